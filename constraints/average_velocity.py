@@ -1,0 +1,67 @@
+"""Known average velocity over time intervals."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from bvpnav.errors import InputError
+from bvpnav.items import Item, as_values
+
+from ._common import finite, times
+
+__all__ = ["AverageVelocity"]
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class AverageVelocity(Item):
+    """The mean velocity over one or many intervals ``[t0, t1]`` is known.
+
+    Parameters
+    ----------
+    t0, t1 : float or array_like of float
+        Interval starts and ends in s (``t0 < t1`` element-wise).
+    value : float or array_like
+        Mean velocity in m/s (scalar, per axis, per interval, or (n_intervals, n_axes)).
+    axes, sigma, mode, huber, tol, name
+        See :class:`bvpnav.items.Item`; ``sigma`` in m/s.
+
+    Notes
+    -----
+    The mean of v over an interval is exact in terms of positions:
+
+    .. math:: \\rho = \\frac{r(t_1) - r(t_0)}{t_1 - t_0} - \\bar v.
+    """
+
+    t0: Any
+    t1: Any
+    value: Any = 0.0
+    units = "m/s"
+
+    def validate(self) -> None:
+        a = times(self.t0, self.label, "t0")
+        b = times(self.t1, self.label, "t1")
+        if a.size != b.size:
+            raise InputError(f"{self.label}: {a.size} starts t0 but {b.size} ends t1")
+        bad = np.flatnonzero(b <= a)
+        if bad.size:
+            k = int(bad[0])
+            raise InputError(
+                f"{self.label}: interval {k} has t1={b[k]!r} s <= t0={a[k]!r} s; give t0 < t1"
+            )
+        object.__setattr__(self, "t0", a)
+        object.__setattr__(self, "t1", b)
+        object.__setattr__(self, "value", finite(self.value, self.label))
+
+    def compile(self, model):
+        ax = model.axes_of(self.axes, self.label)
+        what = f"{self.label}(t0/t1)"
+        dt = np.repeat(self.t1 - self.t0, len(ax))
+        rows = (model.position(self.t1, self.axes, what) - model.position(self.t0, self.axes, what))
+        rows = rows / dt
+        return rows - as_values(self.value, self.t0.size, len(ax), f"{self.label}: value")
+
+    def math(self) -> str:
+        return f"(r(t1_k) - r(t0_k)) / (t1_k - t0_k) - vbar_k = 0 over {self.t0.size} interval(s)"

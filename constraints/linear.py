@@ -1,0 +1,88 @@
+"""Any linear combination of positions or velocities at given instants (escape hatch)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from bvpnav.errors import InputError
+from bvpnav.items import Item
+from bvpnav.model import Affine
+
+from ._common import finite, times
+
+__all__ = ["Linear"]
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Linear(Item):
+    """User rows ``sum_k sum_a C[i, k, a] q_a(t_k) = value_i``.
+
+    Parameters
+    ----------
+    t : array_like of float, shape (K,)
+        Instants in s that the rows refer to.
+    coef : array_like, shape (m, K, n_axes), (m, K) or (K,)
+        Coefficients ``C``; (m, K) or (K,) when the item has one axis. Units: value
+        units per quantity unit.
+    value : float or array_like, shape (m,)
+        Right-hand sides ``e`` in ``units``.
+    quantity : {"position", "velocity"}
+        What ``q`` is: position (m) or velocity (m/s).
+    units : str
+        Units of the rows, for reports (default ``"m"``).
+    axes, sigma, mode, huber, tol, name
+        See :class:`bvpnav.items.Item`; ``sigma`` in the rows' units.
+
+    Notes
+    -----
+    The residual is :math:`\\rho_i = \\sum_{k,a} C_{ika}\\, q_a(t_k) - e_i`, i.e. the
+    2011 paper's general ``D r = e`` row by row.
+    """
+
+    t: Any
+    coef: Any
+    value: Any = 0.0
+    quantity: str = "position"
+    row_units: str = "m"
+
+    def validate(self) -> None:
+        t = times(self.t, self.label)
+        c = finite(self.coef, self.label, "coef")
+        if c.ndim == 1:
+            c = c[None, :, None]
+        elif c.ndim == 2:
+            c = c[:, :, None]
+        if c.ndim != 3 or c.shape[1] != t.size:
+            raise InputError(
+                f"{self.label}: coef shape {np.shape(self.coef)} does not match {t.size} instant(s); "
+                "expected (m, K, n_axes), (m, K) or (K,)"
+            )
+        if self.quantity not in ("position", "velocity"):
+            raise InputError(f"{self.label}: quantity={self.quantity!r}; use 'position' or 'velocity'")
+        v = finite(self.value, self.label)
+        if v.size not in (1, c.shape[0]):
+            raise InputError(f"{self.label}: {v.size} values for {c.shape[0]} rows")
+        object.__setattr__(self, "t", t)
+        object.__setattr__(self, "coef", c)
+        object.__setattr__(self, "value", v)
+
+    def compile(self, model):
+        ax = model.axes_of(self.axes, self.label)
+        if self.coef.shape[2] != len(ax):
+            raise InputError(
+                f"{self.label}: coef has {self.coef.shape[2]} axis column(s) but the item applies "
+                f"to {len(ax)} axis(es) {[model.axes[a] for a in ax]}; set axes= to match"
+            )
+        what = f"{self.label}(t=...)"
+        q = model.position if self.quantity == "position" else model.velocity
+        base = q(self.t, self.axes, what)  # rows k * nax + a
+        C = sp.csr_matrix(self.coef.reshape(self.coef.shape[0], -1))
+        rhs = np.broadcast_to(self.value.ravel(), (C.shape[0],))
+        return Affine(C @ base.A, C @ base.c - rhs)
+
+    def math(self) -> str:
+        return f"sum_k C_ik {self.quantity}(t_k) - e_i = 0 ({self.coef.shape[0]} row(s))"

@@ -1,0 +1,50 @@
+"""Known positions at given instants (Dirichlet conditions when at the ends)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from bvpnav.items import Item, as_values
+
+from ._common import finite, times
+
+__all__ = ["Position"]
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Position(Item):
+    """The position is known at one or many instants.
+
+    Parameters
+    ----------
+    t : float or array_like of float
+        Instants in s, inside the recording window.
+    value : float or array_like
+        Position in m: a scalar, one value per axis, one per instant, or shape
+        (len(t), n_axes).
+    axes, sigma, mode, huber, tol, name
+        See :class:`bvpnav.items.Item`; ``sigma`` in m.
+
+    Notes
+    -----
+    Residual per instant k and axis a: :math:`\\rho = r_a(t_k) - p_{k,a}` with
+    :math:`r_a(t) = \\sum_j r_{a,j} \\phi_j(t)`. At ``t = T0`` or ``T1`` in hard mode
+    this is the Dirichlet boundary condition.
+    """
+
+    t: Any
+    value: Any = 0.0
+    units = "m"
+
+    def validate(self) -> None:
+        object.__setattr__(self, "t", times(self.t, self.label))
+        object.__setattr__(self, "value", finite(self.value, self.label))
+
+    def compile(self, model):
+        ax = model.axes_of(self.axes, self.label)
+        rows = model.position(self.t, self.axes, what=f"{self.label}(t=...)")
+        return rows - as_values(self.value, self.t.size, len(ax), f"{self.label}: value")
+
+    def math(self) -> str:
+        return f"r(t_k) - p_k = 0 at {self.t.size} instant(s)"

@@ -1,0 +1,51 @@
+"""Known velocities at given instants (Neumann conditions when at the ends)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from bvpnav.items import Item, as_values
+
+from ._common import finite, times
+
+__all__ = ["Velocity"]
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Velocity(Item):
+    """The velocity is known at one or many instants.
+
+    Parameters
+    ----------
+    t : float or array_like of float
+        Instants in s, inside the recording window.
+    value : float or array_like
+        Velocity in m/s (scalar, per axis, per instant, or (len(t), n_axes)).
+    axes, sigma, mode, huber, tol, name
+        See :class:`bvpnav.items.Item`; ``sigma`` in m/s.
+
+    Notes
+    -----
+    Residual :math:`\\rho = v_a(t_k) - u_{k,a}`. At the window's ends the velocity is
+    the FEM's natural boundary unknown :math:`v_0` or :math:`v_1` itself, so an end
+    velocity in hard mode is an exact Neumann condition. Elsewhere
+    :math:`v_j = (r_j - r_{j-1})/h_{j-1} + h_{j-1}(a_{j-1} + 2a_j)/6` with the corrected
+    acceleration, integrated exactly between nodes.
+    """
+
+    t: Any
+    value: Any = 0.0
+    units = "m/s"
+
+    def validate(self) -> None:
+        object.__setattr__(self, "t", times(self.t, self.label))
+        object.__setattr__(self, "value", finite(self.value, self.label))
+
+    def compile(self, model):
+        ax = model.axes_of(self.axes, self.label)
+        rows = model.velocity(self.t, self.axes, what=f"{self.label}(t=...)")
+        return rows - as_values(self.value, self.t.size, len(ax), f"{self.label}: value")
+
+    def math(self) -> str:
+        return f"v(t_k) - u_k = 0 at {self.t.size} instant(s)"

@@ -1,0 +1,176 @@
+"""Linear finite elements for r''(t) = a(t) on a non-uniform grid (pure scipy.sparse).
+
+Weak form
+---------
+For every test function u,
+
+.. math::
+
+    \\int_{T_0}^{T_1} \\dot r \\dot u \\, dt
+      = -\\int_{T_0}^{T_1} a u \\, dt + v(T_1) u(T_1) - v(T_0) u(T_0).
+
+With hat functions for r, u and a (a interpolated linearly between samples) this is,
+per axis, the N equations
+
+.. math::
+
+    K r + e_1 v_0 - e_N v_1 + M a = 0,
+
+where ``K`` is the stiffness matrix (``1/h_{j-1} + 1/h_j`` on the diagonal, ``-1/h_j``
+beside it, ``1/h`` at the two ends), ``M`` the consistent mass matrix
+(``(h_{j-1} + h_j)/3`` on the diagonal, ``h_j/6`` beside it) and ``v_0``, ``v_1`` the
+end velocities, which are unknowns of the system (natural boundary terms). The load
+vector of the papers is ``f = -M a``. Summing all rows gives ``v_1 - v_0 = \\int a``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from .grid import TimeGrid, as_times
+
+__all__ = [
+    "stiffness",
+    "mass",
+    "load",
+    "boundary_columns",
+    "node_velocity_operators",
+    "velocity_operators",
+]
+
+
+def stiffness(grid: TimeGrid) -> sp.csr_matrix:
+    """Stiffness matrix ``K[i, j] = integral(phi_i' phi_j')``, 1/s.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix, shape (N, N)
+        Symmetric, tridiagonal, singular (constants are in its null space).
+    """
+    inv = 1.0 / grid.h
+    diag = np.zeros(grid.n)
+    diag[:-1] += inv
+    diag[1:] += inv
+    return sp.diags([-inv, diag, -inv], [-1, 0, 1], format="csr")
+
+
+def mass(grid: TimeGrid) -> sp.csr_matrix:
+    """Consistent mass matrix ``M[i, j] = integral(phi_i phi_j)``, s.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix, shape (N, N)
+        Symmetric positive definite, tridiagonal.
+    """
+    h = grid.h
+    diag = np.zeros(grid.n)
+    diag[:-1] += h / 3.0
+    diag[1:] += h / 3.0
+    return sp.diags([h / 6.0, diag, h / 6.0], [-1, 0, 1], format="csr")
+
+
+def load(grid: TimeGrid, acc: np.ndarray) -> np.ndarray:
+    """Load vector ``f = -M a`` of linearly interpolated samples, m/s.
+
+    Parameters
+    ----------
+    grid : TimeGrid
+    acc : ndarray, shape (N,) or (N, d)
+        Acceleration samples in m/s^2.
+
+    Notes
+    -----
+    .. math:: f_j = -\\tfrac{h_{j-1}}{6}(a_{j-1} + 2a_j) - \\tfrac{h_j}{6}(2a_j + a_{j+1})
+    """
+    return -(mass(grid) @ np.asarray(acc, dtype=float))
+
+
+def boundary_columns(grid: TimeGrid) -> sp.csr_matrix:
+    """Columns multiplying the end velocities ``(v_0, v_1)`` in the FEM rows.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix, shape (N, 2)
+        ``+1`` at row 1 for ``v_0`` and ``-1`` at row N for ``v_1``.
+    """
+    n = grid.n
+    return sp.csr_matrix(([1.0, -1.0], ([0, n - 1], [0, 1])), shape=(n, 2))
+
+
+def node_velocity_operators(grid: TimeGrid) -> tuple[sp.csr_matrix, sp.csr_matrix, sp.csr_matrix]:
+    """Operators giving nodal velocities ``v = Vr r + Va a + Vb [v0, v1]``.
+
+    Returns
+    -------
+    Vr : csr_matrix, shape (N, N), 1/s
+    Va : csr_matrix, shape (N, N), s
+    Vb : csr_matrix, shape (N, 2), dimensionless
+
+    Notes
+    -----
+    Interior node j uses the natural boundary term of the sub-domain ``[T_0, t_j]``:
+
+    .. math:: v_j = \\frac{r_j - r_{j-1}}{h_{j-1}} + \\frac{h_{j-1}}{6}(a_{j-1} + 2a_j),
+
+    which equals the same formula from the right (``[t_j, T_1]``) whenever FEM row j
+    holds. It is exact when r is a cubic (a linear in t) and the nodal positions
+    are exact, so it converges as O(h^2) with the FEM's nodal values. The end nodes
+    return the unknowns ``v_0`` and ``v_1`` themselves, so a velocity condition at
+    an end is exact.
+    """
+    n = grid.n
+    h = grid.h
+    j = np.arange(1, n - 1)  # interior nodes, formula from the left element j-1
+    hl = h[j - 1]
+    Vr = sp.csr_matrix(
+        (np.concatenate([1.0 / hl, -1.0 / hl]), (np.concatenate([j, j]), np.concatenate([j, j - 1]))),
+        shape=(n, n),
+    )
+    Va = sp.csr_matrix(
+        (np.concatenate([hl / 6.0, hl / 3.0]), (np.concatenate([j, j]), np.concatenate([j - 1, j]))),
+        shape=(n, n),
+    )
+    Vb = sp.csr_matrix(([1.0, 1.0], ([0, n - 1], [0, 1])), shape=(n, 2))
+    return Vr, Va, Vb
+
+
+def velocity_operators(
+    grid: TimeGrid, times, what: str = "time"
+) -> tuple[sp.csr_matrix, sp.csr_matrix, sp.csr_matrix]:
+    """Operators for the velocity at arbitrary times inside the window.
+
+    Returns ``(Vr, Va, Vb)`` with ``len(times)`` rows, as in
+    :func:`node_velocity_operators`.
+
+    Notes
+    -----
+    For ``t = t_j + s`` inside element j the acceleration is linear, so
+
+    .. math:: v(t) = v_j + a_j s + (a_{j+1} - a_j) \\frac{s^2}{2 h_j}.
+
+    Times on a node use the nodal rows directly (exact at the ends).
+    """
+    times = grid.check_inside(as_times(times, what), what)
+    j, s = grid.locate(times)
+    at_end = times >= grid.t1
+    j = np.where(at_end, grid.n - 1, j)
+    s = np.where(at_end, 0.0, s)
+    NVr, NVa, NVb = node_velocity_operators(grid)
+    m = times.size
+    sel = sp.csr_matrix((np.ones(m), (np.arange(m), j)), shape=(m, grid.n))
+    Vr = sel @ NVr
+    Vb = sel @ NVb
+    inner = s > 0
+    k = np.flatnonzero(inner)
+    jj = j[k]
+    hh = grid.h[np.minimum(jj, grid.n - 2)]
+    ss = s[k]
+    c1 = ss - ss**2 / (2.0 * hh)
+    c2 = ss**2 / (2.0 * hh)
+    extra = sp.csr_matrix(
+        (np.concatenate([c1, c2]), (np.concatenate([k, k]), np.concatenate([jj, jj + 1]))),
+        shape=(m, grid.n),
+    )
+    Va = sel @ NVa + extra
+    return Vr.tocsr(), Va.tocsr(), Vb.tocsr()

@@ -1,0 +1,163 @@
+"""The time grid: validation, steps and evaluation rows of the hat functions."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from .errors import InputError
+
+__all__ = ["TimeGrid", "as_times"]
+
+#: Relative slack (in units of the window length) allowed when an item time sits
+#: on the window's edge but is off by rounding, e.g. ``t = 0.1 * 100``.
+EDGE_SLACK = 1e-9
+
+
+def as_times(t, name: str = "t") -> np.ndarray:
+    """Return ``t`` as a 1-D float array, or raise :class:`InputError` naming ``name``."""
+    try:
+        arr = np.asarray(t, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name}: cannot be read as numbers ({exc}); pass numbers in s") from None
+    if arr.ndim == 0:
+        arr = arr.reshape(1)
+    if arr.ndim != 1:
+        raise InputError(f"{name}: expected a scalar or a 1-D array of times in s, got shape {arr.shape}")
+    bad = np.flatnonzero(~np.isfinite(arr))
+    if bad.size:
+        raise InputError(
+            f"{name}: value at index {bad[0]} is {arr[bad[0]]!r}; times must be finite numbers in s"
+        )
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class TimeGrid:
+    """Strictly increasing sample times ``t_1 < ... < t_N`` in s.
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Sample times in s; finite and strictly increasing, ``N >= 3``.
+        Non-uniform steps are allowed.
+
+    Notes
+    -----
+    The steps are :math:`h_i = t_{i+1} - t_i`. The hat function of node ``j`` is
+
+    .. math:: \\phi_j(t) = \\max(0, 1 - |t - t_j| / h), \\quad h = h_{j-1} \\text{ or } h_j,
+
+    so any piecewise-linear function is :math:`r(t) = \\sum_j r_j \\phi_j(t)`.
+    """
+
+    t: np.ndarray
+    h: np.ndarray = field(init=False, repr=False)
+
+    def __post_init__(self):
+        t = as_times(self.t, "time")
+        if t.size < 3:
+            raise InputError(
+                f"time: {t.size} samples given; the FEM needs at least 3 samples "
+                "(two elements). Pass a longer recording."
+            )
+        dt = np.diff(t)
+        bad = np.flatnonzero(dt <= 0)
+        if bad.size:
+            i = int(bad[0]) + 1
+            kind = "duplicate" if dt[bad[0]] == 0 else "decreasing"
+            raise InputError(
+                f"time: sample {i} ({t[i]!r} s) is {kind} after sample {i - 1} ({t[i - 1]!r} s); "
+                "times must be strictly increasing. Sort the samples and drop duplicates."
+            )
+        t.setflags(write=False)
+        dt.setflags(write=False)
+        object.__setattr__(self, "t", t)
+        object.__setattr__(self, "h", dt)
+
+    # ------------------------------------------------------------------ basics
+    @property
+    def n(self) -> int:
+        """Number of samples (nodes) N."""
+        return int(self.t.size)
+
+    @property
+    def t0(self) -> float:
+        """Start of the window, s."""
+        return float(self.t[0])
+
+    @property
+    def t1(self) -> float:
+        """End of the window, s."""
+        return float(self.t[-1])
+
+    @property
+    def duration(self) -> float:
+        """Window length ``t_N - t_1``, s."""
+        return self.t1 - self.t0
+
+    def gaps(self, factor: float = 10.0) -> np.ndarray:
+        """Indices ``i`` whose step ``h_i`` exceeds ``factor`` times the median step."""
+        med = float(np.median(self.h))
+        return np.flatnonzero(self.h > factor * med)
+
+    # ------------------------------------------------------------ evaluation
+    def check_inside(self, times: np.ndarray, what: str) -> np.ndarray:
+        """Clip rounding-level excursions to the window; raise for real ones.
+
+        Parameters
+        ----------
+        times : ndarray
+            Times in s.
+        what : str
+            Name used in the error message (e.g. ``"Position(t=...)"``).
+        """
+        slack = EDGE_SLACK * max(self.duration, 1.0)
+        lo, hi = self.t0, self.t1
+        bad = np.flatnonzero((times < lo - slack) | (times > hi + slack))
+        if bad.size:
+            k = int(bad[0])
+            raise InputError(
+                f"{what}: time {times[k]!r} s (entry {k}) is outside the recording window "
+                f"[{lo!r}, {hi!r}] s; bvpnav never extrapolates. Use a time inside the window."
+            )
+        return np.clip(times, lo, hi)
+
+    def locate(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Element index ``j`` and local coordinate ``s = t - t_j`` for each time.
+
+        The element of a time equal to a node ``t_j`` (``j < N``) is ``j``; the last
+        node belongs to the last element.
+        """
+        j = np.searchsorted(self.t, times, side="right") - 1
+        j = np.clip(j, 0, self.n - 2)
+        return j, times - self.t[j]
+
+    def interpolation_matrix(self, times, what: str = "time") -> sp.csr_matrix:
+        """Rows ``phi(t)`` evaluating the piecewise-linear nodal function at ``times``.
+
+        Returns
+        -------
+        scipy.sparse.csr_matrix, shape (len(times), N)
+            Row ``k`` has ``1 - s/h_j`` at column ``j`` and ``s/h_j`` at ``j + 1``.
+        """
+        times = self.check_inside(as_times(times, what), what)
+        j, s = self.locate(times)
+        theta = s / self.h[j]
+        m = times.size
+        rows = np.repeat(np.arange(m), 2)
+        cols = np.column_stack([j, j + 1]).ravel()
+        vals = np.column_stack([1.0 - theta, theta]).ravel()
+        return sp.csr_matrix((vals, (rows, cols)), shape=(m, self.n))
+
+    def nodes_in(self, t0: float, t1: float) -> np.ndarray:
+        """Indices of the nodes with ``t0 <= t_j <= t1``."""
+        return np.flatnonzero((self.t >= t0) & (self.t <= t1))
+
+    def __len__(self) -> int:
+        return self.n
+
+    def __repr__(self) -> str:
+        return f"TimeGrid(N={self.n}, t0={self.t0:g} s, t1={self.t1:g} s)"

@@ -1,0 +1,242 @@
+"""Input container: sample times and accelerations (navigation frame or strapdown)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+from scipy.spatial.transform import Rotation
+
+from .errors import InputError
+from .grid import TimeGrid
+
+__all__ = ["ImuData", "STANDARD_GRAVITY", "DEFAULT_AXES"]
+
+#: Standard gravity, m/s^2.
+STANDARD_GRAVITY = 9.80665
+#: Default axis names by number of axes.
+DEFAULT_AXES = {1: ("x",), 2: ("x", "y"), 3: ("x", "y", "z")}
+
+
+def _finite_2d(arr, name: str, columns: Sequence[str] | None = None) -> np.ndarray:
+    try:
+        a = np.asarray(arr, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name}: cannot be read as numbers ({exc})") from None
+    if a.ndim == 1:
+        a = a[:, None]
+    if a.ndim != 2:
+        raise InputError(f"{name}: expected shape (N,) or (N, d), got {a.shape}")
+    bad = np.argwhere(~np.isfinite(a))
+    if bad.size:
+        i, k = (int(v) for v in bad[0])
+        col = columns[k] if columns is not None and k < len(columns) else f"column {k}"
+        raise InputError(
+            f"{name}: sample {i}, {col} is {a[i, k]!r}; every sample must be a finite number. "
+            "Remove or repair that sample (bvpnav never fills gaps silently)."
+        )
+    return a
+
+
+class ImuData:
+    """Sample times with the accelerations that drive r''(t) = a(t).
+
+    Give either navigation-frame accelerations ``acc`` or a strapdown triple
+    (``specific_force``, ``attitude``, ``gravity``).
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Sample times in s, finite and strictly increasing (non-uniform allowed).
+    acc : array_like, shape (N,) or (N, d), optional
+        Navigation-frame acceleration in m/s^2, ``d`` = 1, 2 or 3 axes.
+    specific_force : array_like, shape (N, 3), optional
+        Body-frame specific force in m/s^2 (what an accelerometer triad measures).
+    attitude : scipy.spatial.transform.Rotation or array_like, optional
+        Body-to-navigation rotation per sample: a ``Rotation`` of length N, quaternions
+        (N, 4) in scipy's scalar-last order ``(x, y, z, w)``, or matrices (N, 3, 3).
+    gravity : array_like, shape (3,), optional
+        Gravity vector in the navigation frame, m/s^2. Default ``(0, 0, -g0)`` with
+        ``g0 = 9.80665`` (z up).
+    axes : sequence of str, optional
+        Axis names; default ``x``, ``x, y`` or ``x, y, z`` by the number of axes.
+
+    Notes
+    -----
+    In strapdown mode the navigation-frame acceleration is
+
+    .. math:: a(t_i) = C_i f_i + g,
+
+    with ``C_i`` the body-to-navigation rotation matrix of sample i.
+    """
+
+    def __init__(
+        self,
+        t,
+        acc=None,
+        *,
+        specific_force=None,
+        attitude=None,
+        gravity=None,
+        axes: Sequence[str] | None = None,
+    ):
+        self.grid = TimeGrid(t)
+        n = self.grid.n
+        self.specific_force: np.ndarray | None = None
+        self.attitude: Rotation | None = None
+        self.gravity: np.ndarray | None = None
+        if acc is not None and specific_force is not None:
+            raise InputError("give either acc (navigation frame) or specific_force, not both")
+        if acc is None and specific_force is None:
+            raise InputError("no accelerations: give acc=(N, d) in m/s^2 or specific_force=(N, 3)")
+        if acc is not None:
+            if attitude is not None or gravity is not None:
+                raise InputError(
+                    "attitude/gravity go with specific_force (body frame); acc is already in "
+                    "the navigation frame"
+                )
+            a = _finite_2d(acc, "acc", axes)
+        else:
+            f = _finite_2d(specific_force, "specific_force", ("f_x", "f_y", "f_z"))
+            if f.shape[1] != 3:
+                raise InputError(f"specific_force: expected shape (N, 3), got {f.shape}")
+            if attitude is None:
+                raise InputError("specific_force needs attitude (body to navigation) per sample")
+            rot = self._as_rotation(attitude, n)
+            g = np.array([0.0, 0.0, -STANDARD_GRAVITY]) if gravity is None else np.asarray(
+                gravity, dtype=float
+            )
+            if g.shape != (3,) or not np.all(np.isfinite(g)):
+                raise InputError(f"gravity: expected 3 finite numbers in m/s^2, got {gravity!r}")
+            if f.shape[0] != n:
+                raise InputError(
+                    f"specific_force has {f.shape[0]} samples but t has {n}; lengths must match"
+                )
+            self.specific_force, self.attitude, self.gravity = f, rot, g
+            a = rot.apply(f) + g
+        if a.shape[0] != n:
+            raise InputError(f"acc has {a.shape[0]} samples but t has {n}; lengths must match")
+        d = a.shape[1]
+        if d not in (1, 2, 3):
+            raise InputError(f"acc: {d} axes given; bvpnav handles 1, 2 or 3 axes")
+        if axes is None:
+            axes = DEFAULT_AXES[d]
+        axes = tuple(str(s) for s in ([axes] if isinstance(axes, str) else axes))
+        if len(axes) != d:
+            raise InputError(f"axes: {len(axes)} names {axes} for {d} acceleration columns")
+        if len(set(axes)) != d:
+            raise InputError(f"axes: names must be distinct, got {axes}")
+        a.setflags(write=False)
+        self.acc: np.ndarray = a
+        self.axes: tuple[str, ...] = axes
+
+    @staticmethod
+    def _as_rotation(attitude, n: int) -> Rotation:
+        if isinstance(attitude, Rotation):
+            rot = attitude
+            if rot.single or len(rot) != n:
+                size = 1 if rot.single else len(rot)
+                raise InputError(f"attitude: Rotation of length {size}, expected one per sample ({n})")
+            return rot
+        arr = np.asarray(attitude, dtype=float)
+        if arr.shape == (n, 4):
+            norms = np.linalg.norm(arr, axis=1)
+            bad = np.flatnonzero(np.abs(norms - 1.0) > 1e-6)
+            if bad.size:
+                raise InputError(
+                    f"attitude: quaternion {bad[0]} has norm {norms[bad[0]]:.6g}, not 1; pass unit "
+                    "quaternions (x, y, z, w), scalar last"
+                )
+            return Rotation.from_quat(arr)
+        if arr.shape == (n, 3, 3):
+            return Rotation.from_matrix(arr)
+        raise InputError(
+            f"attitude: shape {arr.shape}; expected a Rotation of length {n}, quaternions ({n}, 4) "
+            f"scalar-last, or matrices ({n}, 3, 3)"
+        )
+
+    # ---------------------------------------------------------------- helpers
+    @property
+    def t(self) -> np.ndarray:
+        """Sample times, s."""
+        return self.grid.t
+
+    @property
+    def n(self) -> int:
+        """Number of samples N."""
+        return self.grid.n
+
+    @property
+    def ndim(self) -> int:
+        """Number of navigation axes d."""
+        return len(self.axes)
+
+    @property
+    def is_strapdown(self) -> bool:
+        """True when built from body-frame specific force and attitude."""
+        return self.specific_force is not None
+
+    def axis_index(self, names, what: str = "axes") -> tuple[int, ...]:
+        """Indices of the named axes; ``None`` means all axes.
+
+        Raises
+        ------
+        InputError
+            For an unknown axis name, listing the valid ones.
+        """
+        if names is None:
+            return tuple(range(self.ndim))
+        if isinstance(names, str):
+            names = (names,)
+        out = []
+        for s in names:
+            if s not in self.axes:
+                raise InputError(f"{what}: unknown axis {s!r}; this data has axes {list(self.axes)}")
+            out.append(self.axes.index(s))
+        return tuple(out)
+
+    @classmethod
+    def from_dataframe(
+        cls, df: pd.DataFrame, time: str = "t", columns: Sequence[str] | None = None,
+        axes: Sequence[str] | None = None,
+    ) -> ImuData:
+        """Build from a DataFrame with a time column and one column per axis (m/s^2).
+
+        Parameters
+        ----------
+        df : pandas.DataFrame
+        time : str
+            Name of the time column (s). If absent, the index is used when it is named
+            ``time``.
+        columns : sequence of str, optional
+            Acceleration columns in order; default: every other numeric column.
+        axes : sequence of str, optional
+            Axis names; default derived from the column names (``ax`` -> ``x``).
+        """
+        if time in df.columns:
+            t = df[time].to_numpy()
+        elif df.index.name == time:
+            t = df.index.to_numpy()
+        else:
+            raise InputError(
+                f"time column {time!r} not found; columns are {list(df.columns)}. "
+                "Pass time=<name of the time column>."
+            )
+        if columns is None:
+            columns = [c for c in df.columns if c != time]
+        missing = [c for c in columns if c not in df.columns]
+        if missing:
+            raise InputError(f"acceleration column(s) {missing} not found; columns are {list(df.columns)}")
+        if axes is None and all(str(c).startswith("a") and len(str(c)) > 1 for c in columns):
+            axes = [str(c)[1:].lstrip("_") for c in columns]
+        return cls(t, df[list(columns)].to_numpy(dtype=float), axes=axes)
+
+    def to_dataframe(self) -> pd.DataFrame:
+        """Navigation-frame accelerations as a DataFrame indexed by time ``t`` (s)."""
+        cols = {f"a{s}": self.acc[:, k] for k, s in enumerate(self.axes)}
+        return pd.DataFrame(cols, index=pd.Index(self.t, name="t"))
+
+    def __repr__(self) -> str:
+        mode = "strapdown" if self.is_strapdown else "navigation-frame"
+        return f"ImuData(N={self.n}, axes={self.axes}, {mode}, t=[{self.grid.t0:g}, {self.grid.t1:g}] s)"

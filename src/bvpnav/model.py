@@ -1,0 +1,330 @@
+"""The unknowns of a navigation problem and the linear maps items are built from.
+
+All unknowns live in one stacked vector ``x`` (a single cvxpy Variable). Per axis
+``a`` (in the order of ``data.axes``) the block is
+
+    [ r_a (N nodal positions, m) | w_a (N acceleration residuals, m/s^2) | v0_a, v1_a (m/s) ]
+
+followed by the error-model parameters ``l`` (q entries, units per parameter).
+Everything an item needs is an :class:`Affine` map ``A x + c`` built from sparse
+matrices, so the same rows feed cvxpy, the direct back ends, ``describe()`` and
+``matrices()``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import cvxpy as cp
+import numpy as np
+import scipy.sparse as sp
+
+from . import fem
+from .errors import InputError
+from .grid import as_times
+from .imu import ImuData
+
+__all__ = ["Affine", "NavModel"]
+
+
+@dataclass(frozen=True, eq=False)
+class Affine:
+    """An affine map ``x -> A x + c`` of the stacked unknowns.
+
+    Parameters
+    ----------
+    A : scipy.sparse.csr_matrix, shape (m, n)
+    c : ndarray, shape (m,)
+    labels : tuple of str, optional
+        One label per row (e.g. ``"x(t=2.5)"``) for reports.
+    """
+
+    A: sp.csr_matrix
+    c: np.ndarray
+    labels: tuple[str, ...] | None = None
+
+    def __post_init__(self):
+        A = sp.csr_matrix(self.A)
+        c = np.broadcast_to(np.asarray(self.c, dtype=float), (A.shape[0],)).copy()
+        object.__setattr__(self, "A", A)
+        object.__setattr__(self, "c", c)
+
+    @property
+    def m(self) -> int:
+        """Number of rows."""
+        return self.A.shape[0]
+
+    def __len__(self) -> int:
+        return self.m
+
+    def __add__(self, other) -> Affine:
+        if isinstance(other, Affine):
+            return Affine(self.A + other.A, self.c + other.c, self.labels)
+        return Affine(self.A, self.c + np.asarray(other, dtype=float), self.labels)
+
+    def __sub__(self, other) -> Affine:
+        if isinstance(other, Affine):
+            return Affine(self.A - other.A, self.c - other.c, self.labels)
+        return Affine(self.A, self.c - np.asarray(other, dtype=float), self.labels)
+
+    def __neg__(self) -> Affine:
+        return Affine(-self.A, -self.c, self.labels)
+
+    def __mul__(self, k) -> Affine:
+        k = np.asarray(k, dtype=float)
+        if k.ndim == 0:
+            return Affine(self.A * float(k), self.c * float(k), self.labels)
+        k = np.broadcast_to(k, (self.m,))
+        return Affine(sp.diags(k) @ self.A, self.c * k, self.labels)
+
+    __rmul__ = __mul__
+
+    def __truediv__(self, k) -> Affine:
+        return self * (1.0 / np.asarray(k, dtype=float))
+
+    def rows(self, idx) -> Affine:
+        """A subset of the rows."""
+        idx = np.asarray(idx)
+        labels = None if self.labels is None else tuple(np.asarray(self.labels, dtype=object)[idx])
+        return Affine(self.A[idx], self.c[idx], labels)
+
+    @staticmethod
+    def vstack(parts: Sequence[Affine]) -> Affine:
+        """Stack several maps row-wise."""
+        parts = list(parts)
+        labels = None
+        if all(p.labels is not None for p in parts):
+            labels = tuple(lab for p in parts for lab in p.labels)
+        return Affine(sp.vstack([p.A for p in parts], format="csr"),
+                      np.concatenate([p.c for p in parts]), labels)
+
+    def expr(self, x: cp.Expression) -> cp.Expression:
+        """The cvxpy expression ``A @ x + c``."""
+        if not self.c.any():
+            return self.A @ x
+        return self.A @ x + self.c
+
+    def value(self, x: np.ndarray) -> np.ndarray:
+        """Evaluate at a numeric ``x``."""
+        return self.A @ x + self.c
+
+    def row_scale(self, x: np.ndarray) -> np.ndarray:
+        """``|A| |x| + |c|`` per row: the size of the terms that cancel in each row."""
+        return abs(self.A) @ np.abs(x) + np.abs(self.c)
+
+
+class NavModel:
+    """Typed context handed to every item's ``compile``: the unknowns and their maps.
+
+    Parameters
+    ----------
+    data : ImuData
+    error_model : ErrorModel, optional
+        Contributes the parameter columns ``G`` (acceleration per unit parameter).
+
+    Notes
+    -----
+    Per axis ``a`` the hard FEM constraint is
+
+    .. math:: K r_a + e_1 v_{0,a} - e_N v_{1,a} + M (\\hat a_a + G_a l + w_a) = 0,
+
+    i.e. the 2010 paper's ``K r = f(\\hat a) + F l + f(w)`` with ``f(a) = -M a`` and
+    ``F = -M G``. The corrected acceleration is ``a_c = \\hat a + G l + w``.
+    """
+
+    def __init__(self, data: ImuData, error_model=None):
+        self.data = data
+        self.grid = data.grid
+        self.axes = data.axes
+        self.error_model = error_model
+        n, d = self.grid.n, data.ndim
+        self.N = n
+        self.d = d
+        self.block = 2 * n + 2
+        if error_model is not None:
+            G = np.asarray(error_model.columns(data), dtype=float)
+            if G.shape[:2] != (n, d):
+                raise InputError(
+                    f"error model {error_model!r}: columns of shape {G.shape}, expected ({n}, {d}, q)"
+                )
+            self.param_names = tuple(error_model.names(data))
+        else:
+            G = np.zeros((n, d, 0))
+            self.param_names = ()
+        self.G = G
+        self.q = G.shape[2]
+        self.size = d * self.block + self.q
+        self.x = cp.Variable(self.size, name="x")
+        self.K = fem.stiffness(self.grid)
+        self.M = fem.mass(self.grid)
+        self._node_vel = fem.node_velocity_operators(self.grid)
+
+    # --------------------------------------------------------------- layout
+    def _offset(self, axis: int) -> int:
+        return axis * self.block
+
+    def r_index(self, axis: int) -> np.ndarray:
+        """Indices of the nodal positions of axis ``axis`` in ``x``."""
+        o = self._offset(axis)
+        return np.arange(o, o + self.N)
+
+    def w_index(self, axis: int) -> np.ndarray:
+        """Indices of the acceleration residuals of axis ``axis`` in ``x``."""
+        o = self._offset(axis) + self.N
+        return np.arange(o, o + self.N)
+
+    def v_end_index(self, axis: int) -> tuple[int, int]:
+        """Indices of ``v0`` and ``v1`` of axis ``axis`` in ``x``."""
+        o = self._offset(axis) + 2 * self.N
+        return o, o + 1
+
+    @property
+    def l_index(self) -> np.ndarray:
+        """Indices of the error-model parameters in ``x``."""
+        return np.arange(self.d * self.block, self.size)
+
+    def _place(self, blocks: dict[str, sp.spmatrix], axis: int) -> sp.csr_matrix:
+        """Assemble per-axis blocks (keys r, w, vb, l) into rows over the whole ``x``."""
+        m = next(iter(blocks.values())).shape[0]
+        o = self._offset(axis)
+        parts, cols = [], []
+        if "r" in blocks:
+            parts.append(sp.coo_matrix(blocks["r"]))
+            cols.append(o)
+        if "w" in blocks:
+            parts.append(sp.coo_matrix(blocks["w"]))
+            cols.append(o + self.N)
+        if "vb" in blocks:
+            parts.append(sp.coo_matrix(blocks["vb"]))
+            cols.append(o + 2 * self.N)
+        if "l" in blocks and self.q:
+            parts.append(sp.coo_matrix(blocks["l"]))
+            cols.append(self.d * self.block)
+        rows = np.concatenate([p.row for p in parts])
+        cc = np.concatenate([p.col + c0 for p, c0 in zip(parts, cols)])
+        vals = np.concatenate([p.data for p in parts])
+        return sp.csr_matrix((vals, (rows, cc)), shape=(m, self.size))
+
+    def axes_of(self, axes, what: str = "axes") -> tuple[int, ...]:
+        """Axis indices for a name, a sequence of names, or ``None`` (all)."""
+        return self.data.axis_index(axes, what)
+
+    # ----------------------------------------------------------- FEM rows
+    def fem_rows(self) -> Affine:
+        """The hard FEM equations ``K r + B v + M (a_hat + G l + w) = 0`` for all axes (m/s)."""
+        B = fem.boundary_columns(self.grid)
+        out = []
+        for a in range(self.d):
+            blocks = {"r": self.K, "w": self.M, "vb": B}
+            if self.q:
+                blocks["l"] = self.M @ self.G[:, a, :]
+            A = self._place(blocks, a)
+            out.append(Affine(A, self.M @ self.data.acc[:, a],
+                              tuple(f"fem_{self.axes[a]}[{i}]" for i in range(self.N))))
+        return Affine.vstack(out)
+
+    def residual_rows(self, axes=None) -> Affine:
+        """The acceleration residuals ``w`` (m/s^2), axis-major."""
+        parts = []
+        for a in self.axes_of(axes):
+            A = sp.csr_matrix(
+                (np.ones(self.N), (np.arange(self.N), self.w_index(a))), shape=(self.N, self.size)
+            )
+            parts.append(Affine(A, np.zeros(self.N)))
+        return Affine.vstack(parts)
+
+    def load_residual_rows(self, axes=None) -> Affine:
+        """The load residuals ``K r + B v - f(a_hat) - F l = -M w`` (m/s), axis-major."""
+        parts = []
+        for a in self.axes_of(axes):
+            A = self._place({"w": -self.M}, a)
+            parts.append(Affine(A, np.zeros(self.N)))
+        return Affine.vstack(parts)
+
+    def corrected_acceleration_rows(self, axis: int) -> Affine:
+        """``a_c = a_hat + G l + w`` at every node of one axis, m/s^2."""
+        blocks = {"w": sp.identity(self.N, format="csr")}
+        if self.q:
+            blocks["l"] = sp.csr_matrix(self.G[:, axis, :])
+        return Affine(self._place(blocks, axis), self.data.acc[:, axis])
+
+    # ------------------------------------------------- evaluation at times
+    def _labels(self, quantity: str, times: np.ndarray, axes: tuple[int, ...]) -> tuple[str, ...]:
+        return tuple(f"{quantity}{self.axes[a]}(t={tk:.6g})" for tk in times for a in axes)
+
+    def _interleave(self, per_axis: list[Affine], m: int) -> Affine:
+        """Stack per-axis blocks of m rows so that row ``k * nax + a`` is time k, axis a."""
+        stacked = Affine.vstack(per_axis)
+        nax = len(per_axis)
+        order = (np.arange(nax)[None, :] * m + np.arange(m)[:, None]).ravel()
+        return Affine(stacked.A[order], stacked.c[order])
+
+    def position(self, t, axes=None, what: str = "position") -> Affine:
+        """Positions at times ``t`` (m): rows ordered time-major, then axis.
+
+        Notes
+        -----
+        The FEM position is piecewise linear: :math:`r(t) = \\sum_j r_j \\phi_j(t)`.
+        """
+        times = as_times(t, what)
+        ax = self.axes_of(axes, what)
+        P = self.grid.interpolation_matrix(times, what)
+        parts = [Affine(self._place({"r": P}, a), np.zeros(times.size)) for a in ax]
+        out = self._interleave(parts, times.size)
+        return Affine(out.A, out.c, self._labels("", times, ax))
+
+    def velocity(self, t, axes=None, what: str = "velocity") -> Affine:
+        """Velocities at times ``t`` (m/s): rows ordered time-major, then axis.
+
+        Notes
+        -----
+        At a node, :math:`v_j = (r_j - r_{j-1})/h_{j-1} + h_{j-1}(a_{j-1} + 2 a_j)/6` with
+        the corrected acceleration ``a = a_hat + G l + w``; ``v_0``/``v_1`` at the ends;
+        between nodes the linear acceleration is integrated exactly (see
+        :func:`bvpnav.fem.velocity_operators`). Second order in h.
+        """
+        times = as_times(t, what)
+        ax = self.axes_of(axes, what)
+        Vr, Va, Vb = fem.velocity_operators(self.grid, times, what)
+        parts = []
+        for a in ax:
+            blocks = {"r": Vr, "w": Va, "vb": Vb}
+            if self.q:
+                blocks["l"] = Va @ self.G[:, a, :]
+            parts.append(Affine(self._place(blocks, a), Va @ self.data.acc[:, a]))
+        out = self._interleave(parts, times.size)
+        return Affine(out.A, out.c, self._labels("v", times, ax))
+
+    def node_velocity(self, axis: int) -> Affine:
+        """Velocity at every node of one axis (m/s)."""
+        Vr, Va, Vb = self._node_vel
+        blocks = {"r": Vr, "w": Va, "vb": Vb}
+        if self.q:
+            blocks["l"] = Va @ self.G[:, axis, :]
+        return Affine(self._place(blocks, axis), Va @ self.data.acc[:, axis])
+
+    def node_position(self, axis: int) -> Affine:
+        """Position at every node of one axis (m)."""
+        I = sp.identity(self.N, format="csr")
+        return Affine(self._place({"r": I}, axis), np.zeros(self.N))
+
+    def params(self, names=None) -> Affine:
+        """Error-model parameters (internal, linear parametrisation) as rows."""
+        idx = np.arange(self.q) if names is None else np.array(
+            [self.param_names.index(n) for n in names], dtype=int
+        )
+        A = sp.csr_matrix((np.ones(idx.size), (np.arange(idx.size), self.l_index[idx])),
+                          shape=(idx.size, self.size))
+        return Affine(A, np.zeros(idx.size), tuple(self.param_names[i] for i in idx))
+
+    # --------------------------------------------------------- extraction
+    def split(self, xval: np.ndarray) -> dict[str, np.ndarray]:
+        """Numeric pieces of a solution vector: r, w (N, d), v_end (2, d), l (q,)."""
+        r = np.column_stack([xval[self.r_index(a)] for a in range(self.d)])
+        w = np.column_stack([xval[self.w_index(a)] for a in range(self.d)])
+        vend = np.array([[xval[i] for i in self.v_end_index(a)] for a in range(self.d)]).T
+        return {"r": r, "w": w, "v_end": vend, "l": xval[self.l_index]}
+
+    def __repr__(self) -> str:
+        return f"NavModel(N={self.N}, axes={self.axes}, q={self.q}, unknowns={self.size})"

@@ -1,0 +1,632 @@
+"""NavigationProblem: data + items + objective -> a verified trajectory.
+
+The FEM equations are hard constraints of a cvxpy problem; the measurement error is
+the explicit acceleration residual ``w`` (m/s^2); error-model parameters ``l`` are
+unknowns too; every item compiles to an affine residual that the problem turns into a
+hard, soft, robust or band term. The regularization weight ``lam`` is one cvxpy
+Parameter, so the problem is DPP and a new ``lam`` re-uses the compiled problem.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Any
+
+import cvxpy as cp
+import numpy as np
+import pandas as pd
+
+from .errors import (
+    BvpnavError,
+    ConvexityError,
+    Inaccurate,
+    Infeasible,
+    InputError,
+    SolveError,
+    Unbounded,
+)
+from .imu import ImuData
+from .items import Item
+from .model import Affine, NavModel
+from .result import Solution
+from .solvers import VERIFY_RTOL, resolve_solver, solver_options
+
+__all__ = ["NavigationProblem", "Term", "RESIDUAL_FORMS"]
+
+RESIDUAL_FORMS = ("acceleration", "load")
+
+
+@dataclass(eq=False)
+class Term:
+    """One compiled piece of information.
+
+    Attributes
+    ----------
+    label : str
+    item : Item or None
+        ``None`` for terms the problem itself adds (error-model priors).
+    residual : Affine
+        ``D x - e`` in the item's units (for inequalities: ``g`` with ``g <= 0``).
+    mode : str
+        ``hard``, ``soft``, ``robust`` or ``band``.
+    kind : str
+        ``equality`` or ``inequality``.
+    sigma, tol : ndarray or None
+        Per-row standard deviation and band half-width, item units.
+    huber : float or None
+        Huber threshold in item units (robust mode); ``None`` means L1.
+    scaled_by_lam : bool
+        Whether the term is multiplied by ``lam`` (items: yes; priors: no).
+    """
+
+    label: str
+    item: Item | None
+    residual: Affine
+    mode: str
+    kind: str = "equality"
+    sigma: np.ndarray | None = None
+    tol: np.ndarray | None = None
+    huber: float | None = None
+    scaled_by_lam: bool = True
+    units: str = ""
+
+
+class NavigationProblem:
+    """Accelerations plus additional information, posed as one convex problem.
+
+    Parameters
+    ----------
+    data : ImuData
+        Sample times and accelerations.
+    residual : {"acceleration", "load"}
+        Objective form. ``"acceleration"`` (default) penalises the acceleration
+        residual, :math:`\\sum_i \\|w_i\\|^2 / \\sigma_a^2` (the MAP estimate for white
+        accelerometer noise of standard deviation ``sigma_a``); ``"load"`` penalises the
+        FEM load residual :math:`\\|K r - f(\\hat a) - F l\\|^2`, the 2011 paper's
+        Tikhonov form.
+    sigma_a : float or array_like, optional
+        Accelerometer noise standard deviation in m/s^2 (scalar or one per axis), for
+        the acceleration form. Default 1 m/s^2 (then ``lam`` absorbs the scale).
+    error_model : ErrorModel, optional
+        Sensor error model contributing unknown parameters (see
+        :mod:`bvpnav.error_models`).
+    items : iterable of Item, optional
+        Initial items; more can be added with :meth:`add`.
+
+    Notes
+    -----
+    The problem solved is
+
+    .. math::
+
+        \\min_{r, w, v_0, v_1, l}\\; J_0(w) + \\lambda \\sum_{k \\in soft} \\|(D_k x - e_k)/\\sigma_k\\|^2
+        \\quad\\text{s.t.}\\quad K r + B v + M(\\hat a + G l + w) = 0,\\; D_h x = e_h,
+
+    with :math:`J_0 = \\|w / \\sigma_a\\|^2` or :math:`\\|M w\\|^2` (= :math:`\\|K r + Bv - f\\|^2`).
+    Robust items use the Huber function or L1 in place of the square; band items add
+    :math:`|D x - e| \\le tol`; inequality items add :math:`g(x) \\le 0`.
+    """
+
+    def __init__(
+        self,
+        data: ImuData,
+        residual: str = "acceleration",
+        sigma_a=None,
+        error_model=None,
+        items: Iterable[Item] = (),
+    ):
+        if not isinstance(data, ImuData):
+            raise InputError(f"data must be a bvpnav.ImuData, got {type(data).__name__}")
+        if residual not in RESIDUAL_FORMS:
+            raise InputError(f"residual={residual!r}; choose one of {list(RESIDUAL_FORMS)}")
+        if sigma_a is not None and residual == "load":
+            raise InputError("sigma_a goes with residual='acceleration'; the load form has no sigma_a")
+        self.data = data
+        self.residual = residual
+        if sigma_a is None:
+            sa = np.ones(data.ndim)
+        else:
+            from .items import positive_array
+
+            sa = np.broadcast_to(positive_array(sigma_a, "sigma_a (m/s^2)", False), (data.ndim,))
+        self.sigma_a = np.array(sa, dtype=float)
+        self._sigma_a_given = sigma_a is not None
+        self.error_model = error_model
+        self._items: list[Item] = []
+        self._model: NavModel | None = None
+        self._terms: list[Term] | None = None
+        self._cvx: dict[str, Any] | None = None
+        for it in items:
+            self.add(it)
+
+    # ----------------------------------------------------------- building
+    def add(self, *items: Item) -> NavigationProblem:
+        """Add one or more items; returns the problem for chaining."""
+        for it in items:
+            if not isinstance(it, Item):
+                raise InputError(
+                    f"add(): {it!r} is not a bvpnav item; build one from bvpnav.constraints "
+                    "(e.g. Position(t=0.0, value=0.0))"
+                )
+            label = it.label
+            taken = {x.label for x in self._items}
+            if it.name is None and label in taken:
+                k = 2
+                while f"{label}#{k}" in taken:
+                    k += 1
+                label = f"{label}#{k}"
+                self._items.append(_Renamed.wrap(it, label))
+            elif it.name is not None and label in taken:
+                raise InputError(f"add(): an item named {label!r} is already in the problem")
+            else:
+                self._items.append(it)
+        self._terms = None
+        self._cvx = None
+        return self
+
+    @property
+    def items(self) -> list[Item]:
+        """The items in the order they were added."""
+        return [_Renamed.unwrap(i) for i in self._items]
+
+    @property
+    def item_labels(self) -> list[str]:
+        """Unique labels of the items (``Class`` or ``Class#k``)."""
+        return [i.label for i in self._items]
+
+    @property
+    def model(self) -> NavModel:
+        """The :class:`NavModel` (unknowns and their maps), built on first use."""
+        if self._model is None:
+            self._model = NavModel(self.data, self.error_model)
+        return self._model
+
+    def terms(self) -> list[Term]:
+        """Compile every item (once) into :class:`Term` objects."""
+        if self._terms is not None:
+            return self._terms
+        model = self.model
+        terms = []
+        for it in self._items:
+            label = it.label
+            try:
+                res = it.compile(model)
+            except BvpnavError:
+                raise
+            except Exception as exc:  # a custom item's bug: name the item
+                raise BvpnavError(f"{label}: compile() failed: {type(exc).__name__}: {exc}") from exc
+            if not isinstance(res, Affine):
+                raise ConvexityError(
+                    f"{label}: compile() returned {type(res).__name__}; items must return a "
+                    "bvpnav.model.Affine residual built from the model's maps"
+                )
+            if res.m == 0:
+                raise InputError(f"{label}: produced no rows (nothing to constrain)")
+            terms.append(
+                Term(label=label, item=_Renamed.unwrap(it), residual=res, mode=it.mode,
+                     kind=getattr(it, "kind", "equality"), sigma=it.weight_rows(res.m),
+                     tol=it.tol_rows(res.m), huber=it.huber, units=getattr(it, "units", ""))
+            )
+        if self.error_model is not None and hasattr(self.error_model, "terms"):
+            terms.extend(self.error_model.terms(model))
+        self._terms = terms
+        return terms
+
+    def data_rows(self) -> Affine:
+        """Rows whose sum of squares is the data term ``J_0`` (see class Notes)."""
+        m = self.model
+        if self.residual == "acceleration":
+            return m.residual_rows() / np.repeat(self.sigma_a, m.N)
+        return m.load_residual_rows()
+
+    def build(self) -> dict[str, Any]:
+        """Build (once) and return the cvxpy problem with its parts.
+
+        Returns
+        -------
+        dict
+            ``problem`` (cp.Problem), ``lam`` (cp.Parameter), ``x`` (cp.Variable),
+            ``fem`` (the FEM constraint) and ``cons`` (label -> list of constraints).
+        """
+        if self._cvx is not None:
+            return self._cvx
+        model = self.model
+        x = model.x
+        lam = cp.Parameter(nonneg=True, value=1.0, name="lam")
+        fem_rows = model.fem_rows()
+        fem_con = fem_rows.expr(x) == 0
+        objective = cp.sum_squares(self.data_rows().expr(x))
+        cons: dict[str, list] = {}
+        penalties = []
+        for term in self.terms():
+            r = term.residual.expr(x)
+            mode = term.mode
+            con_list = []
+            if term.kind == "equality":
+                if mode == "hard":
+                    con_list.append(r == 0)
+                elif mode == "band":
+                    con_list += [r <= term.tol, -r <= term.tol]
+                elif mode == "soft":
+                    penalties.append((term, cp.sum_squares(cp.multiply(1.0 / term.sigma, r))))
+                elif mode == "robust":
+                    w2 = 1.0 / term.sigma**2
+                    if term.huber is None:
+                        penalties.append((term, cp.norm1(cp.multiply(1.0 / term.sigma, r))))
+                    else:
+                        penalties.append((term, cp.sum(cp.multiply(w2, cp.huber(r, term.huber)))))
+            else:  # inequality g <= 0
+                if mode == "hard":
+                    con_list.append(r <= 0)
+                elif mode == "band":
+                    con_list.append(r <= term.tol)
+                elif mode == "soft":
+                    penalties.append((term, cp.sum_squares(cp.multiply(1.0 / term.sigma, cp.pos(r)))))
+                else:
+                    penalties.append((term, cp.sum(cp.multiply(1.0 / term.sigma, cp.pos(r)))))
+            cons[term.label] = con_list
+        for term, pen in penalties:
+            if not pen.is_convex():  # pragma: no cover - built from convex atoms
+                raise ConvexityError(f"{term.label}: its penalty is not convex")
+            objective = objective + (lam * pen if term.scaled_by_lam else pen)
+        all_cons = [fem_con] + [c for lst in cons.values() for c in lst]
+        prob = cp.Problem(cp.Minimize(objective), all_cons)
+        if not prob.is_dcp():
+            bad = [t.label for t, p in penalties if not p.is_dcp()]
+            raise ConvexityError(f"the problem is not DCP; culprit item(s): {bad or 'unknown'}")
+        if not prob.is_dpp():
+            bad = [t.label for t, p in penalties if not (lam * p).is_dpp()]
+            raise ConvexityError(f"the problem is not DPP in lam; culprit item(s): {bad or 'unknown'}")
+        self._cvx = {"problem": prob, "lam": lam, "x": x, "fem": fem_con, "fem_rows": fem_rows,
+                     "cons": cons, "penalties": penalties}
+        return self._cvx
+
+    @property
+    def has_soft_terms(self) -> bool:
+        """True when ``lam`` multiplies at least one term."""
+        return any(t.mode in ("soft", "robust") and t.scaled_by_lam for t in self.terms())
+
+    # ------------------------------------------------------ observability
+    def null_directions(self) -> tuple[np.ndarray, list[str]]:
+        """Directions of ``x`` the FEM equations leave free when ``w = 0``.
+
+        Returns
+        -------
+        Z : ndarray, shape (n_unknowns, 2 d + q)
+            Per axis a position offset and a velocity offset, then one direction per
+            error-model parameter (the trajectory change it causes, starting at rest).
+        names : list of str
+        """
+        m = self.model
+        t = m.grid.t
+        cols, names = [], []
+        for a, ax in enumerate(m.axes):
+            z = np.zeros(m.size)
+            z[m.r_index(a)] = 1.0
+            cols.append(z)
+            names.append(f"axis {ax}: position offset")
+            z = np.zeros(m.size)
+            z[m.r_index(a)] = t - t[0]
+            z[list(m.v_end_index(a))] = 1.0
+            cols.append(z)
+            names.append(f"axis {ax}: velocity offset")
+        h = m.grid.h
+        for k, pname in enumerate(m.param_names):
+            z = np.zeros(m.size)
+            z[m.l_index[k]] = 1.0
+            for a in range(m.d):
+                mg = m.M @ m.G[:, a, k]
+                s = np.cumsum(mg)[:-1]  # element slopes with v0 = 0
+                r = np.concatenate([[0.0], np.cumsum(s * h)])
+                z[m.r_index(a)] = r
+                i0, i1 = m.v_end_index(a)
+                z[i0] = 0.0
+                z[i1] = s[-1] + mg[-1]
+            cols.append(z)
+            names.append(f"parameter {pname}")
+        return np.column_stack(cols), names
+
+    def unobservable(self) -> list[str]:
+        """Names of unknown directions that no item pins down (empty when all are)."""
+        terms = [t for t in self.terms() if t.kind == "equality"]
+        Z, names = self.null_directions()
+        if not terms:
+            return names
+        D = Affine.vstack([t.residual for t in terms]).A
+        DZ = D @ Z
+        norms = np.linalg.norm(DZ, axis=0)
+        scale = norms.max() if norms.size and norms.max() > 0 else 1.0
+        out = [names[k] for k in np.flatnonzero(norms <= 1e-12 * scale)]
+        ok = np.flatnonzero(norms > 1e-12 * scale)
+        if ok.size:
+            Dn = DZ[:, ok] / norms[ok]
+            u, s, vt = np.linalg.svd(Dn, full_matrices=False)
+            for k in np.flatnonzero(s < 1e-9 * s[0]):
+                comb = vt[k]
+                big = np.flatnonzero(np.abs(comb) > 0.1 * np.abs(comb).max())
+                out.append(" + ".join(names[ok[j]] for j in big) + " (only in combination)")
+        return out
+
+    def check_observability(self) -> None:
+        """Raise :class:`InputError` naming what the information leaves undetermined."""
+        missing = self.unobservable()
+        if missing:
+            raise InputError(
+                "not enough information: nothing determines " + "; ".join(missing)
+                + ". Add items (e.g. Position at an end for an offset, a second Position or a "
+                "Velocity for a velocity offset, more velocities for error-model parameters) "
+                "or remove error-model parameters."
+            )
+
+    # ------------------------------------------------------------ solving
+    def solve(
+        self,
+        solver: str = "clarabel",
+        lam: float | str = 1.0,
+        accuracy: str = "default",
+        verify: bool = True,
+        options: dict | None = None,
+        verbose: bool = False,
+    ) -> Solution:
+        """Solve and verify.
+
+        Parameters
+        ----------
+        solver : str
+            Case-insensitive solver name (``bvpnav.available_solvers()``).
+        lam : float or str
+            Regularization weight (dimensionless ratio of the item terms to the data
+            term), or the name of a rule that chooses it.
+        accuracy : {"low", "default", "high"}
+            Preset mapped to the solver's options and to the verification tolerance.
+        verify : bool
+            Recompute residuals and raise :class:`~bvpnav.errors.Inaccurate` if the
+            answer fails (default True; switch off only to inspect a failure).
+        options : dict, optional
+            Extra solver options, on top of the preset.
+
+        Returns
+        -------
+        Solution
+        """
+        lam_rule = "fixed"
+        if isinstance(lam, str):
+            from . import regularization
+
+            return regularization.solve_with_rule(self, lam, solver=solver, accuracy=accuracy,
+                                                  options=options)
+        lam = float(lam)
+        if not np.isfinite(lam) or lam < 0:
+            raise InputError(f"lam={lam!r}: must be a finite number >= 0")
+        backend = resolve_solver(solver)
+        opts = solver_options(backend, accuracy, options)
+        self.check_observability()
+        t_start = time.perf_counter()
+        if backend.kind == "direct":
+            xval, info = backend.run(self, lam, accuracy, opts)
+            duals = info.pop("duals", None)
+        else:
+            xval, info, duals = self._solve_cvxpy(backend, lam, opts, verbose)
+        info["wall_time"] = time.perf_counter() - t_start
+        info.update(solver=backend.name, accuracy=accuracy, options=opts)
+        return self._finish(xval, lam, lam_rule, info, duals, accuracy, verify)
+
+    def _solve_cvxpy(self, backend, lam: float, opts: dict, verbose: bool):
+        cvx = self.build()
+        prob: cp.Problem = cvx["problem"]
+        cvx["lam"].value = lam
+        t0 = time.perf_counter()
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                prob.solve(solver=backend.cvxpy_name, verbose=verbose, **opts)
+        except cp.error.SolverError as exc:
+            raise SolveError(
+                f"{backend.name} failed: {exc}",
+                attempts=[{"solver": backend.name, "status": "solver_error", "reason": str(exc)}],
+            ) from exc
+        wall = time.perf_counter() - t0
+        status = prob.status
+        st = prob.solver_stats
+        info = {
+            "status": status,
+            "iterations": getattr(st, "num_iters", None),
+            "solve_time": getattr(st, "solve_time", None),
+            "setup_time": getattr(st, "setup_time", None),
+            "compile_time": getattr(prob, "compilation_time", None),
+            "cvxpy_time": wall,
+            "objective": prob.value,
+            "solver_warnings": [str(w.message) for w in caught],
+        }
+        if status in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE):
+            hard = [t.label for t in self.terms() if t.mode in ("hard", "band")]
+            raise Infeasible(
+                f"{backend.name}: the hard information cannot hold together (status {status}). "
+                f"Hard/band items: {hard}. Soften some of them (give sigma=...).",
+                attempts=[{"solver": backend.name, "status": status, "reason": "infeasible"}],
+            )
+        if status in (cp.UNBOUNDED, cp.UNBOUNDED_INACCURATE):
+            raise Unbounded(
+                f"{backend.name}: the problem is unbounded (status {status}); some unknown is not "
+                "determined by any information",
+                attempts=[{"solver": backend.name, "status": status, "reason": "unbounded"}],
+            )
+        if cvx["x"].value is None:
+            raise SolveError(
+                f"{backend.name} returned no solution (status {status})",
+                attempts=[{"solver": backend.name, "status": status, "reason": "no solution"}],
+            )
+        duals = {"fem": cvx["fem"].dual_value}
+        for label, lst in cvx["cons"].items():
+            duals[label] = [c.dual_value for c in lst]
+        return np.array(cvx["x"].value, dtype=float), info, duals
+
+    # ------------------------------------------------------- verification
+    def verify(self, xval: np.ndarray, lam: float, accuracy: str = "default",
+               duals: dict | None = None) -> dict[str, Any]:
+        """Recompute the FEM residual, hard-item violations and (when duals are given
+        and the objective is smooth) the stationarity residual.
+
+        Returns
+        -------
+        dict
+            ``fem_residual`` (relative), ``max_violation`` (relative, over hard, band and
+            inequality items), ``worst_item``, ``stationarity`` (relative or None),
+            ``rtol`` and ``verified`` (bool).
+        """
+        rtol = VERIFY_RTOL[accuracy]
+        model = self.model
+        fem = model.fem_rows()
+        res = fem.value(xval)
+        scale = fem.row_scale(xval)
+        fem_rel = float(np.max(np.abs(res)) / max(np.max(scale), 1e-300))
+        worst, worst_item = 0.0, None
+        for term in self.terms():
+            if term.mode not in ("hard", "band") and not (term.kind == "inequality"
+                                                          and term.mode == "hard"):
+                continue
+            r = term.residual.value(xval)
+            if term.kind == "equality":
+                v = np.abs(r) if term.mode == "hard" else np.maximum(np.abs(r) - term.tol, 0)
+            else:
+                v = np.maximum(r - (term.tol if term.mode == "band" else 0.0), 0)
+            sc = max(float(np.max(term.residual.row_scale(xval))), 1.0)
+            rel = float(np.max(v) / sc)
+            if rel > worst:
+                worst, worst_item = rel, term.label
+        stat = None
+        if duals is not None:
+            stat = self._stationarity(xval, lam, duals)
+        ok = fem_rel <= rtol and worst <= rtol * 10 and (stat is None or stat <= np.sqrt(rtol))
+        return {"fem_residual": fem_rel, "max_violation": worst, "worst_item": worst_item,
+                "stationarity": stat, "rtol": rtol, "verified": bool(ok)}
+
+    def _stationarity(self, xval: np.ndarray, lam: float, duals: dict) -> float | None:
+        """Relative norm of the Lagrangian gradient (None for non-smooth objectives)."""
+        grads = []
+        data = self.data_rows()
+        grads.append(2.0 * (data.A.T @ data.value(xval)))
+        model = self.model
+        fem = model.fem_rows()
+        y = duals.get("fem")
+        if y is None:
+            return None
+        grads.append(fem.A.T @ np.asarray(y, dtype=float).ravel())
+        for term in self.terms():
+            r = term.residual.value(xval)
+            A = term.residual.A
+            k = lam if term.scaled_by_lam else 1.0
+            if term.mode == "soft" and term.kind == "equality":
+                grads.append(k * 2.0 * (A.T @ (r / term.sigma**2)))
+            elif term.mode == "soft":
+                grads.append(k * 2.0 * (A.T @ (np.maximum(r, 0) / term.sigma**2)))
+            elif term.mode == "robust":
+                if term.huber is None or term.kind != "equality":
+                    return None
+                g = np.where(np.abs(r) <= term.huber, 2.0 * r, 2.0 * term.huber * np.sign(r))
+                grads.append(k * (A.T @ (g / term.sigma**2)))
+            else:
+                dl = duals.get(term.label)
+                if dl is None or any(d is None for d in dl):
+                    return None
+                if term.kind == "equality" and term.mode == "band":
+                    z = np.asarray(dl[0]).ravel() - np.asarray(dl[1]).ravel()
+                else:
+                    z = np.asarray(dl[0]).ravel()
+                grads.append(A.T @ z)
+        total = np.sum(grads, axis=0)
+        # floor: the data-term gradient if the residual were as large as the measurement
+        probe = np.zeros(model.size)
+        for a in range(model.d):
+            probe[model.w_index(a)] = model.data.acc[:, a]
+        floor = float(np.max(np.abs(2.0 * (data.A.T @ data.value(probe)))))
+        scale = max(max(float(np.max(np.abs(g))) for g in grads), floor, 1e-300)
+        return float(np.max(np.abs(total)) / scale)
+
+    # -------------------------------------------------------------- result
+    def _finish(self, xval, lam, lam_rule, info, duals, accuracy, verify) -> Solution:
+        check = self.verify(xval, lam, accuracy, duals)
+        info["verification"] = check
+        info["verified"] = check["verified"]
+        info.setdefault("attempts", []).append(
+            {"solver": info["solver"], "status": info.get("status"),
+             "reason": "verified" if check["verified"] else "failed verification"}
+        )
+        if verify and not check["verified"]:
+            raise Inaccurate(
+                f"{info['solver']} (status {info.get('status')}, accuracy={accuracy!r}) returned an "
+                f"answer that fails verification: FEM residual {check['fem_residual']:.2e}, "
+                f"worst hard-item violation {check['max_violation']:.2e} "
+                f"({check['worst_item']}), stationarity {check['stationarity']}, "
+                f"tolerance {check['rtol']:.0e}. Try accuracy='high', another solver "
+                "(e.g. solver='direct' for problems without inequalities), or residual="
+                "'acceleration'.",
+                attempts=info["attempts"],
+            )
+        return self._make_solution(xval, lam, lam_rule, info, duals)
+
+    def _make_solution(self, xval, lam, lam_rule, info, duals) -> Solution:
+        model = self.model
+        t = model.grid.t
+        idx = pd.Index(t, name="t")
+        cols = {}
+        for a, ax in enumerate(model.axes):
+            cols[ax] = model.node_position(a).value(xval)
+        for a, ax in enumerate(model.axes):
+            cols["v" + ax] = model.node_velocity(a).value(xval)
+        traj = pd.DataFrame(cols, index=idx)
+        parts = model.split(xval)
+        resid = pd.DataFrame({f"w_{ax}": parts["w"][:, a] for a, ax in enumerate(model.axes)},
+                             index=idx)
+        rows, item_res = [], {}
+        for term in self.terms():
+            r = term.residual.value(xval)
+            item_res[term.label] = r
+            shown = np.maximum(r, 0) if term.kind == "inequality" else r
+            dual_rms = None
+            if duals is not None and duals.get(term.label):
+                ds = [np.asarray(d).ravel() for d in duals[term.label] if d is not None]
+                if ds:
+                    dual_rms = float(np.sqrt(np.mean(np.concatenate(ds) ** 2)))
+            rows.append({
+                "item": term.label,
+                "class": type(term.item).__name__ if term.item is not None else "prior",
+                "mode": term.mode, "kind": term.kind, "rows": term.residual.m,
+                "units": term.units,
+                "rms": float(np.sqrt(np.mean(shown**2))), "max_abs": float(np.max(np.abs(shown))),
+                "dual_rms": dual_rms,
+            })
+        items_df = pd.DataFrame(rows, columns=["item", "class", "mode", "kind", "rows", "units",
+                                               "rms", "max_abs", "dual_rms"])
+        if self.error_model is not None and model.q:
+            params = self.error_model.report(parts["l"], model)
+        else:
+            params = pd.Series(dtype=float, name="estimate")
+        warn = []
+        gaps = model.grid.gaps()
+        if gaps.size:
+            warn.append(f"{gaps.size} time step(s) longer than 10x the median step (first at sample "
+                        f"{gaps[0]}, t={t[gaps[0]]:g} s); results across gaps rely on the "
+                        "linear-acceleration assumption")
+        return Solution(trajectory=traj, residuals=resid, items=items_df, item_residuals=item_res,
+                        lam=float(lam), lam_rule=lam_rule, error_params=params, stats=info,
+                        x=xval, warnings=warn)
+
+
+class _Renamed:
+    """Give a second unnamed item of the same class a unique label without mutating it."""
+
+    @staticmethod
+    def wrap(item: Item, label: str) -> Item:
+        clone = object.__new__(type(item))
+        clone.__dict__.update(item.__dict__)
+        object.__setattr__(clone, "name", label)
+        object.__setattr__(clone, "_original", item)
+        return clone
+
+    @staticmethod
+    def unwrap(item: Item) -> Item:
+        return item.__dict__.get("_original", item)
