@@ -202,7 +202,7 @@ class NavModel:
             parts.append(sp.coo_matrix(blocks["l"]))
             cols.append(self.d * self.block)
         rows = np.concatenate([p.row for p in parts])
-        cc = np.concatenate([p.col + c0 for p, c0 in zip(parts, cols)])
+        cc = np.concatenate([p.col + c0 for p, c0 in zip(parts, cols, strict=False)])
         vals = np.concatenate([p.data for p in parts])
         return sp.csr_matrix((vals, (rows, cc)), shape=(m, self.size))
 
