@@ -370,8 +370,9 @@ class NavigationProblem:
         verify: bool = True,
         options: dict | None = None,
         verbose: bool = False,
+        fallback="auto",
     ) -> Solution:
-        """Solve and verify.
+        """Solve and verify, falling back to other back ends when an answer fails.
 
         Parameters
         ----------
@@ -379,20 +380,35 @@ class NavigationProblem:
             Case-insensitive solver name (``bvpnav.available_solvers()``).
         lam : float or str
             Regularization weight (dimensionless ratio of the item terms to the data
-            term), or the name of a rule that chooses it.
+            term), or the name of a rule that chooses it (``"lcurve"``, ``"gcv"``,
+            ``"discrepancy"``, ``"quasi"``).
         accuracy : {"low", "default", "high"}
             Preset mapped to the solver's options and to the verification tolerance.
         verify : bool
-            Recompute residuals and raise :class:`~bvpnav.errors.Inaccurate` if the
-            answer fails (default True; switch off only to inspect a failure).
+            Recompute residuals and refuse answers that fail (default True; switch off
+            only to inspect a failure: the result then says ``verified=False``).
         options : dict, optional
             Extra solver options, on top of the preset.
+        fallback : "auto", sequence or None
+            What to try when the answer fails verification or the solver errs: a
+            sequence of solver names or ``(name, options)`` pairs; ``"auto"`` retries
+            Clarabel with static regularization switched on (it helps small problems
+            with many hard rows, hurts large ones) and then the direct back end when
+            the problem is least squares; ``None`` or ``()`` disables it. Every attempt
+            is recorded in ``solution.stats["attempts"]`` with its reason.
 
         Returns
         -------
         Solution
+
+        Raises
+        ------
+        InputError
+            Before solving, for bad input or information that leaves unknowns free.
+        SolveError
+            (``Infeasible``, ``Unbounded``, ``Inaccurate``) when every attempt failed;
+            ``error.attempts`` lists each attempt's status and reason.
         """
-        lam_rule = "fixed"
         if isinstance(lam, str):
             from . import regularization
 
@@ -404,6 +420,66 @@ class NavigationProblem:
         backend = resolve_solver(solver)
         opts = solver_options(backend, accuracy, options)
         self.check_observability()
+        chain = [(backend, opts)] + self._fallback_chain(backend, accuracy, options, fallback)
+        attempts: list[dict] = []
+        last_exc: SolveError | None = None
+        for k, (be, op) in enumerate(chain):
+            try:
+                sol = self._attempt(be, op, lam, accuracy, verify, verbose)
+            except Infeasible as exc:  # infeasibility is a property of the information
+                exc.attempts = attempts + exc.attempts
+                raise
+            except SolveError as exc:
+                attempts.extend(exc.attempts or [{"solver": be.name, "status": "error",
+                                                  "reason": str(exc)}])
+                last_exc = exc
+                if not verify and k == 0:
+                    raise
+                continue
+            sol.stats["attempts"] = attempts + sol.stats["attempts"]
+            if attempts:
+                sol.warnings.append(
+                    f"{backend.name} failed ({attempts[0]['reason']}); the answer comes from "
+                    f"{be.name} with options {op}"
+                )
+            return sol
+        assert last_exc is not None
+        summary = "; ".join(f"{a['solver']}: {a['status']} ({a['reason']})" for a in attempts)
+        raise type(last_exc)(f"every attempt failed: {summary}. Last error: {last_exc}",
+                             attempts=attempts)
+
+    def _fallback_chain(self, backend, accuracy, options, fallback) -> list:
+        from .solvers import Backend
+
+        if fallback is None or (not isinstance(fallback, str) and len(fallback) == 0):
+            return []
+        entries: list = []
+        if isinstance(fallback, str):
+            if fallback != "auto":
+                raise InputError(f"fallback={fallback!r}; use 'auto', a list of solver names, or None")
+            if backend.name == "clarabel":
+                entries.append(("clarabel", {"static_regularization_enable": True}))
+            entries.append("direct")
+            if backend.name != "clarabel":
+                entries.append("clarabel")
+        else:
+            entries = list(fallback)
+        chain = []
+        for e in entries:
+            name, extra = (e, {}) if isinstance(e, str) else (e[0], dict(e[1]))
+            try:
+                be = resolve_solver(name)
+            except BvpnavError:
+                if fallback == "auto":
+                    continue  # an optional back end that is not installed
+                raise
+            if isinstance(be, Backend) and be.name == backend.name and not extra:
+                continue
+            chain.append((be, solver_options(be, accuracy, {**(options or {}), **extra}
+                                             if be.name == backend.name else extra)))
+        return chain
+
+    def _attempt(self, backend, opts, lam, accuracy, verify, verbose) -> Solution:
         t_start = time.perf_counter()
         if backend.kind == "direct":
             xval, info = backend.run(self, lam, accuracy, opts)
@@ -412,7 +488,7 @@ class NavigationProblem:
             xval, info, duals = self._solve_cvxpy(backend, lam, opts, verbose)
         info["wall_time"] = time.perf_counter() - t_start
         info.update(solver=backend.name, accuracy=accuracy, options=opts)
-        return self._finish(xval, lam, lam_rule, info, duals, accuracy, verify)
+        return self._finish(xval, lam, "fixed", info, duals, accuracy, verify)
 
     def _solve_cvxpy(self, backend, lam: float, opts: dict, verbose: bool):
         cvx = self.build()
@@ -500,9 +576,13 @@ class NavigationProblem:
         stat = None
         if duals is not None:
             stat = self._stationarity(xval, lam, duals)
-        ok = fem_rel <= rtol and worst <= rtol * 10 and (stat is None or stat <= np.sqrt(rtol))
+        from .kkt import FORWARD_RTOL, forward_error
+
+        fwd = forward_error(self, xval, lam, duals)
+        ok = (fem_rel <= rtol and worst <= rtol * 10 and (stat is None or stat <= np.sqrt(rtol))
+              and (fwd is None or fwd <= FORWARD_RTOL[accuracy]))
         return {"fem_residual": fem_rel, "max_violation": worst, "worst_item": worst_item,
-                "stationarity": stat, "rtol": rtol, "verified": bool(ok)}
+                "stationarity": stat, "forward_error": fwd, "rtol": rtol, "verified": bool(ok)}
 
     def _stationarity(self, xval: np.ndarray, lam: float, duals: dict) -> float | None:
         """Relative norm of the Lagrangian gradient (None for non-smooth objectives)."""
@@ -561,6 +641,7 @@ class NavigationProblem:
                 f"answer that fails verification: FEM residual {check['fem_residual']:.2e}, "
                 f"worst hard-item violation {check['max_violation']:.2e} "
                 f"({check['worst_item']}), stationarity {check['stationarity']}, "
+                f"estimated forward error {check['forward_error']}, "
                 f"tolerance {check['rtol']:.0e}. Try accuracy='high', another solver "
                 "(e.g. solver='direct' for problems without inequalities), or residual="
                 "'acceleration'.",

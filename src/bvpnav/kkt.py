@@ -1,0 +1,146 @@
+"""The equality-constrained least-squares view of a problem, and a forward-error check.
+
+Problems whose items are all hard or soft (no inequalities, bands or robust
+penalties) are linear least squares with linear equality constraints:
+
+.. math::
+
+    \\min_x \\|D x + c\\|^2 \\quad \\text{s.t.} \\quad E x + e = 0,
+
+where ``D`` stacks the data rows and the soft rows (weighted by
+:math:`\\sqrt{\\lambda}/\\sigma`, priors by :math:`1/\\sigma`) and ``E`` stacks the FEM rows and
+the hard items. Its optimality conditions, written with the residual
+:math:`\\rho = D x + c` and :math:`\\mu = y/2` so that no normal matrix is formed, are the
+augmented system
+
+.. math::
+
+    \\begin{bmatrix} -I & D & 0 \\\\ D^T & 0 & E^T \\\\ 0 & E & 0 \\end{bmatrix}
+    \\begin{bmatrix} \\rho \\\\ x \\\\ \\mu \\end{bmatrix} =
+    \\begin{bmatrix} -c \\\\ 0 \\\\ -e \\end{bmatrix}.
+
+One step of iterative refinement on this system from a solver's answer estimates that
+answer's forward error; bvpnav uses it to judge solvers' answers on problems where
+small residuals do not imply an accurate trajectory (the load-residual form is
+ill-conditioned roughly like :math:`N^4`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .model import Affine
+
+__all__ = ["LeastSquaresForm", "least_squares_form", "forward_error"]
+
+#: Largest relative forward error accepted per accuracy preset.
+FORWARD_RTOL = {"low": 1e-4, "default": 1e-6, "high": 1e-8}
+
+
+@dataclass(eq=False)
+class LeastSquaresForm:
+    """``min ||D x + c||^2 s.t. E x + e = 0`` with row bookkeeping.
+
+    Attributes
+    ----------
+    D : Affine
+        Objective rows (data, then soft items, then priors), already weighted.
+    E : Affine
+        Equality rows (FEM first, then hard items).
+    eq_blocks : list of (label, slice)
+        Which rows of ``E`` belong to the FEM (label ``"fem"``) and to each hard item.
+    """
+
+    D: Affine
+    E: Affine
+    eq_blocks: list
+
+    def augmented(self) -> sp.csc_matrix:
+        """The symmetric indefinite augmented matrix (see module Notes)."""
+        m, n = self.D.A.shape
+        p = self.E.A.shape[0]
+        return sp.bmat(
+            [[-sp.identity(m), self.D.A, None],
+             [self.D.A.T, None, self.E.A.T],
+             [None, self.E.A, sp.csr_matrix((p, p))]],
+            format="csc",
+        )
+
+    def rhs(self) -> np.ndarray:
+        """Right-hand side of the augmented system."""
+        n = self.D.A.shape[1]
+        return np.concatenate([-self.D.c, np.zeros(n), -self.E.c])
+
+
+def least_squares_form(problem, lam: float) -> LeastSquaresForm | None:
+    """The problem as equality-constrained least squares, or None if it is not one.
+
+    Returns None when an item is an inequality, a band or a robust penalty.
+    """
+    model = problem.model
+    obj = [problem.data_rows()]
+    eq = [model.fem_rows()]
+    blocks = [("fem", slice(0, eq[0].m))]
+    start = eq[0].m
+    for term in problem.terms():
+        if term.kind != "equality" or term.mode in ("band", "robust"):
+            return None
+        if term.mode == "hard":
+            eq.append(term.residual)
+            blocks.append((term.label, slice(start, start + term.residual.m)))
+            start += term.residual.m
+        else:
+            k = np.sqrt(lam) if term.scaled_by_lam else 1.0
+            obj.append(term.residual * (k / term.sigma))
+    return LeastSquaresForm(Affine.vstack(obj), Affine.vstack(eq), blocks)
+
+
+def forward_error(problem, xval: np.ndarray, lam: float, duals: dict | None) -> float | None:
+    """Relative forward error of ``xval`` estimated by one refinement step.
+
+    Parameters
+    ----------
+    problem : NavigationProblem
+    xval : ndarray
+        The stacked solution to judge.
+    lam : float
+    duals : dict or None
+        ``{"fem": y, label: [y_item]}`` in cvxpy's sign convention (Lagrangian
+        ``f + y^T (E x + e)``). Missing duals are estimated as zero, which makes the
+        estimate pessimistic, never optimistic.
+
+    Returns
+    -------
+    float or None
+        :math:`\\|\\delta x\\|_\\infty / \\|x\\|_\\infty` for the correction :math:`\\delta` of one
+        refinement step, or None when the problem is not equality-constrained least
+        squares.
+    """
+    form = least_squares_form(problem, lam)
+    if form is None:
+        return None
+    p = form.E.m
+    y = np.zeros(p)
+    if duals:
+        for label, sl in form.eq_blocks:
+            d = duals.get(label)
+            if label != "fem":
+                d = d[0] if d else None
+            if d is not None:
+                y[sl] = np.asarray(d, dtype=float).ravel()
+    rho = form.D.value(xval)
+    z = np.concatenate([rho, xval, y / 2.0])
+    S = form.augmented()
+    resid = form.rhs() - S @ z
+    try:
+        lu = spla.splu(S, permc_spec="COLAMD")
+        delta = lu.solve(resid)
+    except RuntimeError:  # singular: the information does not determine x
+        return float("inf")
+    m = form.D.m
+    dx = delta[m:m + xval.size]
+    return float(np.max(np.abs(dx)) / max(np.max(np.abs(xval)), 1e-300))
