@@ -55,6 +55,11 @@ class AverageVelocity(Item):
         object.__setattr__(self, "t1", b)
         object.__setattr__(self, "value", finite(self.value, self.label))
 
+    @classmethod
+    def example(cls) -> AverageVelocity:
+        """A valid instance for a window of [0, 10] s with axes x, y, z (contract tests)."""
+        return cls(t0=[1.0, 3.0], t1=[2.0, 9.5], value=[0.2, -0.1])
+
     def compile(self, model):
         ax = model.axes_of(self.axes, self.label)
         what = f"{self.label}(t0/t1)"

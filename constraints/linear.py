@@ -70,6 +70,11 @@ class Linear(Item):
         object.__setattr__(self, "coef", c)
         object.__setattr__(self, "value", v)
 
+    @classmethod
+    def example(cls) -> Linear:
+        """A valid instance for a window of [0, 10] s with axes x, y, z (contract tests)."""
+        return cls(t=[2.0, 8.0], coef=[[1.0, -1.0]], value=0.5, axes="y")
+
     def compile(self, model):
         ax = model.axes_of(self.axes, self.label)
         if self.coef.shape[2] != len(ax):

@@ -41,6 +41,11 @@ class Position(Item):
         object.__setattr__(self, "t", times(self.t, self.label))
         object.__setattr__(self, "value", finite(self.value, self.label))
 
+    @classmethod
+    def example(cls) -> Position:
+        """A valid instance for a window of [0, 10] s with axes x, y, z (contract tests)."""
+        return cls(t=[0.0, 2.5, 10.0], value=[0.0, 1.0, 3.0])
+
     def compile(self, model):
         ax = model.axes_of(self.axes, self.label)
         rows = model.position(self.t, self.axes, what=f"{self.label}(t=...)")

@@ -90,6 +90,11 @@ class Symmetry(Item):
             raise InputError(f"{self.label}: no sample lies within the mirrored range around {c!r} s")
         return np.minimum(tau, reach)
 
+    @classmethod
+    def example(cls) -> Symmetry:
+        """A valid instance for a window of [0, 10] s with axes x, y, z (contract tests)."""
+        return cls(about=5.0, halfwidth=4.0)
+
     def compile(self, model):
         tau = self.taus(model.grid)
         what = f"{self.label}(about={self.about:g})"
@@ -97,9 +102,7 @@ class Symmetry(Item):
         left = model.position(self.about - tau, self.axes, what)
         if self.parity == "even":
             return right - left
-        ax = model.axes_of(self.axes, self.label)
         centre = model.position(np.full(tau.size, self.about), self.axes, what)
-        del ax
         return right + left - centre * 2.0
 
     def math(self) -> str:

@@ -42,6 +42,11 @@ class Velocity(Item):
         object.__setattr__(self, "t", times(self.t, self.label))
         object.__setattr__(self, "value", finite(self.value, self.label))
 
+    @classmethod
+    def example(cls) -> Velocity:
+        """A valid instance for a window of [0, 10] s with axes x, y, z (contract tests)."""
+        return cls(t=[0.0, 4.2, 10.0], value=0.5)
+
     def compile(self, model):
         ax = model.axes_of(self.axes, self.label)
         rows = model.velocity(self.t, self.axes, what=f"{self.label}(t=...)")

@@ -46,6 +46,11 @@ class ZeroVelocity(Item):
         inner = grid.t[(grid.t > self.t0) & (grid.t < self.t1)]
         return np.concatenate([[self.t0], inner, [self.t1]])
 
+    @classmethod
+    def example(cls) -> ZeroVelocity:
+        """A valid instance for a window of [0, 10] s with axes x, y, z (contract tests)."""
+        return cls(t0=0.0, t1=1.0)
+
     def compile(self, model):
         return model.velocity(self.instants(model.grid), self.axes, f"{self.label}(t0/t1)")
 

@@ -176,6 +176,15 @@ class Item:
         """
         raise NotImplementedError
 
+    @classmethod
+    def example(cls) -> Item:
+        """A valid instance for a window of [0, 10] s with axes x, y, z.
+
+        Every registered item provides one, so the shared contract test
+        (``tests/test_contract.py``) can exercise it without a list to maintain.
+        """
+        raise NotImplementedError(f"{cls.__name__} must implement example() for the contract test")
+
     def math(self) -> str:
         """One line of plain-text mathematics for ``describe()``."""
         return f"{type(self).__name__}"

@@ -1,0 +1,41 @@
+"""The installed package exposes every file of the top-level constraints/ folder."""
+
+from __future__ import annotations
+
+import importlib
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+FILES = sorted(p.name for p in (ROOT / "constraints").glob("*.py"))
+
+
+def test_every_constraints_file_imports_from_the_installed_package():
+    import bvpnav.constraints as pkg
+
+    installed = Path(pkg.__file__).parent
+    for name in FILES:
+        if name == "__init__.py":
+            continue
+        mod = importlib.import_module(f"bvpnav.constraints.{name[:-3]}")
+        assert Path(mod.__file__).name == name
+        assert (installed / name).exists()
+
+
+def test_wheel_contains_every_constraints_file(tmp_path):
+    """What `pip install .` installs: build the wheel and read its file list."""
+    proc = subprocess.run(
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(tmp_path), str(ROOT)],
+        capture_output=True, text=True, timeout=300,
+    )
+    if proc.returncode != 0:
+        pytest.fail(f"building the wheel failed:\n{proc.stdout}\n{proc.stderr}")
+    wheel = next(tmp_path.glob("bvpnav-*.whl"))
+    names = set(zipfile.ZipFile(wheel).namelist())
+    for name in FILES:
+        assert f"bvpnav/constraints/{name}" in names, name
+    assert "bvpnav/__init__.py" in names and "bvpnav/problem.py" in names
