@@ -68,7 +68,11 @@ class ImuData:
 
     .. math:: a(t_i) = C_i f_i + g,
 
-    with ``C_i`` the body-to-navigation rotation matrix of sample i.
+    with ``C_i`` the body-to-navigation rotation matrix of sample i
+    (``v_nav = C_i v_body``). Frames: the navigation frame is whatever frame the
+    positions are wanted in (z up with the default gravity); the body frame is the
+    accelerometer triad's. To integrate the attitude from gyro rates use
+    :meth:`from_gyro`.
     """
 
     def __init__(
@@ -86,6 +90,8 @@ class ImuData:
         self.specific_force: np.ndarray | None = None
         self.attitude: Rotation | None = None
         self.gravity: np.ndarray | None = None
+        #: Body rates (N, 3) in rad/s when the attitude came from :meth:`from_gyro`.
+        self.gyro: np.ndarray | None = None
         if acc is not None and specific_force is not None:
             raise InputError("give either acc (navigation frame) or specific_force, not both")
         if acc is None and specific_force is None:
@@ -130,6 +136,48 @@ class ImuData:
         a.setflags(write=False)
         self.acc: np.ndarray = a
         self.axes: tuple[str, ...] = axes
+
+    @classmethod
+    def from_gyro(
+        cls,
+        t,
+        specific_force,
+        gyro,
+        *,
+        initial_attitude: Rotation | None = None,
+        gravity=None,
+    ) -> ImuData:
+        """Strapdown data whose attitude is integrated from gyro rates.
+
+        Parameters
+        ----------
+        t : array_like, shape (N,)
+            Sample times in s.
+        specific_force : array_like, shape (N, 3)
+            Body-frame specific force in m/s^2.
+        gyro : array_like, shape (N, 3)
+            Body angular rates relative to the navigation frame, rad/s (body axes).
+        initial_attitude : scipy.spatial.transform.Rotation, optional
+            Body-to-navigation attitude at ``t[0]``; default identity.
+        gravity : array_like, shape (3,), optional
+            Navigation-frame gravity in m/s^2 (default ``(0, 0, -9.80665)``).
+
+        Notes
+        -----
+        :math:`C_{k+1} = C_k \\exp([\\phi_k\\times])` with the step rotation vector
+        :math:`\\phi_k = \\tfrac{h_k}{2}(\\omega_k + \\omega_{k+1}) + \\tfrac{h_k^2}{12}\\,
+        \\omega_k \\times \\omega_{k+1}` (see :func:`bvpnav.attitude.integrate_gyro`);
+        then :math:`a_i = C_i f_i + g`. The rates are kept in ``data.gyro``.
+        """
+        from .attitude import integrate_gyro
+
+        grid = TimeGrid(t)
+        rot = integrate_gyro(grid.t, gyro, initial_attitude)
+        out = cls(grid.t, specific_force=specific_force, attitude=rot, gravity=gravity)
+        w = np.array(gyro, dtype=float)
+        w.setflags(write=False)
+        out.gyro = w
+        return out
 
     @staticmethod
     def _as_rotation(attitude, n: int) -> Rotation:
