@@ -68,5 +68,9 @@ class AverageVelocity(Item):
         rows = rows / dt
         return rows - as_values(self.value, self.t0.size, len(ax), f"{self.label}: value")
 
+    def latex(self) -> str:
+        """The residual's equation for ``describe(format="latex")`` (mathtext)."""
+        return r"\frac{r(t_{1,k}) - r(t_{0,k})}{t_{1,k} - t_{0,k}} - \bar v_k = 0"
+
     def math(self) -> str:
         return f"(r(t1_k) - r(t0_k)) / (t1_k - t0_k) - vbar_k = 0 over {self.t0.size} interval(s)"

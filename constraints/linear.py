@@ -89,5 +89,9 @@ class Linear(Item):
         rhs = np.broadcast_to(self.value.ravel(), (C.shape[0],))
         return Affine(C @ base.A, C @ base.c - rhs)
 
+    def latex(self) -> str:
+        """The residual's equation for ``describe(format="latex")`` (mathtext)."""
+        return r"\sum_j C_{ij}\, q(t_j) - e_i = 0"
+
     def math(self) -> str:
         return f"sum_k C_ik {self.quantity}(t_k) - e_i = 0 ({self.coef.shape[0]} row(s))"

@@ -51,5 +51,9 @@ class Position(Item):
         rows = model.position(self.t, self.axes, what=f"{self.label}(t=...)")
         return rows - as_values(self.value, self.t.size, len(ax), f"{self.label}: value")
 
+    def latex(self) -> str:
+        """The residual's equation for ``describe(format="latex")`` (mathtext)."""
+        return r"r(t_k) - p_k = 0"
+
     def math(self) -> str:
         return f"r(t_k) - p_k = 0 at {self.t.size} instant(s)"

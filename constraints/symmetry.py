@@ -105,6 +105,12 @@ class Symmetry(Item):
         centre = model.position(np.full(tau.size, self.about), self.axes, what)
         return right + left - centre * 2.0
 
+    def latex(self) -> str:
+        """The residual's equation for ``describe(format="latex")`` (mathtext)."""
+        if self.parity == "even":
+            return r"r(c + \tau_k) - r(c - \tau_k) = 0"
+        return r"r(c + \tau_k) + r(c - \tau_k) - 2 r(c) = 0"
+
     def math(self) -> str:
         if self.parity == "even":
             return f"r(c + tau_k) - r(c - tau_k) = 0, c = {self.about:g} s"

@@ -52,5 +52,9 @@ class Velocity(Item):
         rows = model.velocity(self.t, self.axes, what=f"{self.label}(t=...)")
         return rows - as_values(self.value, self.t.size, len(ax), f"{self.label}: value")
 
+    def latex(self) -> str:
+        """The residual's equation for ``describe(format="latex")`` (mathtext)."""
+        return r"v(t_k) - u_k = 0"
+
     def math(self) -> str:
         return f"v(t_k) - u_k = 0 at {self.t.size} instant(s)"

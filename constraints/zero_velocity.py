@@ -54,5 +54,9 @@ class ZeroVelocity(Item):
     def compile(self, model):
         return model.velocity(self.instants(model.grid), self.axes, f"{self.label}(t0/t1)")
 
+    def latex(self) -> str:
+        """The residual's equation for ``describe(format="latex")`` (mathtext)."""
+        return r"v(t_k) = 0"
+
     def math(self) -> str:
         return f"v(t_k) = 0 for t_k in [{self.t0:g}, {self.t1:g}] s"

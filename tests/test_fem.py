@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from bvpnav.constraints import Position, Velocity
 from conftest import exact_piecewise_linear, quintic
 
 import bvpnav
 from bvpnav import fem
+from bvpnav.constraints import Position, Velocity
 from bvpnav.grid import TimeGrid
 
 

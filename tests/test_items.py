@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import quintic
+
+import bvpnav
 from bvpnav.constraints import (
     AverageVelocity,
     Linear,
@@ -12,9 +15,6 @@ from bvpnav.constraints import (
     Velocity,
     ZeroVelocity,
 )
-from conftest import quintic
-
-import bvpnav
 
 T = np.linspace(0.0, 10.0, 401)
 

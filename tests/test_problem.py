@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-from bvpnav.constraints import Position, Velocity
 from conftest import cubic_prior, quintic
 
 import bvpnav
+from bvpnav.constraints import Position, Velocity
 
 
 def table1_problem(n, residual="acceleration", seed=1, scale=0.05, bias=-0.5):

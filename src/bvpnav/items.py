@@ -189,6 +189,10 @@ class Item:
         """One line of plain-text mathematics for ``describe()``."""
         return f"{type(self).__name__}"
 
+    def latex(self) -> str | None:
+        """The residual's equation as mathtext-compatible LaTeX (None: use ``math()``)."""
+        return None
+
     # ------------------------------------------------------------ helpers
     @property
     def label(self) -> str:
