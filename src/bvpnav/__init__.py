@@ -20,6 +20,7 @@ Quick start::
 
 from __future__ import annotations
 
+from . import attitude, error_models, simulate
 from ._version import __version__
 from .errors import (
     BvpnavError,
@@ -56,5 +57,8 @@ __all__ = [
     "SolverNotFound",
     "TimeGrid",
     "Unbounded",
+    "attitude",
     "available_solvers",
+    "error_models",
+    "simulate",
 ]

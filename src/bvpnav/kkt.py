@@ -136,11 +136,57 @@ def forward_error(problem, xval: np.ndarray, lam: float, duals: dict | None) -> 
     z = np.concatenate([rho, xval, y / 2.0])
     S = form.augmented()
     resid = form.rhs() - S @ z
+    m = form.D.m
+    dense = m + problem.model.l_index  # error-model parameters: dense columns of the FEM rows
     try:
-        lu = spla.splu(S, permc_spec="COLAMD")
-        delta = lu.solve(resid)
+        delta = solve_bordered(S, resid, dense)
     except RuntimeError:  # singular: the information does not determine x
         return float("inf")
-    m = form.D.m
     dx = delta[m:m + xval.size]
     return float(np.max(np.abs(dx)) / max(np.max(np.abs(xval)), 1e-300))
+
+
+def solve_bordered(S: sp.spmatrix, rhs: np.ndarray, dense: np.ndarray) -> np.ndarray:
+    r"""Solve ``S z = rhs`` by eliminating a few dense unknowns through their Schur complement.
+
+    Error-model parameters touch every FEM row, so their columns are dense; a sparse LU
+    of the whole matrix then fills in roughly like N^2. Factorising the sparse part
+    alone and handling the q dense unknowns by a q x q Schur complement keeps the cost
+    linear in N.
+
+    Parameters
+    ----------
+    S : sparse matrix, shape (T, T)
+    rhs : ndarray, shape (T,) or (T, k)
+    dense : ndarray of int
+        Indices of the unknowns (and matching equations) to eliminate last.
+
+    Notes
+    -----
+    With ``B`` the sparse block and ``L`` the dense indices,
+
+    .. math:: (S_{LL} - S_{LB} S_{BB}^{-1} S_{BL})\, z_L = r_L - S_{LB} S_{BB}^{-1} r_B,
+              \qquad z_B = S_{BB}^{-1} (r_B - S_{BL} z_L).
+    """
+    S = sp.csc_matrix(S)
+    dense = np.asarray(dense, dtype=int)
+    if dense.size == 0:
+        return spla.splu(S, permc_spec="COLAMD").solve(rhs)
+    keep = np.setdiff1d(np.arange(S.shape[0]), dense)
+    Sr = S[keep]
+    Sd = S[dense]
+    SBB = Sr[:, keep].tocsc()
+    SBL = Sr[:, dense].toarray()
+    SLB = Sd[:, keep].tocsr()
+    SLL = Sd[:, dense].toarray()
+    lu = spla.splu(SBB, permc_spec="COLAMD")
+    rB, rL = rhs[keep], rhs[dense]
+    X = lu.solve(SBL)
+    y0 = lu.solve(rB)
+    schur = SLL - SLB @ X
+    zL = np.linalg.solve(schur, rL - SLB @ y0)
+    zB = y0 - X @ zL
+    z = np.empty_like(rhs, dtype=float)
+    z[keep] = zB
+    z[dense] = zL
+    return z

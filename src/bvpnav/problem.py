@@ -343,11 +343,16 @@ class NavigationProblem:
         ok = np.flatnonzero(norms > 1e-12 * scale)
         if ok.size:
             Dn = DZ[:, ok] / norms[ok]
-            u, s, vt = np.linalg.svd(Dn, full_matrices=False)
-            for k in np.flatnonzero(s < 1e-9 * s[0]):
-                comb = vt[k]
-                big = np.flatnonzero(np.abs(comb) > 0.1 * np.abs(comb).max())
-                out.append(" + ".join(names[ok[j]] for j in big) + " (only in combination)")
+            # full_matrices: with fewer information rows than directions the null space
+            # has more vectors than there are singular values
+            _, s, vt = np.linalg.svd(Dn, full_matrices=True)
+            rank = int(np.sum(s > 1e-9 * s[0])) if s.size else 0
+            null = vt[rank:]
+            if null.shape[0]:
+                involved = sorted({int(j) for comb in null
+                                   for j in np.flatnonzero(np.abs(comb) > 0.1 * np.abs(comb).max())})
+                what = ", ".join(names[ok[j]] for j in involved)
+                out.append(f"{null.shape[0]} combination(s) of: {what}")
         return out
 
     def check_observability(self) -> None:

@@ -1,0 +1,71 @@
+"""Sensor error models: plug-ins that add unknown parameters to the FEM equations.
+
+An error model contributes columns ``G`` (acceleration change per unit of each
+internal parameter) so that the corrected navigation-frame acceleration is
+``a_c = a_hat + G l + w``; the 2010 paper's ``K r = f0 + F l`` with ``F = -M G``.
+Models compose with ``+``; the paper's nine-parameter model (Section 5.3) is::
+
+    from bvpnav.error_models import Bias, ScaleFactor, UnknownGravity
+    model = ScaleFactor() + Bias() + UnknownGravity()
+
+Built-in models, one per file of this package (each discovered on import):
+
+==================  ============================  ==========================
+model               parameters                    units
+==================  ============================  ==========================
+``Bias``            ``bias_<sensor axis>``        m/s^2 (sensor reads high)
+``ScaleFactor``     ``scale_<sensor axis>``       dimensionless (0.01 = +1 %)
+``Misalignment``    ``misalignment_<i><j>``       rad (small angle)
+``UnknownGravity``  ``gravity_<nav axis>``        m/s^2 (gravity vector)
+==================  ============================  ==========================
+
+Measurement convention (the simulator :mod:`bvpnav.simulate` uses the same one):
+
+.. math:: \\hat f = (I + \\mathrm{diag}(s)) (I + \\Theta) f + b + n,
+
+with ``f`` the true specific force in sensor axes, ``s`` the scale-factor errors,
+``Theta`` the misalignment (zero diagonal, ``Theta_ij`` = how much of axis ``j`` sensor
+``i`` picks up), ``b`` the bias and ``n`` noise. Sensor axes are the body axes
+``x, y, z`` for strapdown data and the navigation axes for navigation-frame data
+(``C = I``).
+
+Write your own by subclassing :class:`ErrorModel` and implementing ``names(data)``
+and ``columns(data)`` (see ``examples/custom_error_model.py``).
+"""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+
+from ._base import (
+    CompositeErrorModel,
+    ErrorModel,
+    Param,
+    SensorCorrection,
+    SensorErrorModel,
+    sensor_axes,
+    sensor_frame,
+    sensor_signal,
+)
+
+__all__ = [
+    "CompositeErrorModel",
+    "Param",
+    "SensorCorrection",
+    "ErrorModel",
+    "SensorErrorModel",
+    "sensor_axes",
+    "sensor_frame",
+    "sensor_signal",
+]
+
+for _info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
+    if _info.name.startswith("_"):
+        continue
+    _mod = importlib.import_module(f"{__name__}.{_info.name}")
+    for _name in getattr(_mod, "__all__", ()):
+        globals()[_name] = getattr(_mod, _name)
+        __all__.append(_name)
+
+del _info, _mod, _name

@@ -1,0 +1,581 @@
+"""The error-model contract, composition with ``+``, and the exact sensor-correction map.
+
+Contract (what :class:`bvpnav.model.NavModel` and :class:`bvpnav.NavigationProblem`
+call):
+
+- ``names(data) -> list[str]``: one name per internal parameter (``q`` names);
+- ``columns(data) -> ndarray (N, d, q)``: change of the navigation-frame acceleration
+  (m/s^2) per unit of each internal parameter, so ``a_c = a_hat + G l + w``;
+- ``report(l, model) -> pandas.Series``: the physical, unit-bearing estimates indexed
+  by name (``Series.attrs["units"]`` maps name to units);
+- ``terms(model) -> list[Term]``: priors (soft, not scaled by ``lam``) and bounds
+  (hard inequalities) on the parameters.
+
+The built-in sensor models share one exact linear reparametrisation. The measurement
+model
+
+.. math:: \\hat f = D f + b, \\qquad D = (I + \\mathrm{diag}(s))(I + \\Theta),
+
+is inverted exactly by a correction that is *linear* in the internal unknowns
+``E`` (a matrix) and ``beta`` (a vector):
+
+.. math:: f = (I + E) \\hat f + \\beta, \\qquad I + E = D^{-1}, \\quad \\beta = -D^{-1} b.
+
+``ScaleFactor`` owns the diagonal of ``E``, ``Misalignment`` its off-diagonal entries,
+``Bias`` owns ``beta`` and ``UnknownGravity`` an additive correction ``dg`` of the
+nominal gravity. The reported physical values follow from ``D = (I + E)^{-1}``:
+``s_i = D_ii - 1``, ``Theta_ij = D_ij / D_ii``, ``b = -D beta``, ``g = g_nominal + dg``.
+A noise-free measurement of this form is therefore corrected exactly, not to first
+order (Misalignment modelled without ScaleFactor is exact to first order only,
+because ``E`` then has no diagonal).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, ClassVar, NamedTuple
+
+import numpy as np
+import pandas as pd
+
+from ..errors import InputError
+from ..model import Affine
+
+__all__ = [
+    "ErrorModel",
+    "SensorErrorModel",
+    "CompositeErrorModel",
+    "Param",
+    "SensorCorrection",
+    "sensor_axes",
+    "sensor_frame",
+    "sensor_signal",
+    "as_error_model",
+]
+
+ROLES = ("scale", "misalignment", "bias", "gravity")
+
+
+# ------------------------------------------------------------------ data views
+def sensor_axes(data) -> tuple[str, ...]:
+    """Names of the sensor axes: body ``x, y, z`` (strapdown) or the navigation axes."""
+    return ("x", "y", "z") if data.is_strapdown else tuple(data.axes)
+
+
+def sensor_frame(data) -> np.ndarray:
+    """Sensor-to-navigation rotation per sample, shape (N, d, n_sensor), dimensionless.
+
+    The body-to-navigation matrices ``C_i`` for strapdown data; identity matrices for
+    navigation-frame data (the sensor axes are the navigation axes).
+    """
+    if data.is_strapdown:
+        return data.attitude.as_matrix()
+    d = data.ndim
+    return np.broadcast_to(np.eye(d), (data.n, d, d))
+
+
+def sensor_signal(data) -> np.ndarray:
+    """The measured sensor output per sample, shape (N, n_sensor), m/s^2.
+
+    Body-frame specific force for strapdown data, else the navigation-frame ``acc``.
+    """
+    return data.specific_force if data.is_strapdown else data.acc
+
+
+def _nominal_gravity(data) -> np.ndarray:
+    """Gravity already added to ``data.acc`` (m/s^2, per navigation axis); zero for nav data."""
+    if data.is_strapdown:
+        return np.asarray(data.gravity, dtype=float)
+    return np.zeros(data.ndim)
+
+
+# ------------------------------------------------------------- small helpers
+def _finite(value, what: str) -> np.ndarray:
+    try:
+        v = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{what}: {value!r} is not numeric") from None
+    if np.isnan(v).any():
+        raise InputError(f"{what}: contains NaN; give numbers")
+    return v
+
+
+def _per_param(value, q: int, what: str) -> np.ndarray:
+    """Broadcast a scalar or a q-vector to q entries."""
+    v = np.asarray(value, dtype=float).ravel()
+    if v.size == 1:
+        return np.full(q, float(v[0]))
+    if v.size != q:
+        raise InputError(f"{what}: {v.size} values for {q} parameters; give one value or {q}")
+    return v.copy()
+
+
+class Param(NamedTuple):
+    """One internal parameter of a built-in sensor model.
+
+    Attributes
+    ----------
+    name : str
+    role : {"scale", "misalignment", "bias", "gravity"}
+    i : int
+        Sensor axis (scale, bias, misalignment row) or navigation axis (gravity).
+    j : int
+        Sensor axis picked up (misalignment column); equal to ``i`` for scale, -1 else.
+    """
+
+    name: str
+    role: str
+    i: int
+    j: int = -1
+
+
+class _Combinable:
+    """``+`` composition shared by single and composite models."""
+
+    @property
+    def components(self) -> tuple:
+        return (self,)
+
+    def __add__(self, other):
+        if not isinstance(other, _Combinable):
+            return NotImplemented
+        return CompositeErrorModel(*self.components, *other.components)
+
+    def __radd__(self, other):
+        if isinstance(other, (int, float)) and other == 0:  # sum([...]) support
+            return self
+        return NotImplemented
+
+
+@dataclass(frozen=True, kw_only=True, eq=False, repr=False)
+class ErrorModel(_Combinable):
+    """Base class of error models (the plug-in contract).
+
+    Parameters
+    ----------
+    axes : str or sequence of str, optional
+        Sensor axes (or navigation axes, for gravity) the model applies to; default all.
+    prior : float or array_like, optional
+        Prior value of each parameter in the model's units (default: the model's
+        ``default_prior``, e.g. zero bias, nominal gravity). Used only with ``sigma``.
+    sigma : float or array_like, optional
+        Prior standard deviation in the model's units: adds the soft term
+        :math:`\\sum_k ((p_k - p_k^0)/\\sigma_k)^2` to the objective (not scaled by ``lam``).
+    bounds : (float, float) or (array_like, array_like), optional
+        Lower and upper bounds in the model's units (``-inf``/``inf`` allowed): hard
+        inequalities :math:`lo \\le p \\le hi`.
+
+    Notes
+    -----
+    A subclass implements ``names(data)`` and ``columns(data)`` (shape (N, d, q): the
+    change of the navigation-frame acceleration in m/s^2 per unit parameter). Then the
+    corrected acceleration is :math:`a_c = \\hat a + G l + w`. By default the internal
+    parameter is the reported one (``report`` returns ``l``) and priors and bounds act
+    on ``l`` directly; the built-in sensor models override this with an exact
+    nonlinear reparametrisation (see :mod:`bvpnav.error_models._base`).
+    """
+
+    axes: Any = None
+    prior: Any = None
+    sigma: Any = None
+    bounds: Any = None
+
+    #: Units of the reported parameters.
+    units: ClassVar[str] = ""
+    #: Parameter name prefix (``<prefix>_<axis>``).
+    prefix: ClassVar[str] = "param"
+
+    def __post_init__(self):
+        label = type(self).__name__
+        if isinstance(self.axes, str):
+            object.__setattr__(self, "axes", (self.axes,))
+        elif self.axes is not None:
+            object.__setattr__(self, "axes", tuple(str(a) for a in self.axes))
+            if not self.axes:
+                raise InputError(f"{label}: axes=() selects nothing; omit axes for all axes")
+        if self.sigma is not None:
+            s = _finite(self.sigma, f"{label}: sigma")
+            if not np.all(np.isfinite(s) & (s > 0)):
+                raise InputError(f"{label}: sigma={self.sigma!r} must be finite and > 0 ({self.units})")
+            object.__setattr__(self, "sigma", s)
+        if self.prior is not None:
+            if self.sigma is None:
+                raise InputError(
+                    f"{label}: prior={self.prior!r} without sigma; give sigma (in {self.units}) "
+                    "for a soft prior, or bounds=(lo, hi) for hard limits"
+                )
+            p = _finite(self.prior, f"{label}: prior")
+            if not np.all(np.isfinite(p)):
+                raise InputError(f"{label}: prior must be finite")
+            object.__setattr__(self, "prior", p)
+        if self.bounds is not None:
+            try:
+                lo, hi = self.bounds
+            except (TypeError, ValueError):
+                raise InputError(f"{label}: bounds={self.bounds!r}; give a pair (lo, hi)") from None
+            lo = _finite(lo, f"{label}: lower bound")
+            hi = _finite(hi, f"{label}: upper bound")
+            try:
+                ok = np.all(np.broadcast_to(lo, np.broadcast_shapes(lo.shape, hi.shape))
+                            < np.broadcast_to(hi, np.broadcast_shapes(lo.shape, hi.shape)))
+            except ValueError:
+                raise InputError(f"{label}: bounds have shapes {lo.shape} and {hi.shape}") from None
+            if not ok:
+                raise InputError(f"{label}: bounds={self.bounds!r} need lo < hi")
+            object.__setattr__(self, "bounds", (lo, hi))
+        self.validate()
+
+    # ------------------------------------------------------------ contract
+    def validate(self) -> None:
+        """Check the model's own arguments; raise :class:`InputError` naming the model."""
+
+    def names(self, data) -> list[str]:
+        """Parameter names, one per column."""
+        raise NotImplementedError
+
+    def columns(self, data) -> np.ndarray:
+        """Acceleration change per unit parameter, shape (N, d, q), m/s^2 per unit."""
+        raise NotImplementedError
+
+    def report(self, l, model) -> pd.Series:
+        """Physical estimates by name (default: the internal values themselves)."""
+        names = self.names(model.data)
+        return _series(np.asarray(l, dtype=float), names, self.units)
+
+    def physical_rows(self, model, value) -> Affine:
+        """Rows ``w_k (p_k - v_k)`` (model units, ``w_k > 0``) of each parameter against ``value``.
+
+        Priors and bounds are built from these rows; the default ``w_k = 1`` with
+        ``p = l``.
+        """
+        names = self.names(model.data)
+        return model.params(names) - _per_param(value, len(names), f"{type(self).__name__}: value")
+
+    def default_prior(self, model) -> np.ndarray:
+        """Prior value when ``sigma`` is given without ``prior`` (default 0)."""
+        return np.zeros(len(self.names(model.data)))
+
+    def terms(self, model) -> list:
+        """Soft prior and hard bound terms for :class:`bvpnav.NavigationProblem`."""
+        from ..problem import Term
+
+        names = self.names(model.data)
+        q = len(names)
+        tag = type(self).__name__ + "[" + ", ".join(names) + "]"
+        out = []
+        if self.sigma is not None:
+            p0 = self.default_prior(model) if self.prior is None else _per_param(
+                self.prior, q, f"{tag}: prior")
+            rows = self.physical_rows(model, p0)
+            out.append(Term(label=f"prior {tag}", item=None, residual=_relabel(rows, names, "prior"),
+                            mode="soft", kind="equality", sigma=_per_param(self.sigma, q, f"{tag}: sigma"),
+                            scaled_by_lam=False, units=self.units))
+        if self.bounds is not None:
+            lo = _per_param(self.bounds[0], q, f"{tag}: lower bound")
+            hi = _per_param(self.bounds[1], q, f"{tag}: upper bound")
+            parts = []
+            ku = np.flatnonzero(np.isfinite(hi))
+            kl = np.flatnonzero(np.isfinite(lo))
+            if ku.size:
+                parts.append(_relabel(self.physical_rows(model, np.where(np.isfinite(hi), hi, 0.0)).rows(ku),
+                                      [names[k] for k in ku], "upper"))
+            if kl.size:
+                parts.append(_relabel(-self.physical_rows(model, np.where(np.isfinite(lo), lo, 0.0)).rows(kl),
+                                      [names[k] for k in kl], "lower"))
+            if parts:
+                out.append(Term(label=f"bounds {tag}", item=None, residual=Affine.vstack(parts),
+                                mode="hard", kind="inequality", scaled_by_lam=False, units=self.units))
+        return out
+
+    def __repr__(self) -> str:
+        args = []
+        for k, v in self.__dict__.items():
+            if v is None or k.startswith("_"):
+                continue
+            if isinstance(v, np.ndarray):
+                v = v.tolist()
+            elif isinstance(v, tuple) and any(isinstance(x, np.ndarray) for x in v):
+                v = tuple(x.tolist() if isinstance(x, np.ndarray) else x for x in v)
+            args.append(f"{k}={v!r}")
+        return f"{type(self).__name__}({', '.join(args)})"
+
+    # -------------------------------------------------------------- helpers
+    def _select_axes(self, available: tuple[str, ...], what: str) -> tuple[int, ...]:
+        """Indices of ``self.axes`` in ``available`` (all when ``axes`` is None)."""
+        if self.axes is None:
+            return tuple(range(len(available)))
+        out = []
+        for a in self.axes:
+            if a not in available:
+                raise InputError(
+                    f"{type(self).__name__}: unknown {what} axis {a!r}; this data has {what} axes "
+                    f"{list(available)}"
+                )
+            if available.index(a) in out:
+                raise InputError(f"{type(self).__name__}: axis {a!r} given twice")
+            out.append(available.index(a))
+        return tuple(out)
+
+
+def _series(values: np.ndarray, names, units: str | dict) -> pd.Series:
+    s = pd.Series(np.asarray(values, dtype=float), index=pd.Index(list(names), name="parameter"),
+                  name="estimate")
+    s.attrs["units"] = dict(units) if isinstance(units, dict) else {n: units for n in names}
+    return s
+
+
+def _relabel(a: Affine, names, what: str) -> Affine:
+    return Affine(a.A, a.c, tuple(f"{what}({n})" for n in names))
+
+
+# ----------------------------------------------------- exact sensor correction
+@dataclass(frozen=True)
+class SensorCorrection:
+    """Internal sensor correction ``f = (I + E) f_hat + beta`` and gravity correction ``dg``.
+
+    Attributes
+    ----------
+    E : ndarray (n_sensor, n_sensor), dimensionless
+    beta : ndarray (n_sensor,), m/s^2
+    dg : ndarray (d,), m/s^2
+    g_nominal : ndarray (d,), m/s^2
+    """
+
+    E: np.ndarray
+    beta: np.ndarray
+    dg: np.ndarray
+    g_nominal: np.ndarray
+
+    @property
+    def D(self) -> np.ndarray:
+        """Sensor matrix ``D = (I + E)^{-1} = (I + diag(s))(I + Theta)``."""
+        n = self.E.shape[0]
+        try:
+            return np.linalg.inv(np.eye(n) + self.E)
+        except np.linalg.LinAlgError:  # pragma: no cover - degenerate estimate
+            return np.full((n, n), np.nan)
+
+    def value(self, p: Param) -> float:
+        """Physical value of one parameter (see module notes)."""
+        D = self.D
+        if p.role == "scale":
+            return float(D[p.i, p.i] - 1.0)
+        if p.role == "misalignment":
+            return float(D[p.i, p.j] / D[p.i, p.i])
+        if p.role == "bias":
+            return float(-(D @ self.beta)[p.i])
+        return float(self.g_nominal[p.i] + self.dg[p.i])
+
+    @classmethod
+    def from_values(cls, params: list[Param], values: np.ndarray, data) -> SensorCorrection:
+        ns = len(sensor_axes(data))
+        E = np.zeros((ns, ns))
+        beta = np.zeros(ns)
+        dg = np.zeros(data.ndim)
+        for p, v in zip(params, values, strict=True):
+            if p.role in ("scale", "misalignment"):
+                E[p.i, p.j] = v
+            elif p.role == "bias":
+                beta[p.i] = v
+            else:
+                dg[p.i] = v
+        return cls(E, beta, dg, _nominal_gravity(data))
+
+
+def _sensor_layout(model) -> dict[tuple[str, int, int], str]:
+    """(role, i, j) -> parameter name over every built-in sensor model in the problem."""
+    em = model.error_model
+    comps = getattr(em, "components", (em,)) if em is not None else ()
+    out = {}
+    for c in comps:
+        if isinstance(c, SensorErrorModel):
+            for p in c.params(model.data):
+                out[(p.role, p.i, p.j)] = p.name
+    return out
+
+
+@dataclass(frozen=True, kw_only=True, eq=False, repr=False)
+class SensorErrorModel(ErrorModel):
+    """Base of the built-in sensor models (scale, misalignment, bias, gravity).
+
+    Subclasses list their internal parameters with :meth:`params`; the columns, the
+    physical report and the exact prior/bound rows follow from the roles.
+
+    Notes
+    -----
+    With ``C_i`` the sensor-to-navigation matrix and ``f_i`` the measured sensor output
+    of sample i, the columns are
+
+    .. math::
+
+        G[:, :, E_{kj}] = C_i[:, k] \\hat f_{i,j}, \\quad
+        G[:, :, \\beta_k] = C_i[:, k], \\quad G[:, :, dg_a] = e_a
+
+    (the 2010 paper's eq. 31-34 with ``F = -M G``).
+    """
+
+    def params(self, data) -> list[Param]:
+        """The internal parameters with their roles."""
+        raise NotImplementedError
+
+    def names(self, data) -> list[str]:
+        return [p.name for p in self.params(data)]
+
+    def columns(self, data) -> np.ndarray:
+        C = sensor_frame(data)
+        f = sensor_signal(data)
+        n, d = data.n, data.ndim
+        cols = []
+        for p in self.params(data):
+            if p.role in ("scale", "misalignment"):
+                cols.append(C[:, :, p.i] * f[:, p.j, None])
+            elif p.role == "bias":
+                cols.append(np.array(C[:, :, p.i]))
+            else:
+                g = np.zeros((n, d))
+                g[:, p.i] = 1.0
+                cols.append(g)
+        return np.stack(cols, axis=2)
+
+    def physical(self, corr: SensorCorrection, data) -> np.ndarray:
+        """Physical values of this model's parameters given the full correction."""
+        return np.array([corr.value(p) for p in self.params(data)])
+
+    def report(self, l, model) -> pd.Series:
+        ps = self.params(model.data)
+        corr = SensorCorrection.from_values(ps, np.asarray(l, dtype=float), model.data)
+        return _series(self.physical(corr, model.data), [p.name for p in ps], self.units)
+
+    def physical_rows(self, model, value) -> Affine:
+        """Rows linear in the internal unknowns, equal to ``w (p - v)`` with ``w > 0``.
+
+        Notes
+        -----
+        With ``k_i = E_ii`` (zero when scale is not modelled):
+
+        - scale: :math:`-k_i - v(1 + k_i) = (s_i - v)(1 + k_i)`;
+        - bias: :math:`-\\beta_i - v(1 + k_i) = (b_i - v)(1 + k_i)`;
+        - gravity: :math:`g_a + dg_a - v`;
+        - misalignment: :math:`-E_{ij} - v \\approx \\Theta_{ij} - v` (first order).
+
+        The first three are exact without misalignment, so bounds on them are exact
+        linear inequalities; with misalignment they hold to first order in Theta.
+        """
+        ps = self.params(model.data)
+        v = _per_param(value, len(ps), f"{type(self).__name__}: value")
+        layout = _sensor_layout(model)
+        g0 = _nominal_gravity(model.data)
+        rows = []
+        for p, vk in zip(ps, v, strict=True):
+            P = model.params([p.name])
+            if p.role == "scale":
+                rows.append(P * (-(1.0 + vk)) - vk)
+            elif p.role == "misalignment":
+                rows.append(-P - vk)
+            elif p.role == "bias":
+                r = -P - vk
+                kname = layout.get(("scale", p.i, p.i))
+                if kname is not None:
+                    r = r + model.params([kname]) * (-vk)
+                rows.append(r)
+            else:
+                rows.append(P + (g0[p.i] - vk))
+        return Affine.vstack(rows)
+
+
+# ------------------------------------------------------------------ composite
+class CompositeErrorModel(_Combinable):
+    """Several error models side by side (built with ``+``).
+
+    Parameters
+    ----------
+    *components : ErrorModel
+        Parameters are ordered as the components are.
+
+    Notes
+    -----
+    The columns are concatenated, ``G = [G_1 | G_2 | ...]``. Reporting evaluates the
+    built-in sensor models jointly (bias, scale and misalignment share one exact
+    correction matrix) and every other model on its own slice of ``l``.
+    """
+
+    def __init__(self, *components):
+        flat = []
+        for c in components:
+            if not isinstance(c, _Combinable):
+                raise InputError(
+                    f"error model: {c!r} is not an error model; use bvpnav.error_models.Bias(), "
+                    "ScaleFactor(), ... or a subclass of ErrorModel"
+                )
+            flat.extend(c.components)
+        if not flat:
+            raise InputError("error model: no components")
+        self._components = tuple(flat)
+
+    @property
+    def components(self) -> tuple:
+        return self._components
+
+    def _sizes(self, data) -> list[int]:
+        return [len(c.names(data)) for c in self._components]
+
+    def names(self, data) -> list[str]:
+        out, owner = [], {}
+        for c in self._components:
+            for n in c.names(data):
+                if n in owner:
+                    raise InputError(
+                        f"error model: parameter {n!r} comes from both {owner[n]} and "
+                        f"{type(c).__name__}; each parameter may appear once (select axes=...)"
+                    )
+                owner[n] = type(c).__name__
+                out.append(n)
+        return out
+
+    def columns(self, data) -> np.ndarray:
+        self.names(data)  # duplicate check
+        return np.concatenate([np.asarray(c.columns(data), dtype=float) for c in self._components],
+                              axis=2)
+
+    def report(self, l, model) -> pd.Series:
+        data = model.data
+        l = np.asarray(l, dtype=float)
+        sizes = self._sizes(data)
+        offs = np.concatenate([[0], np.cumsum(sizes)])
+        sens_p, sens_v = [], []
+        for c, o, q in zip(self._components, offs[:-1], sizes, strict=True):
+            if isinstance(c, SensorErrorModel):
+                sens_p.extend(c.params(data))
+                sens_v.extend(l[o:o + q])
+        corr = SensorCorrection.from_values(sens_p, np.array(sens_v), data)
+        parts = []
+        units = {}
+        for c, o, q in zip(self._components, offs[:-1], sizes, strict=True):
+            if isinstance(c, SensorErrorModel):
+                s = _series(c.physical(corr, data), c.names(data), c.units)
+            else:
+                s = c.report(l[o:o + q], model)
+            parts.append(s)
+            units.update(s.attrs.get("units", {n: getattr(c, "units", "") for n in s.index}))
+        out = pd.concat(parts)
+        out.name = "estimate"
+        out.index.name = "parameter"
+        out.attrs["units"] = units
+        return out
+
+    def terms(self, model) -> list:
+        out = []
+        for c in self._components:
+            if hasattr(c, "terms"):
+                out.extend(c.terms(model))
+        return out
+
+    def __repr__(self) -> str:
+        return " + ".join(repr(c) for c in self._components)
+
+
+def as_error_model(obj):
+    """Return ``obj`` if it is an error model (single or composite), else raise InputError."""
+    if obj is None or isinstance(obj, _Combinable):
+        return obj
+    raise InputError(f"error_model={obj!r}: expected bvpnav.error_models.Bias() + ScaleFactor() etc.")
