@@ -90,7 +90,8 @@ def run_csne(problem, lam: float, accuracy: str, options: dict):
     max_it = int(options.get("max_iter", {"low": 5, "default": 20, "high": 50}[accuracy]))
     tol = float(options.get("tol", {"low": 1e-8, "default": 1e-12, "high": 1e-15}[accuracy]))
     corr, k = np.inf, 0
-    for k in range(1, max_it + 1):
+    for _ in range(max_it):
+        k += 1
         x, y = z[:n], z[n:]
         r1 = -2.0 * (D.A.T @ D.value(x)) - E.A.T @ y
         r2 = -E.value(x)

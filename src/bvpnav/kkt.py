@@ -246,7 +246,8 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
 
     z = solve(rhs)
     corr, k = 0.0, 0
-    for k in range(1, refine + 1):
+    for _ in range(refine):
+        k += 1
         dz = solve(rhs - S @ z)
         z += dz
         corr = float(np.max(np.abs(dz[m:m + n])) / max(np.max(np.abs(z[m:m + n])), 1e-300))
