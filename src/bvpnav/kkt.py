@@ -35,7 +35,8 @@ import scipy.sparse.linalg as spla
 
 from .model import Affine
 
-__all__ = ["LeastSquaresForm", "least_squares_form", "forward_error"]
+__all__ = ["LeastSquaresForm", "least_squares_form", "forward_error", "BorderedLU", "solve_bordered",
+           "solve_least_squares"]
 
 #: Largest relative forward error accepted per accuracy preset.
 FORWARD_RTOL = {"low": 1e-4, "default": 1e-6, "high": 1e-8}
@@ -53,11 +54,14 @@ class LeastSquaresForm:
         Equality rows (FEM first, then hard items).
     eq_blocks : list of (label, slice)
         Which rows of ``E`` belong to the FEM (label ``"fem"``) and to each hard item.
+    lam_rows : ndarray of bool
+        Rows of ``D`` multiplied by :math:`\\sqrt{\\lambda}` (soft items).
     """
 
     D: Affine
     E: Affine
     eq_blocks: list
+    lam_rows: np.ndarray | None = None
 
     def augmented(self) -> sp.csc_matrix:
         """The symmetric indefinite augmented matrix (see module Notes)."""
@@ -86,6 +90,7 @@ def least_squares_form(problem, lam: float) -> LeastSquaresForm | None:
     eq = [model.fem_rows()]
     blocks = [("fem", slice(0, eq[0].m))]
     start = eq[0].m
+    scaled = [np.zeros(obj[0].m, dtype=bool)]
     for term in problem.terms():
         if term.kind != "equality" or term.mode in ("band", "robust"):
             return None
@@ -96,7 +101,8 @@ def least_squares_form(problem, lam: float) -> LeastSquaresForm | None:
         else:
             k = np.sqrt(lam) if term.scaled_by_lam else 1.0
             obj.append(term.residual * (k / term.sigma))
-    return LeastSquaresForm(Affine.vstack(obj), Affine.vstack(eq), blocks)
+            scaled.append(np.full(term.residual.m, bool(term.scaled_by_lam)))
+    return LeastSquaresForm(Affine.vstack(obj), Affine.vstack(eq), blocks, np.concatenate(scaled))
 
 
 def forward_error(problem, xval: np.ndarray, lam: float, duals: dict | None) -> float | None:
@@ -146,20 +152,24 @@ def forward_error(problem, xval: np.ndarray, lam: float, duals: dict | None) -> 
     return float(np.max(np.abs(dx)) / max(np.max(np.abs(xval)), 1e-300))
 
 
-def solve_bordered(S: sp.spmatrix, rhs: np.ndarray, dense: np.ndarray) -> np.ndarray:
-    r"""Solve ``S z = rhs`` by eliminating a few dense unknowns through their Schur complement.
+class BorderedLU:
+    r"""A factorization of ``S`` that eliminates a few dense unknowns through their Schur complement.
 
     Error-model parameters touch every FEM row, so their columns are dense; a sparse LU
     of the whole matrix then fills in roughly like N^2. Factorising the sparse part
     alone and handling the q dense unknowns by a q x q Schur complement keeps the cost
-    linear in N.
+    linear in N. The factorization is reused by every :meth:`solve`.
 
     Parameters
     ----------
     S : sparse matrix, shape (T, T)
-    rhs : ndarray, shape (T,) or (T, k)
     dense : ndarray of int
         Indices of the unknowns (and matching equations) to eliminate last.
+
+    Raises
+    ------
+    RuntimeError
+        From SuperLU when the sparse block is singular.
 
     Notes
     -----
@@ -168,28 +178,57 @@ def solve_bordered(S: sp.spmatrix, rhs: np.ndarray, dense: np.ndarray) -> np.nda
     .. math:: (S_{LL} - S_{LB} S_{BB}^{-1} S_{BL})\, z_L = r_L - S_{LB} S_{BB}^{-1} r_B,
               \qquad z_B = S_{BB}^{-1} (r_B - S_{BL} z_L).
     """
-    S = sp.csc_matrix(S)
-    dense = np.asarray(dense, dtype=int)
-    if dense.size == 0:
-        return spla.splu(S, permc_spec="COLAMD").solve(rhs)
-    keep = np.setdiff1d(np.arange(S.shape[0]), dense)
-    Sr = S[keep]
-    Sd = S[dense]
-    SBB = Sr[:, keep].tocsc()
-    SBL = Sr[:, dense].toarray()
-    SLB = Sd[:, keep].tocsr()
-    SLL = Sd[:, dense].toarray()
-    lu = spla.splu(SBB, permc_spec="COLAMD")
-    rB, rL = rhs[keep], rhs[dense]
-    X = lu.solve(SBL)
-    y0 = lu.solve(rB)
-    schur = SLL - SLB @ X
-    zL = np.linalg.solve(schur, rL - SLB @ y0)
-    zB = y0 - X @ zL
-    z = np.empty_like(rhs, dtype=float)
-    z[keep] = zB
-    z[dense] = zL
-    return z
+
+    def __init__(self, S: sp.spmatrix, dense: np.ndarray):
+        S = sp.csc_matrix(S)
+        self.S = S
+        self.dense = np.asarray(dense, dtype=int)
+        if self.dense.size == 0:
+            self.keep = None
+            self.lu = spla.splu(S, permc_spec="COLAMD")
+            return
+        self.keep = np.setdiff1d(np.arange(S.shape[0]), self.dense)
+        Sr, Sd = S[self.keep], S[self.dense]
+        self.lu = spla.splu(Sr[:, self.keep].tocsc(), permc_spec="COLAMD")
+        self.SBL = Sr[:, self.dense].toarray()
+        self.SLB = Sd[:, self.keep].tocsr()
+        self.X = self.lu.solve(self.SBL)
+        self.schur = Sd[:, self.dense].toarray() - self.SLB @ self.X
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        """Solve ``S z = rhs`` for one (T,) or several (T, k) right-hand sides."""
+        rhs = np.asarray(rhs, dtype=float)
+        if self.keep is None:
+            return self.lu.solve(rhs)
+        y0 = self.lu.solve(rhs[self.keep])
+        zL = np.linalg.solve(self.schur, rhs[self.dense] - self.SLB @ y0)
+        z = np.empty_like(rhs)
+        z[self.keep] = y0 - self.X @ zL
+        z[self.dense] = zL
+        return z
+
+    def refined(self, rhs: np.ndarray, steps: int, tol: float = 0.0, window: slice | None = None):
+        """Solve with up to ``steps`` iterative-refinement steps in double precision.
+
+        Returns ``(z, steps_taken, last_relative_correction)``; the correction is measured
+        on ``window`` (default: all of ``z``) and refinement stops below ``tol``.
+        """
+        window = window if window is not None else slice(None)
+        z = self.solve(rhs)
+        corr, k = 0.0, 0
+        for _ in range(steps):
+            k += 1
+            dz = self.solve(rhs - self.S @ z)
+            z += dz
+            corr = float(np.max(np.abs(dz[window])) / max(np.max(np.abs(z[window])), 1e-300))
+            if corr < tol:
+                break
+        return z, k, corr
+
+
+def solve_bordered(S: sp.spmatrix, rhs: np.ndarray, dense: np.ndarray) -> np.ndarray:
+    """Solve ``S z = rhs`` once with :class:`BorderedLU` (see there)."""
+    return BorderedLU(S, dense).solve(rhs)
 
 
 def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14):
@@ -223,40 +262,13 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
     form = least_squares_form(problem, lam)
     if form is None:
         raise ValueError("not an equality-constrained least-squares problem")
-    S = sp.csc_matrix(form.augmented())
-    rhs = form.rhs()
     m, n = form.D.A.shape
-    dense = m + problem.model.l_index
-    keep = np.setdiff1d(np.arange(S.shape[0]), dense)
-    lu = spla.splu(S[keep][:, keep].tocsc(), permc_spec="COLAMD")
-
-    def solve(r):
-        if dense.size == 0:
-            return lu.solve(r)
-        Sr, Sd = S[keep], S[dense]
-        SBL = Sr[:, dense].toarray()
-        SLB = Sd[:, keep].tocsr()
-        X = lu.solve(SBL)
-        y0 = lu.solve(r[keep])
-        zL = np.linalg.solve(Sd[:, dense].toarray() - SLB @ X, r[dense] - SLB @ y0)
-        z = np.empty_like(r)
-        z[keep] = y0 - X @ zL
-        z[dense] = zL
-        return z
-
-    z = solve(rhs)
-    corr, k = 0.0, 0
-    for _ in range(refine):
-        k += 1
-        dz = solve(rhs - S @ z)
-        z += dz
-        corr = float(np.max(np.abs(dz[m:m + n])) / max(np.max(np.abs(z[m:m + n])), 1e-300))
-        if corr < tol:
-            break
+    fac = BorderedLU(form.augmented(), m + problem.model.l_index)
+    z, k, corr = fac.refined(form.rhs(), refine, tol, window=slice(m, m + n))
     x = z[m:m + n]
     mu = z[m + n:]
     duals = {}
     for label, sl in form.eq_blocks:
         y = 2.0 * mu[sl]
         duals[label] = y if label == "fem" else [y]
-    return x, {"duals": duals, "refinements": k, "correction": corr}
+    return x, {"duals": duals, "refinements": k, "correction": corr, "factor": fac, "form": form}
