@@ -20,8 +20,9 @@ Quick start::
 
 from __future__ import annotations
 
-from . import attitude, error_models, simulate
+from . import attitude, baselines, error_models, regularization, scenarios, simulate
 from ._version import __version__
+from .compare import compare_solvers
 from .errors import (
     BvpnavError,
     ConvexityError,
@@ -59,6 +60,9 @@ __all__ = [
     "Unbounded",
     "attitude",
     "available_solvers",
+    "baselines",
+    "compare_solvers",
     "error_models",
+    "regularization",
     "simulate",
 ]

@@ -1,0 +1,118 @@
+"""Solvers side by side on one problem: a tidy table, failures included."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+
+from .errors import BvpnavError, SolveError
+
+__all__ = ["compare_solvers", "COLUMNS"]
+
+#: Columns of :func:`compare_solvers`'s table.
+COLUMNS = ["solver", "preset", "status", "verified", "compile_time", "solve_time", "wall_time",
+           "iterations", "objective", "fem_residual", "max_violation", "forward_error", "rms_error",
+           "max_error", "error"]
+
+
+def _reference_positions(reference, problem):
+    if reference is None:
+        return None
+    if hasattr(reference, "position") and callable(reference.position):
+        ref = reference.position()
+    else:
+        ref = np.asarray(reference, dtype=float)
+    ref = ref.reshape(problem.model.N, -1)
+    if ref.shape[1] != problem.model.d:
+        from .errors import InputError
+
+        raise InputError(f"reference has {ref.shape[1]} axes, the problem {problem.model.d}; give "
+                         "positions of shape (N,) or (N, d) in m at the sample times")
+    return ref
+
+
+def compare_solvers(problem, solvers: Sequence[str] | None = None, presets: Sequence[str] = ("default",),
+                    reference=None, lam: float | str = 1.0, options: dict | None = None) -> pd.DataFrame:
+    """Solve one problem with several solvers and accuracy presets.
+
+    Parameters
+    ----------
+    problem : NavigationProblem
+    solvers : sequence of str, optional
+        Solver names (default: Clarabel and OSQP, and the direct back ends ``direct`` and
+        ``csne`` when the problem is least squares; SCS and others on request, e.g.
+        ``solvers=["clarabel", "scs"]``: SCS needs about 10^5 iterations and tens of seconds
+        for a 2,000-sample problem).
+    presets : sequence of {"low", "default", "high"}
+    reference : array_like or Solution, optional
+        True (or reference) positions, m, shape (N,) or (N, d), for ``rms_error`` and
+        ``max_error``.
+    lam : float or str
+        The same lambda for every run (a rule name is resolved once, before the runs, with
+        the direct sweep when possible).
+    options : dict, optional
+        Per-solver extra options: ``{"osqp": {"max_iter": 1000}}``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per (solver, preset) with :data:`COLUMNS`: status as reported by the solver
+        (or the error class), ``verified`` from bvpnav's residual checks, times in s,
+        ``fem_residual``/``max_violation``/``forward_error`` relative, errors in m. A run
+        that fails is a row with its status and message in ``error``; nothing is raised.
+
+    Notes
+    -----
+    Runs use ``fallback=None`` and ``verify=False`` so each row shows that solver's own
+    answer; ``verified`` then says whether bvpnav would have accepted it.
+    """
+    from .kkt import least_squares_form
+    from .solvers import available_solvers
+
+    if solvers is None:
+        have = set(available_solvers())
+        solvers = [s for s in ("clarabel", "osqp") if s in have]
+        if least_squares_form(problem, 1.0) is not None:
+            solvers += ["direct", "csne"]
+    if isinstance(lam, str):
+        from .regularization import choose_lambda
+
+        lam = choose_lambda(problem, lam)
+    ref = _reference_positions(reference, problem)
+    form = least_squares_form(problem, lam)
+    rows = []
+    for name in solvers:
+        for preset in presets:
+            row = dict.fromkeys(COLUMNS)
+            row.update(solver=name, preset=preset, verified=False)
+            t0 = time.perf_counter()
+            try:
+                sol = problem.solve(solver=name, lam=lam, accuracy=preset, verify=False, fallback=None,
+                                    options=(options or {}).get(name))
+            except (SolveError, BvpnavError) as exc:
+                att = getattr(exc, "attempts", None) or []
+                row.update(status=att[-1]["status"] if att else type(exc).__name__,
+                           error=f"{type(exc).__name__}: {exc}", wall_time=time.perf_counter() - t0)
+                rows.append(row)
+                continue
+            st = sol.stats
+            ver = st.get("verification", {})
+            row.update(status=st.get("status"), verified=bool(st.get("verified")),
+                       compile_time=st.get("compile_time"), solve_time=st.get("solve_time"),
+                       wall_time=st.get("wall_time"), iterations=st.get("iterations"),
+                       objective=st.get("objective"), fem_residual=ver.get("fem_residual"),
+                       max_violation=ver.get("max_violation"), forward_error=ver.get("forward_error"))
+            if row["objective"] is None and form is not None:
+                row["objective"] = float(np.sum(form.D.value(sol.x) ** 2))
+            if ref is not None:
+                e = sol.position().reshape(ref.shape) - ref
+                row.update(rms_error=float(np.sqrt(np.mean(e**2))), max_error=float(np.max(np.abs(e))))
+            rows.append(row)
+    df = pd.DataFrame(rows, columns=COLUMNS)
+    for c in ("compile_time", "solve_time", "wall_time", "objective", "fem_residual", "max_violation",
+              "forward_error", "rms_error", "max_error"):
+        df[c] = pd.to_numeric(df[c], errors="coerce")
+    return df
