@@ -64,5 +64,6 @@ __all__ = [
     "compare_solvers",
     "error_models",
     "regularization",
+    "scenarios",
     "simulate",
 ]
