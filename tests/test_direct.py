@@ -68,3 +68,21 @@ def test_csne_reports_its_refinement_steps():
     sol = prob.solve(solver="csne", fallback=None)
     assert 1 <= sol.stats["iterations"] <= 20
     assert sol.stats["verification"]["forward_error"] < 1e-8
+
+
+def test_redundant_consistent_hard_rows_are_solved():
+    """Average velocities over [0, 5] and [5, 10] with both end positions hard repeat one
+    row; the multiplier block is singular but x is unique."""
+    from bvpnav.constraints import AverageVelocity
+
+    t = np.linspace(0.0, 10.0, 501)
+    prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=np.full(t.size, 0.2)))
+    prob.add(Position(t=[0.0, 10.0], value=[0.0, 10.0]),
+             AverageVelocity(t0=[0.0, 5.0], t1=[5.0, 10.0], value=[1.0, 1.0]))
+    sol = prob.solve(solver="direct", fallback=None)
+    assert sol.stats["verified"]
+    # the same information without the repeated row gives the same trajectory
+    ref = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=np.full(t.size, 0.2)))
+    ref.add(Position(t=[0.0, 10.0], value=[0.0, 10.0]), AverageVelocity(t0=0.0, t1=5.0, value=1.0))
+    np.testing.assert_allclose(sol.position(), ref.solve(solver="direct").position(), atol=1e-9)
+    assert abs(sol.position()[250, 0] - 5.0) < 1e-9

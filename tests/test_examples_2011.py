@@ -75,3 +75,14 @@ def test_compare_solvers_table_shows_failures_as_rows():
     assert not good.loc["osqp", "verified"]
     assert "SolverNotFound" in good.loc["no-such-solver", "error"]
     assert set(bvpnav.compare.COLUMNS) <= set(df.columns)
+
+
+def test_information_a_smoother_cannot_use():
+    res = load("information_smoothers_cannot_use").run(seeds=4, quiet=True)
+    rts = res["RTS smoother (4 boundary values)"]
+    # with the same information bvpnav and the RTS smoother agree (both are the same estimator)
+    assert abs(res["bvpnav, 4 boundary values"] - rts) < 0.02 * rts
+    # symmetry and average velocities are information the smoother cannot take
+    assert res["bvpnav + symmetry"] < rts
+    assert res["bvpnav + average velocities"] < 0.8 * rts
+    assert res["bvpnav + both"] < 0.5 * rts

@@ -145,7 +145,7 @@ def forward_error(problem, xval: np.ndarray, lam: float, duals: dict | None) -> 
     m = form.D.m
     dense = m + problem.model.l_index  # error-model parameters: dense columns of the FEM rows
     try:
-        delta = solve_bordered(S, resid, dense)
+        delta = solve_bordered(S, resid, dense, np.arange(m + xval.size, S.shape[0]))
     except RuntimeError:  # singular: the information does not determine x
         return float("inf")
     dx = delta[m:m + xval.size]
@@ -179,9 +179,23 @@ class BorderedLU:
               \qquad z_B = S_{BB}^{-1} (r_B - S_{BL} z_L).
     """
 
-    def __init__(self, S: sp.spmatrix, dense: np.ndarray):
+    def __init__(self, S: sp.spmatrix, dense: np.ndarray, shift_rows: np.ndarray | None = None):
         S = sp.csc_matrix(S)
         self.S = S
+        self.shift = 0.0
+        try:
+            self._factor(S, dense)
+        except (RuntimeError, np.linalg.LinAlgError):
+            if shift_rows is None or len(shift_rows) == 0:
+                raise
+            # redundant (but consistent) hard rows make the multiplier block singular: factor
+            # S - delta I on those rows instead and let refinement against S recover x
+            self.shift = 1e-10 * float(abs(S).max())
+            d = np.zeros(S.shape[0])
+            d[np.asarray(shift_rows, dtype=int)] = self.shift
+            self._factor((S - sp.diags(d)).tocsc(), dense)
+
+    def _factor(self, S, dense):
         self.dense = np.asarray(dense, dtype=int)
         if self.dense.size == 0:
             self.keep = None
@@ -194,6 +208,8 @@ class BorderedLU:
         self.SLB = Sd[:, self.keep].tocsr()
         self.X = self.lu.solve(self.SBL)
         self.schur = Sd[:, self.dense].toarray() - self.SLB @ self.X
+        if not np.all(np.isfinite(self.schur)) or np.linalg.cond(self.schur) > 1e15:
+            raise np.linalg.LinAlgError("singular Schur complement")
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         """Solve ``S z = rhs`` for one (T,) or several (T, k) right-hand sides."""
@@ -226,9 +242,18 @@ class BorderedLU:
         return z, k, corr
 
 
-def solve_bordered(S: sp.spmatrix, rhs: np.ndarray, dense: np.ndarray) -> np.ndarray:
+def solve_bordered(S: sp.spmatrix, rhs: np.ndarray, dense: np.ndarray,
+                   shift_rows: np.ndarray | None = None) -> np.ndarray:
     """Solve ``S z = rhs`` once with :class:`BorderedLU` (see there)."""
-    return BorderedLU(S, dense).solve(rhs)
+    return BorderedLU(S, dense, shift_rows).solve(rhs)
+
+
+def factor_form(form: LeastSquaresForm, problem) -> BorderedLU:
+    """:class:`BorderedLU` of a form's augmented matrix, error-model columns eliminated last,
+    redundant hard rows handled by a tiny shift of the multiplier block."""
+    m, n = form.D.A.shape
+    p = form.E.m
+    return BorderedLU(form.augmented(), m + problem.model.l_index, np.arange(m + n, m + n + p))
 
 
 def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14):
@@ -263,8 +288,8 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
     if form is None:
         raise ValueError("not an equality-constrained least-squares problem")
     m, n = form.D.A.shape
-    fac = BorderedLU(form.augmented(), m + problem.model.l_index)
-    z, k, corr = fac.refined(form.rhs(), refine, tol, window=slice(m, m + n))
+    fac = factor_form(form, problem)
+    z, k, corr = fac.refined(form.rhs(), refine + (3 if fac.shift else 0), tol, window=slice(m, m + n))
     x = z[m:m + n]
     mu = z[m + n:]
     duals = {}

@@ -36,7 +36,7 @@ from scipy.interpolate import CubicSpline
 from scipy.optimize import minimize_scalar
 
 from .errors import InputError
-from .kkt import BorderedLU, least_squares_form
+from .kkt import factor_form, least_squares_form
 
 __all__ = ["RULES", "LambdaCurve", "lambda_curve", "choose_lambda", "solve_with_rule"]
 
@@ -134,7 +134,7 @@ class _DirectSweep:
         form = least_squares_form(self.problem, lam)
         m, n = form.D.A.shape
         try:
-            fac = BorderedLU(form.augmented(), m + self.model.l_index)
+            fac = factor_form(form, self.problem)
         except RuntimeError as exc:
             raise InputError(f"lambda={lam:g}: the KKT matrix is singular ({exc}); some unknown is "
                              "not determined by the information") from exc
