@@ -46,7 +46,8 @@ def run_direct(problem, lam: float, accuracy: str, options: dict):
     refine = int(options.get("refine", {"low": 1, "default": 3, "high": 6}[accuracy]))
     try:
         x, info = solve_least_squares(problem, lam, refine=refine)
-        info.pop("factor"), info.pop("form")
+        # verification reuses the factorization (one LU per solve, not two)
+        problem._direct_factor = (float(lam), info.pop("form"), info.pop("factor"))
     except RuntimeError as exc:  # singular factorization
         raise SolveError(f"direct: the KKT matrix is singular ({exc}); some unknown is not "
                          "determined by the information",

@@ -105,7 +105,8 @@ def least_squares_form(problem, lam: float) -> LeastSquaresForm | None:
     return LeastSquaresForm(Affine.vstack(obj), Affine.vstack(eq), blocks, np.concatenate(scaled))
 
 
-def forward_error(problem, xval: np.ndarray, lam: float, duals: dict | None) -> float | None:
+def forward_error(problem, xval: np.ndarray, lam: float, duals: dict | None,
+                  factored: tuple | None = None) -> float | None:
     """Relative forward error of ``xval`` estimated by one refinement step.
 
     Parameters
@@ -125,8 +126,11 @@ def forward_error(problem, xval: np.ndarray, lam: float, duals: dict | None) -> 
         :math:`\\|\\delta x\\|_\\infty / \\|x\\|_\\infty` for the correction :math:`\\delta` of one
         refinement step, or None when the problem is not equality-constrained least
         squares.
+    factored : (LeastSquaresForm, BorderedLU), optional
+        A factorization of this problem's augmented matrix at this ``lam`` to reuse (the
+        direct back end passes its own; the residual is still computed afresh).
     """
-    form = least_squares_form(problem, lam)
+    form = factored[0] if factored is not None else least_squares_form(problem, lam)
     if form is None:
         return None
     p = form.E.m
@@ -145,8 +149,11 @@ def forward_error(problem, xval: np.ndarray, lam: float, duals: dict | None) -> 
     m = form.D.m
     dense = m + problem.model.l_index  # error-model parameters: dense columns of the FEM rows
     try:
-        delta = solve_bordered(S, resid, dense, np.arange(m + xval.size, S.shape[0]))
-    except RuntimeError:  # singular: the information does not determine x
+        if factored is not None:
+            delta = factored[1].solve(resid)
+        else:
+            delta = solve_bordered(S, resid, dense, np.arange(m + xval.size, S.shape[0]))
+    except (RuntimeError, np.linalg.LinAlgError):  # singular: the information does not determine x
         return float("inf")
     dx = delta[m:m + xval.size]
     return float(np.max(np.abs(dx)) / max(np.max(np.abs(xval)), 1e-300))

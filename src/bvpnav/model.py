@@ -213,6 +213,15 @@ class NavModel:
     # ----------------------------------------------------------- FEM rows
     def fem_rows(self) -> Affine:
         """The hard FEM equations ``K r + B v + M (a_hat + G l + w) = 0`` for all axes (m/s)."""
+        key = id(self.data.acc)
+        cached = getattr(self, "_fem_cache", None)
+        if cached is not None and cached[0] == key:
+            return cached[1]
+        rows = self._fem_rows()
+        self._fem_cache = (key, rows)
+        return rows
+
+    def _fem_rows(self) -> Affine:
         B = fem.boundary_columns(self.grid)
         out = []
         for a in range(self.d):

@@ -343,9 +343,11 @@ class NavigationProblem:
         ok = np.flatnonzero(norms > 1e-12 * scale)
         if ok.size:
             Dn = DZ[:, ok] / norms[ok]
-            # full_matrices: with fewer information rows than directions the null space
-            # has more vectors than there are singular values
-            _, s, vt = np.linalg.svd(Dn, full_matrices=True)
+            # with fewer information rows than directions the null space has more vectors
+            # than there are singular values: pad with zero rows (never a full U: M x M)
+            if Dn.shape[0] < Dn.shape[1]:
+                Dn = np.vstack([Dn, np.zeros((Dn.shape[1] - Dn.shape[0], Dn.shape[1]))])
+            _, s, vt = np.linalg.svd(Dn, full_matrices=False)
             rank = int(np.sum(s > 1e-9 * s[0])) if s.size else 0
             null = vt[rank:]
             if null.shape[0]:
@@ -357,6 +359,9 @@ class NavigationProblem:
 
     def check_observability(self) -> None:
         """Raise :class:`InputError` naming what the information leaves undetermined."""
+        terms = self.terms()
+        if getattr(self, "_observable_terms", None) is terms:  # checked for these items already
+            return
         missing = self.unobservable()
         if missing:
             raise InputError(
@@ -365,6 +370,7 @@ class NavigationProblem:
                 "Velocity for a velocity offset, more velocities for error-model parameters) "
                 "or remove error-model parameters."
             )
+        self._observable_terms = terms
 
     # ------------------------------------------------------------ solving
     def solve(
@@ -583,7 +589,10 @@ class NavigationProblem:
             stat = self._stationarity(xval, lam, duals)
         from .kkt import FORWARD_RTOL, forward_error
 
-        fwd = forward_error(self, xval, lam, duals)
+        cached = getattr(self, "_direct_factor", None)
+        self._direct_factor = None
+        reuse = cached[1:] if cached is not None and cached[0] == float(lam) else None
+        fwd = forward_error(self, xval, lam, duals, reuse)
         ok = (fem_rel <= rtol and worst <= rtol * 10 and (stat is None or stat <= np.sqrt(rtol))
               and (fwd is None or fwd <= FORWARD_RTOL[accuracy]))
         return {"fem_residual": fem_rel, "max_violation": worst, "worst_item": worst_item,
