@@ -134,3 +134,25 @@ def test_rule_errors_name_the_fix():
     hard = bvpnav.NavigationProblem(prob.data).add(Position(t=[0.0, 10.0], value=[0.0, 10.0]))
     with pytest.raises(bvpnav.InputError, match="every item is hard"):
         hard.solve(lam="lcurve")
+
+
+def test_plots_mark_every_rule_and_write_atomically(tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from bvpnav import plot
+    from bvpnav.io import atomic_savefig
+
+    prob, sc = table1()
+    curve = lambda_curve(prob, rules=("lcurve", "gcv", "quasi"), points=13, lam_range=(1e-3, 1e3))
+    fig = curve.plot()
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert sum(lab.split(":")[0] in curve.chosen for lab in labels) == 3
+    assert any("(used)" in lab and lab.startswith("lcurve") for lab in labels)
+    sol = prob.solve(solver="direct", lam=curve.lam_chosen)
+    f2 = plot.errors({"I": sol}, sc.position)
+    rms = float(f2.axes[0].get_legend().get_texts()[0].get_text().split("RMS ")[1].split(" m")[0])
+    assert abs(rms - sol.rms_error(sc.position)) < 1e-3 * rms + 1e-12
+    out = tmp_path / "lcurve.png"
+    atomic_savefig(fig, out)
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

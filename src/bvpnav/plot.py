@@ -71,9 +71,14 @@ def trajectory(solutions: dict, truth=None, axis: str | None = None, ax=None):
 def errors(solutions: dict, truth, axis: str | None = None, ax=None):
     """Position error (m) against time for several solutions, with each RMS in the legend."""
     fig, ax = _axes(ax, figsize=(8, 4))
-    truth = np.asarray(truth)
+    truth = np.asarray(truth, dtype=float)
     for label, sol in solutions.items():
-        e = sol.position(axis) - truth
+        pos = np.asarray(sol.position(axis), dtype=float)
+        if pos.ndim == 2 and truth.ndim == 1:
+            if pos.shape[1] != 1:
+                raise ValueError(f"truth has one axis but the solution has {pos.shape[1]}; pass axis=")
+            pos = pos[:, 0]
+        e = pos - truth
         ax.plot(sol.t, e, label=f"{label} (RMS {np.sqrt(np.mean(e**2)):.3g} m)")
     ax.axhline(0, color="k", lw=0.5)
     ax.set_xlabel("t (s)")
