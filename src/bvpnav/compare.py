@@ -69,13 +69,13 @@ def compare_solvers(problem, solvers: Sequence[str] | None = None, presets: Sequ
     Runs use ``fallback=None`` and ``verify=False`` so each row shows that solver's own
     answer; ``verified`` then says whether bvpnav would have accepted it.
     """
-    from .kkt import least_squares_form
+    from .kkt import least_squares_form, non_least_squares_term
     from .solvers import available_solvers
 
     if solvers is None:
         have = set(available_solvers())
         solvers = [s for s in ("clarabel", "osqp") if s in have]
-        if least_squares_form(problem, 1.0) is not None:
+        if non_least_squares_term(problem) is None:
             solvers += ["direct", "csne"]
     if isinstance(lam, str):
         from .regularization import choose_lambda

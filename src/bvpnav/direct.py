@@ -24,30 +24,30 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .errors import InputError, SolveError
-from .kkt import least_squares_form, solve_least_squares
+from .kkt import least_squares_form, non_least_squares_term, solve_least_squares
 from .solvers import Backend, register_backend
 
 __all__ = ["run_direct", "run_csne"]
 
 
 def _refuse(problem, name: str) -> None:
-    for term in problem.terms():
-        if term.kind != "equality" or term.mode in ("band", "robust"):
-            raise InputError(
-                f"solver {name!r} solves equality-constrained least squares only; item "
-                f"{term.label!r} has mode {term.mode!r} ({term.kind}). Use solver='clarabel'."
-            )
+    term = non_least_squares_term(problem)
+    if term is not None:
+        raise InputError(
+            f"solver {name!r} solves equality-constrained least squares only; item "
+            f"{term.label!r} has mode {term.mode!r} ({term.kind}). Use solver='clarabel'."
+        )
 
 
 def run_direct(problem, lam: float, accuracy: str, options: dict):
     """Back end ``direct``: returns ``(x, info)`` for :meth:`NavigationProblem.solve`."""
     _refuse(problem, "direct")
     t0 = time.perf_counter()
-    refine = int(options.get("refine", {"low": 1, "default": 3, "high": 6}[accuracy]))
+    refine = int(options["refine"])
     try:
         x, info = solve_least_squares(problem, lam, refine=refine)
         # verification reuses the factorization (one LU per solve, not two)
-        problem._direct_factor = (float(lam), info.pop("form"), info.pop("factor"))
+        info["factored"] = (info.pop("form"), info.pop("factor"))
     except RuntimeError as exc:  # singular factorization
         raise SolveError(f"direct: the KKT matrix is singular ({exc}); some unknown is not "
                          "determined by the information",
@@ -89,8 +89,7 @@ def run_csne(problem, lam: float, accuracy: str, options: dict):
         raise SolveError(f"csne: singular normal matrix ({exc})",
                          attempts=[{"solver": "csne", "status": "singular", "reason": str(exc)}]) from exc
     z = np.zeros(K.shape[0])
-    max_it = int(options.get("max_iter", {"low": 5, "default": 20, "high": 50}[accuracy]))
-    tol = float(options.get("tol", {"low": 1e-8, "default": 1e-12, "high": 1e-15}[accuracy]))
+    max_it, tol = int(options["max_iter"]), float(options["tol"])
     corr, k = np.inf, 0
     for _ in range(max_it):
         k += 1
@@ -113,5 +112,6 @@ def run_csne(problem, lam: float, accuracy: str, options: dict):
 register_backend(Backend("direct", "direct", run=run_direct,
                          presets={"low": {"refine": 1}, "default": {"refine": 3}, "high": {"refine": 6}}))
 register_backend(Backend("csne", "direct", run=run_csne,
-                         presets={"low": {"max_iter": 5}, "default": {"max_iter": 20},
-                                  "high": {"max_iter": 50}}))
+                         presets={"low": {"max_iter": 5, "tol": 1e-8},
+                                  "default": {"max_iter": 20, "tol": 1e-12},
+                                  "high": {"max_iter": 50, "tol": 1e-15}}))

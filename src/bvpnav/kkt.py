@@ -35,8 +35,8 @@ import scipy.sparse.linalg as spla
 
 from .model import Affine
 
-__all__ = ["LeastSquaresForm", "least_squares_form", "forward_error", "BorderedLU", "solve_bordered",
-           "solve_least_squares"]
+__all__ = ["LeastSquaresForm", "least_squares_form", "non_least_squares_term", "forward_error",
+           "BorderedLU", "solve_bordered", "factor_form", "solve_least_squares"]
 
 #: Largest relative forward error accepted per accuracy preset.
 FORWARD_RTOL = {"low": 1e-4, "default": 1e-6, "high": 1e-8}
@@ -80,11 +80,22 @@ class LeastSquaresForm:
         return np.concatenate([-self.D.c, np.zeros(n), -self.E.c])
 
 
+def non_least_squares_term(problem):
+    """The first term that makes the problem not least squares (an inequality, a band or
+    a robust penalty), or None when the problem is equality-constrained least squares."""
+    for term in problem.terms():
+        if term.kind != "equality" or term.mode in ("band", "robust"):
+            return term
+    return None
+
+
 def least_squares_form(problem, lam: float) -> LeastSquaresForm | None:
     """The problem as equality-constrained least squares, or None if it is not one.
 
     Returns None when an item is an inequality, a band or a robust penalty.
     """
+    if non_least_squares_term(problem) is not None:
+        return None
     model = problem.model
     obj = [problem.data_rows()]
     eq = [model.fem_rows()]
@@ -92,8 +103,6 @@ def least_squares_form(problem, lam: float) -> LeastSquaresForm | None:
     start = eq[0].m
     scaled = [np.zeros(obj[0].m, dtype=bool)]
     for term in problem.terms():
-        if term.kind != "equality" or term.mode in ("band", "robust"):
-            return None
         if term.mode == "hard":
             eq.append(term.residual)
             blocks.append((term.label, slice(start, start + term.residual.m)))
@@ -144,7 +153,7 @@ def forward_error(problem, xval: np.ndarray, lam: float, duals: dict | None,
                 y[sl] = np.asarray(d, dtype=float).ravel()
     rho = form.D.value(xval)
     z = np.concatenate([rho, xval, y / 2.0])
-    S = form.augmented()
+    S = factored[1].S if factored is not None else form.augmented()
     resid = form.rhs() - S @ z
     m = form.D.m
     dense = m + problem.model.l_index  # error-model parameters: dense columns of the FEM rows

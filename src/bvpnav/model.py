@@ -213,13 +213,20 @@ class NavModel:
     # ----------------------------------------------------------- FEM rows
     def fem_rows(self) -> Affine:
         """The hard FEM equations ``K r + B v + M (a_hat + G l + w) = 0`` for all axes (m/s)."""
-        key = id(self.data.acc)
-        cached = getattr(self, "_fem_cache", None)
-        if cached is not None and cached[0] == key:
-            return cached[1]
-        rows = self._fem_rows()
-        self._fem_cache = (key, rows)
-        return rows
+        if getattr(self, "_fem_cache", None) is None:
+            self._fem_cache = self._fem_rows()
+        return self._fem_cache
+
+    def with_acc(self, acc: np.ndarray) -> NavModel:
+        """The same model (grid, K, M, error-model columns) for other measured
+        accelerations ``acc`` (N, d), m/s^2; used to differentiate with respect to the data."""
+        import copy
+
+        other = copy.copy(self)
+        other.data = copy.copy(self.data)
+        other.data.acc = np.asarray(acc, dtype=float)
+        other._fem_cache = None
+        return other
 
     def _fem_rows(self) -> Affine:
         B = fem.boundary_columns(self.grid)

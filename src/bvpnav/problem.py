@@ -492,14 +492,16 @@ class NavigationProblem:
 
     def _attempt(self, backend, opts, lam, accuracy, verify, verbose) -> Solution:
         t_start = time.perf_counter()
+        factored = None
         if backend.kind == "direct":
             xval, info = backend.run(self, lam, accuracy, opts)
             duals = info.pop("duals", None)
+            factored = info.pop("factored", None)
         else:
             xval, info, duals = self._solve_cvxpy(backend, lam, opts, verbose)
         info["wall_time"] = time.perf_counter() - t_start
         info.update(solver=backend.name, accuracy=accuracy, options=opts)
-        return self._finish(xval, lam, "fixed", info, duals, accuracy, verify)
+        return self._finish(xval, lam, "fixed", info, duals, accuracy, verify, factored)
 
     def _solve_cvxpy(self, backend, lam: float, opts: dict, verbose: bool):
         cvx = self.build()
@@ -553,9 +555,12 @@ class NavigationProblem:
 
     # ------------------------------------------------------- verification
     def verify(self, xval: np.ndarray, lam: float, accuracy: str = "default",
-               duals: dict | None = None) -> dict[str, Any]:
+               duals: dict | None = None, factored: tuple | None = None) -> dict[str, Any]:
         """Recompute the FEM residual, hard-item violations and (when duals are given
         and the objective is smooth) the stationarity residual.
+
+        ``factored`` is an optional ``(LeastSquaresForm, BorderedLU)`` of this problem at
+        this ``lam`` (the direct back end's own) reused by the forward-error estimate.
 
         Returns
         -------
@@ -589,10 +594,7 @@ class NavigationProblem:
             stat = self._stationarity(xval, lam, duals)
         from .kkt import FORWARD_RTOL, forward_error
 
-        cached = getattr(self, "_direct_factor", None)
-        self._direct_factor = None
-        reuse = cached[1:] if cached is not None and cached[0] == float(lam) else None
-        fwd = forward_error(self, xval, lam, duals, reuse)
+        fwd = forward_error(self, xval, lam, duals, factored)
         ok = (fem_rel <= rtol and worst <= rtol * 10 and (stat is None or stat <= np.sqrt(rtol))
               and (fwd is None or fwd <= FORWARD_RTOL[accuracy]))
         return {"fem_residual": fem_rel, "max_violation": worst, "worst_item": worst_item,
@@ -641,8 +643,8 @@ class NavigationProblem:
         return float(np.max(np.abs(total)) / scale)
 
     # -------------------------------------------------------------- result
-    def _finish(self, xval, lam, lam_rule, info, duals, accuracy, verify) -> Solution:
-        check = self.verify(xval, lam, accuracy, duals)
+    def _finish(self, xval, lam, lam_rule, info, duals, accuracy, verify, factored=None) -> Solution:
+        check = self.verify(xval, lam, accuracy, duals, factored)
         info["verification"] = check
         info["verified"] = check["verified"]
         info.setdefault("attempts", []).append(

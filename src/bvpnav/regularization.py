@@ -36,7 +36,7 @@ from scipy.interpolate import CubicSpline
 from scipy.optimize import minimize_scalar
 
 from .errors import InputError
-from .kkt import factor_form, least_squares_form
+from .kkt import factor_form, least_squares_form, non_least_squares_term
 
 __all__ = ["RULES", "LambdaCurve", "lambda_curve", "choose_lambda", "solve_with_rule"]
 
@@ -120,12 +120,6 @@ class _DirectSweep:
         self._rhs_jac = None
         self._probe_rhs = None
 
-    def _norms(self, x):
-        rho2 = float(np.sum(self.data.value(x) ** 2))
-        rho2 += sum(float(np.sum((t.residual.value(x) / t.sigma) ** 2)) for t in self.fixed_terms)
-        eta2 = sum(float(np.sum((t.residual.value(x) / t.sigma) ** 2)) for t in self.lam_terms)
-        return rho2, eta2
-
     def point(self, lam: float, need_trace: bool = False, probes: int = 24, seed: int = 0) -> dict:
         key = float(lam)
         pt = self.cache.get(key)
@@ -140,16 +134,19 @@ class _DirectSweep:
                              "not determined by the information") from exc
         z, _, _ = fac.refined(form.rhs(), 2, 1e-14, window=slice(m, m + n))
         x = z[m:m + n]
-        rho2, eta2 = self._norms(x)
+        scaled = [t.residual.value(x) / t.sigma for t in self.lam_terms]  # S (A x + c)
+        rho2 = float(np.sum(self.data.value(x) ** 2))
+        rho2 += sum(float(np.sum((t.residual.value(x) / t.sigma) ** 2)) for t in self.fixed_terms)
+        eta2 = sum(float(np.sum(r**2)) for r in scaled)
         # dx/dlam from the same factorization: H x' + E^T mu' = -sum A^T S^2 (A x + c)
         g = np.zeros(n)
-        for t in self.lam_terms:
-            g -= t.residual.A.T @ (t.residual.value(x) / t.sigma**2)
+        for t, r in zip(self.lam_terms, scaled, strict=True):
+            g -= t.residual.A.T @ (r / t.sigma)
         rhs = np.concatenate([np.zeros(m), g, np.zeros(form.E.m)])
         dz, _, _ = fac.refined(rhs, 1, window=slice(m, m + n))
         dx = dz[m:m + n]
-        deta2 = sum(2.0 * float(np.sum((t.residual.value(x) / t.sigma)
-                                       * ((t.residual.A @ dx) / t.sigma))) for t in self.lam_terms)
+        deta2 = sum(2.0 * float(np.sum(r * ((t.residual.A @ dx) / t.sigma)))
+                    for t, r in zip(self.lam_terms, scaled, strict=True))
         pos = np.concatenate([self.model.r_index(a) for a in range(self.model.d)])
         pt = {"lam": key, "rho2": rho2, "eta2": eta2, "deta2": deta2, "x": x,
               "quasi": float(np.linalg.norm(lam * dx[pos]) / math.sqrt(pos.size))}
@@ -164,11 +161,7 @@ class _DirectSweep:
         accelerations change by ``Z`` (N, d); the form is affine in the data."""
         def rhs_for(acc):
             p2 = copy.copy(self.problem)
-            m2 = copy.copy(self.model)
-            d2 = copy.copy(self.problem.data)
-            d2.acc = acc
-            m2.data = d2
-            p2._model, p2._terms, p2._cvx = m2, None, None
+            p2._model, p2._terms, p2._cvx = self.model.with_acc(acc), None, None
             return least_squares_form(p2, 1.0).rhs()
 
         if self._rhs_jac is None:
@@ -302,7 +295,8 @@ def lambda_curve(problem, rules=RULES, rule: str = "lcurve", lam_range=(1e-6, 1e
         \\mathrm{tr}(I - A_\\lambda)` (the data residual's expected size given the stated
         noise, only meaningful for ``residual="acceleration"`` with ``sigma_a`` given).
     probes : int
-        Hutchinson probes for GCV's trace when the problem has more than 1,200 samples x axes.
+        Hutchinson probes for GCV's trace when the problem has more than 300 samples x axes
+        (below that the trace is exact).
     seed : int
         Seed of the probes (results are reproducible).
     progress : bool, optional
@@ -337,7 +331,7 @@ def lambda_curve(problem, rules=RULES, rule: str = "lcurve", lam_range=(1e-6, 1e
         raise InputError(f"lam_range={lam_range!r}: need 0 < low < high")
     if points < 7:
         raise InputError(f"points={points}: the sweep needs at least 7 points")
-    ls = least_squares_form(problem, 1.0) is not None
+    ls = non_least_squares_term(problem) is None
     if engine == "auto":
         engine = "direct" if ls else "cvxpy"
     if engine == "direct" and not ls:
