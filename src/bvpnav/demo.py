@@ -19,25 +19,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from .baselines import trapezoid
 from .constraints import Position, Velocity
 from .problem import NavigationProblem
 from .scenarios import tikhonov2011
 
 __all__ = ["run_demo"]
-
-
-def _trapezoid(t: np.ndarray, acc: np.ndarray, r0: float, v0: float):
-    try:
-        from .baselines import trapezoid
-    except ImportError:  # pragma: no cover - baselines ship with the package
-        trapezoid = None
-    if trapezoid is not None:
-        vel, pos = trapezoid(t, acc, v0=v0, r0=r0)
-        return np.ravel(pos), np.ravel(vel)
-    h = np.diff(t)
-    vel = v0 + np.concatenate([[0.0], np.cumsum(h * (acc[1:] + acc[:-1]) / 2)])
-    pos = r0 + np.concatenate([[0.0], np.cumsum(h * (vel[1:] + vel[:-1]) / 2)])
-    return pos, vel
 
 
 def run_demo(png: str | None = "bvpnav-demo.png", seed: int = 0, quiet: bool = False,
@@ -65,7 +52,7 @@ def run_demo(png: str | None = "bvpnav-demo.png", seed: int = 0, quiet: bool = F
     b = sc.boundary
     truth = sc.position
     rms = {}
-    pos_ivp, _ = _trapezoid(t, acc, b["r0"], b["v0"])
+    _, pos_ivp = trapezoid(t, acc, v0=b["v0"], r0=b["r0"])
     rms["I   time-stepping (trapezoid)"] = float(np.sqrt(np.mean((pos_ivp - truth) ** 2)))
 
     ends = Position(t=[b["t0"], b["t1"]], value=[b["r0"], b["r1"]], name="ends")
@@ -75,12 +62,8 @@ def run_demo(png: str | None = "bvpnav-demo.png", seed: int = 0, quiet: bool = F
     prior_t = np.concatenate([t[:10], t[-10:]])
     tik = NavigationProblem(sc.data, residual="load").add(
         ends, Position(t=prior_t, value=sc.prior(prior_t), sigma=1.0, name="prior"))
-    from .errors import SolverNotFound
-
-    try:  # the load form is ill-conditioned: the direct back end is its accurate path
-        sol3 = tik.solve(lam=lam, solver="direct")
-    except SolverNotFound:
-        sol3 = tik.solve(lam=lam)
+    # the load form is ill-conditioned: the direct back end is its accurate path
+    sol3 = tik.solve(lam=lam, solver="direct")
     rms["III FEM + Tikhonov (2011 paper, L-curve)"] = sol3.rms_error(truth)
 
     full = NavigationProblem(sc.data).add(
