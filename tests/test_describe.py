@@ -24,7 +24,9 @@ def table1_problem():
 
 
 def test_describe_text_for_the_table1_problem():
-    text = describe(table1_problem(), lam=3.611)
+    prob = table1_problem()
+    text = prob.describe(lam=3.611)
+    assert text == describe(prob, lam=3.611)
     lines = text.splitlines()
     assert lines[0] == ("bvpnav problem: N = 501 samples on [0, 10] s (h = 0.02 s); axes: x; "
                         "residual form: load")
@@ -46,7 +48,7 @@ def test_describe_latex_renders_with_mathtext():
     matplotlib.use("Agg")
     from matplotlib import mathtext
 
-    tex = describe(table1_problem(), format="latex", lam=3.611)
+    tex = table1_problem().describe(format="latex", lam=3.611)
     formulas = [ln for ln in tex.splitlines() if ln.startswith("$")]
     assert r"$\lambda = 3.611$" in formulas
     assert r"$r(t_k) - p_k = 0\quad \mathrm{[ends,\ hard,\ 2\ rows]}$" in formulas
@@ -69,7 +71,8 @@ def test_solve_by_hand_from_matrices(residual):
              Position(t=t[:5], value=sc.prior(t[:5]), sigma=0.5, name="prior"),
              Velocity(t=5.0, value=0.0, sigma=0.2))
     lam = 2.5
-    mats = matrices(prob)
+    mats = prob.matrices()
+    assert mats.A_eq.shape == matrices(prob).A_eq.shape
     # min ||J x||^2 + lam ||(D x - e)/sigma||^2  s.t.  A_eq x = b_eq   (dense KKT by hand)
     J = mats.J.toarray()
     W = mats.D.toarray() / mats.sigma[:, None]

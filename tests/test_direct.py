@@ -86,3 +86,40 @@ def test_redundant_consistent_hard_rows_are_solved():
     ref.add(Position(t=[0.0, 10.0], value=[0.0, 10.0]), AverageVelocity(t0=0.0, t1=5.0, value=1.0))
     np.testing.assert_allclose(sol.position(), ref.solve(solver="direct").position(), atol=1e-9)
     assert abs(sol.position()[250, 0] - 5.0) < 1e-9
+
+
+@pytest.mark.parametrize("with_bias", [False, True])
+def test_ldl_and_lu_factorizations_agree(with_bias):
+    """QDLDL on the regularized quasi-definite matrix, refined against the exact one, gives
+    the pivoted LU's answer; error-model columns are eliminated the same way for both."""
+    from bvpnav.error_models import Bias
+
+    prob, _ = table1_problem(3001)
+    if with_bias:
+        prob = bvpnav.NavigationProblem(prob.data, error_model=Bias())
+        prob.add(Position(t=[0.0, 10.0], value=[0.0, 10.0]), Velocity(t=[0.0, 10.0], value=[0.0, 0.0]))
+    a = prob.solve(solver="direct", lam=1.3, options={"method": "ldl"}, fallback=None)
+    b = prob.solve(solver="direct", lam=1.3, options={"method": "lu"}, fallback=None)
+    assert a.stats["factorization"] == "ldl" and b.stats["factorization"] == "lu"
+    assert a.stats["verified"] and b.stats["verified"]
+    np.testing.assert_allclose(a.x, b.x, rtol=0, atol=1e-9 * np.max(np.abs(b.x)))
+
+
+def test_auto_factorization_follows_the_residual_form_and_ldl_stalls_are_caught():
+    acc, _ = table1_problem(2001)
+    load, _ = table1_problem(2001, residual="load")
+    assert acc.solve(solver="direct").stats["factorization"] == "ldl"
+    assert load.solve(solver="direct").stats["factorization"] == "lu"
+    # forcing LDL on the load form (condition ~ N^4): refinement stalls and the LU takes over
+    forced = load.solve(solver="direct", options={"method": "ldl"}, fallback=None)
+    assert forced.stats["factorization"].startswith("lu (ldl refinement stalled")
+    assert forced.stats["verification"]["forward_error"] < 1e-8
+
+
+def test_ldl_handles_redundant_hard_rows():
+    """The same position given twice as hard: LU needs its shift, the regularized LDL not."""
+    prob, _ = table1_problem(1001)
+    prob.add(Position(t=10.0, value=10.0, name="again"))
+    a = prob.solve(solver="direct", options={"method": "ldl"}, fallback=None)
+    b = prob.solve(solver="direct", options={"method": "lu"}, fallback=None)
+    np.testing.assert_allclose(a.x, b.x, rtol=0, atol=1e-9 * np.max(np.abs(b.x)))

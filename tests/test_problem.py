@@ -59,18 +59,24 @@ def test_solver_names_are_case_insensitive_and_unknown_lists_installed():
 def test_clarabel_and_osqp_high_agree_on_2000_samples():
     prob, _ = table1_problem(2000)
     c = prob.solve(solver="clarabel", accuracy="high")
-    # OSQP's 'high' preset cannot reach bvpnav's 1e-8 forward-error tolerance here (it ends
-    # near 2.5e-7, status optimal_inaccurate): bvpnav says so instead of calling it verified
+    # Whether OSQP's 'high' preset reaches bvpnav's forward-error tolerance depends on its
+    # solution polishing (osqp 0.6/1.0 ended near 2.5e-7, osqp 1.1.3 polishes to 6e-12):
+    # the verdict must follow the measured error either way
     o = prob.solve(solver="osqp", accuracy="high", fallback=None, verify=False)
-    assert o.stats["solver"] == "osqp" and not o.stats["verified"]
-    assert 1e-8 < o.stats["verification"]["forward_error"] < 1e-5
+    ver = o.stats["verification"]
+    assert o.stats["solver"] == "osqp"
+    assert o.stats["verified"] == (ver["forward_error"] <= ver["rtol"] and ver["fem_residual"] <= ver["rtol"])
     assert np.max(np.abs(c.position() - o.position())) < 1e-4
+    # stopped early (iteration limit) OSQP is far off: bvpnav says so instead of calling it
+    # verified (a fresh problem: cvxpy would warm-start OSQP from the answer above)
+    prob, _ = table1_problem(2000)
+    cut = prob.solve(solver="osqp", fallback=None, verify=False, options={"max_iter": 50, "polish": False})
+    assert not cut.stats["verified"] and cut.stats["verification"]["forward_error"] > 1e-6
+    with pytest.raises(bvpnav.Inaccurate, match="osqp"):
+        prob.solve(solver="osqp", fallback=None, options={"max_iter": 50, "polish": False})
     # at its default preset OSQP's answer passes the default (1e-6) verification
     od = prob.solve(solver="osqp", fallback=None)
     assert od.stats["verified"] and np.max(np.abs(c.position() - od.position())) < 1e-4
-    # the options in force are recorded
-    assert o.stats["options"]["eps_abs"] == 1e-7
-    assert c.stats["options"]["static_regularization_enable"] is False
 
 
 def test_changing_lam_does_not_recompile():

@@ -63,6 +63,18 @@ class LeastSquaresForm:
     eq_blocks: list
     lam_rows: np.ndarray | None = None
 
+    def augmented_upper(self, delta: float) -> sp.csc_matrix:
+        """Upper triangle of the augmented matrix regularized by ``+delta`` on the unknowns
+        and ``-delta`` on the multipliers (quasi-definite; assembled directly, for LDL^T)."""
+        m, n = self.D.A.shape
+        p = self.E.A.shape[0]
+        return sp.bmat(
+            [[-sp.identity(m), self.D.A, None],
+             [None, delta * sp.identity(n), self.E.A.T],
+             [None, None, -delta * sp.identity(p)]],
+            format="csc",
+        )
+
     def augmented(self) -> sp.csc_matrix:
         """The symmetric indefinite augmented matrix (see module Notes)."""
         m, n = self.D.A.shape
@@ -168,6 +180,23 @@ def forward_error(problem, xval: np.ndarray, lam: float, duals: dict | None,
     return float(np.max(np.abs(dx)) / max(np.max(np.abs(xval)), 1e-300))
 
 
+class _LDL:
+    """QDLDL's LDL^T factorization (AMD ordering, no pivoting) of a quasi-definite matrix,
+    with SuperLU's ``solve`` interface (one or several right-hand sides)."""
+
+    def __init__(self, upper: sp.spmatrix):
+        import qdldl  # a dependency of cvxpy
+
+        self._f = qdldl.Solver(sp.csc_matrix(upper), upper=True)
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        rhs = np.asarray(rhs, dtype=float)
+        if rhs.ndim == 1:
+            return self._f.solve(rhs)
+        return np.column_stack([self._f.solve(np.ascontiguousarray(rhs[:, k]))
+                                for k in range(rhs.shape[1])])
+
+
 class BorderedLU:
     r"""A factorization of ``S`` that eliminates a few dense unknowns through their Schur complement.
 
@@ -181,6 +210,14 @@ class BorderedLU:
     S : sparse matrix, shape (T, T)
     dense : ndarray of int
         Indices of the unknowns (and matching equations) to eliminate last.
+    shift_rows : ndarray of int, optional
+        Rows (multipliers of hard items) that may be shifted by a tiny amount if the LU
+        finds the matrix singular (redundant but consistent hard rows).
+    upper : sparse matrix, optional
+        The upper triangle of a statically regularized ``S`` (``S + diag(reg)`` with
+        ``reg`` > 0 on the primal unknowns and < 0 on the multipliers: quasi-definite):
+        factorise it with QDLDL's LDL^T (no pivoting) instead of ``S`` with SuperLU's LU;
+        :meth:`refined` then iterates against ``S`` itself.
 
     Raises
     ------
@@ -195,10 +232,17 @@ class BorderedLU:
               \qquad z_B = S_{BB}^{-1} (r_B - S_{BL} z_L).
     """
 
-    def __init__(self, S: sp.spmatrix, dense: np.ndarray, shift_rows: np.ndarray | None = None):
+    def __init__(self, S: sp.spmatrix, dense: np.ndarray, shift_rows: np.ndarray | None = None,
+                 upper: sp.spmatrix | None = None):
         S = sp.csc_matrix(S)
         self.S = S
         self.shift = 0.0
+        self.method = "lu" if upper is None else "ldl"
+        self._upper = upper
+        if upper is not None:  # quasi-definite: no pivoting, no singular multiplier block
+            self._factor(S, dense)
+            self._upper = None
+            return
         try:
             self._factor(S, dense)
         except (RuntimeError, np.linalg.LinAlgError):
@@ -211,15 +255,21 @@ class BorderedLU:
             d[np.asarray(shift_rows, dtype=int)] = self.shift
             self._factor((S - sp.diags(d)).tocsc(), dense)
 
+    def _sparse_factor(self, B, keep=None):
+        if self.method == "lu":
+            return spla.splu(B, permc_spec="COLAMD")
+        U = self._upper if keep is None else sp.csc_matrix(self._upper)[keep][:, keep]
+        return _LDL(U)
+
     def _factor(self, S, dense):
         self.dense = np.asarray(dense, dtype=int)
         if self.dense.size == 0:
             self.keep = None
-            self.lu = spla.splu(S, permc_spec="COLAMD")
+            self.lu = self._sparse_factor(S)
             return
         self.keep = np.setdiff1d(np.arange(S.shape[0]), self.dense)
         Sr, Sd = S[self.keep], S[self.dense]
-        self.lu = spla.splu(Sr[:, self.keep].tocsc(), permc_spec="COLAMD")
+        self.lu = self._sparse_factor(Sr[:, self.keep].tocsc(), self.keep)
         self.SBL = Sr[:, self.dense].toarray()
         self.SLB = Sd[:, self.keep].tocsr()
         self.X = self.lu.solve(self.SBL)
@@ -239,23 +289,26 @@ class BorderedLU:
         z[self.dense] = zL
         return z
 
-    def refined(self, rhs: np.ndarray, steps: int, tol: float = 0.0, window: slice | None = None):
+    def refined(self, rhs: np.ndarray, steps: int, tol: float = 0.0, window: slice | None = None,
+                stall: float | None = None):
         """Solve with up to ``steps`` iterative-refinement steps in double precision.
 
         Returns ``(z, steps_taken, last_relative_correction)``; the correction is measured
-        on ``window`` (default: all of ``z``) and refinement stops below ``tol``.
+        on ``window`` (default: all of ``z``) and refinement stops below ``tol``, or, with
+        ``stall``, as soon as a correction is not at least ``stall`` times smaller than the
+        one before (the rounding floor has been reached).
         """
         window = window if window is not None else slice(None)
         z = self.solve(rhs)
-        corr, k = 0.0, 0
+        corr, k = np.inf, 0
         for _ in range(steps):
             k += 1
             dz = self.solve(rhs - self.S @ z)
             z += dz
-            corr = float(np.max(np.abs(dz[window])) / max(np.max(np.abs(z[window])), 1e-300))
-            if corr < tol:
+            prev, corr = corr, float(np.max(np.abs(dz[window])) / max(np.max(np.abs(z[window])), 1e-300))
+            if corr < tol or (stall is not None and corr > stall * prev):
                 break
-        return z, k, corr
+        return z, k, (0.0 if k == 0 else corr)
 
 
 def solve_bordered(S: sp.spmatrix, rhs: np.ndarray, dense: np.ndarray,
@@ -264,28 +317,49 @@ def solve_bordered(S: sp.spmatrix, rhs: np.ndarray, dense: np.ndarray,
     return BorderedLU(S, dense, shift_rows).solve(rhs)
 
 
-def factor_form(form: LeastSquaresForm, problem) -> BorderedLU:
-    """:class:`BorderedLU` of a form's augmented matrix, error-model columns eliminated last,
-    redundant hard rows handled by a tiny shift of the multiplier block."""
+def factor_form(form: LeastSquaresForm, problem, method: str = "lu", delta: float = 1e-12) -> BorderedLU:
+    """:class:`BorderedLU` of a form's augmented matrix, error-model columns eliminated last.
+
+    ``method="lu"``: SuperLU (COLAMD ordering, partial pivoting); redundant hard rows are
+    handled by a tiny shift of the multiplier block. ``method="ldl"``: QDLDL on the
+    quasi-definite matrix regularized by ``+delta`` on the unknowns and ``-delta`` on the
+    multipliers (the augmented matrix already has ``-I`` on the residual rows); several
+    times faster, but its answers need refinement against the exact matrix.
+    """
     m, n = form.D.A.shape
     p = form.E.m
-    return BorderedLU(form.augmented(), m + problem.model.l_index, np.arange(m + n, m + n + p))
+    dense = m + problem.model.l_index
+    if method == "ldl":
+        return BorderedLU(form.augmented(), dense, upper=form.augmented_upper(delta))
+    if method != "lu":
+        raise ValueError(f"method={method!r}; choose 'lu' or 'ldl'")
+    return BorderedLU(form.augmented(), dense, np.arange(m + n, m + n + p))
 
 
-def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14):
+def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14,
+                        method: str = "auto", ldl_steps: int = 30, ldl_tol: float = 1e-12,
+                        ldl_accept: float = 1e-7):
     """Solve the equality-constrained least-squares form directly.
 
-    One sparse LU of the augmented system (error-model parameters eliminated through
-    their Schur complement) followed by iterative refinement in double precision.
+    One sparse factorization of the augmented system (error-model parameters eliminated
+    through their Schur complement) followed by iterative refinement in double precision.
 
     Parameters
     ----------
     problem : NavigationProblem
     lam : float
     refine : int
-        Maximum refinement steps.
+        Refinement steps after an LU factorization (stops early below ``tol``).
     tol : float
         Stop refining when the relative correction falls below this.
+    method : {"auto", "lu", "ldl"}
+        ``"lu"``: SuperLU with partial pivoting; robust for the ill-conditioned load form.
+        ``"ldl"``: QDLDL on the regularized quasi-definite matrix, refined until the
+        correction is below ``ldl_tol`` or stops shrinking (the rounding floor; at most
+        ``ldl_steps``); if the last correction is then above ``ldl_accept``, the LU is
+        used instead and the reason is recorded. ``"auto"``: ``"ldl"`` for the
+        acceleration-residual form, ``"lu"`` for the load form (whose condition number,
+        roughly N^4, defeats a regularized factorization).
 
     Returns
     -------
@@ -293,23 +367,49 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
         The stacked solution.
     info : dict
         ``duals`` (cvxpy's sign convention, for verification), ``refinements``, ``correction``
-        (relative size of the last correction, like the 2011 paper's Table 2).
+        (relative size of the last correction, like the 2011 paper's Table 2),
+        ``factorization`` (``"lu"`` or ``"ldl"``, with the reason for any switch),
+        ``factor`` and ``form``.
 
     Raises
     ------
     ValueError
         When the problem is not least squares (inequalities, bands, robust items).
+
+    Notes
+    -----
+    Refinement: :math:`z_{k+1} = z_k + \\tilde S^{-1} (b - S z_k)`, where :math:`\\tilde S`
+    is the factorised (possibly regularized) matrix; it converges when
+    :math:`\\|I - \\tilde S^{-1} S\\| < 1`.
     """
     form = least_squares_form(problem, lam)
     if form is None:
         raise ValueError("not an equality-constrained least-squares problem")
+    if method == "auto":
+        method = "lu" if getattr(problem, "residual", "acceleration") == "load" else "ldl"
     m, n = form.D.A.shape
-    fac = factor_form(form, problem)
-    z, k, corr = fac.refined(form.rhs(), refine + (3 if fac.shift else 0), tol, window=slice(m, m + n))
+    window = slice(m, m + n)
+    rhs = form.rhs()
+    note = method
+    fac = None
+    if method == "ldl":
+        try:
+            fac = factor_form(form, problem, "ldl")
+            z, k, corr = fac.refined(rhs, ldl_steps, ldl_tol, window=window, stall=0.5)
+            if not (np.isfinite(corr) and corr <= ldl_accept and np.all(np.isfinite(z))):
+                note = f"lu (ldl refinement stalled at correction {corr:.1e})"
+                fac = None
+        except (RuntimeError, np.linalg.LinAlgError, ValueError) as exc:
+            note = f"lu (ldl failed: {exc})"
+            fac = None
+    if fac is None:
+        fac = factor_form(form, problem, "lu")
+        z, k, corr = fac.refined(rhs, refine + (3 if fac.shift else 0), tol, window=window)
     x = z[m:m + n]
     mu = z[m + n:]
     duals = {}
     for label, sl in form.eq_blocks:
         y = 2.0 * mu[sl]
         duals[label] = y if label == "fem" else [y]
-    return x, {"duals": duals, "refinements": k, "correction": corr, "factor": fac, "form": form}
+    return x, {"duals": duals, "refinements": k, "correction": corr, "factorization": note,
+               "factor": fac, "form": form}

@@ -289,6 +289,48 @@ class NavigationProblem:
         """True when ``lam`` multiplies at least one term."""
         return any(t.mode in ("soft", "robust") and t.scaled_by_lam for t in self.terms())
 
+    # ------------------------------------------------------ teaching
+    def describe(self, format: str = "text", lam: float | None = None, conditioning: bool = True) -> str:
+        """The assembled problem in readable mathematics (see :func:`bvpnav.describe.describe`).
+
+        Parameters
+        ----------
+        format : {"text", "latex"}
+            Plain text, or LaTeX lines that render with matplotlib's mathtext.
+        lam : float, optional
+            The lambda to print (default: the problem's current value).
+        conditioning : bool
+            Include a condition estimate of the KKT matrix (one sparse LU).
+
+        Returns
+        -------
+        str
+            Variables with sizes and units, the FEM hard constraints, the error-model
+            columns, each item's equation with its mode and weight, the objective with
+            lambda, the size (rows, columns, non-zeros) and the conditioning estimate.
+        """
+        from .describe import describe
+
+        return describe(self, format=format, lam=lam, conditioning=conditioning)
+
+    def matrices(self):
+        """The assembled matrices (K, M, f, F, A_eq, b_eq, J, D, e, sigma, legend, layout)
+        for a solve by hand; see :class:`bvpnav.describe.Matrices`.
+
+        Returns
+        -------
+        bvpnav.describe.Matrices
+
+        Notes
+        -----
+        The problem is :math:`\\min_x \\|J x\\|^2 + \\lambda \\|(D x - e)/\\sigma\\|^2`
+        subject to :math:`A_{eq} x = b_{eq}`, whose first rows are the FEM equations
+        :math:`K r + B v - f - F l + M w = 0`.
+        """
+        from .describe import matrices
+
+        return matrices(self)
+
     # ------------------------------------------------------ observability
     def null_directions(self) -> tuple[np.ndarray, list[str]]:
         """Directions of ``x`` the FEM equations leave free when ``w = 0``.
