@@ -139,7 +139,8 @@ def main(argv=None):
 
         print(f"\npeak resident memory at {rates[-1]:g} Hz x {args.duration:g} s (each row its own process)")
         print(f"{'backend':<10}{'time (s)':>9}{'x fastest':>10}{'peak (MB)':>11}  note")
-        rows = [run_case(__file__, [str(rates[-1]), str(args.duration), b]) | {"backend": b} for b in backends]
+        largest = [str(rates[-1]), str(args.duration)]
+        rows = [run_case(__file__, [*largest, b]) | {"backend": b} for b in backends]
         fastest = min(r.get("time", np.inf) for r in rows if r["backend"].startswith(("direct", "csne")))
         for r in rows:
             t = r.get("time", np.nan)
