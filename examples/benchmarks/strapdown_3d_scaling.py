@@ -30,6 +30,7 @@ import json
 import time
 
 import numpy as np
+from _memory import own_peak_mb, run_case
 
 import bvpnav
 from bvpnav import simulate
@@ -109,7 +110,7 @@ def case(rate: float, duration: float, name: str) -> dict:
     build = time.perf_counter() - t0
     sol, dt = solve(prob, name, verify=False)
     return {"backend": name, "build": build, "time": dt, "verified": bool(sol.stats["verified"]),
-            "status": sol.stats["status"], "rms": score(sol, sim)[1]}
+            "status": sol.stats["status"], "rms": score(sol, sim)[1], "peak_mb": own_peak_mb()}
 
 
 def main(argv=None):
@@ -135,8 +136,6 @@ def main(argv=None):
                   f"{r['ratio']:>10.2f}{r['error']:>11.1e}{r['param']:>11.1e}{r['rms']:>12.4f}  {r['note']}",
                   flush=True)
     if args.memory:
-        from _memory import run_case
-
         print(f"\npeak resident memory at {rates[-1]:g} Hz x {args.duration:g} s (each row its own process)")
         print(f"{'backend':<10}{'time (s)':>9}{'x fastest':>10}{'peak (MB)':>11}  note")
         largest = [str(rates[-1]), str(args.duration)]

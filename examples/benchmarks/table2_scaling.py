@@ -38,6 +38,7 @@ import warnings
 
 import numpy as np
 import scipy.sparse.linalg as spla
+from _memory import own_peak_mb, run_case
 
 import bvpnav
 from bvpnav.constraints import Position
@@ -129,12 +130,10 @@ def case(n: int, residual: str, backend: str) -> dict:
     sol, dt = timed(lambda: prob.solve(solver=backend, fallback=None, verify=False))
     return {"n": n, "form": residual, "backend": backend, "build": t_build, "time": dt,
             "status": sol.stats["status"], "verified": bool(sol.stats["verified"]),
-            "forward_error": sol.stats["verification"]["forward_error"]}
+            "forward_error": sol.stats["verification"]["forward_error"], "peak_mb": own_peak_mb()}
 
 
 def memory_table(n: int, forms: list[str]) -> None:
-    from _memory import run_case
-
     print(f"\npeak resident memory at N = {n} (each row its own process)")
     print(f"{'form':<13}{'backend':<10}{'time (s)':>10}{'x fastest':>10}{'peak (MB)':>11}  note")
     for form in forms:
@@ -155,6 +154,7 @@ def main(argv=None):
     ap.add_argument("--forms", default="load,acceleration")
     ap.add_argument("--memory", action="store_true",
                     help="also run the largest N once per back end in its own process (peak memory)")
+    ap.add_argument("--memory-only", action="store_true", help="only the peak-memory table")
     ap.add_argument("--case", nargs=3, metavar=("N", "FORM", "BACKEND"), help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.case:
@@ -163,6 +163,9 @@ def main(argv=None):
     ns = [n for n in (500, 1000, 2000, 4000, 8000, 16000, 32000, 64000, 128000, 256000, 512000, 1000000)
           if n <= args.max_n]
     forms = args.forms.split(",")
+    if args.memory_only:
+        memory_table(ns[-1], forms)
+        return
     print(f"{'form':<13}{'N':>8}{'M':>7}  {'backend':<9}{'time (s)':>10}{'x fastest':>10}{'rel. error':>12}"
           f"  {'paper CSNE (ms)':>15}  note")
     for form in forms:
