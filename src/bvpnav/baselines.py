@@ -260,7 +260,8 @@ def rts_smoother(t, acc, measurements, sigma_a: float = 1.0, sigma_bias: float =
             S = H @ P @ H + std**2
             K = P @ H / S
             x = x + K * (val - x[comp])
-            P = P - np.outer(K, H @ P)
+            IKH = np.eye(3) - np.outer(K, H)  # Joseph form: stays symmetric positive definite
+            P = IKH @ P @ IKH.T + std**2 * np.outer(K, K)
             P = 0.5 * (P + P.T)
         return x, P
 
@@ -283,7 +284,12 @@ def rts_smoother(t, acc, measurements, sigma_a: float = 1.0, sigma_bias: float =
     xs = xs_f.copy()
     Ps = Ps_f.copy()
     for k in range(n - 2, -1, -1):
-        C = Ps_f[k] @ Fs[k].T @ np.linalg.pinv(Ps_p[k + 1])
+        # C = P_f F^T (P^-)^{-1} by a solve: a pseudo-inverse would truncate the small
+        # eigenvalues that tiny process noise leaves in P^- (and lose the answer)
+        try:
+            C = np.linalg.solve(Ps_p[k + 1], Fs[k] @ Ps_f[k]).T
+        except np.linalg.LinAlgError:  # exactly singular (no process noise at all)
+            C = np.linalg.lstsq(Ps_p[k + 1], Fs[k] @ Ps_f[k], rcond=None)[0].T
         xs[k] = xs_f[k] + C @ (xs[k + 1] - xs_p[k + 1])
         Ps[k] = Ps_f[k] + C @ (Ps[k + 1] - Ps_p[k + 1]) @ C.T
     std = np.sqrt(np.maximum(np.einsum("kii->ki", Ps), 0.0))
