@@ -573,11 +573,22 @@ class NavigationProblem:
             "solver_warnings": [str(w.message) for w in caught],
         }
         if status in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE):
-            hard = [t.label for t in self.terms() if t.mode in ("hard", "band")]
+            from .conflicts import conflicting_items
+
+            try:
+                culprits = conflicting_items(self)
+            except Exception:  # the finder must never hide the solver's verdict
+                culprits = []
+            if culprits:
+                which = f"These hard items conflict: {culprits}. Soften one of them (give sigma=...)."
+            else:
+                hard = [t.label for t in self.terms() if t.mode in ("hard", "band")]
+                which = (f"No conflicting subset was confirmed (a numerical verdict?). Hard/band "
+                         f"items: {hard}. Soften some of them (give sigma=...) or try another solver.")
             raise Infeasible(
-                f"{backend.name}: the hard information cannot hold together (status {status}). "
-                f"Hard/band items: {hard}. Soften some of them (give sigma=...).",
-                attempts=[{"solver": backend.name, "status": status, "reason": "infeasible"}],
+                f"{backend.name}: the hard information cannot hold together (status {status}). {which}",
+                attempts=[{"solver": backend.name, "status": status, "reason": "infeasible",
+                           "conflicts": culprits}],
             )
         if status in (cp.UNBOUNDED, cp.UNBOUNDED_INACCURATE):
             raise Unbounded(
