@@ -23,7 +23,16 @@ the ends (and elsewhere): positions, velocities, average velocities, symmetry,
 stationary intervals... posed as one convex problem and solved with a verified solver.
 
 Start here:
-  bvpnav demo                 run the bundled scenario, print a table, write a PNG
+  bvpnav demo                                  the bundled scenario: a table and a PNG
+  bvpnav simulate tikhonov2011 --out rec       a synthetic recording and its spec
+  bvpnav solve rec/recording.csv --spec rec/spec.toml --out traj.csv --plot traj.png
+  bvpnav lcurve rec/recording.csv --spec rec/spec.toml --plot lcurve.png
+  bvpnav compare rec/recording.csv --spec rec/spec.toml
+  bvpnav batch recordings/ --spec spec.toml --out results/ --workers 2
+
+A recording is a CSV or Parquet file with a time column and acceleration columns; the
+spec (TOML) says which columns and units, what else is known (items), the error model,
+the solver and how to choose lambda. See `bvpnav simulate --help` for examples.
 """
 
 EPILOG = "Exit codes: 0 ok, 2 bad input, 3 infeasible or failed solve, 1 internal error."
@@ -39,7 +48,113 @@ def _cmd_demo(args) -> int:
     return EXIT_OK
 
 
+def _lam(text: str | None):
+    if text is None:
+        return None
+    try:
+        return float(text)
+    except ValueError:
+        return text  # a rule name, checked by solve()
+
+
+def _load(args):
+    from .io import read_recording
+    from .spec import load_spec
+
+    spec = load_spec(args.spec)
+    data = read_recording(args.input, spec.input)
+    return spec, spec.build(data)
+
+
+def _say(args, text: str) -> None:
+    if not getattr(args, "quiet", False):
+        print(text)
+
+
+def _cmd_simulate(args) -> int:
+    from .samples import write_sample
+
+    paths = write_sample(args.scenario, args.out, seed=args.seed, rate=args.rate)
+    _say(args, "wrote " + ", ".join(str(p) for p in paths))
+    return EXIT_OK
+
+
+def _cmd_solve(args) -> int:
+    from .batch import solve_recording
+    from .spec import load_spec
+
+    spec = load_spec(args.spec)
+    sol, row = solve_recording(args.input, spec, args.out, solver=args.solver, lam=_lam(args.lam),
+                               summary_path=args.summary)
+    if args.plot:
+        from . import plot
+        from .io import atomic_savefig
+
+        fig = plot.trajectory({f"bvpnav ({sol.stats.get('solver')})": sol})
+        atomic_savefig(fig, args.plot, dpi=110)
+    _say(args, f"{row['samples']} samples; lam = {sol.lam:.6g} ({sol.lam_rule}); solver {row['solver']} "
+               f"({row['status']}, verified); wrote {args.out}")
+    return EXIT_OK
+
+
+def _cmd_lcurve(args) -> int:
+    from .io import atomic_savefig, write_table
+    from .regularization import RULES, lambda_curve
+
+    spec, prob = _load(args)
+    rules = [r for r in args.rules.split(",") if r]
+    for r in rules:
+        if r not in RULES:
+            raise InputError(f"--rules: unknown rule {r!r}; choose from {list(RULES)}")
+    curve = lambda_curve(prob, rules=rules, rule=rules[0], points=args.points,
+                         progress=False if args.quiet else None)
+    fig = curve.plot()
+    atomic_savefig(fig, args.plot, dpi=110)
+    if args.out:
+        write_table(curve.to_frame(), args.out)
+    for r, lam in curve.chosen.items():
+        _say(args, f"{r:<12} lam = {lam:.6g}")
+    for w in curve.warnings:
+        _say(args, f"warning: {w}")
+    return EXIT_OK
+
+
+def _cmd_compare(args) -> int:
+    from .compare import compare_solvers
+    from .io import write_table
+
+    spec, prob = _load(args)
+    solvers = args.solvers.split(",") if args.solvers else None
+    lam = _lam(args.lam) if args.lam is not None else spec.solve.get("lam", 1.0)
+    table = compare_solvers(prob, solvers=solvers, presets=args.presets.split(","), lam=lam)
+    if args.out:
+        write_table(table, args.out)
+    if args.plot:
+        from . import plot
+        from .io import atomic_savefig
+
+        atomic_savefig(plot.comparison(table), args.plot, dpi=110)
+    cols = ["solver", "preset", "status", "verified", "wall_time", "forward_error", "max_violation"]
+    _say(args, table[cols].to_string(index=False, float_format="{:.3g}".format))
+    return EXIT_OK
+
+
+def _cmd_batch(args) -> int:
+    from .batch import run_batch
+
+    df = run_batch(args.directory, args.spec, args.out, scheduler=args.scheduler, workers=args.workers,
+                   solver=args.solver, lam=_lam(args.lam), resume=args.resume, progress=not args.quiet,
+                   suffix="." + args.format)
+    bad = df[~df.ok.astype(bool)]
+    _say(args, f"{len(df)} recordings, {len(bad)} failed; summary: {args.out}/summary.csv")
+    for _, r in bad.iterrows():
+        _say(args, f"  FAILED {r.recording}: {r.error}")
+    return EXIT_OK if bad.empty else EXIT_SOLVE
+
+
 def build_parser() -> argparse.ArgumentParser:
+    from .samples import SAMPLES
+
     parser = argparse.ArgumentParser(
         prog="bvpnav", description=DESCRIPTION, epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -58,6 +173,83 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--seed", type=int, default=0, help="noise seed (default: %(default)s)")
     demo.add_argument("--quiet", action="store_true", help="print nothing")
     demo.set_defaults(func=_cmd_demo)
+
+    def common(p, lam=True):
+        p.add_argument("input", metavar="INPUT", help="recording: .csv or .parquet")
+        p.add_argument("--spec", required=True, metavar="SPEC", help="spec file (TOML)")
+        if lam:
+            p.add_argument("--lam", metavar="LAM", help="lambda: a number or a rule (lcurve, gcv, "
+                           "discrepancy, quasi); default from the spec")
+        p.add_argument("--quiet", action="store_true", help="print nothing")
+
+    sim = sub.add_parser(
+        "simulate", help="write a synthetic recording and its spec",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Write DIR/recording.csv (t in s, acc_<axis> in m/s^2), DIR/spec.toml (what is "
+                    "known, error model, solver, lambda rule) and DIR/truth.csv (true positions), so "
+                    "every command can be tried without data.\n\nScenarios:\n"
+                    + "\n".join(f"  {k:<14} {v.__doc__.strip().splitlines()[0]}" for k, v in SAMPLES.items()))
+    sim.add_argument("scenario", choices=sorted(SAMPLES), metavar="SCENARIO", help=", ".join(sorted(SAMPLES)))
+    sim.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
+    sim.add_argument("--seed", type=int, default=0, help="noise seed (default: %(default)s)")
+    sim.add_argument("--rate", type=float, default=None, help="sampling rate, Hz (scenario default)")
+    sim.add_argument("--quiet", action="store_true", help="print nothing")
+    sim.set_defaults(func=_cmd_simulate)
+
+    solve = sub.add_parser(
+        "solve", help="solve one recording",
+        description="Solve a recording with a spec; write the trajectory (t, positions in m, "
+                    "velocities in m/s; CSV or Parquet by OUT's suffix) and a JSON summary beside it "
+                    "(lambda and rule, error-model estimates with units, solver statistics, item "
+                    "residuals). Outputs are written atomically; the input is never modified.")
+    common(solve)
+    solve.add_argument("--out", required=True, metavar="OUT", help="trajectory file (.csv or .parquet)")
+    solve.add_argument("--summary", metavar="JSON", help="summary path (default: OUT with .json)")
+    solve.add_argument("--plot", metavar="PNG", help="also draw the trajectory")
+    solve.add_argument("--solver", help="override the spec's solver (e.g. clarabel, osqp, direct, csne)")
+    solve.set_defaults(func=_cmd_solve)
+
+    lc = sub.add_parser(
+        "lcurve", help="sweep lambda and plot the L-curve",
+        description="Sweep lambda, evaluate the selection rules and plot the L-curve with each "
+                    "rule's choice marked.")
+    common(lc, lam=False)
+    lc.add_argument("--plot", required=True, metavar="PNG", help="figure path")
+    lc.add_argument("--rules", default="lcurve,gcv,quasi", help="rules, comma separated "
+                    "(default: %(default)s; discrepancy needs sigma_a)")
+    lc.add_argument("--points", type=int, default=25, help="sweep size (default: %(default)s)")
+    lc.add_argument("--out", metavar="CSV", help="also write the sweep as a table")
+    lc.set_defaults(func=_cmd_lcurve)
+
+    cmp_ = sub.add_parser(
+        "compare", help="solve one recording with several solvers",
+        description="One problem, several solvers and presets: status, times, bvpnav's verification "
+                    "and errors, one row each (failures are rows too).")
+    common(cmp_)
+    cmp_.add_argument("--solvers", help="comma separated (default: clarabel, osqp and, for least "
+                      "squares, direct and csne)")
+    cmp_.add_argument("--presets", default="default", help="comma separated: low, default, high")
+    cmp_.add_argument("--out", metavar="CSV", help="write the table")
+    cmp_.add_argument("--plot", metavar="PNG", help="draw the table")
+    cmp_.set_defaults(func=_cmd_compare)
+
+    bt = sub.add_parser(
+        "batch", help="solve every recording in a folder (Dask)",
+        description="Solve every *.csv/*.parquet in DIR with one spec on dask.distributed: an "
+                    "in-process LocalCluster by default, or --scheduler ADDRESS for a cluster. A "
+                    "failing recording becomes a row of OUT/summary.csv with its error; the others "
+                    "go on. Exit code 3 if any failed.")
+    bt.add_argument("directory", metavar="DIR", help="folder of recordings")
+    bt.add_argument("--spec", required=True, metavar="SPEC", help="spec file (TOML)")
+    bt.add_argument("--out", required=True, metavar="DIR", help="output folder")
+    bt.add_argument("--scheduler", metavar="ADDRESS", help="dask scheduler, e.g. tcp://host:8786")
+    bt.add_argument("--workers", type=int, default=2, help="local workers (default: %(default)s)")
+    bt.add_argument("--solver", help="override the spec's solver")
+    bt.add_argument("--lam", metavar="LAM", help="override the spec's lambda")
+    bt.add_argument("--format", choices=("csv", "parquet"), default="csv", help="trajectory files")
+    bt.add_argument("--resume", action="store_true", help="skip recordings already solved")
+    bt.add_argument("--quiet", action="store_true", help="no progress bar, print nothing")
+    bt.set_defaults(func=_cmd_batch)
     return parser
 
 

@@ -331,6 +331,27 @@ class NavigationProblem:
 
         return matrices(self)
 
+    def to_spec(self, solve: dict | None = None, input: dict | None = None) -> str:
+        """The problem's information as spec-file TOML (see :mod:`bvpnav.spec`).
+
+        Parameters
+        ----------
+        solve : dict, optional
+            The ``[solve]`` table (solver, accuracy, lam).
+        input : dict, optional
+            The ``[input]`` table (time column and unit, axis columns, acceleration unit).
+
+        Returns
+        -------
+        str
+            TOML listing every item and error-model component with its parameters, the
+            residual form and sigma_a; ``bvpnav.spec.parse_spec(text).build(data)`` gives
+            the same problem back.
+        """
+        from .spec import dumps_spec, problem_to_spec
+
+        return dumps_spec(problem_to_spec(self, solve=solve, input=input))
+
     # ------------------------------------------------------ observability
     def null_directions(self) -> tuple[np.ndarray, list[str]]:
         """Directions of ``x`` the FEM equations leave free when ``w = 0``.

@@ -1,0 +1,89 @@
+"""Synthetic recordings with their specs, for trying the command line without data.
+
+Each sample writes ``recording.csv`` (``t`` in s, ``acc_<axis>`` in m/s^2),
+``spec.toml`` and ``truth.csv`` (true positions, m) into a folder.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .errors import InputError
+from .io import atomic_write_text, write_table
+
+__all__ = ["SAMPLES", "write_sample"]
+
+
+def _tikhonov2011(seed: int, rate: float | None):
+    """The 2011 paper's Example 1 (quintic, biased and scaled, unit noise; cubic prior)."""
+    from .constraints import Position
+    from .imu import ImuData
+    from .problem import NavigationProblem
+    from .scenarios import tikhonov2011
+
+    sc = tikhonov2011(rate=rate or 50.0, seed=seed)
+    t = sc.t
+    tp = np.concatenate([t[1:11], t[-11:-1]])
+    prob = NavigationProblem(ImuData(t=t, acc=sc.data.acc), residual="load")
+    prob.add(Position(t=[0.0, 10.0], value=[0.0, 10.0], name="ends"),
+             Position(t=tp, value=sc.prior(tp), sigma=1.0, name="cubic prior"))
+    solve = {"solver": "direct", "accuracy": "default", "lam": "lcurve"}
+    return t, sc.data.acc, sc.position[:, None], prob, solve
+
+
+def _shuttle(seed: int, rate: float | None):
+    """A shuttle run out 10 m and back in 20 s: symmetry, stopwatch, bias model."""
+    from .constraints import AverageVelocity, Position, Symmetry, Velocity
+    from .error_models import Bias
+    from .imu import ImuData
+    from .problem import NavigationProblem
+    from .scenarios import quintic_trajectory
+
+    p, _, a = quintic_trajectory()
+    rate = rate or 50.0
+    t = np.linspace(0.0, 20.0, int(round(20 * rate)) + 1)
+    mirror = np.where(t <= 10.0, t, 20.0 - t)
+    rng = np.random.default_rng(seed)
+    acc = (1.02 * a(mirror) + rng.normal(0.3, 1.0, t.size))[:, None]
+    prob = NavigationProblem(ImuData(t=t, acc=acc), sigma_a=1.0, error_model=Bias())
+    prob.add(Position(t=[0.0, 20.0], value=[0.0, 0.0], name="ends"),
+             Velocity(t=[0.0, 20.0], value=[0.0, 0.0], name="at rest"),
+             Symmetry(about=10.0, sigma=0.01, name="mirror"),
+             AverageVelocity(t0=[0.0, 10.0], t1=[10.0, 20.0], value=[1.0, -1.0], name="stopwatch"))
+    solve = {"solver": "direct", "accuracy": "default", "lam": 1.0}
+    return t, acc, p(mirror)[:, None], prob, solve
+
+
+#: Sample scenarios by name.
+SAMPLES = {"tikhonov2011": _tikhonov2011, "shuttle": _shuttle}
+
+
+def write_sample(name: str, out, seed: int = 0, rate: float | None = None) -> list[Path]:
+    """Write a sample scenario's recording, spec and truth into folder ``out``.
+
+    Returns
+    -------
+    list of Path
+        ``recording.csv``, ``spec.toml``, ``truth.csv``.
+    """
+    if name not in SAMPLES:
+        raise InputError(f"unknown scenario {name!r}; choose one of {sorted(SAMPLES)}")
+    if rate is not None and not (np.isfinite(rate) and rate > 0):
+        raise InputError(f"--rate {rate!r}: give a positive sampling rate in Hz")
+    t, acc, truth, prob, solve = SAMPLES[name](seed, rate)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    axes = prob.data.axes
+    rec = pd.DataFrame({"t": t, **{f"acc_{ax}": acc[:, k] for k, ax in enumerate(axes)}})
+    tru = pd.DataFrame({"t": t, **{ax: truth[:, k] for k, ax in enumerate(axes)}})
+    inp = {"time": "t", "time_unit": "s", "columns": {ax: f"acc_{ax}" for ax in axes}, "unit": "m/s^2"}
+    paths = [out / "recording.csv", out / "spec.toml", out / "truth.csv"]
+    write_table(rec, paths[0])
+    header = (f"# bvpnav sample scenario {name!r} (seed {seed}): "
+              f"{SAMPLES[name].__doc__.strip().splitlines()[0]}\n")
+    atomic_write_text(paths[1], header + prob.to_spec(solve=solve, input=inp))
+    write_table(tru, paths[2])
+    return paths

@@ -1,0 +1,311 @@
+"""Spec files: a problem's information, error model, form, solver and lambda rule in TOML.
+
+A spec lists items by their registered names (``bvpnav.items.registry()``) and error
+models by theirs (:func:`error_model_registry`), with their parameters; the input
+section maps a recording's columns and units. It is parsed with :mod:`tomllib` only and
+can never import or execute code: every name is looked up in the registries, every
+field checked against the class, and anything unknown is an error that names the line
+and lists the valid choices.
+
+Example::
+
+    [input]                       # how to read a recording (CSV or Parquet)
+    time = "t"                    # time column
+    time_unit = "s"               # s, ms, us or ns
+    columns = { x = "acc_x" }     # axis name -> acceleration column
+    unit = "m/s^2"                # m/s^2, g, mg or ft/s^2
+
+    [problem]
+    residual = "acceleration"     # or "load" (the 2011 paper's form)
+    sigma_a = 1.0                 # m/s^2
+
+    [solve]
+    solver = "direct"
+    accuracy = "default"
+    lam = "lcurve"                # a number or a rule: lcurve, gcv, discrepancy, quasi
+
+    [[error_model]]
+    type = "bias"
+
+    [[item]]
+    type = "position"
+    name = "ends"
+    t = [0.0, 10.0]
+    value = [0.0, 10.0]
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import tomllib
+
+from .errors import InputError
+from .items import _snake, registry
+
+__all__ = ["Spec", "load_spec", "parse_spec", "dumps_spec", "problem_to_spec", "problem_from_spec",
+           "error_model_registry", "TIME_UNITS", "ACC_UNITS"]
+
+#: Seconds per unit of the time column.
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
+#: m/s^2 per unit of the acceleration columns.
+ACC_UNITS = {"m/s^2": 1.0, "g": 9.80665, "mg": 9.80665e-3, "ft/s^2": 0.3048}
+
+_SECTIONS = {
+    "input": {"time", "time_unit", "columns", "unit"},
+    "problem": {"residual", "sigma_a"},
+    "solve": {"solver", "accuracy", "lam", "fallback"},
+    "error_model": None,  # array of tables, checked per model
+    "item": None,  # array of tables, checked per item
+}
+
+
+def error_model_registry() -> dict[str, type]:
+    """Concrete error-model classes by registered name (snake case of the class name)."""
+    from . import error_models as em
+
+    out: dict[str, type] = {}
+    abstract = {"ErrorModel", "SensorErrorModel", "CompositeErrorModel"}
+
+    def walk(cls):
+        for sub in cls.__subclasses__():
+            if sub.__name__ not in abstract and not sub.__name__.startswith("_") \
+                    and dataclasses.is_dataclass(sub):
+                out[_snake(sub.__name__)] = sub
+            walk(sub)
+
+    walk(em.ErrorModel)
+    return dict(sorted(out.items()))
+
+
+@dataclasses.dataclass
+class Spec:
+    """A parsed spec: plain data, not yet bound to a recording.
+
+    Attributes
+    ----------
+    input : dict
+        ``time``, ``time_unit``, ``columns`` (axis -> column), ``unit``.
+    problem : dict
+        Keyword arguments of :class:`bvpnav.NavigationProblem` (``residual``, ``sigma_a``).
+    solve : dict
+        Keyword arguments of :meth:`bvpnav.NavigationProblem.solve`.
+    items : list
+        Item instances.
+    error_models : list
+        Error-model instances (combined with ``+``).
+    """
+
+    input: dict
+    problem: dict
+    solve: dict
+    items: list
+    error_models: list
+
+    def error_model(self):
+        """The combined error model, or None."""
+        if not self.error_models:
+            return None
+        out = self.error_models[0]
+        for m in self.error_models[1:]:
+            out = out + m
+        return out
+
+    def build(self, data):
+        """A :class:`bvpnav.NavigationProblem` for ``data`` (ImuData) from this spec."""
+        from .problem import NavigationProblem
+
+        prob = NavigationProblem(data, error_model=self.error_model(), **self.problem)
+        return prob.add(*self.items)
+
+
+# ------------------------------------------------------------------ reading
+def _line_of(text: str, key: str, section: str | None = None, index: int = 0) -> int | None:
+    """1-based line of ``key = ...`` inside the ``index``-th ``[section]``/``[[section]]``."""
+    lines = text.splitlines()
+    start, end = 0, len(lines)
+    if section is not None:
+        heads = [i for i, ln in enumerate(lines)
+                 if re.match(rf"^\s*\[\[?\s*{re.escape(section)}\s*\]\]?\s*(#.*)?$", ln)]
+        if index >= len(heads):
+            return None
+        start = heads[index]
+        nxt = [i for i, ln in enumerate(lines) if i > start and re.match(r"^\s*\[", ln)]
+        end = nxt[0] if nxt else len(lines)
+        if key is None:
+            return start + 1
+    for i in range(start, end):
+        if re.match(rf"^\s*{re.escape(key)}\s*=", lines[i]):
+            return i + 1
+    return start + 1 if section is not None else None
+
+
+def _where(source: str, line: int | None) -> str:
+    return f"{source}, line {line}" if line else source
+
+
+def _instantiate(cls, kind: str, fields: dict, text: str, section: str, index: int, source: str):
+    allowed = [f.name for f in dataclasses.fields(cls) if f.init]
+    for key in fields:
+        if key not in allowed:
+            line = _line_of(text, key, section, index)
+            raise InputError(f"{_where(source, line)}: {kind} {_snake(cls.__name__)!r} has no field "
+                             f"{key!r}; valid fields: {allowed}")
+    try:
+        return cls(**fields)
+    except InputError as exc:
+        line = _line_of(text, None, section, index)
+        raise InputError(f"{_where(source, line)}: {exc}") from None
+    except (TypeError, ValueError) as exc:
+        line = _line_of(text, None, section, index)
+        raise InputError(f"{_where(source, line)}: {kind} {_snake(cls.__name__)!r}: {exc}") from None
+
+
+def parse_spec(text: str, source: str = "spec") -> Spec:
+    """Parse TOML text into a :class:`Spec`.
+
+    Raises
+    ------
+    InputError
+        For TOML syntax errors, unknown sections, keys, item or error-model names, and
+        invalid values, naming the line and listing the valid choices.
+    """
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{source}: not valid TOML: {exc}") from None
+    for sec in doc:
+        if sec not in _SECTIONS:
+            line = _line_of(text, None, sec) or _line_of(text, sec)
+            raise InputError(f"{_where(source, line)}: unknown section {sec!r}; valid sections: "
+                             f"{sorted(_SECTIONS)}")
+    plain = {}
+    for sec in ("input", "problem", "solve"):
+        tab = doc.get(sec, {})
+        if not isinstance(tab, dict):
+            raise InputError(f"{source}: [{sec}] must be a table")
+        for key in tab:
+            if key not in _SECTIONS[sec]:
+                line = _line_of(text, key, sec)
+                raise InputError(f"{_where(source, line)}: unknown key {key!r} in [{sec}]; valid keys: "
+                                 f"{sorted(_SECTIONS[sec])}")
+        plain[sec] = dict(tab)
+    inp = plain["input"]
+    if "time_unit" in inp and inp["time_unit"] not in TIME_UNITS:
+        raise InputError(f"{_where(source, _line_of(text, 'time_unit', 'input'))}: time_unit="
+                         f"{inp['time_unit']!r}; valid units: {list(TIME_UNITS)}")
+    if "unit" in inp and inp["unit"] not in ACC_UNITS:
+        raise InputError(f"{_where(source, _line_of(text, 'unit', 'input'))}: unit={inp['unit']!r}; "
+                         f"valid acceleration units: {list(ACC_UNITS)}")
+    if "columns" in inp and not (isinstance(inp["columns"], dict) and inp["columns"]
+                                 and all(isinstance(v, str) for v in inp["columns"].values())):
+        raise InputError(f"{_where(source, _line_of(text, 'columns', 'input'))}: columns must map "
+                         'axis names to column names, e.g. columns = { x = "acc_x" }')
+    reg_items = registry()
+    reg_models = error_model_registry()
+    objs = {}
+    for sec, reg, kind in (("item", reg_items, "item"), ("error_model", reg_models, "error model")):
+        entries = doc.get(sec, [])
+        if isinstance(entries, dict):
+            entries = [entries]
+        out = []
+        for k, entry in enumerate(entries):
+            fields = dict(entry)
+            name = fields.pop("type", None)
+            if name is None:
+                raise InputError(f"{_where(source, _line_of(text, None, sec, k))}: [[{sec}]] number "
+                                 f"{k + 1} has no type; valid types: {sorted(reg)}")
+            if str(name).lower() not in reg:
+                raise InputError(f"{_where(source, _line_of(text, 'type', sec, k))}: unknown {kind} "
+                                 f"{name!r}; valid types: {sorted(reg)}")
+            out.append(_instantiate(reg[str(name).lower()], kind, fields, text, sec, k, source))
+        objs[sec] = out
+    return Spec(inp, plain["problem"], plain["solve"], objs["item"], objs["error_model"])
+
+
+def load_spec(path) -> Spec:
+    """Read and parse a spec file (opened read-only)."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise InputError(f"spec {str(p)!r}: cannot read it ({exc.strerror})") from None
+    except UnicodeDecodeError:
+        raise InputError(f"spec {str(p)!r}: not UTF-8 text") from None
+    return parse_spec(text, source=str(p))
+
+
+# ------------------------------------------------------------------ writing
+def _toml_value(v) -> str:
+    if isinstance(v, np.ndarray):
+        v = v.tolist()
+    if isinstance(v, np.generic):
+        v = v.item()
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        if math.isnan(v):
+            return "nan"
+        if math.isinf(v):
+            return "inf" if v > 0 else "-inf"
+        return repr(v)  # shortest round-trip representation
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    if isinstance(v, dict):
+        return "{ " + ", ".join(f"{k} = {_toml_value(x)}" for k, x in v.items()) + " }"
+    raise InputError(f"cannot write {v!r} ({type(v).__name__}) to a spec")
+
+
+def _fields_of(obj, skip=()) -> dict:
+    out = {}
+    for f in dataclasses.fields(obj):
+        if not f.init or f.name in skip:
+            continue
+        v = getattr(obj, f.name)
+        if v is None:
+            continue
+        if isinstance(v, tuple) and f.name == "bounds":
+            v = [np.asarray(v[0]).tolist(), np.asarray(v[1]).tolist()]
+        out[f.name] = v
+    return out
+
+
+def dumps_spec(spec: Spec) -> str:
+    """TOML text for a :class:`Spec` (the inverse of :func:`parse_spec`)."""
+    lines = ["# bvpnav spec (written by bvpnav)"]
+    for sec in ("input", "problem", "solve"):
+        tab = getattr(spec, sec)
+        if tab:
+            lines += ["", f"[{sec}]"] + [f"{k} = {_toml_value(v)}" for k, v in tab.items()]
+    for m in spec.error_models:
+        lines += ["", "[[error_model]]", f'type = "{_snake(type(m).__name__)}"']
+        lines += [f"{k} = {_toml_value(v)}" for k, v in _fields_of(m).items()]
+    for it in spec.items:
+        lines += ["", "[[item]]", f'type = "{type(it).registered_name()}"']
+        lines += [f"{k} = {_toml_value(v)}" for k, v in _fields_of(it).items()]
+    return "\n".join(lines) + "\n"
+
+
+def problem_to_spec(problem, solve: dict | None = None, input: dict | None = None) -> Spec:
+    """The :class:`Spec` of a problem (its items, error model, form and sigma_a)."""
+    prob_kw: dict[str, Any] = {"residual": problem.residual}
+    if problem._sigma_a_given:
+        sa = problem.sigma_a
+        prob_kw["sigma_a"] = float(sa[0]) if np.all(sa == sa[0]) else sa.tolist()
+    em = problem.error_model
+    models = [] if em is None else list(getattr(em, "components", (em,)))
+    return Spec(dict(input or {}), prob_kw, dict(solve or {}), list(problem.items), models)
+
+
+def problem_from_spec(spec: Spec, data):
+    """Build the problem a spec describes for ``data`` (ImuData)."""
+    return spec.build(data)
