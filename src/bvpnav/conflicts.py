@@ -7,20 +7,10 @@ import cvxpy as cp
 __all__ = ["conflicting_items"]
 
 
-def _feasible(problem, terms) -> bool:
-    """Whether the FEM equations and ``terms`` (hard, band or inequality) can all hold."""
-    model = problem.model
-    x = cp.Variable(model.size)
-    fem = model.fem_rows()
-    cons = [fem.A @ x + fem.c == 0]
-    for t in terms:
-        r = t.residual.A @ x + t.residual.c
-        if t.kind == "inequality":
-            cons.append(r <= 0)
-        elif t.mode == "band":
-            cons.append(cp.abs(r) <= t.tol)
-        else:
-            cons.append(r == 0)
+def _feasible(cvx: dict, labels) -> bool:
+    """Whether the FEM equations and the constraints of the items ``labels`` can all hold
+    (the very constraints :meth:`NavigationProblem.build` compiled, modes included)."""
+    cons = [cvx["fem"]] + [c for label in labels for c in cvx["cons"][label]]
     prob = cp.Problem(cp.Minimize(0), cons)
     try:
         prob.solve(solver="CLARABEL")
@@ -45,17 +35,18 @@ def conflicting_items(problem) -> list[str]:
 
     Notes
     -----
-    Deletion filter (Chinneck): start from every hard, band and inequality item (the FEM
-    equations always stay); for each item, if the rest is still infeasible without it,
+    Deletion filter (Chinneck): start from every item that compiles to constraints (hard
+    and band items, hard inequalities; the FEM equations always stay); for each item, if the rest is still infeasible without it,
     drop it for good. One feasibility solve per item, so this runs only after a solve
     has failed.
     """
-    terms = [t for t in problem.terms() if t.mode in ("hard", "band") or t.kind == "inequality"]
-    if _feasible(problem, terms):
+    cvx = problem.build()
+    labels = [label for label, cons in cvx["cons"].items() if cons]
+    if _feasible(cvx, labels):
         return []
-    keep = list(terms)
-    for t in terms:
-        trial = [s for s in keep if s is not t]
-        if not _feasible(problem, trial):
+    keep = list(labels)
+    for label in labels:
+        trial = [k for k in keep if k != label]
+        if not _feasible(cvx, trial):
             keep = trial
-    return [t.label for t in keep]
+    return keep
