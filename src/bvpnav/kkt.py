@@ -187,7 +187,7 @@ class _LDL:
     def __init__(self, upper: sp.spmatrix):
         import qdldl  # a dependency of cvxpy
 
-        self._f = qdldl.Solver(sp.csc_matrix(upper), upper=True)
+        self._f = qdldl.Solver(upper, upper=True)
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         rhs = np.asarray(rhs, dtype=float)
@@ -238,10 +238,8 @@ class BorderedLU:
         self.S = S
         self.shift = 0.0
         self.method = "lu" if upper is None else "ldl"
-        self._upper = upper
         if upper is not None:  # quasi-definite: no pivoting, no singular multiplier block
-            self._factor(S, dense)
-            self._upper = None
+            self._factor(S, dense, upper)
             return
         try:
             self._factor(S, dense)
@@ -255,21 +253,22 @@ class BorderedLU:
             d[np.asarray(shift_rows, dtype=int)] = self.shift
             self._factor((S - sp.diags(d)).tocsc(), dense)
 
-    def _sparse_factor(self, B, keep=None):
-        if self.method == "lu":
-            return spla.splu(B, permc_spec="COLAMD")
-        U = self._upper if keep is None else sp.csc_matrix(self._upper)[keep][:, keep]
-        return _LDL(U)
+    def _sparse_factor(self, B):
+        B = sp.csc_matrix(B)
+        return spla.splu(B, permc_spec="COLAMD") if self.method == "lu" else _LDL(B)
 
-    def _factor(self, S, dense):
+    def _factor(self, S, dense, upper=None):
+        """Factor the sparse block (of ``upper`` for LDL^T, else of ``S``) and form the
+        Schur complement of the dense unknowns from ``S``."""
+        F = S if upper is None else sp.csc_matrix(upper)
         self.dense = np.asarray(dense, dtype=int)
         if self.dense.size == 0:
             self.keep = None
-            self.lu = self._sparse_factor(S)
+            self.lu = self._sparse_factor(F)
             return
         self.keep = np.setdiff1d(np.arange(S.shape[0]), self.dense)
         Sr, Sd = S[self.keep], S[self.dense]
-        self.lu = self._sparse_factor(Sr[:, self.keep].tocsc(), self.keep)
+        self.lu = self._sparse_factor(F[self.keep][:, self.keep])
         self.SBL = Sr[:, self.dense].toarray()
         self.SLB = Sd[:, self.keep].tocsr()
         self.X = self.lu.solve(self.SBL)
