@@ -83,9 +83,9 @@ def _task(path: str, spec_text: str, spec_source: str, out: str, solver, lam) ->
         msg = f"{type(exc).__name__}: {exc}"
     except Exception as exc:  # a bug: keep the other recordings going, report it in full
         msg = f"{type(exc).__name__}: {exc} | " + traceback.format_exc(limit=3).replace("\n", " ")
-    return {"recording": path, "ok": False, "error": msg, "samples": None, "lam": None, "lam_rule": None,
-            "solver": None, "status": None, "verified": False, "seconds": time.perf_counter() - t0,
-            "output": ""}
+    # the columns not given are empty in the summary table
+    return {"recording": path, "ok": False, "error": msg, "verified": False,
+            "seconds": time.perf_counter() - t0, "output": ""}
 
 
 def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, workers: int = 2,
@@ -122,17 +122,16 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
     pandas.DataFrame
         The summary table (also written to ``out_dir/summary.csv``).
     """
-    from .spec import load_spec
+    from .spec import parse_spec, read_spec_text
 
     directory, out_dir = Path(directory), Path(out_dir)
     if not directory.is_dir():
         raise InputError(f"{str(directory)!r} is not a folder of recordings")
-    spec = load_spec(spec_path)  # fail early, in the client, on a bad spec
-    spec_text = Path(spec_path).read_text(encoding="utf-8")
+    spec_text = read_spec_text(spec_path)  # the workers parse this same text
+    parse_spec(spec_text, str(spec_path))  # fail early, in the client, on a bad spec
     files = sorted(p for p in directory.iterdir() if p.suffix.lower() in RECORDING_SUFFIXES)
     if not files:
         raise InputError(f"{str(directory)!r}: no recordings (*.csv, *.parquet) in it")
-    del spec
     out_dir.mkdir(parents=True, exist_ok=True)
     jobs, rows = [], []
     for p in files:

@@ -48,8 +48,8 @@ import tomllib
 from .errors import InputError
 from .items import _snake, registry
 
-__all__ = ["Spec", "load_spec", "parse_spec", "dumps_spec", "problem_to_spec", "problem_from_spec",
-           "error_model_registry", "TIME_UNITS", "ACC_UNITS"]
+__all__ = ["Spec", "load_spec", "read_spec_text", "parse_spec", "dumps_spec", "problem_to_spec",
+           "problem_from_spec", "error_model_registry", "TIME_UNITS", "ACC_UNITS"]
 
 #: Seconds per unit of the time column.
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
@@ -228,16 +228,20 @@ def parse_spec(text: str, source: str = "spec") -> Spec:
     return Spec(inp, plain["problem"], plain["solve"], objs["item"], objs["error_model"])
 
 
-def load_spec(path) -> Spec:
-    """Read and parse a spec file (opened read-only)."""
+def read_spec_text(path) -> str:
+    """A spec file's text (opened read-only), with errors naming the file."""
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        return p.read_text(encoding="utf-8")
     except OSError as exc:
         raise InputError(f"spec {str(p)!r}: cannot read it ({exc.strerror})") from None
     except UnicodeDecodeError:
         raise InputError(f"spec {str(p)!r}: not UTF-8 text") from None
-    return parse_spec(text, source=str(p))
+
+
+def load_spec(path) -> Spec:
+    """Read and parse a spec file (opened read-only)."""
+    return parse_spec(read_spec_text(path), source=str(path))
 
 
 # ------------------------------------------------------------------ writing
