@@ -42,3 +42,37 @@ def test_consistent_information_accuses_nobody_even_when_redundant():
     prob = problem(Position(t=10.0, value=0.0, name="end again"))  # repeats the ends, consistently
     assert conflicting_items(prob) == []
     assert prob.solve().stats["verified"]
+
+
+def test_demote_by_priority_keeps_the_trusted_item_hard():
+    a = Position(t=5.0, value=1.0, name="fix A")
+    b = Position(t=5.0, value=2.0, name="fix B")
+    sol = problem(a, b).solve(on_conflict="demote", priority={"fix A": 1.0}, demote_sigma=0.1)
+    r5 = np.interp(5.0, sol.t, sol.position("x"))
+    assert abs(r5 - 1.0) < 1e-9  # fix A stayed hard
+    assert sol.stats["demoted"] == [{"item": "fix B", "sigma": 0.1, "priority": 0.0,
+                                     "conflict": ["fix A", "fix B"]}]
+    row = sol.items.set_index("item").loc["fix B"]
+    assert row["mode"] == "soft" and abs(row["max_abs"] - 1.0) < 1e-9
+    assert any("'fix B'" in w and "demoted to soft with sigma=0.1" in w for w in sol.warnings)
+    # the other way round: B trusted more, A demoted
+    sol = problem(a, b).solve(on_conflict="demote", priority={"fix B": 2.0})
+    assert abs(np.interp(5.0, sol.t, sol.position("x")) - 2.0) < 1e-9
+    assert [d["item"] for d in sol.stats["demoted"]] == ["fix A"]
+    assert sol.stats["demoted"][0]["sigma"] == 1.0  # the documented default
+
+
+def test_demote_ties_go_to_the_item_added_last_and_only_one_item_per_conflict():
+    from bvpnav.constraints import AverageVelocity
+
+    prob = problem(Position(t=5.0, value=1.0, name="fix"),
+                   AverageVelocity(t0=0.0, t1=5.0, value=0.0, name="stopwatch"))
+    sol = prob.solve(on_conflict="demote", priority={"ends": 10.0, "fix": 5.0})
+    assert [d["item"] for d in sol.stats["demoted"]] == ["stopwatch"]
+    assert abs(np.interp(5.0, sol.t, sol.position("x")) - 1.0) < 1e-9
+    sol = prob.solve(on_conflict="demote")  # all priority 0: the last added goes
+    assert [d["item"] for d in sol.stats["demoted"]] == ["stopwatch"]
+    with pytest.raises(bvpnav.InputError, match=r"priority names unknown item\(s\) \['nope'\]"):
+        prob.solve(on_conflict="demote", priority={"nope": 1.0})
+    with pytest.raises(bvpnav.InputError, match="on_conflict='ignore'"):
+        prob.solve(on_conflict="ignore")

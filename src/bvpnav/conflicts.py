@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import cvxpy as cp
 
-__all__ = ["conflicting_items"]
+__all__ = ["conflicting_items", "solve_demoting"]
 
 
 def _feasible(cvx: dict, labels) -> bool:
@@ -50,3 +52,90 @@ def conflicting_items(problem) -> list[str]:
         if not _feasible(cvx, trial):
             keep = trial
     return keep
+
+
+def _demoted_problem(problem, label: str, sigma: float):
+    """A copy of ``problem`` with the item ``label`` made soft (sigma in its units)."""
+    from .problem import NavigationProblem, _Renamed
+
+    items = []
+    for it in problem._items:
+        if it.label == label:
+            base = _Renamed.unwrap(it)
+            it = dataclasses.replace(base, mode="soft", sigma=sigma, tol=None, huber=None, name=label)
+        items.append(it)
+    return NavigationProblem(problem.data, residual=problem.residual,
+                             sigma_a=problem.sigma_a if problem._sigma_a_given else None,
+                             error_model=problem.error_model, items=items)
+
+
+def solve_demoting(problem, solve_kwargs: dict, priority=None, demote_sigma=None):
+    """Solve, demoting conflicting hard items to soft by priority until the rest holds.
+
+    Parameters
+    ----------
+    problem : NavigationProblem
+    solve_kwargs : dict
+        Arguments for :meth:`NavigationProblem.solve` (solver, lam, accuracy, ...).
+    priority : mapping of str to float, optional
+        Item label -> priority (higher is kept hard longer); default 0 for every item,
+        ties broken by demoting the item added last.
+    demote_sigma : float or mapping of str to float, optional
+        Sigma (item units) of a demoted item; default 1.0.
+
+    Returns
+    -------
+    Solution
+        With ``stats["demoted"]``: one record per demoted item (``item``, ``sigma``,
+        ``priority``, ``conflict`` — the conflicting set it was taken from), and one
+        warning per demotion.
+
+    Notes
+    -----
+    Each round solves; on :class:`~bvpnav.errors.Infeasible` it takes the conflicting set
+    that :func:`conflicting_items` found (an irreducible infeasible subset), demotes its
+    lowest-priority *item* (error-model priors are never demoted) and solves the modified
+    problem again. Every round removes one hard item, so the loop ends.
+    """
+    from .errors import Infeasible, InputError
+
+    labels = problem.item_labels
+    priority = dict(priority or {})
+    sig_map = demote_sigma if isinstance(demote_sigma, dict) else {}
+    for what, keys in (("priority", priority), ("demote_sigma", sig_map)):
+        unknown = sorted(set(keys) - set(labels))
+        if unknown:
+            raise InputError(f"{what} names unknown item(s) {unknown}; the problem's items are {labels}")
+    order = {label: k for k, label in enumerate(labels)}
+    demoted: list[dict] = []
+    current = problem
+    while True:
+        try:
+            sol = current.solve(**solve_kwargs, on_conflict="raise")
+            break
+        except Infeasible as exc:
+            conflict = next((a["conflicts"] for a in reversed(exc.attempts or [])
+                             if a.get("conflicts")), [])
+            hard_items = {t.label for t in current.terms()
+                          if t.item is not None and t.mode in ("hard", "band")}
+            candidates = [c for c in conflict if c in hard_items]
+            if not candidates:
+                done = f"; already demoted {[d['item'] for d in demoted]}" if demoted else ""
+                raise Infeasible(f"{exc}{done}. No demotable item was identified in the conflict.",
+                                 attempts=exc.attempts) from exc
+            victim = min(candidates, key=lambda c: (priority.get(c, 0.0), -order[c]))
+            if isinstance(demote_sigma, dict):
+                sigma = float(demote_sigma.get(victim, 1.0))
+            else:
+                sigma = 1.0 if demote_sigma is None else float(demote_sigma)
+            demoted.append({"item": victim, "sigma": sigma, "priority": priority.get(victim, 0.0),
+                            "conflict": list(conflict)})
+            current = _demoted_problem(current, victim, sigma)
+    sol.stats["demoted"] = demoted
+    for d in demoted:
+        others = [c for c in d["conflict"] if c != d["item"]]
+        sol.warnings.append(
+            f"hard item {d['item']!r} (priority {d['priority']:g}) conflicted with {others} and was "
+            f"demoted to soft with sigma={d['sigma']:g}"
+        )
+    return sol

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import time
 import warnings
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -34,9 +34,15 @@ from .model import Affine, NavModel
 from .result import Solution
 from .solvers import VERIFY_RTOL, resolve_solver, solver_options
 
-__all__ = ["NavigationProblem", "Term", "RESIDUAL_FORMS"]
+__all__ = ["NavigationProblem", "Term", "RESIDUAL_FORMS", "DEFAULT_FALLBACK"]
 
 RESIDUAL_FORMS = ("acceleration", "load")
+
+#: The automatic fallback chain (``fallback="auto"``) after a primary Clarabel attempt:
+#: Clarabel again with static regularization, the direct sparse back end (equality-
+#: constrained least squares only; skipped with a recorded reason otherwise), then SCS.
+#: After another primary solver the first entry is plain Clarabel.
+DEFAULT_FALLBACK: tuple = (("clarabel", {"static_regularization_enable": True}), "direct", "scs")
 
 
 @dataclass(eq=False)
@@ -445,6 +451,9 @@ class NavigationProblem:
         options: dict | None = None,
         verbose: bool = False,
         fallback="auto",
+        on_conflict: str = "raise",
+        priority: Mapping[str, float] | None = None,
+        demote_sigma: float | Mapping[str, float] | None = None,
     ) -> Solution:
         """Solve and verify, falling back to other back ends when an answer fails.
 
@@ -465,11 +474,28 @@ class NavigationProblem:
             Extra solver options, on top of the preset.
         fallback : "auto", sequence or None
             What to try when the answer fails verification or the solver errs: a
-            sequence of solver names or ``(name, options)`` pairs; ``"auto"`` retries
+            sequence of solver names or ``(name, options)`` pairs (the primary's
+            ``options`` are not passed on). ``"auto"`` is :data:`DEFAULT_FALLBACK`:
             Clarabel with static regularization switched on (it helps small problems
-            with many hard rows, hurts large ones) and then the direct back end when
-            the problem is least squares; ``None`` or ``()`` disables it. Every attempt
-            is recorded in ``solution.stats["attempts"]`` with its reason.
+            with many hard rows, hurts large ones; plain Clarabel after another primary
+            solver), the direct back end (skipped, with the reason recorded, when the
+            problem is not equality-constrained least squares), then SCS. ``None`` or
+            ``()`` disables it. Every attempt is recorded in
+            ``solution.stats["attempts"]`` with its status and reason.
+        on_conflict : {"raise", "demote"}
+            What to do when the hard information cannot hold together. ``"raise"``
+            (default) raises :class:`~bvpnav.errors.Infeasible` naming the conflicting
+            items. ``"demote"`` turns the lowest-priority item of each conflicting set
+            into a soft item and solves again, until the rest is consistent; the
+            result's ``stats["demoted"]`` and ``warnings`` say which items were
+            demoted, with what sigma and which conflict they belonged to.
+        priority : mapping of str to float, optional
+            Item label -> priority for ``on_conflict="demote"``: higher means more
+            trusted, kept hard longer. Unlisted items have priority 0; among equal
+            priorities the item added last is demoted first.
+        demote_sigma : float or mapping of str to float, optional
+            Standard deviation (item units) given to a demoted item, one number for all
+            or per label; default 1.0 (e.g. 1 m for a position, 1 m/s for a velocity).
 
         Returns
         -------
@@ -483,6 +509,14 @@ class NavigationProblem:
             (``Infeasible``, ``Unbounded``, ``Inaccurate``) when every attempt failed;
             ``error.attempts`` lists each attempt's status and reason.
         """
+        if on_conflict not in ("raise", "demote"):
+            raise InputError(f"on_conflict={on_conflict!r}; choose 'raise' or 'demote'")
+        if on_conflict == "demote":
+            from .conflicts import solve_demoting
+
+            return solve_demoting(self, dict(solver=solver, lam=lam, accuracy=accuracy, verify=verify,
+                                             options=options, verbose=verbose, fallback=fallback),
+                                  priority=priority, demote_sigma=demote_sigma)
         if isinstance(lam, str):
             from . import regularization
 
@@ -503,6 +537,12 @@ class NavigationProblem:
             except Infeasible as exc:  # infeasibility is a property of the information
                 exc.attempts = attempts + exc.attempts
                 raise
+            except InputError as exc:
+                if k == 0:
+                    raise
+                # a fallback that cannot take this problem (e.g. direct with inequalities)
+                attempts.append({"solver": be.name, "status": "not applicable", "reason": str(exc)})
+                continue
             except SolveError as exc:
                 attempts.extend(exc.attempts or [{"solver": be.name, "status": "error",
                                                   "reason": str(exc)}])
@@ -531,11 +571,9 @@ class NavigationProblem:
         if isinstance(fallback, str):
             if fallback != "auto":
                 raise InputError(f"fallback={fallback!r}; use 'auto', a list of solver names, or None")
-            if backend.name == "clarabel":
-                entries.append(("clarabel", {"static_regularization_enable": True}))
-            entries.append("direct")
+            entries = list(DEFAULT_FALLBACK)
             if backend.name != "clarabel":
-                entries.append("clarabel")
+                entries[0] = "clarabel"
         else:
             entries = list(fallback)
         chain = []
@@ -776,7 +814,10 @@ class NavigationProblem:
             params = self.error_model.report(parts["l"], model)
         else:
             params = pd.Series(dtype=float, name="estimate")
-        warn = []
+        warn = [f"{info.get('solver')}: {w}" for w in info.get("solver_warnings", [])]
+        if str(info.get("status", "")).endswith("inaccurate"):
+            warn.append(f"{info.get('solver')} reported status {info['status']!r}; the answer passed "
+                        "bvpnav's verification (see stats['verification'])")
         gaps = model.grid.gaps()
         if gaps.size:
             warn.append(f"{gaps.size} time step(s) longer than 10x the median step (first at sample "
