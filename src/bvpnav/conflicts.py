@@ -38,9 +38,9 @@ def conflicting_items(problem) -> list[str]:
     Notes
     -----
     Deletion filter (Chinneck): start from every item that compiles to constraints (hard
-    and band items, hard inequalities; the FEM equations always stay); for each item, if
-    the rest is still infeasible without it, drop it for good. One feasibility solve per
-    item, so this runs only after a solve has failed.
+    and band items, hard inequalities and second-order cones; the FEM equations always
+    stay); for each item, if the rest is still infeasible without it, drop it for good.
+    One feasibility solve per item, so this runs only after a solve has failed.
     """
     cvx = problem.build()
     labels = [label for label, cons in cvx["cons"].items() if cons]

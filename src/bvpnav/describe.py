@@ -211,7 +211,11 @@ def describe(problem, format: str = "text", lam: float | None = None,
              r"F = -M G\quad \mathrm{(error\ model\ columns)}")
     for t in terms:
         if t.mode == "hard" or t.mode == "band":
-            rel = "= 0" if t.mode == "hard" else f"|.| <= {_fmt(t.tol)} {t.units}"
+            if t.kind == "equality":
+                rel = "= 0" if t.mode == "hard" else f"|.| <= {_fmt(t.tol)} {t.units}"
+            else:  # inequality g <= 0, or cone ||u_k|| - s_k <= 0
+                cone = ", second-order cone per node" if t.kind == "cone" else ""
+                rel = ("<= 0" if t.mode == "hard" else f"<= {_fmt(t.tol)} {t.units}") + cone
             body = t.item.math() if t.item is not None else t.label
             math(f"  {t.label} [{t.mode}, {t.residual.m} rows]: {body}  ({rel})",
                  _item_latex(t) + rf"\quad \mathrm{{[{_tex_text(t.label)},\ {t.mode},\ "
@@ -227,7 +231,10 @@ def describe(problem, format: str = "text", lam: float | None = None,
         if t.mode in ("soft", "robust") or (t.kind == "inequality" and t.mode == "soft"):
             k = "lam * " if t.scaled_by_lam else ""
             pen = "huber" if t.mode == "robust" and t.huber else ("|.|" if t.mode == "robust" else "(.)^2")
+            if t.kind != "equality":  # only the violation max(g, 0) is penalised
+                pen = "pos(.)" if t.mode == "robust" else "pos(.)^2"
             body = (t.item.math() if t.item is not None else t.label).replace(" = 0", "")
+            body = body.replace(" <= 0", "")
             math(f"  + {k}sum {pen} of ({body}) / sigma   [{t.label}, {t.mode}, sigma = "
                  f"{_fmt(t.sigma)} {t.units}, {t.residual.m} rows]",
                  (r"+\ \lambda " if t.scaled_by_lam else "+ ") + r"\sum_k \left(\frac{"
@@ -235,11 +242,15 @@ def describe(problem, format: str = "text", lam: float | None = None,
                  + rf"\quad \mathrm{{[{_tex_text(t.label)},\ {t.mode},\ \sigma = {_fmt(t.sigma)}\ "
                  rf"{_tex_text(t.units)}]}}")
     math(f"  lam = {lam:.6g}", rf"\lambda = {lam:.6g}")
-    A_eq = Affine.vstack([model.fem_rows()] + [t.residual for t in terms if t.mode == "hard"]).A
+    A_eq = Affine.vstack([model.fem_rows()] + [t.residual for t in terms
+                                                if t.mode == "hard" and t.kind == "equality"]).A
+    n_ineq = sum(t.residual.m for t in terms if t.kind == "inequality" and t.mode in ("hard", "band"))
+    n_cone = sum(t.residual.groups for t in terms if t.kind == "cone" and t.mode in ("hard", "band"))
     n_obj = problem.data_rows().m + sum(t.residual.m for t in terms if t.mode in ("soft", "robust"))
     nnz = A_eq.nnz + problem.data_rows().A.nnz + sum(
-        t.residual.A.nnz for t in terms if t.mode != "hard")
-    head(f"size: {model.size} unknowns, {A_eq.shape[0]} equality rows, {n_obj} objective rows, "
+        t.residual.A.nnz for t in terms if not (t.mode == "hard" and t.kind == "equality"))
+    extra = (f"{n_ineq} inequality rows, " if n_ineq else "") + (f"{n_cone} cones, " if n_cone else "")
+    head(f"size: {model.size} unknowns, {A_eq.shape[0]} equality rows, {extra}{n_obj} objective rows, "
          f"{nnz} non-zeros")
     if conditioning:
         c = _condition_estimate(problem, lam)
@@ -261,5 +272,7 @@ def _item_latex(term, lhs: bool = False) -> str:
     if body is None:
         body = r"\mathrm{" + _tex_text(item.math() if item is not None else term.label) + "}"
     if lhs:
+        if r"\leq" in body:  # inequality: the penalised quantity is the left side of <= 0
+            return body.split(r"\leq")[0]
         return body.split("=")[0] if "=" in body else body
     return body

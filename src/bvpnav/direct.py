@@ -37,7 +37,8 @@ def _refuse(problem, name: str) -> None:
     if term is not None:
         raise InputError(
             f"solver {name!r} solves equality-constrained least squares only; item "
-            f"{term.label!r} has mode {term.mode!r} ({term.kind}). Use solver='clarabel'."
+            f"{term.label!r} has mode {term.mode!r} ({term.kind}). Use solver='clarabel' "
+            "(or 'scs')."
         )
 
 

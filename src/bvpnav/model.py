@@ -25,7 +25,7 @@ from .errors import InputError
 from .grid import as_times
 from .imu import ImuData
 
-__all__ = ["Affine", "NavModel"]
+__all__ = ["Affine", "Cone", "NavModel"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -112,6 +112,45 @@ class Affine:
     def row_scale(self, x: np.ndarray) -> np.ndarray:
         """``|A| |x| + |c|`` per row: the size of the terms that cancel in each row."""
         return abs(self.A) @ np.abs(x) + np.abs(self.c)
+
+
+@dataclass(frozen=True, eq=False)
+class Cone(Affine):
+    """Affine rows grouped into second-order cones: ``||u_k||_2 <= s_k``.
+
+    The rows come in consecutive groups of ``size``; in group ``k`` the first row is the
+    bound ``s_k`` and the remaining ``size - 1`` rows are the vector ``u_k`` (both affine
+    in ``x``, same units). Items of ``kind = "cone"`` return one from ``compile``.
+
+    Parameters
+    ----------
+    A, c, labels
+        As for :class:`Affine` (``m`` a multiple of ``size``).
+    size : int
+        Rows per group (1 + length of the vector), at least 2.
+
+    Notes
+    -----
+    The constraint is :math:`\\|A_{u,k} x + c_{u,k}\\|_2 \\le A_{s,k} x + c_{s,k}` per group.
+    """
+
+    size: int = 2
+
+    def __post_init__(self):
+        super().__post_init__()
+        if int(self.size) < 2 or self.A.shape[0] % int(self.size):
+            raise InputError(f"Cone: {self.A.shape[0]} rows do not split into groups of {self.size}")
+        object.__setattr__(self, "size", int(self.size))
+
+    @property
+    def groups(self) -> int:
+        """Number of cones."""
+        return self.m // self.size
+
+    def excess(self, x: np.ndarray) -> np.ndarray:
+        """``||u_k|| - s_k`` per group at a numeric ``x`` (<= 0 where the cone holds)."""
+        v = self.value(x).reshape(self.groups, self.size)
+        return np.linalg.norm(v[:, 1:], axis=1) - v[:, 0]
 
 
 class NavModel:

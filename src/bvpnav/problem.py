@@ -59,7 +59,8 @@ class Term:
     mode : str
         ``hard``, ``soft``, ``robust`` or ``band``.
     kind : str
-        ``equality`` or ``inequality``.
+        ``equality``, ``inequality`` (``g <= 0``) or ``cone`` (``residual`` is a
+        :class:`~bvpnav.model.Cone`: per group ``||u_k|| <= s_k``).
     sigma, tol : ndarray or None
         Per-row standard deviation and band half-width, item units.
     huber : float or None
@@ -137,7 +138,11 @@ class NavigationProblem:
         else:
             from .items import positive_array
 
-            sa = np.broadcast_to(positive_array(sigma_a, "sigma_a (m/s^2)", False), (data.ndim,))
+            sa = positive_array(sigma_a, "sigma_a (m/s^2)", False).ravel()
+            if sa.size not in (1, data.ndim):
+                raise InputError(f"sigma_a: {sa.size} value(s) for the axes {list(data.axes)}; give one "
+                                 "value in m/s^2 or one per axis")
+            sa = np.broadcast_to(sa, (data.ndim,))
         self.sigma_a = np.array(sa, dtype=float)
         self._sigma_a_given = sigma_a is not None
         self.error_model = error_model
@@ -264,6 +269,10 @@ class NavigationProblem:
                         penalties.append((term, cp.norm1(cp.multiply(1.0 / term.sigma, r))))
                     else:
                         penalties.append((term, cp.sum(cp.multiply(w2, cp.huber(r, term.huber)))))
+            elif term.kind == "cone":  # groups (s_k, u_k) with ||u_k|| <= s_k
+                con_list, pen = _cone_parts(term, r)
+                if pen is not None:
+                    penalties.append((term, pen))
             else:  # inequality g <= 0
                 if mode == "hard":
                     con_list.append(r <= 0)
@@ -509,6 +518,11 @@ class NavigationProblem:
             (``Infeasible``, ``Unbounded``, ``Inaccurate``) when every attempt failed;
             ``error.attempts`` lists each attempt's status and reason.
         """
+        if any(getattr(it, "needs_linearization", False) for it in self._items):
+            from .sequential import solve_sequential  # nonlinear items: sequential convex loop
+
+            return solve_sequential(self, solver=solver, lam=lam, accuracy=accuracy, verify=verify,
+                                    options=options, verbose=verbose, fallback=fallback)
         if on_conflict not in ("raise", "demote"):
             raise InputError(f"on_conflict={on_conflict!r}; choose 'raise' or 'demote'")
         if on_conflict == "demote":
@@ -592,6 +606,9 @@ class NavigationProblem:
         return chain
 
     def _attempt(self, backend, opts, lam, accuracy, verify, verbose) -> Solution:
+        from .solvers import check_support
+
+        check_support(backend, self)  # before solving: e.g. a cone item given to a QP solver
         t_start = time.perf_counter()
         factored = None
         if backend.kind == "direct":
@@ -695,6 +712,10 @@ class NavigationProblem:
             r = term.residual.value(xval)
             if term.kind == "equality":
                 v = np.abs(r) if term.mode == "hard" else np.maximum(np.abs(r) - term.tol, 0)
+            elif term.kind == "cone":
+                k = term.residual.size
+                v = np.maximum(term.residual.excess(xval)
+                               - (term.tol[::k] if term.mode == "band" else 0.0), 0)
             else:
                 v = np.maximum(r - (term.tol if term.mode == "band" else 0.0), 0)
             sc = max(float(np.max(term.residual.row_scale(xval))), 1.0)
@@ -727,7 +748,12 @@ class NavigationProblem:
             r = term.residual.value(xval)
             A = term.residual.A
             k = lam if term.scaled_by_lam else 1.0
-            if term.mode == "soft" and term.kind == "equality":
+            if term.kind == "cone":
+                g = _cone_gradient(term, xval, duals.get(term.label))
+                if g is None:
+                    return None
+                grads.append(k * g if term.mode in ("soft", "robust") else g)
+            elif term.mode == "soft" and term.kind == "equality":
                 grads.append(k * 2.0 * (A.T @ (r / term.sigma**2)))
             elif term.mode == "soft":
                 grads.append(k * 2.0 * (A.T @ (np.maximum(r, 0) / term.sigma**2)))
@@ -751,6 +777,17 @@ class NavigationProblem:
         for a in range(model.d):
             probe[model.w_index(a)] = model.data.acc[:, a]
         floor = float(np.max(np.abs(2.0 * (data.A.T @ data.value(probe)))))
+        # and each weighted term's gradient if its residual were as large as the terms that
+        # cancel in it (|A| |x| + |c|): a consistent problem (every residual zero, e.g.
+        # zero acceleration fitted exactly) otherwise has only round-off to compare with
+        for term in self.terms():
+            if term.mode in ("soft", "robust") and term.sigma is not None:
+                k = lam if term.scaled_by_lam else 1.0
+                size = term.residual.row_scale(xval)
+                if term.mode == "robust" and term.huber is not None:
+                    size = np.minimum(size, term.huber)
+                w = 2.0 * size / term.sigma**2
+                floor = max(floor, float(np.max(k * (abs(term.residual.A).T @ w))))
         scale = max(max(float(np.max(np.abs(g))) for g in grads), floor, 1e-300)
         return float(np.max(np.abs(total)) / scale)
 
@@ -792,12 +829,14 @@ class NavigationProblem:
                              index=idx)
         rows, item_res = [], {}
         for term in self.terms():
-            r = term.residual.value(xval)
+            r = term.residual.excess(xval) if term.kind == "cone" else term.residual.value(xval)
             item_res[term.label] = r
-            shown = np.maximum(r, 0) if term.kind == "inequality" else r
+            shown = np.maximum(r, 0) if term.kind in ("inequality", "cone") else r
             dual_rms = None
             if duals is not None and duals.get(term.label):
-                ds = [np.asarray(d).ravel() for d in duals[term.label] if d is not None]
+                ds = [np.concatenate([np.asarray(p, dtype=float).ravel() for p in d])
+                      if isinstance(d, list | tuple) else np.asarray(d, dtype=float).ravel()
+                      for d in duals[term.label] if d is not None]
                 if ds:
                     dual_rms = float(np.sqrt(np.mean(np.concatenate(ds) ** 2)))
             rows.append({
@@ -820,12 +859,65 @@ class NavigationProblem:
                         "bvpnav's verification (see stats['verification'])")
         gaps = model.grid.gaps()
         if gaps.size:
-            warn.append(f"{gaps.size} time step(s) longer than 10x the median step (first at sample "
-                        f"{gaps[0]}, t={t[gaps[0]]:g} s); results across gaps rely on the "
+            h, med = model.grid.h, float(np.median(model.grid.h))
+            warn.append(f"{gaps.size} gap(s) longer than 10x the median step {med:g} s: the first, from "
+                        f"sample {gaps[0]} to {gaps[0] + 1} (t={t[gaps[0]]:g} s), is {h[gaps[0]]:g} s "
+                        f"long; results across gaps rely on the "
                         "linear-acceleration assumption")
         return Solution(trajectory=traj, residuals=resid, items=items_df, item_residuals=item_res,
                         lam=float(lam), lam_rule=lam_rule, error_params=params, stats=info,
                         x=xval, warnings=warn)
+
+
+def _cone_parts(term: Term, r: cp.Expression) -> tuple[list, cp.Expression | None]:
+    """Constraints and penalty of a cone term (see :class:`bvpnav.model.Cone`).
+
+    Notes
+    -----
+    With the excess :math:`e_k = \\|u_k\\|_2 - s_k`: hard :math:`e_k \\le 0`; band
+    :math:`e_k \\le tol_k`; soft :math:`\\sum_k \\max(e_k, 0)^2/\\sigma_k^2`; robust
+    :math:`\\sum_k \\max(e_k, 0)/\\sigma_k` (the last two times ``lam``).
+    """
+    k = term.residual.size
+    R = cp.reshape(r, (k, term.residual.groups), order="F")
+    s, U = R[0, :], R[1:, :]
+    if term.mode == "hard":
+        return [cp.SOC(s, U, axis=0)], None
+    if term.mode == "band":
+        return [cp.SOC(s + term.tol[::k], U, axis=0)], None
+    excess = cp.pos(cp.norm(U, 2, axis=0) - s)
+    w = 1.0 / term.sigma[::k]
+    if term.mode == "soft":
+        return [], cp.sum_squares(cp.multiply(w, excess))
+    return [], cp.sum(cp.multiply(w, excess))
+
+
+def _cone_gradient(term: Term, xval: np.ndarray, duals) -> np.ndarray | None:
+    """Gradient of a cone term's part of the Lagrangian (None where it is not smooth or
+    the duals are missing). cvxpy's SOC duals ``(mu, Y)`` enter as ``-(mu s + <Y, U>)``."""
+    res = term.residual
+    k = res.size
+    A = res.A
+    if term.mode in ("hard", "band"):
+        if not duals or duals[0] is None:
+            return None
+        mu, Y = duals[0]
+        z = np.column_stack([np.asarray(mu, dtype=float).ravel(),
+                             np.asarray(Y, dtype=float).reshape(k - 1, -1).T]).ravel()
+        return -(A.T @ z)
+    if term.mode == "robust":
+        return None
+    v = res.value(xval).reshape(res.groups, k)
+    nu = np.linalg.norm(v[:, 1:], axis=1)
+    e = np.maximum(nu - v[:, 0], 0.0)
+    if np.any((e > 0) & (nu == 0)):
+        return None
+    coef = 2.0 * e / term.sigma[::k] ** 2
+    dz = np.zeros_like(v)
+    on = e > 0
+    dz[on, 1:] = coef[on, None] * v[on, 1:] / nu[on, None]
+    dz[on, 0] = -coef[on]
+    return A.T @ dz.ravel()
 
 
 class _Renamed:

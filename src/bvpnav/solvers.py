@@ -31,6 +31,8 @@ __all__ = [
     "solver_options",
     "register_backend",
     "Backend",
+    "unsupported_term",
+    "check_support",
 ]
 
 ACCURACIES = ("low", "default", "high")
@@ -144,3 +146,48 @@ def solver_options(backend: Backend, accuracy: str, overrides: dict | None = Non
     opts = dict(backend.presets.get(accuracy, {}))
     opts.update(overrides or {})
     return opts
+
+
+def _takes_cones(backend: Backend) -> bool:
+    """Whether a cvxpy back end accepts second-order cones (asks cvxpy's solver table)."""
+    from cvxpy.constraints import SOC
+    from cvxpy.reductions.solvers.defines import SOLVER_MAP_CONIC
+
+    solver = SOLVER_MAP_CONIC.get(backend.cvxpy_name or "")
+    return solver is not None and SOC in getattr(solver, "SUPPORTED_CONSTRAINTS", ())
+
+
+def unsupported_term(backend: Backend, problem) -> Any:
+    """The first term of ``problem`` that ``backend`` cannot take, or None.
+
+    Direct back ends take equality-constrained least squares only (no inequality, band,
+    robust or cone terms); QP-only cvxpy solvers (e.g. OSQP) take no cone terms.
+    """
+    if backend.kind == "direct":
+        from .kkt import non_least_squares_term
+
+        return non_least_squares_term(problem)
+    if not _takes_cones(backend):
+        for term in problem.terms():
+            if term.kind == "cone":
+                return term
+    return None
+
+
+def check_support(backend: Backend, problem) -> None:
+    """Raise :class:`InputError` naming the item when ``backend`` cannot solve ``problem``."""
+    term = unsupported_term(backend, problem)
+    if term is None:
+        return
+    if backend.kind == "direct":
+        why = "it solves equality-constrained least squares only"
+    else:
+        why = "it is a QP solver and this item is a second-order cone"
+    conic = [n for n in ("clarabel", "scs") if n in available_solvers()]
+    raise InputError(
+        f"solver {backend.name!r} cannot take item {term.label!r} (kind {term.kind!r}, mode "
+        f"{term.mode!r}): {why}. Use solver={conic[0] if conic else 'clarabel'!r}"
+        + (f" or solver={conic[1]!r}" if len(conic) > 1 else "")
+        + (", or give the item mode='soft'." if backend.kind == "direct" and term.kind == "equality"
+           else ".")
+    )
