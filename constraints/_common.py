@@ -20,7 +20,8 @@ def interval(t0, t1, label: str) -> tuple[float, float]:
     if a.size != 1 or b.size != 1:
         raise InputError(f"{label}: t0 and t1 must be single times in s")
     if not b[0] > a[0]:
-        raise InputError(f"{label}: interval t0={a[0]!r} s, t1={b[0]!r} s has t1 <= t0; give t0 < t1")
+        raise InputError(f"{label}: interval t0={float(a[0])!r} s, t1={float(b[0])!r} s has t1 <= t0; "
+                         "give t0 < t1")
     return float(a[0]), float(b[0])
 
 
@@ -32,5 +33,6 @@ def finite(value, label: str, what: str = "value") -> np.ndarray:
         raise InputError(f"{label}: {what}={value!r} is not numeric") from None
     bad = np.flatnonzero(~np.isfinite(v.ravel()))
     if bad.size:
-        raise InputError(f"{label}: {what} entry {bad[0]} is {v.ravel()[bad[0]]!r}; must be finite")
+        raise InputError(f"{label}: {what} entry {bad[0]} is {float(v.ravel()[bad[0]])!r}; must be finite "
+                         "(give a number)")
     return v

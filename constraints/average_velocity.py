@@ -49,7 +49,7 @@ class AverageVelocity(Item):
         if bad.size:
             k = int(bad[0])
             raise InputError(
-                f"{self.label}: interval {k} has t1={b[k]!r} s <= t0={a[k]!r} s; give t0 < t1"
+                f"{self.label}: interval {k} has t1={float(b[k])!r} s <= t0={float(a[k])!r} s; give t0 < t1"
             )
         object.__setattr__(self, "t0", a)
         object.__setattr__(self, "t1", b)

@@ -70,7 +70,8 @@ class Symmetry(Item):
         c = self.about
         if not grid.t0 <= c <= grid.t1:
             raise InputError(
-                f"{self.label}: about={c!r} s is outside the window [{grid.t0!r}, {grid.t1!r}] s"
+                f"{self.label}: about={c!r} s is outside the window [{grid.t0!r}, {grid.t1!r}] s; "
+                "use a time inside the window"
             )
         reach = min(c - grid.t0, grid.t1 - c)
         if self.halfwidth is not None:

@@ -31,7 +31,8 @@ def _rates(gyro, n: int, what: str = "gyro") -> np.ndarray:
     bad = np.argwhere(~np.isfinite(w))
     if bad.size:
         i, k = (int(v) for v in bad[0])
-        raise InputError(f"{what}: sample {i}, axis {'xyz'[k]} is {w[i, k]!r}; rates must be finite")
+        raise InputError(f"{what}: sample {i}, axis {'xyz'[k]} is {float(w[i, k])!r}; rates must be "
+                         "finite. Remove or repair that sample.")
     return w
 
 

@@ -105,6 +105,9 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
     scheduler : str, optional
         A ``dask.distributed`` scheduler address; default an in-process LocalCluster of
         ``workers`` single-threaded worker processes on the loopback interface.
+        ``"serial"`` solves the recordings one after the other in this process, without
+        Dask (for debugging and tests; an exception that is not an ``Exception``, such
+        as ``KeyboardInterrupt``, stops the run, leaving the finished outputs).
     workers : int
         Workers of the local cluster.
     solver, lam : optional
@@ -126,7 +129,8 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
 
     directory, out_dir = Path(directory), Path(out_dir)
     if not directory.is_dir():
-        raise InputError(f"{str(directory)!r} is not a folder of recordings")
+        raise InputError(f"{str(directory)!r} is not a folder of recordings; give the folder that holds "
+                         "the *.csv / *.parquet files")
     spec_text = read_spec_text(spec_path)  # the workers parse this same text
     parse_spec(spec_text, str(spec_path))  # fail early, in the client, on a bad spec
     files = sorted(p for p in directory.iterdir() if p.suffix.lower() in RECORDING_SUFFIXES)
@@ -141,7 +145,9 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
                          "output": str(out)})
             continue
         jobs.append((str(p), spec_text, str(spec_path), str(out), solver, lam))
-    if jobs:
+    if jobs and scheduler == "serial":
+        rows += [_task(*job) for job in jobs]
+    elif jobs:
         rows += _run_on_dask(jobs, scheduler, workers, progress)
     df = pd.DataFrame(rows, columns=SUMMARY_COLUMNS)
     df = df.sort_values("recording", kind="stable").reset_index(drop=True)

@@ -11,7 +11,7 @@ import argparse
 import sys
 
 from . import __version__
-from .errors import BvpnavError, InputError, SolveError
+from .errors import BvpnavError, InputError, SolveError, SolverNotFound
 
 EXIT_OK, EXIT_BUG, EXIT_INPUT, EXIT_SOLVE = 0, 1, 2, 3
 
@@ -94,6 +94,8 @@ def _cmd_solve(args) -> int:
         atomic_savefig(fig, args.plot, dpi=110)
     _say(args, f"{row['samples']} samples; lam = {sol.lam:.6g} ({sol.lam_rule}); solver {row['solver']} "
                f"({row['status']}, verified); wrote {args.out}")
+    for w in sol.warnings:
+        _say(args, f"warning: {w}")
     return EXIT_OK
 
 
@@ -239,7 +241,8 @@ def build_parser() -> argparse.ArgumentParser:
     bt.add_argument("directory", metavar="DIR", help="folder of recordings")
     bt.add_argument("--spec", required=True, metavar="SPEC", help="spec file (TOML)")
     bt.add_argument("--out", required=True, metavar="DIR", help="output folder")
-    bt.add_argument("--scheduler", metavar="ADDRESS", help="dask scheduler, e.g. tcp://host:8786")
+    bt.add_argument("--scheduler", metavar="ADDRESS", help="dask scheduler, e.g. tcp://host:8786, or "
+                    "'serial' to solve one by one in this process without Dask")
     bt.add_argument("--workers", type=int, default=2, help="local workers (default: %(default)s)")
     bt.add_argument("--solver", help="override the spec's solver")
     bt.add_argument("--lam", metavar="LAM", help="override the spec's lambda")
@@ -259,7 +262,7 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_INPUT
     try:
         return int(args.func(args))
-    except InputError as exc:
+    except (InputError, SolverNotFound) as exc:  # a bad file, spec or argument
         print(f"bvpnav: error: {exc}", file=sys.stderr)
         return EXIT_INPUT
     except SolveError as exc:

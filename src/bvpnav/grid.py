@@ -29,7 +29,8 @@ def as_times(t, name: str = "t") -> np.ndarray:
     bad = np.flatnonzero(~np.isfinite(arr))
     if bad.size:
         raise InputError(
-            f"{name}: value at index {bad[0]} is {arr[bad[0]]!r}; times must be finite numbers in s"
+            f"{name}: value at index {bad[0]} is {float(arr[bad[0]])!r} ({bad.size} non-finite "
+            "value(s)); times must be finite numbers in s. Remove or repair that entry."
         )
     return arr
 
@@ -69,7 +70,8 @@ class TimeGrid:
             i = int(bad[0]) + 1
             kind = "duplicate" if dt[bad[0]] == 0 else "decreasing"
             raise InputError(
-                f"time: sample {i} ({t[i]!r} s) is {kind} after sample {i - 1} ({t[i - 1]!r} s); "
+                f"time: sample {i} ({float(t[i])!r} s) is {kind} after sample {i - 1} "
+                f"({float(t[i - 1])!r} s); "
                 "times must be strictly increasing. Sort the samples and drop duplicates."
             )
         t.setflags(write=False)
@@ -120,7 +122,7 @@ class TimeGrid:
         if bad.size:
             k = int(bad[0])
             raise InputError(
-                f"{what}: time {times[k]!r} s (entry {k}) is outside the recording window "
+                f"{what}: time {float(times[k])!r} s (entry {k}) is outside the recording window "
                 f"[{lo!r}, {hi!r}] s; bvpnav never extrapolates. Use a time inside the window."
             )
         return np.clip(times, lo, hi)

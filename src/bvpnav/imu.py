@@ -33,7 +33,7 @@ def _finite_2d(arr, name: str, columns: Sequence[str] | None = None) -> np.ndarr
         i, k = (int(v) for v in bad[0])
         col = columns[k] if columns is not None and k < len(columns) else f"column {k}"
         raise InputError(
-            f"{name}: sample {i}, {col} is {a[i, k]!r}; every sample must be a finite number. "
+            f"{name}: sample {i}, {col} is {float(a[i, k])!r}; every sample must be a finite number. "
             "Remove or repair that sample (bvpnav never fills gaps silently)."
         )
     return a
@@ -117,12 +117,14 @@ class ImuData:
                 raise InputError(f"gravity: expected 3 finite numbers in m/s^2, got {gravity!r}")
             if f.shape[0] != n:
                 raise InputError(
-                    f"specific_force has {f.shape[0]} samples but t has {n}; lengths must match"
+                    f"specific_force has {f.shape[0]} samples but t has {n}; lengths must match: give "
+                    "one specific-force row per time"
                 )
             self.specific_force, self.attitude, self.gravity = f, rot, g
             a = rot.apply(f) + g
         if a.shape[0] != n:
-            raise InputError(f"acc has {a.shape[0]} samples but t has {n}; lengths must match")
+            raise InputError(f"acc has {a.shape[0]} samples but t has {n}; lengths must match: give one "
+                             "acceleration row per time")
         d = a.shape[1]
         if d not in (1, 2, 3):
             raise InputError(f"acc: {d} axes given; bvpnav handles 1, 2 or 3 axes")
@@ -130,9 +132,10 @@ class ImuData:
             axes = DEFAULT_AXES[d]
         axes = tuple(str(s) for s in ([axes] if isinstance(axes, str) else axes))
         if len(axes) != d:
-            raise InputError(f"axes: {len(axes)} names {axes} for {d} acceleration columns")
+            raise InputError(f"axes: {len(axes)} names {axes} for {d} acceleration columns; give one name "
+                             "per acceleration column")
         if len(set(axes)) != d:
-            raise InputError(f"axes: names must be distinct, got {axes}")
+            raise InputError(f"axes: names must be distinct, got {axes}; rename the repeated axis")
         a.setflags(write=False)
         self.acc: np.ndarray = a
         self.axes: tuple[str, ...] = axes
@@ -187,17 +190,44 @@ class ImuData:
                 size = 1 if rot.single else len(rot)
                 raise InputError(f"attitude: Rotation of length {size}, expected one per sample ({n})")
             return rot
-        arr = np.asarray(attitude, dtype=float)
-        if arr.shape == (n, 4):
+        try:
+            arr = np.asarray(attitude, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(
+                f"attitude: cannot be read as numbers; pass a Rotation of length {n}, quaternions "
+                f"({n}, 4) scalar-last, or matrices ({n}, 3, 3)"
+            ) from None
+        kind = {(n, 4): "quaternion", (n, 3, 3): "matrix"}.get(arr.shape)
+        if kind is not None:
+            nonfinite = np.flatnonzero(~np.all(np.isfinite(arr.reshape(n, -1)), axis=1))
+            if nonfinite.size:
+                i = int(nonfinite[0])
+                raise InputError(
+                    f"attitude: {kind} {i} has a non-finite entry ({arr[i].ravel().tolist()}); every "
+                    "sample's attitude must be finite. Remove or repair that sample."
+                )
+        if kind == "quaternion":
+            # No silent normalisation: a quaternion far from unit length is a units or
+            # column-order mistake, not rounding.
             norms = np.linalg.norm(arr, axis=1)
             bad = np.flatnonzero(np.abs(norms - 1.0) > 1e-6)
             if bad.size:
                 raise InputError(
                     f"attitude: quaternion {bad[0]} has norm {norms[bad[0]]:.6g}, not 1; pass unit "
-                    "quaternions (x, y, z, w), scalar last"
+                    "quaternions (x, y, z, w), scalar last (normalize them with q / |q| if they are "
+                    "rotations)"
                 )
             return Rotation.from_quat(arr)
-        if arr.shape == (n, 3, 3):
+        if kind == "matrix":
+            err = np.abs(np.einsum("nij,nkj->nik", arr, arr) - np.eye(3)).max(axis=(1, 2))
+            det = np.linalg.det(arr)
+            bad = np.flatnonzero((err > 1e-6) | (det < 0))
+            if bad.size:
+                i = int(bad[0])
+                raise InputError(
+                    f"attitude: matrix {i} is not a rotation (max |C C^T - I| = {err[i]:.3g}, det = "
+                    f"{det[i]:.6g}); pass orthonormal body-to-navigation matrices with det = +1"
+                )
             return Rotation.from_matrix(arr)
         raise InputError(
             f"attitude: shape {arr.shape}; expected a Rotation of length {n}, quaternions ({n}, 4) "

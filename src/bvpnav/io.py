@@ -66,12 +66,27 @@ def _read_table(path: Path):
 
     suffix = path.suffix.lower()
     if not path.exists():
-        raise InputError(f"{str(path)!r}: no such file")
+        raise InputError(f"{str(path)!r}: no such file; check the path")
+    if not path.is_file():
+        raise InputError(f"{str(path)!r}: not a file; give the path of a recording (.csv or .parquet)")
     if suffix == ".csv":
         try:
             return pd.read_csv(path)
-        except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-            raise InputError(f"{str(path)!r}: not a readable CSV file ({str(exc).splitlines()[0]})") from None
+        except pd.errors.EmptyDataError:
+            raise InputError(f"{str(path)!r}: not a readable CSV file (it is empty); a recording needs a "
+                             "header line (t, acc_<axis>) and at least 3 rows") from None
+        except pd.errors.ParserError as exc:
+            raise InputError(f"{str(path)!r}: not a readable CSV file ({str(exc).splitlines()[0]}); every "
+                             "row needs the same number of fields as the header line") from None
+        except UnicodeDecodeError:
+            raise InputError(f"{str(path)!r}: not a readable CSV file (not UTF-8 text); save it as UTF-8 "
+                             "comma-separated values") from None
+        except (ValueError, OverflowError) as exc:  # e.g. unbalanced quotes, absurd field sizes
+            raise InputError(f"{str(path)!r}: not a readable CSV file ({str(exc).splitlines()[0]}); check "
+                             "the file is comma-separated text with one header line") from None
+        except OSError as exc:
+            raise InputError(f"{str(path)!r}: cannot read it ({exc.strerror}); check the path and "
+                             "permissions") from None
     if suffix in (".parquet", ".pq"):
         try:
             import pyarrow  # noqa: F401
@@ -106,8 +121,12 @@ def read_recording(path: str | os.PathLike, input: dict | None = None):
     Raises
     ------
     InputError
-        Naming the file and the column or row: missing columns (with the ones present),
-        non-numeric, NaN or infinite cells, unsorted or duplicate times, unknown units.
+        Naming the file and the column or row, with the fix: missing columns (with the
+        ones present), columns of bool, date or duration type, non-numeric, NaN or
+        infinite cells, unsorted or duplicate times, fewer than 3 rows, unknown units,
+        unreadable or empty files, ragged rows and fields separated by something other
+        than commas. Any other failure of the CSV parser is reported the same way, so
+        no raw parser exception escapes.
     """
     import numpy as np
     import pandas as pd
@@ -117,18 +136,30 @@ def read_recording(path: str | os.PathLike, input: dict | None = None):
 
     p = Path(path)
     inp = dict(input or {})
-    df = _read_table(p)
     name = str(p)
     tcol = inp.get("time", "t")
     tunit = inp.get("time_unit", "s")
     unit = inp.get("unit", "m/s^2")
-    if tunit not in TIME_UNITS:
+    if not isinstance(tcol, str):
+        raise InputError(f"{name}: time={tcol!r}; give the name of the time column as a string")
+    if not isinstance(tunit, str) or tunit not in TIME_UNITS:
         raise InputError(f"{name}: time_unit={tunit!r}; valid units: {list(TIME_UNITS)}")
-    if unit not in ACC_UNITS:
+    if not isinstance(unit, str) or unit not in ACC_UNITS:
         raise InputError(f"{name}: unit={unit!r}; valid acceleration units: {list(ACC_UNITS)}")
     cols = inp.get("columns")
+    if cols is not None and not (isinstance(cols, dict) and cols
+                                 and all(isinstance(v, str) for v in cols.values())):
+        raise InputError(f"{name}: columns={cols!r}; map axis names to column names, e.g. "
+                         'columns = { x = "acc_x" }')
+    df = _read_table(p)
+    if len(df.columns) == 1:
+        head = str(df.columns[0])
+        for sep, what in ((";", "';'"), ("\t", "tabs"), ("|", "'|'"), (" ", "spaces")):
+            if sep in head.strip():
+                raise InputError(f"{name}: one column {head!r}: the fields seem to be separated by {what}; "
+                                 "bvpnav reads comma-separated CSV, save the file with ',' between fields")
     if cols is None:
-        cols = {c[4:]: c for c in df.columns if str(c).startswith("acc_")}
+        cols = {str(c)[4:]: c for c in df.columns if str(c).startswith("acc_")}
         if not cols:
             raise InputError(f"{name}: no acceleration columns: name them acc_<axis> or map them with "
                              f"columns = {{ x = \"...\" }} in the spec's [input]; columns in the file: "
@@ -146,7 +177,18 @@ def read_recording(path: str | os.PathLike, input: dict | None = None):
 
     arrays = {}
     for col in [tcol, *cols.values()]:
-        v = pd.to_numeric(df[col], errors="coerce").to_numpy(dtype=float)
+        dtype = df[col].dtype
+        if pd.api.types.is_bool_dtype(dtype) or not (pd.api.types.is_numeric_dtype(dtype)
+                                                     or pd.api.types.is_object_dtype(dtype)
+                                                     or pd.api.types.is_string_dtype(dtype)):
+            raise InputError(f"{name}: column {col!r} holds {dtype} values; store "
+                             + ("times as numbers in " + tunit if col == tcol else
+                                f"accelerations as numbers in {unit}") + " in that column")
+        try:
+            v = pd.to_numeric(df[col], errors="coerce").to_numpy(dtype=float, na_value=np.nan)
+        except (TypeError, ValueError):  # cells holding lists, dicts, bytes ... (Parquet)
+            raise InputError(f"{name}: column {col!r} holds values that are not numbers "
+                             f"(first: {df[col].iloc[0]!r}); store plain numbers in it") from None
         raw = df[col].to_numpy()
         bad = np.flatnonzero(~np.isfinite(v))
         if bad.size:

@@ -70,7 +70,7 @@ def positive_array(value, what: str, allow_none: bool = True):
         raise InputError(f"{what}: {value!r} is not a number") from None
     bad = np.flatnonzero(~(np.isfinite(arr) & (arr > 0)).ravel())
     if bad.size:
-        v = arr.ravel()[bad[0]]
+        v = float(arr.ravel()[bad[0]])
         raise InputError(
             f"{what} = {v!r}: must be a finite positive number (for a hard condition omit sigma "
             "or use mode='hard')"
@@ -254,7 +254,7 @@ def as_values(value, m_times: int, nax: int, what: str) -> np.ndarray:
         raise InputError(f"{what}: {value!r} is not numeric") from None
     if not np.all(np.isfinite(v)):
         k = int(np.flatnonzero(~np.isfinite(v.ravel()))[0])
-        raise InputError(f"{what}: entry {k} is {v.ravel()[k]!r}; values must be finite")
+        raise InputError(f"{what}: entry {k} is {float(v.ravel()[k])!r}; values must be finite")
     if v.ndim == 0:
         out = np.full((m_times, nax), float(v))
     elif v.shape == (m_times, nax):

@@ -156,14 +156,59 @@ def _instantiate(cls, kind: str, fields: dict, text: str, section: str, index: i
             line = _line_of(text, key, section, index)
             raise InputError(f"{_where(source, line)}: {kind} {_snake(cls.__name__)!r} has no field "
                              f"{key!r}; valid fields: {allowed}")
+    for key in ("name", "mode"):
+        if key in fields and not isinstance(fields[key], str):
+            line = _line_of(text, key, section, index)
+            raise InputError(f"{_where(source, line)}: {kind} {_snake(cls.__name__)!r}: {key}="
+                             f"{fields[key]!r}; give a string, e.g. {key} = \"...\"")
     try:
         return cls(**fields)
     except InputError as exc:
         line = _line_of(text, None, section, index)
         raise InputError(f"{_where(source, line)}: {exc}") from None
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:
         line = _line_of(text, None, section, index)
-        raise InputError(f"{_where(source, line)}: {kind} {_snake(cls.__name__)!r}: {exc}") from None
+        raise InputError(f"{_where(source, line)}: {kind} {_snake(cls.__name__)!r}: {exc}; check the "
+                         f"fields' types and values against the {kind}'s documentation") from None
+
+
+def _check_values(plain: dict, text: str, source: str) -> None:
+    """Check the values of ``[problem]`` and ``[solve]`` (not only their keys)."""
+    from .items import positive_array
+    from .problem import RESIDUAL_FORMS
+    from .regularization import RULES
+    from .solvers import ACCURACIES
+
+    def where(key: str, sec: str) -> str:
+        return _where(source, _line_of(text, key, sec))
+
+    prob, solve = plain["problem"], plain["solve"]
+    if "residual" in prob and not (isinstance(prob["residual"], str) and prob["residual"] in RESIDUAL_FORMS):
+        raise InputError(f"{where('residual', 'problem')}: residual={prob['residual']!r}; choose one of "
+                         f"{list(RESIDUAL_FORMS)}")
+    if "sigma_a" in prob:
+        sa = prob["sigma_a"]
+        if isinstance(sa, bool) or (isinstance(sa, list) and any(isinstance(v, bool) for v in sa)):
+            raise InputError(f"{where('sigma_a', 'problem')}: sigma_a={sa!r}; give a number in m/s^2")
+        try:
+            arr = positive_array(sa, "sigma_a (m/s^2)", allow_none=False)
+        except (InputError, OverflowError) as exc:
+            raise InputError(f"{where('sigma_a', 'problem')}: {exc}") from None
+        if arr.ndim > 1 or arr.size not in (1, 2, 3):
+            raise InputError(f"{where('sigma_a', 'problem')}: sigma_a={sa!r}; give one number in m/s^2 or "
+                             "one per axis")
+    if "solver" in solve and not isinstance(solve["solver"], str):
+        raise InputError(f"{where('solver', 'solve')}: solver={solve['solver']!r}; give a solver name, "
+                         'e.g. solver = "direct"')
+    if "accuracy" in solve and not (isinstance(solve["accuracy"], str) and solve["accuracy"] in ACCURACIES):
+        raise InputError(f"{where('accuracy', 'solve')}: accuracy={solve['accuracy']!r}; choose one of "
+                         f"{list(ACCURACIES)}")
+    if "lam" in solve:
+        lam = solve["lam"]
+        number = isinstance(lam, (int, float)) and not isinstance(lam, bool)
+        if not ((number and math.isfinite(lam) and lam >= 0) or (isinstance(lam, str) and lam in RULES)):
+            raise InputError(f"{where('lam', 'solve')}: lam={lam!r}; give a number >= 0 or a rule: "
+                             f"{', '.join(RULES)}")
 
 
 def parse_spec(text: str, source: str = "spec") -> Spec:
@@ -173,7 +218,9 @@ def parse_spec(text: str, source: str = "spec") -> Spec:
     ------
     InputError
         For TOML syntax errors, unknown sections, keys, item or error-model names, and
-        invalid values, naming the line and listing the valid choices.
+        invalid values (of ``[input]``, ``[problem]`` and ``[solve]`` too: residual form,
+        ``sigma_a`` > 0, solver name, accuracy preset, ``lam`` >= 0 or a rule; and values
+        of the wrong TOML type anywhere), naming the line and listing the valid choices.
     """
     try:
         doc = tomllib.loads(text)
@@ -196,10 +243,14 @@ def parse_spec(text: str, source: str = "spec") -> Spec:
                                  f"{sorted(_SECTIONS[sec])}")
         plain[sec] = dict(tab)
     inp = plain["input"]
-    if "time_unit" in inp and inp["time_unit"] not in TIME_UNITS:
+    _check_values(plain, text, source)
+    if "time" in inp and not isinstance(inp["time"], str):
+        raise InputError(f"{_where(source, _line_of(text, 'time', 'input'))}: time={inp['time']!r}; give the "
+                         'name of the time column as a string, e.g. time = "t"')
+    if "time_unit" in inp and not (isinstance(inp["time_unit"], str) and inp["time_unit"] in TIME_UNITS):
         raise InputError(f"{_where(source, _line_of(text, 'time_unit', 'input'))}: time_unit="
                          f"{inp['time_unit']!r}; valid units: {list(TIME_UNITS)}")
-    if "unit" in inp and inp["unit"] not in ACC_UNITS:
+    if "unit" in inp and not (isinstance(inp["unit"], str) and inp["unit"] in ACC_UNITS):
         raise InputError(f"{_where(source, _line_of(text, 'unit', 'input'))}: unit={inp['unit']!r}; "
                          f"valid acceleration units: {list(ACC_UNITS)}")
     if "columns" in inp and not (isinstance(inp["columns"], dict) and inp["columns"]
@@ -213,6 +264,10 @@ def parse_spec(text: str, source: str = "spec") -> Spec:
         entries = doc.get(sec, [])
         if isinstance(entries, dict):
             entries = [entries]
+        if not isinstance(entries, list) or not all(isinstance(e, dict) for e in entries):
+            line = _line_of(text, None, sec) or _line_of(text, sec)
+            raise InputError(f"{_where(source, line)}: {sec} must be a list of [[{sec}]] tables, each "
+                             f'with a type = "..." key; valid types: {sorted(reg)}')
         out = []
         for k, entry in enumerate(entries):
             fields = dict(entry)

@@ -1,0 +1,199 @@
+"""Safety of files: inputs opened read-only, outputs atomic, interrupted batches resumable."""
+
+from __future__ import annotations
+
+import builtins
+import io
+import os
+import stat
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import bvpnav.batch
+import bvpnav.io
+from bvpnav.batch import run_batch
+from bvpnav.cli import main
+from bvpnav.io import read_recording, write_table
+from bvpnav.samples import write_sample
+from bvpnav.spec import load_spec
+
+WRITE_MODES = set("wax+")
+
+
+@pytest.fixture(scope="module")
+def sample(tmp_path_factory):
+    """The shuttle sample at 5 Hz (101 samples): recording.csv and spec.toml."""
+    d = tmp_path_factory.mktemp("shuttle")
+    write_sample("shuttle", d, rate=5.0)
+    return d
+
+
+def leftovers(folder):
+    """Temporary files of the atomic writer (``.<name>.<random>.tmp``) left in a folder."""
+    return sorted(p.name for p in folder.iterdir() if p.name.endswith(".tmp"))
+
+
+def test_solve_opens_read_only_inputs_for_reading_only(sample, tmp_path, monkeypatch):
+    """chmod 0o444 inputs solve fine and keep bytes and mtime; a spy on open() also checks the
+    mode, since chmod alone proves nothing when the tests run as root."""
+    rec, spec = tmp_path / "rec.csv", tmp_path / "spec.toml"
+    rec.write_bytes((sample / "recording.csv").read_bytes())
+    spec.write_bytes((sample / "spec.toml").read_bytes())
+    for p in (rec, spec):
+        p.chmod(0o444)
+    before = {p: (p.read_bytes(), p.stat().st_mtime_ns) for p in (rec, spec)}
+    opened = []  # (input path, mode or flags) for every open of an input
+    real_open, real_os_open = builtins.open, os.open
+    inputs = {str(rec), str(spec)}
+
+    def spy_open(file, mode="r", *args, **kwargs):
+        if str(file) in inputs:
+            opened.append((str(file), mode))
+        return real_open(file, mode, *args, **kwargs)
+
+    def spy_os_open(path, flags, *args, **kwargs):
+        if str(path) in inputs:
+            opened.append((str(path), "w" if flags & (os.O_WRONLY | os.O_RDWR | os.O_APPEND) else "r"))
+        return real_os_open(path, flags, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "open", spy_open)
+    monkeypatch.setattr(io, "open", spy_open)
+    monkeypatch.setattr(os, "open", spy_os_open)
+    out = tmp_path / "out" / "traj.csv"
+    assert main(["solve", str(rec), "--spec", str(spec), "--out", str(out), "--quiet"]) == 0
+    monkeypatch.undo()
+    assert {p for p, _ in opened} == inputs  # the spy saw both inputs being read ...
+    assert all(not (WRITE_MODES & set(str(m))) for _, m in opened), opened  # ... and only read
+    for p, (data, mtime) in before.items():
+        assert p.read_bytes() == data and p.stat().st_mtime_ns == mtime
+        assert stat.S_IMODE(p.stat().st_mode) == 0o444
+    got = pd.read_csv(out)
+    sp = load_spec(spec)
+    ref = sp.build(read_recording(rec, sp.input)).solve(**sp.solve).trajectory
+    assert len(got) == 101 and list(got.columns) == ["t", "x", "vx"]
+    np.testing.assert_array_equal(got["x"].to_numpy(), ref["x"].to_numpy())
+    assert abs(got["x"].iloc[0]) < 1e-12 and abs(got["x"].iloc[-1]) < 1e-12  # hard ends at the origin, m
+    assert out.with_suffix(".json").exists() and leftovers(out.parent) == []
+
+
+def test_a_read_only_parquet_recording_is_left_untouched(sample, tmp_path):
+    rec = tmp_path / "rec.parquet"
+    pd.read_csv(sample / "recording.csv").to_parquet(rec)
+    rec.chmod(0o444)
+    data, mtime = rec.read_bytes(), rec.stat().st_mtime_ns
+    out = tmp_path / "traj.parquet"
+    assert main(["solve", str(rec), "--spec", str(sample / "spec.toml"), "--out", str(out), "--quiet"]) == 0
+    assert rec.read_bytes() == data and rec.stat().st_mtime_ns == mtime
+    assert len(pd.read_parquet(out)) == 101
+
+
+class DiskFull(OSError):
+    pass
+
+
+def half_then_fail(method):
+    """Replace a writer method by one that writes half of its output, then fails."""
+    def broken(self, path, *args, **kwargs):
+        buf = io.StringIO()
+        method(self, buf, *args, **kwargs)
+        text = buf.getvalue()
+        with builtins.open(path, "w") as fh:
+            fh.write(text[: len(text) // 2])
+        raise DiskFull(28, "No space left on device")
+    return broken
+
+
+@pytest.mark.parametrize("fails", ["trajectory", "summary"])
+def test_a_failed_write_leaves_the_old_output_whole_and_no_temporary_file(sample, tmp_path, monkeypatch,
+                                                                          fails):
+    out, summ = tmp_path / "traj.csv", tmp_path / "traj.json"
+    out.write_text("old trajectory\n")
+    summ.write_text('{"old": true}\n')
+    if fails == "trajectory":
+        monkeypatch.setattr(pd.DataFrame, "to_csv", half_then_fail(pd.DataFrame.to_csv))
+    else:
+        real = type(out).write_text
+
+        def write_text(self, text, *args, **kwargs):
+            real(self, text[: len(text) // 2], *args, **kwargs)
+            raise DiskFull(28, "No space left on device")
+        monkeypatch.setattr(type(out), "write_text", write_text)
+    code = main(["solve", str(sample / "recording.csv"), "--spec", str(sample / "spec.toml"), "--out",
+                 str(out), "--quiet"])
+    monkeypatch.undo()
+    assert code == 2  # an OSError: reported, not a traceback
+    assert summ.read_text() == '{"old": true}\n'
+    if fails == "trajectory":
+        assert out.read_text() == "old trajectory\n"
+    else:  # the trajectory was complete and replaced before the summary failed
+        assert len(pd.read_csv(out)) == 101
+    assert leftovers(tmp_path) == []
+
+
+def test_an_interrupt_mid_write_leaves_the_old_file(tmp_path, monkeypatch):
+    out = tmp_path / "t.csv"
+    write_table(pd.DataFrame({"t": [0.0, 1.0]}), out)
+    old = out.read_bytes()
+
+    def interrupted(self, path, *args, **kwargs):
+        with builtins.open(path, "w") as fh:
+            fh.write("t\n0.0\n")
+        raise KeyboardInterrupt
+    monkeypatch.setattr(pd.DataFrame, "to_csv", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        write_table(pd.DataFrame({"t": np.arange(5.0)}), out)
+    assert out.read_bytes() == old and leftovers(tmp_path) == []
+
+
+def test_an_interrupted_batch_keeps_finished_outputs_and_resumes(sample, tmp_path, monkeypatch):
+    recs = tmp_path / "recs"
+    recs.mkdir()
+    for seed in range(5):
+        write_sample("shuttle", tmp_path / f"s{seed}", seed=seed, rate=5.0)
+        (tmp_path / f"s{seed}" / "recording.csv").rename(recs / f"run{seed}.csv")
+    spec = sample / "spec.toml"
+    out = tmp_path / "out"
+    solved = []
+    real_solve, real_json = bvpnav.batch.solve_recording, bvpnav.batch.write_json
+
+    def counting_solve(path, *args, **kwargs):
+        solved.append(os.path.basename(path))
+        return real_solve(path, *args, **kwargs)
+
+    def json_then_interrupt(obj, path):
+        if os.path.basename(path) == "run2.json":  # run2's trajectory is written, its summary not
+            raise KeyboardInterrupt
+        real_json(obj, path)
+
+    monkeypatch.setattr(bvpnav.batch, "solve_recording", counting_solve)
+    monkeypatch.setattr(bvpnav.batch, "write_json", json_then_interrupt)
+    with pytest.raises(KeyboardInterrupt):
+        run_batch(recs, spec, out, scheduler="serial", progress=False)
+    assert solved == ["run0.csv", "run1.csv", "run2.csv"]
+    assert sorted(p.name for p in out.iterdir()) == ["run0.csv", "run0.json", "run1.csv", "run1.json",
+                                                     "run2.csv"]  # no summary, no temporary file
+    stamps = {p.name: p.stat().st_mtime_ns for p in out.iterdir()}
+    finished = {p.name: p.read_bytes() for p in out.iterdir()}
+
+    monkeypatch.setattr(bvpnav.batch, "write_json", real_json)
+    solved.clear()
+    df = run_batch(recs, spec, out, scheduler="serial", progress=False, resume=True)
+    assert solved == ["run2.csv", "run3.csv", "run4.csv"]  # run2 had no summary: solved again
+    assert df.ok.all() and len(df) == 5
+    assert df.status.tolist()[:2] == ["skipped (resume)"] * 2
+    for name in ("run0.csv", "run0.json", "run1.csv", "run1.json"):
+        p = out / name
+        assert p.stat().st_mtime_ns == stamps[name] and p.read_bytes() == finished[name]
+    assert (out / "run2.json").exists() and (out / "summary.csv").exists() and leftovers(out) == []
+    # the resumed outputs are those of an uninterrupted run
+    sp = load_spec(spec)
+    for seed in range(5):
+        ref = sp.build(read_recording(recs / f"run{seed}.csv", sp.input)).solve(**sp.solve).trajectory
+        got = pd.read_csv(out / f"run{seed}.csv")
+        np.testing.assert_array_equal(got["x"].to_numpy(), ref["x"].to_numpy())
+    # a second resume solves nothing
+    solved.clear()
+    df = run_batch(recs, spec, out, scheduler="serial", progress=False, resume=True)
+    assert solved == [] and (df.status == "skipped (resume)").all()
