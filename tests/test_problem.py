@@ -162,3 +162,15 @@ def test_fallback_rescues_a_failing_primary_and_says_why():
     with pytest.raises(bvpnav.SolveError) as exc:
         prob.solve(solver="osqp", options={"max_iter": 1}, fallback=[("osqp", {"max_iter": 2})])
     assert [a["solver"] for a in exc.value.attempts] == ["osqp", "osqp"]
+
+
+@pytest.mark.parametrize("solver", ["direct", "clarabel", "osqp"])
+def test_exactly_consistent_zero_data_verifies(solver):
+    # zero acceleration, hard ends on a straight line: every gradient is round-off, and
+    # the stationarity check compares it with the scale the trajectory sets (|r|/T^2)
+    t = np.linspace(0.0, 10.0, 51)
+    prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=np.zeros_like(t)))
+    prob.add(Position(t=[0.0, 10.0], value=[0.0, 10.0]))
+    sol = prob.solve(solver=solver, fallback=None)
+    assert sol.stats["verified"] and sol.stats["verification"]["stationarity"] < 1e-10
+    assert np.max(np.abs(sol.position("x") - t)) < 1e-8

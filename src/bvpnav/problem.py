@@ -773,9 +773,16 @@ class NavigationProblem:
                 grads.append(A.T @ z)
         total = np.sum(grads, axis=0)
         # floor: the data-term gradient if the residual were as large as the measurement
+        # (at least the acceleration scale the trajectory itself sets, |r|/T^2 and |v|/T,
+        # so that exactly consistent data, e.g. zero acceleration with hard positions on
+        # a straight line, is not judged against round-off alone)
         probe = np.zeros(model.size)
+        T = model.grid.duration
         for a in range(model.d):
-            probe[model.w_index(a)] = model.data.acc[:, a]
+            r_a = model.node_position(a).value(xval)
+            v_a = model.node_velocity(a).value(xval)
+            a_scale = max(float(np.max(np.abs(r_a))) / T**2, float(np.max(np.abs(v_a))) / T)
+            probe[model.w_index(a)] = np.maximum(np.abs(model.data.acc[:, a]), a_scale)
         floor = float(np.max(np.abs(2.0 * (data.A.T @ data.value(probe)))))
         # and each weighted term's gradient if its residual were as large as the terms that
         # cancel in it (|A| |x| + |c|): a consistent problem (every residual zero, e.g.
