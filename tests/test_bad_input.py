@@ -191,6 +191,11 @@ CASES = [
     pytest.param(api(lambda: Position(t=1.0, mode="sfot", name="p")),
                  r"p: mode='sfot'", r"choose one of \['hard', 'soft', 'robust', 'band'\]",
                  id="item-bad-mode"),
+    pytest.param(api(lambda: Position(t=1.0, name=[0])),
+                 r"Position: name=\[0\]", r"give a non-empty string", id="item-name-not-a-string"),
+    pytest.param(api(lambda: bvpnav.NavigationProblem(bvpnav.ImuData(T, ACC[:, 0]))
+                     .solve(on_conflict="ignore")),
+                 r"on_conflict='ignore'", r"choose 'raise' or 'demote'", id="solve-bad-on-conflict"),
     pytest.param(api(lambda: Position(t=[1.0, np.nan], name="p")),
                  r"p: t: value at index 1 is nan", r"remove or repair", id="item-t-nan"),
     pytest.param(api(lambda: Velocity(t=1.0, value=[0.0, np.inf], name="v")),

@@ -188,3 +188,58 @@ def test_example_specs_parse_and_match_the_simulated_ones(tmp_path):
         sim = load_spec(tmp_path / p.stem / "spec.toml")
         assert [type(i).__name__ for i in spec.items] == [type(i).__name__ for i in sim.items]
         assert spec.solve == sim.solve and spec.input == sim.input
+
+
+def test_spec_on_conflict_demote_records_the_demoted_item(tmp_path):
+    # two hard fixes disagree at t = 5 s; the spec trusts "fix A" more, so "fix B" is
+    # demoted to soft (sigma 0.1 m), the run succeeds and the summary says so
+    t = np.linspace(0.0, 10.0, 101)
+    pd.DataFrame({"t": t, "acc_x": np.zeros_like(t)}).to_csv(tmp_path / "rec.csv", index=False)
+    spec_text = """
+[input]
+time = "t"
+columns = { x = "acc_x" }
+
+[solve]
+solver = "clarabel"
+lam = 1.0
+on_conflict = "demote"
+priority = { "fix A" = 1.0 }
+demote_sigma = 0.1
+
+[[item]]
+type = "position"
+name = "ends"
+t = [0.0, 10.0]
+value = [0.0, 0.0]
+
+[[item]]
+type = "position"
+name = "fix A"
+t = 5.0
+value = 1.0
+
+[[item]]
+type = "position"
+name = "fix B"
+t = 5.0
+value = 2.0
+"""
+    (tmp_path / "spec.toml").write_text(spec_text)
+    out = tmp_path / "traj.csv"
+    proc = run("solve", tmp_path / "rec.csv", "--spec", tmp_path / "spec.toml", "--out", out)
+    assert proc.returncode == 0, proc.stderr
+    assert "'fix B'" in proc.stderr + proc.stdout and "demoted" in proc.stderr + proc.stdout
+    got = pd.read_csv(out)
+    assert abs(np.interp(5.0, got["t"], got["x"]) - 1.0) < 1e-9
+    summary = json.loads(out.with_suffix(".json").read_text())
+    assert [d["item"] for d in summary["solver"]["demoted"]] == ["fix B"]
+    # without the option the same spec is an error naming both fixes (exit code 3)
+    (tmp_path / "raise.toml").write_text(spec_text.replace('on_conflict = "demote"', ""))
+    proc = run("solve", tmp_path / "rec.csv", "--spec", tmp_path / "raise.toml", "--out",
+               tmp_path / "t2.csv")
+    assert proc.returncode == 3 and "['fix A', 'fix B']" in proc.stderr
+    with pytest.raises(bvpnav.InputError, match=r"line 9: on_conflict='ignore'"):
+        parse_spec(spec_text.replace('"demote"', '"ignore"'))
+    with pytest.raises(bvpnav.InputError, match=r"line 10: priority="):
+        parse_spec(spec_text.replace("1.0 }", '"high" }'))

@@ -265,7 +265,7 @@ def summary(solution, problem) -> dict:
             units[n] = getattr(comp, "units", "")
     st = solution.stats
     keep = ("solver", "status", "verified", "accuracy", "iterations", "compile_time", "solve_time",
-            "wall_time", "factorization", "verification", "attempts")
+            "wall_time", "factorization", "verification", "attempts", "demoted", "sequential")
     return clean({
         "lam": solution.lam, "lam_rule": solution.lam_rule,
         "error_model": {k: {"estimate": float(v), "units": units.get(k, "")}

@@ -133,6 +133,9 @@ class Item:
         return _snake(cls.__name__)
 
     def __post_init__(self):
+        if self.name is not None and not (isinstance(self.name, str) and self.name.strip()):
+            raise InputError(f"{type(self).__name__}: name={self.name!r}; give a non-empty string "
+                             "(it labels the item in reports and errors)")
         label = self.label
         mode = self.mode
         if mode is None:

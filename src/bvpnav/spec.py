@@ -59,7 +59,7 @@ ACC_UNITS = {"m/s^2": 1.0, "g": 9.80665, "mg": 9.80665e-3, "ft/s^2": 0.3048}
 _SECTIONS = {
     "input": {"time", "time_unit", "columns", "unit"},
     "problem": {"residual", "sigma_a"},
-    "solve": {"solver", "accuracy", "lam", "fallback"},
+    "solve": {"solver", "accuracy", "lam", "fallback", "on_conflict", "priority", "demote_sigma"},
     "error_model": None,  # array of tables, checked per model
     "item": None,  # array of tables, checked per item
 }
@@ -209,6 +209,25 @@ def _check_values(plain: dict, text: str, source: str) -> None:
         if not ((number and math.isfinite(lam) and lam >= 0) or (isinstance(lam, str) and lam in RULES)):
             raise InputError(f"{where('lam', 'solve')}: lam={lam!r}; give a number >= 0 or a rule: "
                              f"{', '.join(RULES)}")
+    if "on_conflict" in solve and solve["on_conflict"] not in ("raise", "demote"):
+        raise InputError(f"{where('on_conflict', 'solve')}: on_conflict={solve['on_conflict']!r}; "
+                         'choose "raise" or "demote"')
+
+    def number(v, positive: bool) -> bool:
+        ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+        return ok and (v > 0 if positive else True)
+
+    if "priority" in solve:
+        pr = solve["priority"]
+        if not (isinstance(pr, dict) and all(number(v, False) for v in pr.values())):
+            raise InputError(f"{where('priority', 'solve')}: priority={pr!r}; give a table of item "
+                             'name = number, e.g. priority = { "survey point" = 10 }')
+    if "demote_sigma" in solve:
+        ds = solve["demote_sigma"]
+        ok = number(ds, True) or (isinstance(ds, dict) and all(number(v, True) for v in ds.values()))
+        if not ok:
+            raise InputError(f"{where('demote_sigma', 'solve')}: demote_sigma={ds!r}; give a number > 0 "
+                             "(item units) or a table of item name = number > 0")
 
 
 def parse_spec(text: str, source: str = "spec") -> Spec:
