@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import warnings
 
 import cvxpy as cp
 
@@ -15,7 +16,9 @@ def _feasible(cvx: dict, labels) -> bool:
     cons = [cvx["fem"]] + [c for label in labels for c in cvx["cons"][label]]
     prob = cp.Problem(cp.Minimize(0), cons)
     try:
-        prob.solve(solver="CLARABEL")
+        with warnings.catch_warnings():  # an inaccurate feasibility verdict is judged below,
+            warnings.simplefilter("ignore")  # not passed on as a stray cvxpy warning
+            prob.solve(solver="CLARABEL")
     except cp.SolverError:
         return True  # cannot tell: do not accuse
     return prob.status not in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE)
@@ -116,8 +119,8 @@ def solve_demoting(problem, solve_kwargs: dict, priority=None, demote_sigma=None
         except Infeasible as exc:
             conflict = next((a["conflicts"] for a in reversed(exc.attempts or [])
                              if a.get("conflicts")), [])
-            hard_items = {t.label for t in current.terms()
-                          if t.item is not None and t.mode in ("hard", "band")}
+            # from the items, not terms(): an item awaiting linearization (TrackLine) cannot compile
+            hard_items = {it.label for it in current._items if it.mode in ("hard", "band")}
             candidates = [c for c in conflict if c in hard_items]
             if not candidates:
                 done = f"; already demoted {[d['item'] for d in demoted]}" if demoted else ""

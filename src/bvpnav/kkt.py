@@ -335,6 +335,10 @@ def factor_form(form: LeastSquaresForm, problem, method: str = "lu", delta: floa
     return BorderedLU(form.augmented(), dense, np.arange(m + n, m + n + p))
 
 
+#: Largest normwise backward error at which a refined LDL^T answer is accepted.
+LDL_BACKWARD = 1e-12
+
+
 def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14,
                         method: str = "auto", ldl_steps: int = 30, ldl_tol: float = 1e-12,
                         ldl_accept: float = 1e-7):
@@ -395,8 +399,20 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
         try:
             fac = factor_form(form, problem, "ldl")
             z, k, corr = fac.refined(rhs, ldl_steps, ldl_tol, window=window, stall=0.5)
-            if not (np.isfinite(corr) and corr <= ldl_accept and np.all(np.isfinite(z))):
+            # a small correction alone can mislead (a wild first solve makes every later
+            # correction small relative to z): also require the normwise backward error
+            # |rhs - S z| / (|S| |z| + |rhs|) (infinity norms) to be near rounding
+            eta = np.inf
+            if np.all(np.isfinite(z)):
+                S = fac.S
+                den = (float(np.max(abs(S) @ np.ones(S.shape[1]))) * float(np.max(np.abs(z)))
+                       + float(np.max(np.abs(rhs))))
+                eta = float(np.max(np.abs(rhs - S @ z)) / max(den, 1e-300))
+            if not (np.isfinite(corr) and corr <= ldl_accept):
                 note = f"lu (ldl refinement stalled at correction {corr:.1e})"
+                fac = None
+            elif not eta <= LDL_BACKWARD:
+                note = f"lu (ldl backward error {eta:.1e} after refinement)"
                 fac = None
         except (RuntimeError, np.linalg.LinAlgError, ValueError) as exc:
             note = f"lu (ldl failed: {exc})"
