@@ -518,19 +518,19 @@ class NavigationProblem:
             (``Infeasible``, ``Unbounded``, ``Inaccurate``) when every attempt failed;
             ``error.attempts`` lists each attempt's status and reason.
         """
-        if any(getattr(it, "needs_linearization", False) for it in self._items):
-            from .sequential import solve_sequential  # nonlinear items: sequential convex loop
-
-            return solve_sequential(self, solver=solver, lam=lam, accuracy=accuracy, verify=verify,
-                                    options=options, verbose=verbose, fallback=fallback)
         if on_conflict not in ("raise", "demote"):
             raise InputError(f"on_conflict={on_conflict!r}; choose 'raise' or 'demote'")
-        if on_conflict == "demote":
+        if on_conflict == "demote":  # before the loop: each round calls solve() (and the loop) again
             from .conflicts import solve_demoting
 
             return solve_demoting(self, dict(solver=solver, lam=lam, accuracy=accuracy, verify=verify,
                                              options=options, verbose=verbose, fallback=fallback),
                                   priority=priority, demote_sigma=demote_sigma)
+        if any(getattr(it, "needs_linearization", False) for it in self._items):
+            from .sequential import solve_sequential  # nonlinear items: sequential convex loop
+
+            return solve_sequential(self, solver=solver, lam=lam, accuracy=accuracy, verify=verify,
+                                    options=options, verbose=verbose, fallback=fallback)
         if isinstance(lam, str):
             from . import regularization
 
@@ -696,7 +696,10 @@ class NavigationProblem:
         dict
             ``fem_residual`` (relative), ``max_violation`` (relative, over hard, band and
             inequality items), ``worst_item``, ``stationarity`` (relative or None),
-            ``rtol`` and ``verified`` (bool).
+            ``rtol``, ``nonfinite`` (what is NaN or infinite in the solution vector or in
+            the reported error-model parameters: any makes the answer fail),
+            ``conditioning`` (see :func:`bvpnav.conditioning.assess_conditioning`; None
+            without error-model parameters) and ``verified`` (bool).
         """
         rtol = VERIFY_RTOL[accuracy]
         model = self.model
@@ -725,13 +728,41 @@ class NavigationProblem:
         stat = None
         if duals is not None:
             stat = self._stationarity(xval, lam, duals)
-        from .kkt import FORWARD_RTOL, forward_error
+        from .kkt import FORWARD_RTOL, factor_form, forward_error, least_squares_form
 
-        fwd = forward_error(self, xval, lam, duals, factored)
+        # NaN/inf never pass: not in x (comparisons with NaN are False, but say so), nor in
+        # the reported error-model parameters (a singular physical reparametrisation)
+        nonfinite = []
+        if not np.all(np.isfinite(xval)):
+            nonfinite.append(f"{int(np.count_nonzero(~np.isfinite(xval)))} entries of the solution vector")
+        if self.error_model is not None and model.q:
+            with np.errstate(all="ignore"):
+                rep = self.error_model.report(model.split(xval)["l"], model)
+            vals = np.asarray(rep, dtype=float)
+            nonfinite += [f"error parameter {n} = {v}" for n, v in zip(rep.index, vals, strict=True)
+                          if not np.isfinite(v)]
+        fwd_failed = False
+        if factored is None and model.q:
+            # factor once here: the forward-error estimate and the conditioning share it
+            form = least_squares_form(self, lam)
+            if form is not None:
+                try:
+                    factored = (form, factor_form(form, self, "lu"))
+                except (RuntimeError, np.linalg.LinAlgError):  # forward_error's verdict too
+                    fwd_failed = True
+        fwd = float("inf") if fwd_failed else forward_error(self, xval, lam, duals, factored)
+        conditioning = None
+        if model.q and not np.any(~np.isfinite(xval)):
+            from .conditioning import assess_conditioning
+
+            conditioning = assess_conditioning(self, xval, lam, factored)
+            if nonfinite and conditioning["degenerate_axes"]:
+                nonfinite += [w for w in conditioning["warnings"] if w.startswith("sensor axis")]
         ok = (fem_rel <= rtol and worst <= rtol * 10 and (stat is None or stat <= np.sqrt(rtol))
-              and (fwd is None or fwd <= FORWARD_RTOL[accuracy]))
+              and (fwd is None or fwd <= FORWARD_RTOL[accuracy]) and not nonfinite)
         return {"fem_residual": fem_rel, "max_violation": worst, "worst_item": worst_item,
-                "stationarity": stat, "forward_error": fwd, "rtol": rtol, "verified": bool(ok)}
+                "stationarity": stat, "forward_error": fwd, "rtol": rtol, "nonfinite": nonfinite,
+                "conditioning": conditioning, "verified": bool(ok)}
 
     def _stationarity(self, xval: np.ndarray, lam: float, duals: dict) -> float | None:
         """Relative norm of the Lagrangian gradient (None for non-smooth objectives)."""
@@ -807,6 +838,10 @@ class NavigationProblem:
             {"solver": info["solver"], "status": info.get("status"),
              "reason": "verified" if check["verified"] else "failed verification"}
         )
+        degenerate = [s for s in check.get("nonfinite", []) if s.startswith("sensor axis")]
+        if degenerate:  # the information, not the solver: no fallback can do better
+            raise InputError(f"{info['solver']}: the error-model estimate is not finite because "
+                             + "; ".join(degenerate))
         if verify and not check["verified"]:
             raise Inaccurate(
                 f"{info['solver']} (status {info.get('status')}, accuracy={accuracy!r}) returned an "
@@ -814,7 +849,8 @@ class NavigationProblem:
                 f"worst hard-item violation {check['max_violation']:.2e} "
                 f"({check['worst_item']}), stationarity {check['stationarity']}, "
                 f"estimated forward error {check['forward_error']}, "
-                f"tolerance {check['rtol']:.0e}. Try accuracy='high', another solver "
+                + (f"not finite: {'; '.join(check['nonfinite'])}, " if check.get("nonfinite") else "")
+                + f"tolerance {check['rtol']:.0e}. Try accuracy='high', another solver "
                 "(e.g. solver='direct' for problems without inequalities), or residual="
                 "'acceleration'.",
                 attempts=info["attempts"],
@@ -861,6 +897,10 @@ class NavigationProblem:
         else:
             params = pd.Series(dtype=float, name="estimate")
         warn = [f"{info.get('solver')}: {w}" for w in info.get("solver_warnings", [])]
+        cond = (info.get("verification") or {}).get("conditioning")
+        if cond is not None:
+            info["conditioning"] = cond
+            warn += cond["warnings"]
         if str(info.get("status", "")).endswith("inaccurate"):
             warn.append(f"{info.get('solver')} reported status {info['status']!r}; the answer passed "
                         "bvpnav's verification (see stats['verification'])")
