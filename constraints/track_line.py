@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 import scipy.sparse as sp
+from scipy.spatial import cKDTree
 
 from bvpnav.errors import InputError
 from bvpnav.items import Item
@@ -31,6 +32,8 @@ SEGMENT, VERTEX, CONTINUITY = 0, 1, 2
 #: ... and rows dropped.
 OUT_OF_RANGE, AMBIGUOUS = -1, -2
 
+#: Floor of the continuation sigma of a hard track, as a fraction of the path length.
+CONTINUATION_FLOOR = 1e-3
 _CHUNK_ELEMENTS = 2_000_000  # samples x segments evaluated at once
 #: Candidates nearer than ``d_min + ambiguity`` (radius rho) on one branch span at most about
 #: 2 rho of arc length (a little more on the outside of a bend): more than 3 rho is two branches.
@@ -162,17 +165,36 @@ def project_onto_polyline(vertices, t, positions, ambiguity: float = 0.5,
     amb = np.zeros(n, dtype=bool)
     lmax = float(L.max())
     chunk = max(1, _CHUNK_ELEMENTS // nseg)
+    # candidate segments: within dv + ambiguity (dv, the distance to the nearest vertex, bounds the
+    # distance to the polyline) of the sample, so their midpoints are within that + L_max / 2
+    dv = cKDTree(V).query(Q)[0]
+    mtree = cKDTree(A + 0.5 * d)
     for k0 in range(0, n, chunk):
         sl = slice(k0, min(n, k0 + chunk))
-        raw, u, dist, s = _to_segments(Q[sl], A, d, L, S0)
-        j = np.argmin(dist, axis=1)
-        rows = np.arange(j.size)
-        dm = dist[rows, j]
-        seg[sl], uu[sl], rawu[sl], dmin[sl], arc[sl] = j, u[rows, j], raw[rows, j], dm, s[rows, j]
-        cand = dist <= (dm + ambiguity)[:, None]
-        sc = np.where(cand, s, np.nan)
-        span = np.nanmax(sc, axis=1) - np.nanmin(sc, axis=1)
-        amb[sl] = span > _BRANCH * (dm + ambiguity)
+        Qc = Q[sl]
+        radius = (dv[sl] + ambiguity + 0.5 * lmax) * (1.0 + 1e-9) + 1e-12
+        near = mtree.query_ball_point(Qc, radius)
+        cnt = np.fromiter((len(c) for c in near), dtype=int, count=len(near))
+        rows = np.repeat(np.arange(cnt.size), cnt)
+        cols = np.concatenate([np.asarray(c, dtype=int) for c in near])
+        order = np.lexsort((cols, rows))  # segments in index order: argmin's tie-breaking
+        rows, cols = rows[order], cols[order]
+        start = np.concatenate([[0], np.cumsum(cnt)[:-1]])
+        rel = Qc[rows] - A[cols]
+        raw = (rel[:, 0] * d[cols, 0] + rel[:, 1] * d[cols, 1]) / (L[cols] * L[cols])
+        u = np.clip(raw, 0.0, 1.0)
+        dist = np.hypot(Qc[rows, 0] - (A[cols, 0] + u * d[cols, 0]),
+                        Qc[rows, 1] - (A[cols, 1] + u * d[cols, 1]))  # as _to_segments
+        sarc = S0[cols] + u * L[cols]
+        dm = np.minimum.reduceat(dist, start)
+        first = np.flatnonzero(dist == dm[rows])
+        _, at = np.unique(rows[first], return_index=True)
+        pick = first[at]
+        seg[sl], uu[sl], rawu[sl], dmin[sl], arc[sl] = cols[pick], u[pick], raw[pick], dm, sarc[pick]
+        cand = dist <= (dm + ambiguity)[rows]
+        hi = np.maximum.reduceat(np.where(cand, sarc, -np.inf), start)
+        lo = np.minimum.reduceat(np.where(cand, sarc, np.inf), start)
+        amb[sl] = (hi - lo) > _BRANCH * (dm + ambiguity)
     status = np.full(n, SEGMENT, dtype=int)
     # ambiguous samples: arc-length continuity with the neighbouring unambiguous ones
     idx = np.flatnonzero(amb)
@@ -275,6 +297,11 @@ class TrackLine(Item):
     vertical parts and loops work). Samples beyond the ends of the path give no row;
     ambiguous samples are resolved by arc-length continuity (see
     :func:`project_onto_polyline`).
+
+    In hard and band mode the sequential loop starts with a soft copy
+    (:meth:`continuation_sigma`, :meth:`with_mode`): hard rows from a far start fix the
+    estimate on the path at wrong arc lengths, from which the iteration recovers only
+    slowly (see :mod:`bvpnav.sequential`).
     """
 
     x: Any
@@ -391,12 +418,49 @@ class TrackLine(Item):
 
     def projection(self) -> TrackProjection:
         """Nearest points and row directions at the linearization point (see
-        :func:`project_onto_polyline`)."""
+        :func:`project_onto_polyline`; computed once per linearized copy)."""
         if self.about is None:
             raise InputError(f"{self.label}: no linearization point yet; use linearized(t, positions)")
-        keep = self.in_interval(self.about_t)
-        return project_onto_polyline(self.vertices, self.about_t[keep], self.about[keep], self.ambiguity,
-                                     self.beyond_ends)
+        cached = self.__dict__.get("_projection")
+        if cached is None:
+            keep = self.in_interval(self.about_t)
+            cached = project_onto_polyline(self.vertices, self.about_t[keep], self.about[keep],
+                                           self.ambiguity, self.beyond_ends)
+            object.__setattr__(self, "_projection", cached)
+        return cached
+
+    @property
+    def length(self) -> float:
+        """Arc length of the polyline, m."""
+        return float(np.sum(np.hypot(np.diff(self.x), np.diff(self.y))))
+
+    def continuation_sigma(self) -> float:
+        r"""Sigma (m) of the soft stand-in for a hard or band track in the sequential loop.
+
+        Returns
+        -------
+        float
+            ``max(d_rms, floor)``: the RMS distance (m) of the linearization point's kept
+            samples to the path, but at least the band half-width ``tol`` (band mode) or
+            1e-3 of the path length :attr:`length` (hard mode).
+
+        Notes
+        -----
+        :math:`\sigma = \max(\sqrt{\overline{d_k^2}}, \sigma_\min)`; see
+        :func:`bvpnav.sequential.solve_sequential` for why the loop starts soft.
+        """
+        pr = self.projection()
+        d = pr.distance[pr.kept]
+        rms = float(np.sqrt(np.mean(d**2))) if d.size else 0.0
+        floor = float(np.max(self.tol)) if self.mode == "band" else CONTINUATION_FLOOR * self.length
+        return max(rms, floor)
+
+    def with_mode(self, mode: str, sigma=None, tol=None, huber=None) -> TrackLine:
+        """A copy in another mode (same path, interval and linearization point; m)."""
+        new = dataclasses.replace(self, mode=mode, sigma=sigma, tol=tol, huber=huber)
+        if "_projection" in self.__dict__:  # the rows do not depend on the mode
+            object.__setattr__(new, "_projection", self.__dict__["_projection"])
+        return new
 
     # ------------------------------------------------------------ contract
     @classmethod

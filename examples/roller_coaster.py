@@ -162,7 +162,8 @@ def run(small: bool = False, figures: str | None = None, quiet: bool = False) ->
                 warnings.simplefilter("ignore", RuntimeWarning)
                 lin = item.linearized(data.t, sol_a.trajectory)
                 curve = lambda_curve(bvpnav.NavigationProblem(data, sigma_a=ACCEL.noise).add(ends, lin),
-                                     rules=("lcurve",), lam_range=(1e-4, 1e6))
+                                     rules=("lcurve",), lam_range=(1e-4, 1e6),
+                                     points=9 if small else 25)  # refined in its bracket
             lam = curve.lam_chosen
         t_l = time.perf_counter() - t_l
         t_s = time.perf_counter()
