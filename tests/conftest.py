@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import importlib.util
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -39,3 +43,16 @@ def exact_piecewise_linear(t, acc, r0, v0):
         v[j + 1] = v[j] + h[j] * (acc[j] + acc[j + 1]) / 2.0
         r[j + 1] = r[j] + v[j] * h[j] + h[j] ** 2 * (2.0 * acc[j] + acc[j + 1]) / 6.0
     return r, v
+
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def load_example(name: str):
+    """Import ``examples/<name>.py`` afresh as module ``_example_<name>`` (registered in
+    ``sys.modules`` so that dataclasses and inspect can find it)."""
+    spec = importlib.util.spec_from_file_location(f"_example_{name}", EXAMPLES / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod
+    spec.loader.exec_module(mod)
+    return mod

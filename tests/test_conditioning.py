@@ -31,14 +31,11 @@ axis (bias_y without scale_y) has relative singular value 1.
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pandas as pd
 import pytest
 import scipy.linalg as sla
+from conftest import load_example
 
 import bvpnav
 from bvpnav.conditioning import GAIN_LIMIT, RELATIVE_SV_WARN, information_matrix, relative_singular_values
@@ -246,21 +243,12 @@ def test_nan_report_fails_every_attempt():
 
 
 # --------------------------------------------------------- the reported case
-def _load_example(name: str):
-    path = Path(__file__).resolve().parents[1] / "examples" / f"{name}.py"
-    spec = importlib.util.spec_from_file_location(f"_h6_{name}", path)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod
-    spec.loader.exec_module(mod)
-    return mod
-
-
 def test_ski_jump_with_scale_factor_on_all_axes_is_flagged():
     """examples/ski_jump.py at 50 Hz, gyro attitude: with ScaleFactor() on all axes the
     internal parameters are well separated (smallest relative singular value 0.15) but
     the correction nearly removes the body y axis (1 + k_y = -0.0196: a reversed gain of
     -51); the warning names scale_y and bias_y. The example's own model has no warning."""
-    sj = _load_example("ski_jump")
+    sj = load_example("ski_jump")
     sc = sj.simulate_jump(50.0, 0)
     info = sj.information(sc)
     bad, _ = sj.problems(sc, info, "gyro", Bias() + ScaleFactor())

@@ -2,23 +2,13 @@
 
 from __future__ import annotations
 
-import importlib.util
 import inspect
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import load_example
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
-
-
-def load(name: str):
-    spec = importlib.util.spec_from_file_location(name, EXAMPLES / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[name] = mod  # lets inspect and dataclasses find the module
-    spec.loader.exec_module(mod)
-    return mod
+load = load_example
 
 
 @pytest.fixture(scope="module")

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import importlib.util
 import pathlib
 import warnings
 
 import numpy as np
 import pytest
+from conftest import load_example
 
 import bvpnav
 from bvpnav.constraints import Position, TrackLine
@@ -256,9 +256,7 @@ def test_loop_warns_when_not_converged():
 
 # ------------------------------------------------------------ the example
 def test_roller_coaster_small():
-    spec = importlib.util.spec_from_file_location("roller_coaster", EX / "roller_coaster.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
+    mod = load_example("roller_coaster")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         df = mod.run(small=True, quiet=True)
