@@ -229,7 +229,7 @@ def assess_conditioning(problem, xval: np.ndarray, lam: float, factored: tuple |
         (ascending list), ``min_relative_sv``, ``condition`` (ratio of the largest to the
         smallest relative singular value, inf when one is 0), ``weak`` (list of
         ``{"parameters", "relative_sv"}`` below ``threshold``), ``degenerate_axes``
-        (list of ``{"axis", "gain", "kept", "parameters"}``), ``threshold`` and
+        (list of ``{"axis", "gain", "kept", "parameters", "message"}``), ``threshold`` and
         ``warnings`` (list of str).
 
     Notes
@@ -267,7 +267,7 @@ def assess_conditioning(problem, xval: np.ndarray, lam: float, factored: tuple |
     degenerate = _degenerate_axes(problem, np.asarray(l, dtype=float))
     for dg in degenerate:
         who = dg["parameters"]
-        warn.append(
+        dg["message"] = (
             f"sensor axis {dg['axis']}: the estimated correction keeps a fraction "
             f"{dg['kept']:.2g} of the measured signal (gain 1 + scale = {dg['gain']:.3g}): the "
             "data are explained best with no true specific force along this axis, so "
@@ -275,6 +275,7 @@ def assess_conditioning(problem, xval: np.ndarray, lam: float, factored: tuple |
             + " not determined and the reported values are meaningless; model no scale factor "
             f"on axis {dg['axis']} (ScaleFactor(axes=(...)) without {dg['axis']!r})"
         )
+        warn.append(dg["message"])
     smin = float(sv[0]) if sv.size else None
     cond = float(sv[-1] / sv[0]) if sv.size and sv[0] > 0 else float("inf")
     return {"relative_singular_values": [float(s) for s in sv], "min_relative_sv": smin,

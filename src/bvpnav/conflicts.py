@@ -59,7 +59,7 @@ def conflicting_items(problem) -> list[str]:
 
 def _demoted_problem(problem, label: str, sigma: float):
     """A copy of ``problem`` with the item ``label`` made soft (sigma in its units)."""
-    from .problem import NavigationProblem, _Renamed
+    from .problem import _Renamed
 
     items = []
     for it in problem._items:
@@ -67,9 +67,7 @@ def _demoted_problem(problem, label: str, sigma: float):
             base = _Renamed.unwrap(it)
             it = dataclasses.replace(base, mode="soft", sigma=sigma, tol=None, huber=None, name=label)
         items.append(it)
-    return NavigationProblem(problem.data, residual=problem.residual,
-                             sigma_a=problem.sigma_a if problem._sigma_a_given else None,
-                             error_model=problem.error_model, items=items)
+    return problem.with_items(items)
 
 
 def solve_demoting(problem, solve_kwargs: dict, priority=None, demote_sigma=None):
@@ -105,6 +103,7 @@ def solve_demoting(problem, solve_kwargs: dict, priority=None, demote_sigma=None
     labels = problem.item_labels
     priority = dict(priority or {})
     sig_map = demote_sigma if isinstance(demote_sigma, dict) else {}
+    sig_default = 1.0 if demote_sigma is None or isinstance(demote_sigma, dict) else float(demote_sigma)
     for what, keys in (("priority", priority), ("demote_sigma", sig_map)):
         unknown = sorted(set(keys) - set(labels))
         if unknown:
@@ -127,10 +126,7 @@ def solve_demoting(problem, solve_kwargs: dict, priority=None, demote_sigma=None
                 raise Infeasible(f"{exc}{done}. No demotable item was identified in the conflict.",
                                  attempts=exc.attempts) from exc
             victim = min(candidates, key=lambda c: (priority.get(c, 0.0), -order[c]))
-            if isinstance(demote_sigma, dict):
-                sigma = float(demote_sigma.get(victim, 1.0))
-            else:
-                sigma = 1.0 if demote_sigma is None else float(demote_sigma)
+            sigma = float(sig_map.get(victim, sig_default))
             demoted.append({"item": victim, "sigma": sigma, "priority": priority.get(victim, 0.0),
                             "conflict": list(conflict)})
             current = _demoted_problem(current, victim, sigma)

@@ -405,8 +405,7 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
             eta = np.inf
             if np.all(np.isfinite(z)):
                 S = fac.S
-                den = (float(np.max(abs(S) @ np.ones(S.shape[1]))) * float(np.max(np.abs(z)))
-                       + float(np.max(np.abs(rhs))))
+                den = spla.norm(S, np.inf) * np.max(np.abs(z)) + np.max(np.abs(rhs))
                 eta = float(np.max(np.abs(rhs - S @ z)) / max(den, 1e-300))
             if not (np.isfinite(corr) and corr <= ldl_accept):
                 note = f"lu (ldl refinement stalled at correction {corr:.1e})"

@@ -178,6 +178,20 @@ class NavigationProblem:
         self._cvx = None
         return self
 
+    def with_items(self, items: Iterable[Item], error_model: bool = True) -> NavigationProblem:
+        """The same data, objective form and sigma_a with other items (their labels kept).
+
+        With ``error_model=True`` the copy also keeps the error model and shares this
+        problem's :class:`NavModel` (the same unknowns and FEM matrices); without it the
+        copy has no error-model parameters.
+        """
+        new = NavigationProblem(self.data, residual=self.residual,
+                                sigma_a=self.sigma_a if self._sigma_a_given else None,
+                                error_model=self.error_model if error_model else None, items=items)
+        if error_model:
+            new._model = self._model
+        return new
+
     @property
     def items(self) -> list[Item]:
         """The items in the order they were added."""
@@ -756,8 +770,8 @@ class NavigationProblem:
             from .conditioning import assess_conditioning
 
             conditioning = assess_conditioning(self, xval, lam, factored)
-            if nonfinite and conditioning["degenerate_axes"]:
-                nonfinite += [w for w in conditioning["warnings"] if w.startswith("sensor axis")]
+            if nonfinite:
+                nonfinite += [dg["message"] for dg in conditioning["degenerate_axes"]]
         ok = (fem_rel <= rtol and worst <= rtol * 10 and (stat is None or stat <= np.sqrt(rtol))
               and (fwd is None or fwd <= FORWARD_RTOL[accuracy]) and not nonfinite)
         return {"fem_residual": fem_rel, "max_violation": worst, "worst_item": worst_item,
@@ -838,8 +852,9 @@ class NavigationProblem:
             {"solver": info["solver"], "status": info.get("status"),
              "reason": "verified" if check["verified"] else "failed verification"}
         )
-        degenerate = [s for s in check.get("nonfinite", []) if s.startswith("sensor axis")]
-        if degenerate:  # the information, not the solver: no fallback can do better
+        cond = check.get("conditioning") or {}
+        degenerate = [dg["message"] for dg in cond.get("degenerate_axes", [])]
+        if degenerate and check.get("nonfinite"):  # the information's fault: no fallback can help
             raise InputError(f"{info['solver']}: the error-model estimate is not finite because "
                              + "; ".join(degenerate))
         if verify and not check["verified"]:

@@ -52,28 +52,17 @@ def needs_linearization(item) -> bool:
     return bool(getattr(item, "needs_linearization", False))
 
 
-def _sub_problem(problem, items, error_model: bool = True):
-    from .problem import NavigationProblem
-
-    sub = NavigationProblem(problem.data, residual=problem.residual,
-                            sigma_a=problem.sigma_a if problem._sigma_a_given else None,
-                            error_model=problem.error_model if error_model else None, items=items)
-    if error_model:
-        sub._model = problem.model  # the same unknowns and FEM matrices
-    return sub
-
-
 def _initial_trajectory(problem, initial, nonlin, solve_kw) -> tuple[pd.DataFrame, str, Solution | None]:
     t = problem.model.grid.t
     axes = list(problem.model.axes)
     if initial is None:
         rest = [it for it in problem._items if not needs_linearization(it)]
-        sub = _sub_problem(problem, rest)
+        sub = problem.with_items(rest)
         missing = sub.unobservable()
         note = ""
         if missing and problem.error_model is not None:
             # the error-model parameters may need the nonlinear items: start with them at zero
-            sub = _sub_problem(problem, rest, error_model=False)
+            sub = problem.with_items(rest, error_model=False)
             missing = sub.unobservable()
             note = " (without the error model, which needs them)"
         if missing:
@@ -229,7 +218,7 @@ def solve_sequential(problem, solver: str = "clarabel", lam: float | str = 1.0, 
                 items.append(lin)
             else:
                 items.append(it)
-        sub = _sub_problem(problem, items)
+        sub = problem.with_items(items)
         sol = sub.solve(**{**solve_kw, "lam": lam_soft if soft else lam_now})
         if not soft:
             if rule is not None and curve is None:

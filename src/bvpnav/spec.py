@@ -173,7 +173,7 @@ def _instantiate(cls, kind: str, fields: dict, text: str, section: str, index: i
 
 
 def _check_values(plain: dict, text: str, source: str) -> None:
-    """Check the values of ``[problem]`` and ``[solve]`` (not only their keys)."""
+    """Check the values of ``[problem]``, ``[solve]`` and ``[input]`` (not only their keys)."""
     from .items import positive_array
     from .problem import RESIDUAL_FORMS
     from .regularization import RULES
@@ -228,6 +228,20 @@ def _check_values(plain: dict, text: str, source: str) -> None:
         if not ok:
             raise InputError(f"{where('demote_sigma', 'solve')}: demote_sigma={ds!r}; give a number > 0 "
                              "(item units) or a table of item name = number > 0")
+    inp = plain["input"]
+    if "time" in inp and not isinstance(inp["time"], str):
+        raise InputError(f"{where('time', 'input')}: time={inp['time']!r}; give the "
+                         'name of the time column as a string, e.g. time = "t"')
+    if "time_unit" in inp and not (isinstance(inp["time_unit"], str) and inp["time_unit"] in TIME_UNITS):
+        raise InputError(f"{where('time_unit', 'input')}: time_unit="
+                         f"{inp['time_unit']!r}; valid units: {list(TIME_UNITS)}")
+    if "unit" in inp and not (isinstance(inp["unit"], str) and inp["unit"] in ACC_UNITS):
+        raise InputError(f"{where('unit', 'input')}: unit={inp['unit']!r}; "
+                         f"valid acceleration units: {list(ACC_UNITS)}")
+    if "columns" in inp and not (isinstance(inp["columns"], dict) and inp["columns"]
+                                 and all(isinstance(v, str) for v in inp["columns"].values())):
+        raise InputError(f"{where('columns', 'input')}: columns must map "
+                         'axis names to column names, e.g. columns = { x = "acc_x" }')
 
 
 def parse_spec(text: str, source: str = "spec") -> Spec:
@@ -263,19 +277,6 @@ def parse_spec(text: str, source: str = "spec") -> Spec:
         plain[sec] = dict(tab)
     inp = plain["input"]
     _check_values(plain, text, source)
-    if "time" in inp and not isinstance(inp["time"], str):
-        raise InputError(f"{_where(source, _line_of(text, 'time', 'input'))}: time={inp['time']!r}; give the "
-                         'name of the time column as a string, e.g. time = "t"')
-    if "time_unit" in inp and not (isinstance(inp["time_unit"], str) and inp["time_unit"] in TIME_UNITS):
-        raise InputError(f"{_where(source, _line_of(text, 'time_unit', 'input'))}: time_unit="
-                         f"{inp['time_unit']!r}; valid units: {list(TIME_UNITS)}")
-    if "unit" in inp and not (isinstance(inp["unit"], str) and inp["unit"] in ACC_UNITS):
-        raise InputError(f"{_where(source, _line_of(text, 'unit', 'input'))}: unit={inp['unit']!r}; "
-                         f"valid acceleration units: {list(ACC_UNITS)}")
-    if "columns" in inp and not (isinstance(inp["columns"], dict) and inp["columns"]
-                                 and all(isinstance(v, str) for v in inp["columns"].values())):
-        raise InputError(f"{_where(source, _line_of(text, 'columns', 'input'))}: columns must map "
-                         'axis names to column names, e.g. columns = { x = "acc_x" }')
     reg_items = registry()
     reg_models = error_model_registry()
     objs = {}
