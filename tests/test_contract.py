@@ -72,8 +72,6 @@ def test_item_contract(name):
 @pytest.mark.parametrize("name", ITEMS)
 def test_item_respects_axis_selection(name):
     item = item_class(name).example()
-    if item.kind == "cone":
-        pytest.skip("cone items select axes as a whole vector")
     model = model3d()
     one = dataclasses.replace(item, axes=("y",)) if item.axes is None else item
     sel = one.axes
