@@ -3,10 +3,19 @@
 :func:`solve_recording` is the one code path from a file and a spec to a trajectory, a
 JSON summary and a summary row; the ``solve`` command and :func:`run_batch` both call
 it, so a batch gives bit-identical results to solving the recordings one by one.
+
+Every finished recording's JSON summary carries a ``run`` record: the fingerprint of what
+produced it (bvpnav version, SHA-256 of the spec text, the options that change results --
+solver, lam, format -- and the recording's size, mtime and SHA-256) and the size and
+SHA-256 of the trajectory written. ``run_batch(..., resume=True)`` skips a recording only
+when that fingerprint matches and the trajectory is there, unchanged and readable;
+otherwise it solves it again and the summary row's ``resume`` column says why.
 """
 
 from __future__ import annotations
 
+import json
+import os
 import time
 import traceback
 from pathlib import Path
@@ -14,15 +23,30 @@ from pathlib import Path
 import pandas as pd
 
 from .errors import BvpnavError, InputError
-from .io import read_recording, summary, write_json, write_table, write_trajectory
+from .io import (
+    check_outputs,
+    check_table_path,
+    file_fingerprint,
+    output_lock,
+    read_recording,
+    remove_stale_temporaries,
+    summary,
+    write_json,
+    write_table,
+    write_trajectory,
+)
 
-__all__ = ["solve_kwargs", "solve_recording", "run_batch", "RECORDING_SUFFIXES", "SUMMARY_COLUMNS"]
+__all__ = ["solve_kwargs", "solve_recording", "run_batch", "fingerprint", "resume_reason",
+           "RECORDING_SUFFIXES", "SUMMARY_COLUMNS"]
 
 #: File types a batch picks up.
 RECORDING_SUFFIXES = (".csv", ".parquet", ".pq")
-#: Columns of the batch summary table.
+#: Columns of the batch summary table (``resume``: why a recording was skipped or solved
+#: again by ``resume=True``; empty otherwise).
 SUMMARY_COLUMNS = ["recording", "ok", "error", "samples", "lam", "lam_rule", "solver", "status",
-                   "verified", "seconds", "output"]
+                   "verified", "seconds", "output", "resume"]
+#: The batch summary table's name in the output folder.
+SUMMARY_NAME = "summary.csv"
 
 
 def solve_kwargs(spec, solver: str | None = None, lam=None) -> dict:
@@ -37,7 +61,34 @@ def solve_kwargs(spec, solver: str | None = None, lam=None) -> dict:
     return kw
 
 
-def solve_recording(path, spec, out, solver: str | None = None, lam=None, summary_path=None):
+def _sha256(text: str) -> str:
+    import hashlib
+
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def _recording_fingerprint(path) -> dict:
+    try:
+        return file_fingerprint(path)
+    except OSError as exc:
+        raise InputError(f"recording {str(path)!r}: cannot read it ({exc.strerror}); it was removed or "
+                         "changed during the run: restore it and run again") from None
+
+
+def fingerprint(path, spec_text: str | None, solver=None, lam=None, fmt: str | None = None,
+                recording: dict | None = None) -> dict:
+    """What a result depends on: bvpnav's version, the spec text's SHA-256, the options that
+    change results (``solver``, ``lam``, ``format``) and the recording's size, mtime (ns) and
+    SHA-256 (``recording``, computed from ``path`` when not given)."""
+    from . import __version__
+
+    opts = json.loads(json.dumps({"solver": solver, "lam": lam, "format": fmt}))
+    return {"bvpnav": __version__, "spec_sha256": None if spec_text is None else _sha256(spec_text),
+            "options": opts, "recording": recording or _recording_fingerprint(path)}
+
+
+def solve_recording(path, spec, out, solver: str | None = None, lam=None, summary_path=None,
+                    spec_text: str | None = None):
     """Solve one recording file with a spec; write the trajectory and its JSON summary.
 
     Parameters
@@ -51,41 +102,150 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
         Overrides of the spec's ``[solve]`` table.
     summary_path : path-like, optional
         JSON summary (default: ``out`` with suffix ``.json``).
+    spec_text : str, optional
+        The spec's text, for the fingerprint in the summary's ``run`` record (see
+        :func:`fingerprint`); None records no spec hash, so ``resume`` re-solves.
 
     Returns
     -------
     (Solution, dict)
         The solution and its summary row (see :data:`SUMMARY_COLUMNS`).
+
+    Raises
+    ------
+    InputError
+        Before any work if an output is the recording or the other output, or cannot be
+        written (:func:`bvpnav.io.check_outputs`), or has an unknown suffix; and if the
+        recording changes while it is being solved (nothing is written then).
     """
     t0 = time.perf_counter()
+    out = Path(out)
+    summary_path = Path(summary_path) if summary_path is not None else out.with_suffix(".json")
+    fmt = check_table_path(out, "out")
+    check_outputs({"recording": path}, {"out": out, "summary_path": summary_path})
     data = read_recording(path, spec.input)
+    rec_fp = _recording_fingerprint(path)
     prob = spec.build(data)
     sol = prob.solve(**solve_kwargs(spec, solver, lam))
-    out = Path(out)
+    now = _recording_fingerprint(path)
+    if (now["size"], now["sha256"]) != (rec_fp["size"], rec_fp["sha256"]):
+        raise InputError(f"recording {str(path)!r} changed while it was being solved; nothing was written: "
+                         "wait until it is complete and run again")
     write_trajectory(sol, out)
-    write_json(summary(sol, prob), summary_path or out.with_suffix(".json"))
+    written = file_fingerprint(out)
+    summ = summary(sol, prob)
+    summ["run"] = {"recording": str(path), "samples": int(data.grid.n),
+                   "fingerprint": fingerprint(path, spec_text, solver, lam, fmt, recording=rec_fp),
+                   "trajectory": {"path": str(out), "size": written["size"], "sha256": written["sha256"]}}
+    write_json(summ, summary_path)
     row = {"recording": str(path), "ok": True, "error": "", "samples": data.grid.n, "lam": sol.lam,
            "lam_rule": sol.lam_rule, "solver": sol.stats.get("solver"), "status": sol.stats.get("status"),
            "verified": bool(sol.stats.get("verified")), "seconds": time.perf_counter() - t0,
-           "output": str(out)}
+           "output": str(out), "resume": ""}
     return sol, row
 
 
-def _task(path: str, spec_text: str, spec_source: str, out: str, solver, lam) -> dict:
-    """One batch task (runs on a worker): never raises, returns a summary row."""
+def _task(path: str, spec_text: str, spec_source: str, out: str, solver, lam, note: str = "") -> dict:
+    """One batch task (runs on a worker): never raises an ``Exception``, returns a summary row."""
     from .spec import parse_spec
 
     t0 = time.perf_counter()
     try:
         spec = parse_spec(spec_text, spec_source)
-        return solve_recording(path, spec, out, solver, lam)[1]
+        row = solve_recording(path, spec, out, solver, lam, spec_text=spec_text)[1]
+        row["resume"] = note
+        return row
     except BvpnavError as exc:
         msg = f"{type(exc).__name__}: {exc}"
+    except MemoryError:
+        msg = ("MemoryError: out of memory solving this recording; solve it in shorter windows "
+               "(fewer samples each) or on a machine with more memory")
     except Exception as exc:  # a bug: keep the other recordings going, report it in full
-        msg = f"{type(exc).__name__}: {exc} | " + traceback.format_exc(limit=3).replace("\n", " ")
+        msg = (f"internal error (a bug in bvpnav, please report it): {type(exc).__name__}: {exc} | "
+               + traceback.format_exc(limit=3).replace("\n", " "))
     # the columns not given are empty in the summary table
     return {"recording": path, "ok": False, "error": msg, "verified": False,
-            "seconds": time.perf_counter() - t0, "output": ""}
+            "seconds": time.perf_counter() - t0, "output": "", "resume": note}
+
+
+def resume_reason(recording, out, summary_path, current: dict) -> tuple[str | None, dict]:
+    """Why a finished-looking recording must be solved again (None: it may be skipped).
+
+    Parameters
+    ----------
+    recording : path-like
+    out, summary_path : path-like
+        Its trajectory and JSON summary.
+    current : dict
+        The fingerprint of this run (:func:`fingerprint`).
+
+    Returns
+    -------
+    (str or None, dict)
+        The reason (e.g. ``"spec changed"``) or None, and the summary read (empty if none).
+    """
+    out, summary_path = Path(out), Path(summary_path)
+    if not summary_path.is_file():
+        return f"no summary {summary_path.name}", {}
+    try:
+        js = json.loads(summary_path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return f"summary {summary_path.name} unreadable", {}
+    run = js.get("run") if isinstance(js, dict) else None
+    if not isinstance(run, dict) or not isinstance(run.get("fingerprint"), dict):
+        return f"summary {summary_path.name} has no fingerprint (written by an older bvpnav)", {}
+    old = run["fingerprint"]
+    if old.get("bvpnav") != current["bvpnav"]:
+        return f"bvpnav version changed ({old.get('bvpnav')} -> {current['bvpnav']})", js
+    if old.get("spec_sha256") is None or old.get("spec_sha256") != current["spec_sha256"]:
+        return "spec changed", js
+    oo, co = old.get("options") or {}, current["options"]
+    changed = [f"{k}: {oo.get(k)!r} -> {co.get(k)!r}" for k in co if oo.get(k) != co.get(k)]
+    if changed:
+        return "options changed (" + ", ".join(changed) + ")", js
+    orec, crec = old.get("recording") or {}, current["recording"]
+    if (orec.get("size"), orec.get("sha256")) != (crec["size"], crec["sha256"]):
+        return "recording changed", js
+    traj = run.get("trajectory") or {}
+    if not out.is_file():
+        return f"trajectory {out.name} missing", js
+    try:
+        got = file_fingerprint(out)
+    except OSError:
+        return f"trajectory {out.name} unreadable", js
+    if got["size"] == 0:
+        return f"trajectory {out.name} empty", js
+    if (got["size"], got["sha256"]) != (traj.get("size"), traj.get("sha256")):
+        return f"trajectory {out.name} changed since it was written", js
+    try:
+        df = pd.read_csv(out) if out.suffix.lower() == ".csv" else pd.read_parquet(out)
+    except Exception:  # any parser failure means: solve again
+        return f"trajectory {out.name} unreadable", js
+    if "t" not in df.columns or len(df) != run.get("samples"):
+        return f"trajectory {out.name} incomplete", js
+    return None, js
+
+
+def _plan_outputs(files: list[Path], out_dir: Path, suffix: str) -> list[Path]:
+    """Trajectory path of each recording; refuses two recordings that would write the same
+    output and a recording whose output would be the batch summary table."""
+    seen: dict[str, Path] = {}
+    outs = []
+    for p in files:
+        key = p.stem.casefold()  # case-insensitive file systems: A.csv and a.csv collide too
+        if key in seen:
+            raise InputError(f"recordings {str(seen[key])!r} and {str(p)!r} would both write "
+                             f"{str(out_dir / (p.stem + suffix))!r} and {p.stem}.json (outputs are named "
+                             "after the recording's name without its suffix): rename one of them or move "
+                             "it to another folder")
+        seen[key] = p
+        out = out_dir / (p.stem + suffix)
+        if out.name.casefold() == SUMMARY_NAME:
+            raise InputError(f"recording {str(p)!r} would write its trajectory onto the batch summary table "
+                             f"{str(out_dir / SUMMARY_NAME)!r}: rename the recording (any name but "
+                             "'summary') or use --format parquet")
+        outs.append(out)
+    return outs
 
 
 def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, workers: int = 2,
@@ -101,7 +261,11 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
         The spec file.
     out_dir : path-like
         Output folder: ``<stem><suffix>`` and ``<stem>.json`` per recording and
-        ``summary.csv`` (one row per recording, failures included).
+        ``summary.csv`` (one row per recording, failures included). It must not be
+        ``directory``; two recordings with the same stem (``a.csv``, ``a.parquet``) and a
+        recording whose trajectory would be ``summary.csv`` are refused before any work.
+        While the batch runs it holds a lock on the folder (``.bvpnav.lock``): a second
+        run into the same folder is refused.
     scheduler : str, optional
         A ``dask.distributed`` scheduler address; default an in-process LocalCluster of
         ``workers`` single-threaded worker processes on the loopback interface.
@@ -113,8 +277,10 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
     solver, lam : optional
         Overrides of the spec's ``[solve]`` table.
     resume : bool
-        Skip recordings whose trajectory and summary already exist (an interrupted run
-        leaves completed outputs intact: every file is written atomically).
+        Skip a recording only when its JSON summary's fingerprint matches this run (spec
+        text, solver, lam, format, the recording's content, bvpnav's version) and its
+        trajectory exists unchanged and readable; every other recording is solved again,
+        and the ``resume`` column of its row says why (e.g. ``re-solved: spec changed``).
     progress : bool
         Show a progress bar (tqdm).
     suffix : {".csv", ".parquet"}
@@ -124,6 +290,13 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
     -------
     pandas.DataFrame
         The summary table (also written to ``out_dir/summary.csv``).
+
+    Raises
+    ------
+    InputError
+        Bad folder or spec, output collisions (see ``out_dir``), an output that is an input
+        (symlink, hard link), an output folder that cannot be written or is in use by
+        another run; all before any recording is solved.
     """
     from .spec import parse_spec, read_spec_text
 
@@ -131,28 +304,65 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
     if not directory.is_dir():
         raise InputError(f"{str(directory)!r} is not a folder of recordings; give the folder that holds "
                          "the *.csv / *.parquet files")
+    if suffix not in (".csv", ".parquet"):
+        raise InputError(f"suffix={suffix!r}: the trajectory format is '.csv' or '.parquet'")
     spec_text = read_spec_text(spec_path)  # the workers parse this same text
     parse_spec(spec_text, str(spec_path))  # fail early, in the client, on a bad spec
+    if os.path.realpath(out_dir) == os.path.realpath(directory) or (
+            out_dir.is_dir() and os.path.samefile(out_dir, directory)):
+        raise InputError(f"the output folder (--out) {str(out_dir)!r} is the folder of the recordings "
+                         f"{str(directory)!r}: the outputs would mix with the recordings (and a later batch "
+                         "would read them as recordings); give --out another folder")
     files = sorted(p for p in directory.iterdir() if p.suffix.lower() in RECORDING_SUFFIXES)
     if not files:
         raise InputError(f"{str(directory)!r}: no recordings (*.csv, *.parquet) in it")
-    out_dir.mkdir(parents=True, exist_ok=True)
+    outs = _plan_outputs(files, out_dir, suffix)
+    inputs = {"--spec": spec_path, **{f"recording {p.name}": p for p in files}}
+    outputs = {"--out": out_dir / SUMMARY_NAME}
+    for o in outs:
+        outputs[f"--out (output of {o.stem})"] = o
+        outputs[f"--out (summary of {o.stem})"] = o.with_suffix(".json")
+    check_outputs(inputs, outputs)
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"--out {str(out_dir)!r}: cannot create the folder ({exc.strerror}); give --out "
+                         "a folder you can write to") from None
+    with output_lock(out_dir, "--out"):
+        try:
+            rows = _run(files, outs, spec_text, str(spec_path), scheduler, workers, solver, lam, resume,
+                        progress, suffix)
+            df = pd.DataFrame(rows, columns=SUMMARY_COLUMNS)
+            df = df.sort_values("recording", kind="stable").reset_index(drop=True)
+            write_table(df, out_dir / SUMMARY_NAME)
+        finally:  # temporaries of workers that were stopped mid-write (their processes are gone)
+            remove_stale_temporaries(out_dir)
+    return df
+
+
+def _run(files, outs, spec_text, spec_source, scheduler, workers, solver, lam, resume, progress,
+         suffix) -> list[dict]:
     jobs, rows = [], []
-    for p in files:
-        out = out_dir / (p.stem + suffix)
-        if resume and out.exists() and out.with_suffix(".json").exists():
-            rows.append({"recording": str(p), "ok": True, "error": "", "status": "skipped (resume)",
-                         "output": str(out)})
-            continue
-        jobs.append((str(p), spec_text, str(spec_path), str(out), solver, lam))
+    for p, out in zip(files, outs, strict=True):
+        note = ""
+        if resume:
+            current = fingerprint(p, spec_text, solver, lam, suffix)
+            reason, js = resume_reason(p, out, out.with_suffix(".json"), current)
+            if reason is None:
+                run = js["run"]
+                rows.append({"recording": str(p), "ok": True, "error": "", "samples": run.get("samples"),
+                             "lam": js.get("lam"), "lam_rule": js.get("lam_rule"),
+                             "solver": (js.get("solver") or {}).get("solver"), "status": "skipped (resume)",
+                             "verified": bool((js.get("solver") or {}).get("verified")),
+                             "output": str(out), "resume": "skipped: fingerprint matches"})
+                continue
+            note = f"re-solved: {reason}"
+        jobs.append((str(p), spec_text, spec_source, str(out), solver, lam, note))
     if jobs and scheduler == "serial":
         rows += [_task(*job) for job in jobs]
     elif jobs:
         rows += _run_on_dask(jobs, scheduler, workers, progress)
-    df = pd.DataFrame(rows, columns=SUMMARY_COLUMNS)
-    df = df.sort_values("recording", kind="stable").reset_index(drop=True)
-    write_table(df, out_dir / "summary.csv")
-    return df
+    return rows
 
 
 def _run_on_dask(jobs, scheduler, workers, progress) -> list[dict]:

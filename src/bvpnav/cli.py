@@ -1,13 +1,22 @@
 """The ``bvpnav`` command.
 
-Exit codes: 0 success; 2 bad input (a file, a spec, an argument); 3 the solve failed
-(infeasible information, or no solver produced a verified answer); 1 anything else
-(a bug: please report it).
+Exit codes: 0 success; 2 bad input (a file, a spec, an argument, an output that would
+replace an input or cannot be written); 3 the solve failed (infeasible information, no
+solver produced a verified answer -- for ``compare``: no row verified; for ``batch``: a
+recording failed --, or out of memory); 130 interrupted (Ctrl-C), 143 terminated
+(SIGTERM), temporary files removed in both cases; 1 anything else (an internal error: a
+bug, please report it; ``BVPNAV_DEBUG=1`` shows its traceback).
+
+Every command checks its outputs before any work (:func:`bvpnav.io.check_outputs`): no
+output may be an input or another output (after symlinks and hard links), figure and
+table suffixes must be formats bvpnav writes, and the output folders must be writable.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import signal
 import sys
 
 from . import __version__
@@ -35,7 +44,10 @@ spec (TOML) says which columns and units, what else is known (items), the error 
 the solver and how to choose lambda. See `bvpnav simulate --help` for examples.
 """
 
-EPILOG = "Exit codes: 0 ok, 2 bad input, 3 infeasible or failed solve, 1 internal error."
+EPILOG = ("Exit codes: 0 ok, 2 bad input, 3 infeasible or failed solve (compare: nothing verified; "
+          "batch: a recording failed), 130 interrupted, 143 terminated, 1 internal error "
+          "(BVPNAV_DEBUG=1 shows the traceback).")
+EXIT_INTERRUPT, EXIT_TERM = 130, 143
 
 
 def _cmd_demo(args) -> int:
@@ -44,6 +56,8 @@ def _cmd_demo(args) -> int:
 
     if args.scenario not in SCENARIOS:
         raise InputError(f"unknown scenario {args.scenario!r}; choose one of {sorted(SCENARIOS)}")
+    if args.plot:
+        _check(args, {}, {"--plot": args.plot}, figures=("--plot",))
     run_demo(png=args.plot, seed=args.seed, quiet=args.quiet)
     return EXIT_OK
 
@@ -55,6 +69,19 @@ def _lam(text: str | None):
         return float(text)
     except ValueError:
         return text  # a rule name, checked by solve()
+
+
+def _check(args, inputs: dict, outputs: dict, figures=(), tables=()) -> None:
+    """The output policy before any work: suffixes, then :func:`bvpnav.io.check_outputs`."""
+    from .io import check_figure_path, check_outputs, check_table_path
+
+    for opt in figures:
+        if outputs.get(opt) is not None:
+            check_figure_path(outputs[opt], opt)
+    for opt in tables:
+        if outputs.get(opt) is not None:
+            check_table_path(outputs[opt], opt)
+    check_outputs(inputs, outputs)
 
 
 def _load(args):
@@ -74,24 +101,34 @@ def _say(args, text: str) -> None:
 def _cmd_simulate(args) -> int:
     from .samples import write_sample
 
-    paths = write_sample(args.scenario, args.out, seed=args.seed, rate=args.rate)
+    paths = write_sample(args.scenario, args.out, seed=args.seed, rate=args.rate, force=args.force)
     _say(args, "wrote " + ", ".join(str(p) for p in paths))
     return EXIT_OK
 
 
 def _cmd_solve(args) -> int:
-    from .batch import solve_recording
-    from .spec import load_spec
+    from pathlib import Path
 
-    spec = load_spec(args.spec)
+    from .batch import solve_recording
+    from .spec import parse_spec, read_spec_text
+
+    summary = args.summary if args.summary is not None else str(Path(args.out).with_suffix(".json"))
+    if args.summary is not None and Path(args.summary).suffix.lower() != ".json":
+        raise InputError(f"--summary {args.summary!r}: the summary is JSON; end its name with .json")
+    opt_summary = "--summary" if args.summary is not None else "--summary (default: --out with .json)"
+    _check(args, {"INPUT": args.input, "--spec": args.spec},
+           {"--out": args.out, opt_summary: summary, "--plot": args.plot},
+           figures=("--plot",), tables=("--out",))
+    spec_text = read_spec_text(args.spec)
+    spec = parse_spec(spec_text, str(args.spec))
     sol, row = solve_recording(args.input, spec, args.out, solver=args.solver, lam=_lam(args.lam),
-                               summary_path=args.summary)
+                               summary_path=summary, spec_text=spec_text)
     if args.plot:
         from . import plot
         from .io import atomic_savefig
 
         fig = plot.trajectory({f"bvpnav ({sol.stats.get('solver')})": sol})
-        atomic_savefig(fig, args.plot, dpi=110)
+        atomic_savefig(fig, args.plot, "--plot", dpi=110)
     _say(args, f"{row['samples']} samples; lam = {sol.lam:.6g} ({sol.lam_rule}); solver {row['solver']} "
                f"({row['status']}, verified); wrote {args.out}")
     for w in sol.warnings:
@@ -101,16 +138,23 @@ def _cmd_solve(args) -> int:
 
 def _cmd_lcurve(args) -> int:
     from .io import atomic_savefig, write_table
-    from .regularization import lambda_curve
+    from .regularization import RULES, lambda_curve
 
+    rules = [r.strip() for r in args.rules.split(",")]
+    if not any(rules) or not all(rules):
+        k = next((i for i, r in enumerate(rules) if not r), 0)
+        raise InputError(f"--rules {args.rules!r}: " + ("no rule named" if not any(rules) else
+                         f"entry {k + 1} is empty") + f"; give one or more of {', '.join(RULES)} separated "
+                         "by commas, e.g. --rules lcurve,gcv")
+    _check(args, {"INPUT": args.input, "--spec": args.spec}, {"--plot": args.plot, "--out": args.out},
+           figures=("--plot",), tables=("--out",))
     spec, prob = _load(args)
-    rules = [r for r in args.rules.split(",") if r]  # lambda_curve names an unknown one
     curve = lambda_curve(prob, rules=rules, rule=rules[0], points=args.points,
                          progress=False if args.quiet else None)
     fig = curve.plot()
-    atomic_savefig(fig, args.plot, dpi=110)
+    atomic_savefig(fig, args.plot, "--plot", dpi=110)
     if args.out:
-        write_table(curve.to_frame(), args.out)
+        write_table(curve.to_frame(), args.out, "--out")
     for r, lam in curve.chosen.items():
         _say(args, f"{r:<12} lam = {lam:.6g}")
     for w in curve.warnings:
@@ -122,19 +166,31 @@ def _cmd_compare(args) -> int:
     from .compare import compare_solvers
     from .io import write_table
 
+    for opt, text in (("--solvers", args.solvers), ("--presets", args.presets)):
+        if text is not None and not all(x.strip() for x in text.split(",")):
+            eg = "--solvers direct,clarabel" if opt == "--solvers" else "--presets low,default"
+            raise InputError(f"{opt} {text!r}: an entry is empty; give names separated by commas, e.g. {eg}")
+    _check(args, {"INPUT": args.input, "--spec": args.spec}, {"--out": args.out, "--plot": args.plot},
+           figures=("--plot",), tables=("--out",))
     spec, prob = _load(args)
-    solvers = args.solvers.split(",") if args.solvers else None
+    solvers = [x.strip() for x in args.solvers.split(",")] if args.solvers else None
     lam = _lam(args.lam) if args.lam is not None else spec.solve.get("lam", 1.0)
-    table = compare_solvers(prob, solvers=solvers, presets=args.presets.split(","), lam=lam)
+    table = compare_solvers(prob, solvers=solvers, presets=[x.strip() for x in args.presets.split(",")],
+                            lam=lam)
     if args.out:
-        write_table(table, args.out)
+        write_table(table, args.out, "--out")
     if args.plot:
         from . import plot
         from .io import atomic_savefig
 
-        atomic_savefig(plot.comparison(table), args.plot, dpi=110)
+        atomic_savefig(plot.comparison(table), args.plot, "--plot", dpi=110)
     cols = ["solver", "preset", "status", "verified", "wall_time", "forward_error", "max_violation"]
     _say(args, table[cols].to_string(index=False, float_format="{:.3g}".format))
+    if not table["verified"].astype(bool).any():
+        # a comparison in which nothing was verified has no answer to trust: a failed solve
+        print(f"bvpnav: solve failed: none of the {len(table)} runs gave a verified answer (see the "
+              "status column); try another solver or preset, or check the spec", file=sys.stderr)
+        return EXIT_SOLVE
     return EXIT_OK
 
 
@@ -146,8 +202,8 @@ def _cmd_batch(args) -> int:
                    suffix="." + args.format)
     bad = df[~df.ok.astype(bool)]
     _say(args, f"{len(df)} recordings, {len(bad)} failed; summary: {args.out}/summary.csv")
-    for _, r in bad.iterrows():
-        _say(args, f"  FAILED {r.recording}: {r.error}")
+    for _, r in bad.iterrows():  # the full error (an internal error's traceback) is in summary.csv
+        _say(args, f"  FAILED {r.recording}: {str(r.error).split(' | ')[0]}")
     return EXIT_OK if bad.empty else EXIT_SOLVE
 
 
@@ -192,6 +248,8 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     sim.add_argument("--seed", type=int, default=0, help="noise seed (default: %(default)s)")
     sim.add_argument("--rate", type=float, default=None, help="sampling rate, Hz (scenario default)")
+    sim.add_argument("--force", action="store_true", help="replace recording.csv, spec.toml, truth.csv "
+                     "if DIR already holds them (default: refuse)")
     sim.add_argument("--quiet", action="store_true", help="print nothing")
     sim.set_defaults(func=_cmd_simulate)
 
@@ -204,7 +262,8 @@ def build_parser() -> argparse.ArgumentParser:
     common(solve)
     solve.add_argument("--out", required=True, metavar="OUT", help="trajectory file (.csv or .parquet)")
     solve.add_argument("--summary", metavar="JSON", help="summary path (default: OUT with .json)")
-    solve.add_argument("--plot", metavar="PNG", help="also draw the trajectory")
+    solve.add_argument("--plot", metavar="PNG", help="also draw the trajectory (format from the suffix: "
+                       ".png, .pdf, .svg ...)")
     solve.add_argument("--solver", help="override the spec's solver (e.g. clarabel, osqp, direct, csne)")
     solve.set_defaults(func=_cmd_solve)
 
@@ -223,7 +282,8 @@ def build_parser() -> argparse.ArgumentParser:
     cmp_ = sub.add_parser(
         "compare", help="solve one recording with several solvers",
         description="One problem, several solvers and presets: status, times, bvpnav's verification "
-                    "and errors, one row each (failures are rows too).")
+                    "and errors, one row each (failures are rows too). Exit code 3 if no row is "
+                    "verified.")
     common(cmp_)
     cmp_.add_argument("--solvers", help="comma separated (default: clarabel, osqp and, for least "
                       "squares, direct and csne)")
@@ -247,19 +307,49 @@ def build_parser() -> argparse.ArgumentParser:
     bt.add_argument("--solver", help="override the spec's solver")
     bt.add_argument("--lam", metavar="LAM", help="override the spec's lambda")
     bt.add_argument("--format", choices=("csv", "parquet"), default="csv", help="trajectory files")
-    bt.add_argument("--resume", action="store_true", help="skip recordings already solved")
+    bt.add_argument("--resume", action="store_true", help="skip recordings already solved with the same "
+                    "spec, options and recording content (their JSON summary's fingerprint); solve the "
+                    "others again, saying why in summary.csv's resume column")
     bt.add_argument("--quiet", action="store_true", help="no progress bar, print nothing")
     bt.set_defaults(func=_cmd_batch)
     return parser
 
 
+class _Terminated(BaseException):
+    """Raised by the SIGTERM handler so that cleanup (temporary files) runs as for Ctrl-C."""
+
+
+def _on_sigterm(signum, frame):
+    raise _Terminated
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``bvpnav`` command; returns the exit code."""
+    """Entry point of the ``bvpnav`` command; returns the exit code.
+
+    Every failure is one line on stderr: ``bvpnav: error: ...`` (exit 2), ``bvpnav: solve
+    failed: ...`` (exit 3), ``bvpnav: interrupted`` (Ctrl-C, exit 130), ``bvpnav:
+    terminated`` (SIGTERM, exit 143) or ``bvpnav: internal error: ...`` (exit 1; set
+    ``BVPNAV_DEBUG=1`` to see the traceback).
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:
         parser.print_help()
         return EXIT_INPUT
+    old = None
+    try:
+        old = signal.signal(signal.SIGTERM, _on_sigterm)
+    except (ValueError, OSError):  # not the main thread: leave SIGTERM alone
+        old = None
+    try:
+        return _dispatch(args)
+    finally:
+        if old is not None:
+            signal.signal(signal.SIGTERM, old)
+
+
+def _dispatch(args) -> int:
+    debug = os.environ.get("BVPNAV_DEBUG", "") not in ("", "0")
     try:
         return int(args.func(args))
     except (InputError, SolverNotFound) as exc:  # a bad file, spec or argument
@@ -271,9 +361,29 @@ def main(argv: list[str] | None = None) -> int:
     except BvpnavError as exc:
         print(f"bvpnav: error: {exc}", file=sys.stderr)
         return EXIT_SOLVE
-    except OSError as exc:
-        print(f"bvpnav: error: {exc}", file=sys.stderr)
+    except KeyboardInterrupt:  # the atomic writers have removed their temporary files
+        print("bvpnav: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPT
+    except _Terminated:
+        print("bvpnav: terminated", file=sys.stderr)
+        return EXIT_TERM
+    except MemoryError:
+        print("bvpnav: solve failed: out of memory; solve a shorter window (fewer samples), split the "
+              "recording, or use a machine with more memory", file=sys.stderr)
+        return EXIT_SOLVE
+    except OSError as exc:  # writes are reported by the io layer; this is a read or a folder
+        where = f" {exc.filename!r}" if exc.filename else ""
+        print(f"bvpnav: error:{where} {exc.strerror or exc}; check the path and permissions", file=sys.stderr)
         return EXIT_INPUT
+    except Exception as exc:
+        if debug:
+            import traceback
+
+            traceback.print_exc()
+        print(f"bvpnav: internal error: {type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''} "
+              "(a bug in bvpnav, please report it; run again with BVPNAV_DEBUG=1 to see the traceback)",
+              file=sys.stderr)
+        return EXIT_BUG
 
 
 if __name__ == "__main__":  # pragma: no cover

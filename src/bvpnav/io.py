@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -21,41 +20,181 @@ __all__ = ["atomic_path", "atomic_write_text", "atomic_write_bytes", "atomic_sav
            "write_table", "write_trajectory", "summary", "write_json"]
 
 
+# ------------------------------------------------------------------ atomic output
+# Write side (issue 14): the temporary file of a write is ``.<name>.bvpnav-<host>-<pid>-<hex>.tmp``
+# beside its destination, created with the umask's mode (never mkstemp's 0600); a replaced
+# file keeps its mode. Temporaries are removed on every exit path of the ``with`` block; those
+# of a process that died without cleaning up (SIGKILL, power loss) are removed the next time
+# this host's bvpnav writes into that folder. An OSError becomes an InputError that names the
+# destination (never the temporary name), the reason and the fix.
+import errno as _errno  # noqa: E402
+import re as _re  # noqa: E402
+import secrets as _secrets  # noqa: E402
+import socket as _socket  # noqa: E402
+import stat as _stat  # noqa: E402
+
+__all__ += ["check_outputs", "check_figure_path", "check_table_path", "remove_stale_temporaries",
+            "file_fingerprint", "output_lock", "TABLE_SUFFIXES"]
+
+#: Suffixes :func:`write_table` writes.
+TABLE_SUFFIXES = (".csv", ".parquet", ".pq")
+
+_HOST = _re.sub(r"[^A-Za-z0-9_]", "_", _socket.gethostname())[:40] or "host"
+_TMP_RE = _re.compile(r"^\..*\.bvpnav-(?P<host>[A-Za-z0-9_]+)-(?P<pid>\d+)-[0-9a-f]{8}\.tmp$", _re.DOTALL)
+_swept: set[str] = set()
+
+#: errno -> (reason, fix) of a failed write.
+_WRITE_ERRORS = {
+    _errno.ENOSPC: ("the disk is full", "free some space or write to another disk"),
+    _errno.EDQUOT: ("the disk quota is exhausted", "free some space or write to another disk"),
+    _errno.EFBIG: ("the file is too large for this file system or for the process's file-size "
+                   "limit (ulimit -f)", "raise the limit or write to another disk"),
+    _errno.EACCES: ("permission denied", "choose a folder you can write to, or change its permissions"),
+    _errno.EPERM: ("operation not permitted", "choose a folder you can write to, or change its permissions"),
+    _errno.EROFS: ("the file system is read-only", "write to a folder on a writable disk"),
+    _errno.ENOENT: ("its folder does not exist (or was removed during the run)",
+                    "check the path and create the folder"),
+    _errno.ENOTDIR: ("a part of the path is a file, not a folder", "choose another path"),
+    _errno.EISDIR: ("it is a folder", "give the path of a file"),
+    _errno.ENAMETOOLONG: ("the name is too long", "choose a shorter path"),
+    _errno.EIO: ("an input/output error of the disk", "check the disk and write elsewhere"),
+}
+
+
+def _write_error(dest: Path, exc: OSError, tmp: Path | None = None) -> InputError:
+    """An :class:`InputError` naming ``dest`` (not the temporary file) for an OSError."""
+    reason, fix = _WRITE_ERRORS.get(exc.errno, (None, "check the path, the permissions and the free space"))
+    if reason is None:
+        reason = exc.strerror or str(exc)
+        if tmp is not None:
+            reason = reason.replace(str(tmp), str(dest)).replace(tmp.name, dest.name)
+    kept = "it was left as it was" if dest.exists() else "nothing was written there"
+    return InputError(f"cannot write {str(dest)!r}: {reason}; {fix} ({kept})")
+
+
+def _pid_alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    if os.name != "posix":  # os.kill(pid, 0) would terminate the process on Windows
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # e.g. EPERM: it exists, owned by someone else
+        return True
+    return True
+
+
+def remove_stale_temporaries(folder: str | os.PathLike) -> list[Path]:
+    """Remove temporary files that a dead bvpnav process of this host left in ``folder``.
+
+    Only names of bvpnav's atomic writer (``.<name>.bvpnav-<host>-<pid>-<hex>.tmp``) whose
+    host is this one and whose process no longer exists are removed; any other file is left.
+
+    Returns
+    -------
+    list of Path
+        The files removed.
+    """
+    removed = []
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return removed
+    for e in entries:
+        m = _TMP_RE.match(e.name)
+        if m is None or m["host"] != _HOST or _pid_alive(int(m["pid"])):
+            continue
+        with contextlib.suppress(OSError):
+            if e.is_file(follow_symlinks=False):
+                os.unlink(e.path)
+                removed.append(Path(e.path))
+    return removed
+
+
+def _new_temp(dest: Path) -> Path:
+    """Create an empty temporary file beside ``dest`` (mode from the umask)."""
+    for _ in range(100):
+        tmp = dest.parent / f".{dest.name[:120]}.bvpnav-{_HOST}-{os.getpid()}-{_secrets.token_hex(4)}.tmp"
+        try:
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+        except FileExistsError:
+            continue
+        os.close(fd)
+        return tmp
+    raise FileExistsError(_errno.EEXIST, "no free temporary name")  # pragma: no cover
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; on success move it onto ``path``.
 
-    On an exception the temporary file is removed and ``path`` is left untouched.
+    The file appears whole or not at all: on any exception (KeyboardInterrupt included) the
+    temporary file is removed and ``path`` is left as it was. A new file gets the mode the
+    umask gives; a replaced file keeps its mode. Stale temporaries of dead bvpnav processes
+    in the folder are removed first (once per folder and process).
+
+    Raises
+    ------
+    InputError
+        On an OSError (disk full, permission, read-only file system, file too large ...),
+        naming ``path``, the reason and the fix.
     """
     dest = Path(path)
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".tmp", dir=dest.parent)
-    os.close(fd)
-    tmp_path = Path(tmp)
+    tmp = None
     try:
-        yield tmp_path
-        os.replace(tmp_path, dest)
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        folder = os.path.realpath(dest.parent)
+        if folder not in _swept:
+            remove_stale_temporaries(folder)
+            _swept.add(folder)
+        tmp = _new_temp(dest)
+        try:
+            mode = _stat.S_IMODE(os.stat(dest).st_mode)  # a replaced file keeps its mode
+        except OSError:
+            mode = _stat.S_IMODE(os.stat(tmp).st_mode)  # 0o666 & ~umask
+    except OSError as exc:
+        if tmp is not None:
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+        raise _write_error(dest, exc) from None
+    try:
+        yield tmp
+        os.chmod(tmp, mode)
+        os.replace(tmp, dest)
+    except OSError as exc:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise _write_error(dest, exc, tmp) from None
     except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            tmp_path.unlink()
+        with contextlib.suppress(OSError):
+            tmp.unlink()
         raise
 
 
 def atomic_write_text(path: str | os.PathLike, text: str) -> None:
-    """Write text (UTF-8) atomically."""
+    """Write text (UTF-8) atomically (see :func:`atomic_path`)."""
     with atomic_path(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
 
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
-    """Write bytes atomically."""
+    """Write bytes atomically (see :func:`atomic_path`)."""
     with atomic_path(path) as tmp:
         tmp.write_bytes(data)
 
 
-def atomic_savefig(fig, path: str | os.PathLike, **kwargs) -> None:
-    """Save a matplotlib figure atomically (format from the path's suffix)."""
-    fmt = Path(path).suffix.lstrip(".") or "png"
+def atomic_savefig(fig, path: str | os.PathLike, option: str = "path", **kwargs) -> None:
+    """Save a matplotlib figure atomically, in the format of the path's suffix.
+
+    Raises
+    ------
+    InputError
+        If the suffix is not a format matplotlib writes (checked before anything is
+        written; see :func:`check_figure_path`), or on an OSError as :func:`atomic_path`.
+    """
+    fmt = check_figure_path(path, option)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format=fmt, **kwargs)
 
@@ -215,21 +354,28 @@ def read_recording(path: str | os.PathLike, input: dict | None = None):
     return ImuData(t=t, acc=acc, axes=list(cols))
 
 
-def write_table(df, path: str | os.PathLike) -> None:
-    """Write a DataFrame atomically as CSV (floats round-trip exactly) or Parquet."""
+def write_table(df, path: str | os.PathLike, option: str = "path") -> None:
+    """Write a DataFrame atomically as CSV (floats round-trip exactly) or Parquet.
+
+    Raises
+    ------
+    InputError
+        On an unknown suffix (before anything is written), a missing pyarrow, or an
+        OSError as :func:`atomic_path`.
+    """
     p = Path(path)
-    suffix = p.suffix.lower()
+    suffix = check_table_path(p, option)
+    if suffix in (".parquet", ".pq"):
+        try:
+            import pyarrow  # noqa: F401
+        except ImportError:
+            raise InputError(f"{str(p)!r}: writing Parquet needs pyarrow "
+                             "(pip install 'bvpnav[parquet]')") from None
     with atomic_path(p) as tmp:
         if suffix == ".csv":
             df.to_csv(tmp, index=False, float_format="%.17g")
-        elif suffix in (".parquet", ".pq"):
-            try:
-                df.to_parquet(tmp, index=False)
-            except ImportError:
-                raise InputError(f"{str(p)!r}: writing Parquet needs pyarrow "
-                                 "(pip install 'bvpnav[parquet]')") from None
         else:
-            raise InputError(f"{str(p)!r}: unknown output type {suffix!r}; use .csv or .parquet")
+            df.to_parquet(tmp, index=False)
 
 
 def write_trajectory(solution, path: str | os.PathLike) -> None:
@@ -281,3 +427,205 @@ def write_json(obj, path: str | os.PathLike) -> None:
     import json
 
     atomic_write_text(path, json.dumps(obj, indent=2) + "\n")
+
+
+# ------------------------------------------------------------------ output policy
+def _figure_formats() -> dict[str, str]:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    return FigureCanvasAgg.get_supported_filetypes()
+
+
+def check_figure_path(path: str | os.PathLike, option: str = "path") -> str:
+    """The matplotlib format of a figure path from its suffix, checked before any work.
+
+    Parameters
+    ----------
+    path : path-like
+        Figure file, e.g. ``traj.png``.
+    option : str
+        How the caller names the path in messages (e.g. ``"--plot"``).
+
+    Returns
+    -------
+    str
+        The format (the suffix without its dot, lower case).
+
+    Raises
+    ------
+    InputError
+        If the suffix is missing or not a format matplotlib writes; the message lists them.
+    """
+    fmt = Path(path).suffix.lstrip(".").lower()
+    formats = _figure_formats()
+    if fmt not in formats:
+        what = f"suffix {Path(path).suffix!r}" if fmt else "no suffix"
+        raise InputError(f"{option} {str(path)!r}: {what} is not a figure format matplotlib writes; end "
+                         f"the name with one of {', '.join('.' + f for f in sorted(formats))} "
+                         "(e.g. .png)")
+    return fmt
+
+
+def check_table_path(path: str | os.PathLike, option: str = "path") -> str:
+    """The lower-case suffix of a table output (``.csv``, ``.parquet``, ``.pq``), checked
+    before any work; :class:`InputError` naming ``option`` otherwise."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in TABLE_SUFFIXES:
+        what = f"unknown output type {Path(path).suffix!r}" if suffix else "no suffix"
+        raise InputError(f"{option} {str(path)!r}: {what}; end the name with .csv or .parquet")
+    return suffix
+
+
+def _ident(path: str | os.PathLike) -> tuple[str, tuple[int, int] | None]:
+    """(the path with symlinks resolved, (device, inode) if it exists)."""
+    real = os.path.realpath(path)
+    try:
+        st = os.stat(path)
+    except OSError:
+        return real, None
+    return real, (st.st_dev, st.st_ino)
+
+
+def _kind(mode: int) -> str:
+    for test, name in ((_stat.S_ISDIR, "a folder"), (_stat.S_ISFIFO, "a named pipe (FIFO)"),
+                       (_stat.S_ISCHR, "a character device"), (_stat.S_ISBLK, "a block device"),
+                       (_stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return name
+    return "not a regular file"
+
+
+def _probe_folder(folder: Path) -> OSError | None:
+    """Create and remove a temporary file in ``folder``: the OSError, if writing fails."""
+    try:
+        tmp = _new_temp(folder / "probe")
+    except OSError as exc:
+        return exc
+    with contextlib.suppress(OSError):
+        tmp.unlink()
+    return None
+
+
+def check_outputs(inputs: dict, outputs: dict) -> None:
+    """The output policy, checked by every command before any work.
+
+    Parameters
+    ----------
+    inputs : dict
+        How the caller names each input (e.g. ``"INPUT"``, ``"--spec"``) -> its path
+        (None: not given). Inputs are only read.
+    outputs : dict
+        How the caller names each output (e.g. ``"--out"``, ``"--plot"``) -> its path
+        (None: not given).
+
+    Raises
+    ------
+    InputError
+        Naming both paths and the option to change, when an output is an input or another
+        output of the same run (same path after resolving symlinks, or the same file
+        through a hard link); when an output exists but is a folder, a FIFO, a device or a
+        read-only file; when a part of its folder is a file; or when its folder cannot be
+        written (permission, read-only file system), checked by creating and removing a
+        temporary file there.
+    """
+    ins = [(k, p, *_ident(p)) for k, p in inputs.items() if p is not None]
+    outs = [(k, p, *_ident(p)) for k, p in outputs.items() if p is not None]
+    for i, (opt, p, real, key) in enumerate(outs):
+        for iopt, ip, ireal, ikey in ins:
+            if real == ireal or (key is not None and key == ikey):
+                how = "the same file" if real == ireal else "a hard link to it"
+                raise InputError(f"{opt} {str(p)!r} is {how} as the input {iopt} {str(ip)!r}: bvpnav never "
+                                 f"writes over its inputs; give {opt} another path")
+        for oopt, op, oreal, okey in outs[:i]:
+            if real == oreal or (key is not None and key == okey):
+                raise InputError(f"{opt} {str(p)!r} and {oopt} {str(op)!r} are the same file: one output "
+                                 f"would overwrite the other; give {opt} another path")
+    folders: dict[str, tuple[str, object]] = {}
+    for opt, p, _real, key in outs:
+        p = Path(p)
+        if key is not None:
+            st = os.stat(p)
+            if not _stat.S_ISREG(st.st_mode):
+                raise InputError(f"{opt} {str(p)!r} is {_kind(st.st_mode)}; bvpnav replaces its outputs "
+                                 f"whole, give {opt} the path of a regular file")
+            if not st.st_mode & 0o222:
+                raise InputError(f"{opt} {str(p)!r} is read-only (mode {_stat.S_IMODE(st.st_mode):04o}); "
+                                 f"bvpnav does not replace a read-only file: make it writable (chmod u+w) "
+                                 f"or give {opt} another path")
+        parent = p.parent
+        while not parent.exists() and parent != parent.parent:
+            parent = parent.parent
+        if parent.exists() and not parent.is_dir():
+            raise InputError(f"{opt} {str(p)!r}: {str(parent)!r} is a file, not a folder; give {opt} a path "
+                             "in a folder")
+        folders.setdefault(os.path.realpath(parent), (opt, p))
+    for folder, (opt, p) in folders.items():
+        exc = _probe_folder(Path(folder))
+        if exc is not None:
+            reason, fix = _WRITE_ERRORS.get(exc.errno, (exc.strerror or "it cannot be written", ""))
+            raise InputError(f"{opt} {str(p)!r}: cannot write in {folder!r}: {reason}; give {opt} a path in "
+                             "a folder you can write to" + (f" ({fix})" if fix else ""))
+
+
+def file_fingerprint(path: str | os.PathLike) -> dict:
+    """Size (bytes), modification time (ns) and SHA-256 of a file's content."""
+    import hashlib
+
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        st = os.fstat(fh.fileno())
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return {"size": st.st_size, "mtime_ns": st.st_mtime_ns, "sha256": h.hexdigest()}
+
+
+@contextlib.contextmanager
+def output_lock(folder: str | os.PathLike, option: str = "--out") -> Iterator[None]:
+    """Hold an exclusive lock on an output folder (``.bvpnav.lock`` in it) while writing.
+
+    A second bvpnav run that writes into the same folder at the same time is refused at
+    once (no waiting) instead of interleaving its outputs with the first's. The lock is
+    the kernel's (``flock``), so it is released when the process dies, even by SIGKILL;
+    the file is removed on exit. Without ``fcntl`` (Windows) there is no lock.
+
+    Raises
+    ------
+    InputError
+        If another process holds the lock, naming the folder and its process id.
+    """
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - Windows
+        yield
+        return
+    path = Path(folder) / ".bvpnav.lock"
+    while True:
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+        except OSError as exc:
+            raise _write_error(path, exc) from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            other = ""
+            with contextlib.suppress(OSError):
+                other = os.pread(fd, 32, 0).decode(errors="replace").strip()
+            os.close(fd)
+            raise InputError(f"{option} {str(folder)!r}: another bvpnav run (pid {other or '?'}) is writing "
+                             f"into this folder now; wait for it to finish or give {option} another folder"
+                             ) from None
+        try:  # the holder before us may have removed the file: lock the one at the path
+            same = os.path.samestat(os.fstat(fd), os.stat(path))
+        except OSError:
+            same = False
+        if same:
+            break
+        os.close(fd)
+    try:
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        yield
+    finally:
+        with contextlib.suppress(OSError):
+            os.unlink(path)
+        os.close(fd)

@@ -6,6 +6,7 @@ Each sample writes ``recording.csv`` (``t`` in s, ``acc_<axis>`` in m/s^2),
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -61,26 +62,54 @@ def _shuttle(seed: int, rate: float | None):
 SAMPLES = {"tikhonov2011": _tikhonov2011, "shuttle": _shuttle}
 
 
-def write_sample(name: str, out, seed: int = 0, rate: float | None = None) -> list[Path]:
+def write_sample(name: str, out, seed: int = 0, rate: float | None = None, force: bool = False) -> list[Path]:
     """Write a sample scenario's recording, spec and truth into folder ``out``.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`SAMPLES`.
+    out : path-like
+        Folder (created if missing).
+    seed : int
+        Noise seed.
+    rate : float, optional
+        Sampling rate, Hz (scenario default if None).
+    force : bool
+        Replace ``recording.csv``, ``spec.toml`` and ``truth.csv`` if they already exist in
+        ``out``; without it an existing one is refused (nothing is written).
 
     Returns
     -------
     list of Path
         ``recording.csv``, ``spec.toml``, ``truth.csv``.
+
+    Raises
+    ------
+    InputError
+        Unknown scenario, bad rate, existing files without ``force``, or an output that
+        cannot be written (see :func:`bvpnav.io.check_outputs`).
     """
+    from .io import check_outputs
+
     if name not in SAMPLES:
         raise InputError(f"unknown scenario {name!r}; choose one of {sorted(SAMPLES)}")
     if rate is not None and not (np.isfinite(rate) and rate > 0):
         raise InputError(f"--rate {rate!r}: give a positive sampling rate in Hz")
-    t, acc, truth, prob, solve = SAMPLES[name](seed, rate)
     out = Path(out)
+    paths = [out / "recording.csv", out / "spec.toml", out / "truth.csv"]
+    existing = [p.name for p in paths if os.path.lexists(p)]
+    if existing and not force:
+        raise InputError(f"--out {str(out)!r} already holds {', '.join(existing)}: simulate does not replace "
+                         "files it did not write in this run; give --out a new or empty folder, or add "
+                         "--force to replace them")
+    check_outputs({}, {f"--out ({p.name})": p for p in paths})
+    t, acc, truth, prob, solve = SAMPLES[name](seed, rate)
     out.mkdir(parents=True, exist_ok=True)
     axes = prob.data.axes
     rec = pd.DataFrame({"t": t, **{f"acc_{ax}": acc[:, k] for k, ax in enumerate(axes)}})
     tru = pd.DataFrame({"t": t, **{ax: truth[:, k] for k, ax in enumerate(axes)}})
     inp = {"time": "t", "time_unit": "s", "columns": {ax: f"acc_{ax}" for ax in axes}, "unit": "m/s^2"}
-    paths = [out / "recording.csv", out / "spec.toml", out / "truth.csv"]
     write_table(rec, paths[0])
     header = (f"# bvpnav sample scenario {name!r} (seed {seed}): "
               f"{SAMPLES[name].__doc__.strip().splitlines()[0]}\n")
