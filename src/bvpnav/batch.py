@@ -123,8 +123,13 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     summary_path = Path(summary_path) if summary_path is not None else out.with_suffix(".json")
     fmt = check_table_path(out, "out")
     check_outputs({"recording": path}, {"out": out, "summary_path": summary_path})
+    try:  # before reading: a recording still being written is then caught below
+        rec_fp = file_fingerprint(path)
+    except OSError:  # missing, a folder, a FIFO ...: the reader says so, naming the fix
+        rec_fp = None
     data = read_recording(path, spec.input)
-    rec_fp = _recording_fingerprint(path)
+    if rec_fp is None:
+        rec_fp = _recording_fingerprint(path)
     prob = spec.build(data)
     sol = prob.solve(**solve_kwargs(spec, solver, lam))
     now = _recording_fingerprint(path)

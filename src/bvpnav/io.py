@@ -528,18 +528,29 @@ def check_outputs(inputs: dict, outputs: dict) -> None:
         written (permission, read-only file system), checked by creating and removing a
         temporary file there.
     """
-    ins = [(k, p, *_ident(p)) for k, p in inputs.items() if p is not None]
+    by_real: dict[str, tuple[str, object, bool]] = {}  # resolved path -> (name, path, is an input)
+    by_key: dict[tuple[int, int], tuple[str, object, bool]] = {}  # (device, inode) -> the same
+    for k, p in inputs.items():
+        if p is not None:
+            real, key = _ident(p)
+            by_real.setdefault(real, (k, p, True))
+            if key is not None:
+                by_key.setdefault(key, (k, p, True))
     outs = [(k, p, *_ident(p)) for k, p in outputs.items() if p is not None]
-    for i, (opt, p, real, key) in enumerate(outs):
-        for iopt, ip, ireal, ikey in ins:
-            if real == ireal or (key is not None and key == ikey):
-                how = "the same file" if real == ireal else "a hard link to it"
-                raise InputError(f"{opt} {str(p)!r} is {how} as the input {iopt} {str(ip)!r}: bvpnav never "
+    for opt, p, real, key in outs:
+        hit, how = by_real.get(real), "the same file as"
+        if hit is None and key is not None and key in by_key:
+            hit, how = by_key[key], "a hard link to"
+        if hit is not None:
+            other, op, is_input = hit
+            if is_input:
+                raise InputError(f"{opt} {str(p)!r} is {how} the input {other} {str(op)!r}: bvpnav never "
                                  f"writes over its inputs; give {opt} another path")
-        for oopt, op, oreal, okey in outs[:i]:
-            if real == oreal or (key is not None and key == okey):
-                raise InputError(f"{opt} {str(p)!r} and {oopt} {str(op)!r} are the same file: one output "
-                                 f"would overwrite the other; give {opt} another path")
+            raise InputError(f"{opt} {str(p)!r} is {how} the output {other} {str(op)!r}: one output would "
+                             f"overwrite the other; give {opt} another path")
+        by_real[real] = (opt, p, False)
+        if key is not None:
+            by_key[key] = (opt, p, False)
     folders: dict[str, tuple[str, object]] = {}
     for opt, p, _real, key in outs:
         p = Path(p)
@@ -568,9 +579,18 @@ def check_outputs(inputs: dict, outputs: dict) -> None:
 
 
 def file_fingerprint(path: str | os.PathLike) -> dict:
-    """Size (bytes), modification time (ns) and SHA-256 of a file's content."""
+    """Size (bytes), modification time (ns) and SHA-256 of a regular file's content.
+
+    Raises
+    ------
+    OSError
+        If it cannot be read, or is not a regular file (a FIFO is never opened: that
+        would block).
+    """
     import hashlib
 
+    if not _stat.S_ISREG(os.stat(path).st_mode):
+        raise OSError(_errno.EINVAL, "not a regular file", str(path))
     h = hashlib.sha256()
     with open(path, "rb") as fh:
         st = os.fstat(fh.fileno())

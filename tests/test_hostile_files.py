@@ -1,0 +1,651 @@
+"""Hostile matrix of outputs and the command line (issue 14): every way a run could destroy,
+misread or hide something.
+
+Each case asserts the exact exit code (or exception class), the culprit named in the message,
+the fix, that every input and every earlier output is byte-identical (bytes and mode) and
+that no temporary file is left. Cases that must be refused before any work also assert that
+no file appeared.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import re
+import resource
+import shutil
+import signal
+import socket
+import stat
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from _hostile import (
+    EXIT_INPUT,
+    EXIT_INTERRUPT,
+    EXIT_OK,
+    EXIT_SOLVE,
+    assert_clean_failure,
+    assert_unchanged,
+    raises_named,
+    run_cli,
+    snapshot,
+    stray_temporaries,
+)
+
+import bvpnav.batch
+import bvpnav.io
+from bvpnav.cli import main
+from bvpnav.errors import InputError
+from bvpnav.io import read_recording
+from bvpnav.samples import write_sample
+from bvpnav.spec import load_spec
+
+EXIT_BUG, EXIT_TERM = 1, 143
+
+
+# ------------------------------------------------------------------ fixtures and helpers
+@pytest.fixture(scope="module")
+def sample(tmp_path_factory):
+    """The shuttle sample at 5 Hz (101 samples) and one earlier solve of it (traj.csv/.json)."""
+    d = tmp_path_factory.mktemp("shuttle")
+    write_sample("shuttle", d, rate=5.0)
+    assert main(["solve", str(d / "recording.csv"), "--spec", str(d / "spec.toml"), "--out",
+                 str(d / "traj.csv"), "--quiet"]) == 0
+    return d
+
+
+@pytest.fixture
+def work(sample, tmp_path):
+    """tmp_path with rec.csv, spec.toml and the earlier outputs traj.csv, traj.json."""
+    for src, dst in (("recording.csv", "rec.csv"), ("spec.toml", "spec.toml"), ("traj.csv", "traj.csv"),
+                     ("traj.json", "traj.json")):
+        shutil.copyfile(sample / src, tmp_path / dst)
+    return tmp_path
+
+
+def files_in(folder: Path) -> set[str]:
+    return {str(p.relative_to(folder)) for p in folder.rglob("*")}
+
+
+def cli(argv, capsys) -> tuple[int, str]:
+    """Run ``main`` in this process; (exit code, stderr). Never a traceback."""
+    code = main([str(a) for a in argv])
+    err = capsys.readouterr().err
+    assert "Traceback" not in err, err
+    return code, err
+
+
+def match_all(text: str, *patterns: str) -> None:
+    for pat in patterns:
+        assert re.search(pat, text, re.IGNORECASE | re.DOTALL), f"{pat!r} not in:\n{text}"
+
+
+def solve_argv(t: Path, *extra) -> list:
+    return ["solve", t / "rec.csv", "--spec", t / "spec.toml", "--quiet", *extra]
+
+
+def recs_folder(t: Path, names=("run0.csv", "run1.csv")) -> Path:
+    recs = t / "recs"
+    recs.mkdir(exist_ok=True)
+    for n in names:
+        if n.endswith(".parquet"):
+            pd.read_csv(t / "rec.csv").to_parquet(recs / n)
+        else:
+            shutil.copyfile(t / "rec.csv", recs / n)
+    return recs
+
+
+def batch_argv(t: Path, recs: Path, out: Path, *extra) -> list:
+    return ["batch", recs, "--spec", t / "spec.toml", "--out", out, "--scheduler", "serial", "--quiet",
+            *extra]
+
+
+def popen_cli(args, **kw) -> subprocess.Popen:
+    env = dict(os.environ, MPLBACKEND="Agg", PYTHONWARNINGS="default")
+    return subprocess.Popen([sys.executable, "-m", "bvpnav.cli", *map(str, args)], stdin=subprocess.DEVNULL,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, **kw)
+
+
+def wait_for(cond, proc: subprocess.Popen, what: str, limit: float = 240.0) -> None:
+    """Poll ``cond()`` until true (the process must still be running); a safety limit only."""
+    end = time.monotonic() + limit
+    while not cond():
+        assert proc.poll() is None, f"process ended before {what}: {proc.communicate()}"
+        assert time.monotonic() < end, f"never saw {what}"
+        time.sleep(0.005)
+
+
+def many_recordings(t: Path, n: int) -> Path:
+    recs = t / "recs"
+    recs.mkdir()
+    for k in range(n):
+        shutil.copyfile(t / "rec.csv", recs / f"run{k:02d}.csv")
+    return recs
+
+
+# ------------------------------------------------------------------ refused before any work
+def _link(t, name, target):
+    (t / name).symlink_to(t / target)
+    return t / name
+
+
+def _hard(t, name, target):
+    os.link(t / target, t / name)
+    return t / name
+
+
+REFUSED = [
+    # --- data loss: an output that is an input or another output
+    pytest.param(lambda t: solve_argv(t, "--out", t / "rec.csv"),
+                 r"--out '[^']*rec\.csv' is the same file as the input INPUT", r"give --out another path",
+                 id="solve-out-is-the-recording"),
+    pytest.param(lambda t: solve_argv(t, "--out", t / "nowhere" / ".." / "rec.csv"),
+                 r"--out '[^']*nowhere/\.\./rec\.csv' is the same file as the input INPUT",
+                 r"give --out another path", id="solve-out-is-the-recording-spelt-otherwise"),
+    pytest.param(lambda t: solve_argv(t, "--out", _link(t, "link.csv", "rec.csv")),
+                 r"--out '[^']*link\.csv' is the same file as the input INPUT '[^']*rec\.csv'",
+                 r"give --out another path", id="solve-out-symlink-to-the-recording"),
+    pytest.param(lambda t: solve_argv(t, "--out", _hard(t, "hard.csv", "rec.csv")),
+                 r"--out '[^']*hard\.csv' is a hard link to the input INPUT '[^']*rec\.csv'",
+                 r"give --out another path", id="solve-out-hard-link-to-the-recording"),
+    pytest.param(lambda t: ["solve", t / "rec.csv", "--spec", _hard(t, "s.json", "spec.toml"), "--out",
+                            t / "new.csv", "--summary", t / "s.json", "--quiet"],
+                 r"--summary '[^']*s\.json' is the same file as the input --spec", r"give --summary another",
+                 id="solve-summary-is-the-spec"),
+    pytest.param(lambda t: ["solve", t / "rec.csv", "--spec", _hard(t, "new.json", "spec.toml"), "--out",
+                            t / "new.csv", "--quiet"],
+                 r"--summary \(default: --out with \.json\) '[^']*new\.json' is the same file as the input "
+                 r"--spec", r"give --summary", id="solve-default-summary-is-the-spec"),
+    pytest.param(lambda t: solve_argv(t, "--out", t / "traj.csv", "--plot", _link(t, "fig.png", "spec.toml")),
+                 r"--plot '[^']*fig\.png' is the same file as the input --spec '[^']*spec\.toml'",
+                 r"give --plot another path", id="solve-plot-symlink-to-the-spec"),
+    pytest.param(lambda t: solve_argv(t, "--out", t / "traj.csv", "--summary",
+                                      _link(t, "s.json", "traj.csv")),
+                 r"--summary '[^']*s\.json' is the same file as the output --out '[^']*traj\.csv'",
+                 r"give --summary another path", id="solve-summary-symlink-to-the-trajectory"),
+    pytest.param(lambda t: ["lcurve", t / "rec.csv", "--spec", t / "spec.toml", "--plot", t / "l.png",
+                            "--out", t / "rec.csv", "--quiet"],
+                 r"--out '[^']*rec\.csv' is the same file as the input INPUT", r"give --out another path",
+                 id="lcurve-out-is-the-recording"),
+    pytest.param(lambda t: ["compare", t / "rec.csv", "--spec", t / "spec.toml", "--out",
+                            _link(t, "table.csv", "rec.csv"), "--quiet"],
+                 r"--out '[^']*table\.csv' is the same file as the input INPUT", r"give --out another path",
+                 id="compare-out-symlink-to-the-recording"),
+    pytest.param(lambda t: batch_argv(t, recs_folder(t), t / "recs"),
+                 r"output folder \(--out\) '[^']*recs' is the folder of the recordings",
+                 r"give --out another folder", id="batch-out-is-the-recordings-folder"),
+    pytest.param(lambda t: batch_argv(t, recs_folder(t), _link(t, "results", "recs")),
+                 r"output folder \(--out\) '[^']*results' is the folder of the recordings",
+                 r"give --out another folder", id="batch-out-symlink-to-the-recordings-folder"),
+    pytest.param(lambda t: batch_argv(t, recs_folder(t, ("a.csv", "a.parquet")), t / "out"),
+                 r"recordings '[^']*a\.csv' and '[^']*a\.parquet' would both write '[^']*out/a\.csv'",
+                 r"rename one of them", id="batch-two-recordings-one-stem"),
+    pytest.param(lambda t: batch_argv(t, recs_folder(t, ("run.csv", "summary.csv")), t / "out"),
+                 r"recording '[^']*summary\.csv' would write its trajectory onto the batch summary table",
+                 r"rename the recording|--format parquet", id="batch-recording-named-summary"),
+    pytest.param(lambda t: (recs_folder(t), (t / "out").mkdir(),
+                            (t / "out" / "run0.csv").symlink_to(t / "recs" / "run0.csv"),
+                            batch_argv(t, t / "recs", t / "out"))[-1],
+                 r"--out \(output of run0\) '[^']*out/run0\.csv' is the same file as the input recording "
+                 r"run0\.csv", r"give --out", id="batch-output-symlink-to-a-recording"),
+    pytest.param(lambda t: (recs_folder(t), (t / "out").mkdir(),
+                            os.link(t / "spec.toml", t / "out" / "run1.json"),
+                            batch_argv(t, t / "recs", t / "out"))[-1],
+                 r"--out \(summary of run1\) '[^']*out/run1\.json' is a hard link to the input --spec",
+                 r"give --out", id="batch-summary-hard-link-to-the-spec"),
+    pytest.param(lambda t: ["simulate", "shuttle", "--out", t, "--rate", "5", "--quiet"],
+                 r"--out '[^']*' already holds spec\.toml", r"--force",
+                 id="simulate-into-a-folder-with-a-spec"),
+    pytest.param(lambda t: (t.joinpath("mine").mkdir(),
+                            shutil.copyfile(t / "rec.csv", t / "mine" / "truth.csv"),
+                            ["simulate", "shuttle", "--out", t / "mine", "--quiet"])[-1],
+                 r"already holds truth\.csv", r"new or empty folder, or add --force",
+                 id="simulate-over-a-users-truth-file"),
+    # --- data loss: outputs that are not plain replaceable files
+    pytest.param(lambda t: (t.joinpath("traj.csv").chmod(0o444), solve_argv(t, "--out", t / "traj.csv"))[-1],
+                 r"--out '[^']*traj\.csv' is read-only \(mode 0444\)", r"chmod u\+w|another path",
+                 id="solve-over-a-read-only-output"),
+    pytest.param(lambda t: (t.joinpath("dir.csv").mkdir(), solve_argv(t, "--out", t / "dir.csv"))[-1],
+                 r"--out '[^']*dir\.csv' is a folder", r"path of a regular file", id="solve-out-is-a-folder"),
+    pytest.param(lambda t: solve_argv(t, "--out", t / "rec.csv" / "traj.csv"),
+                 r"'[^']*rec\.csv' is a file, not a folder", r"give --out a path in a folder",
+                 id="solve-out-inside-a-file"),
+    pytest.param(lambda t: ["simulate", "shuttle", "--out", t / "rec.csv", "--quiet"],
+                 r"'[^']*rec\.csv' is a file, not a folder", r"in a folder", id="simulate-out-is-a-file"),
+    # --- hang: outputs that a writer would block on
+    pytest.param(lambda t: (os.mkfifo(t / "pipe.csv"), solve_argv(t, "--out", t / "pipe.csv"))[-1],
+                 r"--out '[^']*pipe\.csv' is a named pipe \(FIFO\)", r"path of a regular file",
+                 id="solve-out-is-a-fifo"),
+    pytest.param(lambda t: (os.mkfifo(t / "fig.png"), solve_argv(t, "--out", t / "o.csv", "--plot",
+                                                                 t / "fig.png"))[-1],
+                 r"--plot '[^']*fig\.png' is a named pipe", r"regular file", id="solve-plot-is-a-fifo"),
+    # --- misread input: suffixes and option lists checked up front, not after the work
+    pytest.param(lambda t: solve_argv(t, "--out", t / "o.csv", "--plot", t / "out.txt"),
+                 r"--plot '[^']*out\.txt': suffix '\.txt' is not a figure format", r"\.png",
+                 id="solve-plot-txt"),
+    pytest.param(lambda t: solve_argv(t, "--out", t / "o.csv", "--plot", t / "figure"),
+                 r"--plot '[^']*figure': no suffix", r"\.png", id="solve-plot-no-suffix"),
+    pytest.param(lambda t: solve_argv(t, "--out", t / "traj.txt"),
+                 r"--out '[^']*traj\.txt': unknown output type '\.txt'", r"\.csv or \.parquet",
+                 id="solve-out-txt"),
+    pytest.param(lambda t: solve_argv(t, "--out", t / "o.csv", "--summary", t / "s.txt"),
+                 r"--summary '[^']*s\.txt'", r"end its name with \.json", id="solve-summary-not-json"),
+    pytest.param(lambda t: ["lcurve", t / "rec.csv", "--spec", t / "spec.toml", "--plot", t / "l.png",
+                            "--rules", ",", "--quiet"],
+                 r"--rules ',': no rule named", r"lcurve, gcv", id="lcurve-rules-comma"),
+    pytest.param(lambda t: ["lcurve", t / "rec.csv", "--spec", t / "spec.toml", "--plot", t / "l.png",
+                            "--rules", "lcurve,,gcv", "--quiet"],
+                 r"--rules 'lcurve,,gcv': entry 2 is empty", r"separated by commas", id="lcurve-rules-hole"),
+    pytest.param(lambda t: ["lcurve", t / "rec.csv", "--spec", t / "spec.toml", "--plot", t / "l.docx",
+                            "--quiet"],
+                 r"--plot '[^']*l\.docx': suffix '\.docx'", r"\.png", id="lcurve-plot-docx"),
+    pytest.param(lambda t: ["compare", t / "rec.csv", "--spec", t / "spec.toml", "--solvers", "direct,",
+                            "--quiet"],
+                 r"--solvers 'direct,': an entry is empty", r"direct,clarabel", id="compare-solvers-hole"),
+    pytest.param(lambda t: ["demo", "--plot", t / "demo.txt", "--quiet"],
+                 r"--plot '[^']*demo\.txt'", r"\.png", id="demo-plot-txt"),
+]
+
+
+@pytest.mark.parametrize("build,culprit,fix", REFUSED)
+def test_refused_before_any_work(build, culprit, fix, work, capsys):
+    argv = build(work)
+    before, names = snapshot(work), files_in(work)
+    code, err = cli(argv, capsys)
+    assert code == EXIT_INPUT, err
+    assert err.startswith("bvpnav: error: ") and len(err.strip().splitlines()) == 1, err
+    match_all(err, culprit, fix)
+    assert_unchanged(before)
+    assert files_in(work) == names  # nothing was written: the check came before the work
+    assert stray_temporaries(work) == []
+
+
+def test_simulate_force_replaces_its_own_files_only(work, capsys):
+    """--force is the way to write into a folder that holds the three names; other files stay."""
+    keep = snapshot(work / "rec.csv", work / "traj.csv", work / "traj.json")
+    code, err = cli(["simulate", "shuttle", "--out", work, "--rate", "5", "--force", "--quiet"], capsys)
+    assert code == EXIT_OK, err
+    assert_unchanged(keep)
+    assert load_spec(work / "spec.toml").solve["solver"] == "direct"
+    assert len(pd.read_csv(work / "truth.csv")) == 101
+    assert stray_temporaries(work) == []
+
+
+# ------------------------------------------------------------------ modes of written files
+def test_new_outputs_get_the_umask_mode_and_replaced_ones_keep_theirs(work, capsys):
+    old = os.umask(0o022)
+    try:
+        (work / "traj.csv").chmod(0o640)  # the earlier output: group-readable, not world
+        code, err = cli(solve_argv(work, "--out", work / "traj.csv", "--plot", work / "new.png"), capsys)
+    finally:
+        os.umask(old)
+    assert code == EXIT_OK, err
+    assert stat.S_IMODE((work / "traj.csv").stat().st_mode) == 0o640  # kept, not made private
+    for new in ("new.png",):
+        assert stat.S_IMODE((work / new).stat().st_mode) == 0o644  # 0o666 & ~0o022, not mkstemp's 0o600
+    assert stat.S_IMODE((work / "traj.json").stat().st_mode) == 0o644  # replaced a 0644 file
+    assert stray_temporaries(work) == []
+
+
+# ------------------------------------------------------------------ resume
+def _bump(rec: Path) -> None:
+    """Change one acceleration sample of a recording (same size class, other content)."""
+    df = pd.read_csv(rec)
+    df.loc[7, "acc_x"] += 0.5
+    df.to_csv(rec, index=False)
+
+
+RESUME = [
+    pytest.param(lambda t, recs: (t / "spec.toml").write_text((t / "spec.toml").read_text().replace(
+        "lam = 1.0", "lam = 2.0")), "all", r"re-solved: spec changed", id="spec-changed"),
+    pytest.param(lambda t, recs: _bump(recs / "run0.csv"), "run0", r"re-solved: recording changed",
+                 id="recording-changed"),
+    pytest.param(lambda t, recs: (t / "out" / "run0.csv").write_bytes(b""), "run0",
+                 r"re-solved: trajectory run0\.csv empty", id="zero-byte-trajectory"),
+    pytest.param(lambda t, recs: (t / "out" / "run0.csv").write_bytes(
+        (t / "out" / "run0.csv").read_bytes()[:300]), "run0",
+        r"re-solved: trajectory run0\.csv changed since it was written", id="truncated-trajectory"),
+    pytest.param(lambda t, recs: (t / "out" / "run0.json").write_text('{"lam": 1.0, "ru'), "run0",
+                 r"re-solved: summary run0\.json unreadable", id="corrupt-summary"),
+    pytest.param(lambda t, recs: (t / "out" / "run0.json").write_text(json.dumps({
+        k: v for k, v in json.loads((t / "out" / "run0.json").read_text()).items() if k != "run"})),
+        "run0", r"re-solved: summary run0\.json has no fingerprint", id="summary-of-an-older-bvpnav"),
+    pytest.param(lambda t, recs: (t / "out" / "run0.csv").unlink(), "run0",
+                 r"re-solved: trajectory run0\.csv missing", id="trajectory-deleted"),
+    pytest.param("--solver", "all", r"re-solved: options changed \(solver: None -> 'clarabel'\)",
+                 id="solver-changed"),
+    pytest.param("--lam", "all", r"re-solved: options changed \(lam: None -> 3\.0\)", id="lam-changed"),
+]
+
+
+@pytest.mark.parametrize("change,which,note", RESUME)
+def test_resume_solves_again_what_no_longer_matches(change, which, note, work, capsys):
+    recs = recs_folder(work)
+    out = work / "out"
+    code, err = cli(batch_argv(work, recs, out), capsys)
+    assert code == EXIT_OK, err
+    extra = []
+    if isinstance(change, str):  # an option of the new run
+        extra = [change, {"--solver": "clarabel", "--lam": "3.0"}[change]]
+    else:
+        change(work, recs)
+    keep = {n for n in ("run0", "run1") if which != "all" and n != which}
+    before = snapshot(recs, work / "spec.toml", *[out / f"{n}{s}" for n in keep for s in (".csv", ".json")])
+    code, err = cli(batch_argv(work, recs, out, "--resume", *extra), capsys)
+    assert code == EXIT_OK, err
+    assert_unchanged(before)  # inputs, and the outputs still valid, untouched
+    df = pd.read_csv(out / "summary.csv", keep_default_na=False)
+    for n in ("run0", "run1"):
+        row = df[df.recording.str.endswith(f"{n}.csv")].iloc[0]
+        if n in keep:
+            assert row.status == "skipped (resume)" and row.resume == "skipped: fingerprint matches"
+        else:
+            match_all(row.resume, note)
+            assert row.ok and row.status != "skipped (resume)"
+            spec = load_spec(work / "spec.toml")
+            kw = bvpnav.batch.solve_kwargs(spec, *(["clarabel", None] if change == "--solver" else
+                                                   [None, 3.0] if change == "--lam" else [None, None]))
+            ref = spec.build(read_recording(recs / f"{n}.csv", spec.input)).solve(**kw).trajectory
+            np.testing.assert_array_equal(pd.read_csv(out / f"{n}.csv")["x"].to_numpy(), ref["x"].to_numpy())
+    assert stray_temporaries(work) == []
+
+
+# ------------------------------------------------------------------ signals (real processes)
+def test_ctrl_c_in_a_batch_exits_130_in_one_line_and_resume_finishes_it(work):
+    recs = many_recordings(work, 24)
+    out = work / "out"
+    inputs = snapshot(recs, work / "spec.toml")
+    proc = popen_cli(batch_argv(work, recs, out))
+    wait_for(lambda: (out / "run00.json").exists(), proc, "the first finished recording")
+    proc.send_signal(signal.SIGINT)
+    stdout, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == EXIT_INTERRUPT, stderr
+    assert stderr.strip() == "bvpnav: interrupted" and "Traceback" not in stderr
+    assert_unchanged(inputs)
+    assert stray_temporaries(work) == [] and not (out / "summary.csv").exists()
+    finished = sorted(p.stem for p in out.glob("*.json"))
+    assert 1 <= len(finished) < 24
+    earlier = snapshot(*[out / f"{n}{s}" for n in finished for s in (".csv", ".json")])
+    proc2 = run_cli(batch_argv(work, recs, out, "--resume"))
+    assert proc2.returncode == EXIT_OK, proc2.stderr
+    assert_unchanged(inputs)
+    assert_unchanged(earlier)  # finished recordings were skipped, not written again
+    df = pd.read_csv(out / "summary.csv", keep_default_na=False)
+    assert len(df) == 24 and df.ok.all()
+    assert (df.status == "skipped (resume)").sum() == len(finished)
+    assert set(df.resume) <= {"skipped: fingerprint matches"} | {
+        f"re-solved: no summary {p.stem}.json" for p in recs.iterdir()}
+    assert stray_temporaries(work) == []
+
+
+def test_sigterm_in_a_batch_exits_143_and_cleans_up(work):
+    recs = many_recordings(work, 24)
+    out = work / "out"
+    inputs = snapshot(recs, work / "spec.toml")
+    proc = popen_cli(batch_argv(work, recs, out))
+    wait_for(lambda: (out / "run00.json").exists(), proc, "the first finished recording")
+    proc.send_signal(signal.SIGTERM)
+    _, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == EXIT_TERM, stderr
+    assert stderr.strip() == "bvpnav: terminated"
+    assert_unchanged(inputs)
+    assert stray_temporaries(work) == [] and not (out / ".bvpnav.lock").exists()
+
+
+def test_sigkill_mid_write_leaves_no_partial_output_and_the_next_run_removes_the_temporary(work):
+    """simulate at 5 kHz writes 3.5 MB CSV files (each takes a while): killed while the first
+    temporary exists, nothing partial is visible under a real name; the next bvpnav write into
+    the folder removes the dead process's temporary."""
+    d = work / "sim"
+    proc = popen_cli(["simulate", "shuttle", "--out", d, "--rate", "5000", "--quiet"])
+    wait_for(lambda: d.is_dir() and stray_temporaries(d) != [], proc, "a temporary file")
+    proc.kill()
+    proc.wait()
+    left = stray_temporaries(d)
+    assert left and all(f".bvpnav-{_host()}-{proc.pid}-" in n for n in left), left
+    visible = sorted(p.name for p in d.iterdir() if not p.name.startswith("."))
+    for name in visible:  # only whole files under real names
+        assert len(pd.read_csv(d / name)) == 100001
+    code = run_cli(["simulate", "shuttle", "--out", d, "--rate", "5", "--force", "--quiet"])
+    assert code.returncode == EXIT_OK, code.stderr
+    assert stray_temporaries(d) == [] and len(pd.read_csv(d / "recording.csv")) == 101
+
+
+def _host() -> str:
+    return re.sub(r"[^A-Za-z0-9_]", "_", socket.gethostname())[:40]
+
+
+def test_stale_temporaries_of_dead_processes_are_removed_and_nothing_else(work, capsys):
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
+                          text=True, check=True)
+    pid = int(dead.stdout)
+    stale = work / f".traj.csv.bvpnav-{_host()}-{pid}-0123abcd.tmp"
+    alive = work / f".traj.csv.bvpnav-{_host()}-{os.getpid()}-89abcdef.tmp"  # this process: running
+    other_host = work / f".traj.csv.bvpnav-elsewhere-{pid}-0123abcd.tmp"  # maybe running elsewhere
+    users = work / ".notes.tmp"
+    for p in (stale, alive, other_host, users):
+        p.write_text("partial")
+    keep = snapshot(work / "rec.csv", work / "spec.toml", alive, other_host, users)
+    code, err = cli(solve_argv(work, "--out", work / "traj.csv"), capsys)
+    assert code == EXIT_OK, err
+    assert not stale.exists()
+    assert_unchanged(keep)
+
+
+# ------------------------------------------------------------------ write failures
+def _fsize_limit(nbytes: int):
+    def limit():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (nbytes, nbytes))
+    return limit
+
+
+def test_file_too_large_names_the_destination_not_the_temporary(work):
+    """ulimit -f: the trajectory (~6 kB) exceeds 2 kB; Python ignores SIGXFSZ, write() gets EFBIG."""
+    before = snapshot(work)
+    proc = run_cli(solve_argv(work, "--out", work / "traj.csv"), preexec_fn=_fsize_limit(2000))
+    assert_clean_failure(proc, EXIT_INPUT, r"cannot write '[^']*traj\.csv': the file is too large",
+                         r"raise the limit or write to another disk", r"it was left as it was")
+    assert ".tmp" not in proc.stderr and "Errno" not in proc.stderr
+    assert_unchanged(before)
+    assert stray_temporaries(work) == []
+
+
+@contextlib.contextmanager
+def tmpfs(where: Path, options: str):
+    if os.geteuid() != 0 or shutil.which("mount") is None:
+        pytest.skip("needs root and mount(8) for a small tmpfs")
+    where.mkdir()
+    res = subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(where)], capture_output=True)
+    if res.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here: {res.stderr!r}")
+    try:
+        yield where
+    finally:
+        subprocess.run(["umount", str(where)], check=True)
+
+
+def test_disk_full_on_a_small_tmpfs(work):
+    with tmpfs(work / "small", "size=8k") as small:
+        (small / "traj.csv").write_text("old trajectory\n")
+        before = snapshot(work)
+        proc = run_cli(solve_argv(work, "--out", small / "traj.csv"))
+        assert_clean_failure(proc, EXIT_INPUT, r"cannot write '[^']*small/traj\.csv': the disk is full",
+                             r"free some space or write to another disk", r"left as it was")
+        assert ".tmp" not in proc.stderr
+        assert_unchanged(before)
+        assert stray_temporaries(work) == []
+
+
+def test_outputs_in_a_read_only_folder_are_refused_before_the_solve(work):
+    with tmpfs(work / "ro", "ro,size=64k") as ro:
+        before = snapshot(work)
+        proc = run_cli(solve_argv(work, "--out", ro / "traj.csv"))
+        assert_clean_failure(proc, EXIT_INPUT, r"--out '[^']*ro/traj\.csv': cannot write in '[^']*ro'",
+                             r"read-only", r"a folder you can write to")
+        proc = run_cli(batch_argv(work, recs_folder(work), ro / "out"))
+        assert_clean_failure(proc, EXIT_INPUT, r"--out[^']*'[^']*ro/out/", r"read-only|cannot create",
+                             r"folder you can write to")
+        assert_unchanged(before)
+
+
+def test_a_failed_write_reports_the_destination_in_the_api(work, monkeypatch):
+    """The Python API raises InputError (not a raw OSError quoting '.traj.csv.<...>.tmp')."""
+    import errno
+
+    def full(self, path, *args, **kwargs):
+        Path(path).write_text("t,x\n0,")
+        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+
+    before = snapshot(work)
+    monkeypatch.setattr(pd.DataFrame, "to_csv", full)
+    err = raises_named(InputError,
+                       lambda: bvpnav.io.write_table(pd.DataFrame({"t": [0.0]}), work / "traj.csv"),
+                       r"cannot write '[^']*traj\.csv': the disk is full", r"free some space")
+    assert ".tmp" not in str(err)
+    assert_unchanged(before)
+    assert stray_temporaries(work) == []
+
+
+# ------------------------------------------------------------------ concurrent runs, vanishing inputs
+def test_a_second_batch_into_the_same_folder_is_refused_at_once(work):
+    recs = many_recordings(work, 24)
+    out = work / "out"
+    first = popen_cli(batch_argv(work, recs, out))
+    wait_for(lambda: (out / ".bvpnav.lock").exists(), first, "the first run's lock")
+    first.send_signal(signal.SIGSTOP)  # hold it mid-run, deterministically
+    try:
+        before = snapshot(recs, work / "spec.toml", out)
+        second = run_cli(batch_argv(work, recs, out))
+        assert_clean_failure(second, EXIT_INPUT, rf"--out '[^']*out': another bvpnav run \(pid {first.pid}\)",
+                             r"wait for it to finish or give --out another folder")
+        assert_unchanged(before)
+    finally:
+        first.send_signal(signal.SIGCONT)
+    _, stderr = first.communicate(timeout=300)
+    assert first.returncode == EXIT_OK, stderr
+    assert len(pd.read_csv(out / "summary.csv")) == 24 and stray_temporaries(work) == []
+
+
+def test_a_recording_deleted_during_a_batch_is_a_failed_row(work, monkeypatch, capsys):
+    recs = recs_folder(work, ("run0.csv", "run1.csv", "run2.csv"))
+    real = bvpnav.batch.solve_recording
+
+    def solve_then_delete(path, *args, **kwargs):
+        res = real(path, *args, **kwargs)
+        if path.endswith("run0.csv"):
+            (recs / "run1.csv").unlink()
+        return res
+
+    monkeypatch.setattr(bvpnav.batch, "solve_recording", solve_then_delete)
+    keep = snapshot(recs / "run0.csv", recs / "run2.csv", work / "spec.toml")
+    code, err = cli(batch_argv(work, recs, work / "out"), capsys)
+    out = capsys.readouterr()
+    assert code == EXIT_SOLVE, err
+    df = pd.read_csv(work / "out" / "summary.csv", keep_default_na=False)
+    bad = df[~df.ok]
+    assert len(bad) == 1 and bad.recording.iloc[0].endswith("run1.csv")
+    match_all(bad.error.iloc[0], r"run1\.csv'?: no such file", r"check the path")
+    assert df.ok.sum() == 2 and not out.err
+    assert_unchanged(keep)
+    assert stray_temporaries(work) == []
+
+
+def test_a_recording_that_changes_during_its_solve_writes_nothing(work, monkeypatch, capsys):
+    real = bvpnav.batch.read_recording
+
+    def read_then_append(path, *args, **kwargs):
+        data = real(path, *args, **kwargs)
+        with open(path, "a") as fh:  # another program is still writing the recording
+            fh.write("20.2,0.5\n")
+        return data
+
+    monkeypatch.setattr(bvpnav.batch, "read_recording", read_then_append)
+    code, err = cli(solve_argv(work, "--out", work / "new.csv"), capsys)
+    assert code == EXIT_INPUT, err
+    match_all(err, r"recording '[^']*rec\.csv' changed while it was being solved; nothing was written",
+              r"run again")
+    assert not (work / "new.csv").exists() and not (work / "new.json").exists()
+
+
+# ------------------------------------------------------------------ tracebacks and vague endings
+def test_an_internal_error_is_one_line_with_how_to_see_the_traceback(work, monkeypatch, capsys):
+    def bug(*args, **kwargs):
+        return {}["no such key"]
+
+    monkeypatch.setattr(bvpnav.batch, "solve_recording", bug)
+    before = snapshot(work)
+    code, err = cli(solve_argv(work, "--out", work / "traj.csv"), capsys)
+    assert code == EXIT_BUG
+    assert len(err.strip().splitlines()) == 1
+    match_all(err, r"bvpnav: internal error: KeyError: 'no such key'", r"BVPNAV_DEBUG=1")
+    assert_unchanged(before)
+    monkeypatch.setenv("BVPNAV_DEBUG", "1")
+    assert main([str(a) for a in solve_argv(work, "--out", work / "traj.csv")]) == EXIT_BUG
+    assert "Traceback" in capsys.readouterr().err  # asked for: shown
+
+
+def test_out_of_memory_exits_3_suggesting_a_shorter_window(work, monkeypatch, capsys):
+    def oom(*args, **kwargs):
+        raise MemoryError
+
+    monkeypatch.setattr(bvpnav.batch, "solve_recording", oom)
+    before = snapshot(work)
+    code, err = cli(solve_argv(work, "--out", work / "traj.csv"), capsys)
+    assert code == EXIT_SOLVE and len(err.strip().splitlines()) == 1
+    match_all(err, r"out of memory", r"shorter window")
+    assert_unchanged(before)
+
+
+def test_ctrl_c_while_writing_exits_130_and_keeps_the_old_output(work, monkeypatch, capsys):
+    def interrupted(self, path, *args, **kwargs):
+        Path(path).write_text("t,x\n0,")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(pd.DataFrame, "to_csv", interrupted)
+    before = snapshot(work)
+    code, err = cli(solve_argv(work, "--out", work / "traj.csv"), capsys)
+    assert code == EXIT_INTERRUPT and err.strip() == "bvpnav: interrupted"
+    assert_unchanged(before)
+    assert stray_temporaries(work) == []
+
+
+CONFLICT_SPEC = """
+[input]
+time = "t"
+columns = { x = "acc_x" }
+
+[solve]
+lam = 1.0
+
+[[item]]
+type = "position"
+name = "fix A"
+t = 5.0
+value = 1.0
+
+[[item]]
+type = "position"
+name = "fix B"
+t = 5.0
+value = 2.0
+"""
+
+
+def test_compare_with_nothing_verified_exits_3(work, capsys):
+    (work / "conflict.toml").write_text(CONFLICT_SPEC)
+    before = snapshot(work)
+    code, err = cli(["compare", work / "rec.csv", "--spec", work / "conflict.toml", "--solvers",
+                     "clarabel,direct", "--out", work / "table.csv", "--quiet"], capsys)
+    assert code == EXIT_SOLVE, err
+    match_all(err, r"none of the 2 runs gave a verified answer",
+              r"try another solver or preset|check the spec")
+    assert_unchanged(before)
+    table = pd.read_csv(work / "table.csv")  # the table is still written: it says what failed
+    assert len(table) == 2 and not table.verified.any()
