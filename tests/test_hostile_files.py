@@ -107,10 +107,23 @@ def batch_argv(t: Path, recs: Path, out: Path, *extra) -> list:
             *extra]
 
 
+def _default_sigint():
+    signal.signal(signal.SIGINT, signal.SIG_DFL)  # a background test runner may have it ignored
+
+
 def popen_cli(args, **kw) -> subprocess.Popen:
+    """Start ``python -m bvpnav.cli ARGS`` in its own process group (as a terminal runs a
+    command: Ctrl-C there is SIGINT to the whole group, see :func:`ctrl_c`)."""
     env = dict(os.environ, MPLBACKEND="Agg", PYTHONWARNINGS="default")
     return subprocess.Popen([sys.executable, "-m", "bvpnav.cli", *map(str, args)], stdin=subprocess.DEVNULL,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, **kw)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                            start_new_session=True, preexec_fn=_default_sigint, **kw)
+
+
+def ctrl_c(proc: subprocess.Popen) -> None:
+    """What Ctrl-C in a terminal does: SIGINT to every process of the command's group
+    (the Dask workers included)."""
+    os.killpg(proc.pid, signal.SIGINT)
 
 
 def wait_for(cond, proc: subprocess.Popen, what: str, limit: float = 240.0) -> None:
@@ -358,13 +371,17 @@ def test_resume_solves_again_what_no_longer_matches(change, which, note, work, c
 
 
 # ------------------------------------------------------------------ signals (real processes)
-def test_ctrl_c_in_a_batch_exits_130_in_one_line_and_resume_finishes_it(work):
+@pytest.mark.parametrize("scheduler", ["serial", "dask"])
+def test_ctrl_c_in_a_batch_exits_130_in_one_line_and_resume_finishes_it(work, scheduler):
     recs = many_recordings(work, 24)
     out = work / "out"
     inputs = snapshot(recs, work / "spec.toml")
-    proc = popen_cli(batch_argv(work, recs, out))
-    wait_for(lambda: (out / "run00.json").exists(), proc, "the first finished recording")
-    proc.send_signal(signal.SIGINT)
+    argv = batch_argv(work, recs, out)
+    if scheduler == "dask":  # the default: a LocalCluster of two worker processes
+        argv = [a for a in argv if a not in ("--scheduler", "serial")]
+    proc = popen_cli(argv)
+    wait_for(lambda: any(out.glob("*.json")), proc, "the first finished recording")
+    ctrl_c(proc)
     stdout, stderr = proc.communicate(timeout=120)
     assert proc.returncode == EXIT_INTERRUPT, stderr
     assert stderr.strip() == "bvpnav: interrupted" and "Traceback" not in stderr
@@ -373,7 +390,7 @@ def test_ctrl_c_in_a_batch_exits_130_in_one_line_and_resume_finishes_it(work):
     finished = sorted(p.stem for p in out.glob("*.json"))
     assert 1 <= len(finished) < 24
     earlier = snapshot(*[out / f"{n}{s}" for n in finished for s in (".csv", ".json")])
-    proc2 = run_cli(batch_argv(work, recs, out, "--resume"))
+    proc2 = run_cli([*argv, "--resume"])
     assert proc2.returncode == EXIT_OK, proc2.stderr
     assert_unchanged(inputs)
     assert_unchanged(earlier)  # finished recordings were skipped, not written again
@@ -649,3 +666,47 @@ def test_compare_with_nothing_verified_exits_3(work, capsys):
     assert_unchanged(before)
     table = pd.read_csv(work / "table.csv")  # the table is still written: it says what failed
     assert len(table) == 2 and not table.verified.any()
+
+
+def test_a_lock_left_by_a_killed_batch_does_not_block_the_next(work, capsys):
+    """The lock is the kernel's: a killed run leaves the file, not the lock."""
+    recs = recs_folder(work)
+    (work / "out").mkdir()
+    (work / "out" / ".bvpnav.lock").write_text("4194304\n")  # a pid from a run that was SIGKILLed
+    code, err = cli(batch_argv(work, recs, work / "out"), capsys)
+    assert code == EXIT_OK, err
+    assert not (work / "out" / ".bvpnav.lock").exists()
+    assert len(pd.read_csv(work / "out" / "summary.csv")) == 2
+
+
+# ------------------------------------------------------------------ the Python API refuses the same
+def _solve_rec(t: Path, out: Path, **kw):
+    return bvpnav.batch.solve_recording(t / "rec.csv", load_spec(t / "spec.toml"), out, **kw)
+
+
+API = [
+    pytest.param(lambda t: _solve_rec(t, t / "rec.csv"),
+                 r"out '[^']*rec\.csv' is the same file as the input recording", r"give out another path",
+                 id="solve_recording-out-is-the-recording"),
+    pytest.param(lambda t: _solve_rec(t, t / "traj.csv", summary_path=t / "traj.csv"),
+                 r"summary_path '[^']*traj\.csv' is the same file as the output out '[^']*traj\.csv'",
+                 r"give summary_path another path", id="solve_recording-summary-onto-the-trajectory"),
+    pytest.param(lambda t: bvpnav.batch.run_batch(recs_folder(t), t / "spec.toml", t / "recs",
+                                                  scheduler="serial", progress=False),
+                 r"output folder \(--out\) '[^']*recs' is the folder of the recordings", r"another folder",
+                 id="run_batch-into-the-recordings-folder"),
+    pytest.param(lambda t: write_sample("shuttle", t, rate=5.0),
+                 r"already holds spec\.toml", r"--force", id="write_sample-over-a-spec"),
+    pytest.param(lambda t: bvpnav.io.write_table(pd.DataFrame({"t": [0.0]}), t / "table.xlsx", "out"),
+                 r"out '[^']*table\.xlsx': unknown output type '\.xlsx'", r"\.csv or \.parquet",
+                 id="write_table-unknown-suffix"),
+]
+
+
+@pytest.mark.parametrize("call,culprit,fix", API)
+def test_the_api_refuses_before_any_work(call, culprit, fix, work):
+    before, names = snapshot(work), files_in(work)
+    raises_named(InputError, lambda: call(work), culprit, fix)
+    assert_unchanged(before)
+    assert files_in(work) - names <= {"recs", "recs/run0.csv", "recs/run1.csv"}  # the set-up only
+    assert stray_temporaries(work) == []

@@ -14,8 +14,10 @@ otherwise it solves it again and the summary row's ``resume`` column says why.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
+import signal
 import time
 import traceback
 from pathlib import Path
@@ -370,6 +372,22 @@ def _run(files, outs, spec_text, spec_source, scheduler, workers, solver, lam, r
     return rows
 
 
+@contextlib.contextmanager
+def _workers_ignore_ctrl_c():
+    """Start the local workers with SIGINT ignored (inherited through spawn's exec): Ctrl-C in
+    a terminal reaches the whole process group, and only this process should handle it (by
+    closing the cluster), not each worker with its own traceback."""
+    try:
+        old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:  # not the main thread: signals are not ours to change
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
 def _run_on_dask(jobs, scheduler, workers, progress) -> list[dict]:
     try:
         from dask.distributed import Client, LocalCluster, as_completed
@@ -377,8 +395,12 @@ def _run_on_dask(jobs, scheduler, workers, progress) -> list[dict]:
         raise InputError("batch needs dask.distributed: pip install 'bvpnav[batch]'") from None
     cluster = None
     if scheduler is None:
-        cluster = LocalCluster(n_workers=max(int(workers), 1), threads_per_worker=1, processes=True,
-                               host="127.0.0.1", dashboard_address=None)
+        import logging
+
+        # silence_logs: the workers' warnings (e.g. tasks cancelled by Ctrl-C) are not for users
+        with _workers_ignore_ctrl_c():
+            cluster = LocalCluster(n_workers=max(int(workers), 1), threads_per_worker=1, processes=True,
+                                   host="127.0.0.1", dashboard_address=None, silence_logs=logging.ERROR)
         client = Client(cluster)
     else:
         client = Client(scheduler)

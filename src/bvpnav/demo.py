@@ -34,7 +34,8 @@ def run_demo(png: str | None = "bvpnav-demo.png", seed: int = 0, quiet: bool = F
     Parameters
     ----------
     png : str or None
-        Where to write the figure (None: no figure).
+        Where to write the figure (None: no figure); its suffix (a format matplotlib
+        writes) and folder are checked before any work, and it is written atomically.
     seed : int
         Noise seed.
     quiet : bool
@@ -42,11 +43,21 @@ def run_demo(png: str | None = "bvpnav-demo.png", seed: int = 0, quiet: bool = F
     lam : float or str
         Lambda for method 3 (default: chosen by the L-curve).
 
+    Raises
+    ------
+    InputError
+        If ``png`` has a suffix matplotlib does not write, or cannot be written.
+
     Returns
     -------
     dict
         RMS position errors (m) by method, the lambda used, and the figure path.
     """
+    if png:  # the output policy, before the work
+        from .io import check_figure_path, check_outputs
+
+        check_figure_path(png, "png")
+        check_outputs({}, {"png": png})
     sc = tikhonov2011(seed=seed)
     t, acc = sc.t, sc.data.acc[:, 0]
     b = sc.boundary
