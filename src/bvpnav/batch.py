@@ -405,15 +405,22 @@ def _run_on_dask(jobs, scheduler, workers, progress) -> list[dict]:
     else:
         client = Client(scheduler)
     try:
-        futures = [client.submit(_task, *job, pure=False) for job in jobs]
+        futures = {client.submit(_task, *job, pure=False): job for job in jobs}
         bar = None
         if progress:
             from tqdm.auto import tqdm
 
             bar = tqdm(total=len(futures), desc="recordings", unit="rec")
         rows = []
-        for fut in as_completed(futures):
-            rows.append(fut.result())
+        for fut in as_completed(list(futures)):
+            try:
+                rows.append(fut.result())
+            except Exception as exc:  # _task never raises: the worker itself died (e.g. KilledWorker)
+                path, note = futures[fut][0], futures[fut][-1]
+                rows.append({"recording": path, "ok": False, "verified": False, "output": "", "resume": note,
+                             "error": f"{type(exc).__name__}: the worker process solving it died ({exc}), "
+                                      "often from lack of memory: solve it alone with `bvpnav solve`, in "
+                                      "shorter windows, or with fewer --workers"})
             if bar is not None:
                 bar.update(1)
         if bar is not None:
