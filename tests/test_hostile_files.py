@@ -293,6 +293,7 @@ def test_simulate_force_replaces_its_own_files_only(work, capsys):
 
 # ------------------------------------------------------------------ modes of written files
 def test_new_outputs_get_the_umask_mode_and_replaced_ones_keep_theirs(work, capsys):
+    inputs = snapshot(work / "rec.csv", work / "spec.toml")
     old = os.umask(0o022)
     try:
         (work / "traj.csv").chmod(0o640)  # the earlier output: group-readable, not world
@@ -304,6 +305,7 @@ def test_new_outputs_get_the_umask_mode_and_replaced_ones_keep_theirs(work, caps
     for new in ("new.png",):
         assert stat.S_IMODE((work / new).stat().st_mode) == 0o644  # 0o666 & ~0o022, not mkstemp's 0o600
     assert stat.S_IMODE((work / "traj.json").stat().st_mode) == 0o644  # replaced a 0644 file
+    assert_unchanged(inputs)
     assert stray_temporaries(work) == []
 
 
@@ -421,6 +423,7 @@ def test_sigkill_mid_write_leaves_no_partial_output_and_the_next_run_removes_the
     temporary exists, nothing partial is visible under a real name; the next bvpnav write into
     the folder removes the dead process's temporary."""
     d = work / "sim"
+    others = snapshot(work)  # files beside the killed run's folder
     proc = popen_cli(["simulate", "shuttle", "--out", d, "--rate", "5000", "--quiet"])
     wait_for(lambda: d.is_dir() and stray_temporaries(d) != [], proc, "a temporary file")
     proc.kill()
@@ -433,6 +436,7 @@ def test_sigkill_mid_write_leaves_no_partial_output_and_the_next_run_removes_the
     code = run_cli(["simulate", "shuttle", "--out", d, "--rate", "5", "--force", "--quiet"])
     assert code.returncode == EXIT_OK, code.stderr
     assert stray_temporaries(d) == [] and len(pd.read_csv(d / "recording.csv")) == 101
+    assert_unchanged(others)
 
 
 def _host() -> str:
@@ -454,6 +458,7 @@ def test_stale_temporaries_of_dead_processes_are_removed_and_nothing_else(work, 
     assert code == EXIT_OK, err
     assert not stale.exists()
     assert_unchanged(keep)
+    assert stray_temporaries(work) == sorted(p.name for p in (alive, other_host, users))
 
 
 # ------------------------------------------------------------------ write failures
@@ -500,16 +505,33 @@ def test_disk_full_on_a_small_tmpfs(work):
         assert stray_temporaries(work) == []
 
 
+@contextlib.contextmanager
+def read_only_folder(where: Path):
+    """A folder nobody can write: chmod 0555 for a normal user; as root (who ignores modes) a
+    read-only tmpfs."""
+    if os.geteuid() != 0:
+        where.mkdir()
+        where.chmod(0o555)
+        try:
+            yield where
+        finally:
+            where.chmod(0o755)
+        return
+    with tmpfs(where, "ro,size=64k") as ro:
+        yield ro
+
+
 def test_outputs_in_a_read_only_folder_are_refused_before_the_solve(work):
-    with tmpfs(work / "ro", "ro,size=64k") as ro:
+    with read_only_folder(work / "ro") as ro:
         before = snapshot(work)
         proc = run_cli(solve_argv(work, "--out", ro / "traj.csv"))
         assert_clean_failure(proc, EXIT_INPUT, r"--out '[^']*ro/traj\.csv': cannot write in '[^']*ro'",
-                             r"read-only", r"a folder you can write to")
+                             r"read-only|permission denied", r"a folder you can write to")
         proc = run_cli(batch_argv(work, recs_folder(work), ro / "out"))
-        assert_clean_failure(proc, EXIT_INPUT, r"--out[^']*'[^']*ro/out/", r"read-only|cannot create",
+        assert_clean_failure(proc, EXIT_INPUT, r"--out[^']*'[^']*ro/out/", r"read-only|permission denied",
                              r"folder you can write to")
         assert_unchanged(before)
+        assert stray_temporaries(work) == []
 
 
 def test_a_failed_write_reports_the_destination_in_the_api(work, monkeypatch):
@@ -584,11 +606,14 @@ def test_a_recording_that_changes_during_its_solve_writes_nothing(work, monkeypa
         return data
 
     monkeypatch.setattr(bvpnav.batch, "read_recording", read_then_append)
+    others = snapshot(work / "spec.toml", work / "traj.csv", work / "traj.json")
     code, err = cli(solve_argv(work, "--out", work / "new.csv"), capsys)
     assert code == EXIT_INPUT, err
     match_all(err, r"recording '[^']*rec\.csv' changed while it was being solved; nothing was written",
               r"run again")
     assert not (work / "new.csv").exists() and not (work / "new.json").exists()
+    assert_unchanged(others)
+    assert stray_temporaries(work) == []
 
 
 # ------------------------------------------------------------------ tracebacks and vague endings
@@ -606,6 +631,8 @@ def test_an_internal_error_is_one_line_with_how_to_see_the_traceback(work, monke
     monkeypatch.setenv("BVPNAV_DEBUG", "1")
     assert main([str(a) for a in solve_argv(work, "--out", work / "traj.csv")]) == EXIT_BUG
     assert "Traceback" in capsys.readouterr().err  # asked for: shown
+    assert_unchanged(before)
+    assert stray_temporaries(work) == []
 
 
 def test_out_of_memory_exits_3_suggesting_a_shorter_window(work, monkeypatch, capsys):
@@ -618,6 +645,7 @@ def test_out_of_memory_exits_3_suggesting_a_shorter_window(work, monkeypatch, ca
     assert code == EXIT_SOLVE and len(err.strip().splitlines()) == 1
     match_all(err, r"out of memory", r"shorter window")
     assert_unchanged(before)
+    assert stray_temporaries(work) == []
 
 
 def test_ctrl_c_while_writing_exits_130_and_keeps_the_old_output(work, monkeypatch, capsys):
@@ -666,6 +694,7 @@ def test_compare_with_nothing_verified_exits_3(work, capsys):
     assert_unchanged(before)
     table = pd.read_csv(work / "table.csv")  # the table is still written: it says what failed
     assert len(table) == 2 and not table.verified.any()
+    assert stray_temporaries(work) == []
 
 
 def test_a_lock_left_by_a_killed_batch_does_not_block_the_next(work, capsys):
@@ -673,10 +702,13 @@ def test_a_lock_left_by_a_killed_batch_does_not_block_the_next(work, capsys):
     recs = recs_folder(work)
     (work / "out").mkdir()
     (work / "out" / ".bvpnav.lock").write_text("4194304\n")  # a pid from a run that was SIGKILLed
+    inputs = snapshot(recs, work / "spec.toml")
     code, err = cli(batch_argv(work, recs, work / "out"), capsys)
     assert code == EXIT_OK, err
     assert not (work / "out" / ".bvpnav.lock").exists()
     assert len(pd.read_csv(work / "out" / "summary.csv")) == 2
+    assert_unchanged(inputs)
+    assert stray_temporaries(work) == []
 
 
 # ------------------------------------------------------------------ the Python API refuses the same
