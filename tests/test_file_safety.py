@@ -197,3 +197,24 @@ def test_an_interrupted_batch_keeps_finished_outputs_and_resumes(sample, tmp_pat
     solved.clear()
     df = run_batch(recs, spec, out, scheduler="serial", progress=False, resume=True)
     assert solved == [] and (df.status == "skipped (resume)").all()
+
+
+def test_the_json_summary_records_what_the_result_depends_on(sample, tmp_path):
+    """The run record that --resume compares: spec text hash, options, the recording's size
+    and content hash, and the trajectory's size and hash as written."""
+    import hashlib
+    import json
+
+    out = tmp_path / "traj.csv"
+    assert main(["solve", str(sample / "recording.csv"), "--spec", str(sample / "spec.toml"), "--out",
+                 str(out), "--solver", "direct", "--quiet"]) == 0
+    run = json.loads(out.with_suffix(".json").read_text())["run"]
+    fp = run["fingerprint"]
+    rec = (sample / "recording.csv").read_bytes()
+    assert fp["spec_sha256"] == hashlib.sha256((sample / "spec.toml").read_bytes()).hexdigest()
+    assert fp["options"] == {"solver": "direct", "lam": None, "format": ".csv"}
+    assert fp["recording"]["size"] == len(rec)
+    assert fp["recording"]["sha256"] == hashlib.sha256(rec).hexdigest()
+    assert fp["recording"]["mtime_ns"] == (sample / "recording.csv").stat().st_mtime_ns
+    assert run["samples"] == 101 and run["trajectory"]["size"] == out.stat().st_size
+    assert run["trajectory"]["sha256"] == hashlib.sha256(out.read_bytes()).hexdigest()

@@ -297,7 +297,9 @@ def build_parser() -> argparse.ArgumentParser:
         description="Solve every *.csv/*.parquet in DIR with one spec on dask.distributed: an "
                     "in-process LocalCluster by default, or --scheduler ADDRESS for a cluster. A "
                     "failing recording becomes a row of OUT/summary.csv with its error; the others "
-                    "go on. Exit code 3 if any failed.")
+                    "go on. Exit code 3 if any failed. OUT must not be DIR; two recordings with one "
+                    "name (a.csv, a.parquet) and a second run into the same OUT at the same time are "
+                    "refused before any work.")
     bt.add_argument("directory", metavar="DIR", help="folder of recordings")
     bt.add_argument("--spec", required=True, metavar="SPEC", help="spec file (TOML)")
     bt.add_argument("--out", required=True, metavar="DIR", help="output folder")
