@@ -232,6 +232,10 @@ REFUSED = [
                  id="solve-out-inside-a-file"),
     pytest.param(lambda t: ["simulate", "shuttle", "--out", t / "rec.csv", "--quiet"],
                  r"'[^']*rec\.csv' is a file, not a folder", r"in a folder", id="simulate-out-is-a-file"),
+    pytest.param(lambda t: ((t / "null.csv").symlink_to("/dev/null"),
+                            solve_argv(t, "--out", t / "null.csv"))[-1],
+                 r"--out '[^']*null\.csv' is a character device", r"path of a regular file",
+                 id="solve-out-symlink-to-dev-null"),
     # --- hang: outputs that a writer would block on
     pytest.param(lambda t: (os.mkfifo(t / "pipe.csv"), solve_argv(t, "--out", t / "pipe.csv"))[-1],
                  r"--out '[^']*pipe\.csv' is a named pipe \(FIFO\)", r"path of a regular file",
