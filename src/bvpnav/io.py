@@ -182,8 +182,9 @@ def _csv_text(raw: bytes, name: str) -> str:
         sample = next((ln for ln in lines[1:] if ln.strip()), "")
         if re.search(r"\d,\d", sample):
             raise InputError(f"{name!r}: fields separated by ';' with decimal commas (line 2: "
-                             f"{sample[:40]!r}); bvpnav reads comma-separated CSV with '.' as the decimal point: export it with "
-                             "',' between fields and '.' decimals (pandas: df.to_csv(path, index=False))")
+                             f"{sample[:40]!r}); bvpnav reads comma-separated CSV with '.' as the decimal "
+                             "point: export it with ',' between fields and '.' decimals "
+                             "(pandas: df.to_csv(path, index=False))")
     try:
         cells = next(csv.reader(_io.StringIO(header)))
     except (csv.Error, StopIteration):
@@ -198,8 +199,8 @@ def _csv_text(raw: bytes, name: str) -> str:
         for j, c in enumerate(cells):
             if c in seen:
                 raise InputError(f"{name!r}: header line 1 names column {c!r} twice (columns "
-                                 f"{seen[c] + 1} and {j + 1}); give every column its own name (the second one would be renamed "
-                                 "silently otherwise)")
+                                 f"{seen[c] + 1} and {j + 1}); give every column its own name (the second "
+                                 "one would be renamed silently otherwise)")
             seen[c] = j
     return text
 
