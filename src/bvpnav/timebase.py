@@ -73,9 +73,11 @@ def _refuse_kind(arr: np.ndarray, what: str, units: str, time: bool) -> None:
         if stamp is not None:
             kind = "m" if isinstance(stamp, (_dt.timedelta, np.timedelta64)) else "M"
         else:
-            odd = next((v for v in flat if not (isinstance(v, (int, float, np.integer, np.floating))
-                                                and not isinstance(v, (bool, np.bool_)))), None)
-            shown = "" if odd is None else f" (first non-number: {odd!r} of type {type(odd).__name__})"
+            odd = [(k, v) for k, v in enumerate(flat)
+                   if not (isinstance(v, (int, float, np.integer, np.floating))
+                           and not isinstance(v, (bool, np.bool_)))][:1]
+            shown = "" if not odd else (f" (entry {odd[0][0]} is {odd[0][1]!r}, of type "
+                                        f"{type(odd[0][1]).__name__})")
             raise InputError(f"{what}: an object array{shown}; give plain numbers in {units} "
                              "(e.g. np.asarray(values, dtype=float) after fixing the odd entries)")
     if kind == "b":
@@ -236,7 +238,7 @@ def to_seconds(values: Any, unit: str | None = None) -> tuple[np.ndarray, str]:
         if nat.size:
             raise InputError(f"to_seconds: entry {int(nat[0])} is NaT (missing); every sample needs a time. "
                              "Remove or repair that entry.")
-        ns = idx.asi8.astype(np.int64)  # integer nanoseconds
+        ns = idx.as_unit("ns").asi8.astype(np.int64)  # integer nanoseconds (whatever the resolution)
         origin = idx[0].isoformat() if kind == "M" else str(idx[0])
         return (ns - ns[0]).astype(float) * 1e-9, origin
     if unit is None:
