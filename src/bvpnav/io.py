@@ -211,11 +211,9 @@ def _read_table(path: Path):
     import pandas as pd
 
     suffix = path.suffix.lower()
+    raw = read_regular_file(path, "recording")  # first: a FIFO or device is named as such
     if suffix not in (".csv", ".parquet", ".pq"):
-        if not path.exists():
-            raise InputError(f"{str(path)!r}: no such file; check the path")
         raise InputError(f"{str(path)!r}: unknown file type {suffix!r}; give a .csv or .parquet file")
-    raw = read_regular_file(path, "recording")
     if suffix == ".csv":
         text = _csv_text(raw, str(path))
         try:
