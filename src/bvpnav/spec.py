@@ -93,7 +93,8 @@ class Spec:
     Attributes
     ----------
     input : dict
-        ``time``, ``time_unit``, ``columns`` (axis -> column), ``unit``.
+        ``time``, ``time_unit`` (or ``"iso8601"``), ``time_origin`` (``"first"``),
+        ``columns`` (axis -> column), ``unit``.
     problem : dict
         Keyword arguments of :class:`bvpnav.NavigationProblem` (``residual``, ``sigma_a``).
     solve : dict

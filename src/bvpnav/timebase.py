@@ -124,6 +124,16 @@ def as_float_array(x: Any, what: str, units: str = "SI units", time: bool = Fals
         For bool, complex, object, string, datetime and duration data.
     """
     arr = _pandas_array(x)
+    if arr is None and isinstance(x, (list, tuple)):
+        # np.asarray([1.0, True]) would be [1.0, 1.0]: find a bool mixed into numbers first
+        try:
+            obj = np.asarray(x, dtype=object).ravel()
+        except (TypeError, ValueError):
+            obj = np.array([], dtype=object)
+        flag = next((k for k, v in enumerate(obj) if isinstance(v, (bool, np.bool_))), None)
+        if flag is not None:
+            raise InputError(f"{what}: entry {flag} is {obj[flag]!r}, a bool (True/False), not a "
+                             f"{'time' if time else 'measurement'}; give numbers in {units}")
     if arr is None:
         try:
             arr = np.asarray(x)
