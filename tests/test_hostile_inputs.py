@@ -219,6 +219,12 @@ def _xls_as_csv(sample, folder):
     return p, {}, None
 
 
+def _utf16_csv(sample, folder):
+    p = folder / "rec.csv"
+    p.write_bytes((sample / "recording.csv").read_text().encode("utf-16"))
+    return p, {}, None
+
+
 def _parquet_as_csv(sample, folder):
     p = folder / "rec.csv"
     p.write_bytes(_parquet_bytes(_csv_of(sample)))
@@ -318,6 +324,8 @@ FILE_CASES = [
      r"export the sheet as CSV"),
     ("xls-renamed-csv", "misread input", _xls_as_csv, r"rec\.csv'?: this \.csv file is a legacy Excel \.xls",
      r"export the sheet as CSV"),
+    ("utf16-csv", "vague message", _utf16_csv, r"rec\.csv'?: this \.csv file is UTF-16 text",
+     r"save it as UTF-8"),
     ("parquet-renamed-csv", "vague message", _parquet_as_csv,
      r"rec\.csv'?: this \.csv file is a Parquet file", r"rename it to \.parquet"),
     ("csv-renamed-parquet", "vague message", _csv_as_parquet,
@@ -454,6 +462,8 @@ SPEC_CASES = [
      r"bad\.toml, line 1: p: value: bool values", r"give numbers"),
     ("spec-item-times-text", '[[item]]\ntype = "position"\nname = "p"\nt = ["0", "1"]\n',
      r"bad\.toml, line 1: p: t: cannot be read as numbers: text values", r"pass numbers in s"),
+    ("spec-item-time-toml-datetime", '[[item]]\ntype = "position"\nname = "p"\nt = 2026-01-31T12:00:00Z\n',
+     r"bad\.toml, line 4: item 'position': t holds a TOML date/time", r"write e\.g\. t = 12\.5"),
     ("spec-item-axes-empty", '[[item]]\ntype = "velocity"\nname = "v"\nt = 0.0\naxes = []\n',
      r"bad\.toml, line 1: v: axes=\[\] names no axis", r"omit axes="),
 ]

@@ -73,6 +73,8 @@ _MAGIC = (
     (b"\xfd7zXZ\x00", "xz-compressed data", "decompress it first (unxz)"),
     (b"%PDF", "a PDF document", "export the data itself as CSV"),
     (b"\x89HDF", "an HDF5 file", "export the datasets as CSV or Parquet"),
+    (b"\xff\xfe", "UTF-16 text (little-endian byte-order mark)", "save it as UTF-8"),
+    (b"\xfe\xff", "UTF-16 text (big-endian byte-order mark)", "save it as UTF-8"),
 )
 
 
@@ -166,7 +168,7 @@ def _csv_text(raw: bytes, name: str) -> str:
         line = raw[: exc.start].count(b"\n") + 1
         raise InputError(f"{name!r}: not a readable CSV file (byte {exc.start}, line {line}, is not UTF-8 "
                          "text); save it as UTF-8 comma-separated values") from None
-    lines = text.splitlines()
+    lines = text[: 1 << 16].splitlines()  # the head is enough for the checks below
     k = 0
     while k < len(lines) and (lines[k].lstrip().startswith(("#", "%")) or not lines[k].strip()):
         k += 1
@@ -177,7 +179,7 @@ def _csv_text(raw: bytes, name: str) -> str:
                          "(or move the notes to a separate file) so the header (e.g. t,acc_x) is line 1")
     if not lines:
         return text
-    header = lines[0]
+    header = text.split("\n", 1)[0].rstrip("\r")
     if ";" in header and "," not in header:
         sample = next((ln for ln in lines[1:] if ln.strip()), "")
         if re.search(r"\d,\d", sample):

@@ -153,6 +153,19 @@ def _where(source: str, line: int | None) -> str:
     return f"{source}, line {line}" if line else source
 
 
+def _has_datetime(v) -> bool:
+    """Whether a TOML value is or holds a date, time or date-time."""
+    import datetime
+
+    if isinstance(v, (datetime.date, datetime.time)):  # datetime.datetime is a date
+        return True
+    if isinstance(v, list):
+        return any(_has_datetime(x) for x in v)
+    if isinstance(v, dict):
+        return any(_has_datetime(x) for x in v.values())
+    return False
+
+
 def _instantiate(cls, kind: str, fields: dict, text: str, section: str, index: int, source: str):
     allowed = [f.name for f in dataclasses.fields(cls) if f.init]
     for key in fields:
@@ -165,6 +178,13 @@ def _instantiate(cls, kind: str, fields: dict, text: str, section: str, index: i
             line = _line_of(text, key, section, index)
             raise InputError(f"{_where(source, line)}: {kind} {_snake(cls.__name__)!r}: {key}="
                              f"{fields[key]!r}; give a string, e.g. {key} = \"...\"")
+    for key, v in fields.items():
+        if _has_datetime(v):
+            line = _line_of(text, key, section, index)
+            raise InputError(f"{_where(source, line)}: {kind} {_snake(cls.__name__)!r}: {key} holds a TOML "
+                             "date/time; spec times are numbers in s on the recording's time axis (seconds "
+                             'from the first sample when [input] has time_unit = "iso8601"): write e.g. '
+                             f"{key} = 12.5")
     try:
         return cls(**fields)
     except InputError as exc:
