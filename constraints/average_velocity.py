@@ -67,8 +67,8 @@ class AverageVelocity(Item):
         return cls(t0=[1.0, 3.0], t1=[2.0, 9.5], value=[0.2, -0.1])
 
     def compile(self, model):
-        ax = model.axes_of(self.axes, self.label)
-        what = f"{self.label}(t0/t1)"
+        ax = model.axes_of(self.axes, self.identify())
+        what = f"{self.identify()}(t0/t1)"
         dt = np.repeat(self.t1 - self.t0, len(ax))
         rows = (model.position(self.t1, self.axes, what) - model.position(self.t0, self.axes, what))
         rows = rows / dt

@@ -53,8 +53,8 @@ class Position(Item):
         return cls(t=[0.0, 2.5, 6.0, 10.0], value=[0.0, 1.0, 2.0, 3.0])  # one per instant, any axes
 
     def compile(self, model):
-        ax = model.axes_of(self.axes, self.label)
-        rows = model.position(self.t, self.axes, what=f"{self.label}(t=...)")
+        ax = model.axes_of(self.axes, self.identify())
+        rows = model.position(self.t, self.axes, what=f"{self.identify()}(t=...)")
         return rows - as_values(self.value, self.t.size, len(ax), f"{self.identify()}: value")
 
     def latex(self) -> str:

@@ -54,8 +54,8 @@ class Velocity(Item):
         return cls(t=[0.0, 4.2, 10.0], value=0.5)
 
     def compile(self, model):
-        ax = model.axes_of(self.axes, self.label)
-        rows = model.velocity(self.t, self.axes, what=f"{self.label}(t=...)")
+        ax = model.axes_of(self.axes, self.identify())
+        rows = model.velocity(self.t, self.axes, what=f"{self.identify()}(t=...)")
         return rows - as_values(self.value, self.t.size, len(ax), f"{self.identify()}: value")
 
     def latex(self) -> str:

@@ -312,7 +312,7 @@ def _short(v, n: int = 4) -> str:
         return repr(v)
     try:
         arr = np.asarray(v, dtype=float)
-    except (TypeError, ValueError):
+    except Exception:  # anything not numeric (it is only shown)
         text = repr(v)
         return text if len(text) <= 40 else text[:37] + "..."
     if arr.ndim == 0:
