@@ -6,6 +6,7 @@ import numpy as np
 
 from bvpnav.errors import InputError
 from bvpnav.grid import as_times
+from bvpnav.timebase import as_float_array
 
 
 def times(value, label: str, what: str = "t") -> np.ndarray:
@@ -26,11 +27,8 @@ def interval(t0, t1, label: str) -> tuple[float, float]:
 
 
 def finite(value, label: str, what: str = "value") -> np.ndarray:
-    """Finite float array (any shape), naming the item on error."""
-    try:
-        v = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{label}: {what}={value!r} is not numeric") from None
+    """Finite float array (any shape, a fresh copy), naming the item on error."""
+    v = as_float_array(value, f"{label}: {what}", "the item's units")  # a copy, never the caller's
     bad = np.flatnonzero(~np.isfinite(v.ravel()))
     if bad.size:
         raise InputError(f"{label}: {what} entry {bad[0]} is {float(v.ravel()[bad[0]])!r}; must be finite "

@@ -25,6 +25,8 @@ class AverageVelocity(Item):
         Interval starts and ends in s (``t0 < t1`` element-wise).
     value : float or array_like
         Mean velocity in m/s (scalar, per axis, per interval, or (n_intervals, n_axes)).
+        By the broadcasting rule of :class:`bvpnav.items.Item`: a flat list of
+        len(t) == n_axes > 1 values is refused (write shape (len(t), n_axes)).
     axes, sigma, mode, huber, tol, name
         See :class:`bvpnav.items.Item`; ``sigma`` in m/s.
 
@@ -55,18 +57,22 @@ class AverageVelocity(Item):
         object.__setattr__(self, "t1", b)
         object.__setattr__(self, "value", finite(self.value, self.label))
 
+    def n_instants(self) -> int:
+        """Number of instants (rows per axis)."""
+        return int(self.t0.size)
+
     @classmethod
     def example(cls) -> AverageVelocity:
         """A valid instance for a window of [0, 10] s with axes x, y, z (contract tests)."""
         return cls(t0=[1.0, 3.0], t1=[2.0, 9.5], value=[0.2, -0.1])
 
     def compile(self, model):
-        ax = model.axes_of(self.axes, self.label)
-        what = f"{self.label}(t0/t1)"
+        ax = model.axes_of(self.axes, self.identify())
+        what = f"{self.identify()}(t0/t1)"
         dt = np.repeat(self.t1 - self.t0, len(ax))
         rows = (model.position(self.t1, self.axes, what) - model.position(self.t0, self.axes, what))
         rows = rows / dt
-        return rows - as_values(self.value, self.t0.size, len(ax), f"{self.label}: value")
+        return rows - as_values(self.value, self.t0.size, len(ax), f"{self.identify()}: value")
 
     def latex(self) -> str:
         """The residual's equation for ``describe(format="latex")`` (mathtext)."""

@@ -166,7 +166,7 @@ class PositionBound(Item):
         return check_times(model, a, b, np.concatenate(extra) if extra else ())
 
     def compile(self, model):
-        label = self.label
+        label = self.identify()
         ax = model.axes_of(self.axes, label)
         a, b = resolve_interval(model, self.t0, self.t1, label)
         ts = self.check_times(model)

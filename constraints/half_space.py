@@ -78,7 +78,7 @@ class HalfSpace(Item):
         return cls(axes=("x", "z"), normal=[0.3, -1.0], b=5.0, t0=2.0, t1=8.0)
 
     def compile(self, model):
-        label = self.label
+        label = self.identify()
         ax = model.axes_of(self.axes, label)
         if len(ax) != self.normal.size:
             raise InputError(

@@ -76,13 +76,13 @@ class Linear(Item):
         return cls(t=[2.0, 8.0], coef=[[1.0, -1.0]], value=0.5, axes="y")
 
     def compile(self, model):
-        ax = model.axes_of(self.axes, self.label)
+        ax = model.axes_of(self.axes, self.identify())
         if self.coef.shape[2] != len(ax):
             raise InputError(
-                f"{self.label}: coef has {self.coef.shape[2]} axis column(s) but the item applies "
+                f"{self.identify()}: coef has {self.coef.shape[2]} axis column(s) but the item applies "
                 f"to {len(ax)} axis(es) {[model.axes[a] for a in ax]}; set axes= to match"
             )
-        what = f"{self.label}(t=...)"
+        what = f"{self.identify()}(t=...)"
         q = model.position if self.quantity == "position" else model.velocity
         base = q(self.t, self.axes, what)  # rows k * nax + a
         C = sp.csr_matrix(self.coef.reshape(self.coef.shape[0], -1))

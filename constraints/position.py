@@ -23,6 +23,8 @@ class Position(Item):
     value : float or array_like
         Position in m: a scalar, one value per axis, one per instant, or shape
         (len(t), n_axes).
+        By the broadcasting rule of :class:`bvpnav.items.Item`: a flat list of
+        len(t) == n_axes > 1 values is refused (write shape (len(t), n_axes)).
     axes, sigma, mode, huber, tol, name
         See :class:`bvpnav.items.Item`; ``sigma`` in m.
 
@@ -41,15 +43,19 @@ class Position(Item):
         object.__setattr__(self, "t", times(self.t, self.label))
         object.__setattr__(self, "value", finite(self.value, self.label))
 
+    def n_instants(self) -> int:
+        """Number of instants (rows per axis)."""
+        return int(self.t.size)
+
     @classmethod
     def example(cls) -> Position:
         """A valid instance for a window of [0, 10] s with axes x, y, z (contract tests)."""
-        return cls(t=[0.0, 2.5, 10.0], value=[0.0, 1.0, 3.0])
+        return cls(t=[0.0, 2.5, 6.0, 10.0], value=[0.0, 1.0, 2.0, 3.0])  # one per instant, any axes
 
     def compile(self, model):
-        ax = model.axes_of(self.axes, self.label)
-        rows = model.position(self.t, self.axes, what=f"{self.label}(t=...)")
-        return rows - as_values(self.value, self.t.size, len(ax), f"{self.label}: value")
+        ax = model.axes_of(self.axes, self.identify())
+        rows = model.position(self.t, self.axes, what=f"{self.identify()}(t=...)")
+        return rows - as_values(self.value, self.t.size, len(ax), f"{self.identify()}: value")
 
     def latex(self) -> str:
         """The residual's equation for ``describe(format="latex")`` (mathtext)."""

@@ -69,7 +69,7 @@ class SpeedLimit(Item):
         return cls(v_max=20.0, t0=1.0, t1=9.0)
 
     def compile(self, model):
-        label = self.label
+        label = self.identify()
         ax = model.axes_of(self.axes, label)
         a, b = resolve_interval(model, self.t0, self.t1, label)
         ts = check_times(model, a, b)

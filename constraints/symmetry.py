@@ -98,7 +98,7 @@ class Symmetry(Item):
 
     def compile(self, model):
         tau = self.taus(model.grid)
-        what = f"{self.label}(about={self.about:g})"
+        what = f"{self.identify()}(about={self.about:g})"
         right = model.position(self.about + tau, self.axes, what)
         left = model.position(self.about - tau, self.axes, what)
         if self.parity == "even":

@@ -474,19 +474,19 @@ class TrackLine(Item):
     def compile(self, model):
         if self.about is None:
             raise InputError(
-                f"{self.label}: a track is nonlinear and needs a linearization point. "
+                f"{self.identify()}: a track is nonlinear and needs a linearization point. "
                 "NavigationProblem.solve() supplies it (sequential loop, bvpnav.sequential); to "
                 "compile by hand use item.linearized(t, positions) first")
-        model.axes_of(self.axes, self.label)
+        model.axes_of(self.axes, self.identify())
         pr = self.projection()
         k = np.flatnonzero(pr.kept)
         if k.size == 0:
             raise InputError(
-                f"{self.label}: every sample of the linearization point is beyond the ends of the "
+                f"{self.identify()}: every sample of the linearization point is beyond the ends of the "
                 f"path or ambiguous ({pr.counts()}); check the path, axes={list(self.axes)} and "
                 "the interval t0/t1")
         tk = pr.t[k]
-        rows = model.position(tk, self.axes, what=f"{self.label}(t=...)")  # rows 2 i + a
+        rows = model.position(tk, self.axes, what=f"{self.identify()}(t=...)")  # rows 2 i + a
         nrm = pr.normal[k]
         C = sp.csr_matrix((nrm.ravel(), (np.repeat(np.arange(k.size), 2), np.arange(2 * k.size))),
                           shape=(k.size, 2 * k.size))

@@ -52,7 +52,7 @@ class ZeroVelocity(Item):
         return cls(t0=0.0, t1=1.0)
 
     def compile(self, model):
-        return model.velocity(self.instants(model.grid), self.axes, f"{self.label}(t0/t1)")
+        return model.velocity(self.instants(model.grid), self.axes, f"{self.identify()}(t0/t1)")
 
     def latex(self) -> str:
         """The residual's equation for ``describe(format="latex")`` (mathtext)."""

@@ -285,3 +285,65 @@ def test_fuzz_parquet_reader(folder, df, inp):
     path = folder / "rec.parquet"
     df.to_parquet(path)
     check_recording(path, inp)
+
+
+# ------------------------------------------------- the one input normalisation
+@st.composite
+def api_arrays(draw):
+    """Arrays of any dtype a caller may hold, as numpy arrays, lists or pandas objects."""
+    n = 5
+    kind = draw(st.sampled_from(["float", "int", "bool", "complex", "datetime", "timedelta", "object",
+                                 "str", "list", "series", "nullable"]))
+    if kind == "float":
+        return np.array(draw(st.lists(st.floats(), min_size=n, max_size=n)))
+    if kind == "int":
+        return np.array(draw(st.lists(st.integers(-2**62, 2**62), min_size=n, max_size=n)), dtype=np.int64)
+    if kind == "bool":
+        return np.array(draw(st.lists(st.booleans(), min_size=n, max_size=n)))
+    if kind == "complex":
+        return np.array(draw(st.lists(st.complex_numbers(allow_nan=False), min_size=n, max_size=n)),
+                        dtype=complex)
+    if kind == "datetime":
+        freq = draw(st.sampled_from(["1ms", "1s"]))
+        return pd.date_range("2026-01-01", periods=n, freq=freq).to_numpy().copy()
+    if kind == "timedelta":
+        return np.arange(n).astype("timedelta64[s]")
+    if kind == "object":
+        return np.array(draw(st.lists(st.one_of(st.floats(), st.none(), st.text(max_size=3)), min_size=n,
+                                      max_size=n)), dtype=object)
+    if kind == "str":
+        return np.array([str(float(x)) for x in range(n)])
+    if kind == "list":
+        return draw(st.lists(st.one_of(st.floats(allow_nan=False), st.integers(-5, 5), st.booleans()),
+                             min_size=n, max_size=n))
+    if kind == "series":
+        return pd.Series(np.arange(n, dtype=float) * draw(st.floats(0.1, 10.0)))
+    return pd.array([1.0, None, 2.0, 3.0, 4.0] if draw(st.booleans()) else [0.0, 1.0, 2.0, 3.0, 4.0],
+                    dtype="Float64")
+
+
+@settings(max_examples=300, **FUZZ)
+@given(t=api_arrays(), acc=api_arrays())
+def test_fuzz_imudata_normalisation(t, acc):
+    """ImuData takes any caller array: a valid result is exactly the float64 reading of
+    plain numbers, anything else is InputError; the caller's arrays are never changed,
+    frozen or kept."""
+    keep = [x.copy() if isinstance(x, np.ndarray) else x for x in (t, acc)]
+    try:
+        data = bvpnav.ImuData(t, acc)
+    except InputError:
+        data = None
+    for orig, now in zip(keep, (t, acc), strict=True):
+        if isinstance(now, np.ndarray):
+            assert now.flags.writeable
+            if now.dtype.kind == "O":  # None and NaN entries: compare what each entry is
+                assert [repr(x) for x in orig.ravel()] == [repr(x) for x in now.ravel()]
+            else:
+                assert np.array_equal(orig, now, equal_nan=now.dtype.kind == "f")
+    if data is None:
+        return
+    for given_, got in ((t, data.t), (acc, data.acc[:, 0])):
+        plain = np.asarray(given_.to_numpy() if hasattr(given_, "to_numpy") else given_)
+        assert plain.dtype.kind in "iuf", plain.dtype  # only plain numbers are accepted
+        assert np.array_equal(got, plain.astype(float))
+        assert not np.shares_memory(got, plain)

@@ -177,3 +177,55 @@ def test_soft_tends_to_hard():
     soft = bvpnav.NavigationProblem(data).add(ends, Velocity(t=[0.0, 10.0], value=0.0, sigma=0.1))
     big = soft.solve(lam=1e6)
     assert np.max(np.abs(big.position("x") - hard.position("x"))) < 1e-4
+
+
+# ------------------------------------------------------------ broadcasting rule
+@pytest.mark.parametrize("given, k, a, rows", [
+    (2.0, 3, 2, [2.0] * 6),                                       # scalar
+    ([1.0, 2.0, 3.0], 3, 2, [1.0, 1.0, 2.0, 2.0, 3.0, 3.0]),      # one per instant
+    ([1.0, 2.0], 3, 2, [1.0, 2.0, 1.0, 2.0, 1.0, 2.0]),           # one per axis
+    ([1.0, 2.0, 3.0, 4.0, 5.0, 6.0], 3, 2, [1, 2, 3, 4, 5, 6]),   # one per row, time-major
+    ([[1.0, 2.0], [3.0, 4.0], [5.0, 6.0]], 3, 2, [1, 2, 3, 4, 5, 6]),  # (instants, axes)
+    ([[1.0, 2.0], [3.0, 4.0]], 2, 2, [1, 2, 3, 4]),               # (instants, axes), square
+    ([1.0, 2.0], 2, 1, [1.0, 2.0]),                               # one axis: per instant = per row
+])
+def test_broadcast_rows_time_major(given, k, a, rows):
+    """Row i * a + j is instant i, axis j, whatever form the quantity is given in."""
+    from bvpnav.items import broadcast_rows
+
+    assert broadcast_rows(given, k, a, "q").tolist() == [float(r) for r in rows]
+
+
+@pytest.mark.parametrize("given, k, a, pattern", [
+    ([1.0, 2.0], 2, 2, r"one per instant or one per axis\? Write it as shape \(2, 2\)"),
+    ([1.0, 2.0, 3.0], 3, 3, r"one per instant or one per axis"),
+    ([1.0, 2.0], 3, 1, r"shape \(2,\) does not fit 3 instant\(s\) x 1 axis"),
+    ([1.0, 2.0, 3.0, 4.0], 3, 2, r"accepted flat lengths: \[1, 2, 3, 6\]"),
+    ([[1.0, 2.0]], 3, 2, r"shape \(1, 2\) does not fit"),
+])
+def test_broadcast_rows_refuses_ambiguous_and_short(given, k, a, pattern):
+    from bvpnav.errors import InputError
+    from bvpnav.items import broadcast_rows
+
+    with pytest.raises(InputError, match=pattern):
+        broadcast_rows(given, k, a, "q")
+
+
+def test_per_axis_sigma_weights_each_axis():
+    """On main a per-axis sigma was repeated axis-major onto time-major rows (the second
+    axis's sigma weighted the first axis's later instants); now each axis gets its own."""
+    item = Position(t=[0.0, 5.0, 10.0], value=0.0, sigma=[0.1, 1.0])
+    assert item.weight_rows(6).tolist() == [0.1, 1.0, 0.1, 1.0, 0.1, 1.0]
+    band = Velocity(t=[0.0, 5.0, 10.0], value=0.0, mode="band", tol=[[0.1, 0.2], [0.3, 0.4], [0.5, 0.6]])
+    assert band.tol_rows(6).tolist() == [0.1, 0.2, 0.3, 0.4, 0.5, 0.6]
+
+
+def test_identify_shows_what_an_unnamed_item_holds():
+    assert Position(t=[0.0, 10.0], value=[0.0, 10.0]).identify() == "Position (t=[0, 10] s, value=[0, 10] m)"
+    assert Velocity(t=np.arange(11.0), value=0.0).identify() == (
+        "Velocity (t=[0, 1, 2, ..., 10] (11 values) s, value=0 m/s)")
+    assert Position(t=0.0, value=1.0, name="fix A").identify() == "fix A"
+    prob = bvpnav.NavigationProblem(bvpnav.ImuData(T, np.zeros(T.size)))
+    prob.add(Position(t=0.0, value=0.0), Position(t=[0.0, 10.0], value=[0.0, 10.0], axes="x"))
+    assert [i.identify() for i in prob._items] == [
+        "Position (t=[0] s, value=0 m)", "Position#2 (t=[0, 10] s, value=[0, 10] m, axes=['x'])"]

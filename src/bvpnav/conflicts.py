@@ -131,10 +131,14 @@ def solve_demoting(problem, solve_kwargs: dict, priority=None, demote_sigma=None
                             "conflict": list(conflict)})
             current = _demoted_problem(current, victim, sigma)
     sol.stats["demoted"] = demoted
+    ident = {it.label: it.identify() for it in problem._items}  # unnamed items: what they hold
     for d in demoted:
-        others = [c for c in d["conflict"] if c != d["item"]]
+        others = [ident.get(c, c) for c in d["conflict"] if c != d["item"]]
+        shown = ident.get(d["item"], d["item"])
+        shown = repr(shown) if shown == d["item"] else shown
         sol.warnings.append(
-            f"hard item {d['item']!r} (priority {d['priority']:g}) conflicted with {others} and was "
+            f"hard item {shown} (priority {d['priority']:g}) conflicted "
+            f"with {others} and was "
             f"demoted to soft with sigma={d['sigma']:g}"
         )
     return sol

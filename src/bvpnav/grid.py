@@ -8,6 +8,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .errors import InputError
+from .timebase import as_seconds
 
 __all__ = ["TimeGrid", "as_times"]
 
@@ -17,22 +18,12 @@ EDGE_SLACK = 1e-9
 
 
 def as_times(t, name: str = "t") -> np.ndarray:
-    """Return ``t`` as a 1-D float array, or raise :class:`InputError` naming ``name``."""
-    try:
-        arr = np.asarray(t, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name}: cannot be read as numbers ({exc}); pass numbers in s") from None
-    if arr.ndim == 0:
-        arr = arr.reshape(1)
-    if arr.ndim != 1:
-        raise InputError(f"{name}: expected a scalar or a 1-D array of times in s, got shape {arr.shape}")
-    bad = np.flatnonzero(~np.isfinite(arr))
-    if bad.size:
-        raise InputError(
-            f"{name}: value at index {bad[0]} is {float(arr[bad[0]])!r} ({bad.size} non-finite "
-            "value(s)); times must be finite numbers in s. Remove or repair that entry."
-        )
-    return arr
+    """Return ``t`` as a fresh 1-D float array in s, or raise :class:`InputError` naming ``name``.
+
+    The one time normalisation of :mod:`bvpnav.timebase` (a copy; bool, complex, object,
+    text, datetime and duration values refused by name with the conversion to use).
+    """
+    return as_seconds(t, name, limit=False)
 
 
 @dataclass(frozen=True, eq=False)
@@ -42,8 +33,10 @@ class TimeGrid:
     Parameters
     ----------
     t : array_like, shape (N,)
-        Sample times in s; finite and strictly increasing, ``N >= 3``.
-        Non-uniform steps are allowed.
+        Sample times in s; finite and strictly increasing, ``N >= 3``, at most
+        :data:`bvpnav.timebase.MAX_SECONDS` in magnitude. Non-uniform steps are allowed.
+        The array is copied (then frozen); datetimes and epochs in ms/us/ns are refused
+        with the conversion :func:`bvpnav.timebase.to_seconds`.
 
     Notes
     -----
@@ -58,7 +51,7 @@ class TimeGrid:
     h: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self):
-        t = as_times(self.t, "time")
+        t = as_seconds(self.t, "time")  # a copy: the caller's array is never frozen or kept
         if t.size < 3:
             raise InputError(
                 f"time: {t.size} samples given; the FEM needs at least 3 samples "

@@ -10,8 +10,9 @@ from scipy.spatial.transform import Rotation
 
 from .errors import InputError
 from .grid import TimeGrid
+from .timebase import as_float_array
 
-__all__ = ["ImuData", "STANDARD_GRAVITY", "DEFAULT_AXES"]
+__all__ = ["ImuData", "STANDARD_GRAVITY", "DEFAULT_AXES", "RESERVED_NAMES", "axis_name_clash"]
 
 #: Standard gravity, m/s^2.
 STANDARD_GRAVITY = 9.80665
@@ -19,11 +20,36 @@ STANDARD_GRAVITY = 9.80665
 DEFAULT_AXES = {1: ("x",), 2: ("x", "y"), 3: ("x", "y", "z")}
 
 
+#: Output column names besides the per-axis ones: the time column of a trajectory.
+RESERVED_NAMES = ("t",)
+
+
+def _outputs(axis: str) -> tuple[str, ...]:
+    """Trajectory columns of one axis: position, velocity and their uncertainties."""
+    return (axis, f"v{axis}", f"{axis}_std", f"v{axis}_std")
+
+
+def axis_name_clash(axes: Sequence[str]) -> str | None:
+    """Why these axis names cannot name trajectory columns, or None when they can.
+
+    A trajectory has the columns ``t``, ``<axis>``, ``v<axis>``, ``<axis>_std`` and
+    ``v<axis>_std`` per axis; every one must be distinct, so an axis may not be empty,
+    be ``t``, or produce another axis's column (``vx`` beside ``x``: the velocity of
+    ``x`` is ``vx``; ``x_std`` beside ``x``).
+    """
+    owner: dict[str, str] = {r: "the time column" for r in RESERVED_NAMES}
+    for a in axes:
+        if not a.strip():
+            return f"axis name {a!r} is empty"
+        for col in _outputs(a):
+            if col in owner:
+                return (f"axis {a!r} would write the column {col!r}, which is already {owner[col]}")
+            owner[col] = f"a column of axis {a!r}" if col != a else f"the position of axis {a!r}"
+    return None
+
+
 def _finite_2d(arr, name: str, columns: Sequence[str] | None = None) -> np.ndarray:
-    try:
-        a = np.asarray(arr, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name}: cannot be read as numbers ({exc})") from None
+    a = as_float_array(arr, name, "m/s^2")  # a copy: the caller's array is never kept
     if a.ndim == 1:
         a = a[:, None]
     if a.ndim != 2:
@@ -60,10 +86,22 @@ class ImuData:
         Gravity vector in the navigation frame, m/s^2. Default ``(0, 0, -g0)`` with
         ``g0 = 9.80665`` (z up).
     axes : sequence of str, optional
-        Axis names; default ``x``, ``x, y`` or ``x, y, z`` by the number of axes.
+        Axis names; default ``x``, ``x, y`` or ``x, y, z`` by the number of axes. They
+        name the trajectory's columns (``<axis>``, ``v<axis>``, ``<axis>_std``,
+        ``v<axis>_std`` beside ``t``), so names whose columns would collide (``t``, an
+        empty name, ``vx`` beside ``x``) are refused.
+    time_origin : str, optional
+        What ``t = 0`` is when the times were converted to seconds (see
+        :func:`bvpnav.timebase.to_seconds`); kept in ``data.time_origin``.
 
     Notes
     -----
+    Every array is copied (the copies are frozen): the caller's arrays stay writeable and
+    a later edit of them changes nothing here. Times go through
+    :func:`bvpnav.timebase.as_seconds`, numbers through
+    :func:`bvpnav.timebase.as_float_array` (bool, complex, object, text, datetime values
+    refused by name).
+
     In strapdown mode the navigation-frame acceleration is
 
     .. math:: a(t_i) = C_i f_i + g,
@@ -84,8 +122,15 @@ class ImuData:
         attitude=None,
         gravity=None,
         axes: Sequence[str] | None = None,
+        time_origin: str | None = None,
     ):
         self.grid = TimeGrid(t)
+        if time_origin is not None and not isinstance(time_origin, str):
+            raise InputError(f"time_origin={time_origin!r}; give a string saying what t = 0 is (e.g. the "
+                             "origin returned by bvpnav.timebase.to_seconds) or omit it")
+        #: What ``t = 0`` is when the times were converted (e.g. an ISO 8601 timestamp or
+        #: ``"1700000000000000000 ns"``); None when the times were given in s as they are.
+        self.time_origin: str | None = time_origin
         n = self.grid.n
         self.specific_force: np.ndarray | None = None
         self.attitude: Rotation | None = None
@@ -110,8 +155,8 @@ class ImuData:
             if attitude is None:
                 raise InputError("specific_force needs attitude (body to navigation) per sample")
             rot = self._as_rotation(attitude, n)
-            g = np.array([0.0, 0.0, -STANDARD_GRAVITY]) if gravity is None else np.asarray(
-                gravity, dtype=float
+            g = np.array([0.0, 0.0, -STANDARD_GRAVITY]) if gravity is None else as_float_array(
+                gravity, "gravity", "m/s^2"
             )
             if g.shape != (3,) or not np.all(np.isfinite(g)):
                 raise InputError(f"gravity: expected 3 finite numbers in m/s^2, got {gravity!r}")
@@ -130,12 +175,18 @@ class ImuData:
             raise InputError(f"acc: {d} axes given; bvpnav handles 1, 2 or 3 axes")
         if axes is None:
             axes = DEFAULT_AXES[d]
-        axes = tuple(str(s) for s in ([axes] if isinstance(axes, str) else axes))
+        if not isinstance(axes, str) and any(not isinstance(s, str) for s in axes):
+            raise InputError(f"axes: {list(axes)!r}; give axis names as strings, e.g. axes=('x', 'y')")
+        axes = tuple([axes] if isinstance(axes, str) else axes)
         if len(axes) != d:
             raise InputError(f"axes: {len(axes)} names {axes} for {d} acceleration columns; give one name "
                              "per acceleration column")
         if len(set(axes)) != d:
             raise InputError(f"axes: names must be distinct, got {axes}; rename the repeated axis")
+        clash = axis_name_clash(axes)
+        if clash is not None:
+            raise InputError(f"axes {axes}: {clash}; trajectory columns are t, <axis>, v<axis>, "
+                             "<axis>_std and v<axis>_std, so rename that axis (e.g. 'x', 'y', 'z')")
         a.setflags(write=False)
         self.acc: np.ndarray = a
         self.axes: tuple[str, ...] = axes
@@ -177,7 +228,7 @@ class ImuData:
         grid = TimeGrid(t)
         rot = integrate_gyro(grid.t, gyro, initial_attitude)
         out = cls(grid.t, specific_force=specific_force, attitude=rot, gravity=gravity)
-        w = np.array(gyro, dtype=float)
+        w = as_float_array(gyro, "gyro", "rad/s")
         w.setflags(write=False)
         out.gyro = w
         return out
@@ -190,13 +241,8 @@ class ImuData:
                 size = 1 if rot.single else len(rot)
                 raise InputError(f"attitude: Rotation of length {size}, expected one per sample ({n})")
             return rot
-        try:
-            arr = np.asarray(attitude, dtype=float)
-        except (TypeError, ValueError):
-            raise InputError(
-                f"attitude: cannot be read as numbers; pass a Rotation of length {n}, quaternions "
-                f"({n}, 4) scalar-last, or matrices ({n}, 3, 3)"
-            ) from None
+        arr = as_float_array(attitude, "attitude", f"a Rotation of length {n}, quaternions ({n}, 4) "
+                             f"scalar-last, or matrices ({n}, 3, 3)")
         kind = {(n, 4): "quaternion", (n, 3, 3): "matrix"}.get(arr.shape)
         if kind is not None:
             nonfinite = np.flatnonzero(~np.all(np.isfinite(arr.reshape(n, -1)), axis=1))
@@ -308,7 +354,7 @@ class ImuData:
             raise InputError(f"acceleration column(s) {missing} not found; columns are {list(df.columns)}")
         if axes is None and all(str(c).startswith("a") and len(str(c)) > 1 for c in columns):
             axes = [str(c)[1:].lstrip("_") for c in columns]
-        return cls(t, df[list(columns)].to_numpy(dtype=float), axes=axes)
+        return cls(t, df[list(columns)], axes=axes)
 
     def to_dataframe(self) -> pd.DataFrame:
         """Navigation-frame accelerations as a DataFrame indexed by time ``t`` (s)."""

@@ -200,43 +200,271 @@ def atomic_savefig(fig, path: str | os.PathLike, option: str = "path", **kwargs)
 
 
 # ------------------------------------------------------------------ recordings
+#: Leading bytes of file types that are sometimes renamed to .csv / .parquet.
+_MAGIC = (
+    (b"PK\x03\x04", "a ZIP archive (an .xlsx/.ods workbook, or a zipped file)",
+     "open it in its program and export the sheet as CSV (comma-separated, '.' decimals), or unzip it"),
+    (b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1", "a legacy Excel .xls workbook (OLE2)",
+     "open it in a spreadsheet program and export the sheet as CSV (comma-separated, '.' decimals)"),
+    (b"PAR1", "a Parquet file", "rename it to .parquet"),
+    (b"\x1f\x8b", "gzip-compressed data", "decompress it first (gunzip)"),
+    (b"BZh", "bzip2-compressed data", "decompress it first (bunzip2)"),
+    (b"\xfd7zXZ\x00", "xz-compressed data", "decompress it first (unxz)"),
+    (b"%PDF", "a PDF document", "export the data itself as CSV"),
+    (b"\x89HDF", "an HDF5 file", "export the datasets as CSV or Parquet"),
+    (b"\xff\xfe", "UTF-16 text (little-endian byte-order mark)", "save it as UTF-8"),
+    (b"\xfe\xff", "UTF-16 text (big-endian byte-order mark)", "save it as UTF-8"),
+)
+
+
+def read_regular_file(path: str | os.PathLike, what: str = "recording") -> bytes:
+    """The bytes of a regular file, refusing anything else before it could block.
+
+    ``os.stat`` is checked before opening (a FIFO, a terminal or ``/dev/stdin`` would
+    block a reader forever, a folder cannot be read), and the descriptor is opened
+    non-blocking and checked again with ``os.fstat`` (no race with a swapped file).
+
+    Parameters
+    ----------
+    path : str or path-like
+    what : str
+        What the file is for, in messages (``"recording"``, ``"spec"``).
+
+    Raises
+    ------
+    InputError
+        Naming the path: missing, not a regular file (saying what it is), unreadable.
+    """
+    import stat
+
+    name = str(path)
+    kinds = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+             (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+             (stat.S_ISSOCK, "a socket"))
+
+    def kind_of(mode: int) -> str | None:
+        if stat.S_ISREG(mode):
+            return None
+        return next((k for test, k in kinds if test(mode)), "not a regular file")
+
+    def refuse(kind: str) -> InputError:
+        return InputError(f"{what} {name!r} is {kind}, not a regular file; bvpnav reads a {what} only "
+                          "from a regular file (a pipe or device could block forever): save it to a file "
+                          "and give that path")
+
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        raise InputError(f"{what} {name!r}: no such file; check the path") from None
+    except OSError as exc:
+        raise InputError(f"{what} {name!r}: cannot read it ({exc.strerror}); check the path and "
+                         "permissions") from None
+    kind = kind_of(st.st_mode)
+    if kind is not None:
+        raise refuse(kind)
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+    except OSError as exc:
+        raise InputError(f"{what} {name!r}: cannot read it ({exc.strerror}); check the path and "
+                         "permissions") from None
+    try:
+        kind = kind_of(os.fstat(fd).st_mode)
+        if kind is not None:
+            raise refuse(kind)
+        with os.fdopen(fd, "rb", closefd=False) as fh:
+            return fh.read()
+    except OSError as exc:
+        raise InputError(f"{what} {name!r}: cannot read it ({exc.strerror}); check the path and "
+                         "permissions") from None
+    finally:
+        os.close(fd)
+
+
+def _sniff(raw: bytes) -> tuple[str, str] | None:
+    """(what the bytes are, the fix) for known binary formats, else None."""
+    for magic, what, fix in _MAGIC:
+        if raw.startswith(magic):
+            return what, fix
+    if b"\x00" in raw[:4096]:
+        return "binary data (NUL bytes)", "give a CSV text file or a Parquet file"
+    return None
+
+
+def _csv_text(raw: bytes, name: str) -> str:
+    """Decode a CSV file and refuse what it would be misread as (with the fix)."""
+    import csv
+    import io as _io
+    import re
+
+    found = _sniff(raw)
+    if found is not None:
+        what, fix = found
+        raise InputError(f"{name!r}: this .csv file is {what}, not CSV text; {fix}")
+    try:
+        # A UTF-8 byte-order mark is an encoding marker, not data: accepted and dropped.
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = raw[: exc.start].count(b"\n") + 1
+        raise InputError(f"{name!r}: not a readable CSV file (byte {exc.start}, line {line}, is not UTF-8 "
+                         "text); save it as UTF-8 comma-separated values") from None
+    lines = text[: 1 << 16].splitlines()  # the head is enough for the checks below
+    k = 0
+    while k < len(lines) and (lines[k].lstrip().startswith(("#", "%")) or not lines[k].strip()):
+        k += 1
+    if k and any(ln.strip() for ln in lines[:k]):
+        first = next(ln for ln in lines[:k] if ln.strip())
+        raise InputError(f"{name!r}: lines 1-{k} are a comment preamble ({first.strip()[:40]!r}) before the "
+                         "header; bvpnav reads the header from line 1 and skips nothing: delete those lines "
+                         "(or move the notes to a separate file) so the header (e.g. t,acc_x) is line 1")
+    if not lines:
+        return text
+    header = text.split("\n", 1)[0].rstrip("\r")
+    if ";" in header and "," not in header:
+        sample = next((ln for ln in lines[1:] if ln.strip()), "")
+        if re.search(r"\d,\d", sample):
+            raise InputError(f"{name!r}: fields separated by ';' with decimal commas (line 2: "
+                             f"{sample[:40]!r}); bvpnav reads comma-separated CSV with '.' as the decimal "
+                             "point: export it with ',' between fields and '.' decimals "
+                             "(pandas: df.to_csv(path, index=False))")
+    try:
+        cells = next(csv.reader(_io.StringIO(header)))
+    except (csv.Error, StopIteration):
+        return text  # the table reader reports it
+    if len(cells) > 1:
+        empty = [j for j, c in enumerate(cells) if not c.strip()]
+        if empty:
+            j = empty[0]
+            raise InputError(f"{name!r}: header cell {j + 1} (line 1) is empty; name every column (t, "
+                             f"acc_<axis>, ...) so no column is read under an invented name; header: {cells}")
+        seen: dict[str, int] = {}
+        for j, c in enumerate(cells):
+            if c in seen:
+                raise InputError(f"{name!r}: header line 1 names column {c!r} twice (columns "
+                                 f"{seen[c] + 1} and {j + 1}); give every column its own name (the second "
+                                 "one would be renamed silently otherwise)")
+            seen[c] = j
+    return text
+
+
 def _read_table(path: Path):
+    import io as _io
+
     import pandas as pd
 
     suffix = path.suffix.lower()
-    if not path.exists():
-        raise InputError(f"{str(path)!r}: no such file; check the path")
-    if not path.is_file():
-        raise InputError(f"{str(path)!r}: not a file; give the path of a recording (.csv or .parquet)")
+    raw = read_regular_file(path, "recording")  # first: a FIFO or device is named as such
+    if suffix not in (".csv", ".parquet", ".pq"):
+        raise InputError(f"{str(path)!r}: unknown file type {suffix!r}; give a .csv or .parquet file")
     if suffix == ".csv":
+        text = _csv_text(raw, str(path))
         try:
-            return pd.read_csv(path)
+            return pd.read_csv(_io.StringIO(text))
         except pd.errors.EmptyDataError:
             raise InputError(f"{str(path)!r}: not a readable CSV file (it is empty); a recording needs a "
                              "header line (t, acc_<axis>) and at least 3 rows") from None
         except pd.errors.ParserError as exc:
             raise InputError(f"{str(path)!r}: not a readable CSV file ({str(exc).splitlines()[0]}); every "
                              "row needs the same number of fields as the header line") from None
-        except UnicodeDecodeError:
-            raise InputError(f"{str(path)!r}: not a readable CSV file (not UTF-8 text); save it as UTF-8 "
-                             "comma-separated values") from None
         except (ValueError, OverflowError) as exc:  # e.g. unbalanced quotes, absurd field sizes
             raise InputError(f"{str(path)!r}: not a readable CSV file ({str(exc).splitlines()[0]}); check "
                              "the file is comma-separated text with one header line") from None
-        except OSError as exc:
-            raise InputError(f"{str(path)!r}: cannot read it ({exc.strerror}); check the path and "
-                             "permissions") from None
-    if suffix in (".parquet", ".pq"):
+    try:
+        import pyarrow  # noqa: F401
+    except ImportError:
+        raise InputError(f"{str(path)!r}: reading Parquet needs pyarrow "
+                         "(pip install 'bvpnav[parquet]')") from None
+    if not raw.startswith(b"PAR1"):
+        found = _sniff(raw)
+        if found is None:
+            head = raw[:30].decode("utf-8", "replace")
+            what, fix = f"text ({head!r}...)", "if it is CSV, rename it to .csv"
+        else:
+            what, fix = found
+        raise InputError(f"{str(path)!r}: this {suffix} file is {what}, not Parquet (no PAR1 magic bytes); "
+                         f"{fix}")
+    try:
+        df = pd.read_parquet(_io.BytesIO(raw))
+    except Exception as exc:  # pyarrow raises its own error types for corrupt files
+        raise InputError(f"{str(path)!r}: not a readable Parquet file ({exc})") from None
+    names = [str(c) for c in df.columns]
+    dup = sorted({c for c in names if names.count(c) > 1})
+    if dup:
+        raise InputError(f"{str(path)!r}: column {dup[0]!r} appears {names.count(dup[0])} times; give every "
+                         "column its own name")
+    if any(not c.strip() for c in names):
+        j = next(j for j, c in enumerate(names) if not c.strip())
+        raise InputError(f"{str(path)!r}: column {j + 1} has an empty name; name every column (t, "
+                         "acc_<axis>, ...)")
+    return df
+
+
+def _time_seconds(df, tcol: str, tunit: str, origin: str | None, name: str, row_ref):
+    """The time column in s and what t = 0 is (None: the times as given)."""
+    import numpy as np
+    import pandas as pd
+
+    from .timebase import TIME_UNITS, to_seconds
+
+    col = df[tcol]
+    dtype = col.dtype
+    iso_hint = ("set time_unit = \"iso8601\" in the spec's [input] (times become seconds from the first "
+                "sample, recorded in data.time_origin) or store the times as numbers in s")
+    if tunit == "iso8601":
+        if pd.api.types.is_datetime64_any_dtype(dtype):
+            stamps = col
+        elif pd.api.types.is_object_dtype(dtype) or pd.api.types.is_string_dtype(dtype):
+            cells = col.to_numpy()
+            bad = [k for k, v in enumerate(cells) if not isinstance(v, str)]
+            if bad:
+                k = bad[0]
+                raise InputError(f"{name}: {row_ref(k)}, column {tcol!r} is {cells[k]!r}, not an ISO 8601 "
+                                 "timestamp (time_unit = \"iso8601\"); fix or remove that row")
+            stamps = pd.to_datetime(col, format="ISO8601", errors="coerce")
+            nat = np.flatnonzero(stamps.isna().to_numpy())
+            if nat.size:
+                k = int(nat[0])
+                raise InputError(f"{name}: {row_ref(k)}, column {tcol!r} is {cells[k]!r}, not an ISO 8601 "
+                                 "timestamp (e.g. 2026-01-31T12:00:00.125Z); fix or remove that row")
+        else:
+            raise InputError(f"{name}: column {tcol!r} holds {dtype} values but time_unit = \"iso8601\"; "
+                             "store ISO 8601 timestamps there, or give time_unit = \"s\" (ms, us, ns) for "
+                             "numbers")
         try:
-            import pyarrow  # noqa: F401
-        except ImportError:
-            raise InputError(f"{str(path)!r}: reading Parquet needs pyarrow "
-                             "(pip install 'bvpnav[parquet]')") from None
-        try:
-            return pd.read_parquet(path)
-        except Exception as exc:  # pyarrow raises its own error types for corrupt files
-            raise InputError(f"{str(path)!r}: not a readable Parquet file ({exc})") from None
-    raise InputError(f"{str(path)!r}: unknown file type {suffix!r}; give a .csv or .parquet file")
+            t, zero = to_seconds(stamps)
+        except InputError as exc:
+            raise InputError(f"{name}: column {tcol!r}: {exc}") from None
+        return t, zero
+    if pd.api.types.is_datetime64_any_dtype(dtype) or pd.api.types.is_timedelta64_dtype(dtype):
+        raise InputError(f"{name}: column {tcol!r} holds {dtype} values, not numbers in {tunit}; "
+                         + (iso_hint if pd.api.types.is_datetime64_any_dtype(dtype) else
+                            "store the durations as numbers in s"))
+    if pd.api.types.is_bool_dtype(dtype) or not (pd.api.types.is_numeric_dtype(dtype)
+                                                 or pd.api.types.is_object_dtype(dtype)
+                                                 or pd.api.types.is_string_dtype(dtype)):
+        raise InputError(f"{name}: column {tcol!r} holds {dtype} values; store times as numbers in {tunit} "
+                         "in that column")
+    if pd.api.types.is_object_dtype(dtype) or pd.api.types.is_string_dtype(dtype):
+        v = pd.to_numeric(col, errors="coerce").to_numpy(dtype=float, na_value=np.nan)
+        bad = np.flatnonzero(~np.isfinite(v))
+        if bad.size and isinstance(col.iloc[int(bad[0])], str):
+            cell = col.iloc[int(bad[0])]
+            if not pd.isna(pd.to_datetime(pd.Series([cell]), format="ISO8601", errors="coerce").iloc[0]):
+                raise InputError(f"{name}: {row_ref(int(bad[0]))}, column {tcol!r} is the timestamp "
+                                 f"{cell!r}, not a number in {tunit}; {iso_hint}")
+    if pd.api.types.is_integer_dtype(dtype) and len(col):
+        ints = col.to_numpy()
+        dt = np.diff(ints.astype(np.int64)) if ints.dtype.kind == "i" else None
+        if dt is not None and np.all(dt > 0):
+            if origin == "first":
+                return to_seconds(ints, tunit)
+            big = float(np.max(np.abs(ints.astype(float)))) * TIME_UNITS[tunit]
+            if np.spacing(big) > 0.5 * TIME_UNITS[tunit]:
+                raise InputError(
+                    f"{name}: column {tcol!r} holds integer times up to {int(np.max(np.abs(ints)))} {tunit} "
+                    f"(an epoch?) that float seconds cannot resolve to 1 {tunit}; add time_origin = "
+                    "\"first\" to the spec's [input] (times then count from the first sample, exactly, "
+                    "and the origin is recorded in data.time_origin)")
+    return None, None
 
 
 def read_recording(path: str | os.PathLike, input: dict | None = None):
@@ -245,17 +473,22 @@ def read_recording(path: str | os.PathLike, input: dict | None = None):
     Parameters
     ----------
     path : str or path-like
-        The file; opened read-only, never modified.
+        The file; must be a regular file (a FIFO, device or folder is refused before
+        it is opened), opened read-only, never modified.
     input : dict, optional
         The spec's ``[input]`` table: ``time`` (column, default ``"t"``), ``time_unit``
-        (``s``, ``ms``, ``us``, ``ns``; default ``s``), ``columns`` (axis -> column;
+        (``s``, ``ms``, ``us``, ``ns``; default ``s``; or ``iso8601`` for ISO 8601
+        timestamps or a datetime column, converted to seconds from the first sample),
+        ``time_origin`` (``"first"``: count the times from the first sample, subtracted
+        exactly in integer arithmetic for integer columns), ``columns`` (axis -> column;
         default every ``acc_<axis>`` column) and ``unit`` (``m/s^2``, ``g``, ``mg``,
         ``ft/s^2``; default ``m/s^2``).
 
     Returns
     -------
     ImuData
-        Times in s, accelerations in m/s^2.
+        Times in s, accelerations in m/s^2; ``data.time_origin`` says what ``t = 0`` is
+        when the times were converted (ISO timestamp or ``"<value> <unit>"``), else None.
 
     Raises
     ------
@@ -264,13 +497,18 @@ def read_recording(path: str | os.PathLike, input: dict | None = None):
         ones present), columns of bool, date or duration type, non-numeric, NaN or
         infinite cells, unsorted or duplicate times, fewer than 3 rows, unknown units,
         unreadable or empty files, ragged rows and fields separated by something other
-        than commas. Any other failure of the CSV parser is reported the same way, so
-        no raw parser exception escapes.
+        than commas; files that are something else (a ZIP/xlsx/xls/Parquet renamed .csv,
+        text renamed .parquet), comment preambles, decimal commas, empty or duplicate
+        header cells, ISO timestamps without ``time_unit = "iso8601"``, integer epochs that
+        float seconds cannot resolve, axis names whose trajectory columns would collide
+        (``acc_vx`` beside ``acc_x``, ``acc_t``, ``acc_``). A UTF-8 byte-order mark is
+        accepted (an encoding marker, not data). Time stored as the Parquet index is used
+        when the index carries the time column's name. No raw parser exception escapes.
     """
     import numpy as np
     import pandas as pd
 
-    from .imu import ImuData
+    from .imu import ImuData, axis_name_clash
     from .spec import ACC_UNITS, TIME_UNITS
 
     p = Path(path)
@@ -279,10 +517,15 @@ def read_recording(path: str | os.PathLike, input: dict | None = None):
     tcol = inp.get("time", "t")
     tunit = inp.get("time_unit", "s")
     unit = inp.get("unit", "m/s^2")
+    origin = inp.get("time_origin")
     if not isinstance(tcol, str):
         raise InputError(f"{name}: time={tcol!r}; give the name of the time column as a string")
-    if not isinstance(tunit, str) or tunit not in TIME_UNITS:
-        raise InputError(f"{name}: time_unit={tunit!r}; valid units: {list(TIME_UNITS)}")
+    if not isinstance(tunit, str) or (tunit not in TIME_UNITS and tunit != "iso8601"):
+        raise InputError(f"{name}: time_unit={tunit!r}; valid units: {list(TIME_UNITS)} for numbers, or "
+                         "'iso8601' for timestamps")
+    if origin is not None and origin != "first":
+        raise InputError(f"{name}: time_origin={origin!r}; the only choice is \"first\" (count the times "
+                         "from the first sample), or omit it")
     if not isinstance(unit, str) or unit not in ACC_UNITS:
         raise InputError(f"{name}: unit={unit!r}; valid acceleration units: {list(ACC_UNITS)}")
     cols = inp.get("columns")
@@ -291,6 +534,19 @@ def read_recording(path: str | os.PathLike, input: dict | None = None):
         raise InputError(f"{name}: columns={cols!r}; map axis names to column names, e.g. "
                          'columns = { x = "acc_x" }')
     df = _read_table(p)
+    if tcol not in df.columns and df.index.name is not None:
+        if df.index.name == tcol:  # the time column stored as the Parquet index: unambiguous
+            df = df.reset_index()
+        else:
+            raise InputError(f"{name}: time column {tcol!r} not found; the file's index is named "
+                             f"{df.index.name!r} (the time stored as the Parquet index?): set time = "
+                             f"\"{df.index.name}\" in the spec's [input] if it is the time; columns in the "
+                             f"file: {list(df.columns)}")
+    if tcol not in df.columns and not isinstance(df.index, pd.RangeIndex):
+        raise InputError(f"{name}: time column {tcol!r} not found; the file has an unnamed {df.index.dtype} "
+                         "index (the time stored as the Parquet index without a name?): write the file with "
+                         f"the time as a column named {tcol!r} (df.reset_index(names={tcol!r})); columns "
+                         f"in the file: {list(df.columns)}")
     if len(df.columns) == 1:
         head = str(df.columns[0])
         for sep, what in ((";", "';'"), ("\t", "tabs"), ("|", "'|'"), (" ", "spaces")):
@@ -303,6 +559,18 @@ def read_recording(path: str | os.PathLike, input: dict | None = None):
             raise InputError(f"{name}: no acceleration columns: name them acc_<axis> or map them with "
                              f"columns = {{ x = \"...\" }} in the spec's [input]; columns in the file: "
                              f"{list(df.columns)}")
+        clash = axis_name_clash(list(cols))
+        if clash is not None:
+            raise InputError(f"{name}: the columns {list(cols.values())} give the axes {list(cols)}: {clash} "
+                             "(trajectory columns are t, <axis>, v<axis>, <axis>_std, v<axis>_std); rename "
+                             "the column(s) (e.g. acc_x, acc_y, acc_z) or map them with columns = { x = "
+                             "\"...\" } in the spec's [input]")
+    else:
+        clash = axis_name_clash([str(a) for a in cols])
+        if clash is not None:
+            raise InputError(f"{name}: [input] columns = {cols}: {clash} (trajectory columns are t, <axis>, "
+                             "v<axis>, <axis>_std, v<axis>_std); choose other axis names, e.g. "
+                             "columns = { x = \"...\", y = \"...\" }")
     for what, col in [("time", tcol)] + [(f"axis {a}", c) for a, c in cols.items()]:
         if col not in df.columns:
             raise InputError(f"{name}: column {col!r} ({what}) not found; columns in the file: "
@@ -314,8 +582,9 @@ def read_recording(path: str | os.PathLike, input: dict | None = None):
     def row_ref(k: int) -> str:
         return f"row {k}" + (f" (line {k + line0})" if line0 else "")
 
+    t_conv, zero = _time_seconds(df, tcol, tunit, origin, name, row_ref)
     arrays = {}
-    for col in [tcol, *cols.values()]:
+    for col in ([] if t_conv is not None else [tcol]) + list(cols.values()):
         dtype = df[col].dtype
         if pd.api.types.is_bool_dtype(dtype) or not (pd.api.types.is_numeric_dtype(dtype)
                                                      or pd.api.types.is_object_dtype(dtype)
@@ -323,6 +592,9 @@ def read_recording(path: str | os.PathLike, input: dict | None = None):
             raise InputError(f"{name}: column {col!r} holds {dtype} values; store "
                              + ("times as numbers in " + tunit if col == tcol else
                                 f"accelerations as numbers in {unit}") + " in that column")
+        if pd.api.types.is_complex_dtype(dtype):
+            raise InputError(f"{name}: column {col!r} holds complex values; store real accelerations in "
+                             f"{unit} in that column")
         try:
             v = pd.to_numeric(df[col], errors="coerce").to_numpy(dtype=float, na_value=np.nan)
         except (TypeError, ValueError):  # cells holding lists, dicts, bytes ... (Parquet)
@@ -341,17 +613,28 @@ def read_recording(path: str | os.PathLike, input: dict | None = None):
             raise InputError(f"{name}: {row_ref(k)}, column {col!r} is {what} ({bad.size} bad row(s) in "
                              "this column); fix or remove those rows")
         arrays[col] = v
-    t = arrays[tcol] * TIME_UNITS[tunit]
+    if t_conv is not None:
+        t, shown = t_conv, df[tcol].to_numpy()
+    else:
+        shown = arrays[tcol]
+        if origin == "first":
+            from .timebase import to_seconds
+
+            t, zero = to_seconds(shown, tunit)
+        else:
+            t = shown * TIME_UNITS[tunit]
     dt = np.diff(t)
     bad = np.flatnonzero(dt <= 0)
     if bad.size:
         k = int(bad[0]) + 1
         kind = "repeats" if dt[k - 1] == 0 else "goes back from"
-        raise InputError(f"{name}: {row_ref(k)}: time {float(arrays[tcol][k])!r} {kind} the previous "
-                         f"row's {float(arrays[tcol][k - 1])!r} ({tcol!r} must increase strictly); "
+        prev, cur = shown[k - 1], shown[k]
+        fmt = (lambda x: repr(float(x))) if t_conv is None else (lambda x: repr(str(x)))
+        raise InputError(f"{name}: {row_ref(k)}: time {fmt(cur)} {kind} the previous "
+                         f"row's {fmt(prev)} ({tcol!r} must increase strictly); "
                          "sort the file by time and drop duplicate samples")
     acc = np.column_stack([arrays[c] for c in cols.values()]) * ACC_UNITS[unit]
-    return ImuData(t=t, acc=acc, axes=list(cols))
+    return ImuData(t=t, acc=acc, axes=list(cols), time_origin=zero)
 
 
 def write_table(df, path: str | os.PathLike, option: str = "path") -> None:

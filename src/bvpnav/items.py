@@ -20,8 +20,9 @@ from typing import Any, ClassVar
 import numpy as np
 
 from .errors import InputError
+from .timebase import as_float_array
 
-__all__ = ["Item", "MODES", "registry", "register", "item_class"]
+__all__ = ["Item", "MODES", "registry", "register", "item_class", "broadcast_rows", "as_values"]
 
 MODES = ("hard", "soft", "robust", "band")
 
@@ -64,10 +65,7 @@ def positive_array(value, what: str, allow_none: bool = True):
         if allow_none:
             return None
         raise InputError(f"{what} is required")
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{what}: {value!r} is not a number") from None
+    arr = as_float_array(value, what, "the item's units")
     bad = np.flatnonzero(~(np.isfinite(arr) & (arr > 0)).ravel())
     if bad.size:
         v = float(arr.ravel()[bad[0]])
@@ -108,6 +106,24 @@ class Item:
     - robust: :math:`\\lambda \\sum_i \\mathrm{huber}(\\rho_i/\\sigma_i, M/\\sigma_i)`, or
       :math:`\\lambda \\sum_i |\\rho_i|/\\sigma_i` without a threshold;
     - band: :math:`|\\rho_i| \\le \\mathrm{tol}_i`.
+
+    **Broadcasting rule** (one function, :func:`broadcast_rows`, for ``value``, ``sigma``
+    and ``tol`` of every item). An item with K instants on A axes has K * A residual rows,
+    time-major (instant 0 axes 0..A-1, instant 1, ...). A per-row quantity may be
+
+    - a scalar: the same for every row;
+    - K values: one per instant (the same on every axis);
+    - A values: one per axis (the same at every instant);
+    - K * A values: one per row, time-major;
+    - shape (K, A): one per instant and axis.
+
+    When K == A > 1 a flat list of K values could mean per instant or per axis: it is
+    refused, with both spellings (shape (K, A) says either unambiguously, e.g.
+    ``value=[[0, 0], [10, 10]]`` for "0 m at the first instant, 10 m at the second" on
+    two axes). Anything else is refused naming the item and the accepted lengths; nothing
+    is repeated to fit. Items whose instants are the grid nodes (intervals, symmetry,
+    bounds, cones, tracks) take a scalar or one value per row. ``axes=[]`` (no axis) is
+    refused at construction.
     """
 
     axes: Any = None
@@ -165,7 +181,18 @@ class Item:
         if isinstance(self.axes, str):
             object.__setattr__(self, "axes", (self.axes,))
         elif self.axes is not None:
-            object.__setattr__(self, "axes", tuple(str(a) for a in self.axes))
+            try:
+                axes = tuple(self.axes)
+            except TypeError:
+                raise InputError(f"{label}: axes={self.axes!r}; give an axis name or a list of them, e.g. "
+                                 "axes=('x', 'y')") from None
+            if not axes:
+                raise InputError(f"{label}: axes={self.axes!r} names no axis; omit axes= for every axis "
+                                 "of the data, or name some, e.g. axes=('x',)")
+            if not all(isinstance(a, str) for a in axes):
+                raise InputError(f"{label}: axes={self.axes!r}; give axis names as strings, e.g. "
+                                 "axes=('x', 'y')")
+            object.__setattr__(self, "axes", axes)
         self.validate()
 
     # ----------------------------------------------------------- contract
@@ -202,28 +229,63 @@ class Item:
         """The item's name for messages."""
         return self.name or type(self).__name__
 
+    def row_layout(self, m: int) -> tuple[int, int]:
+        """``(instants, axes)`` of the item's ``m`` residual rows (time-major).
+
+        The default uses :meth:`n_instants` when the item knows them; otherwise every row
+        is its own instant (``(m, 1)``: a scalar or one value per row).
+        """
+        k = self.n_instants()
+        if k and m % k == 0:
+            return k, m // k
+        return m, 1
+
+    def n_instants(self) -> int | None:
+        """Number of instants (or intervals) the item constrains, if known before compiling."""
+        return None
+
     def weight_rows(self, m: int) -> np.ndarray | None:
-        """``sigma`` broadcast to the item's m residual rows (None for hard/band)."""
+        """``sigma`` per residual row (None for hard/band), by :func:`broadcast_rows`."""
         if self.sigma is None:
             return None
-        return self._broadcast(self.sigma, m, "sigma")
+        k, a = self.row_layout(m)
+        return broadcast_rows(self.sigma, k, a, f"{self.identify()}: sigma", self.units)
 
     def tol_rows(self, m: int) -> np.ndarray | None:
-        """``tol`` broadcast to the item's m residual rows."""
+        """``tol`` per residual row, by :func:`broadcast_rows`."""
         if self.tol is None:
             return None
-        return self._broadcast(self.tol, m, "tol")
+        k, a = self.row_layout(m)
+        return broadcast_rows(self.tol, k, a, f"{self.identify()}: tol", self.units)
 
-    def _broadcast(self, v: np.ndarray, m: int, what: str) -> np.ndarray:
-        v = np.asarray(v, dtype=float)
-        if v.size == 1:
-            return np.full(m, float(v.ravel()[0]))
-        if v.size == m:
-            return v.ravel().astype(float)
-        # per-time or per-axis arrays: repeat to rows (time-major, then axis)
-        if m % v.size == 0:
-            return np.repeat(v.ravel(), m // v.size)
-        raise InputError(f"{self.label}: {what} has {v.size} entries for {m} residual rows")
+    def identify(self) -> str:
+        """The item's label, and for an unnamed item what it holds, for messages.
+
+        A named item is its name; an unnamed one (``Position``, ``Position#3``) is
+        followed by its own fields, shortened, with units, e.g.
+        ``Position#3 (t=[0, 10] s, value=[0, 10] m)``, so a message naming it can be
+        acted on.
+        """
+        original = self.__dict__.get("_original", self)
+        if original.name is not None:
+            return self.label
+        base = {f.name for f in fields(Item)}
+        parts = []
+        for f in fields(self):
+            if f.name in base or not f.init:
+                continue
+            v = getattr(self, f.name)
+            if v is None:
+                continue
+            unit = ""
+            if f.name in ("t", "t0", "t1", "about") or f.name.endswith("_t"):
+                unit = " s"
+            elif f.name == "value":
+                unit = f" {self.units}"
+            parts.append(f"{f.name}={_short(v)}{unit}")
+        if self.axes is not None:
+            parts.append(f"axes={list(self.axes)}")
+        return f"{self.label} ({', '.join(parts)})" if parts else self.label
 
     def params(self) -> dict[str, Any]:
         """Constructor arguments as plain Python values (for specs and repr)."""
@@ -244,31 +306,91 @@ class Item:
         return f"{type(self).__name__}({args})"
 
 
-def as_values(value, m_times: int, nax: int, what: str) -> np.ndarray:
-    """Broadcast an item's value to shape (m_times, nax) then flatten time-major.
-
-    Accepts a scalar, an array of length ``nax`` (one value per axis for every time),
-    an array of length ``m_times`` (one value per time, single axis or the same for
-    every axis), or an array of shape (m_times, nax).
-    """
+def _short(v, n: int = 4) -> str:
+    """A value shortened for a message: numbers with ``%g``, long arrays elided."""
+    if isinstance(v, str):
+        return repr(v)
     try:
-        v = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{what}: {value!r} is not numeric") from None
-    if not np.all(np.isfinite(v)):
-        k = int(np.flatnonzero(~np.isfinite(v.ravel()))[0])
-        raise InputError(f"{what}: entry {k} is {float(v.ravel()[k])!r}; values must be finite")
-    if v.ndim == 0:
-        out = np.full((m_times, nax), float(v))
-    elif v.shape == (m_times, nax):
-        out = v
-    elif v.ndim == 1 and v.size == m_times and (nax == 1 or m_times != nax):
-        out = np.repeat(v[:, None], nax, axis=1)
-    elif v.ndim == 1 and v.size == nax:
-        out = np.repeat(v[None, :], m_times, axis=0)
-    else:
-        raise InputError(
-            f"{what}: shape {v.shape} does not fit {m_times} time(s) x {nax} axis(es); give a "
-            f"scalar, {nax} per-axis values, {m_times} per-time values or shape ({m_times}, {nax})"
-        )
-    return out.ravel()
+        arr = np.asarray(v, dtype=float)
+    except Exception:  # anything not numeric (it is only shown)
+        text = repr(v)
+        return text if len(text) <= 40 else text[:37] + "..."
+    if arr.ndim == 0:
+        return f"{float(arr):g}"
+    if arr.ndim > 1:
+        return f"<array of shape {arr.shape}>"
+    vals = [f"{x:g}" for x in arr]
+    if len(vals) > n:
+        vals = vals[: n - 1] + ["...", vals[-1]]
+        return "[" + ", ".join(vals) + f"] ({arr.size} values)"
+    return "[" + ", ".join(vals) + "]"
+
+
+def broadcast_rows(v, k: int, a: int, what: str, units: str = "") -> np.ndarray:
+    """Spread a per-row quantity over ``k`` instants x ``a`` axes, time-major (the rule).
+
+    Parameters
+    ----------
+    v : float or array_like
+        A scalar, ``k`` values (per instant), ``a`` values (per axis), ``k * a`` values
+        (per row, time-major) or shape ``(k, a)``.
+    k, a : int
+        Instants and axes of the item's rows.
+    what : str
+        The item and the field, for messages (e.g. ``"Position#2 (t=[0, 10] s): value"``).
+    units : str
+        The field's units, for messages.
+
+    Returns
+    -------
+    numpy.ndarray, shape (k * a,)
+        Row ``i * a + j`` is instant ``i``, axis ``j``.
+
+    Raises
+    ------
+    InputError
+        For a flat list of ``k == a > 1`` values (per instant or per axis? both spellings
+        are given), and for any other shape, naming the accepted lengths.
+    """
+    arr = as_float_array(v, what, units or "the item's units")
+    bad = np.flatnonzero(~np.isfinite(arr.ravel()))
+    if bad.size:
+        j = int(bad[0])
+        raise InputError(f"{what}: entry {j} is {float(arr.ravel()[j])!r}; values must be finite")
+    m = k * a
+    if arr.size == 1:
+        return np.full(m, float(arr.ravel()[0]))
+    if arr.shape == (k, a):
+        return arr.ravel()
+    if arr.ndim == 1:
+        if arr.size == k and k == a:
+            per_inst = np.repeat(arr[:, None], a, axis=1).tolist()
+            per_axis = np.repeat(arr[None, :], k, axis=0).tolist()
+            raise InputError(
+                f"{what}: {arr.tolist()} has {k} entries for {k} instants on {a} axes: one per instant "
+                f"or one per axis? Write it as shape ({k}, {a}), one row per instant and one column per "
+                f"axis: {per_inst} for one value per instant (the same on every axis), or {per_axis} "
+                "for one value per axis (the same at every instant)"
+            )
+        if arr.size == m:
+            return arr.copy()
+        if arr.size == k:
+            return np.repeat(arr, a)
+        if arr.size == a:
+            return np.tile(arr, k)
+    accepted = sorted({1, k, a, m})
+    raise InputError(
+        f"{what}: shape {arr.shape} does not fit {k} instant(s) x {a} axis(es) = {m} row(s); give a "
+        f"scalar, {k} value(s) (one per instant), {a} (one per axis), {m} (one per row, time-major) or "
+        f"shape ({k}, {a}) (accepted flat lengths: {accepted}); nothing is repeated to fit"
+    )
+
+
+def as_values(value, m_times: int, nax: int, what: str) -> np.ndarray:
+    """An item's value per residual row: :func:`broadcast_rows` with ``m_times`` instants.
+
+    Accepts a scalar, ``m_times`` values (one per instant), ``nax`` values (one per axis),
+    ``m_times * nax`` values (one per row) or shape ``(m_times, nax)``; a flat list that
+    could be either (``m_times == nax > 1``) is refused with both spellings.
+    """
+    return broadcast_rows(value, m_times, nax, what)

@@ -669,10 +669,12 @@ class NavigationProblem:
                 culprits = conflicting_items(self)
             except Exception:  # the finder must never hide the solver's verdict
                 culprits = []
+            ident = {it.label: it.identify() for it in self._items}  # unnamed items: what they hold
             if culprits:
-                which = f"These hard items conflict: {culprits}. Soften one of them (give sigma=...)."
+                which = (f"These hard items conflict: {[ident.get(c, c) for c in culprits]}. Soften one of "
+                         "them (give sigma=...).")
             else:
-                hard = [t.label for t in self.terms() if t.mode in ("hard", "band")]
+                hard = [ident.get(t.label, t.label) for t in self.terms() if t.mode in ("hard", "band")]
                 which = (f"No conflicting subset was confirmed (a numerical verdict?). Hard/band "
                          f"items: {hard}. Soften some of them (give sigma=...) or try another solver.")
             raise Infeasible(

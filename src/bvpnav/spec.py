@@ -11,7 +11,10 @@ Example::
 
     [input]                       # how to read a recording (CSV or Parquet)
     time = "t"                    # time column
-    time_unit = "s"               # s, ms, us or ns
+    time_unit = "s"               # s, ms, us or ns; "iso8601" for timestamps (seconds from
+                                  # the first sample, kept in data.time_origin)
+    time_origin = "first"         # optional: count numeric times from the first sample
+                                  # (exact for integer epochs, e.g. int64 ns)
     columns = { x = "acc_x" }     # axis name -> acceleration column
     unit = "m/s^2"                # m/s^2, g, mg or ft/s^2
 
@@ -39,7 +42,6 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -47,17 +49,18 @@ import tomllib
 
 from .errors import InputError
 from .items import _snake, registry
+from .timebase import TIME_UNITS as _TIME_UNITS
 
 __all__ = ["Spec", "load_spec", "read_spec_text", "parse_spec", "dumps_spec", "problem_to_spec",
            "problem_from_spec", "error_model_registry", "TIME_UNITS", "ACC_UNITS"]
 
-#: Seconds per unit of the time column.
-TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
+#: Seconds per unit of the time column (``time_unit = "iso8601"`` reads timestamps instead).
+TIME_UNITS = _TIME_UNITS
 #: m/s^2 per unit of the acceleration columns.
 ACC_UNITS = {"m/s^2": 1.0, "g": 9.80665, "mg": 9.80665e-3, "ft/s^2": 0.3048}
 
 _SECTIONS = {
-    "input": {"time", "time_unit", "columns", "unit"},
+    "input": {"time", "time_unit", "time_origin", "columns", "unit"},
     "problem": {"residual", "sigma_a"},
     "solve": {"solver", "accuracy", "lam", "fallback", "on_conflict", "priority", "demote_sigma"},
     "error_model": None,  # array of tables, checked per model
@@ -90,7 +93,8 @@ class Spec:
     Attributes
     ----------
     input : dict
-        ``time``, ``time_unit``, ``columns`` (axis -> column), ``unit``.
+        ``time``, ``time_unit`` (or ``"iso8601"``), ``time_origin`` (``"first"``),
+        ``columns`` (axis -> column), ``unit``.
     problem : dict
         Keyword arguments of :class:`bvpnav.NavigationProblem` (``residual``, ``sigma_a``).
     solve : dict
@@ -149,6 +153,19 @@ def _where(source: str, line: int | None) -> str:
     return f"{source}, line {line}" if line else source
 
 
+def _has_datetime(v) -> bool:
+    """Whether a TOML value is or holds a date, time or date-time."""
+    import datetime
+
+    if isinstance(v, (datetime.date, datetime.time)):  # datetime.datetime is a date
+        return True
+    if isinstance(v, list):
+        return any(_has_datetime(x) for x in v)
+    if isinstance(v, dict):
+        return any(_has_datetime(x) for x in v.values())
+    return False
+
+
 def _instantiate(cls, kind: str, fields: dict, text: str, section: str, index: int, source: str):
     allowed = [f.name for f in dataclasses.fields(cls) if f.init]
     for key in fields:
@@ -161,6 +178,13 @@ def _instantiate(cls, kind: str, fields: dict, text: str, section: str, index: i
             line = _line_of(text, key, section, index)
             raise InputError(f"{_where(source, line)}: {kind} {_snake(cls.__name__)!r}: {key}="
                              f"{fields[key]!r}; give a string, e.g. {key} = \"...\"")
+    for key, v in fields.items():
+        if _has_datetime(v):
+            line = _line_of(text, key, section, index)
+            raise InputError(f"{_where(source, line)}: {kind} {_snake(cls.__name__)!r}: {key} holds a TOML "
+                             "date/time; spec times are numbers in s on the recording's time axis (seconds "
+                             'from the first sample when [input] has time_unit = "iso8601"): write e.g. '
+                             f"{key} = 12.5")
     try:
         return cls(**fields)
     except InputError as exc:
@@ -232,9 +256,14 @@ def _check_values(plain: dict, text: str, source: str) -> None:
     if "time" in inp and not isinstance(inp["time"], str):
         raise InputError(f"{where('time', 'input')}: time={inp['time']!r}; give the "
                          'name of the time column as a string, e.g. time = "t"')
-    if "time_unit" in inp and not (isinstance(inp["time_unit"], str) and inp["time_unit"] in TIME_UNITS):
+    if "time_unit" in inp and not (isinstance(inp["time_unit"], str)
+                                   and (inp["time_unit"] in TIME_UNITS or inp["time_unit"] == "iso8601")):
         raise InputError(f"{where('time_unit', 'input')}: time_unit="
-                         f"{inp['time_unit']!r}; valid units: {list(TIME_UNITS)}")
+                         f"{inp['time_unit']!r}; valid units: {list(TIME_UNITS)} for numbers, or \"iso8601\" "
+                         "for timestamps")
+    if "time_origin" in inp and inp["time_origin"] != "first":
+        raise InputError(f"{where('time_origin', 'input')}: time_origin={inp['time_origin']!r}; the only "
+                         'choice is "first" (count the times from the first sample), or omit the key')
     if "unit" in inp and not (isinstance(inp["unit"], str) and inp["unit"] in ACC_UNITS):
         raise InputError(f"{where('unit', 'input')}: unit={inp['unit']!r}; "
                          f"valid acceleration units: {list(ACC_UNITS)}")
@@ -255,6 +284,8 @@ def parse_spec(text: str, source: str = "spec") -> Spec:
         ``sigma_a`` > 0, solver name, accuracy preset, ``lam`` >= 0 or a rule; and values
         of the wrong TOML type anywhere), naming the line and listing the valid choices.
     """
+    if text.startswith("\ufeff"):  # a UTF-8 byte-order mark: an encoding marker, not TOML
+        text = text[1:]
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -304,14 +335,21 @@ def parse_spec(text: str, source: str = "spec") -> Spec:
 
 
 def read_spec_text(path) -> str:
-    """A spec file's text (opened read-only), with errors naming the file."""
-    p = Path(path)
+    """A spec file's text, with errors naming the file.
+
+    The path must be a regular file (checked with ``os.stat`` before opening: a FIFO or
+    ``/dev/stdin`` would block forever); it is opened read-only. A UTF-8 byte-order mark
+    is accepted and dropped (an encoding marker some editors write, not part of the TOML).
+    """
+    from .io import read_regular_file
+
+    raw = read_regular_file(path, "spec")
     try:
-        return p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"spec {str(p)!r}: cannot read it ({exc.strerror})") from None
-    except UnicodeDecodeError:
-        raise InputError(f"spec {str(p)!r}: not UTF-8 text") from None
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = raw[: exc.start].count(b"\n") + 1
+        raise InputError(f"spec {str(path)!r}: not UTF-8 text (byte {exc.start}, line {line}); save it as "
+                         "UTF-8") from None
 
 
 def load_spec(path) -> Spec:
@@ -320,6 +358,36 @@ def load_spec(path) -> Spec:
 
 
 # ------------------------------------------------------------------ writing
+_ESCAPES = {"\\": "\\\\", '"': '\\"', "\b": "\\b", "\t": "\\t", "\n": "\\n", "\f": "\\f", "\r": "\\r"}
+
+
+def _toml_string(v: str) -> str:
+    """A TOML basic string for any Python string: quotes, backslashes and control
+    characters escaped, everything outside printable ASCII as ``\\uXXXX``/``\\UXXXXXXXX``
+    (the file stays ASCII whatever its encoding is read as)."""
+    out = []
+    for ch in v:
+        code = ord(ch)
+        if ch in _ESCAPES:
+            out.append(_ESCAPES[ch])
+        elif 0x20 <= code < 0x7F:
+            out.append(ch)
+        elif 0xD800 <= code <= 0xDFFF:
+            raise InputError(f"cannot write {v!r} to a spec: it holds a lone surrogate (U+{code:04X}), which "
+                             "is not a Unicode character; fix the string")
+        elif code <= 0xFFFF:
+            out.append(f"\\u{code:04X}")
+        else:
+            out.append(f"\\U{code:08X}")
+    return '"' + "".join(out) + '"'
+
+
+def _toml_key(k) -> str:
+    """A TOML key: bare when it is ``A-Za-z0-9_-``, else a quoted basic string."""
+    k = str(k)
+    return k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else _toml_string(k)
+
+
 def _toml_value(v) -> str:
     if isinstance(v, np.ndarray):
         v = v.tolist()
@@ -336,11 +404,11 @@ def _toml_value(v) -> str:
             return "inf" if v > 0 else "-inf"
         return repr(v)  # shortest round-trip representation
     if isinstance(v, str):
-        return '"' + v.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
+        return _toml_string(v)
     if isinstance(v, (list, tuple)):
         return "[" + ", ".join(_toml_value(x) for x in v) + "]"
     if isinstance(v, dict):
-        return "{ " + ", ".join(f"{k} = {_toml_value(x)}" for k, x in v.items()) + " }"
+        return "{ " + ", ".join(f"{_toml_key(k)} = {_toml_value(x)}" for k, x in v.items()) + " }"
     raise InputError(f"cannot write {v!r} ({type(v).__name__}) to a spec")
 
 
@@ -364,7 +432,7 @@ def dumps_spec(spec: Spec) -> str:
     for sec in ("input", "problem", "solve"):
         tab = getattr(spec, sec)
         if tab:
-            lines += ["", f"[{sec}]"] + [f"{k} = {_toml_value(v)}" for k, v in tab.items()]
+            lines += ["", f"[{sec}]"] + [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in tab.items()]
     for m in spec.error_models:
         lines += ["", "[[error_model]]", f'type = "{_snake(type(m).__name__)}"']
         lines += [f"{k} = {_toml_value(v)}" for k, v in _fields_of(m).items()]
