@@ -218,13 +218,17 @@ def test_verify_refuses_nan_in_x_and_in_the_reported_parameters():
     x[prob.model.r_index(0)[50]] = np.nan
     bad = prob.verify(x, 1.0)
     assert not bad["verified"] and bad["nonfinite"] == ["1 entries of the solution vector"]
-    # 1 + k_y = 0 exactly: I + E is singular, every sensor parameter's report is NaN
+    # 1 + k_y = 0 exactly: I + E is singular; axis y's parameters are undetermined (scale
+    # inf, bias NaN) and the x axis keeps its finite values (issue 14: before, every sensor
+    # parameter's report was NaN, and the same exact zero from a solver on one BLAS kernel
+    # failed a solve that verified on another). This x is not a solution (forward error).
     x = sol.x.copy()
     x[prob.model.l_index[list(prob.model.param_names).index("scale_y")]] = -1.0
     bad = prob.verify(x, 1.0)
-    assert not bad["verified"]
+    assert not bad["verified"] and bad["forward_error"] > 1e-6
     assert [s for s in bad["nonfinite"] if s.startswith("error parameter")] == [
-        f"error parameter {n} = nan" for n in ("bias_x", "bias_y", "scale_x", "scale_y")]
+        "error parameter bias_y = nan", "error parameter scale_y = inf"]
+    assert bad["undetermined"] == ["bias_y", "scale_y"]
     assert any(s.startswith("sensor axis y") for s in bad["nonfinite"])  # the reason
 
 

@@ -772,11 +772,18 @@ class NavigationProblem:
             conditioning = assess_conditioning(self, xval, lam, factored)
             if nonfinite:
                 nonfinite += [dg["message"] for dg in conditioning["degenerate_axes"]]
+        # the parameters of a sensor axis whose kept fraction is zero are undetermined (inf,
+        # NaN) by the information itself; named in warnings, they do not fail the answer.
+        # Anything else not finite does, whatever rounding decided (issue 14).
+        undetermined = sorted({n for dg in (conditioning or {}).get("degenerate_axes", [])
+                               if dg.get("undetermined") for n in dg["parameters"]})
+        unexplained = [s for s in nonfinite if not s.startswith("sensor axis ")
+                       and not any(s.startswith(f"error parameter {n} = ") for n in undetermined)]
         ok = (fem_rel <= rtol and worst <= rtol * 10 and (stat is None or stat <= np.sqrt(rtol))
-              and (fwd is None or fwd <= FORWARD_RTOL[accuracy]) and not nonfinite)
+              and (fwd is None or fwd <= FORWARD_RTOL[accuracy]) and not unexplained)
         return {"fem_residual": fem_rel, "max_violation": worst, "worst_item": worst_item,
                 "stationarity": stat, "forward_error": fwd, "rtol": rtol, "nonfinite": nonfinite,
-                "conditioning": conditioning, "verified": bool(ok)}
+                "undetermined": undetermined, "conditioning": conditioning, "verified": bool(ok)}
 
     def _stationarity(self, xval: np.ndarray, lam: float, duals: dict) -> float | None:
         """Relative norm of the Lagrangian gradient (None for non-smooth objectives)."""
@@ -854,7 +861,8 @@ class NavigationProblem:
         )
         cond = check.get("conditioning") or {}
         degenerate = [dg["message"] for dg in cond.get("degenerate_axes", [])]
-        if degenerate and check.get("nonfinite"):  # the information's fault: no fallback can help
+        if degenerate and check.get("nonfinite") and not check["verified"]:
+            # the information's fault: no fallback can help
             raise InputError(f"{info['solver']}: the error-model estimate is not finite because "
                              + "; ".join(degenerate))
         if verify and not check["verified"]:
