@@ -214,6 +214,22 @@ class NavigationProblem:
         for it in items:
             self.add(it)
 
+    # ------------------------------------------------------------ pickling
+    #: Caches rebuilt lazily after unpickling (cvxpy's compiled problem holds solver
+    #: objects that cannot be pickled; the rest is cheap to rebuild and may be large).
+    _CACHES = ("_model", "_terms", "_cvx", "_observable_terms")
+
+    def __getstate__(self) -> dict:
+        """The problem's definition without its caches (see :attr:`_CACHES`)."""
+        state = dict(self.__dict__)
+        for k in self._CACHES:
+            state.pop(k, None)
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._model, self._terms, self._cvx = None, None, None
+
     # ----------------------------------------------------------- building
     def add(self, *items: Item) -> NavigationProblem:
         """Add one or more items; returns the problem for chaining."""
