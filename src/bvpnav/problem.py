@@ -652,6 +652,7 @@ class NavigationProblem:
         backend = resolve_solver(solver)
         solver_options(backend, accuracy, options)
         self._fallback_chain(backend, accuracy, options, fallback)
+        check_memory(self, backend)  # the primary; a fallback that does not fit is skipped
         if on_conflict == "demote":  # before the loop: each round calls solve() (and the loop) again
             from .conflicts import solve_demoting
 
@@ -673,7 +674,6 @@ class NavigationProblem:
         chain = [(backend, opts)] + self._fallback_chain(backend, accuracy, options, fallback)
         self.check_scales(lam)
         self.check_observability()
-        check_memory(self, backend)  # the primary; a fallback that does not fit is skipped
         attempts: list[dict] = []
         last_exc: SolveError | None = None
         for k, (be, op) in enumerate(chain):
