@@ -342,6 +342,17 @@ def memory_shortfall(backend: Backend, problem, available: int | None = None) ->
             f"({MEMORY_SHARE:.0%} of {_gb(avail)} available)")
 
 
+def _least_squares_items(problem) -> bool:
+    """Whether every item is a hard or soft equality and no error-model bound exists,
+    judged from the items' declared kind and mode (no compilation: N may be huge)."""
+    for it in getattr(problem, "_items", ()):
+        if getattr(it, "kind", "equality") != "equality" or it.mode in ("band", "robust"):
+            return False
+    em = getattr(problem, "error_model", None)
+    comps = getattr(em, "components", (em,)) if em is not None else ()
+    return all(getattr(c, "bounds", None) is None for c in comps)
+
+
 def check_memory(problem, backend: Backend) -> None:
     """Raise :class:`InputError` before any work when ``backend`` would not fit in memory,
     naming N, the estimate, the limit and the options that would fit."""
@@ -360,7 +371,7 @@ def check_memory(problem, backend: Backend) -> None:
     for name in ("direct", "csne"):
         if name in _BACKENDS and name != backend.name:
             other = _BACKENDS[name]
-            if memory_shortfall(other, problem, avail) is None and unsupported_term(other, problem) is None:
+            if memory_shortfall(other, problem, avail) is None and _least_squares_items(problem):
                 fits.append(f"solver={name!r} (about {_gb(memory_estimate(other, problem))})")
     fits.append("a machine with more memory")
     raise InputError(f"not enough memory: {why}. Options that would fit: " + "; ".join(fits) + ".")
