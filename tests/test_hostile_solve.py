@@ -314,6 +314,7 @@ def test_memory_estimate_refuses_before_work_and_names_what_fits(inp, monkeypatc
 def test_memory_refusal_on_ten_million_samples_without_allocating(monkeypatch):
     """The estimate needs N only: a 10-million-sample problem is refused in a moment."""
     t = np.arange(10_000_000, dtype=float) * 1e-3
+    t_copy = t.copy()
     data = bvpnav.ImuData(t=t, acc=np.zeros_like(t))
     prob = NavigationProblem(data, items=[Position(t=[0.0, t[-1]], value=0.0, name="ends"),
                                           Velocity(t=0.0, value=0.0, name="v0")])
@@ -328,6 +329,7 @@ def test_memory_refusal_on_ten_million_samples_without_allocating(monkeypatch):
                        r"'direct' needs about 19\.5 GB", r"limit 14\.4 GB",
                        r"at most 7384615 samples")
     assert "solver='csne'" not in str(exc)  # csne (27.7 GB) does not fit either
+    assert t.tobytes() == t_copy.tobytes()
 
 
 def test_a_fallback_that_does_not_fit_is_skipped_with_its_reason(inp, monkeypatch):

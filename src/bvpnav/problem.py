@@ -595,15 +595,18 @@ class NavigationProblem:
             Case-insensitive solver name (``bvpnav.available_solvers()``).
         lam : float or str
             Regularization weight (dimensionless ratio of the item terms to the data
-            term), or the name of a rule that chooses it (``"lcurve"``, ``"gcv"``,
-            ``"discrepancy"``, ``"quasi"``).
+            term): 0 or within :data:`LAM_RANGE` (1e-12 to 1e12), or the name of a rule
+            that chooses it (``"lcurve"``, ``"gcv"``, ``"discrepancy"``, ``"quasi"``).
         accuracy : {"low", "default", "high"}
             Preset mapped to the solver's options and to the verification tolerance.
         verify : bool
             Recompute residuals and refuse answers that fail (default True; switch off
             only to inspect a failure: the result then says ``verified=False``).
         options : dict, optional
-            Extra solver options, on top of the preset.
+            Extra solver options, on top of the preset. Names are checked before solving
+            for Clarabel (its settings and cvxpy's own keywords) and the direct back ends
+            (names and values); other solvers judge their options themselves (a refusal
+            is a failed attempt).
         fallback : "auto", sequence or None
             What to try when the answer fails verification or the solver errs: a
             sequence of solver names or ``(name, options)`` pairs (the primary's
@@ -636,10 +639,17 @@ class NavigationProblem:
         Raises
         ------
         InputError
-            Before solving, for bad input or information that leaves unknowns free.
+            Before solving, for bad input or information that leaves unknowns free: an
+            option of the wrong type or value (named, with the valid ones), a weight that
+            double precision cannot resolve (:meth:`check_scales`), or a problem whose
+            memory estimate exceeds the available memory
+            (:func:`bvpnav.solvers.check_memory`, naming what would fit).
         SolveError
             (``Infeasible``, ``Unbounded``, ``Inaccurate``) when every attempt failed;
-            ``error.attempts`` lists each attempt's status and reason.
+            ``error.attempts`` lists each attempt's status and reason. Any exception a
+            back end raises (e.g. ``LinAlgError``, SCS's ``ValueError``, ``MemoryError``)
+            is such a failed attempt (status ``"error"``), then the next back end runs;
+            a fallback whose memory estimate does not fit is skipped with its reason.
         """
         if on_conflict not in ("raise", "demote"):
             raise InputError(f"on_conflict={on_conflict!r}; choose 'raise' or 'demote'")
