@@ -78,7 +78,7 @@ def check_lam(lam):
             "choose a lam in that range (or a rule, e.g. lam='lcurve')")
     return lam
 
-__all__ = ["NavigationProblem", "Term", "RESIDUAL_FORMS", "DEFAULT_FALLBACK"]
+__all__ = ["NavigationProblem", "Term", "RESIDUAL_FORMS", "DEFAULT_FALLBACK", "LAM_RANGE", "check_lam"]
 
 RESIDUAL_FORMS = ("acceleration", "load")
 
