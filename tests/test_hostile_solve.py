@@ -28,6 +28,7 @@ from bvpnav.constraints import Position, Velocity
 from bvpnav.errors import InputError, SolveError, SolverNotFound
 from bvpnav.problem import NavigationProblem
 from bvpnav.regularization import lambda_curve
+from bvpnav.sequential import solve_sequential
 
 N = 101
 
@@ -128,6 +129,10 @@ OPTION_CASES = [
                  r"list of solver names", id="rule-fallback-int"),
     pytest.param(lambda p: p.solve(lam="lcurve", options={"typo": 1}), InputError,
                  r"no option 'typo'", r"valid options", id="rule-options-typo"),
+    pytest.param(lambda p: solve_sequential(p, tol="tight"), InputError, r"tol='tight'",
+                 r"positive distance in m", id="sequential-tol-str"),
+    pytest.param(lambda p: solve_sequential(p, max_iter=2.5), InputError, r"max_iter=2\.5",
+                 r"an integer of at least one", id="sequential-max-iter-float"),
     pytest.param(lambda p: p.solve(on_conflict="demote", accuracy="ultra"), InputError,
                  r"accuracy='ultra'", r"choose one of", id="demote-accuracy"),
 ]
