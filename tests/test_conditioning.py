@@ -218,13 +218,17 @@ def test_verify_refuses_nan_in_x_and_in_the_reported_parameters():
     x[prob.model.r_index(0)[50]] = np.nan
     bad = prob.verify(x, 1.0)
     assert not bad["verified"] and bad["nonfinite"] == ["1 entries of the solution vector"]
-    # 1 + k_y = 0 exactly: I + E is singular, every sensor parameter's report is NaN
+    # 1 + k_y = 0 exactly: I + E is singular; axis y's parameters are undetermined (scale
+    # inf, bias NaN) and the x axis keeps its finite values (issue 14: before, every sensor
+    # parameter's report was NaN, and the same exact zero from a solver on one BLAS kernel
+    # failed a solve that verified on another). This x is not a solution (forward error).
     x = sol.x.copy()
     x[prob.model.l_index[list(prob.model.param_names).index("scale_y")]] = -1.0
     bad = prob.verify(x, 1.0)
-    assert not bad["verified"]
+    assert not bad["verified"] and bad["forward_error"] > 1e-6
     assert [s for s in bad["nonfinite"] if s.startswith("error parameter")] == [
-        f"error parameter {n} = nan" for n in ("bias_x", "bias_y", "scale_x", "scale_y")]
+        "error parameter bias_y = nan", "error parameter scale_y = inf"]
+    assert bad["undetermined"] == ["bias_y", "scale_y"]
     assert any(s.startswith("sensor axis y") for s in bad["nonfinite"])  # the reason
 
 
@@ -275,3 +279,39 @@ def test_a_degenerate_axis_with_a_non_finite_report_is_an_input_error_not_a_fall
     with pytest.raises(bvpnav.InputError, match=r"direct: the error-model estimate is not finite "
                        r"because sensor axis y.*without 'y'"):
         prob._finish(x, 1.0, "fixed", info, None, "default", True)
+
+
+@pytest.mark.parametrize("kept", [0.0, 3e-13, -3e-13, 2e-10, -5e-10])
+def test_the_verdict_on_a_removed_axis_does_not_depend_on_rounding(kept):
+    """Issue 14: the same problem gave 1 + k_y = 0 exactly on one BLAS kernel (then NaN
+    everywhere and an InputError) and 3e-13 on another (verified, gain 3e12). Any kept
+    fraction within KEPT_ZERO = 1e-9 of zero is zero: one verdict, the same finiteness,
+    the same message, whichever side of zero the rounding fell (a margin of 2x and more
+    from the threshold on both sides)."""
+    from bvpnav.error_models._base import KEPT_ZERO
+
+    assert abs(kept) <= KEPT_ZERO / 2
+    prob = recording(nu=0.0)
+    sol = prob.solve(solver="direct", fallback=None)
+    x = sol.x.copy()
+    x[prob.model.l_index[list(prob.model.param_names).index("scale_y")]] = -1.0 + kept
+    check = prob.verify(x, 1.0)
+    assert check["verified"] and check["undetermined"] == ["bias_y", "scale_y"]
+    (axis,) = check["conditioning"]["degenerate_axes"]
+    assert axis["kept"] == 0.0 and axis["gain"] == np.inf and axis["undetermined"]
+    assert "keeps a fraction 0 (within 1e-09 of zero)" in axis["message"]
+    rep = prob.error_model.report(prob.model.split(x)["l"], prob.model)
+    assert rep["scale_y"] == np.inf and np.isnan(rep["bias_y"])
+    assert rep["scale_x"] == pytest.approx(0.01, rel=1e-8) and rep["bias_x"] == pytest.approx(0.1, rel=1e-8)
+
+
+def test_a_kept_fraction_beyond_the_threshold_is_a_finite_flagged_gain():
+    """2e-9 (twice KEPT_ZERO) is resolved: a finite gain of 5e8, flagged, verified."""
+    prob = recording(nu=0.0)
+    sol = prob.solve(solver="direct", fallback=None)
+    x = sol.x.copy()
+    x[prob.model.l_index[list(prob.model.param_names).index("scale_y")]] = -1.0 + 2e-9
+    check = prob.verify(x, 1.0)
+    (axis,) = check["conditioning"]["degenerate_axes"]
+    assert not axis["undetermined"] and axis["gain"] == pytest.approx(5e8, rel=1e-6)
+    assert check["undetermined"] == [] and check["nonfinite"] == []

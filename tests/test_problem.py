@@ -174,3 +174,33 @@ def test_exactly_consistent_zero_data_verifies(solver):
     sol = prob.solve(solver=solver, fallback=None)
     assert sol.stats["verified"] and sol.stats["verification"]["stationarity"] < 1e-10
     assert np.max(np.abs(sol.position("x") - t)) < 1e-8
+
+
+# ------------------------------------------------------------ pickling (issue 14)
+@pytest.mark.parametrize("solver", ["clarabel", "direct"])
+def test_a_solved_problem_and_its_solution_pickle_and_re_solve_equal(solver):
+    import pickle
+
+    from bvpnav.error_models import Bias
+
+    prob, _ = table1_problem(201)
+    prob = prob.with_items(prob.items + [Velocity(t=[0.0, 10.0], value=0.0, sigma=0.1, name="v")])
+    prob.error_model = Bias()
+    sol = prob.solve(solver=solver)
+    assert prob._cvx is not None or solver == "direct"  # caches exist before pickling
+    prob2 = pickle.loads(pickle.dumps(prob))
+    sol2 = pickle.loads(pickle.dumps(sol))
+    assert prob2._cvx is None and prob2._model is None and prob2._terms is None
+    assert prob2.item_labels == prob.item_labels and prob2.residual == prob.residual
+    np.testing.assert_array_equal(prob2.data.acc, prob.data.acc)
+    # the solution round-trips exactly, and a re-solve of the copy gives the same answer
+    np.testing.assert_array_equal(sol2.x, sol.x)
+    assert sol2.trajectory.equals(sol.trajectory) and sol2.error_params.equals(sol.error_params)
+    assert sol2.stats["verified"] == sol.stats["verified"] and sol2.warnings == sol.warnings
+    again = prob2.solve(solver=solver)
+    assert again.stats["verified"]
+    np.testing.assert_allclose(again.x, sol.x, rtol=0, atol=1e-12 * np.max(np.abs(sol.x)))
+    # and the original still works after being pickled (its caches were not dropped)
+    assert prob._model is not None
+    np.testing.assert_allclose(prob.solve(solver=solver).x, sol.x, rtol=0,
+                               atol=1e-12 * np.max(np.abs(sol.x)))

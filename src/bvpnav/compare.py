@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 
-from .errors import BvpnavError, SolveError
+from .errors import BvpnavError, InputError, SolveError
 
 __all__ = ["compare_solvers", "COLUMNS"]
 
@@ -27,11 +27,46 @@ def _reference_positions(reference, problem):
         ref = np.asarray(reference, dtype=float)
     ref = ref.reshape(problem.model.N, -1)
     if ref.shape[1] != problem.model.d:
-        from .errors import InputError
-
         raise InputError(f"reference has {ref.shape[1]} axes, the problem {problem.model.d}; give "
                          "positions of shape (N,) or (N, d) in m at the sample times")
     return ref
+
+
+def _listed(value, what: str) -> list:
+    if isinstance(value, str) or not isinstance(value, Sequence):
+        raise InputError(f"{what}={value!r}: give a list of names, e.g. {what}=['default']"
+                         if what == "presets" else
+                         f"{what}={value!r}: give a list of names, e.g. {what}=['clarabel', 'direct']")
+    if len(value) == 0:
+        raise InputError(f"{what}=[]: give at least one name")
+    return list(value)
+
+
+def _check_names(problem, solvers, presets, options) -> None:
+    """InputError before any run for unknown solver or preset names (all of them named,
+    with the valid ones) and for options keyed by a solver that is not compared."""
+    from .solvers import ACCURACIES, available_solvers, check_options, resolve_solver
+
+    solvers, presets = _listed(solvers, "solvers"), _listed(presets, "presets")
+    have = available_solvers()
+    bad = [s for s in solvers if not isinstance(s, str) or s.strip().lower() not in have]
+    if bad:
+        raise InputError(f"compare_solvers: unknown or not installed solver(s) {bad}; available: {have}")
+    bad = [p for p in presets if p not in ACCURACIES]
+    if bad:
+        raise InputError(f"compare_solvers: unknown preset(s) {bad}; choose from {list(ACCURACIES)}")
+    if options is not None:
+        if not isinstance(options, Mapping):
+            raise InputError(f"options={options!r}: give per-solver options, e.g. "
+                             "options={'osqp': {'max_iter': 1000}}")
+        names = {s.strip().lower() for s in solvers}
+        stray = [k for k in options if k not in names]
+        if stray:
+            raise InputError(f"options: solver(s) {stray} are not among the compared solvers "
+                             f"{list(solvers)}; key the options by one of them, e.g. "
+                             "options={'osqp': {'max_iter': 1000}}")
+        for name, opts in options.items():
+            check_options(resolve_solver(name), opts, what=f"options[{name!r}]")
 
 
 def compare_solvers(problem, solvers: Sequence[str] | None = None, presets: Sequence[str] = ("default",),
@@ -77,6 +112,10 @@ def compare_solvers(problem, solvers: Sequence[str] | None = None, presets: Sequ
         solvers = [s for s in ("clarabel", "osqp") if s in have]
         if non_least_squares_term(problem) is None:
             solvers += ["direct", "csne"]
+    _check_names(problem, solvers, presets, options)
+    from .problem import check_lam
+
+    lam = check_lam(lam)
     if isinstance(lam, str):
         from .regularization import choose_lambda
 

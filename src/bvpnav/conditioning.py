@@ -190,12 +190,13 @@ def _degenerate_axes(problem, l: np.ndarray) -> list[dict[str, Any]]:
     corr = SensorCorrection.from_values(params, np.asarray(values, dtype=float), model.data)
     with np.errstate(all="ignore"):
         D = corr.D
+    kept = corr.kept  # within KEPT_ZERO of zero snapped to 0: not at the mercy of rounding
     axes = sensor_axes(model.data)
     out = []
     for p in scaled:
         i = p.i
         gain = float(D[i, i])
-        keep = 1.0 + float(corr.E[i, i])
+        keep = float(kept[i])
         # judged on the kept fraction 1 + E_ii of the axis's own signal: when another
         # axis is degenerate, D = (I + E)^-1 is NaN everywhere, this axis included
         kept_ok = np.isfinite(keep) and 1.0 / GAIN_LIMIT <= keep <= GAIN_LIMIT
@@ -203,7 +204,9 @@ def _degenerate_axes(problem, l: np.ndarray) -> list[dict[str, Any]]:
         if kept_ok and gain_ok:
             continue
         names = [q.name for q in params if q.role in ("scale", "bias", "misalignment") and q.i == i]
-        out.append({"axis": axes[i], "gain": gain, "kept": keep, "parameters": names})
+        # kept fraction zero: the parameters are undetermined (reported inf/NaN), not wrong
+        out.append({"axis": axes[i], "gain": gain, "kept": keep, "parameters": names,
+                    "undetermined": keep == 0.0})
     return out
 
 
@@ -229,7 +232,9 @@ def assess_conditioning(problem, xval: np.ndarray, lam: float, factored: tuple |
         (ascending list), ``min_relative_sv``, ``condition`` (ratio of the largest to the
         smallest relative singular value, inf when one is 0), ``weak`` (list of
         ``{"parameters", "relative_sv"}`` below ``threshold``), ``degenerate_axes``
-        (list of ``{"axis", "gain", "kept", "parameters", "message"}``), ``threshold`` and
+        (list of ``{"axis", "gain", "kept", "parameters", "undetermined", "message"}``;
+        ``undetermined`` when the kept fraction is within ``KEPT_ZERO`` of zero, reported
+        as 0: the axis's parameters are then inf/NaN), ``threshold`` and
         ``warnings`` (list of str).
 
     Notes
@@ -263,13 +268,16 @@ def assess_conditioning(problem, xval: np.ndarray, lam: float, factored: tuple |
                     "estimates are unreliable; add information that separates them or drop "
                     "one of them (e.g. ScaleFactor(axes=(...)) on the axes that feel varying "
                     "specific force)")
+    from .error_models._base import KEPT_ZERO
+
     l = model.split(xval)["l"]
     degenerate = _degenerate_axes(problem, np.asarray(l, dtype=float))
     for dg in degenerate:
         who = dg["parameters"]
         dg["message"] = (
             f"sensor axis {dg['axis']}: the estimated correction keeps a fraction "
-            f"{dg['kept']:.2g} of the measured signal (gain 1 + scale = {dg['gain']:.3g}): the "
+            + (f"0 (within {KEPT_ZERO:g} of zero) " if dg["undetermined"] else f"{dg['kept']:.2g} ")
+            + f"of the measured signal (gain 1 + scale = {dg['gain']:.3g}): the "
             "data are explained best with no true specific force along this axis, so "
             + (", ".join(who[:-1]) + f" and {who[-1]} are" if len(who) > 1 else f"{who[0]} is")
             + " not determined and the reported values are meaningless; model no scale factor "

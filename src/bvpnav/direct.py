@@ -52,7 +52,7 @@ def run_direct(problem, lam: float, accuracy: str, options: dict):
                                       ldl_accept=float(options.get("ldl_accept", 1e-7)))
         # verification reuses the factorization (one LU per solve, not two)
         info["factored"] = (info.pop("form"), info.pop("factor"))
-    except RuntimeError as exc:  # singular factorization
+    except (RuntimeError, np.linalg.LinAlgError) as exc:  # singular factorization / Schur complement
         raise SolveError(f"direct: the KKT matrix is singular ({exc}); some unknown is not "
                          "determined by the information",
                          attempts=[{"solver": "direct", "status": "singular", "reason": str(exc)}]) from exc

@@ -9,6 +9,7 @@ Parameter, so the problem is DPP and a new ``lam`` re-uses the compiled problem.
 
 from __future__ import annotations
 
+import numbers
 import time
 import warnings
 from collections.abc import Iterable, Mapping
@@ -32,9 +33,52 @@ from .imu import ImuData
 from .items import Item
 from .model import Affine, NavModel
 from .result import Solution
-from .solvers import VERIFY_RTOL, resolve_solver, solver_options
+from .solvers import VERIFY_RTOL, check_memory, memory_shortfall, resolve_solver, solver_options
 
-__all__ = ["NavigationProblem", "Term", "RESIDUAL_FORMS", "DEFAULT_FALLBACK"]
+#: Lambda values other than 0 that double precision can weigh against the data term: a
+#: weight beyond 1e12 (or below 1e-12) leaves one side of the objective below rounding of
+#: the other (the answer is that of hard items, or of no soft items).
+LAM_RANGE = (1e-12, 1e12)
+
+#: Bounds of the squared weight of a term relative to the data term (dimensionless, see
+#: :meth:`NavigationProblem.check_scales`): 30 orders of magnitude either way, far from
+#: the overflow of a square (1e308) and wider than any physical choice of sigma.
+WEIGHT_RANGE = (1e-30, 1e30)
+
+#: Accelerometer noise standard deviations (m/s^2) double precision handles in the
+#: acceleration form's weights 1/sigma_a^2.
+SIGMA_A_RANGE = (1e-12, 1e12)
+
+#: Largest acceleration magnitude (m/s^2) accepted: 1e9 m/s^2 is 1e8 g, beyond any
+#: accelerometer; larger values are a unit mistake and overflow the squared residuals.
+ACC_MAX = 1e9
+
+
+def check_lam(lam):
+    """``lam`` as a float (or a rule name), or :class:`InputError` naming the value and
+    the valid ones."""
+    from .regularization import RULES
+
+    if isinstance(lam, str):
+        if lam not in RULES:
+            raise InputError(f"lam={lam!r} is not a known rule; choose one of {list(RULES)} or a "
+                             f"number >= 0")
+        return lam
+    if isinstance(lam, bool | np.bool_) or not isinstance(lam, numbers.Real):
+        raise InputError(f"lam={lam!r} ({type(lam).__name__}): give a finite number >= 0 (e.g. "
+                         f"lam=1.0) or a rule name from {list(RULES)}")
+    lam = float(lam)
+    if not np.isfinite(lam) or lam < 0:
+        raise InputError(f"lam={lam!r}: must be a finite number >= 0")
+    if lam != 0 and not LAM_RANGE[0] <= lam <= LAM_RANGE[1]:
+        raise InputError(
+            f"lam={lam:g} is outside {LAM_RANGE[0]:g}..{LAM_RANGE[1]:g} (or 0), the range in which "
+            "double precision still weighs the soft items against the data term. For items that "
+            "must hold exactly make them hard (sigma=None); to ignore them use lam=0; otherwise "
+            "choose a lam in that range (or a rule, e.g. lam='lcurve')")
+    return lam
+
+__all__ = ["NavigationProblem", "Term", "RESIDUAL_FORMS", "DEFAULT_FALLBACK", "LAM_RANGE", "check_lam"]
 
 RESIDUAL_FORMS = ("acceleration", "load")
 
@@ -144,6 +188,23 @@ class NavigationProblem:
                                  "value in m/s^2 or one per axis")
             sa = np.broadcast_to(sa, (data.ndim,))
         self.sigma_a = np.array(sa, dtype=float)
+        for k in np.flatnonzero((self.sigma_a < SIGMA_A_RANGE[0]) | (self.sigma_a > SIGMA_A_RANGE[1])):
+            raise InputError(
+                f"sigma_a = {self.sigma_a[k]:g} m/s^2 (axis {data.axes[k]}) is outside "
+                f"{SIGMA_A_RANGE[0]:g}..{SIGMA_A_RANGE[1]:g} m/s^2, where the weights 1/sigma_a^2 "
+                "stay resolvable in double precision; give the accelerometer noise in m/s^2 "
+                "(typically 1e-4 to 1)")
+        with np.errstate(invalid="ignore"):
+            big = np.abs(np.asarray(data.acc, dtype=float)) > ACC_MAX
+        if np.any(big):
+            i, a = np.unravel_index(int(np.argmax(big)), big.shape) if big.ndim > 1 else (
+                int(np.argmax(big)), 0)
+            val = np.asarray(data.acc, dtype=float).reshape(data.n, -1)[i, a]
+            raise InputError(
+                f"acceleration at sample {i} (t={data.t[i]:g} s), axis {data.axes[a]}, is {val:g} "
+                f"m/s^2: beyond {ACC_MAX:g} m/s^2 (1e8 g), which no accelerometer measures and whose "
+                f"squares overflow; {int(np.count_nonzero(big))} sample(s) exceed it. Check the "
+                "unit of the acceleration column (m/s^2 expected) or remove the corrupt samples")
         self._sigma_a_given = sigma_a is not None
         self.error_model = error_model
         self._items: list[Item] = []
@@ -152,6 +213,22 @@ class NavigationProblem:
         self._cvx: dict[str, Any] | None = None
         for it in items:
             self.add(it)
+
+    # ------------------------------------------------------------ pickling
+    #: Caches rebuilt lazily after unpickling (cvxpy's compiled problem holds solver
+    #: objects that cannot be pickled; the rest is cheap to rebuild and may be large).
+    _CACHES = ("_model", "_terms", "_cvx", "_observable_terms")
+
+    def __getstate__(self) -> dict:
+        """The problem's definition without its caches (see :attr:`_CACHES`)."""
+        state = dict(self.__dict__)
+        for k in self._CACHES:
+            state.pop(k, None)
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._model, self._terms, self._cvx = None, None, None
 
     # ----------------------------------------------------------- building
     def add(self, *items: Item) -> NavigationProblem:
@@ -449,6 +526,38 @@ class NavigationProblem:
                 out.append(f"{null.shape[0]} combination(s) of: {what}")
         return out
 
+    def check_scales(self, lam: float) -> None:
+        """Raise :class:`InputError` naming a weight double precision cannot resolve.
+
+        The squared weight of every soft (or robust) row relative to the data term,
+        ``(lam if the term is lambda-weighted else 1) * (s / sigma)^2`` with ``s`` the
+        smallest ``sigma_a`` (acceleration form) or 1 (load form), must lie within
+        :data:`WEIGHT_RANGE`; beyond it one side of the objective is lost in rounding of
+        the other, or its square overflows.
+        """
+        ref = float(np.min(self.sigma_a)) if self.residual == "acceleration" else 1.0
+        lo, hi = WEIGHT_RANGE
+        for term in self.terms():
+            if term.mode not in ("soft", "robust") or term.sigma is None:
+                continue
+            k = lam if term.scaled_by_lam else 1.0
+            if k == 0:
+                continue
+            sig = np.asarray(term.sigma, dtype=float)
+            with np.errstate(all="ignore"):
+                w2 = k * (ref / sig) ** 2
+            bad = np.flatnonzero(~((w2 >= lo) & (w2 <= hi)))
+            if bad.size == 0:
+                continue
+            j = int(bad[0])
+            s_lo, s_hi = ref * np.sqrt(k / hi), ref * np.sqrt(k / lo)
+            raise InputError(
+                f"{term.label}: sigma = {sig[j]:g} {term.units} (row {j}) with lam={k:g} gives a "
+                f"squared weight {w2[j]:.3g} relative to the data term, outside {lo:g}..{hi:g}, "
+                "which double precision cannot resolve against it. Give sigma between "
+                f"{s_lo:.3g} and {s_hi:.3g} {term.units} at this lam, or make the item hard "
+                "(sigma=None) if it must hold exactly")
+
     def check_observability(self) -> None:
         """Raise :class:`InputError` naming what the information leaves undetermined."""
         terms = self.terms()
@@ -486,15 +595,18 @@ class NavigationProblem:
             Case-insensitive solver name (``bvpnav.available_solvers()``).
         lam : float or str
             Regularization weight (dimensionless ratio of the item terms to the data
-            term), or the name of a rule that chooses it (``"lcurve"``, ``"gcv"``,
-            ``"discrepancy"``, ``"quasi"``).
+            term): 0 or within :data:`LAM_RANGE` (1e-12 to 1e12), or the name of a rule
+            that chooses it (``"lcurve"``, ``"gcv"``, ``"discrepancy"``, ``"quasi"``).
         accuracy : {"low", "default", "high"}
             Preset mapped to the solver's options and to the verification tolerance.
         verify : bool
             Recompute residuals and refuse answers that fail (default True; switch off
             only to inspect a failure: the result then says ``verified=False``).
         options : dict, optional
-            Extra solver options, on top of the preset.
+            Extra solver options, on top of the preset. Names are checked before solving
+            for Clarabel (its settings and cvxpy's own keywords) and the direct back ends
+            (names and values); other solvers judge their options themselves (a refusal
+            is a failed attempt).
         fallback : "auto", sequence or None
             What to try when the answer fails verification or the solver errs: a
             sequence of solver names or ``(name, options)`` pairs (the primary's
@@ -527,13 +639,30 @@ class NavigationProblem:
         Raises
         ------
         InputError
-            Before solving, for bad input or information that leaves unknowns free.
+            Before solving, for bad input or information that leaves unknowns free: an
+            option of the wrong type or value (named, with the valid ones), a weight that
+            double precision cannot resolve (:meth:`check_scales`), or a problem whose
+            memory estimate exceeds the available memory
+            (:func:`bvpnav.solvers.check_memory`, naming what would fit).
         SolveError
             (``Infeasible``, ``Unbounded``, ``Inaccurate``) when every attempt failed;
-            ``error.attempts`` lists each attempt's status and reason.
+            ``error.attempts`` lists each attempt's status and reason. Any exception a
+            back end raises (e.g. ``LinAlgError``, SCS's ``ValueError``, ``MemoryError``)
+            is such a failed attempt (status ``"error"``), then the next back end runs;
+            a fallback whose memory estimate does not fit is skipped with its reason.
         """
         if on_conflict not in ("raise", "demote"):
             raise InputError(f"on_conflict={on_conflict!r}; choose 'raise' or 'demote'")
+        # every option is checked before any work (also on the rule, sequential and
+        # demotion paths, which call solve() again with the same options)
+        lam = check_lam(lam)
+        for name, flag in (("verify", verify), ("verbose", verbose)):
+            if not isinstance(flag, bool | np.bool_):
+                raise InputError(f"{name}={flag!r}: must be True or False")
+        backend = resolve_solver(solver)
+        solver_options(backend, accuracy, options)
+        self._fallback_chain(backend, accuracy, options, fallback)
+        check_memory(self, backend)  # the primary; a fallback that does not fit is skipped
         if on_conflict == "demote":  # before the loop: each round calls solve() (and the loop) again
             from .conflicts import solve_demoting
 
@@ -549,17 +678,19 @@ class NavigationProblem:
             from . import regularization
 
             return regularization.solve_with_rule(self, lam, solver=solver, accuracy=accuracy,
-                                                  options=options)
-        lam = float(lam)
-        if not np.isfinite(lam) or lam < 0:
-            raise InputError(f"lam={lam!r}: must be a finite number >= 0")
-        backend = resolve_solver(solver)
+                                                  options=options, verify=verify, verbose=verbose,
+                                                  fallback=fallback)
         opts = solver_options(backend, accuracy, options)
-        self.check_observability()
         chain = [(backend, opts)] + self._fallback_chain(backend, accuracy, options, fallback)
+        self.check_scales(lam)
+        self.check_observability()
         attempts: list[dict] = []
         last_exc: SolveError | None = None
         for k, (be, op) in enumerate(chain):
+            short = memory_shortfall(be, self) if k else None
+            if short is not None:
+                attempts.append({"solver": be.name, "status": "not applicable", "reason": short})
+                continue
             try:
                 sol = self._attempt(be, op, lam, accuracy, verify, verbose)
             except Infeasible as exc:  # infeasibility is a property of the information
@@ -578,6 +709,19 @@ class NavigationProblem:
                 if not verify and k == 0:
                     raise
                 continue
+            except (BvpnavError, KeyboardInterrupt, SystemExit):
+                raise
+            except Exception as exc:  # a back end's own failure (LinAlgError, SCS's ValueError,
+                # MemoryError, ...): a recorded failed attempt, then the next back end
+                reason = f"{type(exc).__name__}: {exc}"
+                rec = {"solver": be.name, "status": "error", "reason": reason}
+                attempts.append(rec)
+                err = SolveError(f"{be.name} failed: {reason}", attempts=[rec])
+                err.__cause__ = exc
+                last_exc = err
+                if not verify and k == 0:
+                    raise err from exc
+                continue
             sol.stats["attempts"] = attempts + sol.stats["attempts"]
             if attempts:
                 sol.warnings.append(
@@ -588,25 +732,35 @@ class NavigationProblem:
         assert last_exc is not None
         summary = "; ".join(f"{a['solver']}: {a['status']} ({a['reason']})" for a in attempts)
         raise type(last_exc)(f"every attempt failed: {summary}. Last error: {last_exc}",
-                             attempts=attempts)
+                             attempts=attempts) from last_exc.__cause__
 
     def _fallback_chain(self, backend, accuracy, options, fallback) -> list:
         from .solvers import Backend
 
-        if fallback is None or (not isinstance(fallback, str) and len(fallback) == 0):
+        how = ("use 'auto', None, or a list of solver names or (name, options) pairs, e.g. "
+               "fallback=['direct', ('scs', {'max_iters': 20000})]")
+        if fallback is None:
             return []
         entries: list = []
         if isinstance(fallback, str):
             if fallback != "auto":
-                raise InputError(f"fallback={fallback!r}; use 'auto', a list of solver names, or None")
+                raise InputError(f"fallback={fallback!r}; {how}")
             entries = list(DEFAULT_FALLBACK)
             if backend.name != "clarabel":
                 entries[0] = "clarabel"
-        else:
+        elif isinstance(fallback, list | tuple):
             entries = list(fallback)
+        else:
+            raise InputError(f"fallback={fallback!r} ({type(fallback).__name__}); {how}")
         chain = []
-        for e in entries:
-            name, extra = (e, {}) if isinstance(e, str) else (e[0], dict(e[1]))
+        for k, e in enumerate(entries):
+            if isinstance(e, str):
+                name, extra = e, {}
+            elif (isinstance(e, list | tuple) and len(e) == 2 and isinstance(e[0], str)
+                  and isinstance(e[1], Mapping)):
+                name, extra = e[0], dict(e[1])
+            else:
+                raise InputError(f"fallback entry {k} = {e!r}: {how}")
             try:
                 be = resolve_solver(name)
             except BvpnavError:
@@ -774,11 +928,18 @@ class NavigationProblem:
             conditioning = assess_conditioning(self, xval, lam, factored)
             if nonfinite:
                 nonfinite += [dg["message"] for dg in conditioning["degenerate_axes"]]
+        # the parameters of a sensor axis whose kept fraction is zero are undetermined (inf,
+        # NaN) by the information itself; named in warnings, they do not fail the answer.
+        # Anything else not finite does, whatever rounding decided (issue 14).
+        undetermined = sorted({n for dg in (conditioning or {}).get("degenerate_axes", [])
+                               if dg.get("undetermined") for n in dg["parameters"]})
+        unexplained = [s for s in nonfinite if not s.startswith("sensor axis ")
+                       and not any(s.startswith(f"error parameter {n} = ") for n in undetermined)]
         ok = (fem_rel <= rtol and worst <= rtol * 10 and (stat is None or stat <= np.sqrt(rtol))
-              and (fwd is None or fwd <= FORWARD_RTOL[accuracy]) and not nonfinite)
+              and (fwd is None or fwd <= FORWARD_RTOL[accuracy]) and not unexplained)
         return {"fem_residual": fem_rel, "max_violation": worst, "worst_item": worst_item,
                 "stationarity": stat, "forward_error": fwd, "rtol": rtol, "nonfinite": nonfinite,
-                "conditioning": conditioning, "verified": bool(ok)}
+                "undetermined": undetermined, "conditioning": conditioning, "verified": bool(ok)}
 
     def _stationarity(self, xval: np.ndarray, lam: float, duals: dict) -> float | None:
         """Relative norm of the Lagrangian gradient (None for non-smooth objectives)."""
@@ -856,7 +1017,8 @@ class NavigationProblem:
         )
         cond = check.get("conditioning") or {}
         degenerate = [dg["message"] for dg in cond.get("degenerate_axes", [])]
-        if degenerate and check.get("nonfinite"):  # the information's fault: no fallback can help
+        if degenerate and check.get("nonfinite") and not check["verified"]:
+            # the information's fault: no fallback can help
             raise InputError(f"{info['solver']}: the error-model estimate is not finite because "
                              + "; ".join(degenerate))
         if verify and not check["verified"]:

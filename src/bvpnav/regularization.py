@@ -129,7 +129,7 @@ class _DirectSweep:
         m, n = form.D.A.shape
         try:
             fac = factor_form(form, self.problem)
-        except RuntimeError as exc:
+        except (RuntimeError, np.linalg.LinAlgError) as exc:
             raise InputError(f"lambda={lam:g}: the KKT matrix is singular ({exc}); some unknown is "
                              "not determined by the information") from exc
         z, _, _ = fac.refined(form.rhs(), 2, 1e-14, window=slice(m, m + n))
@@ -194,17 +194,16 @@ class _CvxpySweep:
 
     engine = "cvxpy"
 
-    def __init__(self, problem, solver, accuracy, options):
+    def __init__(self, problem, solver, accuracy, options, solve_kw=None):
         self.problem = problem
-        self.solver, self.accuracy, self.options = solver, accuracy, options
+        self.solve_kw = dict(solve_kw or {}, solver=solver, accuracy=accuracy, options=options)
         self.cache: dict[float, dict] = {}
 
     def point(self, lam: float, need_trace: bool = False, **_) -> dict:
         key = float(lam)
         if key in self.cache:
             return self.cache[key]
-        sol = self.problem.solve(solver=self.solver, lam=key, accuracy=self.accuracy,
-                                 options=self.options)
+        sol = self.problem.solve(lam=key, **self.solve_kw)
         cvx = self.problem.build()
         x = sol.x
         rho2 = float(np.sum(self.problem.data_rows().value(x) ** 2))
@@ -273,7 +272,7 @@ def _sweep(engine, lams, need_trace, progress, probes, seed):
 def lambda_curve(problem, rules=RULES, rule: str = "lcurve", lam_range=(1e-6, 1e6), points: int = 25,
                  solver: str = "clarabel", accuracy: str = "default", options=None,
                  tau: float = 1.5, probes: int = 24, seed: int = 0, progress=None,
-                 engine: str = "auto") -> LambdaCurve:
+                 engine: str = "auto", solve_kw: dict | None = None) -> LambdaCurve:
     """Sweep lambda and apply the selection rules.
 
     Parameters
@@ -302,6 +301,9 @@ def lambda_curve(problem, rules=RULES, rule: str = "lcurve", lam_range=(1e-6, 1e
     progress : bool, optional
         Show a tqdm bar; default: when the problem is large (more than 50,000 unknowns).
     engine : {"auto", "direct", "cvxpy"}
+    solve_kw : dict, optional
+        Further options of :meth:`bvpnav.NavigationProblem.solve` (``verify``,
+        ``fallback``, ``verbose``) for the ``cvxpy`` engine's solves.
 
     Returns
     -------
@@ -326,11 +328,25 @@ def lambda_curve(problem, rules=RULES, rule: str = "lcurve", lam_range=(1e-6, 1e
     if not problem.has_soft_terms:
         raise InputError("choosing lambda needs at least one soft (or robust) item weighted by lambda; "
                          "every item is hard, so lambda has no effect: pass a number (e.g. lam=1)")
-    lo, hi = (float(v) for v in lam_range)
+    from .problem import LAM_RANGE
+
+    try:
+        lo, hi = (float(v) for v in lam_range)
+    except (TypeError, ValueError):
+        raise InputError(f"lam_range={lam_range!r}: give two numbers (low, high), e.g. "
+                         "lam_range=(1e-6, 1e6)") from None
     if not (0 < lo < hi and np.isfinite(hi)):
         raise InputError(f"lam_range={lam_range!r}: need 0 < low < high")
-    if points < 7:
-        raise InputError(f"points={points}: the sweep needs at least 7 points")
+    if lo < LAM_RANGE[0] or hi > LAM_RANGE[1]:
+        raise InputError(
+            f"lam_range={lam_range!r} reaches beyond {LAM_RANGE[0]:g}..{LAM_RANGE[1]:g}, the lambdas "
+            "double precision can weigh against the data term; sweep inside it (the default "
+            "is (1e-6, 1e6))")
+    if isinstance(points, bool) or not isinstance(points, int | np.integer) or points < 7:
+        raise InputError(f"points={points!r}: the sweep needs an integer of at least 7 points")
+    if points > 1000:
+        raise InputError(f"points={points}: at most 1000 sweep points (each is one solve); the "
+                         "corner is refined by Brent's method anyway, 25 is the default")
     ls = non_least_squares_term(problem) is None
     if engine == "auto":
         engine = "direct" if ls else "cvxpy"
@@ -350,11 +366,17 @@ def lambda_curve(problem, rules=RULES, rule: str = "lcurve", lam_range=(1e-6, 1e
             raise InputError("lam='discrepancy' needs the noise level: use residual='acceleration' "
                              "with sigma_a=<accelerometer noise, m/s^2>")
         rules.remove("discrepancy")
+    problem.check_scales(lo)  # the sweep's extremes: every weight stays resolvable
+    problem.check_scales(hi)
     problem.check_observability()
+    if engine == "direct":
+        from .solvers import check_memory, resolve_solver
+
+        check_memory(problem, resolve_solver("direct"))
     if progress is None:
         progress = problem.model.size > 50_000
     eng = _DirectSweep(problem) if engine == "direct" else _CvxpySweep(problem, solver, accuracy,
-                                                                        options)
+                                                                        options, solve_kw)
     need_trace = any(r in rules for r in ("gcv", "discrepancy"))
     lams = np.geomspace(lo, hi, points)
     pts = _sweep(eng, lams, need_trace, progress, probes, seed)
@@ -464,15 +486,20 @@ def choose_lambda(problem, rule: str = "lcurve", **kwargs) -> float:
 
 
 def solve_with_rule(problem, rule: str, solver: str = "clarabel", accuracy: str = "default",
-                    options=None, **kwargs):
+                    options=None, verify: bool = True, verbose: bool = False, fallback="auto",
+                    **kwargs):
     """Choose lambda by ``rule``, then solve with ``solver`` at that lambda.
 
-    The returned :class:`~bvpnav.Solution` carries ``lam_rule`` and the whole
-    :class:`LambdaCurve` in ``solution.curve``.
+    Every solve option (``solver``, ``accuracy``, ``options``, ``verify``, ``verbose``,
+    ``fallback``; see :meth:`bvpnav.NavigationProblem.solve`) reaches the final solve and
+    the sweep's solves (``cvxpy`` engine). The returned :class:`~bvpnav.Solution` carries
+    ``lam_rule`` and the whole :class:`LambdaCurve` in ``solution.curve``.
     """
+    solve_kw = dict(solver=solver, accuracy=accuracy, options=options, verify=verify,
+                    verbose=verbose, fallback=fallback)
     curve = lambda_curve(problem, rules=(rule,), rule=rule, solver=solver, accuracy=accuracy,
-                         options=options, **kwargs)
-    sol = problem.solve(solver=solver, lam=curve.lam_chosen, accuracy=accuracy, options=options)
+                         options=options, solve_kw=solve_kw, **kwargs)
+    sol = problem.solve(lam=curve.lam_chosen, **solve_kw)
     sol.lam_rule = rule
     sol.curve = curve
     sol.warnings.extend(curve.warnings)

@@ -8,6 +8,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from .errors import InputError
+
 __all__ = ["Solution"]
 
 
@@ -55,14 +57,36 @@ class Solution:
     warnings: list[str] = field(default_factory=list)
     curve: Any = None
 
+    def _axis(self, axis, what: str) -> str | None:
+        """``axis`` itself when it is one of the solution's axes (or None), else
+        :class:`~bvpnav.errors.InputError` listing them."""
+        if axis is None or (isinstance(axis, str) and axis in self._pos_cols):
+            return axis
+        raise InputError(f"{what}({axis!r}): the solution has no axis {axis!r}; its axes are "
+                         f"{self._pos_cols} (or call {what}() for all of them)")
+
     def position(self, axis: str | None = None) -> np.ndarray:
-        """Nodal positions (m), shape (N,) for one axis or (N, d) for all."""
+        """Nodal positions (m), shape (N,) for one axis or (N, d) for all.
+
+        Raises
+        ------
+        InputError
+            For an axis the solution does not have (the message lists its axes).
+        """
+        axis = self._axis(axis, "position")
         cols = self._pos_cols if axis is None else [axis]
         out = self.trajectory[cols].to_numpy()
         return out[:, 0] if axis is not None else out
 
     def velocity(self, axis: str | None = None) -> np.ndarray:
-        """Nodal velocities (m/s), shape (N,) for one axis or (N, d) for all."""
+        """Nodal velocities (m/s), shape (N,) for one axis or (N, d) for all.
+
+        Raises
+        ------
+        InputError
+            For an axis the solution does not have (the message lists its axes).
+        """
+        axis = self._axis(axis, "velocity")
         cols = ["v" + c for c in self._pos_cols] if axis is None else ["v" + axis]
         out = self.trajectory[cols].to_numpy()
         return out[:, 0] if axis is not None else out
@@ -78,7 +102,13 @@ class Solution:
 
     def rms_error(self, truth: np.ndarray) -> float:
         """RMS position error (m) against true positions of shape (N,) or (N, d)."""
-        truth = np.asarray(truth, dtype=float).reshape(self.position().shape)
+        shape = self.position().shape
+        try:
+            truth = np.asarray(truth, dtype=float).reshape(shape)
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"rms_error(truth): truth of shape {np.shape(truth)} does not match the "
+                             f"solution's positions {shape} (N samples x axes {self._pos_cols}); give "
+                             "true positions in m at the sample times") from exc
         return float(np.sqrt(np.mean((self.position() - truth) ** 2)))
 
     def __repr__(self) -> str:

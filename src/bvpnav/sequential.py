@@ -174,11 +174,17 @@ def solve_sequential(problem, solver: str = "clarabel", lam: float | str = 1.0, 
 
     Why a hard track needs it (a slow, not a wrong, fixed point): see the module docstring.
     """
-    if not (np.isfinite(tol) and tol > 0):
+    def real(v) -> float:
+        try:
+            return float(v) if not isinstance(v, bool | str) else float("nan")
+        except (TypeError, ValueError):
+            return float("nan")
+
+    if not (np.isfinite(real(tol)) and real(tol) > 0):
         raise InputError(f"tol={tol!r}: the convergence tolerance must be a positive distance in m")
-    if int(max_iter) < 1:
-        raise InputError(f"max_iter={max_iter!r}: need at least one iteration")
-    soft_tol = max(float(tol), 0.01) if soft_tol is None else float(soft_tol)
+    if isinstance(max_iter, bool) or not isinstance(max_iter, int | np.integer) or max_iter < 1:
+        raise InputError(f"max_iter={max_iter!r}: need an integer of at least one iteration")
+    soft_tol = max(float(tol), 0.01) if soft_tol is None else real(soft_tol)
     if not (np.isfinite(soft_tol) and soft_tol > 0):
         raise InputError(f"soft_tol={soft_tol!r}: must be a positive distance in m")
     t_start = time.perf_counter()

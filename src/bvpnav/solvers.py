@@ -15,11 +15,15 @@ N >= 1e5 fail to converge (measured; see README "Solvers").
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import difflib
+import inspect
+import numbers
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 import cvxpy as cp
+import numpy as np
 
 from .errors import InputError, SolverNotFound
 
@@ -33,6 +37,12 @@ __all__ = [
     "Backend",
     "unsupported_term",
     "check_support",
+    "check_options",
+    "valid_options",
+    "check_accuracy",
+    "MEMORY_PER_SAMPLE",
+    "available_memory",
+    "memory_estimate",
 ]
 
 ACCURACIES = ("low", "default", "high")
@@ -139,13 +149,90 @@ def resolve_solver(name: str) -> Backend:
     )
 
 
-def solver_options(backend: Backend, accuracy: str, overrides: dict | None = None) -> dict:
-    """Options in force for a back end and preset, with user overrides on top."""
-    if accuracy not in ACCURACIES:
+def check_accuracy(accuracy) -> str:
+    """``accuracy`` itself, or :class:`InputError` naming the presets."""
+    if not isinstance(accuracy, str) or accuracy not in ACCURACIES:
         raise InputError(f"accuracy={accuracy!r}; choose one of {list(ACCURACIES)}")
+    return accuracy
+
+
+def solver_options(backend: Backend, accuracy: str, overrides: dict | None = None) -> dict:
+    """Options in force for a back end and preset, with user overrides on top (checked
+    by :func:`check_options` first)."""
+    check_accuracy(accuracy)
+    check_options(backend, overrides)
     opts = dict(backend.presets.get(accuracy, {}))
     opts.update(overrides or {})
     return opts
+
+
+#: Values of the direct back ends' options: (check, what a valid value is).
+_DIRECT_VALUES: dict[str, tuple[Callable[[Any], bool], str]] = {
+    "method": (lambda v: v in ("auto", "lu", "ldl"), "one of ['auto', 'lu', 'ldl']"),
+    "refine": (lambda v: _is_int(v) and 0 <= v <= 100, "an integer from 0 to 100"),
+    "max_iter": (lambda v: _is_int(v) and 1 <= v <= 10_000, "an integer from 1 to 10000"),
+    "ldl_accept": (lambda v: _is_real(v) and 0 < v < 1, "a number between 0 and 1"),
+    "tol": (lambda v: _is_real(v) and 0 < v < 1, "a number between 0 and 1"),
+}
+
+
+def _is_int(v) -> bool:
+    return isinstance(v, numbers.Integral) and not isinstance(v, bool | np.bool_)
+
+
+def _is_real(v) -> bool:
+    return (isinstance(v, numbers.Real) and not isinstance(v, bool | np.bool_)
+            and bool(np.isfinite(float(v))))
+
+
+def _cvxpy_keywords() -> set[str]:
+    """cvxpy's own keywords of ``Problem.solve`` (accepted with every cvxpy solver)."""
+    params = inspect.signature(cp.Problem._solve).parameters
+    return {k for k, p in params.items() if k not in ("self", "solver")
+            and p.kind is not inspect.Parameter.VAR_KEYWORD}
+
+
+def valid_options(backend: Backend) -> list[str] | None:
+    """Option names a back end accepts, or None when bvpnav cannot list them (the solver
+    then judges them itself; an error is a recorded failed attempt)."""
+    if backend.kind == "direct":
+        return sorted(backend.presets.get("default", {}))
+    if backend.name == "clarabel":
+        try:
+            import clarabel
+        except ImportError:  # pragma: no cover - clarabel is a dependency of cvxpy
+            return None
+        settings = clarabel.DefaultSettings()
+        names = {a for a in dir(settings) if not a.startswith("_")
+                 and not callable(getattr(settings, a))}
+        return sorted(names | _cvxpy_keywords())
+    return None
+
+
+def check_options(backend: Backend, options, what: str = "options") -> None:
+    """Raise :class:`InputError` naming an option the back end does not know, or a value
+    of a direct back end's option that it cannot use, with the valid ones."""
+    if options is None:
+        return
+    if not isinstance(options, Mapping):
+        raise InputError(f"{what}={options!r}: give a dict of solver options, e.g. "
+                         f"{what}={{'max_iter': 500}}, or None")
+    valid = valid_options(backend)
+    for key in options:
+        if not isinstance(key, str):
+            raise InputError(f"{what}: option name {key!r} for solver {backend.name!r} is not a string")
+        if valid is not None and key not in valid:
+            close = difflib.get_close_matches(key, valid, n=1)
+            raise InputError(
+                f"{what}: solver {backend.name!r} has no option {key!r}"
+                + (f" (did you mean {close[0]!r}?)" if close else "")
+                + f"; valid options: {valid}")
+    if backend.kind == "direct":
+        for key, value in options.items():
+            ok, want = _DIRECT_VALUES.get(key, (lambda v: True, ""))
+            if not ok(value):
+                raise InputError(f"{what}: solver {backend.name!r} option {key}={value!r}: must be "
+                                 f"{want}")
 
 
 def _takes_cones(backend: Backend) -> bool:
@@ -191,3 +278,100 @@ def check_support(backend: Backend, problem) -> None:
         + (", or give the item mode='soft'." if backend.kind == "direct" and term.kind == "equality"
            else ".")
     )
+
+
+# ------------------------------------------------------------------ memory
+#: Peak resident bytes per sample and axis by back end and objective form, measured at
+#: N = 1,000,000 (one axis, Table 2 shape, each run in its own process, data and problem
+#: included; README "Comparing solvers"): direct 1.95 / 2.96 GB, csne 2.77 / 3.06 GB,
+#: Clarabel 5.75 GB (acceleration form; the load form was not run). Other cvxpy solvers
+#: (not measured) are taken as Clarabel: cvxpy's compiled problem dominates.
+MEMORY_PER_SAMPLE: dict[str, dict[str, float]] = {
+    "direct": {"acceleration": 1950.0, "load": 2960.0},
+    "csne": {"acceleration": 2770.0, "load": 3060.0},
+    "clarabel": {"acceleration": 5750.0, "load": 5750.0},
+}
+
+#: Share of the available memory a solve may plan to use.
+MEMORY_SHARE = 0.9
+
+
+def available_memory() -> int | None:
+    """Bytes of memory available to a new allocation: ``MemAvailable`` of /proc/meminfo,
+    else the free physical pages (``os.sysconf``), else None (unknown: no check)."""
+    import os
+
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def memory_estimate(backend: Backend, problem) -> float:
+    """Estimated peak bytes of solving ``problem`` with ``backend`` (see
+    :data:`MEMORY_PER_SAMPLE`): samples x axes x the measured bytes per sample."""
+    per = MEMORY_PER_SAMPLE.get(backend.name, MEMORY_PER_SAMPLE["clarabel"])
+    form = getattr(problem, "residual", "acceleration")
+    return float(problem.data.n) * problem.data.ndim * per.get(form, max(per.values()))
+
+
+def _gb(b: float) -> str:
+    return f"{b / 1e9:.3g} GB"
+
+
+def memory_shortfall(backend: Backend, problem, available: int | None = None) -> str | None:
+    """Why ``backend`` would not fit in memory (a sentence naming N, the estimate and the
+    limit), or None when it fits or the available memory is unknown."""
+    avail = available_memory() if available is None else available
+    if avail is None:
+        return None
+    need = memory_estimate(backend, problem)
+    limit = MEMORY_SHARE * avail
+    if need <= limit:
+        return None
+    return (f"solver {backend.name!r} needs about {_gb(need)} for N = {problem.data.n} samples x "
+            f"{problem.data.ndim} axes (measured {need / (problem.data.n * problem.data.ndim):.0f} "
+            f"bytes per sample and axis), more than the limit {_gb(limit)} "
+            f"({MEMORY_SHARE:.0%} of {_gb(avail)} available)")
+
+
+def _least_squares_items(problem) -> bool:
+    """Whether every item is a hard or soft equality and no error-model bound exists,
+    judged from the items' declared kind and mode (no compilation: N may be huge)."""
+    for it in getattr(problem, "_items", ()):
+        if getattr(it, "kind", "equality") != "equality" or it.mode in ("band", "robust"):
+            return False
+    em = getattr(problem, "error_model", None)
+    comps = getattr(em, "components", (em,)) if em is not None else ()
+    return all(getattr(c, "bounds", None) is None for c in comps)
+
+
+def check_memory(problem, backend: Backend) -> None:
+    """Raise :class:`InputError` before any work when ``backend`` would not fit in memory,
+    naming N, the estimate, the limit and the options that would fit."""
+    avail = available_memory()
+    why = memory_shortfall(backend, problem, avail)
+    if why is None:
+        return
+    limit = MEMORY_SHARE * avail
+    per = memory_estimate(backend, problem) / problem.data.n
+    n_fit = int(limit // per)
+    t = problem.data.t
+    fits = []
+    if n_fit >= 2:
+        dt = float(np.median(np.diff(t)))
+        fits.append(f"a shorter window of at most {n_fit} samples (about {n_fit * dt:.4g} s)")
+    for name in ("direct", "csne"):
+        if name in _BACKENDS and name != backend.name:
+            other = _BACKENDS[name]
+            if memory_shortfall(other, problem, avail) is None and _least_squares_items(problem):
+                fits.append(f"solver={name!r} (about {_gb(memory_estimate(other, problem))})")
+    fits.append("a machine with more memory")
+    raise InputError(f"not enough memory: {why}. Options that would fit: " + "; ".join(fits) + ".")
