@@ -66,10 +66,8 @@ def inp():
     x.assert_unchanged()
 
 
-@pytest.mark.xfail(strict=True, reason="TimeGrid (grid.py) and ImuData (imu.py) freeze the "
-                   "caller's float arrays in place (setflags(write=False) on np.asarray's "
-                   "no-copy view); owned by the grid/imu engineers")
 def test_the_callers_arrays_stay_writeable():
+    """ImuData and TimeGrid copy the caller's arrays (bvpnav.timebase): they stay writeable."""
     x = Inputs()
     x.problem()
     assert x.t.flags.writeable and x.acc.flags.writeable
