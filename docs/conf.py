@@ -1,0 +1,108 @@
+"""Sphinx configuration of the bvpnav documentation.
+
+Build (offline; warnings are errors, as in ``tests/test_docs.py``)::
+
+    pip install -e ".[docs]"
+    sphinx-build -W --keep-going -b html docs docs/_build/html
+
+The tutorial series in ``examples/tutorial`` (jupytext percent scripts, linked into
+``docs/tutorials``) is executed by myst-nb at small size (``BVPNAV_SMALL=1``) unless the
+environment says otherwise: ``BVPNAV_SMALL=0`` runs the full-size tutorials and
+``BVPNAV_DOCS_EXECUTE=off`` builds the pages without running them (no figures).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import bvpnav
+
+sys.path.insert(0, str(Path(__file__).parent / "_ext"))
+
+# -- Project ------------------------------------------------------------------------
+project = "bvpnav"
+author = "bvpnav developers"
+copyright = "bvpnav developers"  # noqa: A001  (Sphinx's name)
+release = bvpnav.__version__
+version = release
+
+# -- General ------------------------------------------------------------------------
+extensions = [
+    "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",
+    "sphinx.ext.napoleon",
+    "sphinx.ext.mathjax",
+    "sphinx.ext.viewcode",
+    "myst_nb",
+]
+# No intersphinx: the build must work without network access.
+exclude_patterns = [
+    "_build", "_ext", "conf.py", "_readme_proposal.md", "**/.ipynb_checkpoints", "jupyter_execute",
+]
+templates_path = ["_templates"]
+source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".py": "myst-nb"}
+root_doc = "index"
+default_role = "code"
+
+# -- MyST / myst-nb -----------------------------------------------------------------
+myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
+myst_heading_anchors = 3
+# The tutorials are jupytext "percent" scripts; myst-nb reads them as notebooks.
+nb_custom_formats = {".py": "bvpnav_docs.read_percent_script"}
+nb_execution_mode = os.environ.get("BVPNAV_DOCS_EXECUTE", "cache")
+nb_execution_timeout = 600
+nb_execution_raise_on_error = True
+nb_execution_show_tb = True
+nb_execution_in_temp = True  # nothing a tutorial writes lands in the source tree
+nb_merge_streams = True
+
+# What the executed tutorials see (the kernel inherits this process's environment).
+os.environ.setdefault("BVPNAV_SMALL", "1")
+os.environ["BVPNAV_FIGURES"] = tempfile.mkdtemp(prefix="bvpnav-docs-figures-")
+os.environ["MPLBACKEND"] = "module://matplotlib_inline.backend_inline"  # figures shown inline
+
+# -- API reference --------------------------------------------------------------------
+autosummary_generate = True
+autosummary_ignore_module_all = False  # document what each module's __all__ exports
+autodoc_default_options = {"members": True, "show-inheritance": True}
+autodoc_member_order = "bysource"
+autodoc_typehints = "signature"
+autodoc_typehints_format = "short"
+napoleon_google_docstring = False
+napoleon_numpy_docstring = True
+napoleon_use_param = False  # types as written (no guessed cross-references such as "n" in "shape (n,)")
+napoleon_use_rtype = False
+# "Attributes" sections are rendered like "Parameters": no attribute directives that would
+# describe dataclass fields a second time, and types stay plain text.
+napoleon_custom_sections = [("Attributes", "params_style")]
+
+
+_documenting = {"module": ""}
+
+
+def _note_module(app, what, name, obj, options, lines):
+    if what == "module":
+        _documenting["module"] = name
+
+
+def _skip_foreign_members(app, what, name, obj, skip, options):
+    """On a sub-package page, skip what the package merely re-exports from elsewhere.
+
+    ``bvpnav.constraints`` re-exports ``Item`` and ``registry`` from :mod:`bvpnav.items`;
+    two aliases of one canonical name are a Sphinx warning. The top-level ``bvpnav``
+    namespace keeps its re-exports: it is the public API.
+    """
+    package = _documenting["module"]
+    home = getattr(obj, "__module__", None)
+    if what == "module" and package not in ("", "bvpnav") and isinstance(home, str):
+        if home != package and not home.startswith(package + "."):
+            return True
+    return skip
+
+
+def setup(app):
+    app.connect("autodoc-process-docstring", _note_module)
+    app.connect("autodoc-skip-member", _skip_foreign_members)
