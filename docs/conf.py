@@ -18,6 +18,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from sphinx.ext import napoleon
+
 import bvpnav
 
 sys.path.insert(0, str(Path(__file__).parent / "_ext"))
@@ -52,7 +54,11 @@ myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
 myst_heading_anchors = 3
 # The tutorials are jupytext "percent" scripts; myst-nb reads them as notebooks.
 nb_custom_formats = {".py": "bvpnav_docs.read_percent_script"}
+_EXECUTE_MODES = ("cache", "force", "auto", "inline", "off")
 nb_execution_mode = os.environ.get("BVPNAV_DOCS_EXECUTE", "cache")
+if nb_execution_mode not in _EXECUTE_MODES:
+    raise ValueError(f"BVPNAV_DOCS_EXECUTE={nb_execution_mode!r}: choose one of {list(_EXECUTE_MODES)} "
+                     "('off' builds the tutorial pages without running them)")
 nb_execution_timeout = 600
 nb_execution_raise_on_error = True
 nb_execution_show_tb = True
@@ -66,7 +72,9 @@ os.environ["MPLBACKEND"] = "module://matplotlib_inline.backend_inline"  # figure
 
 # -- API reference --------------------------------------------------------------------
 autosummary_generate = True
-autosummary_ignore_module_all = False  # document what each module's __all__ exports
+# Submodules are found by walking each package (not from __all__), so every module gets a
+# page; autodoc documents what each module's __all__ exports.
+autosummary_ignore_module_all = True
 autodoc_default_options = {"members": True, "show-inheritance": True}
 autodoc_member_order = "bysource"
 autodoc_typehints = "signature"
@@ -78,6 +86,11 @@ napoleon_use_rtype = False
 # "Attributes" sections are rendered like "Parameters": no attribute directives that would
 # describe dataclass fields a second time, and types stay plain text.
 napoleon_custom_sections = [("Attributes", "params_style")]
+
+# -- HTML -----------------------------------------------------------------------------
+html_theme = "furo"
+html_title = f"bvpnav {release}"
+html_static_path = []
 
 
 _documenting = {"module": ""}
@@ -103,6 +116,22 @@ def _skip_foreign_members(app, what, name, obj, skip, options):
     return skip
 
 
+def _napoleon_except_data(app, what, name, obj, options, lines):
+    """Napoleon for everything but module data and attributes.
+
+    Napoleon reads the first line of a data or attribute docstring as ``type: text``, so
+    the project's ``#: Rate-table radius (m): ...`` comments would lose their first
+    clause to a bogus type. Those comments are prose; leave them as written.
+    """
+    if what in ("data", "attribute"):
+        return
+    napoleon._process_docstring(app, what, name, obj, options, lines)
+
+
 def setup(app):
+    for listener in list(app.events.listeners.get("autodoc-process-docstring", [])):
+        if listener.handler is napoleon._process_docstring:
+            app.disconnect(listener.id)
+    app.connect("autodoc-process-docstring", _napoleon_except_data)
     app.connect("autodoc-process-docstring", _note_module)
     app.connect("autodoc-skip-member", _skip_foreign_members)
