@@ -3,7 +3,11 @@
 Build (offline; warnings are errors, as in ``tests/test_docs.py``)::
 
     pip install -e ".[docs]"
-    sphinx-build -W --keep-going -b html docs docs/_build/html
+    sphinx-build -W --keep-going -j 2 -b html docs docs/_build/html
+    python -m http.server --directory docs/_build/html 8000     # http://localhost:8000
+
+Nothing is fetched at build or view time: no intersphinx, and MathJax is served from
+``_static`` (sphinx-mathjax-offline).
 
 The tutorial series in ``examples/tutorial`` (jupytext percent scripts, linked into
 ``docs/tutorials``) is executed by myst-nb at small size (``BVPNAV_SMALL=1``) unless the
@@ -23,6 +27,7 @@ from sphinx.ext import napoleon
 import bvpnav
 
 sys.path.insert(0, str(Path(__file__).parent / "_ext"))
+import bvpnav_docs  # noqa: E402  (docs/_ext, just put on the path)
 
 # -- Project ------------------------------------------------------------------------
 project = "bvpnav"
@@ -37,6 +42,7 @@ extensions = [
     "sphinx.ext.autosummary",
     "sphinx.ext.napoleon",
     "sphinx.ext.mathjax",
+    "bvpnav_docs",  # docs/_ext: MathJax copied into _static (equations render without a network)
     "sphinx.ext.viewcode",
     "myst_nb",
 ]
@@ -75,6 +81,9 @@ autosummary_generate = True
 # Submodules are found by walking each package (not from __all__), so every module gets a
 # page; autodoc documents what each module's __all__ exports.
 autosummary_ignore_module_all = True
+# Each object is described once, under its shortest public name (the module template
+# passes these to :exclude-members:; see bvpnav_docs.documented_elsewhere).
+autosummary_context = {"documented_elsewhere": bvpnav_docs.documented_elsewhere()}
 autodoc_default_options = {"members": True, "show-inheritance": True}
 autodoc_member_order = "bysource"
 autodoc_typehints = "signature"
@@ -91,29 +100,6 @@ napoleon_custom_sections = [("Attributes", "params_style")]
 html_theme = "furo"
 html_title = f"bvpnav {release}"
 html_static_path = []
-
-
-_documenting = {"module": ""}
-
-
-def _note_module(app, what, name, obj, options, lines):
-    if what == "module":
-        _documenting["module"] = name
-
-
-def _skip_foreign_members(app, what, name, obj, skip, options):
-    """On a sub-package page, skip what the package merely re-exports from elsewhere.
-
-    ``bvpnav.constraints`` re-exports ``Item`` and ``registry`` from :mod:`bvpnav.items`;
-    two aliases of one canonical name are a Sphinx warning. The top-level ``bvpnav``
-    namespace keeps its re-exports: it is the public API.
-    """
-    package = _documenting["module"]
-    home = getattr(obj, "__module__", None)
-    if what == "module" and package not in ("", "bvpnav") and isinstance(home, str):
-        if home != package and not home.startswith(package + "."):
-            return True
-    return skip
 
 
 def _napoleon_except_data(app, what, name, obj, options, lines):
@@ -133,5 +119,3 @@ def setup(app):
         if listener.handler is napoleon._process_docstring:
             app.disconnect(listener.id)
     app.connect("autodoc-process-docstring", _napoleon_except_data)
-    app.connect("autodoc-process-docstring", _note_module)
-    app.connect("autodoc-skip-member", _skip_foreign_members)

@@ -130,9 +130,15 @@ def test_tutorial_pages_were_executed(site, script):
     assert "Traceback" not in html
 
 
-def test_formulation_page_has_equations(site):
+def test_formulation_page_has_equations_rendered_without_a_network(site):
     html = (site / "formulation.html").read_text()
     assert html.count('class="math') >= 10
+    scripts = re.findall(r'<script[^>]*src="([^"]*mathjax[^"]*)"', html)
+    assert scripts == ["_static/mathjax/tex-chtml.js"], scripts
+    assert (site / "_static" / "mathjax" / "tex-chtml.js").stat().st_size > 100_000
+    remote = sorted(str(p.relative_to(site)) for p in site.rglob("*.html")
+                    if re.search(r'<(?:script|link|img)[^>]*(?:src|href)="(?:https?:)?//', p.read_text()))
+    assert not remote, f"pages that load something from the network: {remote}"
 
 
 def test_changelog_is_grouped_by_issue(site):
