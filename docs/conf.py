@@ -75,6 +75,9 @@ nb_merge_streams = True
 os.environ.setdefault("BVPNAV_SMALL", "1")
 os.environ["BVPNAV_FIGURES"] = tempfile.mkdtemp(prefix="bvpnav-docs-figures-")
 os.environ["MPLBACKEND"] = "module://matplotlib_inline.backend_inline"  # figures shown inline
+# tqdm.auto sees a Jupyter kernel and warns that ipywidgets is missing; the pages need no widget.
+os.environ["PYTHONWARNINGS"] = ",".join(
+    filter(None, [os.environ.get("PYTHONWARNINGS"), "ignore:IProgress not found"]))
 
 # -- API reference --------------------------------------------------------------------
 autosummary_generate = True
