@@ -1,0 +1,1 @@
+../../examples/tutorial/01_double_integration.py

@@ -1,0 +1,1 @@
+../../examples/tutorial/02_boundary_value_problem.py

@@ -1,0 +1,1 @@
+../../examples/tutorial/03_bias_error_model.py

@@ -1,0 +1,1 @@
+../../examples/tutorial/04_noise_tikhonov_lcurve.py

@@ -1,0 +1,1 @@
+../../examples/tutorial/05_information_filters_cannot_use.py

@@ -1,0 +1,1 @@
+../../examples/tutorial/06_write_your_own_item.py

@@ -1,0 +1,1 @@
+../../examples/tutorial/07_compare_solvers_and_formulations.py

@@ -1,0 +1,201 @@
+"""The documentation site builds offline with warnings as errors and has its key pages.
+
+The build runs ``sphinx-build -W --keep-going -b html`` (as a reader would) on a copy of
+``docs/`` in a temporary folder, so the generated API stubs never land in the work tree;
+every proxy points at a closed loopback port, so any attempt to fetch something during the
+build (intersphinx inventories, remote images) fails it. The tutorial gallery is executed
+at small size (``BVPNAV_SMALL=1``).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import pkgutil
+import re
+import shutil
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+from _hostile import assert_unchanged, snapshot
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+TUTORIAL = ROOT / "examples" / "tutorial"
+SCRIPTS = sorted(TUTORIAL.glob("[0-9][0-9]_*.py"))
+GUIDES = ["items", "error_models", "solvers", "lambda", "files_cli", "batch", "strapdown"]
+#: Where a fetch would go: the discard port on loopback, closed (connection refused).
+NO_NETWORK = "http://127.0.0.1:9"
+
+
+def _files(root: Path) -> set[Path]:
+    return {p for p in root.rglob("*") if p.is_file()}
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory):
+    """Build the site once for this module; return the HTML folder."""
+    base = tmp_path_factory.mktemp("docs")
+    src = base / "source"
+    # Symbolic links (the tutorials) are copied as the files they point to.
+    shutil.copytree(DOCS, src, ignore=shutil.ignore_patterns(
+        "_build", "generated", "jupyter_execute", ".jupyter_cache"))
+    before = snapshot(ROOT / "examples", DOCS)
+    files_before = _files(ROOT / "examples") | _files(DOCS)
+    env = dict(os.environ, BVPNAV_SMALL="1", MPLBACKEND="Agg")
+    env.pop("BVPNAV_DOCS_EXECUTE", None)
+    for var in ("http_proxy", "https_proxy", "HTTP_PROXY", "HTTPS_PROXY", "all_proxy", "ALL_PROXY"):
+        env[var] = NO_NETWORK
+    env.pop("no_proxy", None)
+    env.pop("NO_PROXY", None)
+    out = base / "html"
+    proc = subprocess.run(
+        [sys.executable, "-m", "sphinx", "-W", "--keep-going", "-j", "2", "-b", "html", str(src), str(out)],
+        cwd=base, env=env, capture_output=True, text=True, timeout=900, stdin=subprocess.DEVNULL,
+    )
+    assert proc.returncode == 0, f"sphinx-build failed:\n{proc.stderr[-6000:]}\n{proc.stdout[-2000:]}"
+    # The build read the examples and the docs and wrote nothing beside them.
+    assert_unchanged(before)
+    assert _files(ROOT / "examples") | _files(DOCS) == files_before
+    return out
+
+
+def test_every_tutorial_script_is_linked_into_the_gallery():
+    """A new tutorial in examples/tutorial needs its link in docs/tutorials (or the site misses it)."""
+    assert SCRIPTS, "no tutorial scripts found"
+    for script in SCRIPTS:
+        link = DOCS / "tutorials" / script.name
+        assert link.exists(), (
+            f"docs/tutorials/{script.name} is missing: add it with "
+            f"`ln -s ../../examples/tutorial/{script.name} docs/tutorials/`")
+        assert link.resolve() == script.resolve(), f"docs/tutorials/{script.name} does not point at {script}"
+    linked = sorted(p.name for p in (DOCS / "tutorials").glob("[0-9][0-9]_*.py"))
+    assert linked == [p.name for p in SCRIPTS], "docs/tutorials links a script that examples/tutorial lacks"
+
+
+def test_key_pages_exist(site):
+    pages = ["index", "getting_started", "formulation", "guide/index", "tutorials/index",
+             "api/index", "changelog", "genindex", "py-modindex", "search"]
+    pages += [f"guide/{g}" for g in GUIDES]
+    pages += [f"tutorials/{p.stem}" for p in SCRIPTS]
+    missing = [p for p in pages if not (site / f"{p}.html").is_file()]
+    assert not missing, missing
+    # The proposal for the README is a source file for the lead, not a page.
+    assert not (site / "_readme_proposal.html").exists()
+
+
+def test_api_reference_lists_the_public_api(site):
+    top = (site / "api" / "generated" / "bvpnav.html").read_text()
+    for name in ("NavigationProblem", "ImuData", "Solution", "InputError", "compare_solvers"):
+        assert f'id="bvpnav.{name}"' in top, name
+    assert 'id="bvpnav.NavigationProblem.solve"' in top
+    cons = (site / "api" / "generated" / "bvpnav.constraints.html").read_text()
+    for name in ("Position", "Velocity", "AverageVelocity", "TrackLine", "SpeedLimit"):
+        assert f'id="bvpnav.constraints.{name}"' in cons, name
+
+
+def test_api_reference_is_recursive_over_every_public_module(site):
+    """Every public module of the installed package has its page, wherever it lives."""
+    import bvpnav
+    import bvpnav.constraints
+
+    names = {"bvpnav", "bvpnav.constraints"}
+    for pkg in (bvpnav, bvpnav.constraints):
+        for info in pkgutil.walk_packages(pkg.__path__, prefix=pkg.__name__ + "."):
+            if not any(part.startswith("_") for part in info.name.split(".")):
+                names.add(info.name)
+    assert {"bvpnav.problem", "bvpnav.error_models.bias", "bvpnav.constraints.position"} <= names
+    missing = sorted(n for n in names if not (site / "api" / "generated" / f"{n}.html").is_file())
+    assert not missing, missing
+
+
+@pytest.mark.parametrize("script", SCRIPTS, ids=[p.stem for p in SCRIPTS])
+def test_tutorial_pages_were_executed(site, script):
+    """Each tutorial page shows its code, the output it printed and its figure."""
+    html = (site / "tutorials" / f"{script.stem}.html").read_text()
+    assert "cell_output" in html, "no executed output on the page"
+    images = re.findall(r'<img[^>]+src="([^"]+\.png)"', html)
+    assert images, "no figure on the page"
+    for src in images:
+        png = (site / "tutorials" / src).resolve()
+        assert png.is_file() and png.stat().st_size > 5000, src
+    assert "Traceback" not in html
+
+
+def test_formulation_page_has_equations_rendered_without_a_network(site):
+    html = (site / "formulation.html").read_text()
+    assert html.count('class="math') >= 10
+    scripts = re.findall(r'<script[^>]*src="([^"]*mathjax[^"]*)"', html)
+    assert scripts == ["_static/mathjax/tex-chtml.js"], scripts
+    assert (site / "_static" / "mathjax" / "tex-chtml.js").stat().st_size > 100_000
+    remote = sorted(str(p.relative_to(site)) for p in site.rglob("*.html")
+                    if re.search(r'<(?:script|link|img)[^>]*(?:src|href)="(?:https?:)?//', p.read_text()))
+    assert not remote, f"pages that load something from the network: {remote}"
+
+
+def test_changelog_is_grouped_by_issue(site):
+    text = (DOCS / "changelog.md").read_text()
+    for issue in (5, 7, 8):
+        assert re.search(rf"^## .*[Ii]ssue {issue}\b", text, re.MULTILINE), issue
+    assert (site / "changelog.html").is_file()
+
+
+def test_license_and_typing_marker_ship_in_the_wheel(tmp_path):
+    meta = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    assert meta["license"] == {"text": "MIT"}
+    text = (ROOT / "LICENSE").read_text()
+    assert text.startswith("MIT License") and "Copyright (c) bvpnav developers" in text
+    proc = subprocess.run(
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(tmp_path), str(ROOT)],
+        capture_output=True, text=True, timeout=300,
+    )
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    names = zipfile.ZipFile(next(tmp_path.glob("bvpnav-*.whl"))).namelist()
+    assert "bvpnav/py.typed" in names
+    assert any(re.search(r"\.dist-info/(licenses/)?LICENSE$", n) for n in names), names
+
+
+#: Runs the ``python`` code blocks of each page in order, one namespace per page.
+_RUN_BLOCKS = r"""
+import json, sys, traceback
+pages = json.loads(sys.stdin.read())
+failed = []
+for page, blocks in pages.items():
+    ns = {"__name__": "__docs__"}
+    for k, code in enumerate(blocks, 1):
+        try:
+            exec(compile(code, f"{page} block {k}", "exec"), ns)
+        except BaseException:
+            failed.append(f"{page}, python block {k}:\n{traceback.format_exc()}")
+            break
+print("\n".join(failed), file=sys.stderr)
+sys.exit(1 if failed else 0)
+"""
+
+
+def _python_blocks(page: Path) -> list[str]:
+    return re.findall(r"^```python\n(.*?)^```", page.read_text(), re.MULTILINE | re.DOTALL)
+
+
+def test_code_on_the_pages_runs(tmp_path):
+    """Every ``python`` block of the hand-written pages runs as shown (a page's blocks in
+    order, sharing one namespace), in an empty folder, at test size."""
+    pages = {str(p.relative_to(DOCS)): _python_blocks(p)
+             for p in sorted(DOCS.glob("*.md")) + sorted((DOCS / "guide").glob("*.md"))
+             if not p.name.startswith("_")}
+    pages = {k: v for k, v in pages.items() if v}
+    assert {"getting_started.md", "guide/items.md", "guide/strapdown.md"} <= set(pages)
+    before = snapshot(ROOT / "examples", DOCS)
+    env = dict(os.environ, BVPNAV_SMALL="1", MPLBACKEND="Agg")
+    proc = subprocess.run([sys.executable, "-c", _RUN_BLOCKS], input=json.dumps(pages), cwd=tmp_path,
+                          env=env, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-6000:]
+    assert_unchanged(before)
