@@ -397,10 +397,12 @@ def _run_on_dask(jobs, scheduler, workers, progress) -> list[dict]:
     if scheduler is None:
         import logging
 
-        # silence_logs: the workers' warnings (e.g. tasks cancelled by Ctrl-C) are not for users
+        # silence_logs: the workers' warnings and errors (tasks cancelled by Ctrl-C, a heartbeat
+        # that finds the scheduler already closed while the cluster shuts down) are not for
+        # users; a task's own failure is a row of the summary, a dead worker too
         with _workers_ignore_ctrl_c():
             cluster = LocalCluster(n_workers=max(int(workers), 1), threads_per_worker=1, processes=True,
-                                   host="127.0.0.1", dashboard_address=None, silence_logs=logging.ERROR)
+                                   host="127.0.0.1", dashboard_address=None, silence_logs=logging.CRITICAL)
         client = Client(cluster)
     else:
         client = Client(scheduler)
