@@ -122,6 +122,8 @@ OPTION_CASES = [
                  r"True or False", id="verify-str"),
     pytest.param(lambda p: p.solve(solver=3), SolverNotFound, r"got 3",
                  r"must be a name \(str\)", id="solver-int"),
+    pytest.param(lambda p: p.solve(solver=None), SolverNotFound, r"got None",
+                 r"must be a name \(str\)", id="solver-none"),
     # the rule path checks every option before its sweep
     pytest.param(lambda p: p.solve(lam="gcv", fallback=5), InputError, r"fallback=5",
                  r"list of solver names", id="rule-fallback-int"),
@@ -134,6 +136,14 @@ OPTION_CASES = [
     pytest.param(lambda p: p.solve(on_conflict="demote", accuracy="ultra"), InputError,
                  r"accuracy='ultra'", r"choose one of", id="demote-accuracy"),
 ]
+
+
+def test_a_bad_solver_name_is_an_input_error(inp):
+    """Found by the independent hostile review: ``except InputError`` missed SolverNotFound."""
+    prob = inp.problem()
+    for bad in (None, "no-such-solver"):
+        exc = raises_named(InputError, lambda b=bad: prob.solve(solver=b), repr(bad), r"available|a name")
+        assert isinstance(exc, SolverNotFound)
 
 
 @pytest.mark.parametrize("call, cls, culprit, fix", OPTION_CASES)

@@ -8,8 +8,8 @@ callers can catch the library's failures without catching programming errors.
   item) and what to do.
 - :class:`ConvexityError`: an item or objective is not DCP/DPP; the message names
   the item.
-- :class:`SolverNotFound`: the requested solver is unknown or not installed; the
-  message lists the installed ones.
+- :class:`SolverNotFound` (an :class:`InputError`): the requested solver is unknown
+  or not installed; the message lists the installed ones.
 - :class:`SolveError` and its subclasses :class:`Infeasible`, :class:`Unbounded`,
   :class:`Inaccurate`: the solver failed, or its answer failed bvpnav's own
   verification.
@@ -41,8 +41,11 @@ class ConvexityError(BvpnavError):
     """An item or objective breaks the DCP/DPP rules; the message names the item."""
 
 
-class SolverNotFound(BvpnavError, ValueError):
-    """Unknown or uninstalled solver; the message lists what is installed."""
+class SolverNotFound(InputError):
+    """Unknown or uninstalled solver; the message lists what is installed.
+
+    A bad solver name is bad input like any other, so ``except InputError`` catches it.
+    """
 
 
 class SolveError(BvpnavError):
