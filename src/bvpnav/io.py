@@ -881,6 +881,32 @@ def bvpnav_summary(path: str | os.PathLike) -> dict | None:
     return js if isinstance(js, dict) and all(k in js for k in SUMMARY_KEYS) else None
 
 
+def _starts_like_summary(path: Path) -> bool:
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(64)
+    except OSError:
+        return False
+    return _re.match(rb'\s*\{\s*"lam"\s*:', head) is not None
+
+
+def _trajectory_columns(path: Path) -> bool:
+    """Whether the table's columns are a bvpnav trajectory's: ``t``, positions, ``v<axis>``."""
+    try:
+        if path.suffix.lower() == ".csv":
+            with open(path, encoding="utf-8", errors="replace", newline="") as fh:
+                cols = fh.readline().rstrip("\r\n").split(",")
+        else:
+            import pyarrow.parquet as pq
+
+            cols = list(pq.read_schema(path).names)
+    except Exception:  # unreadable: not recognisably ours
+        return False
+    k = (len(cols) - 1) // 2
+    return (len(cols) >= 3 and len(cols) % 2 == 1 and cols[0] == "t"
+            and cols[1 + k:] == ["v" + c for c in cols[1:1 + k]])
+
+
 def check_implicit_outputs(outputs: dict, fix: str) -> None:
     """Refuse to replace a file at an output path that bvpnav derived (not one typed by the
     user) unless that file is recognisably bvpnav's own output.
@@ -905,14 +931,15 @@ def check_implicit_outputs(outputs: dict, fix: str) -> None:
         p = Path(p)
         if not os.path.lexists(p):
             continue
-        if kind == "summary":
-            ok = bvpnav_summary(p) is not None
+        if kind == "summary":  # or bvpnav's summary cut short (its text starts with the key "lam")
+            ok = bvpnav_summary(p) is not None or _starts_like_summary(p)
         elif kind == "trajectory":
             js = bvpnav_summary(p.with_suffix(".json"))
             run = js.get("run") if js is not None else None
             traj = run.get("trajectory") if isinstance(run, dict) else None
-            ok = js is not None and (not isinstance(traj, dict)
-                                     or Path(str(traj.get("path", ""))).name == p.name)
+            ok = (js is not None and (not isinstance(traj, dict)
+                                      or Path(str(traj.get("path", ""))).name == p.name)) or (
+                js is None and _trajectory_columns(p))  # written just before a run was stopped
         else:
             try:
                 with open(p, encoding="utf-8", errors="replace", newline="") as fh:
