@@ -105,12 +105,16 @@ def half_then_fail(method):
     return broken
 
 
+#: An earlier bvpnav summary (solve's default summary path replaces only bvpnav's own).
+OLD_SUMMARY = '{"lam": 1.0, "lam_rule": "fixed", "error_model": {}, "solver": {}, "items": []}\n'
+
+
 @pytest.mark.parametrize("fails", ["trajectory", "summary"])
 def test_a_failed_write_leaves_the_old_output_whole_and_no_temporary_file(sample, tmp_path, monkeypatch,
                                                                           fails):
     out, summ = tmp_path / "traj.csv", tmp_path / "traj.json"
     out.write_text("old trajectory\n")
-    summ.write_text('{"old": true}\n')
+    summ.write_text(OLD_SUMMARY)
     if fails == "trajectory":
         monkeypatch.setattr(pd.DataFrame, "to_csv", half_then_fail(pd.DataFrame.to_csv))
     else:
@@ -124,7 +128,7 @@ def test_a_failed_write_leaves_the_old_output_whole_and_no_temporary_file(sample
                  str(out), "--quiet"])
     monkeypatch.undo()
     assert code == 2  # an OSError: reported, not a traceback
-    assert summ.read_text() == '{"old": true}\n'
+    assert summ.read_text() == OLD_SUMMARY
     if fails == "trajectory":
         assert out.read_text() == "old trajectory\n"
     else:  # the trajectory was complete and replaced before the summary failed

@@ -746,3 +746,199 @@ def test_the_api_refuses_before_any_work(call, culprit, fix, work):
     assert_unchanged(before)
     assert files_in(work) - names <= {"recs", "recs/run0.csv", "recs/run1.csv"}  # the set-up only
     assert stray_temporaries(work) == []
+
+
+# ------------------------------------------------------------------ round 2 (issue 14 "Trust")
+def _users_json(p: Path) -> Path:
+    p.parent.mkdir(exist_ok=True)
+    p.write_text('{"logger": "X200"}\n')
+    return p
+
+
+def _lock_link(t: Path) -> list:
+    (t / "keep.txt").write_text("precious\n")
+    argv = _batch_with(t, "x.txt", "")
+    (t / "out" / ".bvpnav.lock").symlink_to(t / "keep.txt")
+    return argv
+
+
+def _batch_with(t: Path, name: str, content: str) -> list:
+    recs = recs_folder(t, ("run0.csv",))
+    (t / "out").mkdir()
+    (t / "out" / name).write_text(content)
+    return batch_argv(t, recs, t / "out")
+
+
+ROUND2_REFUSED = [
+    # --- data loss: a file at a path bvpnav chose (not typed by the user) that is not bvpnav's
+    pytest.param(lambda t: (shutil.copyfile(t / "rec.csv", t / "run1.csv"), _users_json(t / "run1.json"),
+                            solve_argv(t, "--out", t / "run1.parquet"))[-1],
+                 r"--summary \(default: --out with \.json\) '[^']*run1\.json' already exists and is not a "
+                 r"bvpnav JSON summary", r"give --summary PATH", id="F1-solve-default-summary-is-users-json"),
+    pytest.param(lambda t: _batch_with(t, "run0.json", '{"logger": "X200"}\n'),
+                 r"--out \(summary of run0\) '[^']*out/run0\.json' already exists and is not a bvpnav JSON",
+                 r"move it out of the --out folder or give --out another folder", id="F2-batch-users-json"),
+    pytest.param(lambda t: _batch_with(t, "run0.csv", "a,b\n1,2\n"),
+                 r"--out \(output of run0\) '[^']*out/run0\.csv' already exists and is not a bvpnav "
+                 r"trajectory",
+                 r"give --out another folder", id="F2-batch-users-csv"),
+    pytest.param(lambda t: _batch_with(t, "summary.csv", "my,notes\n"),
+                 r"--out \(batch summary\) '[^']*out/summary\.csv' already exists and is not a table bvpnav",
+                 r"give --out another folder", id="F2-batch-users-summary-csv"),
+    # --- data loss: the lock file is a link to, or is, someone else's file
+    pytest.param(lambda t: _lock_link(t),
+                 r"lock file '[^']*out/\.bvpnav\.lock' is a symbolic link", r"remove the link|another folder",
+                 id="F3-lock-symlink-to-a-users-file"),
+    pytest.param(lambda t: _batch_with(t, ".bvpnav.lock", "my notes, not a pid\n"),
+                 r"'[^']*out/\.bvpnav\.lock' exists and is not a bvpnav lock", r"move it away|another folder",
+                 id="F3-lock-is-a-users-file"),
+    # --- traceback: bad numbers for options
+    pytest.param(lambda t: ["simulate", "shuttle", "--out", t / "sim", "--seed", "-1", "--quiet"],
+                 r"--seed -1", r"integer >= 0", id="F13-simulate-negative-seed"),
+    pytest.param(lambda t: ["demo", "--plot", t / "demo.png", "--seed", "-1", "--quiet"],
+                 r"--seed -1", r"integer >= 0", id="F13-demo-negative-seed"),
+    pytest.param(lambda t: batch_argv(t, recs_folder(t), t / "out")[:-3] + ["--workers", "0", "--quiet"],
+                 r"--workers 0", r">= 1", id="F26-workers-0"),
+    pytest.param(lambda t: batch_argv(t, recs_folder(t), t / "out")[:-3] + ["--workers", "-2", "--quiet"],
+                 r"--workers -2", r">= 1", id="F26-workers-negative"),
+    # --- hang / vague: simulate rates
+    pytest.param(lambda t: ["simulate", "shuttle", "--out", t / "sim", "--rate", "1e7", "--quiet"],
+                 r"--rate 1e\+07: .*would have 2e\+08 samples",
+                 r"1,000,000.*give --rate 49999\.\d+ Hz or less",
+                 id="F20-simulate-huge-rate"),
+    pytest.param(lambda t: ["simulate", "shuttle", "--out", t / "sim", "--rate", "1e-9", "--quiet"],
+                 r"--rate 1e-09: .*would have 1 samples", r"give --rate 2 Hz or more",
+                 id="F23-simulate-tiny-rate"),
+]
+
+
+@pytest.mark.parametrize("build,culprit,fix", ROUND2_REFUSED)
+def test_round2_refused_before_any_work(build, culprit, fix, work, capsys):
+    argv = build(work)
+    before, names = snapshot(work), files_in(work)
+    code, err = cli(argv, capsys)
+    assert code == EXIT_INPUT, err
+    match_all(err, culprit, fix)
+    assert_unchanged(before)
+    assert files_in(work) == names
+    assert stray_temporaries(work) == []
+
+
+def test_round2_implicit_outputs_of_bvpnav_are_still_replaced(work, capsys):
+    """F1/F2 policy: bvpnav's own earlier outputs at implicit paths are replaced as before."""
+    inputs = snapshot(work / "rec.csv", work / "spec.toml")
+    code, err = cli(solve_argv(work, "--out", work / "traj.csv"), capsys)  # traj.json is bvpnav's
+    assert code == EXIT_OK, err
+    recs = recs_folder(work, ("run0.csv",))
+    for _ in range(2):
+        code, err = cli(batch_argv(work, recs, work / "out"), capsys)
+        assert code == EXIT_OK, err
+    run = json.loads((work / "out" / "run0.json").read_text())["run"]
+    assert run["trajectory"]["path"].endswith("run0.csv")
+    assert_unchanged(inputs)
+
+
+def test_round2_scheduler_is_case_insensitive(work, capsys):
+    """F14: 'Serial' is 'serial', not an address to connect to."""
+    recs = recs_folder(work, ("run0.csv",))
+    inputs = snapshot(recs, work / "spec.toml")
+    argv = batch_argv(work, recs, work / "out")
+    argv[argv.index("serial")] = "Serial"
+    code, err = cli(argv, capsys)
+    assert code == EXIT_OK, err
+    assert bool(pd.read_csv(work / "out" / "summary.csv").ok.all())
+    assert_unchanged(inputs)
+
+
+def test_round2_recording_name_not_utf8_is_solved(work, capsys):
+    """F15: a file name that is not UTF-8 is solved; summary.csv and the JSON name it escaped."""
+    recs = work / "recs"
+    recs.mkdir()
+    name = os.fsdecode(b"run\xe9.csv")
+    shutil.copyfile(work / "rec.csv", recs / name)
+    inputs = snapshot(recs, work / "spec.toml")
+    code, err = cli(batch_argv(work, recs, work / "out"), capsys)
+    assert code == EXIT_OK, err
+    table = pd.read_csv(work / "out" / "summary.csv")
+    assert table.recording.tolist() == [str(recs / "run") + "\\xe9.csv"] and bool(table.ok.all())
+    assert json.loads((work / "out" / os.fsdecode(b"run\xe9.json")).read_text())["run"]["samples"] == 101
+    assert_unchanged(inputs)
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@contextlib.contextmanager
+def _garbage_peer():
+    """A loopback server that answers every connection with bytes that are not dask's."""
+    import threading
+
+    srv = socket.socket()
+    srv.bind(("127.0.0.1", 0))
+    srv.listen()
+    srv.settimeout(0.2)
+    stop = threading.Event()
+
+    def serve():
+        while not stop.is_set():
+            try:
+                c, _ = srv.accept()
+            except OSError:
+                continue
+            with contextlib.suppress(OSError):
+                c.sendall(b"\xff" * 64)
+            c.close()
+
+    th = threading.Thread(target=serve, daemon=True)
+    th.start()
+    try:
+        yield f"tcp://127.0.0.1:{srv.getsockname()[1]}"
+    finally:
+        stop.set()
+        th.join()
+        srv.close()
+
+
+@contextlib.contextmanager
+def _http_server():
+    port = _free_port()
+    proc = subprocess.Popen([sys.executable, "-m", "http.server", str(port), "--bind", "127.0.0.1"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        for _ in range(500):
+            with socket.socket() as s:
+                if s.connect_ex(("127.0.0.1", port)) == 0:
+                    break
+            time.sleep(0.02)
+        yield f"tcp://127.0.0.1:{port}"
+    finally:
+        proc.kill()
+        proc.wait()
+
+
+@contextlib.contextmanager
+def _nothing_listening():
+    yield f"tcp://127.0.0.1:{_free_port()}"
+
+
+@pytest.mark.parametrize("peer", [pytest.param(_garbage_peer, id="F18-peer-answers-garbage"),
+                                  pytest.param(_http_server, id="F22-http-server"),
+                                  pytest.param(_nothing_listening, id="F25-nothing-listening")])
+def test_round2_scheduler_that_is_not_dask_is_refused(peer, work, capsys, monkeypatch):
+    """A scheduler address is input: exit 2 naming --scheduler and the address, within the
+    connect timeout (shortened here), and nothing written (not even the --out folder)."""
+    monkeypatch.setattr(bvpnav.batch, "CONNECT_TIMEOUT", 2.0)
+    recs = recs_folder(work, ("run0.csv",))
+    before, names = snapshot(work), files_in(work)
+    with peer() as address:
+        argv = batch_argv(work, recs, work / "out")
+        argv[argv.index("serial")] = address
+        code, err = cli(argv, capsys)
+    assert code == EXIT_INPUT, err
+    match_all(err, rf"--scheduler '{re.escape(address)}'", r"nothing is listening there or it is not a dask "
+              r"scheduler", r"give its address|leave --scheduler out")
+    assert_unchanged(before)
+    assert files_in(work) == names

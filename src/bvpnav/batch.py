@@ -14,6 +14,7 @@ otherwise it solves it again and the summary row's ``resume`` column says why.
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import json
 import os
@@ -26,6 +27,7 @@ import pandas as pd
 
 from .errors import BvpnavError, InputError
 from .io import (
+    check_implicit_outputs,
     check_outputs,
     check_table_path,
     file_fingerprint,
@@ -49,6 +51,14 @@ SUMMARY_COLUMNS = ["recording", "ok", "error", "samples", "lam", "lam_rule", "so
                    "verified", "seconds", "output", "resume"]
 #: The batch summary table's name in the output folder.
 SUMMARY_NAME = "summary.csv"
+#: Seconds to wait for a ``--scheduler`` address to answer as a dask scheduler.
+CONNECT_TIMEOUT = 10.0
+
+
+def display_path(path) -> str:
+    """A path as text that can always be written (summary.csv, JSON, the terminal): a file
+    name that is not valid UTF-8 keeps its bytes as ``\\xNN`` escapes instead of failing."""
+    return os.fsencode(path).decode("utf-8", "backslashreplace")
 
 
 def solve_kwargs(spec, solver: str | None = None, lam=None) -> dict:
@@ -103,7 +113,9 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     solver, lam : optional
         Overrides of the spec's ``[solve]`` table.
     summary_path : path-like, optional
-        JSON summary (default: ``out`` with suffix ``.json``).
+        JSON summary (default: ``out`` with suffix ``.json``; at that default path an
+        existing file is replaced only if it is a bvpnav JSON summary, see
+        :func:`bvpnav.io.check_implicit_outputs`).
     spec_text : str, optional
         The spec's text, for the fingerprint in the summary's ``run`` record (see
         :func:`fingerprint`); None records no spec hash, so ``resume`` re-solves.
@@ -122,9 +134,13 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     """
     t0 = time.perf_counter()
     out = Path(out)
+    implicit = summary_path is None
     summary_path = Path(summary_path) if summary_path is not None else out.with_suffix(".json")
     fmt = check_table_path(out, "out")
     check_outputs({"recording": path}, {"out": out, "summary_path": summary_path})
+    if implicit:
+        check_implicit_outputs({"summary_path (default: out with .json)": (summary_path, "summary")},
+                               "move it away or give summary_path (--summary) another path")
     try:  # before reading: a recording still being written is then caught below
         rec_fp = file_fingerprint(path)
     except OSError:  # missing, a folder, a FIFO ...: the reader says so, naming the fix
@@ -141,14 +157,15 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     write_trajectory(sol, out)
     written = file_fingerprint(out)
     summ = summary(sol, prob)
-    summ["run"] = {"recording": str(path), "samples": int(data.grid.n),
+    summ["run"] = {"recording": display_path(path), "samples": int(data.grid.n),
                    "fingerprint": fingerprint(path, spec_text, solver, lam, fmt, recording=rec_fp),
-                   "trajectory": {"path": str(out), "size": written["size"], "sha256": written["sha256"]}}
+                   "trajectory": {"path": display_path(out), "size": written["size"],
+                                  "sha256": written["sha256"]}}
     write_json(summ, summary_path)
-    row = {"recording": str(path), "ok": True, "error": "", "samples": data.grid.n, "lam": sol.lam,
+    row = {"recording": display_path(path), "ok": True, "error": "", "samples": data.grid.n, "lam": sol.lam,
            "lam_rule": sol.lam_rule, "solver": sol.stats.get("solver"), "status": sol.stats.get("status"),
            "verified": bool(sol.stats.get("verified")), "seconds": time.perf_counter() - t0,
-           "output": str(out), "resume": ""}
+           "output": display_path(out), "resume": ""}
     return sol, row
 
 
@@ -171,7 +188,7 @@ def _task(path: str, spec_text: str, spec_source: str, out: str, solver, lam, no
         msg = (f"internal error (a bug in bvpnav, please report it): {type(exc).__name__}: {exc} | "
                + traceback.format_exc(limit=3).replace("\n", " "))
     # the columns not given are empty in the summary table
-    return {"recording": path, "ok": False, "error": msg, "verified": False,
+    return {"recording": display_path(path), "ok": False, "error": msg, "verified": False,
             "seconds": time.perf_counter() - t0, "output": "", "resume": note}
 
 
@@ -274,13 +291,15 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
         While the batch runs it holds a lock on the folder (``.bvpnav.lock``): a second
         run into the same folder is refused.
     scheduler : str, optional
-        A ``dask.distributed`` scheduler address; default an in-process LocalCluster of
-        ``workers`` single-threaded worker processes on the loopback interface.
-        ``"serial"`` solves the recordings one after the other in this process, without
-        Dask (for debugging and tests; an exception that is not an ``Exception``, such
-        as ``KeyboardInterrupt``, stops the run, leaving the finished outputs).
+        A ``dask.distributed`` scheduler address, connected to (within
+        :data:`CONNECT_TIMEOUT` seconds) before any output is written; default an
+        in-process LocalCluster of ``workers`` single-threaded worker processes on the
+        loopback interface. ``"serial"`` (any case) solves the recordings one after the
+        other in this process, without Dask (for debugging and tests; an exception that
+        is not an ``Exception``, such as ``KeyboardInterrupt``, stops the run, leaving the
+        finished outputs).
     workers : int
-        Workers of the local cluster.
+        Workers of the local cluster (>= 1).
     solver, lam : optional
         Overrides of the spec's ``[solve]`` table.
     resume : bool
@@ -302,8 +321,11 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
     ------
     InputError
         Bad folder or spec, output collisions (see ``out_dir``), an output that is an input
-        (symlink, hard link), an output folder that cannot be written or is in use by
-        another run; all before any recording is solved.
+        (symlink, hard link), a file in ``out_dir`` at an output's path that is not
+        bvpnav's own output (a JSON summary, a trajectory named by the summary beside it,
+        a batch summary table), an output folder that cannot be written or is in use by
+        another run, ``workers`` < 1, a scheduler that cannot be reached; all before any
+        recording is solved.
     """
     from .spec import parse_spec, read_spec_text
 
@@ -313,6 +335,16 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
                          "the *.csv / *.parquet files")
     if suffix not in (".csv", ".parquet"):
         raise InputError(f"suffix={suffix!r}: the trajectory format is '.csv' or '.parquet'")
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise InputError(f"--workers {workers!r}: the number of local workers must be an integer >= 1, "
+                         "e.g. --workers 2")
+    if scheduler is not None:
+        scheduler = str(scheduler).strip()
+        if scheduler.casefold() == "serial":
+            scheduler = "serial"
+        elif not scheduler:
+            raise InputError("--scheduler '': give a dask scheduler address (e.g. tcp://host:8786) or "
+                             "'serial'; leave it out for a local cluster")
     spec_text = read_spec_text(spec_path)  # the workers parse this same text
     parse_spec(spec_text, str(spec_path))  # fail early, in the client, on a bad spec
     if os.path.realpath(out_dir) == os.path.realpath(directory) or (
@@ -330,6 +362,54 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
         outputs[f"--out (output of {o.stem})"] = o
         outputs[f"--out (summary of {o.stem})"] = o.with_suffix(".json")
     check_outputs(inputs, outputs)
+    implicit = {"--out (batch summary)": (out_dir / SUMMARY_NAME, tuple(SUMMARY_COLUMNS))}
+    for o in outs:
+        implicit[f"--out (output of {o.stem})"] = (o, "trajectory")
+        implicit[f"--out (summary of {o.stem})"] = (o.with_suffix(".json"), "summary")
+    check_implicit_outputs(implicit, "move it out of the --out folder or give --out another folder")
+    client = _connect(scheduler) if scheduler not in (None, "serial") else None
+    try:
+        return _batch_into(files, outs, out_dir, spec_text, str(spec_path), scheduler, workers, solver,
+                           lam, resume, progress, suffix, client)
+    finally:
+        if client is not None:
+            client.close()
+
+
+async def _probe(address: str) -> None:
+    """Ask the peer at ``address`` who it is; raise unless it says it is a dask scheduler."""
+    from distributed.comm import connect
+
+    comm = await connect(address, timeout=CONNECT_TIMEOUT)
+    try:
+        await comm.write({"op": "identity"})
+        reply = await comm.read()
+    finally:
+        comm.abort()
+    if not (isinstance(reply, dict) and reply.get("type") == "Scheduler"):
+        raise ValueError("the peer is not a dask scheduler")
+
+
+def _connect(scheduler: str):
+    """A dask Client of the scheduler at this address, or InputError naming it (quickly)."""
+    try:
+        from dask.distributed import Client
+    except ImportError:
+        raise InputError("batch needs dask.distributed: pip install 'bvpnav[batch]'") from None
+    try:  # dask's own timeout does not bound the handshake with a peer that never answers
+        asyncio.run(asyncio.wait_for(_probe(scheduler), CONNECT_TIMEOUT))
+        return Client(scheduler, timeout=CONNECT_TIMEOUT, set_as_default=False)
+    except (Exception, MemoryError) as exc:  # refused, timed out, garbage from a peer that is not dask
+        why = str(exc).splitlines()[0][:200] if str(exc) else ""
+        raise InputError(f"--scheduler {scheduler!r}: no dask scheduler answered at this address within "
+                         f"{CONNECT_TIMEOUT:g} s ({type(exc).__name__}{': ' + why if why else ''}): nothing "
+                         "is listening there or it is not a dask scheduler; start one (`dask scheduler`) and "
+                         "give its address, e.g. --scheduler tcp://host:8786, or use 'serial' or leave "
+                         "--scheduler out for a local cluster") from None
+
+
+def _batch_into(files, outs, out_dir, spec_text, spec_source, scheduler, workers, solver, lam, resume,
+                progress, suffix, client) -> pd.DataFrame:
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -337,8 +417,8 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
                          "a folder you can write to") from None
     with output_lock(out_dir, "--out"):
         try:
-            rows = _run(files, outs, spec_text, str(spec_path), scheduler, workers, solver, lam, resume,
-                        progress, suffix)
+            rows = _run(files, outs, spec_text, spec_source, scheduler, workers, solver, lam, resume,
+                        progress, suffix, client)
             df = pd.DataFrame(rows, columns=SUMMARY_COLUMNS)
             df = df.sort_values("recording", kind="stable").reset_index(drop=True)
             write_table(df, out_dir / SUMMARY_NAME)
@@ -348,7 +428,7 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
 
 
 def _run(files, outs, spec_text, spec_source, scheduler, workers, solver, lam, resume, progress,
-         suffix) -> list[dict]:
+         suffix, client=None) -> list[dict]:
     jobs, rows = [], []
     for p, out in zip(files, outs, strict=True):
         note = ""
@@ -357,18 +437,19 @@ def _run(files, outs, spec_text, spec_source, scheduler, workers, solver, lam, r
             reason, js = resume_reason(p, out, out.with_suffix(".json"), current)
             if reason is None:
                 run = js["run"]
-                rows.append({"recording": str(p), "ok": True, "error": "", "samples": run.get("samples"),
+                rows.append({"recording": display_path(p), "ok": True, "error": "",
+                             "samples": run.get("samples"),
                              "lam": js.get("lam"), "lam_rule": js.get("lam_rule"),
                              "solver": (js.get("solver") or {}).get("solver"), "status": "skipped (resume)",
                              "verified": bool((js.get("solver") or {}).get("verified")),
-                             "output": str(out), "resume": "skipped: fingerprint matches"})
+                             "output": display_path(out), "resume": "skipped: fingerprint matches"})
                 continue
             note = f"re-solved: {reason}"
         jobs.append((str(p), spec_text, spec_source, str(out), solver, lam, note))
     if jobs and scheduler == "serial":
         rows += [_task(*job) for job in jobs]
     elif jobs:
-        rows += _run_on_dask(jobs, scheduler, workers, progress)
+        rows += _run_on_dask(jobs, scheduler, workers, progress, client)
     return rows
 
 
@@ -388,12 +469,12 @@ def _workers_ignore_ctrl_c():
         signal.signal(signal.SIGINT, old)
 
 
-def _run_on_dask(jobs, scheduler, workers, progress) -> list[dict]:
+def _run_on_dask(jobs, scheduler, workers, progress, client=None) -> list[dict]:
     try:
         from dask.distributed import Client, LocalCluster, as_completed
     except ImportError:
         raise InputError("batch needs dask.distributed: pip install 'bvpnav[batch]'") from None
-    cluster = None
+    cluster, own = None, client is None
     if scheduler is None:
         import logging
 
@@ -401,11 +482,11 @@ def _run_on_dask(jobs, scheduler, workers, progress) -> list[dict]:
         # that finds the scheduler already closed while the cluster shuts down) are not for
         # users; a task's own failure is a row of the summary, a dead worker too
         with _workers_ignore_ctrl_c():
-            cluster = LocalCluster(n_workers=max(int(workers), 1), threads_per_worker=1, processes=True,
+            cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
                                    host="127.0.0.1", dashboard_address=None, silence_logs=logging.CRITICAL)
         client = Client(cluster)
-    else:
-        client = Client(scheduler)
+    elif client is None:
+        client = _connect(scheduler)
     try:
         futures = {client.submit(_task, *job, pure=False): job for job in jobs}
         bar = None
@@ -419,7 +500,8 @@ def _run_on_dask(jobs, scheduler, workers, progress) -> list[dict]:
                 rows.append(fut.result())
             except Exception as exc:  # _task never raises: the worker itself died (e.g. KilledWorker)
                 path, note = futures[fut][0], futures[fut][-1]
-                rows.append({"recording": path, "ok": False, "verified": False, "output": "", "resume": note,
+                rows.append({"recording": display_path(path), "ok": False, "verified": False, "output": "",
+                             "resume": note,
                              "error": f"{type(exc).__name__}: the worker process solving it died ({exc}), "
                                       "often from lack of memory: solve it alone with `bvpnav solve`, in "
                                       "shorter windows, or with fewer --workers"})
@@ -429,6 +511,7 @@ def _run_on_dask(jobs, scheduler, workers, progress) -> list[dict]:
             bar.close()
         return rows
     finally:
-        client.close()
+        if own:
+            client.close()
         if cluster is not None:
             cluster.close()

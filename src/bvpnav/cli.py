@@ -119,6 +119,12 @@ def _cmd_solve(args) -> int:
     _check(args, {"INPUT": args.input, "--spec": args.spec},
            {"--out": args.out, opt_summary: summary, "--plot": args.plot},
            figures=("--plot",), tables=("--out",))
+    if args.summary is None:  # a path bvpnav chose: replace only a summary of its own
+        from .io import check_implicit_outputs
+
+        check_implicit_outputs({opt_summary: (summary, "summary")},
+                               "move it away, or give --summary PATH to write the summary elsewhere (or to "
+                               "replace that file)")
     spec_text = read_spec_text(args.spec)
     spec = parse_spec(spec_text, str(args.spec))
     sol, row = solve_recording(args.input, spec, args.out, solver=args.solver, lam=_lam(args.lam),

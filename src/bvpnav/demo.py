@@ -37,7 +37,7 @@ def run_demo(png: str | None = "bvpnav-demo.png", seed: int = 0, quiet: bool = F
         Where to write the figure (None: no figure); its suffix (a format matplotlib
         writes) and folder are checked before any work, and it is written atomically.
     seed : int
-        Noise seed.
+        Noise seed (>= 0).
     quiet : bool
         Print nothing.
     lam : float or str
@@ -46,13 +46,17 @@ def run_demo(png: str | None = "bvpnav-demo.png", seed: int = 0, quiet: bool = F
     Raises
     ------
     InputError
-        If ``png`` has a suffix matplotlib does not write, or cannot be written.
+        If ``seed`` is not an integer >= 0, or ``png`` has a suffix matplotlib does not
+        write, or cannot be written.
 
     Returns
     -------
     dict
         RMS position errors (m) by method, the lambda used, and the figure path.
     """
+    from .samples import check_seed
+
+    seed = check_seed(seed)
     if png:  # the output policy, before the work
         from .io import check_figure_path, check_outputs
 

@@ -34,7 +34,8 @@ import socket as _socket  # noqa: E402
 import stat as _stat  # noqa: E402
 
 __all__ += ["check_outputs", "check_figure_path", "check_table_path", "remove_stale_temporaries",
-            "file_fingerprint", "output_lock", "TABLE_SUFFIXES"]
+            "file_fingerprint", "output_lock", "TABLE_SUFFIXES",
+           "bvpnav_summary", "check_implicit_outputs", "SUMMARY_KEYS"]
 
 #: Suffixes :func:`write_table` writes.
 TABLE_SUFFIXES = (".csv", ".parquet", ".pq")
@@ -861,6 +862,99 @@ def check_outputs(inputs: dict, outputs: dict) -> None:
                              "a folder you can write to" + (f" ({fix})" if fix else ""))
 
 
+#: Keys every JSON summary written by bvpnav holds (see :func:`summary`).
+SUMMARY_KEYS = ("lam", "lam_rule", "error_model", "solver", "items")
+
+
+def bvpnav_summary(path: str | os.PathLike) -> dict | None:
+    """The JSON summary at ``path`` if it is recognisably bvpnav's (an object with the keys
+    :data:`SUMMARY_KEYS`), else None (missing, unreadable, not JSON, or someone else's)."""
+    import json
+
+    try:
+        if not _stat.S_ISREG(os.stat(path).st_mode) or os.stat(path).st_size > (64 << 20):
+            return None
+        with open(path, encoding="utf-8") as fh:
+            js = json.load(fh)
+    except (OSError, ValueError):
+        return None
+    return js if isinstance(js, dict) and all(k in js for k in SUMMARY_KEYS) else None
+
+
+def _starts_like_summary(path: Path) -> bool:
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(64)
+    except OSError:
+        return False
+    return _re.match(rb'\s*\{\s*"lam"\s*:', head) is not None
+
+
+def _trajectory_columns(path: Path) -> bool:
+    """Whether the table's columns are a bvpnav trajectory's: ``t``, positions, ``v<axis>``."""
+    try:
+        if path.suffix.lower() == ".csv":
+            with open(path, encoding="utf-8", errors="replace", newline="") as fh:
+                cols = fh.readline().rstrip("\r\n").split(",")
+        else:
+            import pyarrow.parquet as pq
+
+            cols = list(pq.read_schema(path).names)
+    except Exception:  # unreadable: not recognisably ours
+        return False
+    k = (len(cols) - 1) // 2
+    return (len(cols) >= 3 and len(cols) % 2 == 1 and cols[0] == "t"
+            and cols[1 + k:] == ["v" + c for c in cols[1:1 + k]])
+
+
+def check_implicit_outputs(outputs: dict, fix: str) -> None:
+    """Refuse to replace a file at an output path that bvpnav derived (not one typed by the
+    user) unless that file is recognisably bvpnav's own output.
+
+    Parameters
+    ----------
+    outputs : dict
+        How the caller names each implicit output -> ``(path, kind)``; ``kind`` is
+        ``"summary"`` (a JSON summary: replaceable if :func:`bvpnav_summary` recognises it),
+        ``"trajectory"`` (replaceable if the JSON summary beside it, same name with
+        ``.json``, is bvpnav's and, when it has a ``run`` record, names this file) or a
+        tuple of column names (a CSV table: replaceable if its header is exactly those).
+    fix : str
+        How to avoid the collision (e.g. ``"give --summary PATH"``), appended to the message.
+
+    Raises
+    ------
+    InputError
+        Naming the first existing file that is not bvpnav's and the fix; nothing is written.
+    """
+    for opt, (p, kind) in outputs.items():
+        p = Path(p)
+        if not os.path.lexists(p):
+            continue
+        if kind == "summary":  # or bvpnav's summary cut short (its text starts with the key "lam")
+            ok = bvpnav_summary(p) is not None or _starts_like_summary(p)
+        elif kind == "trajectory":
+            js = bvpnav_summary(p.with_suffix(".json"))
+            run = js.get("run") if js is not None else None
+            traj = run.get("trajectory") if isinstance(run, dict) else None
+            ok = (js is not None and (not isinstance(traj, dict)
+                                      or Path(str(traj.get("path", ""))).name == p.name)) or (
+                js is None and _trajectory_columns(p))  # written just before a run was stopped
+        else:
+            try:
+                with open(p, encoding="utf-8", errors="replace", newline="") as fh:
+                    head = fh.readline().rstrip("\r\n")
+            except OSError:
+                head = None
+            ok = head == ",".join(kind)
+        if not ok:
+            what = {"summary": "is not a bvpnav JSON summary",
+                    "trajectory": "is not a bvpnav trajectory (no bvpnav JSON summary beside it names it)"
+                    }.get(kind, "is not a table bvpnav wrote")
+            raise InputError(f"{opt} {str(p)!r} already exists and {what}: bvpnav replaces a file at a path "
+                             f"it chose itself only when that file is its own output; {fix}")
+
+
 def file_fingerprint(path: str | os.PathLike) -> dict:
     """Size (bytes), modification time (ns) and SHA-256 of a regular file's content.
 
@@ -902,11 +996,35 @@ def output_lock(folder: str | os.PathLike, option: str = "--out") -> Iterator[No
         yield
         return
     path = Path(folder) / ".bvpnav.lock"
+    nofollow = getattr(os, "O_NOFOLLOW", 0)
     while True:
-        try:
-            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+        created = True
+        try:  # never follow a symlink, never truncate: a file we did not create is only read
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_EXCL | nofollow, 0o666)
+        except FileExistsError:
+            created = False
+            try:
+                fd = os.open(path, os.O_RDWR | nofollow | getattr(os, "O_NONBLOCK", 0))
+            except FileNotFoundError:  # removed in between by the run that held it: try again
+                continue
+            except OSError as exc:
+                if exc.errno == _errno.EISDIR:
+                    raise InputError(f"{option} {str(folder)!r}: its lock file {str(path)!r} is a folder, "
+                                     f"not bvpnav's lock: remove it or give {option} another folder"
+                                     ) from None
+                if exc.errno == _errno.ELOOP or os.path.islink(path):
+                    raise InputError(f"{option} {str(folder)!r}: its lock file {str(path)!r} is a symbolic "
+                                     "link; bvpnav writes its process id there and never through a link: "
+                                     "remove the link (it is not bvpnav's) or give "
+                                     f"{option} another folder") from None
+                raise _write_error(path, exc) from None
         except OSError as exc:
             raise _write_error(path, exc) from None
+        st = os.fstat(fd)
+        if not _stat.S_ISREG(st.st_mode):
+            os.close(fd)
+            raise InputError(f"{option} {str(folder)!r}: its lock file {str(path)!r} is {_kind(st.st_mode)}, "
+                             f"not bvpnav's lock: remove it or give {option} another folder")
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
@@ -917,15 +1035,22 @@ def output_lock(folder: str | os.PathLike, option: str = "--out") -> Iterator[No
             raise InputError(f"{option} {str(folder)!r}: another bvpnav run (pid {other or '?'}) is writing "
                              f"into this folder now; wait for it to finish or give {option} another folder"
                              ) from None
+        if not created:  # a lock left by a killed run holds a process id and nothing else
+            old = os.pread(fd, 64, 0)
+            if st.st_size > 32 or not _re.fullmatch(rb"\s*\d*\s*", old):
+                os.close(fd)
+                raise InputError(f"{option} {str(folder)!r}: {str(path)!r} exists and is not a bvpnav lock "
+                                 "(bvpnav's holds only a process id); bvpnav does not overwrite it: move "
+                                 f"it away or give {option} another folder")
         try:  # the holder before us may have removed the file: lock the one at the path
-            same = os.path.samestat(os.fstat(fd), os.stat(path))
+            same = os.path.samestat(os.fstat(fd), os.lstat(path))
         except OSError:
             same = False
         if same:
             break
         os.close(fd)
     try:
-        os.ftruncate(fd, 0)
+        os.ftruncate(fd, 0)  # ours: created by this run, or a lock file holding a process id
         os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
         yield
     finally:

@@ -60,6 +60,21 @@ def _shuttle(seed: int, rate: float | None):
 
 #: Sample scenarios by name.
 SAMPLES = {"tikhonov2011": _tikhonov2011, "shuttle": _shuttle}
+#: Duration of each sample's recording, s.
+DURATIONS = {"tikhonov2011": 10.0, "shuttle": 20.0}
+#: Fewest samples a sample recording may have (its items need samples near both ends).
+MIN_SAMPLES = 41
+#: Most samples a sample recording may have (a CSV of about 50 MB).
+MAX_SAMPLES = 1_000_000
+
+
+def check_seed(seed, option: str = "--seed") -> int:
+    """``seed`` as an int, or InputError naming ``option``: a noise seed is an integer >= 0."""
+    import numbers
+
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
+        raise InputError(f"{option} {seed!r}: a noise seed is an integer >= 0 (e.g. {option} 0)")
+    return int(seed)
 
 
 def write_sample(name: str, out, seed: int = 0, rate: float | None = None, force: bool = False) -> list[Path]:
@@ -72,9 +87,11 @@ def write_sample(name: str, out, seed: int = 0, rate: float | None = None, force
     out : path-like
         Folder (created if missing).
     seed : int
-        Noise seed.
+        Noise seed (>= 0).
     rate : float, optional
-        Sampling rate, Hz (scenario default if None).
+        Sampling rate, Hz (scenario default if None); the recording must have between
+        :data:`MIN_SAMPLES` and :data:`MAX_SAMPLES` samples (its duration is
+        :data:`DURATIONS`).
     force : bool
         Replace ``recording.csv``, ``spec.toml`` and ``truth.csv`` if they already exist in
         ``out``; without it an existing one is refused (nothing is written).
@@ -87,8 +104,8 @@ def write_sample(name: str, out, seed: int = 0, rate: float | None = None, force
     Raises
     ------
     InputError
-        Unknown scenario, bad rate, existing files without ``force``, or an output that
-        cannot be written (see :func:`bvpnav.io.check_outputs`).
+        Unknown scenario, bad seed or rate (naming the rates allowed), existing files
+        without ``force``, or an output that cannot be written (see :func:`bvpnav.io.check_outputs`).
     """
     from .io import check_outputs
 
@@ -96,6 +113,18 @@ def write_sample(name: str, out, seed: int = 0, rate: float | None = None, force
         raise InputError(f"unknown scenario {name!r}; choose one of {sorted(SAMPLES)}")
     if rate is not None and not (np.isfinite(rate) and rate > 0):
         raise InputError(f"--rate {rate!r}: give a positive sampling rate in Hz")
+    seed = check_seed(seed)
+    if rate is not None:
+        dur = DURATIONS[name]
+        n = int(round(dur * rate)) + 1 if dur * rate < 1e18 else float("inf")
+        lo, hi = (MIN_SAMPLES - 1) / dur, (MAX_SAMPLES - 1) / dur
+        if n < MIN_SAMPLES:
+            raise InputError(f"--rate {rate:g}: the {dur:g} s scenario {name!r} would have {n} samples; it "
+                             f"needs at least {MIN_SAMPLES}: give --rate {lo:g} Hz or more")
+        if n > MAX_SAMPLES:
+            raise InputError(f"--rate {rate:g}: the {dur:g} s scenario {name!r} would have {n:.3g} samples, "
+                             f"more than the {MAX_SAMPLES:,} a sample recording may have: give --rate "
+                             f"{hi:g} Hz or less")
     out = Path(out)
     paths = [out / "recording.csv", out / "spec.toml", out / "truth.csv"]
     existing = [p.name for p in paths if os.path.lexists(p)]
