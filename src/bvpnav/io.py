@@ -114,17 +114,33 @@ def remove_stale_temporaries(folder: str | os.PathLike) -> list[Path]:
     return removed
 
 
-def _new_temp(dest: Path) -> Path:
-    """Create an empty temporary file beside ``dest`` (mode from the umask)."""
+def _temp_name(dest: Path) -> Path:
+    """A fresh temporary name beside ``dest`` (host, pid and random hex: never another's)."""
+    return dest.parent / f".{dest.name[:120]}.bvpnav-{_HOST}-{os.getpid()}-{_secrets.token_hex(4)}.tmp"
+
+
+def _create_temp(dest: Path, holder: list) -> Path:
+    """Create an empty temporary file beside ``dest`` (mode from the umask).
+
+    Its name is put in ``holder`` *before* the file is created, so that a caller who
+    removes ``holder``'s names on any exception (a signal may arrive between any two
+    bytecodes) never leaves the file behind.
+    """
     for _ in range(100):
-        tmp = dest.parent / f".{dest.name[:120]}.bvpnav-{_HOST}-{os.getpid()}-{_secrets.token_hex(4)}.tmp"
+        holder.append(_temp_name(dest))
         try:
-            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-        except FileExistsError:
+            os.close(os.open(holder[-1], os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+        except FileExistsError:  # not ours (practically impossible): never remove it
+            holder.pop()
             continue
-        os.close(fd)
-        return tmp
+        return holder[-1]
     raise FileExistsError(_errno.EEXIST, "no free temporary name")  # pragma: no cover
+
+
+def _discard(names: list) -> None:
+    for name in names:
+        with contextlib.suppress(OSError):
+            os.unlink(name)
 
 
 @contextlib.contextmanager
@@ -143,34 +159,27 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         naming ``path``, the reason and the fix.
     """
     dest = Path(path)
-    tmp = None
+    made: list[Path] = []  # the temporary's name, recorded before the file exists
     try:
         dest.parent.mkdir(parents=True, exist_ok=True)
         folder = os.path.realpath(dest.parent)
         if folder not in _swept:
             remove_stale_temporaries(folder)
             _swept.add(folder)
-        tmp = _new_temp(dest)
+        tmp = _create_temp(dest, made)
         try:
             mode = _stat.S_IMODE(os.stat(dest).st_mode)  # a replaced file keeps its mode
         except OSError:
             mode = _stat.S_IMODE(os.stat(tmp).st_mode)  # 0o666 & ~umask
-    except OSError as exc:
-        if tmp is not None:
-            with contextlib.suppress(OSError):
-                tmp.unlink()
-        raise _write_error(dest, exc) from None
-    try:
         yield tmp
         os.chmod(tmp, mode)
         os.replace(tmp, dest)
+        made.clear()
     except OSError as exc:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
-        raise _write_error(dest, exc, tmp) from None
-    except BaseException:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
+        _discard(made)
+        raise _write_error(dest, exc, made[0] if made else None) from None
+    except BaseException:  # KeyboardInterrupt, SIGTERM (the CLI's handler), a caller's error
+        _discard(made)
         raise
 
 
@@ -781,12 +790,13 @@ def _kind(mode: int) -> str:
 
 def _probe_folder(folder: Path) -> OSError | None:
     """Create and remove a temporary file in ``folder``: the OSError, if writing fails."""
+    made: list[Path] = []
     try:
-        tmp = _new_temp(folder / "probe")
+        _create_temp(folder / "probe", made)
     except OSError as exc:
         return exc
-    with contextlib.suppress(OSError):
-        tmp.unlink()
+    finally:
+        _discard(made)
     return None
 
 
