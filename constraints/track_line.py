@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -22,7 +23,7 @@ from bvpnav.errors import InputError
 from bvpnav.items import Item
 from bvpnav.model import Affine
 
-from ._common import finite, interval, times
+from ._common import finite, interval, require_nodes, times
 
 __all__ = ["TrackLine", "TrackProjection", "project_onto_polyline", "SEGMENT", "VERTEX", "CONTINUITY",
            "OUT_OF_RANGE", "AMBIGUOUS"]
@@ -412,8 +413,9 @@ class TrackLine(Item):
         p = np.asarray(positions, dtype=float).reshape(t.size, 2)
         keep = self.in_interval(t)
         if not keep.any():
-            raise InputError(f"{self.label}: no time of the estimate lies in [t0, t1] = "
-                             f"[{self.t0}, {self.t1}] s")
+            lo = float(t.min()) if self.t0 is None else self.t0
+            hi = float(t.max()) if self.t1 is None else self.t1
+            require_nodes(SimpleNamespace(t=np.sort(t)), lo, hi, self.identify())
         return dataclasses.replace(self, about=p[keep], about_t=t[keep])
 
     def projection(self) -> TrackProjection:

@@ -526,7 +526,8 @@ def test_to_spec_round_trips_any_name_and_every_item(name, kind):
     fields = {**item.params(), "name": name}
     named = type(item)(**fields)
     prob = bvpnav.NavigationProblem(data).add(named)
-    text = prob.to_spec(solve={"priority": {name: 2.0}, "demote_sigma": {name: 0.5}})
+    text = prob.to_spec(solve={"on_conflict": "demote", "priority": {name: 2.0},
+                                "demote_sigma": {name: 0.5}})
     spec = parse_spec(text, "written.toml")
     assert spec.solve["priority"] == {name: 2.0} and spec.solve["demote_sigma"] == {name: 0.5}
     (back,) = spec.items
