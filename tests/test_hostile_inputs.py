@@ -186,6 +186,10 @@ API_CASES = [
                       Symmetry(about=5.0, halfwidth=0.5, name="mirror")),
      InputError, r"mirror: no sample lies within the mirrored range around 5\.0 s \(halfwidth 0\.5 s\)",
      r"widen halfwidth"),
+    ("F24-add-two-items-one-name", "vague message",
+     lambda a: bvpnav.NavigationProblem(_imu(a)).add(Position(t=0.0, value=0.0, name="ends"),
+                                                     Velocity(t=0.0, value=0.0, name="ends")),
+     InputError, r"add\(\): an item named 'ends' is already in the problem", r"rename one of them"),
     ("conflict-names-unnamed-items", "vague message",
      lambda a: _solve(bvpnav.ImuData(a["t"], a["acc1"]), Position(t=[0.0, 10.0], value=0.0),
                       Position(t=[0.0], value=[3.0])),
@@ -420,6 +424,14 @@ def _extra_field_one_row(sample, folder):
     return p, {}, None
 
 
+def _parquet_numeric_text(sample, folder):
+    df = _csv_of(sample).iloc[:20]
+    df = df.assign(acc_x=df["acc_x"].map(repr))
+    p = folder / "rec.parquet"
+    p.write_bytes(_parquet_bytes(df))
+    return p, {}, None
+
+
 def _parquet_float32_times(sample, folder):
     df = _csv_of(sample).iloc[:20]
     df = df.assign(t=(50000.0 + df["t"]).astype(np.float32))
@@ -476,6 +488,8 @@ FILE_CASES = [
     ("F6-parquet-float32-times", "misread input", _parquet_float32_times,
      r"rec\.parquet: column 't': times stored as float32 resolve only 0\.0039",
      r"store the times as float64, or as integers with time_unit"),
+    ("parquet-numeric-text", "misread input", _parquet_numeric_text,
+     r"rec\.parquet: column 'acc_x' holds text values \(first: '-1\.41", r"pd\.to_numeric"),
     ("F7-one-column-two-axes", "misread input",
      _mapped('{ x = "acc_x", y = "acc_x" }', {"x": "acc_x", "y": "acc_x"}),
      r"column 'acc_x' is mapped to axis 'y' but is already axis 'x'", r"map each axis to its own column"),
@@ -740,3 +754,29 @@ def test_from_dataframe_takes_axes_from_the_names():
     data = bvpnav.ImuData.from_dataframe(df)
     assert data.axes == ("y", "x")
     assert np.array_equal(data.acc[:, 1], 2 * ACC1)
+
+
+@pytest.mark.parametrize("edit, culprit, fix", [
+    pytest.param(("sigma_a = 1.0", "sigma_a = [1.0, 2.0, 3.0]"),
+                 r"bad\.toml, line 12: sigma_a: 3 value\(s\) for the axes \['x'\]", r"one per axis",
+                 id="spec-sigma_a-per-axis-count"),
+    pytest.param(("lam = 1.0", 'lam = 1.0\non_conflict = "demote"\npriority = { nosuch = 1 }'),
+                 r"bad\.toml, line 19: priority names unknown item\(s\) \['nosuch'\]",
+                 r"the problem's items are \['ends'.*use one of these names",
+                 id="spec-priority-unknown-item"),
+])
+def test_spec_errors_found_with_the_data_name_the_line(sample, tmp_path, edit, culprit, fix):
+    """Round 2: errors that need the data (axes, item labels) still name the spec line."""
+    spec = tmp_path / "bad.toml"
+    text = (sample / "spec.toml").read_text()
+    assert edit[0] in text
+    spec.write_text(text.replace(edit[0], edit[1], 1))
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "earlier.csv").write_text("t,x\n0,0\n")
+    before = snapshot(sample, spec, out)
+    proc = run_cli(["solve", sample / "recording.csv", "--spec", spec, "--out", out / "traj.csv"],
+                   timeout=120)
+    assert_clean_failure(proc, EXIT_INPUT, culprit, fix)
+    assert_unchanged(before)
+    assert sorted(p.name for p in out.iterdir()) == ["earlier.csv"]

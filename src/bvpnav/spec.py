@@ -111,6 +111,9 @@ class Spec:
     solve: dict
     items: list
     error_models: list
+    #: Where each ``[problem]``/``[solve]`` key was written (``"spec.toml, line 12"``), for
+    #: errors found only once the data is known (empty when built in code).
+    where: dict = dataclasses.field(default_factory=dict, compare=False, repr=False)
 
     def error_model(self):
         """The combined error model, or None."""
@@ -125,8 +128,23 @@ class Spec:
         """A :class:`bvpnav.NavigationProblem` for ``data`` (ImuData) from this spec."""
         from .problem import NavigationProblem
 
-        prob = NavigationProblem(data, error_model=self.error_model(), **self.problem)
-        return prob.add(*self.items)
+        try:
+            prob = NavigationProblem(data, error_model=self.error_model(), **self.problem)
+        except InputError as exc:
+            key = next((k for k in self.problem if k in str(exc) and k in self.where), None)
+            if key is None:
+                raise
+            raise InputError(f"{self.where[key]}: {exc}") from None
+        prob.add(*self.items)
+        labels = prob.item_labels
+        for key in ("priority", "demote_sigma"):
+            table = self.solve.get(key)
+            unknown = sorted(set(table) - set(labels)) if isinstance(table, dict) else []
+            if unknown:
+                at = self.where.get(key, "spec")
+                raise InputError(f"{at}: {key} names unknown item(s) {unknown}; the problem's items are "
+                                 f"{labels}: use one of these names (or give the item name = \"...\")")
+        return prob
 
 
 # ------------------------------------------------------------------ reading
@@ -362,7 +380,8 @@ def _parse_spec(text: str, source: str = "spec") -> Spec:
                                  f"named {nm!r}; item names identify items (priority, demote_sigma, "
                                  "messages): rename one of them")
             seen[nm] = k
-    return Spec(inp, plain["problem"], plain["solve"], objs["item"], objs["error_model"])
+    where = {k: _where(source, _line_of(text, k, sec)) for sec in ("problem", "solve") for k in plain[sec]}
+    return Spec(inp, plain["problem"], plain["solve"], objs["item"], objs["error_model"], where)
 
 
 def read_spec_text(path) -> str:
