@@ -424,14 +424,6 @@ def _extra_field_one_row(sample, folder):
     return p, {}, None
 
 
-def _parquet_numeric_text(sample, folder):
-    df = _csv_of(sample).iloc[:20]
-    df = df.assign(acc_x=df["acc_x"].map(repr))
-    p = folder / "rec.parquet"
-    p.write_bytes(_parquet_bytes(df))
-    return p, {}, None
-
-
 def _parquet_float32_times(sample, folder):
     df = _csv_of(sample).iloc[:20]
     df = df.assign(t=(50000.0 + df["t"]).astype(np.float32))
@@ -488,8 +480,6 @@ FILE_CASES = [
     ("F6-parquet-float32-times", "misread input", _parquet_float32_times,
      r"rec\.parquet: column 't': times stored as float32 resolve only 0\.0039",
      r"store the times as float64, or as integers with time_unit"),
-    ("parquet-numeric-text", "misread input", _parquet_numeric_text,
-     r"rec\.parquet: column 'acc_x' holds text values \(first: '-1\.41", r"pd\.to_numeric"),
     ("F7-one-column-two-axes", "misread input",
      _mapped('{ x = "acc_x", y = "acc_x" }', {"x": "acc_x", "y": "acc_x"}),
      r"column 'acc_x' is mapped to axis 'y' but is already axis 'x'", r"map each axis to its own column"),

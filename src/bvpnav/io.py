@@ -666,12 +666,6 @@ def read_recording(path: str | os.PathLike, input: dict | None = None):
         if pd.api.types.is_complex_dtype(dtype):
             raise InputError(f"{name}: column {col!r} holds complex values; store real accelerations in "
                              f"{unit} in that column")
-        if line0 is None and (pd.api.types.is_object_dtype(dtype) or pd.api.types.is_string_dtype(dtype)):
-            text = next((v for v in df[col] if isinstance(v, str)), None)
-            if text is not None:  # Parquet stores types: text is never parsed as numbers silently
-                raise InputError(f"{name}: column {col!r} holds text values (first: {text!r}), not numbers; "
-                                 "Parquet stores column types: write it as numbers, e.g. "
-                                 f"df[{col!r}] = pd.to_numeric(df[{col!r}]) before df.to_parquet(...)")
         try:
             v = pd.to_numeric(df[col], errors="coerce").to_numpy(dtype=float, na_value=np.nan)
         except (TypeError, ValueError):  # cells holding lists, dicts, bytes ... (Parquet)
