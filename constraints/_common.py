@@ -26,25 +26,6 @@ def interval(t0, t1, label: str) -> tuple[float, float]:
     return float(a[0]), float(b[0])
 
 
-def require_nodes(grid, a: float, b: float, label: str) -> None:
-    """Refuse an interval ``[a, b]`` (s) that holds no sample of ``grid``.
-
-    An interval item states its condition at the samples inside its interval; one that
-    falls between two samples (a too short interval, or times in the wrong unit) would
-    select none, so it is refused with the nearest samples.
-    """
-    t = grid.t
-    eps = 1e-12 * max(1.0, abs(a), abs(b))
-    if np.any((t >= a - eps) & (t <= b + eps)):
-        return
-    k = int(np.searchsorted(t, a))
-    before = f"{t[k - 1]:.6g} s" if k > 0 else "none"
-    after = f"{t[k]:.6g} s" if k < t.size else "none"
-    raise InputError(f"{label}: interval [{a:.6g}, {b:.6g}] s holds no sample (nearest samples: {before} "
-                     f"before, {after} after), so it would select no node; widen t0/t1 to include at "
-                     "least one sample (or check the unit of the times: s)")
-
-
 def finite(value, label: str, what: str = "value") -> np.ndarray:
     """Finite float array (any shape, a fresh copy), naming the item on error."""
     v = as_float_array(value, f"{label}: {what}", "the item's units")  # a copy, never the caller's

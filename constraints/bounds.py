@@ -12,7 +12,7 @@ from bvpnav.errors import InputError
 from bvpnav.items import Item
 from bvpnav.model import Affine
 
-from ._common import finite, require_nodes
+from ._common import finite
 
 __all__ = ["PositionBound"]
 
@@ -47,7 +47,6 @@ def resolve_interval(model, t0: float | None, t1: float | None, label: str) -> t
         )
     if not b > a:
         raise InputError(f"{label}: interval [{a:g}, {b:g}] s is empty; give t0 < t1")
-    require_nodes(g, a, b, label)
     return float(min(max(a, g.t0), g.t1)), float(min(max(b, g.t0), g.t1))
 
 

@@ -88,9 +88,7 @@ class Symmetry(Item):
             return np.minimum(tau, reach)
         tau = grid.t[(grid.t > c) & (grid.t <= c + reach * (1 + 1e-12))] - c
         if tau.size == 0:
-            raise InputError(f"{self.identify()}: no sample lies within the mirrored range around {c!r} s "
-                             f"(halfwidth {reach!r} s); widen halfwidth to reach at least one sample, or "
-                             "give offsets= (s)")
+            raise InputError(f"{self.label}: no sample lies within the mirrored range around {c!r} s")
         return np.minimum(tau, reach)
 
     @classmethod

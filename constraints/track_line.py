@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -23,7 +22,7 @@ from bvpnav.errors import InputError
 from bvpnav.items import Item
 from bvpnav.model import Affine
 
-from ._common import finite, interval, require_nodes, times
+from ._common import finite, interval, times
 
 __all__ = ["TrackLine", "TrackProjection", "project_onto_polyline", "SEGMENT", "VERTEX", "CONTINUITY",
            "OUT_OF_RANGE", "AMBIGUOUS"]
@@ -413,9 +412,8 @@ class TrackLine(Item):
         p = np.asarray(positions, dtype=float).reshape(t.size, 2)
         keep = self.in_interval(t)
         if not keep.any():
-            lo = float(t.min()) if self.t0 is None else self.t0
-            hi = float(t.max()) if self.t1 is None else self.t1
-            require_nodes(SimpleNamespace(t=np.sort(t)), lo, hi, self.identify())
+            raise InputError(f"{self.label}: no time of the estimate lies in [t0, t1] = "
+                             f"[{self.t0}, {self.t1}] s")
         return dataclasses.replace(self, about=p[keep], about_t=t[keep])
 
     def projection(self) -> TrackProjection:

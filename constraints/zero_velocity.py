@@ -9,7 +9,7 @@ import numpy as np
 
 from bvpnav.items import Item
 
-from ._common import interval, require_nodes
+from ._common import interval
 
 __all__ = ["ZeroVelocity"]
 
@@ -52,7 +52,6 @@ class ZeroVelocity(Item):
         return cls(t0=0.0, t1=1.0)
 
     def compile(self, model):
-        require_nodes(model.grid, self.t0, self.t1, self.identify())
         return model.velocity(self.instants(model.grid), self.axes, f"{self.identify()}(t0/t1)")
 
     def latex(self) -> str:
