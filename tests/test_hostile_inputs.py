@@ -13,6 +13,8 @@ from __future__ import annotations
 import io
 import os
 import stat
+import subprocess
+import sys
 import zipfile
 from pathlib import Path
 
@@ -120,6 +122,37 @@ API_CASES = [
      InputError, r"p: t: datetime values", r"to_seconds"),
     ("sigma-bool", "misread input", lambda a: Position(t=0.0, value=0.0, sigma=True, name="p"),
      InputError, r"p: sigma: bool values", r"give numbers"),
+    # round 2 (issue 14 "Trust"), F4-F6, F8
+    ("F4-acc-DataFrame-by-position", "misread input",
+     lambda a: bvpnav.ImuData(a["t"], pd.DataFrame({"acc_y": a["acc1"], "acc_x": 2 * a["acc1"]})),
+     InputError, r"acc: a DataFrame with columns \['acc_y', 'acc_x'\].*taken by position",
+     r"ImuData\.from_dataframe.*to_numpy\(\) with axes="),
+    ("F4-acc-named-Series", "misread input",
+     lambda a: bvpnav.ImuData(a["t"], pd.Series(a["acc1"], name="acc_y")),
+     InputError, r"acc: a Series named 'acc_y'", r"ImuData\.from_dataframe"),
+    ("F5-acc-masked-entry", "misread input",
+     lambda a: bvpnav.ImuData(a["t"], np.ma.masked_array(a["acc1"], mask=np.arange(N) == 4)),
+     InputError, r"acc: a masked array with 1 masked entry \(first: index 4\)",
+     r"never fills gaps: remove those samples"),
+    ("F5-t-masked-entry", "misread input",
+     lambda a: bvpnav.ImuData(np.ma.masked_array(a["t"], mask=np.arange(N) >= 9), a["acc1"]),
+     InputError, r"time: a masked array with 2 masked entries \(first: index 9\)", r"remove those samples"),
+    ("F5-item-value-masked", "misread input",
+     lambda a: Position(t=[0.0, 10.0], value=np.ma.masked_array([0.0, 1.0], mask=[False, True]), name="p"),
+     InputError, r"p: value: a masked array with 1 masked entry \(first: index 1\)", r"remove those samples"),
+    ("F6-t-float32-quantised", "misread input",
+     lambda a: bvpnav.ImuData((50000.0 + 0.01 * np.arange(N)).astype(np.float32), a["acc1"]),
+     InputError, r"time: times stored as float32 resolve only 0\.0039\d* at 50000",
+     r"store the times as float64, or as integers with time_unit"),
+    ("F8-axis-trailing-space", "misread input", lambda a: _imu(a, axes=("x ", "y")),
+     InputError, r"axis name 'x ' has leading/trailing whitespace", r"rename that axis"),
+    ("F8-axis-control-char", "misread input", lambda a: _imu(a, axes=("x", "y\t")),
+     InputError, r"axis name 'y\\t' has leading/trailing whitespace or control characters",
+     r"rename that axis"),
+    ("F24-add-two-items-one-name", "vague message",
+     lambda a: bvpnav.NavigationProblem(_imu(a)).add(Position(t=0.0, value=0.0, name="ends"),
+                                                     Velocity(t=0.0, value=0.0, name="ends")),
+     InputError, r"add\(\): an item named 'ends' is already in the problem", r"rename one of them"),
     ("conflict-names-unnamed-items", "vague message",
      lambda a: _solve(bvpnav.ImuData(a["t"], a["acc1"]), Position(t=[0.0, 10.0], value=0.0),
                       Position(t=[0.0], value=[3.0])),
@@ -317,6 +350,51 @@ def _mapped_axis_t(sample, folder):
     return p, {"columns": {"t": "acc_x"}}, spec
 
 
+def _mapped(columns: str, table: dict):
+    def build(sample, folder):
+        spec = _plain_spec(sample, folder, f"columns = {columns}\n")
+        p = folder / "rec.csv"
+        p.write_bytes((sample / "recording.csv").read_bytes())
+        return p, {"columns": table}, spec
+    return build
+
+
+def _blank_line(sample, folder):
+    lines = (sample / "recording.csv").read_text().splitlines()
+    p = folder / "rec.csv"
+    p.write_text("\n".join(lines[:3] + [""] + lines[3:8]) + "\n")  # blank line 4; data row 4 on line 5
+    return p, {}, None
+
+
+def _nan_after_blank_lines(sample, folder):
+    p = folder / "rec.csv"
+    p.write_text("t,acc_x\n0,1\n0.2,2\n0.4,nan\n0.6,1\n\n\n")  # trailing blank lines: accepted
+    return p, {}, None
+
+
+def _extra_field(sample, folder):
+    lines = (sample / "recording.csv").read_text().splitlines()
+    p = folder / "rec.csv"
+    p.write_text("\n".join([lines[0]] + [ln + ",0.5" for ln in lines[1:8]]) + "\n")
+    return p, {}, None
+
+
+def _extra_field_one_row(sample, folder):
+    lines = (sample / "recording.csv").read_text().splitlines()
+    lines[4] += ",0.5"
+    p = folder / "rec.csv"
+    p.write_text("\n".join(lines[:8]) + "\n")
+    return p, {}, None
+
+
+def _parquet_float32_times(sample, folder):
+    df = _csv_of(sample).iloc[:20]
+    df = df.assign(t=(50000.0 + df["t"]).astype(np.float32))
+    p = folder / "rec.parquet"
+    p.write_bytes(_parquet_bytes(df))
+    return p, {}, None
+
+
 #: (id, kind, build, culprit, fix); the culprit is matched in the reader's message and the
 #: CLI's stderr alike.
 FILE_CASES = [
@@ -361,6 +439,31 @@ FILE_CASES = [
     ("acc_-empty-axis", "data loss", _header("t,acc_"), r"axis name '' is empty", r"rename the column"),
     ("columns-map-axis-t", "data loss", _mapped_axis_t,
      r"columns = \{'t': 'acc_x'\}: axis 't' would write the column 't'", r"choose other axis names"),
+    # round 2 (issue 14 "Trust"), F6-F10
+    ("F6-parquet-float32-times", "misread input", _parquet_float32_times,
+     r"rec\.parquet: column 't': times stored as float32 resolve only 0\.0039",
+     r"store the times as float64, or as integers with time_unit"),
+    ("F7-one-column-two-axes", "misread input",
+     _mapped('{ x = "acc_x", y = "acc_x" }', {"x": "acc_x", "y": "acc_x"}),
+     r"column 'acc_x' is mapped to axis 'y' but is already axis 'x'", r"map each axis to its own column"),
+    ("F7-time-column-as-axis", "misread input", _mapped('{ x = "t" }', {"x": "t"}),
+     r"column 't' is mapped to axis 'x' but is already the time column", r"map each axis to its own column"),
+    ("F8-header-trailing-space", "misread input", _header("t,acc_x "),
+     r"rec\.csv'?: header cell 2 \(line 1\) is 'acc_x ', with leading/trailing whitespace",
+     r"Remove the spaces around the header names"),
+    ("F8-padded-beside-plain", "misread input", _header("t,acc_x,acc_x "),
+     r"header cell 3 \(line 1\) is 'acc_x '", r"Remove the spaces"),
+    ("F8-header-leading-space", "misread input", _header("t, acc_x"),
+     r"header cell 2 \(line 1\) is ' acc_x'", r"Remove the spaces"),
+    ("F9-blank-line-between-rows", "misread input", _blank_line,
+     r"rec\.csv'?: line 4 is blank, between data rows", r"delete the blank line\(s\)"),
+    ("F9-line-number-after-trailing-blanks", "misread input", _nan_after_blank_lines,
+     r"rec\.csv: row 2 \(line 4\), column 'acc_x' is empty or NaN", r"fix or remove those rows"),
+    ("F10-every-row-one-field-more", "misread input", _extra_field,
+     r"rec\.csv'?: row 0 \(line 2\) has 3 fields but the header \(line 1\) has 2",
+     r"remove the extra field\(s\)"),
+    ("F10-one-row-one-field-more", "misread input", _extra_field_one_row,
+     r"rec\.csv'?: row 3 \(line 5\) has 3 fields but the header \(line 1\) has 2", r"remove the extra"),
 ]
 
 
@@ -376,7 +479,9 @@ def test_reader_says_what_the_file_is(sample, tmp_path, build, culprit, fix):
 
 #: The cases also run through ``bvpnav solve`` (exit 2, no traceback, no output written).
 CLI_IDS = ["xlsx-renamed-csv", "comment-preamble-hash", "decimal-commas", "iso-timestamps-without-unit",
-           "int-ns-epoch", "parquet-time-index-other-name", "duplicate-header", "acc_vx-beside-acc_x"]
+           "int-ns-epoch", "parquet-time-index-other-name", "duplicate-header", "acc_vx-beside-acc_x",
+           "F7-one-column-two-axes", "F8-header-trailing-space", "F9-blank-line-between-rows",
+           "F10-every-row-one-field-more"]
 
 
 @pytest.mark.parametrize("build, culprit, fix", [pytest.param(*c[2:], id=c[0]) for c in FILE_CASES
@@ -466,6 +571,17 @@ SPEC_CASES = [
      r"bad\.toml, line 4: item 'position': t holds a TOML date/time", r"write e\.g\. t = 12\.5"),
     ("spec-item-axes-empty", '[[item]]\ntype = "velocity"\nname = "v"\nt = 0.0\naxes = []\n',
      r"bad\.toml, line 1: v: axes=\[\] names no axis", r"omit axes="),
+    # round 2 (issue 14 "Trust"), F12, F16, F24
+    ("F12-demote-sigma-without-demote", '[solve]\nlam = 1.0\ndemote_sigma = 0.5\n',
+     r"bad\.toml, line 3: demote_sigma is set but on_conflict is 'raise \(the default\)'",
+     r'add on_conflict = "demote" to \[solve\]'),
+    ("F12-priority-with-raise", '[solve]\non_conflict = "raise"\npriority = { ends = 2 }\n',
+     r"bad\.toml, line 3: priority is set but on_conflict is 'raise'", r'add on_conflict = "demote"'),
+    ("F16-nested-10000-deep", "[problem]\nsigma_a = " + "[" * 10000 + "]" * 10000 + "\n",
+     r"bad\.toml: values nested too deeply to read", r"fix that value"),
+    ("F24-two-items-one-name", '[[item]]\ntype = "position"\nname = "ends"\nt = 0.0\n\n'
+     '[[item]]\ntype = "velocity"\nname = "ends"\nt = 1.0\n',
+     r"bad\.toml: the \[\[item\]\] tables at lines 1 and 6 are both named 'ends'", r"rename one of them"),
 ]
 
 
@@ -526,10 +642,94 @@ def test_to_spec_round_trips_any_name_and_every_item(name, kind):
     fields = {**item.params(), "name": name}
     named = type(item)(**fields)
     prob = bvpnav.NavigationProblem(data).add(named)
-    text = prob.to_spec(solve={"priority": {name: 2.0}, "demote_sigma": {name: 0.5}})
+    text = prob.to_spec(solve={"on_conflict": "demote", "priority": {name: 2.0},
+                                "demote_sigma": {name: 0.5}})
     spec = parse_spec(text, "written.toml")
     assert spec.solve["priority"] == {name: 2.0} and spec.solve["demote_sigma"] == {name: 0.5}
     (back,) = spec.items
     assert type(back) is type(named) and back.name == name
     for key, v in named.params().items():
         assert np.array_equal(np.asarray(back.params()[key], dtype=object), np.asarray(v, dtype=object)), key
+
+
+# ------------------------------------------- round 2: huge files are refused unread
+_LIMITED = """
+import resource, sys
+resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))  # a regression fails, not eats memory
+from bvpnav.errors import InputError
+from bvpnav.io import read_recording
+from bvpnav.spec import load_spec
+try:
+    load_spec(sys.argv[2]) if sys.argv[1] == "spec" else read_recording(sys.argv[2])
+except InputError as exc:
+    print(exc, file=sys.stderr)
+    sys.exit(2)
+sys.exit(0)
+"""
+
+
+@pytest.mark.parametrize("which, name, culprit, fix", [
+    pytest.param("spec", "big.toml",
+                 r"spec '.*big\.toml' is 42,949,672,960 bytes, beyond the 10,485,760-byte",
+                 r"A spec is a small text file", id="F17-40GB-sparse-spec"),
+    pytest.param("recording", "r.csv", r"r\.csv'?: this \.csv file is binary data \(NUL bytes\)",
+                 r"give a CSV text file", id="F21-40GB-sparse-recording"),
+])
+def test_huge_sparse_file_is_refused_before_it_is_read(tmp_path, which, name, culprit, fix):
+    """A 40 GB sparse file: refused from its size or its first bytes, in a process whose
+    address space is capped at 3 GB (reading it whole would fail with MemoryError there).
+    Byte-identity of 40 GB cannot be hashed in a test: its size and mtime are checked, and
+    its first MiB is all NUL still."""
+    big = tmp_path / name
+    with open(big, "wb") as fh:
+        fh.truncate(40 << 30)
+    st = big.stat()
+    proc = subprocess.run([sys.executable, "-c", _LIMITED, which, str(big)], capture_output=True,
+                          text=True, timeout=120)
+    assert_clean_failure(proc, EXIT_INPUT, culprit, fix)  # InputError, not MemoryError
+    after = big.stat()
+    assert (after.st_size, after.st_mtime_ns, after.st_mode) == (st.st_size, st.st_mtime_ns, st.st_mode)
+    with open(big, "rb") as fh:
+        assert fh.read(1 << 20) == bytes(1 << 20)
+
+
+# ------------------------------------------- round 2: accepted on purpose (say why)
+def test_unmasked_masked_array_and_fine_float32_times_are_accepted():
+    """A masked array with nothing masked is plain data; float32 times whose resolution is
+    far below the step (0..10 s at 1 s: spacing 1e-6 s) lose nothing."""
+    data = bvpnav.ImuData(T.astype(np.float32), np.ma.masked_array(ACC1.copy()))
+    assert np.array_equal(data.t, T) and np.array_equal(data.acc[:, 0], ACC1)
+
+
+def test_from_dataframe_takes_axes_from_the_names():
+    """The fix the DataFrame refusal points to: axes follow the column names, not positions."""
+    df = pd.DataFrame({"t": T, "ay": ACC1, "ax": 2 * ACC1})
+    data = bvpnav.ImuData.from_dataframe(df)
+    assert data.axes == ("y", "x")
+    assert np.array_equal(data.acc[:, 1], 2 * ACC1)
+
+
+@pytest.mark.parametrize("edit, culprit, fix", [
+    pytest.param(("sigma_a = 1.0", "sigma_a = [1.0, 2.0, 3.0]"),
+                 r"bad\.toml, line 12: sigma_a: 3 value\(s\) for the axes \['x'\]", r"one per axis",
+                 id="spec-sigma_a-per-axis-count"),
+    pytest.param(("lam = 1.0", 'lam = 1.0\non_conflict = "demote"\npriority = { nosuch = 1 }'),
+                 r"bad\.toml, line 19: priority names unknown item\(s\) \['nosuch'\]",
+                 r"the problem's items are \['ends'.*use one of these names",
+                 id="spec-priority-unknown-item"),
+])
+def test_spec_errors_found_with_the_data_name_the_line(sample, tmp_path, edit, culprit, fix):
+    """Round 2: errors that need the data (axes, item labels) still name the spec line."""
+    spec = tmp_path / "bad.toml"
+    text = (sample / "spec.toml").read_text()
+    assert edit[0] in text
+    spec.write_text(text.replace(edit[0], edit[1], 1))
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "earlier.csv").write_text("t,x\n0,0\n")
+    before = snapshot(sample, spec, out)
+    proc = run_cli(["solve", sample / "recording.csv", "--spec", spec, "--out", out / "traj.csv"],
+                   timeout=120)
+    assert_clean_failure(proc, EXIT_INPUT, culprit, fix)
+    assert_unchanged(before)
+    assert sorted(p.name for p in out.iterdir()) == ["earlier.csv"]

@@ -12,10 +12,13 @@ from .errors import InputError
 from .grid import TimeGrid
 from .timebase import as_float_array
 
-__all__ = ["ImuData", "STANDARD_GRAVITY", "DEFAULT_AXES", "RESERVED_NAMES", "axis_name_clash"]
+__all__ = ["ImuData", "STANDARD_GRAVITY", "ACC_UNITS", "DEFAULT_AXES", "RESERVED_NAMES",
+           "axis_name_clash"]
 
 #: Standard gravity, m/s^2.
 STANDARD_GRAVITY = 9.80665
+#: m/s^2 per unit of an acceleration value (``[input] unit`` of a spec).
+ACC_UNITS = {"m/s^2": 1.0, "g": STANDARD_GRAVITY, "mg": STANDARD_GRAVITY * 1e-3, "ft/s^2": 0.3048}
 #: Default axis names by number of axes.
 DEFAULT_AXES = {1: ("x",), 2: ("x", "y"), 3: ("x", "y", "z")}
 
@@ -41,6 +44,9 @@ def axis_name_clash(axes: Sequence[str]) -> str | None:
     for a in axes:
         if not a.strip():
             return f"axis name {a!r} is empty"
+        if a != a.strip() or not a.isprintable():
+            return (f"axis name {a!r} has leading/trailing whitespace or control characters (it would "
+                    "name trajectory columns as it is)")
         for col in _outputs(a):
             if col in owner:
                 return (f"axis {a!r} would write the column {col!r}, which is already {owner[col]}")
@@ -49,6 +55,12 @@ def axis_name_clash(axes: Sequence[str]) -> str | None:
 
 
 def _finite_2d(arr, name: str, columns: Sequence[str] | None = None) -> np.ndarray:
+    if isinstance(arr, pd.DataFrame) or (isinstance(arr, pd.Series) and arr.name is not None):
+        what = (f"a DataFrame with columns {[str(c) for c in arr.columns]}" if isinstance(arr, pd.DataFrame)
+                else f"a Series named {arr.name!r}")
+        raise InputError(f"{name}: {what}; its column names would be ignored and the axes taken by "
+                         "position. Use ImuData.from_dataframe(df, time=..., columns=[...]) (axes from the "
+                         "column names), or pass values.to_numpy() with axes=(...) in the column order")
     a = as_float_array(arr, name, "m/s^2")  # a copy: the caller's array is never kept
     if a.ndim == 1:
         a = a[:, None]
@@ -354,7 +366,8 @@ class ImuData:
             raise InputError(f"acceleration column(s) {missing} not found; columns are {list(df.columns)}")
         if axes is None and all(str(c).startswith("a") and len(str(c)) > 1 for c in columns):
             axes = [str(c)[1:].lstrip("_") for c in columns]
-        return cls(t, df[list(columns)], axes=axes)
+        acc = as_float_array(df[list(columns)], f"columns {list(columns)}", "m/s^2")
+        return cls(t, acc, axes=axes)
 
     def to_dataframe(self) -> pd.DataFrame:
         """Navigation-frame accelerations as a DataFrame indexed by time ``t`` (s)."""

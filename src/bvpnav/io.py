@@ -227,7 +227,8 @@ _MAGIC = (
 )
 
 
-def read_regular_file(path: str | os.PathLike, what: str = "recording") -> bytes:
+def read_regular_file(path: str | os.PathLike, what: str = "recording", max_bytes: int | None = None,
+                      check_head=None) -> bytes:
     """The bytes of a regular file, refusing anything else before it could block.
 
     ``os.stat`` is checked before opening (a FIFO, a terminal or ``/dev/stdin`` would
@@ -239,6 +240,11 @@ def read_regular_file(path: str | os.PathLike, what: str = "recording") -> bytes
     path : str or path-like
     what : str
         What the file is for, in messages (``"recording"``, ``"spec"``).
+    max_bytes : int, optional
+        Refuse files larger than this (by their size, before reading).
+    check_head : callable, optional
+        Called with the first 64 KiB before the rest is read; raises to refuse the file
+        (e.g. binary data) without reading all of it.
 
     Raises
     ------
@@ -278,11 +284,18 @@ def read_regular_file(path: str | os.PathLike, what: str = "recording") -> bytes
         raise InputError(f"{what} {name!r}: cannot read it ({exc.strerror}); check the path and "
                          "permissions") from None
     try:
-        kind = kind_of(os.fstat(fd).st_mode)
+        st = os.fstat(fd)
+        kind = kind_of(st.st_mode)
         if kind is not None:
             raise refuse(kind)
+        if max_bytes is not None and st.st_size > max_bytes:
+            raise InputError(f"{what} {name!r} is {st.st_size:,} bytes, beyond the {max_bytes:,}-byte limit "
+                             f"for a {what}; is it the right file? A {what} is a small text file")
         with os.fdopen(fd, "rb", closefd=False) as fh:
-            return fh.read()
+            head = fh.read(1 << 16)
+            if check_head is not None:
+                check_head(head)
+            return head + fh.read()
     except OSError as exc:
         raise InputError(f"{what} {name!r}: cannot read it ({exc.strerror}); check the path and "
                          "permissions") from None
@@ -346,6 +359,12 @@ def _csv_text(raw: bytes, name: str) -> str:
             j = empty[0]
             raise InputError(f"{name!r}: header cell {j + 1} (line 1) is empty; name every column (t, "
                              f"acc_<axis>, ...) so no column is read under an invented name; header: {cells}")
+        padded = [j for j, c in enumerate(cells) if c != c.strip()]
+        if padded:
+            j = padded[0]
+            raise InputError(f"{name!r}: header cell {j + 1} (line 1) is {cells[j]!r}, with leading/trailing "
+                             "whitespace; it would name a column (and an axis) with the spaces in it. Remove "
+                             "the spaces around the header names (e.g. t,acc_x)")
         seen: dict[str, int] = {}
         for j, c in enumerate(cells):
             if c in seen:
@@ -353,6 +372,12 @@ def _csv_text(raw: bytes, name: str) -> str:
                                  f"{seen[c] + 1} and {j + 1}); give every column its own name (the second "
                                  "one would be renamed silently otherwise)")
             seen[c] = j
+    blank = _re.search(r"\n[ \t\r]*\n", text.rstrip())
+    if blank is not None:
+        line = text[: blank.start()].count("\n") + 2
+        raise InputError(f"{name!r}: line {line} is blank, between data rows; bvpnav skips nothing (a blank "
+                         "line may be a lost sample, and it would shift every reported line number): "
+                         "delete the blank line(s), or repair the missing row")
     return text
 
 
@@ -362,13 +387,23 @@ def _read_table(path: Path):
     import pandas as pd
 
     suffix = path.suffix.lower()
-    raw = read_regular_file(path, "recording")  # first: a FIFO or device is named as such
-    if suffix not in (".csv", ".parquet", ".pq"):
-        raise InputError(f"{str(path)!r}: unknown file type {suffix!r}; give a .csv or .parquet file")
+
+    def head_check(head: bytes) -> None:  # before a huge file is read whole
+        if suffix not in (".csv", ".parquet", ".pq"):
+            raise InputError(f"{str(path)!r}: unknown file type {suffix!r}; give a .csv or .parquet file")
+        found = _sniff(head)
+        if suffix == ".csv" and found is not None:
+            raise InputError(f"{str(path)!r}: this .csv file is {found[0]}, not CSV text; {found[1]}")
+        if suffix != ".csv" and not head.startswith(b"PAR1") and found is not None:
+            raise InputError(f"{str(path)!r}: this {suffix} file is {found[0]}, not Parquet (no PAR1 magic "
+                             f"bytes); {found[1]}")
+
+    raw = read_regular_file(path, "recording", check_head=head_check)  # a FIFO or device named first
     if suffix == ".csv":
         text = _csv_text(raw, str(path))
+        _check_field_counts(text, str(path))
         try:
-            return pd.read_csv(_io.StringIO(text))
+            df = pd.read_csv(_io.StringIO(text), index_col=False)
         except pd.errors.EmptyDataError:
             raise InputError(f"{str(path)!r}: not a readable CSV file (it is empty); a recording needs a "
                              "header line (t, acc_<axis>) and at least 3 rows") from None
@@ -378,6 +413,7 @@ def _read_table(path: Path):
         except (ValueError, OverflowError) as exc:  # e.g. unbalanced quotes, absurd field sizes
             raise InputError(f"{str(path)!r}: not a readable CSV file ({str(exc).splitlines()[0]}); check "
                              "the file is comma-separated text with one header line") from None
+        return df
     try:
         import pyarrow  # noqa: F401
     except ImportError:
@@ -405,7 +441,35 @@ def _read_table(path: Path):
         j = next(j for j, c in enumerate(names) if not c.strip())
         raise InputError(f"{str(path)!r}: column {j + 1} has an empty name; name every column (t, "
                          "acc_<axis>, ...)")
+    padded = [c for c in names if c != c.strip()]
+    if padded:
+        raise InputError(f"{str(path)!r}: column name {padded[0]!r} has leading/trailing whitespace; it "
+                         "would name an axis with the spaces in it. Rename the column without them")
     return df
+
+
+def _check_field_counts(text: str, name: str) -> None:
+    """Refuse rows with more fields than the header (pandas would shift the columns)."""
+    import csv
+    import io as _io
+
+    rows = csv.reader(_io.StringIO(text))
+    try:
+        header = next(rows, None)
+        if header is None:
+            return
+        for k, row in enumerate(rows):
+            _more_fields(name, k, rows.line_num, row, header)
+    except csv.Error:
+        return  # the table reader reports it
+
+
+def _more_fields(name: str, k: int, line: int, row: list, header: list) -> None:
+    if len(row) > len(header):
+        raise InputError(f"{name!r}: row {k} (line {line}) has {len(row)} fields but the header "
+                         f"(line 1) has {len(header)}; every row needs the same number of fields as "
+                         "the header: remove the extra field(s) (a trailing comma?) or name the extra "
+                         "column in the header")
 
 
 def _time_seconds(df, tcol: str, tunit: str, origin: str | None, name: str, row_ref):
@@ -518,8 +582,8 @@ def read_recording(path: str | os.PathLike, input: dict | None = None):
     import numpy as np
     import pandas as pd
 
-    from .imu import ImuData, axis_name_clash
-    from .spec import ACC_UNITS, TIME_UNITS
+    from .imu import ACC_UNITS, ImuData, axis_name_clash
+    from .timebase import TIME_UNITS, check_time_resolution
 
     p = Path(path)
     inp = dict(input or {})
@@ -581,6 +645,13 @@ def read_recording(path: str | os.PathLike, input: dict | None = None):
             raise InputError(f"{name}: [input] columns = {cols}: {clash} (trajectory columns are t, <axis>, "
                              "v<axis>, <axis>_std, v<axis>_std); choose other axis names, e.g. "
                              "columns = { x = \"...\", y = \"...\" }")
+    owner: dict[str, str] = {tcol: "the time column"}
+    for a, c in cols.items():
+        if c in owner:
+            raise InputError(f"{name}: column {c!r} is mapped to axis {a!r} but is already {owner[c]}; one "
+                             "column can feed one axis only: map each axis to its own column in the spec's "
+                             "[input] columns = { x = \"...\", y = \"...\" }")
+        owner[c] = f"axis {a!r}"
     for what, col in [("time", tcol)] + [(f"axis {a}", c) for a, c in cols.items()]:
         if col not in df.columns:
             raise InputError(f"{name}: column {col!r} ({what}) not found; columns in the file: "
@@ -633,6 +704,8 @@ def read_recording(path: str | os.PathLike, input: dict | None = None):
             t, zero = to_seconds(shown, tunit)
         else:
             t = shown * TIME_UNITS[tunit]
+        if isinstance(df[tcol].dtype, np.dtype):
+            check_time_resolution(shown, df[tcol].dtype, f"{name}: column {tcol!r}")
     dt = np.diff(t)
     bad = np.flatnonzero(dt <= 0)
     if bad.size:

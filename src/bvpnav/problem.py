@@ -248,7 +248,9 @@ class NavigationProblem:
                 label = f"{label}#{k}"
                 self._items.append(_Renamed.wrap(it, label))
             elif it.name is not None and label in taken:
-                raise InputError(f"add(): an item named {label!r} is already in the problem")
+                raise InputError(f"add(): an item named {label!r} is already in the problem; item names "
+                                 "identify items (priority, demote_sigma, messages): rename one of them "
+                                 "(name=...)")
             else:
                 self._items.append(it)
         self._terms = None

@@ -48,6 +48,7 @@ import numpy as np
 import tomllib
 
 from .errors import InputError
+from .imu import ACC_UNITS as _ACC_UNITS
 from .items import _snake, registry
 from .timebase import TIME_UNITS as _TIME_UNITS
 
@@ -57,7 +58,7 @@ __all__ = ["Spec", "load_spec", "read_spec_text", "parse_spec", "dumps_spec", "p
 #: Seconds per unit of the time column (``time_unit = "iso8601"`` reads timestamps instead).
 TIME_UNITS = _TIME_UNITS
 #: m/s^2 per unit of the acceleration columns.
-ACC_UNITS = {"m/s^2": 1.0, "g": 9.80665, "mg": 9.80665e-3, "ft/s^2": 0.3048}
+ACC_UNITS = _ACC_UNITS
 
 _SECTIONS = {
     "input": {"time", "time_unit", "time_origin", "columns", "unit"},
@@ -110,6 +111,9 @@ class Spec:
     solve: dict
     items: list
     error_models: list
+    #: Where each ``[problem]``/``[solve]`` key was written (``"spec.toml, line 12"``), for
+    #: errors found only once the data is known (empty when built in code).
+    where: dict = dataclasses.field(default_factory=dict, compare=False, repr=False)
 
     def error_model(self):
         """The combined error model, or None."""
@@ -124,8 +128,23 @@ class Spec:
         """A :class:`bvpnav.NavigationProblem` for ``data`` (ImuData) from this spec."""
         from .problem import NavigationProblem
 
-        prob = NavigationProblem(data, error_model=self.error_model(), **self.problem)
-        return prob.add(*self.items)
+        try:
+            prob = NavigationProblem(data, error_model=self.error_model(), **self.problem)
+        except InputError as exc:
+            key = next((k for k in self.problem if k in str(exc) and k in self.where), None)
+            if key is None:
+                raise
+            raise InputError(f"{self.where[key]}: {exc}") from None
+        prob.add(*self.items)
+        labels = prob.item_labels
+        for key in ("priority", "demote_sigma"):
+            table = self.solve.get(key)
+            unknown = sorted(set(table) - set(labels)) if isinstance(table, dict) else []
+            if unknown:
+                at = self.where.get(key, "spec")
+                raise InputError(f"{at}: {key} names unknown item(s) {unknown}; the problem's items are "
+                                 f"{labels}: use one of these names (or give the item name = \"...\")")
+        return prob
 
 
 # ------------------------------------------------------------------ reading
@@ -246,6 +265,11 @@ def _check_values(plain: dict, text: str, source: str) -> None:
         if not (isinstance(pr, dict) and all(number(v, False) for v in pr.values())):
             raise InputError(f"{where('priority', 'solve')}: priority={pr!r}; give a table of item "
                              'name = number, e.g. priority = { "survey point" = 10 }')
+    for key in ("priority", "demote_sigma"):
+        if key in solve and solve.get("on_conflict") != "demote":
+            raise InputError(f"{where(key, 'solve')}: {key} is set but on_conflict is "
+                             f"{solve.get('on_conflict', 'raise (the default)')!r}, so it would be ignored; "
+                             f'add on_conflict = "demote" to [solve] (or remove {key})')
     if "demote_sigma" in solve:
         ds = solve["demote_sigma"]
         ok = number(ds, True) or (isinstance(ds, dict) and all(number(v, True) for v in ds.values()))
@@ -273,6 +297,10 @@ def _check_values(plain: dict, text: str, source: str) -> None:
                          'axis names to column names, e.g. columns = { x = "acc_x" }')
 
 
+#: Largest spec file read, bytes (a spec is a small text file).
+MAX_SPEC_BYTES = 10 * 1024 * 1024
+
+
 def parse_spec(text: str, source: str = "spec") -> Spec:
     """Parse TOML text into a :class:`Spec`.
 
@@ -282,8 +310,19 @@ def parse_spec(text: str, source: str = "spec") -> Spec:
         For TOML syntax errors, unknown sections, keys, item or error-model names, and
         invalid values (of ``[input]``, ``[problem]`` and ``[solve]`` too: residual form,
         ``sigma_a`` > 0, solver name, accuracy preset, ``lam`` >= 0 or a rule; and values
-        of the wrong TOML type anywhere), naming the line and listing the valid choices.
+        of the wrong TOML type anywhere), naming the line and listing the valid choices;
+        for values nested too deeply to read, and for two items with the same name.
     """
+    try:
+        return _parse_spec(text, source)
+    except RecursionError:
+        raise InputError(f"{source}: values nested too deeply to read (arrays or tables inside one "
+                         "another hundreds of levels deep); a spec needs at most a few levels: fix that "
+                         "value") from None
+
+
+def _parse_spec(text: str, source: str = "spec") -> Spec:
+    """Parse ``text`` (see :func:`parse_spec`)."""
     if text.startswith("\ufeff"):  # a UTF-8 byte-order mark: an encoding marker, not TOML
         text = text[1:]
     try:
@@ -331,7 +370,18 @@ def parse_spec(text: str, source: str = "spec") -> Spec:
                                  f"{name!r}; valid types: {sorted(reg)}")
             out.append(_instantiate(reg[str(name).lower()], kind, fields, text, sec, k, source))
         objs[sec] = out
-    return Spec(inp, plain["problem"], plain["solve"], objs["item"], objs["error_model"])
+    seen: dict[str, int] = {}
+    for k, entry in enumerate(doc.get("item", []) if isinstance(doc.get("item"), list) else []):
+        nm = entry.get("name")
+        if isinstance(nm, str):
+            if nm in seen:
+                first, second = (_line_of(text, None, "item", j) for j in (seen[nm], k))
+                raise InputError(f"{source}: the [[item]] tables at lines {first} and {second} are both "
+                                 f"named {nm!r}; item names identify items (priority, demote_sigma, "
+                                 "messages): rename one of them")
+            seen[nm] = k
+    where = {k: _where(source, _line_of(text, k, sec)) for sec in ("problem", "solve") for k in plain[sec]}
+    return Spec(inp, plain["problem"], plain["solve"], objs["item"], objs["error_model"], where)
 
 
 def read_spec_text(path) -> str:
@@ -343,7 +393,7 @@ def read_spec_text(path) -> str:
     """
     from .io import read_regular_file
 
-    raw = read_regular_file(path, "spec")
+    raw = read_regular_file(path, "spec", max_bytes=MAX_SPEC_BYTES)
     try:
         return raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:

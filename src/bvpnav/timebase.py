@@ -26,7 +26,8 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["MAX_SECONDS", "TIME_UNITS", "as_float_array", "as_seconds", "to_seconds"]
+__all__ = ["MAX_SECONDS", "TIME_UNITS", "as_float_array", "as_seconds", "check_time_resolution",
+           "to_seconds"]
 
 #: Largest time magnitude accepted as seconds (about 3,170 years). Unix epoch seconds
 #: are ~1.7e9; epochs in ms, us or ns (~1.7e12, 1.7e15, 1.7e18) are far beyond it.
@@ -121,8 +122,19 @@ def as_float_array(x: Any, what: str, units: str = "SI units", time: bool = Fals
     Raises
     ------
     InputError
-        For bool, complex, object, string, datetime and duration data.
+        For bool, complex, object, string, datetime and duration data, and masked arrays
+        with a masked entry (an all-unmasked masked array is read as its data).
     """
+    if isinstance(x, np.ma.MaskedArray):
+        mask = np.ma.getmaskarray(x)
+        if mask.any():
+            first = tuple(int(v) for v in np.argwhere(mask)[0])
+            where = first[0] if len(first) == 1 else first
+            raise InputError(f"{what}: a masked array with {int(mask.sum())} masked entr"
+                             f"{'y' if mask.sum() == 1 else 'ies'} (first: index {where}); bvpnav never "
+                             "fills gaps: remove those samples (e.g. keep = ~mask.any(axis=1) on t and "
+                             "the values) or repair them, then pass plain numbers")
+        x = np.ma.getdata(x)
     arr = _pandas_array(x)
     if arr is None and isinstance(x, (list, tuple)):
         # np.asarray([1.0, True]) would be [1.0, 1.0]: find a bool mixed into numbers first
@@ -166,6 +178,7 @@ def as_seconds(t: Any, what: str = "t", limit: bool = True) -> np.ndarray:
         the conversion to use), more than one dimension, non-finite values, and (with
         ``limit``) epoch-sized values.
     """
+    dtype = getattr(t, "dtype", None)
     arr = as_float_array(t, what, "s", time=True)
     if arr.ndim == 0:
         arr = arr.reshape(1)
@@ -177,6 +190,8 @@ def as_seconds(t: Any, what: str = "t", limit: bool = True) -> np.ndarray:
             f"{what}: value at index {bad[0]} is {float(arr[bad[0]])!r} ({bad.size} non-finite "
             "value(s)); times must be finite numbers in s. Remove or repair that entry."
         )
+    if isinstance(dtype, np.dtype):
+        check_time_resolution(arr, dtype, what)
     if limit:
         big = np.flatnonzero(np.abs(arr) > MAX_SECONDS)
         if big.size:
@@ -188,6 +203,44 @@ def as_seconds(t: Any, what: str = "t", limit: bool = True) -> np.ndarray:
                 "from the first sample, integer arithmetic first"
             )
     return arr
+
+
+#: Coarsest time resolution accepted from a low-precision float, as a fraction of the
+#: median sample step.
+RESOLUTION_FRACTION = 1e-3
+
+
+def check_time_resolution(t: np.ndarray, dtype: np.dtype, what: str) -> None:
+    """Refuse times stored in a float type too coarse for their sample steps.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        The times as read (float64), in s or the column's unit.
+    dtype : numpy.dtype
+        The type they were stored in; only floats narrower than float64 are checked.
+    what : str
+        The culprit (argument or column) for the message.
+
+    Raises
+    ------
+    InputError
+        When the spacing of ``dtype`` at ``max|t|`` exceeds :data:`RESOLUTION_FRACTION`
+        of the median sample step: the stored times are already quantised.
+    """
+    if dtype.kind != "f" or dtype.itemsize >= 8 or t.size < 2:
+        return
+    steps = np.abs(np.diff(t))
+    step = float(np.median(steps))
+    if not np.isfinite(step) or step <= 0:
+        return  # the ordering check reports it
+    top = float(np.max(np.abs(t)))
+    res = float(np.spacing(dtype.type(top)))
+    if res > RESOLUTION_FRACTION * step:
+        raise InputError(f"{what}: times stored as {dtype} resolve only {res:.3g} at {top:.6g}, "
+                         f"{res / step:.3g} of the median step {step:.3g} (the times are quantised); store "
+                         "the times as float64, or as integers with time_unit (e.g. ms), or count them "
+                         "from the first sample")
 
 
 def to_seconds(values: Any, unit: str | None = None) -> tuple[np.ndarray, str]:
