@@ -572,9 +572,6 @@ SPEC_CASES = [
     ("spec-item-axes-empty", '[[item]]\ntype = "velocity"\nname = "v"\nt = 0.0\naxes = []\n',
      r"bad\.toml, line 1: v: axes=\[\] names no axis", r"omit axes="),
     # round 2 (issue 14 "Trust"), F12, F16, F24
-    ("F12-demote-sigma-without-demote", '[solve]\nlam = 1.0\ndemote_sigma = 0.5\n',
-     r"bad\.toml, line 3: demote_sigma is set but on_conflict is 'raise \(the default\)'",
-     r'add on_conflict = "demote" to \[solve\]'),
     ("F12-priority-with-raise", '[solve]\non_conflict = "raise"\npriority = { ends = 2 }\n',
      r"bad\.toml, line 3: priority is set but on_conflict is 'raise'", r'add on_conflict = "demote"'),
     ("F16-nested-10000-deep", "[problem]\nsigma_a = " + "[" * 10000 + "]" * 10000 + "\n",

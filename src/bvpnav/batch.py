@@ -141,13 +141,18 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     if implicit:
         check_implicit_outputs({"summary_path (default: out with .json)": (summary_path, "summary")},
                                "move it away or give summary_path (--summary) another path")
-    try:  # before reading: a recording still being written is then caught below
-        rec_fp = file_fingerprint(path)
+    try:  # size and mtime before reading: a recording still being written is caught below
+        st = os.stat(path)
+        before = (st.st_size, st.st_mtime_ns)
     except OSError:  # missing, a folder, a FIFO ...: the reader says so, naming the fix
-        rec_fp = None
+        before = None
+    # the reader first: it looks at the file's head before reading it whole, so a file that is
+    # no recording (a 40 GB preallocated log, a zip) is refused at once, before it is hashed
     data = read_recording(path, spec.input)
-    if rec_fp is None:
-        rec_fp = _recording_fingerprint(path)
+    rec_fp = _recording_fingerprint(path)
+    if before is not None and before != (rec_fp["size"], rec_fp["mtime_ns"]):
+        raise InputError(f"recording {str(path)!r} changed while it was being solved; nothing was written: "
+                         "wait until it is complete and run again")
     prob = spec.build(data)
     sol = prob.solve(**solve_kwargs(spec, solver, lam))
     now = _recording_fingerprint(path)
@@ -480,10 +485,13 @@ def _run_on_dask(jobs, scheduler, workers, progress, client=None) -> list[dict]:
 
         # silence_logs: the workers' warnings and errors (tasks cancelled by Ctrl-C, a heartbeat
         # that finds the scheduler already closed while the cluster shuts down) are not for
-        # users; a task's own failure is a row of the summary, a dead worker too
+        # users; a task's own failure is a row of the summary, a dead worker too.
+        # dashboard_address: the scheduler's HTTP server on a free loopback port (None still
+        # binds 8787 on every interface, and warns when another cluster has it)
         with _workers_ignore_ctrl_c():
             cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
-                                   host="127.0.0.1", dashboard_address=None, silence_logs=logging.CRITICAL)
+                                   host="127.0.0.1", dashboard_address="127.0.0.1:0",
+                                   silence_logs=logging.CRITICAL)
         client = Client(cluster)
     elif client is None:
         client = _connect(scheduler)

@@ -265,10 +265,12 @@ def _check_values(plain: dict, text: str, source: str) -> None:
         if not (isinstance(pr, dict) and all(number(v, False) for v in pr.values())):
             raise InputError(f"{where('priority', 'solve')}: priority={pr!r}; give a table of item "
                              'name = number, e.g. priority = { "survey point" = 10 }')
+    # an explicit on_conflict = "raise" beside them contradicts them; without on_conflict they
+    # are kept for a later "demote" (tests/test_cli.py switches a spec between the two)
     for key in ("priority", "demote_sigma"):
-        if key in solve and solve.get("on_conflict") != "demote":
-            raise InputError(f"{where(key, 'solve')}: {key} is set but on_conflict is "
-                             f"{solve.get('on_conflict', 'raise (the default)')!r}, so it would be ignored; "
+        if key in solve and solve.get("on_conflict") == "raise":
+            raise InputError(f"{where(key, 'solve')}: {key} is set but on_conflict is 'raise', so it "
+                             "would be ignored; "
                              f'add on_conflict = "demote" to [solve] (or remove {key})')
     if "demote_sigma" in solve:
         ds = solve["demote_sigma"]
