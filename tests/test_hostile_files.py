@@ -238,11 +238,12 @@ REFUSED = [
                  id="solve-out-symlink-to-dev-null"),
     # --- hang: outputs that a writer would block on
     pytest.param(lambda t: (os.mkfifo(t / "pipe.csv"), solve_argv(t, "--out", t / "pipe.csv"))[-1],
-                 r"--out '[^']*pipe\.csv' is a named pipe \(FIFO\)", r"path of a regular file",
+                 r"--out '[^']*pipe\.csv' is a FIFO \(named pipe\)", r"path of a regular file",
                  id="solve-out-is-a-fifo"),
     pytest.param(lambda t: (os.mkfifo(t / "fig.png"), solve_argv(t, "--out", t / "o.csv", "--plot",
                                                                  t / "fig.png"))[-1],
-                 r"--plot '[^']*fig\.png' is a named pipe", r"regular file", id="solve-plot-is-a-fifo"),
+                 r"--plot '[^']*fig\.png' is a FIFO \(named pipe\)", r"regular file",
+                 id="solve-plot-is-a-fifo"),
     # --- misread input: suffixes and option lists checked up front, not after the work
     pytest.param(lambda t: solve_argv(t, "--out", t / "o.csv", "--plot", t / "out.txt"),
                  r"--plot '[^']*out\.txt': suffix '\.txt' is not a figure format", r"\.png",

@@ -251,17 +251,10 @@ def read_regular_file(path: str | os.PathLike, what: str = "recording", max_byte
     InputError
         Naming the path: missing, not a regular file (saying what it is), unreadable.
     """
-    import stat
-
     name = str(path)
-    kinds = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
-             (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
-             (stat.S_ISSOCK, "a socket"))
 
     def kind_of(mode: int) -> str | None:
-        if stat.S_ISREG(mode):
-            return None
-        return next((k for test, k in kinds if test(mode)), "not a regular file")
+        return None if _stat.S_ISREG(mode) else _kind(mode)
 
     def refuse(kind: str) -> InputError:
         return InputError(f"{what} {name!r} is {kind}, not a regular file; bvpnav reads a {what} only "
@@ -853,7 +846,7 @@ def _ident(path: str | os.PathLike) -> tuple[str, tuple[int, int] | None]:
 
 
 def _kind(mode: int) -> str:
-    for test, name in ((_stat.S_ISDIR, "a folder"), (_stat.S_ISFIFO, "a named pipe (FIFO)"),
+    for test, name in ((_stat.S_ISDIR, "a folder"), (_stat.S_ISFIFO, "a FIFO (named pipe)"),
                        (_stat.S_ISCHR, "a character device"), (_stat.S_ISBLK, "a block device"),
                        (_stat.S_ISSOCK, "a socket")):
         if test(mode):
