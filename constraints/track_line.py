@@ -3,7 +3,7 @@
 The object is known to move along a polyline with vertices ``(x_i, y_i)`` on two chosen
 axes, but not *when* it is where. The distance to a polyline is not affine in the
 positions, so the item is linearized about a current estimate and re-linearized by the
-sequential convex loop (:mod:`bvpnav.sequential`), which :meth:`NavigationProblem.solve`
+sequential convex loop (:mod:`bvpnav.solve.sequential`), which :meth:`NavigationProblem.solve`
 runs automatically for items that still need a linearization point.
 """
 
@@ -19,7 +19,7 @@ import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
 from bvpnav.errors import InputError
-from bvpnav.items import Item
+from bvpnav.items import Item, Linearizable
 from bvpnav.model import Affine
 
 from ._common import finite, interval, times
@@ -250,7 +250,7 @@ def project_onto_polyline(vertices, t, positions, ambiguity: float = 0.5,
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class TrackLine(Item):
+class TrackLine(Item, Linearizable):
     """The object moves along a known planar polyline (timing unknown).
 
     Parameters
@@ -267,7 +267,7 @@ class TrackLine(Item):
     about : array_like (K, 2), optional
         Linearization point: the current position estimate (m) on ``axes`` at the
         times ``about_t``. Normally left empty: :meth:`NavigationProblem.solve` then runs
-        the sequential loop (:func:`bvpnav.sequential.solve_sequential`), which fills it
+        the sequential loop (:func:`bvpnav.solve.solve_sequential`), which fills it
         via :meth:`linearized`. An item with ``about`` is an ordinary linear item.
     about_t : array_like (K,), optional
         Times (s) of ``about``; the item gives one row per time inside ``[t0, t1]``.
@@ -301,7 +301,7 @@ class TrackLine(Item):
     In hard and band mode the sequential loop starts with a soft copy
     (:meth:`continuation_sigma`, :meth:`with_mode`): hard rows from a far start fix the
     estimate on the path at wrong arc lengths, from which the iteration recovers only
-    slowly (see :mod:`bvpnav.sequential`).
+    slowly (see :mod:`bvpnav.solve.sequential`).
     """
 
     x: Any
@@ -429,6 +429,10 @@ class TrackLine(Item):
             object.__setattr__(self, "_projection", cached)
         return cached
 
+    def linearization_counts(self) -> dict[str, int]:
+        """Row status counts of the linearization point's projection (see :class:`TrackProjection`)."""
+        return self.projection().counts()
+
     @property
     def length(self) -> float:
         """Arc length of the polyline, m."""
@@ -447,7 +451,7 @@ class TrackLine(Item):
         Notes
         -----
         :math:`\sigma = \max(\sqrt{\overline{d_k^2}}, \sigma_\min)`; see
-        :func:`bvpnav.sequential.solve_sequential` for why the loop starts soft.
+        :mod:`bvpnav.solve.sequential` for why the loop starts soft.
         """
         pr = self.projection()
         d = pr.distance[pr.kept]
@@ -475,7 +479,7 @@ class TrackLine(Item):
         if self.about is None:
             raise InputError(
                 f"{self.identify()}: a track is nonlinear and needs a linearization point. "
-                "NavigationProblem.solve() supplies it (sequential loop, bvpnav.sequential); to "
+                "NavigationProblem.solve() supplies it (sequential loop, bvpnav.solve.sequential); to "
                 "compile by hand use item.linearized(t, positions) first")
         model.axes_of(self.axes, self.identify())
         pr = self.projection()

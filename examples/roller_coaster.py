@@ -41,9 +41,8 @@ from scipy.interpolate import CubicSpline
 import bvpnav
 from bvpnav.constraints import Position, TrackLine
 from bvpnav.constraints.track_line import project_onto_polyline
-from bvpnav.regularization import lambda_curve
-from bvpnav.sequential import solve_sequential
 from bvpnav.simulate import Motion, SensorErrors, simulate_imu
+from bvpnav.solve import lambda_curve, solve_sequential
 
 G = 9.80665
 #: (lift speed m/s, rolling-friction deceleration m/s^2) of the three runs

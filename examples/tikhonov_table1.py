@@ -43,8 +43,8 @@ import bvpnav
 from bvpnav.baselines import rts_smoother
 from bvpnav.constraints import Position, Velocity
 from bvpnav.error_models import Bias, ScaleFactor
-from bvpnav.regularization import lambda_curve
 from bvpnav.scenarios import tikhonov2011
+from bvpnav.solve import lambda_curve
 
 #: The paper's Table 1: (s, mu) -> argmin lambda, its sigma_I, sigma_I(lambda_L), lambda_L,
 #: sigma_II, sigma_III (m).

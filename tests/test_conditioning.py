@@ -38,10 +38,16 @@ import scipy.linalg as sla
 from conftest import load_example
 
 import bvpnav
-from bvpnav.conditioning import GAIN_LIMIT, RELATIVE_SV_WARN, information_matrix, relative_singular_values
 from bvpnav.constraints import Position, Velocity
 from bvpnav.error_models import Bias, ErrorModel, ScaleFactor
 from bvpnav.errors import Inaccurate, InputError
+from bvpnav.solve.assemble import finish
+from bvpnav.solve.conditioning import (
+    GAIN_LIMIT,
+    RELATIVE_SV_WARN,
+    information_matrix,
+    relative_singular_values,
+)
 
 T, N = 10.0, 101
 B_Y = 0.2  #: bias of the y sensor, m/s^2
@@ -278,7 +284,7 @@ def test_a_degenerate_axis_with_a_non_finite_report_is_an_input_error_not_a_fall
     info = {"solver": "direct", "status": "optimal"}
     with pytest.raises(bvpnav.InputError, match=r"direct: the error-model estimate is not finite "
                        r"because sensor axis y.*without 'y'"):
-        prob._finish(x, 1.0, "fixed", info, None, "default", True)
+        finish(prob.formulation, x, 1.0, info, None, "default", True)
 
 
 @pytest.mark.parametrize("kept", [0.0, 3e-13, -3e-13, 2e-10, -5e-10])

@@ -1,4 +1,4 @@
-"""Conflicting hard information is reported by name (a deletion filter, bvpnav.conflicts)."""
+"""Conflicting hard information is reported by name (a deletion filter, bvpnav.cvx)."""
 
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import bvpnav
-from bvpnav.conflicts import conflicting_items
 from bvpnav.constraints import Position, Velocity
+from bvpnav.cvx import conflicting_items
 
 
 def problem(*extra):

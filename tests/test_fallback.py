@@ -7,7 +7,7 @@ import pytest
 
 import bvpnav
 from bvpnav.constraints import Position
-from bvpnav.problem import DEFAULT_FALLBACK
+from bvpnav.solve import DEFAULT_FALLBACK
 
 T = np.linspace(0.0, 10.0, 201)
 

@@ -32,7 +32,7 @@ from bvpnav.grid import TimeGrid
 from bvpnav.io import read_recording
 from bvpnav.items import registry
 from bvpnav.samples import write_sample
-from bvpnav.spec import load_spec, parse_spec
+from bvpnav.spec import load_spec, parse_spec, to_spec
 from bvpnav.timebase import to_seconds
 
 N = 11
@@ -632,14 +632,14 @@ names = st.text(min_size=1, max_size=12).filter(lambda s: s.strip())
 @settings(max_examples=150, deadline=None, database=None)
 @given(name=names, kind=st.sampled_from(sorted(registry())))
 def test_to_spec_round_trips_any_name_and_every_item(name, kind):
-    """problem.to_spec() is valid TOML for any item name (spaces, quotes, backslashes,
+    """bvpnav.spec.to_spec(problem) is valid TOML for any item name (spaces, quotes, backslashes,
     control characters, non-ASCII) and gives every registered item's example() back."""
     data = bvpnav.ImuData(T, np.column_stack([ACC1, ACC1, ACC1]), axes=("x", "y", "z"))
     item = registry()[kind].example()
     fields = {**item.params(), "name": name}
     named = type(item)(**fields)
     prob = bvpnav.NavigationProblem(data).add(named)
-    text = prob.to_spec(solve={"on_conflict": "demote", "priority": {name: 2.0},
+    text = to_spec(prob, solve={"on_conflict": "demote", "priority": {name: 2.0},
                                 "demote_sigma": {name: 0.5}})
     spec = parse_spec(text, "written.toml")
     assert spec.solve["priority"] == {name: 2.0} and spec.solve["demote_sigma"] == {name: 0.5}

@@ -23,12 +23,13 @@ from _hostile import (
 )
 
 import bvpnav
-from bvpnav import solvers as S
+from bvpnav import backends as S
+from bvpnav.backends.cvxpy_solvers import CvxpyBackend
 from bvpnav.constraints import Position, Velocity
 from bvpnav.errors import InputError, SolveError, SolverNotFound
 from bvpnav.problem import NavigationProblem
-from bvpnav.regularization import lambda_curve
-from bvpnav.sequential import solve_sequential
+from bvpnav.solve import chain as _chain
+from bvpnav.solve import lambda_curve, solve_sequential
 
 N = 101
 
@@ -153,8 +154,8 @@ def test_wrong_options_are_named_before_any_work(inp, monkeypatch, call, cls, cu
     def no_solve(*a, **k):  # "before work": no back end may run
         raise AssertionError("a back end ran before the options were checked")
 
-    monkeypatch.setattr(NavigationProblem, "_attempt", no_solve)
-    monkeypatch.setattr(bvpnav.regularization._DirectSweep, "point", no_solve)
+    monkeypatch.setattr(_chain, "attempt", no_solve)
+    monkeypatch.setattr(bvpnav.lam.sweep.DirectSweep, "point", no_solve)
     exc = raises_named(cls, lambda: call(prob), culprit, fix)
     assert type(exc) is cls
 
@@ -246,17 +247,15 @@ def _raise(exc):
 def _patch_backend(monkeypatch, name, exc):
     """Make back end ``name`` raise ``exc`` from inside its run."""
     if name in ("direct", "csne"):
-        be = S._BACKENDS[name]
-        monkeypatch.setitem(S._BACKENDS, name, S.Backend(be.name, be.kind, run=_raise(exc),
-                                                         presets=be.presets))
+        monkeypatch.setattr(S._BACKENDS[name], "run", _raise(exc))
     else:
-        orig = NavigationProblem._solve_cvxpy
+        orig = CvxpyBackend.run
 
-        def run(self, backend, *a, **k):
-            if backend.name == name:
+        def run(self, *a, **k):
+            if self.name == name:
                 raise exc
-            return orig(self, backend, *a, **k)
-        monkeypatch.setattr(NavigationProblem, "_solve_cvxpy", run)
+            return orig(self, *a, **k)
+        monkeypatch.setattr(CvxpyBackend, "run", run)
 
 
 CHAIN_CASES = [
@@ -317,7 +316,7 @@ def test_memory_estimate_refuses_before_work_and_names_what_fits(inp, monkeypatc
     assert need == pytest.approx(N * 5750.0)  # measured bytes per sample (README)
     # room for direct (1,950 B per sample) but not for Clarabel (5,750 B)
     monkeypatch.setattr(S, "available_memory", lambda: int(N * 4000 / S.MEMORY_SHARE))
-    monkeypatch.setattr(NavigationProblem, "_attempt", _raise(AssertionError("solved anyway")))
+    monkeypatch.setattr(_chain, "attempt", _raise(AssertionError("solved anyway")))
     exc = raises_named(InputError, prob.solve,
                        r"solver 'clarabel' needs about 0\.000581 GB for N = 101 samples x 1 axes",
                        r"limit 0\.000404 GB", r"solver='direct' \(about", r"at most 70 samples")
@@ -332,7 +331,7 @@ def test_memory_refusal_on_ten_million_samples_without_allocating(monkeypatch):
     prob = NavigationProblem(data, items=[Position(t=[0.0, t[-1]], value=0.0, name="ends"),
                                           Velocity(t=0.0, value=0.0, name="v0")])
     monkeypatch.setattr(S, "available_memory", lambda: 32 * GB)
-    monkeypatch.setattr(NavigationProblem, "check_observability",
+    monkeypatch.setattr(bvpnav.formulation.Formulation, "check_observability",
                         _raise(AssertionError("work before the memory check")))
     raises_named(InputError, prob.solve, r"N = 10000000 samples", r"about 57\.5 GB",
                  r"limit 28\.8 GB", r"solver='direct' \(about 19\.5 GB\)",
@@ -407,7 +406,7 @@ def test_solution_accessors_name_the_axes(solved, call, culprit, fix):
                  id="compare-lam"),
 ])
 def test_compare_solvers_refuses_unknown_names_up_front(inp, monkeypatch, kw, culprit, fix):
-    monkeypatch.setattr(NavigationProblem, "_attempt", _raise(AssertionError("ran a solver")))
+    monkeypatch.setattr(_chain, "attempt", _raise(AssertionError("ran a solver")))
     exc = raises_named(InputError, lambda: bvpnav.compare_solvers(inp.problem(), **kw), culprit, fix)
     assert type(exc) is InputError
 

@@ -29,7 +29,7 @@ def table1_problem(n, residual="acceleration", seed=1, scale=0.05, bias=-0.5):
 
 def kkt_reference(prob, lam, refinements=3):
     """An independent reference: the KKT system of the same problem, sparse LU plus
-    iterative refinement (written here from the definitions, not from bvpnav.kkt)."""
+    iterative refinement (written here from the definitions, not from bvpnav.lsq)."""
     m = prob.model
     terms = prob.terms()
     E = bvpnav.Affine.vstack([m.fem_rows()] + [t.residual for t in terms if t.mode == "hard"])
@@ -187,10 +187,10 @@ def test_a_solved_problem_and_its_solution_pickle_and_re_solve_equal(solver):
     prob = prob.with_items(prob.items + [Velocity(t=[0.0, 10.0], value=0.0, sigma=0.1, name="v")])
     prob.error_model = Bias()
     sol = prob.solve(solver=solver)
-    assert prob._cvx is not None or solver == "direct"  # caches exist before pickling
+    assert "cvx" in prob.formulation.cache or solver == "direct"  # caches exist before pickling
     prob2 = pickle.loads(pickle.dumps(prob))
     sol2 = pickle.loads(pickle.dumps(sol))
-    assert prob2._cvx is None and prob2._model is None and prob2._terms is None
+    assert prob2._form is None and prob2._model is None  # no compiled problem, model or terms
     assert prob2.item_labels == prob.item_labels and prob2.residual == prob.residual
     np.testing.assert_array_equal(prob2.data.acc, prob.data.acc)
     # the solution round-trips exactly, and a re-solve of the copy gives the same answer

@@ -9,8 +9,11 @@ import pytest
 
 import bvpnav
 from bvpnav.constraints import Position
-from bvpnav.regularization import _curvature, _DirectSweep, _spline_curvature, lambda_curve
+from bvpnav.lam.lcurve import curvature as _curvature
+from bvpnav.lam.lcurve import spline_curvature as _spline_curvature
+from bvpnav.lam.sweep import DirectSweep as _DirectSweep
 from bvpnav.scenarios import tikhonov2011
+from bvpnav.solve import lambda_curve
 
 
 def table1(seed=0, scale=0.05, bias=-0.5):
@@ -111,9 +114,10 @@ def test_cvxpy_engine_for_robust_items_matches_direct_curve_shape():
     prob.residual = "acceleration"
     robust, _ = table1()
     robust.residual = "acceleration"
-    robust._items[1] = Position(t=robust._items[1].t, value=robust._items[1].value, sigma=1.0,
-                                mode="robust", huber=1e3, name="prior")
-    robust._terms = robust._cvx = None
+    items = robust.items
+    items[1] = Position(t=items[1].t, value=items[1].value, sigma=1.0, mode="robust", huber=1e3,
+                        name="prior")
+    robust = robust.with_items(items)
     a = lambda_curve(prob, rules=("lcurve",), lam_range=(1e1, 1e7), points=17)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -160,18 +164,22 @@ def test_plots_mark_every_rule_and_write_atomically(tmp_path):
 
 # ------------------------------------- every user option reaches the final solve (issue 14)
 def _final_solve_kwargs(monkeypatch, prob, **kw):
-    """Solve with a rule; return the keywords of the final fixed-lambda solve() call."""
+    """Solve with a rule; return the options the final fixed-lambda solve ran with (what
+    every back-end attempt of it was handed by the pipeline)."""
+    from bvpnav.solve import chain
+
     calls = []
-    orig = bvpnav.NavigationProblem.solve
+    orig = chain.attempt
 
-    def spy(self, *a, **k):
-        calls.append(dict(k))
-        return orig(self, *a, **k)
+    def spy(form, backend, options, lam, opts):
+        calls.append({"lam": lam, "fallback": opts.fallback, "verify": opts.verify,
+                      "accuracy": opts.accuracy, "options": opts.options, "solver": opts.solver})
+        return orig(form, backend, options, lam, opts)
 
-    monkeypatch.setattr(bvpnav.NavigationProblem, "solve", spy)
+    monkeypatch.setattr(chain, "attempt", spy)
     sol = prob.solve(**kw)
     final = [c for c in calls if not isinstance(c.get("lam"), str)]
-    assert len(final) == 1, calls  # the direct sweep solves nothing through solve()
+    assert len({c["lam"] for c in final}) == 1, calls  # the direct sweep runs no back end
     assert final[0]["lam"] == sol.lam == sol.curve.lam_chosen and sol.lam_rule == kw["lam"]
     return final[0], sol
 

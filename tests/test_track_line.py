@@ -19,9 +19,9 @@ from bvpnav.constraints.track_line import (
     VERTEX,
     project_onto_polyline,
 )
-from bvpnav.sequential import solve_sequential
 from bvpnav.simulate import Motion, sample_times
-from bvpnav.spec import dumps_spec, parse_spec
+from bvpnav.solve import solve_sequential
+from bvpnav.spec import dumps_spec, parse_spec, to_spec
 
 EX = pathlib.Path(__file__).resolve().parents[1] / "examples"
 
@@ -100,7 +100,7 @@ def test_spec_round_trip():
     t = np.linspace(0.0, 10.0, 11)
     data = bvpnav.ImuData(t=t, acc=np.zeros((t.size, 2)), axes=("x", "z"))
     prob = bvpnav.NavigationProblem(data).add(item)
-    text = prob.to_spec()
+    text = to_spec(prob)
     back = parse_spec(text).items[0]
     assert isinstance(back, TrackLine) and back.label == "coaster"
     assert np.array_equal(back.x, item.x) and np.array_equal(back.y, item.y)

@@ -20,8 +20,8 @@ import numpy as np
 
 import bvpnav
 from bvpnav.constraints import Position, Velocity
-from bvpnav.regularization import lambda_curve
 from bvpnav.scenarios import cubic_prior, quintic_trajectory
+from bvpnav.solve import lambda_curve
 
 
 def problem(n: int, seed: int = 1):

@@ -35,8 +35,8 @@ import pandas as pd
 
 import bvpnav
 from bvpnav.constraints import Position
-from bvpnav.regularization import lambda_curve
 from bvpnav.scenarios import tikhonov2011
+from bvpnav.solve import lambda_curve
 
 SMALL = os.environ.get("BVPNAV_SMALL") == "1"
 FIGURES = Path(os.environ.get("BVPNAV_FIGURES", "figures"))

@@ -20,8 +20,9 @@ Quick start::
 
 from __future__ import annotations
 
-from . import attitude, baselines, error_models, regularization, scenarios, simulate
+from . import attitude, baselines, error_models, lam, scenarios, simulate, solve
 from ._version import __version__
+from .backends import available_solvers
 from .compare import compare_solvers
 from .errors import (
     BvpnavError,
@@ -39,7 +40,7 @@ from .items import Item
 from .model import Affine, NavModel
 from .problem import NavigationProblem
 from .result import Solution
-from .solvers import available_solvers
+from .solve import lambda_curve
 
 __all__ = [
     "__version__",
@@ -63,7 +64,9 @@ __all__ = [
     "baselines",
     "compare_solvers",
     "error_models",
-    "regularization",
+    "lam",
+    "lambda_curve",
+    "solve",
     "scenarios",
     "simulate",
 ]

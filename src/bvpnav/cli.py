@@ -144,7 +144,10 @@ def _cmd_solve(args) -> int:
 
 def _cmd_lcurve(args) -> int:
     from .io import atomic_savefig, write_table
-    from .regularization import RULES, lambda_curve
+    from .lam import rule_names
+    from .solve import lambda_curve
+
+    RULES = rule_names()
 
     rules = [r.strip() for r in args.rules.split(",")]
     if not any(rules) or not all(rules):

@@ -45,7 +45,7 @@ def _listed(value, what: str) -> list:
 def _check_names(problem, solvers, presets, options) -> None:
     """InputError before any run for unknown solver or preset names (all of them named,
     with the valid ones) and for options keyed by a solver that is not compared."""
-    from .solvers import ACCURACIES, available_solvers, check_options, resolve_solver
+    from .backends import ACCURACIES, available_solvers, check_options, resolve_solver
 
     solvers, presets = _listed(solvers, "solvers"), _listed(presets, "presets")
     have = available_solvers()
@@ -104,8 +104,8 @@ def compare_solvers(problem, solvers: Sequence[str] | None = None, presets: Sequ
     Runs use ``fallback=None`` and ``verify=False`` so each row shows that solver's own
     answer; ``verified`` then says whether bvpnav would have accepted it.
     """
-    from .kkt import least_squares_form, non_least_squares_term
-    from .solvers import available_solvers
+    from .backends import available_solvers
+    from .lsq import least_squares_form, non_least_squares_term
 
     if solvers is None:
         have = set(available_solvers())
@@ -113,11 +113,11 @@ def compare_solvers(problem, solvers: Sequence[str] | None = None, presets: Sequ
         if non_least_squares_term(problem) is None:
             solvers += ["direct", "csne"]
     _check_names(problem, solvers, presets, options)
-    from .problem import check_lam
+    from .solve import check_lam
 
     lam = check_lam(lam)
     if isinstance(lam, str):
-        from .regularization import choose_lambda
+        from .solve import choose_lambda
 
         lam = choose_lambda(problem, lam)
     ref = _reference_positions(reference, problem)

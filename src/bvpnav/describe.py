@@ -16,7 +16,10 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from .cvx import compiled
 from .errors import InputError
+from .formulation import as_formulation
+from .lsq import least_squares_form
 from .model import Affine
 
 __all__ = ["describe", "matrices", "Matrices"]
@@ -79,6 +82,7 @@ def matrices(problem) -> Matrices:
     .. math:: \\min_x \\|J x\\|^2 + \\lambda \\|(D x - e)/\\sigma\\|^2
               \\quad \\text{s.t.} \\quad A_{eq} x = b_{eq}.
     """
+    problem = as_formulation(problem)
     model = problem.model
     d, n = model.d, model.N
     K = sp.block_diag([model.K] * d, format="csr")
@@ -92,12 +96,13 @@ def matrices(problem) -> Matrices:
     soft, sig = [], []
     row_eq, row_d = fem.m, 0
     for term in problem.terms():
-        if term.kind != "equality" or term.mode not in ("hard", "soft"):
+        role = term.least_squares_role()
+        if role is None:
             raise InputError(
                 f"{term.label}: mode {term.mode!r} ({term.kind}) is not a linear row; matrices() "
                 "covers hard and soft equality items"
             )
-        if term.mode == "hard":
+        if role == "E":
             eq.append(term.residual)
             legend.append((term.label, "hard", "A_eq", slice(row_eq, row_eq + term.residual.m)))
             row_eq += term.residual.m
@@ -128,8 +133,6 @@ def matrices(problem) -> Matrices:
 
 def _condition_estimate(problem, lam: float) -> float | None:
     """1-norm condition estimate of the augmented KKT matrix (None if not least squares)."""
-    from .kkt import least_squares_form
-
     form = least_squares_form(problem, lam)
     if form is None:
         return None
@@ -171,10 +174,10 @@ def describe(problem, format: str = "text", lam: float | None = None,
     if format not in ("text", "latex"):
         raise InputError(f"format={format!r}; choose 'text' or 'latex'")
     tex = format == "latex"
+    problem = as_formulation(problem)
     model = problem.model
-    cvx = problem.build()
     if lam is None:
-        lam = float(cvx["lam"].value)
+        lam = float(compiled(problem).lam.value)
     g = model.grid
     h = g.h
     terms = problem.terms()
@@ -210,12 +213,8 @@ def describe(problem, format: str = "text", lam: float | None = None,
         math("  G: acceleration change per unit error parameter (columns of F = -M G)",
              r"F = -M G\quad \mathrm{(error\ model\ columns)}")
     for t in terms:
-        if t.mode == "hard" or t.mode == "band":
-            if t.kind == "equality":
-                rel = "= 0" if t.mode == "hard" else f"|.| <= {_fmt(t.tol)} {t.units}"
-            else:  # inequality g <= 0, or cone ||u_k|| - s_k <= 0
-                cone = ", second-order cone per node" if t.kind == "cone" else ""
-                rel = ("<= 0" if t.mode == "hard" else f"<= {_fmt(t.tol)} {t.units}") + cone
+        if t.is_constraint:
+            rel = t.table.relation(t, _fmt(t.tol) if t.tol is not None else "")
             body = t.item.math() if t.item is not None else t.label
             math(f"  {t.label} [{t.mode}, {t.residual.m} rows]: {body}  ({rel})",
                  _item_latex(t) + rf"\quad \mathrm{{[{_tex_text(t.label)},\ {t.mode},\ "
@@ -228,11 +227,9 @@ def describe(problem, format: str = "text", lam: float | None = None,
         math("  minimize  ||K r + B v - f - F l||^2  (= ||M w||^2, the 2011 paper's load form)",
              r"\min\ \|K r + B v - f - F l\|^2 = \|M w\|^2")
     for t in terms:
-        if t.mode in ("soft", "robust") or (t.kind == "inequality" and t.mode == "soft"):
+        if t.is_penalty:
             k = "lam * " if t.scaled_by_lam else ""
-            pen = "huber" if t.mode == "robust" and t.huber else ("|.|" if t.mode == "robust" else "(.)^2")
-            if t.kind != "equality":  # only the violation max(g, 0) is penalised
-                pen = "pos(.)" if t.mode == "robust" else "pos(.)^2"
+            pen = t.table.penalty_symbol(t)  # inequalities and cones: only the violation
             body = (t.item.math() if t.item is not None else t.label).replace(" = 0", "")
             body = body.replace(" <= 0", "")
             math(f"  + {k}sum {pen} of ({body}) / sigma   [{t.label}, {t.mode}, sigma = "

@@ -22,7 +22,8 @@ import numpy as np
 from .errors import InputError
 from .timebase import as_float_array
 
-__all__ = ["Item", "MODES", "registry", "register", "item_class", "broadcast_rows", "as_values"]
+__all__ = ["Item", "Linearizable", "MODES", "registry", "register", "item_class", "broadcast_rows",
+           "as_values"]
 
 MODES = ("hard", "soft", "robust", "band")
 
@@ -137,6 +138,9 @@ class Item:
     units: ClassVar[str] = "m"
     #: ``"equality"`` (residual should be zero) or ``"inequality"`` (residual <= 0).
     kind: ClassVar[str] = "equality"
+    #: True for an item that cannot compile before it is linearized about a trajectory
+    #: (only :class:`Linearizable` items ever say so).
+    needs_linearization: ClassVar[bool] = False
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
@@ -304,6 +308,45 @@ class Item:
     def __repr__(self) -> str:
         args = ", ".join(f"{k}={v!r}" for k, v in self.params().items())
         return f"{type(self).__name__}({args})"
+
+
+class Linearizable:
+    """The declared contract of an item that is nonlinear in the unknowns.
+
+    Mix it into an :class:`Item` (``class TrackLine(Item, Linearizable)``). The sequential
+    convex loop (:mod:`bvpnav.solve.sequential`) handles exactly the items that are
+    instances of this class and whose :attr:`needs_linearization` is True; it calls the
+    methods below and nothing else.
+
+    Methods to provide: :attr:`needs_linearization` (True while there is no linearization
+    point) and :meth:`linearized`. Optional: :meth:`continuation_sigma` and
+    :meth:`with_mode` (overriding them makes a hard or band item iterate soft first) and
+    :meth:`linearization_counts` (reported per iteration).
+    """
+
+    @property
+    def needs_linearization(self) -> bool:  # type: ignore[override]
+        raise NotImplementedError
+
+    def linearized(self, t, positions) -> Item:
+        """A copy linearized about an estimate (``t`` in s, ``positions`` (N, d) in m or a
+        trajectory DataFrame), which compiles to an affine residual."""
+        raise NotImplementedError
+
+    def continuation_sigma(self) -> float | None:
+        """Sigma (item units) of a soft stand-in for a hard or band linearized copy.
+
+        Override it (and :meth:`with_mode`) to take a continuation: the loop iterates such
+        an item soft first. The base method means "no continuation"."""
+        return None
+
+    def with_mode(self, mode: str, sigma=None, tol=None, huber=None) -> Item:
+        """A copy in another mode (needed when :meth:`continuation_sigma` is not None)."""
+        raise NotImplementedError
+
+    def linearization_counts(self) -> dict[str, int] | None:
+        """Per-row status counts of the linearization (e.g. rows kept or dropped), or None."""
+        return None
 
 
 def _short(v, n: int = 4) -> str:

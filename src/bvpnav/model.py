@@ -1,6 +1,6 @@
 """The unknowns of a navigation problem and the linear maps items are built from.
 
-All unknowns live in one stacked vector ``x`` (a single cvxpy Variable). Per axis
+All unknowns live in one stacked vector ``x`` (numpy here; one cvxpy Variable in :mod:`bvpnav.cvx`). Per axis
 ``a`` (in the order of ``data.axes``) the block is
 
     [ r_a (N nodal positions, m) | w_a (N acceleration residuals, m/s^2) | v0_a, v1_a (m/s) ]
@@ -16,7 +16,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
@@ -98,12 +97,6 @@ class Affine:
             labels = tuple(lab for p in parts for lab in p.labels)
         return Affine(sp.vstack([p.A for p in parts], format="csr"),
                       np.concatenate([p.c for p in parts]), labels)
-
-    def expr(self, x: cp.Expression) -> cp.Expression:
-        """The cvxpy expression ``A @ x + c``."""
-        if not self.c.any():
-            return self.A @ x
-        return self.A @ x + self.c
 
     def value(self, x: np.ndarray) -> np.ndarray:
         """Evaluate at a numeric ``x``."""
@@ -194,7 +187,6 @@ class NavModel:
         self.G = G
         self.q = G.shape[2]
         self.size = d * self.block + self.q
-        self.x = cp.Variable(self.size, name="x")
         self.K = fem.stiffness(self.grid)
         self.M = fem.mass(self.grid)
         self._node_vel = fem.node_velocity_operators(self.grid)
@@ -296,13 +288,6 @@ class NavModel:
             A = self._place({"w": -self.M}, a)
             parts.append(Affine(A, np.zeros(self.N)))
         return Affine.vstack(parts)
-
-    def corrected_acceleration_rows(self, axis: int) -> Affine:
-        """``a_c = a_hat + G l + w`` at every node of one axis, m/s^2."""
-        blocks = {"w": sp.identity(self.N, format="csr")}
-        if self.q:
-            blocks["l"] = sp.csr_matrix(self.G[:, axis, :])
-        return Affine(self._place(blocks, axis), self.data.acc[:, axis])
 
     # ------------------------------------------------- evaluation at times
     def _labels(self, quantity: str, times: np.ndarray, axes: tuple[int, ...]) -> tuple[str, ...]:

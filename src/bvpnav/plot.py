@@ -27,7 +27,7 @@ def lcurve(curve, ax=None, annotate: bool = True):
 
     Parameters
     ----------
-    curve : bvpnav.regularization.LambdaCurve
+    curve : bvpnav.lam.sweep.LambdaCurve
     ax : matplotlib Axes, optional
 
     Notes

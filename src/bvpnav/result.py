@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
@@ -10,7 +11,209 @@ import pandas as pd
 
 from .errors import InputError
 
-__all__ = ["Solution"]
+__all__ = ["Solution", "Attempt", "Verification", "SequentialReport", "Demotion", "SolveRecords"]
+
+
+class _Record(Mapping):
+    """A typed record that also reads like the dict it replaces (``rec["status"]``,
+    ``rec.get("conflicts")``); optional fields that are None are not keys."""
+
+    _optional: tuple[str, ...] = ()
+
+    def _keys(self) -> list[str]:
+        return [f.name for f in fields(self)  # type: ignore[arg-type]
+                if not (f.name in self._optional and getattr(self, f.name) is None)]
+
+    def __getitem__(self, key: str) -> Any:
+        if key in self._keys():
+            return getattr(self, key)
+        raise KeyError(key)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._keys())
+
+    def __len__(self) -> int:
+        return len(self._keys())
+
+    def as_dict(self) -> dict[str, Any]:
+        """A plain dict (what ``Solution.stats`` holds)."""
+        return {k: getattr(self, k) for k in self._keys()}
+
+
+@dataclass(eq=False)
+class Attempt(_Record):
+    """One back end's try at one lambda.
+
+    Attributes
+    ----------
+    solver : str
+    status : str
+        The back end's status word (``optimal``, ``infeasible``, ...), ``error`` for an
+        exception, ``not applicable`` for a back end skipped (memory, problem kind).
+    reason : str
+        ``verified``, ``failed verification`` or why it failed or was skipped.
+    conflicts : list of str, optional
+        The conflicting hard items, for an infeasible attempt.
+    """
+
+    solver: str
+    status: Any
+    reason: str
+    conflicts: list | None = None
+    _optional = ("conflicts",)
+
+    @classmethod
+    def of(cls, rec) -> Attempt:
+        """An :class:`Attempt` from a back end's dict (or an Attempt itself)."""
+        if isinstance(rec, Attempt):
+            return rec
+        return cls(solver=rec["solver"], status=rec.get("status"), reason=rec.get("reason", ""),
+                   conflicts=rec.get("conflicts"))
+
+
+@dataclass(eq=False)
+class Verification(_Record):
+    """bvpnav's own judgement of an answer (see :func:`bvpnav.solve.verify.verify`).
+
+    Attributes
+    ----------
+    fem_residual : float
+        Largest FEM residual relative to the size of the terms that cancel in it.
+    max_violation : float
+        Largest relative violation over hard, band and inequality items.
+    worst_item : str or None
+    stationarity : float or None
+        Relative norm of the Lagrangian gradient (None: non-smooth or no duals).
+    forward_error : float or None
+        Estimated relative forward error (least-squares problems).
+    rtol : float
+        The tolerance of the accuracy preset.
+    nonfinite : list of str
+        What is NaN or infinite in the answer.
+    undetermined : list of str
+        Error-model parameters the information leaves undetermined (named in warnings).
+    conditioning : dict or None
+        See :func:`bvpnav.solve.conditioning.assess_conditioning`.
+    verified : bool
+    """
+
+    fem_residual: float
+    max_violation: float
+    worst_item: str | None
+    stationarity: float | None
+    forward_error: float | None
+    rtol: float
+    nonfinite: list
+    undetermined: list
+    conditioning: dict | None
+    verified: bool
+
+
+@dataclass(eq=False)
+class SequentialReport(_Record):
+    """What the sequential convex loop did (see :func:`bvpnav.solve.sequential.solve_sequential`).
+
+    Attributes
+    ----------
+    iterations : int
+        All phases.
+    max_change, rms_change : list of float
+        Largest and RMS nodal position change per iteration, m.
+    mode : list of str
+        Per iteration ``"soft"`` (continuation) or ``"final"``.
+    sigma : list of dict
+        Per iteration: item label -> continuation sigma, m.
+    phases : list of dict
+        ``mode``, ``iterations``, ``tol``, ``converged`` per phase.
+    continued : list of str
+        Items iterated soft first.
+    converged : bool
+        Of the final phase.
+    tol, soft_tol : float
+        Tolerances, m.
+    max_iter : int
+    initial : str
+        Where the initial estimate came from.
+    lam : list of float
+        Per iteration.
+    status : dict
+        Per item, row status counts of the last linearization.
+    seconds : float
+    """
+
+    iterations: int
+    max_change: list
+    rms_change: list
+    mode: list
+    sigma: list
+    phases: list
+    continued: list
+    converged: bool
+    tol: float
+    soft_tol: float
+    max_iter: int
+    initial: str
+    lam: list
+    status: dict
+    seconds: float
+
+
+@dataclass(eq=False)
+class Demotion(_Record):
+    """A hard item made soft because it conflicted with others.
+
+    Attributes
+    ----------
+    item : str
+    sigma : float
+        Its new standard deviation, item units.
+    priority : float
+    conflict : list of str
+        The conflicting set it was taken from.
+    """
+
+    item: str
+    sigma: float
+    priority: float
+    conflict: list
+
+
+@dataclass(eq=False)
+class SolveRecords:
+    """The typed records the solve stages return; ``Solution.stats`` is built from them.
+
+    Attributes
+    ----------
+    run : dict
+        The winning back end's measurements (``status``, ``iterations``, ``solve_time``,
+        ``setup_time``, ``compile_time``, ``wall_time`` in s, ``objective``, ...) and
+        ``solver``, ``accuracy``, ``options`` in force.
+    attempts : list of Attempt
+    verification : Verification or None
+    sequential : SequentialReport or None
+    demoted : list of Demotion or None
+    """
+
+    run: dict = field(default_factory=dict)
+    attempts: list = field(default_factory=list)
+    verification: Verification | None = None
+    sequential: SequentialReport | None = None
+    demoted: list | None = None
+
+    def stats(self) -> dict[str, Any]:
+        """The ``Solution.stats`` dict (plain values: it is written to JSON by batch runs)."""
+        out = dict(self.run)
+        if self.verification is not None:
+            out["verification"] = self.verification.as_dict()
+            out["verified"] = self.verification.verified
+            if self.verification.conditioning is not None:
+                out["conditioning"] = self.verification.conditioning
+        out["attempts"] = [a.as_dict() for a in self.attempts]
+        if self.sequential is not None:
+            out["sequential"] = self.sequential.as_dict()
+        if self.demoted is not None:
+            out["demoted"] = [d.as_dict() for d in self.demoted]
+        return out
 
 
 @dataclass(eq=False)
@@ -40,9 +243,16 @@ class Solution:
         empty without an error model.
     stats : dict
         Solver, status, iterations, compile/setup/solve times (s), options in force,
-        accuracy preset, verification measures and the attempts made.
+        accuracy preset, verification measures and the attempts made (built from
+        :attr:`records`).
     x : ndarray
         The stacked solution vector (see :class:`bvpnav.model.NavModel`).
+    warnings : list of str
+    curve : LambdaCurve or None
+        The lambda sweep, when a rule chose ``lam``.
+    records : SolveRecords
+        The typed records of the solve (attempts, verification, sequential report,
+        demotions, the winning run's measurements).
     """
 
     trajectory: pd.DataFrame
@@ -56,6 +266,16 @@ class Solution:
     x: np.ndarray
     warnings: list[str] = field(default_factory=list)
     curve: Any = None
+    records: SolveRecords = field(default_factory=SolveRecords)
+
+    def record(self, **records) -> Solution:
+        """Set typed records (``attempts=``, ``sequential=``, ``demoted=``, ...) and
+        rebuild :attr:`stats` from them; returns the solution."""
+        for k, v in records.items():
+            setattr(self.records, k, v)
+        self.stats.clear()
+        self.stats.update(self.records.stats())
+        return self
 
     def _axis(self, axis, what: str) -> str | None:
         """``axis`` itself when it is one of the solution's axes (or None), else

@@ -14,6 +14,7 @@ import pandas as pd
 
 from .errors import InputError
 from .io import atomic_write_text, write_table
+from .spec import to_spec
 
 __all__ = ["SAMPLES", "write_sample"]
 
@@ -142,6 +143,6 @@ def write_sample(name: str, out, seed: int = 0, rate: float | None = None, force
     write_table(rec, paths[0])
     header = (f"# bvpnav sample scenario {name!r} (seed {seed}): "
               f"{SAMPLES[name].__doc__.strip().splitlines()[0]}\n")
-    atomic_write_text(paths[1], header + prob.to_spec(solve=solve, input=inp))
+    atomic_write_text(paths[1], header + to_spec(prob, solve=solve, input=inp))
     write_table(tru, paths[2])
     return paths

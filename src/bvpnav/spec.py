@@ -52,7 +52,7 @@ from .imu import ACC_UNITS as _ACC_UNITS
 from .items import _snake, registry
 from .timebase import TIME_UNITS as _TIME_UNITS
 
-__all__ = ["Spec", "load_spec", "read_spec_text", "parse_spec", "dumps_spec", "problem_to_spec",
+__all__ = ["Spec", "load_spec", "read_spec_text", "parse_spec", "dumps_spec", "problem_to_spec", "to_spec",
            "problem_from_spec", "error_model_registry", "TIME_UNITS", "ACC_UNITS"]
 
 #: Seconds per unit of the time column (``time_unit = "iso8601"`` reads timestamps instead).
@@ -217,10 +217,12 @@ def _instantiate(cls, kind: str, fields: dict, text: str, section: str, index: i
 
 def _check_values(plain: dict, text: str, source: str) -> None:
     """Check the values of ``[problem]``, ``[solve]`` and ``[input]`` (not only their keys)."""
+    from .backends import ACCURACIES
+    from .formulation import RESIDUAL_FORMS
     from .items import positive_array
-    from .problem import RESIDUAL_FORMS
-    from .regularization import RULES
-    from .solvers import ACCURACIES
+    from .lam import rule_names
+
+    RULES = rule_names()
 
     def where(key: str, sec: str) -> str:
         return _where(source, _line_of(text, key, sec))
@@ -508,3 +510,24 @@ def problem_to_spec(problem, solve: dict | None = None, input: dict | None = Non
 def problem_from_spec(spec: Spec, data):
     """Build the problem a spec describes for ``data`` (ImuData)."""
     return spec.build(data)
+
+
+def to_spec(problem, solve: dict | None = None, input: dict | None = None) -> str:
+    """A problem's information as spec-file TOML.
+
+    Parameters
+    ----------
+    problem : NavigationProblem
+    solve : dict, optional
+        The ``[solve]`` table (solver, accuracy, lam).
+    input : dict, optional
+        The ``[input]`` table (time column and unit, axis columns, acceleration unit).
+
+    Returns
+    -------
+    str
+        TOML listing every item and error-model component with its parameters, the
+        residual form and sigma_a; ``parse_spec(text).build(data)`` gives the same problem
+        back.
+    """
+    return dumps_spec(problem_to_spec(problem, solve=solve, input=input))

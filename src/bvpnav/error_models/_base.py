@@ -40,6 +40,7 @@ import pandas as pd
 
 from ..errors import InputError
 from ..model import Affine
+from ..terms import Term
 
 __all__ = [
     "ErrorModel",
@@ -52,9 +53,6 @@ __all__ = [
     "sensor_signal",
     "as_error_model",
 ]
-
-ROLES = ("scale", "misalignment", "bias", "gravity")
-
 
 # ------------------------------------------------------------------ data views
 def sensor_axes(data) -> tuple[str, ...]:
@@ -182,8 +180,6 @@ class ErrorModel(_Combinable):
 
     #: Units of the reported parameters.
     units: ClassVar[str] = ""
-    #: Parameter name prefix (``<prefix>_<axis>``).
-    prefix: ClassVar[str] = "param"
 
     def __post_init__(self):
         label = type(self).__name__
@@ -257,8 +253,6 @@ class ErrorModel(_Combinable):
 
     def terms(self, model) -> list:
         """Soft prior and hard bound terms for :class:`bvpnav.NavigationProblem`."""
-        from ..problem import Term
-
         names = self.names(model.data)
         q = len(names)
         tag = type(self).__name__ + "[" + ", ".join(names) + "]"
@@ -619,8 +613,7 @@ class CompositeErrorModel(_Combinable):
     def terms(self, model) -> list:
         out = []
         for c in self._components:
-            if hasattr(c, "terms"):
-                out.extend(c.terms(model))
+            out.extend(c.terms(model))
         return out
 
     def __repr__(self) -> str:

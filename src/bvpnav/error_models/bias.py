@@ -32,7 +32,6 @@ class Bias(SensorErrorModel):
     """
 
     units = "m/s^2"
-    prefix = "bias"
 
     def params(self, data) -> list[Param]:
         ax = sensor_axes(data)

@@ -39,7 +39,6 @@ class Misalignment(SensorErrorModel):
 
     pairs: Any = None
     units = "rad"
-    prefix = "misalignment"
 
     def validate(self) -> None:
         if self.pairs is not None:

@@ -30,7 +30,6 @@ class ScaleFactor(SensorErrorModel):
     """
 
     units = "1"
-    prefix = "scale"
 
     def params(self, data) -> list[Param]:
         ax = sensor_axes(data)

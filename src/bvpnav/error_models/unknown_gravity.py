@@ -34,7 +34,6 @@ class UnknownGravity(SensorErrorModel):
     """
 
     units = "m/s^2"
-    prefix = "gravity"
 
     def params(self, data) -> list[Param]:
         ax = tuple(data.axes)

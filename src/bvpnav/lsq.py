@@ -33,10 +33,11 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from .formulation import as_formulation
 from .model import Affine
 
 __all__ = ["LeastSquaresForm", "least_squares_form", "non_least_squares_term", "forward_error",
-           "BorderedLU", "solve_bordered", "factor_form", "solve_least_squares"]
+           "BorderedLU", "solve_bordered", "factor_form", "solve_least_squares", "FORWARD_RTOL"]
 
 #: Largest relative forward error accepted per accuracy preset.
 FORWARD_RTOL = {"low": 1e-4, "default": 1e-6, "high": 1e-8}
@@ -92,47 +93,68 @@ class LeastSquaresForm:
         return np.concatenate([-self.D.c, np.zeros(n), -self.E.c])
 
 
-def non_least_squares_term(problem):
+def non_least_squares_term(form):
     """The first term that makes the problem not least squares (an inequality, a band or
     a robust penalty), or None when the problem is equality-constrained least squares."""
-    for term in problem.terms():
-        if term.kind != "equality" or term.mode in ("band", "robust"):
+    for term in as_formulation(form).terms():
+        if term.least_squares_role() is None:
             return term
     return None
 
 
-def least_squares_form(problem, lam: float) -> LeastSquaresForm | None:
-    """The problem as equality-constrained least squares, or None if it is not one.
+def least_squares_form(form, lam: float, surrogate: bool = False) -> LeastSquaresForm | None:
+    r"""The problem as equality-constrained least squares, or None if it is not one.
 
-    Returns None when an item is an inequality, a band or a robust penalty.
+    Parameters
+    ----------
+    form : Formulation or NavigationProblem
+    lam : float
+        Weight of the lambda-scaled soft rows (multiplied by :math:`\sqrt{\lambda}`).
+    surrogate : bool
+        Build the least-squares *part* of any problem instead (robust equalities as soft
+        rows; inequalities, bands and cones left out): the view of the conditioning
+        estimate, which can only err towards less information. Never None then.
+
+    Returns
+    -------
+    LeastSquaresForm or None
+        None when an item is an inequality, a band or a robust penalty (unless
+        ``surrogate``).
+
+    Notes
+    -----
+    Each term's place comes from :meth:`bvpnav.terms.Term.least_squares_role`: hard
+    equalities are rows of ``E``, soft ones rows of ``D`` weighted by
+    :math:`\sqrt{\lambda}/\sigma` (priors by :math:`1/\sigma`).
     """
-    if non_least_squares_term(problem) is not None:
+    form = as_formulation(form)
+    if not surrogate and non_least_squares_term(form) is not None:
         return None
-    model = problem.model
-    obj = [problem.data_rows()]
+    model = form.model
+    obj = [form.data_rows()]
     eq = [model.fem_rows()]
     blocks = [("fem", slice(0, eq[0].m))]
     start = eq[0].m
     scaled = [np.zeros(obj[0].m, dtype=bool)]
-    for term in problem.terms():
-        if term.mode == "hard":
+    for term in form.terms():
+        role = term.least_squares_role(surrogate)
+        if role == "E":
             eq.append(term.residual)
             blocks.append((term.label, slice(start, start + term.residual.m)))
             start += term.residual.m
-        else:
-            k = np.sqrt(lam) if term.scaled_by_lam else 1.0
-            obj.append(term.residual * (k / term.sigma))
+        elif role == "D":
+            obj.append(term.residual * (np.sqrt(term.weight(lam)) / term.sigma))
             scaled.append(np.full(term.residual.m, bool(term.scaled_by_lam)))
     return LeastSquaresForm(Affine.vstack(obj), Affine.vstack(eq), blocks, np.concatenate(scaled))
 
 
-def forward_error(problem, xval: np.ndarray, lam: float, duals: dict | None,
+def forward_error(form, xval: np.ndarray, lam: float, duals: dict | None,
                   factored: tuple | None = None) -> float | None:
     """Relative forward error of ``xval`` estimated by one refinement step.
 
     Parameters
     ----------
-    problem : NavigationProblem
+    form : Formulation or NavigationProblem
     xval : ndarray
         The stacked solution to judge.
     lam : float
@@ -151,6 +173,7 @@ def forward_error(problem, xval: np.ndarray, lam: float, duals: dict | None,
         A factorization of this problem's augmented matrix at this ``lam`` to reuse (the
         direct back end passes its own; the residual is still computed afresh).
     """
+    problem = as_formulation(form)
     form = factored[0] if factored is not None else least_squares_form(problem, lam)
     if form is None:
         return None
@@ -327,7 +350,7 @@ def factor_form(form: LeastSquaresForm, problem, method: str = "lu", delta: floa
     """
     m, n = form.D.A.shape
     p = form.E.m
-    dense = m + problem.model.l_index
+    dense = m + as_formulation(problem).model.l_index
     if method == "ldl":
         return BorderedLU(form.augmented(), dense, upper=form.augmented_upper(delta))
     if method != "lu":
@@ -349,7 +372,7 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
 
     Parameters
     ----------
-    problem : NavigationProblem
+    problem : Formulation or NavigationProblem
     lam : float
     refine : int
         Refinement steps after an LU factorization (stops early below ``tol``).
@@ -385,11 +408,12 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
     is the factorised (possibly regularized) matrix; it converges when
     :math:`\\|I - \\tilde S^{-1} S\\| < 1`.
     """
+    problem = as_formulation(problem)
     form = least_squares_form(problem, lam)
     if form is None:
         raise ValueError("not an equality-constrained least-squares problem")
     if method == "auto":
-        method = "lu" if getattr(problem, "residual", "acceleration") == "load" else "ldl"
+        method = "lu" if problem.residual == "load" else "ldl"
     m, n = form.D.A.shape
     window = slice(m, m + n)
     rhs = form.rhs()

@@ -11,7 +11,7 @@ Two things make an error-model estimate unreliable although the solve succeeds:
    small one means a combination of parameters that the information barely sees: e.g.
    the scale factor and the bias of a sensor axis whose true specific force is almost
    constant. Exactly collinear directions are refused before solving
-   (:meth:`bvpnav.NavigationProblem.check_observability`); nearly collinear ones get a
+   (:meth:`bvpnav.formulation.Formulation.check_observability`); nearly collinear ones get a
    warning naming them.
 2. **A degenerate sensor correction.** The built-in sensor models estimate the exact
    correction ``f = (I + E) f_hat + beta`` and report the physical scale factor
@@ -24,7 +24,7 @@ Two things make an error-model estimate unreliable although the solve succeeds:
    reversed) gets a warning naming the axis' parameters.
 
 Both checks cost ``O(q^3)`` once the Schur complement is known; the verification step
-(:meth:`bvpnav.NavigationProblem.verify`) passes its own factorization, so no extra
+(:func:`bvpnav.solve.verify.verify`) passes its own factorization, so no extra
 factorization of size N is made for equality-constrained least-squares problems.
 """
 
@@ -36,7 +36,9 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .model import Affine
+from ..error_models._base import KEPT_ZERO, SensorCorrection, SensorErrorModel, sensor_axes
+from ..formulation import as_formulation
+from ..lsq import least_squares_form
 
 __all__ = ["RELATIVE_SV_WARN", "GAIN_LIMIT", "information_matrix", "relative_singular_values",
            "assess_conditioning"]
@@ -53,23 +55,6 @@ GAIN_LIMIT = 10.0
 
 #: Components of a weak direction (unit vector) at least this large name a parameter.
 _INVOLVED = 0.2
-
-
-def _surrogate_form(problem, lam: float):
-    """``(D, E)`` of the least-squares part: data rows and equality terms (robust ones as
-    soft), without inequalities, bands and cones, which can only add information."""
-    model = problem.model
-    obj = [problem.data_rows()]
-    eq = [model.fem_rows()]
-    for term in problem.terms():
-        if term.kind != "equality" or term.mode == "band":
-            continue
-        if term.mode == "hard":
-            eq.append(term.residual)
-        else:
-            k = np.sqrt(lam) if term.scaled_by_lam else 1.0
-            obj.append(term.residual * (k / term.sigma))
-    return Affine.vstack(obj), Affine.vstack(eq)
 
 
 def _schur(S: sp.spmatrix, dense: np.ndarray, shift_rows: np.ndarray) -> np.ndarray:
@@ -108,7 +93,7 @@ def information_matrix(problem, lam: float, factored: tuple | None = None) -> np
 
     Notes
     -----
-    With the augmented matrix ``S`` of :mod:`bvpnav.kkt` (unknowns ``rho, x, mu``) split
+    With the augmented matrix ``S`` of :mod:`bvpnav.lsq` (unknowns ``rho, x, mu``) split
     into the parameters ``L`` and the rest ``B``,
 
     .. math:: H = S_{LL} - S_{LB} S_{BB}^{-1} S_{BL},
@@ -119,16 +104,15 @@ def information_matrix(problem, lam: float, factored: tuple | None = None) -> np
     least-squares part (robust items as soft ones, the others left out); the left-out
     items can only add information, so the estimate errs on the side of a warning.
     """
+    problem = as_formulation(problem)
     model = problem.model
-    if factored is not None and getattr(factored[1], "keep", None) is not None:
+    if factored is not None and factored[1].keep is not None:
         H = np.asarray(factored[1].schur, dtype=float)
     else:
-        D, E = _surrogate_form(problem, lam)
-        m, n = D.A.shape
-        p = E.m
-        S = sp.bmat([[-sp.identity(m), D.A, None], [D.A.T, None, E.A.T],
-                     [None, E.A, sp.csr_matrix((p, p))]], format="csc")
-        H = _schur(S, m + model.l_index, np.arange(m + n, m + n + p))
+        form = least_squares_form(problem, lam, surrogate=True)
+        m, n = form.D.A.shape
+        p = form.E.m
+        H = _schur(form.augmented(), m + model.l_index, np.arange(m + n, m + n + p))
     return 0.5 * (H + H.T)
 
 
@@ -172,9 +156,7 @@ def _degenerate_axes(problem, l: np.ndarray) -> list[dict[str, Any]]:
     """Sensor axes whose kept fraction of their own signal ``1 + E_ii`` is not finite or
     outside ``[1/GAIN_LIMIT, GAIN_LIMIT]``, or whose finite gain ``1 + s_i = D_ii`` is
     outside that range (built-in sensor models with a scale factor only)."""
-    from .error_models._base import SensorCorrection, SensorErrorModel, sensor_axes
-
-    model = problem.model
+    model = as_formulation(problem).model
     em = model.error_model
     comps = getattr(em, "components", (em,))
     params, values, off = [], [], 0
@@ -242,7 +224,7 @@ def assess_conditioning(problem, xval: np.ndarray, lam: float, factored: tuple |
     See the module notes for the two criteria. A direction's parameters are those with
     a component of at least 0.2 in the unit direction.
     """
-    model = problem.model
+    model = as_formulation(problem).model
     if model.q == 0:
         return None
     names = list(model.param_names)
@@ -268,8 +250,6 @@ def assess_conditioning(problem, xval: np.ndarray, lam: float, factored: tuple |
                     "estimates are unreliable; add information that separates them or drop "
                     "one of them (e.g. ScaleFactor(axes=(...)) on the axes that feel varying "
                     "specific force)")
-    from .error_models._base import KEPT_ZERO
-
     l = model.split(xval)["l"]
     degenerate = _degenerate_axes(problem, np.asarray(l, dtype=float))
     for dg in degenerate:

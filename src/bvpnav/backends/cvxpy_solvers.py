@@ -1,0 +1,222 @@
+"""cvxpy's installed solvers as back ends: presets, option checks, status mapping.
+
+Every solver cvxpy reports installed (``cvxpy.installed_solvers()``) is a back end under
+its lowercase name. Clarabel (the default), OSQP and SCS have measured accuracy presets;
+another installed solver runs with its own defaults, and the result records that no
+preset was applied (``stats["options"]`` is then the user's options alone).
+
+Presets
+-------
+``low``, ``default`` and ``high`` map to each solver's own options (below) and to the
+relative tolerance of bvpnav's verification (:data:`bvpnav.backends.VERIFY_RTOL`).
+Clarabel's static regularization is switched off in every preset: with it on, the FEM
+problems at N >= 1e5 fail to converge (measured; see README "Solvers").
+"""
+
+from __future__ import annotations
+
+import inspect
+import numbers
+import time
+import warnings
+from typing import Any
+
+import cvxpy as cp
+import numpy as np
+
+from ..cvx import compiled, conflicting_items
+from ..errors import Infeasible, SolveError, Unbounded
+from . import Backend, RawSolve, register_factory
+
+__all__ = ["PRESETS", "CvxpyBackend"]
+
+#: Solver options per preset, by cvxpy's (upper-case) solver name.
+PRESETS: dict[str, dict[str, dict[str, Any]]] = {
+    "CLARABEL": {
+        "low": dict(tol_gap_abs=1e-6, tol_gap_rel=1e-6, tol_feas=1e-6, tol_ktratio=1e-5,
+                    static_regularization_enable=False),
+        "default": dict(tol_gap_abs=1e-9, tol_gap_rel=1e-9, tol_feas=1e-9,
+                        static_regularization_enable=False, max_iter=300),
+        "high": dict(tol_gap_abs=1e-11, tol_gap_rel=1e-11, tol_feas=1e-11, tol_ktratio=1e-9,
+                     static_regularization_enable=False, max_iter=500,
+                     iterative_refinement_reltol=1e-15, iterative_refinement_abstol=1e-15,
+                     iterative_refinement_max_iter=50),
+    },
+    # OSQP (ADMM) cannot reach eps 1e-8 on these problems: at N = 2,000 (1D, soft priors) it
+    # stops at 100,000 iterations with status user_limit (measured). ``high`` is therefore the
+    # tightest setting it reaches there; polishing then solves the active set's KKT system.
+    "OSQP": {
+        "low": dict(eps_abs=1e-5, eps_rel=1e-5, max_iter=20000),
+        "default": dict(eps_abs=1e-6, eps_rel=1e-6, max_iter=100000, polishing=True),
+        "high": dict(eps_abs=1e-7, eps_rel=1e-7, max_iter=50000, polishing=True,
+                     polish_refine_iter=50),
+    },
+    "SCS": {
+        "low": dict(eps_abs=1e-5, eps_rel=1e-5, max_iters=20000),
+        "default": dict(eps_abs=1e-8, eps_rel=1e-8, max_iters=100000),
+        "high": dict(eps_abs=1e-10, eps_rel=1e-10, max_iters=400000),
+    },
+}
+
+#: Peak resident bytes per sample and axis, measured at N = 1,000,000 (one axis, Table 2
+#: shape, each run in its own process, data and problem included; README "Comparing
+#: solvers"): Clarabel 5.75 GB (acceleration form; the load form was not run). Other cvxpy
+#: solvers (not measured) are taken as Clarabel: cvxpy's compiled problem dominates.
+CVXPY_MEMORY = {"acceleration": 5750.0, "load": 5750.0}
+
+
+def _cvxpy_keywords() -> set[str]:
+    """cvxpy's own keywords of ``Problem.solve`` (accepted with every cvxpy solver)."""
+    params = inspect.signature(cp.Problem._solve).parameters
+    return {k for k, p in params.items() if k not in ("self", "solver")
+            and p.kind is not inspect.Parameter.VAR_KEYWORD}
+
+
+def _clarabel_settings() -> dict[str, Any] | None:
+    try:
+        import clarabel
+    except ImportError:  # pragma: no cover - clarabel is a dependency of cvxpy
+        return None
+    settings = clarabel.DefaultSettings()
+    return {a: getattr(settings, a) for a in dir(settings)
+            if not a.startswith("_") and not callable(getattr(settings, a))}
+
+
+def _type_of(default) -> tuple[str, Any] | None:
+    """(description, check) for a setting's default value's type."""
+    if isinstance(default, bool):
+        return "True or False", lambda v: isinstance(v, bool | np.bool_)
+    if isinstance(default, numbers.Integral):
+        return "an integer", lambda v: isinstance(v, numbers.Integral) and not isinstance(v, bool | np.bool_)
+    if isinstance(default, numbers.Real):
+        return "a number", lambda v: isinstance(v, numbers.Real) and not isinstance(v, bool | np.bool_)
+    return None
+
+
+class CvxpyBackend(Backend):
+    """One cvxpy solver (``cvxpy_name`` as cvxpy spells it)."""
+
+    memory_per_sample = CVXPY_MEMORY
+
+    def __init__(self, cvxpy_name: str):
+        self.cvxpy_name = cvxpy_name
+        self.name = cvxpy_name.lower()
+        self.presets = PRESETS.get(cvxpy_name, {})
+
+    # ------------------------------------------------------------ options
+    def valid_options(self) -> list[str] | None:
+        if self.name == "clarabel":
+            settings = _clarabel_settings()
+            return None if settings is None else sorted(set(settings) | _cvxpy_keywords())
+        return None
+
+    def check_value(self, key: str, value) -> str | None:
+        if self.name != "clarabel":
+            return None
+        default = (_clarabel_settings() or {}).get(key)
+        kind = _type_of(default) if default is not None else None
+        if kind is None or kind[1](value):
+            return None
+        return f"{kind[0]} (Clarabel's setting {key}, default {default!r})"
+
+    # ------------------------------------------------------------ support
+    def takes_cones(self) -> bool:
+        """Whether the solver accepts second-order cones (asks cvxpy's solver table)."""
+        from cvxpy.constraints import SOC
+        from cvxpy.reductions.solvers.defines import SOLVER_MAP_CONIC
+
+        solver = SOLVER_MAP_CONIC.get(self.cvxpy_name)
+        return solver is not None and SOC in getattr(solver, "SUPPORTED_CONSTRAINTS", ())
+
+    def accepts(self, form) -> str | None:
+        if self.takes_cones():
+            return None
+        for term in form.terms():
+            if term.kind == "cone":
+                conic = [n for n in ("clarabel", "scs") if n.upper() in cp.installed_solvers()]
+                return (f"solver {self.name!r} cannot take item {term.label!r} (kind {term.kind!r}, "
+                        f"mode {term.mode!r}): it is a QP solver and this item is a second-order "
+                        f"cone. Use solver={conic[0] if conic else 'clarabel'!r}"
+                        + (f" or solver={conic[1]!r}" if len(conic) > 1 else "") + ".")
+        return None
+
+    # ---------------------------------------------------------------- run
+    def run(self, form, lam: float, options: dict, verbose: bool = False) -> RawSolve:
+        cvx = compiled(form)
+        prob: cp.Problem = cvx.problem
+        cvx.lam.value = lam
+        t0 = time.perf_counter()
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                prob.solve(solver=self.cvxpy_name, verbose=verbose, **options)
+        except cp.error.SolverError as exc:
+            raise SolveError(
+                f"{self.name} failed: {exc}",
+                attempts=[{"solver": self.name, "status": "solver_error", "reason": str(exc)}],
+            ) from exc
+        status = prob.status
+        st = prob.solver_stats
+        info = {
+            "status": status,
+            "iterations": getattr(st, "num_iters", None),
+            "solve_time": getattr(st, "solve_time", None),
+            "setup_time": getattr(st, "setup_time", None),
+            "compile_time": getattr(prob, "compilation_time", None),
+            "cvxpy_time": time.perf_counter() - t0,
+            "objective": prob.value,
+            "solver_warnings": [str(w.message) for w in caught],
+        }
+        self._raise_for(status, form, cvx)
+        return RawSolve(np.array(cvx.x.value, dtype=float), info, cvx.duals())
+
+    def _raise_for(self, status: str, form, cvx) -> None:
+        """Raise for an infeasible (naming the conflicting items), unbounded or empty answer."""
+        if status in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE):
+            raise self._infeasible(status, form)
+        if status in (cp.UNBOUNDED, cp.UNBOUNDED_INACCURATE):
+            raise Unbounded(
+                f"{self.name}: the problem is unbounded (status {status}); some unknown is not "
+                "determined by any information",
+                attempts=[{"solver": self.name, "status": status, "reason": "unbounded"}],
+            )
+        if cvx.x.value is None:
+            raise SolveError(
+                f"{self.name} returned no solution (status {status})",
+                attempts=[{"solver": self.name, "status": status, "reason": "no solution"}],
+            )
+
+    def _infeasible(self, status: str, form) -> Infeasible:
+        try:
+            culprits = conflicting_items(form)
+        except Exception:  # the finder must never hide the solver's verdict
+            culprits = []
+        ident = {it.label: it.identify() for it in form.items}  # unnamed items: what they hold
+        if culprits:
+            which = (f"These hard items conflict: {[ident.get(c, c) for c in culprits]}. Soften one of "
+                     "them (give sigma=...).")
+        else:
+            hard = [ident.get(t.label, t.label) for t in form.terms() if t.is_constraint]
+            which = (f"No conflicting subset was confirmed (a numerical verdict?). Hard/band "
+                     f"items: {hard}. Soften some of them (give sigma=...) or try another solver.")
+        return Infeasible(
+            f"{self.name}: the hard information cannot hold together (status {status}). {which}",
+            attempts=[{"solver": self.name, "status": status, "reason": "infeasible",
+                       "conflicts": culprits}],
+        )
+
+
+_CACHE: dict[str, CvxpyBackend] = {}
+
+
+def _installed() -> list[CvxpyBackend]:
+    """One back end per installed cvxpy solver (objects kept, so patches and state stick)."""
+    out = []
+    for s in cp.installed_solvers():
+        if s not in _CACHE:
+            _CACHE[s] = CvxpyBackend(s)
+        out.append(_CACHE[s])
+    return out
+
+
+register_factory(_installed)

@@ -1,0 +1,166 @@
+"""Terms -> one DPP cvxpy problem with the ``lam`` Parameter, and its culprit checks.
+
+:func:`build` lowers a :class:`~bvpnav.formulation.Formulation` once: the FEM rows and the
+hard items become constraints, the data term and the soft and robust items the objective
+(the latter times ``lam``, one ``cp.Parameter``), each term through its row of the mode x
+kind table (:mod:`bvpnav.terms`). The framework, not the plug-in, checks that the result
+is DCP and DPP and names the culprit item. :func:`conflicting_items` finds which hard
+items cannot hold together (a deletion filter over feasibility problems built from the
+very same constraints).
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+from typing import Any
+
+import cvxpy as cp
+
+from .errors import ConvexityError
+from .formulation import as_formulation
+from .model import Affine
+
+__all__ = ["CvxProblem", "lower", "build", "compiled", "conflicting_items"]
+
+
+def lower(rows: Affine, x: cp.Expression) -> cp.Expression:
+    """The cvxpy expression ``A @ x + c`` of an affine map."""
+    if not rows.c.any():
+        return rows.A @ x
+    return rows.A @ x + rows.c
+
+
+@dataclass(eq=False)
+class CvxProblem:
+    """The compiled cvxpy problem and its parts.
+
+    Attributes
+    ----------
+    problem : cvxpy.Problem
+    lam : cvxpy.Parameter
+        The regularization weight (dimensionless, non-negative).
+    x : cvxpy.Variable
+        The stacked unknowns (see :class:`bvpnav.model.NavModel`).
+    fem : cvxpy.Constraint
+        The FEM equations.
+    fem_rows : Affine
+    cons : dict of str to list
+        Item label -> its constraints (empty for penalty terms).
+    penalties : list of (Term, cvxpy.Expression)
+        Each penalty term with its penalty before ``lam``.
+    """
+
+    problem: cp.Problem
+    lam: cp.Parameter
+    x: cp.Variable
+    fem: Any
+    fem_rows: Affine
+    cons: dict = field(default_factory=dict)
+    penalties: list = field(default_factory=list)
+
+    def __getitem__(self, key: str) -> Any:
+        """Dictionary-style access (``build()["problem"]``), as in earlier releases."""
+        return getattr(self, key)
+
+    def duals(self) -> dict:
+        """``{"fem": y, label: [y per constraint]}`` after a solve (cvxpy's sign convention)."""
+        out = {"fem": self.fem.dual_value}
+        for label, lst in self.cons.items():
+            out[label] = [c.dual_value for c in lst]
+        return out
+
+
+def build(form) -> CvxProblem:
+    """Lower a formulation to one DPP cvxpy problem (see the module docstring).
+
+    Raises
+    ------
+    ConvexityError
+        Naming the item whose penalty is not DCP, or not DPP in ``lam``.
+    """
+    form = as_formulation(form)
+    model = form.model
+    x = cp.Variable(model.size, name="x")
+    lam = cp.Parameter(nonneg=True, value=1.0, name="lam")
+    fem_rows = model.fem_rows()
+    fem_con = lower(fem_rows, x) == 0
+    objective = cp.sum_squares(lower(form.data_rows(), x))
+    cons: dict[str, list] = {}
+    penalties = []
+    for term in form.terms():
+        r = lower(term.residual, x)
+        cons[term.label] = term.constraints(r)
+        pen = term.penalty(r)
+        if pen is not None:
+            penalties.append((term, pen))
+    for term, pen in penalties:
+        if not pen.is_convex():  # pragma: no cover - built from convex atoms
+            raise ConvexityError(f"{term.label}: its penalty is not convex")
+        objective = objective + (lam * pen if term.scaled_by_lam else pen)
+    prob = cp.Problem(cp.Minimize(objective), [fem_con] + [c for lst in cons.values() for c in lst])
+    if not prob.is_dcp():
+        bad = [t.label for t, p in penalties if not p.is_dcp()]
+        raise ConvexityError(f"the problem is not DCP; culprit item(s): {bad or 'unknown'}")
+    if not prob.is_dpp():
+        bad = [t.label for t, p in penalties if not (lam * p).is_dpp()]
+        raise ConvexityError(f"the problem is not DPP in lam; culprit item(s): {bad or 'unknown'}")
+    return CvxProblem(problem=prob, lam=lam, x=x, fem=fem_con, fem_rows=fem_rows, cons=cons,
+                      penalties=penalties)
+
+
+def compiled(form) -> CvxProblem:
+    """The formulation's cvxpy problem, built on first use and kept with it (DPP: a new
+    ``lam`` re-uses it)."""
+    form = as_formulation(form)
+    cvx = form.cache.get("cvx")
+    if cvx is None:
+        cvx = form.cache["cvx"] = build(form)
+    return cvx
+
+
+def _feasible(cvx: CvxProblem, labels) -> bool:
+    """Whether the FEM equations and the constraints of the items ``labels`` can all hold
+    (the very constraints :func:`build` compiled, modes included)."""
+    cons = [cvx.fem] + [c for label in labels for c in cvx.cons[label]]
+    prob = cp.Problem(cp.Minimize(0), cons)
+    try:
+        with warnings.catch_warnings():  # an inaccurate feasibility verdict is judged below,
+            warnings.simplefilter("ignore")  # not passed on as a stray cvxpy warning
+            prob.solve(solver="CLARABEL")
+    except cp.SolverError:
+        return True  # cannot tell: do not accuse
+    return prob.status not in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE)
+
+
+def conflicting_items(form) -> list[str]:
+    """Labels of a smallest-by-deletion set of hard items that cannot hold together.
+
+    Parameters
+    ----------
+    form : Formulation or NavigationProblem
+
+    Returns
+    -------
+    list of str
+        Empty when the hard information is consistent. Otherwise an irreducible
+        infeasible subset: these items conflict, and dropping (or softening) any one of
+        them removes this conflict (others may remain).
+
+    Notes
+    -----
+    Deletion filter (Chinneck): start from every item that compiles to constraints (hard
+    and band items, hard inequalities and second-order cones; the FEM equations always
+    stay); for each item, if the rest is still infeasible without it, drop it for good.
+    One feasibility solve per item, so this runs only after a solve has failed.
+    """
+    cvx = compiled(form)
+    labels = [label for label, cons in cvx.cons.items() if cons]
+    if _feasible(cvx, labels):
+        return []
+    keep = list(labels)
+    for label in labels:
+        trial = [k for k in keep if k != label]
+        if not _feasible(cvx, trial):
+            keep = trial
+    return keep

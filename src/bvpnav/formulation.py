@@ -1,0 +1,385 @@
+"""What the problem is: data, objective form, error model and items, compiled to terms.
+
+A :class:`Formulation` is immutable: the same data, residual form, ``sigma_a``, error
+model and items always compile to the same :class:`~bvpnav.terms.Term` list (cached).
+Everything that *solves* (the least-squares view, the cvxpy problem, the back ends, the
+lambda rules and the solve pipeline) takes a formulation and never the user's
+:class:`~bvpnav.NavigationProblem`; a stage that changes the information (demotion,
+linearization) makes a new formulation with :meth:`Formulation.with_items`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from typing import Any
+
+import numpy as np
+
+from .errors import BvpnavError, ConvexityError, InputError
+from .imu import ImuData
+from .items import Item, Linearizable, positive_array
+from .model import Affine, NavModel
+from .terms import Term
+
+__all__ = ["Formulation", "as_formulation", "RESIDUAL_FORMS", "LAM_RANGE", "WEIGHT_RANGE",
+           "SIGMA_A_RANGE", "ACC_MAX", "label_items", "original"]
+
+RESIDUAL_FORMS = ("acceleration", "load")
+
+#: Lambda values other than 0 that double precision can weigh against the data term: a
+#: weight beyond 1e12 (or below 1e-12) leaves one side of the objective below rounding of
+#: the other (the answer is that of hard items, or of no soft items).
+LAM_RANGE = (1e-12, 1e12)
+
+#: Bounds of the squared weight of a term relative to the data term (dimensionless, see
+#: :meth:`Formulation.check_scales`): 30 orders of magnitude either way, far from the
+#: overflow of a square (1e308) and wider than any physical choice of sigma.
+WEIGHT_RANGE = (1e-30, 1e30)
+
+#: Accelerometer noise standard deviations (m/s^2) double precision handles in the
+#: acceleration form's weights 1/sigma_a^2.
+SIGMA_A_RANGE = (1e-12, 1e12)
+
+#: Largest acceleration magnitude (m/s^2) accepted: 1e9 m/s^2 is 1e8 g, beyond any
+#: accelerometer; larger values are a unit mistake and overflow the squared residuals.
+ACC_MAX = 1e9
+
+
+def as_formulation(obj) -> Formulation:
+    """``obj`` itself when it is a :class:`Formulation`, else its ``formulation``
+    (a :class:`~bvpnav.NavigationProblem`)."""
+    if isinstance(obj, Formulation):
+        return obj
+    form = getattr(obj, "formulation", None)
+    if isinstance(form, Formulation):
+        return form
+    raise InputError(f"expected a bvpnav.NavigationProblem or Formulation, got {type(obj).__name__}")
+
+
+class _Renamed:
+    """Give a second unnamed item of the same class a unique label without mutating it."""
+
+    @staticmethod
+    def wrap(item: Item, label: str) -> Item:
+        clone = object.__new__(type(item))
+        clone.__dict__.update(item.__dict__)
+        object.__setattr__(clone, "name", label)
+        object.__setattr__(clone, "_original", item)
+        return clone
+
+
+def original(item: Item) -> Item:
+    """The item as the user gave it (before a unique label was attached)."""
+    return item.__dict__.get("_original", item)
+
+
+def label_items(items: Iterable[Item], taken: Iterable[str] = ()) -> list[Item]:
+    """Items with unique labels: an unnamed item whose class label is taken becomes
+    ``Class#k`` (a relabelled copy; the user's item is not changed).
+
+    Raises
+    ------
+    InputError
+        For something that is not an item, or a second item with the same explicit name.
+    """
+    taken = set(taken)
+    out = []
+    for it in items:
+        if not isinstance(it, Item):
+            raise InputError(
+                f"add(): {it!r} is not a bvpnav item; build one from bvpnav.constraints "
+                "(e.g. Position(t=0.0, value=0.0))"
+            )
+        label = it.label
+        if it.name is None and label in taken:
+            k = 2
+            while f"{label}#{k}" in taken:
+                k += 1
+            label = f"{label}#{k}"
+            it = _Renamed.wrap(it, label)
+        elif it.name is not None and label in taken:
+            raise InputError(f"add(): an item named {label!r} is already in the problem; item names "
+                             "identify items (priority, demote_sigma, messages): rename one of them "
+                             "(name=...)")
+        taken.add(label)
+        out.append(it)
+    return out
+
+
+def _check_sigma_a(sigma_a, data: ImuData) -> np.ndarray:
+    if sigma_a is None:
+        return np.ones(data.ndim)
+    sa = positive_array(sigma_a, "sigma_a (m/s^2)", False).ravel()
+    if sa.size not in (1, data.ndim):
+        raise InputError(f"sigma_a: {sa.size} value(s) for the axes {list(data.axes)}; give one "
+                         "value in m/s^2 or one per axis")
+    sa = np.array(np.broadcast_to(sa, (data.ndim,)), dtype=float)
+    for k in np.flatnonzero((sa < SIGMA_A_RANGE[0]) | (sa > SIGMA_A_RANGE[1])):
+        raise InputError(
+            f"sigma_a = {sa[k]:g} m/s^2 (axis {data.axes[k]}) is outside "
+            f"{SIGMA_A_RANGE[0]:g}..{SIGMA_A_RANGE[1]:g} m/s^2, where the weights 1/sigma_a^2 "
+            "stay resolvable in double precision; give the accelerometer noise in m/s^2 "
+            "(typically 1e-4 to 1)")
+    return sa
+
+
+def _check_acc(data: ImuData) -> None:
+    acc = np.asarray(data.acc, dtype=float)
+    with np.errstate(invalid="ignore"):
+        big = np.abs(acc) > ACC_MAX
+    if not np.any(big):
+        return
+    i, a = np.unravel_index(int(np.argmax(big)), big.shape) if big.ndim > 1 else (int(np.argmax(big)), 0)
+    val = acc.reshape(data.n, -1)[i, a]
+    raise InputError(
+        f"acceleration at sample {i} (t={data.t[i]:g} s), axis {data.axes[a]}, is {val:g} "
+        f"m/s^2: beyond {ACC_MAX:g} m/s^2 (1e8 g), which no accelerometer measures and whose "
+        f"squares overflow; {int(np.count_nonzero(big))} sample(s) exceed it. Check the "
+        "unit of the acceleration column (m/s^2 expected) or remove the corrupt samples")
+
+
+class Formulation:
+    """Data + objective form + error model + items, compiled (once) to terms.
+
+    Parameters
+    ----------
+    data : ImuData
+    residual : {"acceleration", "load"}
+        Objective form (see :class:`bvpnav.NavigationProblem`).
+    sigma_a : float or array_like, optional
+        Accelerometer noise standard deviation, m/s^2 (acceleration form only).
+    error_model : ErrorModel, optional
+    items : iterable of Item
+        Items with unique labels (see :func:`label_items`).
+    model : NavModel, optional
+        A model of the same data and error model to share (its FEM matrices).
+
+    Notes
+    -----
+    The data term :math:`J_0` is :math:`\\sum_i \\|w_i / \\sigma_a\\|^2` (acceleration form)
+    or :math:`\\|M w\\|^2 = \\|K r + B v - f - F l\\|^2` (load form); see
+    :meth:`data_rows`.
+    """
+
+    def __init__(self, data: ImuData, residual: str = "acceleration", sigma_a=None, error_model=None,
+                 items: Iterable[Item] = (), model: NavModel | None = None):
+        if not isinstance(data, ImuData):
+            raise InputError(f"data must be a bvpnav.ImuData, got {type(data).__name__}")
+        if residual not in RESIDUAL_FORMS:
+            raise InputError(f"residual={residual!r}; choose one of {list(RESIDUAL_FORMS)}")
+        if sigma_a is not None and residual == "load":
+            raise InputError("sigma_a goes with residual='acceleration'; the load form has no sigma_a")
+        self.data = data
+        self.residual = residual
+        self.sigma_a = _check_sigma_a(sigma_a, data)
+        self.sigma_a_given = sigma_a is not None
+        _check_acc(data)
+        self.error_model = error_model
+        self.items: tuple[Item, ...] = tuple(items)
+        self._model = model
+        self._terms: list[Term] | None = None
+        self._observable = False
+        #: Caches of the layers above (the cvxpy problem, factorizations), by name.
+        self.cache: dict[str, Any] = {}
+
+    # ----------------------------------------------------------- copies
+    def with_items(self, items: Iterable[Item], error_model: bool = True) -> Formulation:
+        """The same data, objective form and sigma_a with other items (labels kept).
+
+        With ``error_model=True`` the copy keeps the error model and shares this
+        formulation's :class:`NavModel`; without it the copy has no error-model parameters.
+        """
+        return Formulation(self.data, self.residual, self.sigma_a if self.sigma_a_given else None,
+                           self.error_model if error_model else None, items,
+                           model=self._model if error_model else None)
+
+    @property
+    def labels(self) -> list[str]:
+        """Unique labels of the items, in order."""
+        return [i.label for i in self.items]
+
+    @property
+    def nonlinear_items(self) -> list[Item]:
+        """Items that must be linearized before they compile (:class:`Linearizable`)."""
+        return [it for it in self.items if isinstance(it, Linearizable) and it.needs_linearization]
+
+    # -------------------------------------------------------- compiling
+    @property
+    def model(self) -> NavModel:
+        """The :class:`NavModel` (unknowns and their maps), built on first use."""
+        if self._model is None:
+            self._model = NavModel(self.data, self.error_model)
+        return self._model
+
+    def terms(self) -> list[Term]:
+        """Every item (and the error model's priors and bounds) compiled to terms, once."""
+        if self._terms is not None:
+            return self._terms
+        model = self.model
+        terms = [self._compile(it, model) for it in self.items]
+        if self.error_model is not None:
+            terms.extend(self.error_model.terms(model))
+        self._terms = terms
+        return terms
+
+    @staticmethod
+    def _compile(it: Item, model: NavModel) -> Term:
+        label = it.label
+        try:
+            res = it.compile(model)
+        except BvpnavError:
+            raise
+        except Exception as exc:  # a custom item's bug: name the item
+            raise BvpnavError(f"{label}: compile() failed: {type(exc).__name__}: {exc}") from exc
+        if not isinstance(res, Affine):
+            raise ConvexityError(
+                f"{label}: compile() returned {type(res).__name__}; items must return a "
+                "bvpnav.model.Affine residual built from the model's maps"
+            )
+        if res.m == 0:
+            raise InputError(f"{label}: produced no rows (nothing to constrain)")
+        return Term(label=label, item=original(it), residual=res, mode=it.mode, kind=it.kind,
+                    sigma=it.weight_rows(res.m), tol=it.tol_rows(res.m), huber=it.huber,
+                    units=it.units)
+
+    def data_rows(self) -> Affine:
+        """Rows whose sum of squares is the data term ``J_0`` (see class Notes)."""
+        m = self.model
+        if self.residual == "acceleration":
+            return m.residual_rows() / np.repeat(self.sigma_a, m.N)
+        return m.load_residual_rows()
+
+    @property
+    def has_soft_terms(self) -> bool:
+        """True when ``lam`` multiplies at least one term."""
+        return any(t.is_penalty and t.scaled_by_lam for t in self.terms())
+
+    def least_squares_items(self) -> bool:
+        """Whether every item is a hard or soft equality and no error-model bound exists,
+        judged from the items' declared kind and mode (no compilation: N may be huge)."""
+        for it in self.items:
+            if it.kind != "equality" or it.mode in ("band", "robust"):
+                return False
+        em = self.error_model
+        comps = getattr(em, "components", (em,)) if em is not None else ()
+        return all(getattr(c, "bounds", None) is None for c in comps)
+
+    # ---------------------------------------------------- observability
+    def null_directions(self) -> tuple[np.ndarray, list[str]]:
+        """Directions of ``x`` the FEM equations leave free when ``w = 0``.
+
+        Returns
+        -------
+        Z : ndarray, shape (n_unknowns, 2 d + q)
+            Per axis a position offset (m) and a velocity offset (m/s), then one direction
+            per error-model parameter (the trajectory change it causes, starting at rest).
+        names : list of str
+        """
+        m = self.model
+        t = m.grid.t
+        cols, names = [], []
+        for a, ax in enumerate(m.axes):
+            z = np.zeros(m.size)
+            z[m.r_index(a)] = 1.0
+            cols.append(z)
+            names.append(f"axis {ax}: position offset")
+            z = np.zeros(m.size)
+            z[m.r_index(a)] = t - t[0]
+            z[list(m.v_end_index(a))] = 1.0
+            cols.append(z)
+            names.append(f"axis {ax}: velocity offset")
+        h = m.grid.h
+        for k, pname in enumerate(m.param_names):
+            z = np.zeros(m.size)
+            z[m.l_index[k]] = 1.0
+            for a in range(m.d):
+                mg = m.M @ m.G[:, a, k]
+                s = np.cumsum(mg)[:-1]  # element slopes with v0 = 0
+                z[m.r_index(a)] = np.concatenate([[0.0], np.cumsum(s * h)])
+                i0, i1 = m.v_end_index(a)
+                z[i0] = 0.0
+                z[i1] = s[-1] + mg[-1]
+            cols.append(z)
+            names.append(f"parameter {pname}")
+        return np.column_stack(cols), names
+
+    def unobservable(self) -> list[str]:
+        """Names of unknown directions that no item pins down (empty when all are)."""
+        terms = [t for t in self.terms() if t.kind == "equality"]
+        Z, names = self.null_directions()
+        if not terms:
+            return names
+        DZ = Affine.vstack([t.residual for t in terms]).A @ Z
+        norms = np.linalg.norm(DZ, axis=0)
+        scale = norms.max() if norms.size and norms.max() > 0 else 1.0
+        out = [names[k] for k in np.flatnonzero(norms <= 1e-12 * scale)]
+        ok = np.flatnonzero(norms > 1e-12 * scale)
+        if ok.size:
+            out += self._combinations(DZ[:, ok] / norms[ok], [names[j] for j in ok])
+        return out
+
+    @staticmethod
+    def _combinations(Dn: np.ndarray, names: list[str]) -> list[str]:
+        """The undetermined combinations of unit directions ``Dn`` (columns), by name."""
+        # with fewer information rows than directions the null space has more vectors than
+        # there are singular values: pad with zero rows (never a full U: M x M)
+        if Dn.shape[0] < Dn.shape[1]:
+            Dn = np.vstack([Dn, np.zeros((Dn.shape[1] - Dn.shape[0], Dn.shape[1]))])
+        _, s, vt = np.linalg.svd(Dn, full_matrices=False)
+        rank = int(np.sum(s > 1e-9 * s[0])) if s.size else 0
+        null = vt[rank:]
+        if not null.shape[0]:
+            return []
+        involved = sorted({int(j) for comb in null
+                           for j in np.flatnonzero(np.abs(comb) > 0.1 * np.abs(comb).max())})
+        return [f"{null.shape[0]} combination(s) of: " + ", ".join(names[j] for j in involved)]
+
+    def check_observability(self) -> None:
+        """Raise :class:`InputError` naming what the information leaves undetermined."""
+        if self._observable:  # checked for these terms already
+            return
+        missing = self.unobservable()
+        if missing:
+            raise InputError(
+                "not enough information: nothing determines " + "; ".join(missing)
+                + ". Add items (e.g. Position at an end for an offset, a second Position or a "
+                "Velocity for a velocity offset, more velocities for error-model parameters) "
+                "or remove error-model parameters."
+            )
+        self._observable = True
+
+    def check_scales(self, lam: float) -> None:
+        """Raise :class:`InputError` naming a weight double precision cannot resolve.
+
+        The squared weight of every soft (or robust) row relative to the data term,
+        ``(lam if the term is lambda-weighted else 1) * (s / sigma)^2`` with ``s`` the
+        smallest ``sigma_a`` (acceleration form) or 1 (load form), must lie within
+        :data:`WEIGHT_RANGE`; beyond it one side of the objective is lost in rounding of
+        the other, or its square overflows.
+        """
+        ref = float(np.min(self.sigma_a)) if self.residual == "acceleration" else 1.0
+        lo, hi = WEIGHT_RANGE
+        for term in self.terms():
+            k = term.weight(lam)
+            if not term.is_penalty or term.sigma is None or k == 0:
+                continue
+            sig = np.asarray(term.sigma, dtype=float)
+            with np.errstate(all="ignore"):
+                w2 = k * (ref / sig) ** 2
+            bad = np.flatnonzero(~((w2 >= lo) & (w2 <= hi)))
+            if bad.size == 0:
+                continue
+            j = int(bad[0])
+            s_lo, s_hi = ref * np.sqrt(k / hi), ref * np.sqrt(k / lo)
+            raise InputError(
+                f"{term.label}: sigma = {sig[j]:g} {term.units} (row {j}) with lam={k:g} gives a "
+                f"squared weight {w2[j]:.3g} relative to the data term, outside {lo:g}..{hi:g}, "
+                "which double precision cannot resolve against it. Give sigma between "
+                f"{s_lo:.3g} and {s_hi:.3g} {term.units} at this lam, or make the item hard "
+                "(sigma=None) if it must hold exactly")
+
+    def __getstate__(self) -> dict:
+        """The definition without caches (cvxpy objects cannot be pickled)."""
+        state = dict(self.__dict__)
+        state.update(_model=None, _terms=None, _observable=False, cache={})
+        return state

@@ -1,0 +1,127 @@
+"""Lambda rules: how the regularization weight is chosen from a sweep.
+
+A rule is an object with the :class:`LambdaRule` contract: a ``name`` (what users pass as
+``lam=``), what it ``needs`` (``"least_squares"``: the exact sweep of a linear
+least-squares problem; ``"trace"``: the influence trace; ``"noise"``: a stated
+accelerometer noise), ``scores(sweep, pts, s)`` (its score at every sampled lambda) and
+``refine(sweep, pts, s, scores, curve)`` (the chosen lambda, refined between samples).
+One generic sweep (:func:`bvpnav.lam.sweep.sweep_curve`) runs every rule.
+
+The family is a discovered folder, like ``bvpnav.constraints``: each module here defines
+a rule and registers it with :func:`register_rule`; adding a rule is one file (here, or
+anywhere that calls :func:`register_rule`), checked by :func:`bvpnav.testing.check_rule`.
+"""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+
+import numpy as np
+
+from ..errors import InputError
+
+__all__ = ["LambdaRule", "register_rule", "unregister_rule", "get_rule", "rule_names", "NEEDS",
+           "edge_warning"]
+
+#: What a rule may need from the sweep.
+NEEDS = ("least_squares", "trace", "noise")
+
+#: The built-in rules in the order they are listed (and evaluated).
+BUILTIN = ("lcurve", "gcv", "discrepancy", "quasi")
+
+
+class LambdaRule:
+    """The contract of a lambda rule (subclass it).
+
+    Attributes
+    ----------
+    name : str
+        Lowercase name, passed as ``solve(lam=name)``.
+    needs : frozenset of str
+        Subset of :data:`NEEDS`.
+    """
+
+    name: str = ""
+    needs: frozenset = frozenset()
+
+    def scores(self, sweep, pts: list[dict], s: np.ndarray) -> np.ndarray:
+        """The rule's score at each sampled point (``s = log lambda``).
+
+        Each point is a dict with ``lam``, ``rho2`` (the squared norm of the terms not
+        weighted by lambda), ``eta2`` (the lambda-weighted terms), ``x`` (the stacked
+        solution) and, with the direct sweep, ``deta2`` (d eta2 / d lam), ``quasi``
+        (``||lam dr/dlam||`` in m) and, when a rule needs it, ``trace``.
+        """
+        raise NotImplementedError
+
+    def refine(self, sweep, pts: list[dict], s: np.ndarray, scores: np.ndarray, curve) -> float:
+        """The chosen lambda (dimensionless); may append to ``curve.warnings`` and
+        evaluate more points with ``sweep.point(lam)``."""
+        raise NotImplementedError
+
+    def __repr__(self) -> str:
+        return f"<bvpnav lambda rule {self.name!r}>"
+
+
+_RULES: dict[str, LambdaRule] = {}
+
+
+def register_rule(rule: LambdaRule) -> LambdaRule:
+    """Add (or replace) a rule under its name."""
+    if not isinstance(getattr(rule, "name", None), str) or not rule.name:
+        raise InputError(f"register_rule({rule!r}): a rule needs a non-empty name")
+    unknown = set(rule.needs) - set(NEEDS)
+    if unknown:
+        raise InputError(f"register_rule({rule.name!r}): unknown needs {sorted(unknown)}; valid: "
+                         f"{list(NEEDS)}")
+    _RULES[rule.name] = rule
+    return rule
+
+
+def unregister_rule(name: str) -> None:
+    """Remove a registered rule (e.g. one a test added)."""
+    _RULES.pop(name, None)
+
+
+_LOADED = False
+
+
+def _discover() -> None:
+    global _LOADED
+    if _LOADED:
+        return
+    _LOADED = True
+    for name in BUILTIN:
+        importlib.import_module(f"{__name__}.{name}")
+    for info in pkgutil.iter_modules(__path__):
+        if not info.name.startswith("_") and info.name not in BUILTIN and info.name != "sweep":
+            importlib.import_module(f"{__name__}.{info.name}")
+
+
+def rule_names() -> tuple[str, ...]:
+    """Names of every registered rule (the built-ins first)."""
+    _discover()
+    return tuple(_RULES)
+
+
+def get_rule(name: str) -> LambdaRule:
+    """The rule of a name, or :class:`InputError` listing the known ones."""
+    _discover()
+    if isinstance(name, str) and name in _RULES:
+        return _RULES[name]
+    raise InputError(f"lam rule {name!r} is not known; choose one of {list(_RULES)} or a number")
+
+
+def edge_warning(curve, name: str, k: int, guard: int) -> None:
+    """Warn in ``curve`` when the best sample ``k`` lies within ``guard`` of an end."""
+    n = len(curve.lam)
+    if k <= guard or k >= n - 1 - guard:
+        curve.warnings.append(
+            f"{name}: the best value lies at the edge of lam_range={curve.lam_range} "
+            f"(lam={curve.lam[k]:.3g}); widen the range")
+
+
+def bracket(s: np.ndarray, k: int) -> tuple[float, float]:
+    """The log-lambda interval around sample ``k`` (its neighbours)."""
+    return s[max(k - 1, 0)], s[min(k + 1, len(s) - 1)]

@@ -1,0 +1,46 @@
+"""Generalized cross-validation: minimise rho^2 / tr(I - A_lambda)^2."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from . import LambdaRule, bracket, edge_warning, register_rule
+
+__all__ = ["GCV", "gcv"]
+
+
+def gcv(pt: dict) -> float:
+    """The GCV function at one point: :math:`\\hat\\rho / \\mathrm{tr}(I - A_\\lambda)^2`."""
+    dof = abs(pt["trace"])
+    return pt["rho2"] / dof**2 if dof > 0 else np.inf
+
+
+class GCV(LambdaRule):
+    """Minimise :math:`G = \\hat\\rho / \\mathrm{tr}(I - A_\\lambda)^2`.
+
+    Notes
+    -----
+    :math:`\\mathrm{tr}(I - A_\\lambda) = -\\mathrm{tr}(\\partial w / \\partial \\hat a)`, by exact
+    columns for small problems and Hutchinson's randomized estimator for large ones (see
+    :class:`bvpnav.lam.sweep.DirectSweep`).
+    """
+
+    name = "gcv"
+    needs = frozenset({"least_squares", "trace"})
+
+    def scores(self, sweep, pts, s):
+        return np.array([gcv(p) for p in pts])
+
+    def refine(self, sweep, pts, s, scores, curve):
+        k = int(np.argmin(scores))
+        edge_warning(curve, self.name, k, 0)
+        a, b = bracket(s, k)
+        res = minimize_scalar(lambda u: gcv(sweep.point(math.exp(u))), bounds=(a, b), method="bounded",
+                              options={"xatol": 1e-3})
+        return float(math.exp(res.x))
+
+
+register_rule(GCV())

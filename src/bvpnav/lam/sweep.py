@@ -1,0 +1,374 @@
+"""One generic lambda sweep: sample the curve, then let every rule score and refine.
+
+The objective of a formulation splits as
+
+.. math:: J(\\lambda) = \\hat\\rho(x) + \\lambda\\, \\hat\\eta(x),
+
+where :math:`\\hat\\rho` is the sum of squares of every term *not* multiplied by lambda
+(the data term, error-model priors) and :math:`\\hat\\eta` the sum of squares of the
+lambda-weighted items. Every rule looks at the curve :math:`\\lambda \\mapsto
+(\\rho, \\eta) = (\\hat\\rho^{1/2}, \\hat\\eta^{1/2})`.
+
+Two sweeps:
+
+- :class:`DirectSweep` (problems that are equality-constrained least squares): one sparse
+  factorization per lambda (:class:`bvpnav.lsq.BorderedLU`), the derivative
+  :math:`dx/d\\lambda` from the same factorization, hence the L-curve curvature and the
+  quasi-optimality function *exactly* at every lambda; GCV's trace by exact columns for
+  small problems and Hutchinson's randomized estimator (seeded Rademacher probes, one
+  multi-right-hand-side solve) for large ones.
+- :class:`CvxpySweep` (robust, band or inequality items): the solve stage it is given
+  (the pipeline's fixed-lambda chain: back ends, fallback, verification) is run for each
+  lambda; the compiled DPP problem is re-used.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import time
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from ..errors import InputError
+from ..formulation import LAM_RANGE, as_formulation
+from ..lsq import factor_form, least_squares_form, non_least_squares_term
+from . import get_rule, rule_names
+
+__all__ = ["LambdaCurve", "DirectSweep", "CvxpySweep", "sweep_curve"]
+
+
+@dataclass
+class LambdaCurve:
+    """A lambda sweep and the rules' choices.
+
+    Attributes
+    ----------
+    lam : ndarray
+        Sampled lambda values (dimensionless), increasing.
+    residual_norm : ndarray
+        :math:`\\rho(\\lambda)`, square root of the terms not weighted by lambda
+        (data term in its own units, e.g. dimensionless for the acceleration form
+        with ``sigma_a``, m/s for the load form).
+    info_norm : ndarray
+        :math:`\\eta(\\lambda)`, square root of the lambda-weighted item terms.
+    scores : dict of str -> ndarray
+        Per rule, its score at each sampled lambda (curvature for ``lcurve``, the GCV
+        function, the discrepancy ``rho^2 - tau * dof`` and the quasi-optimality
+        function ``||lambda dr/dlambda||`` in m); NaN where not computed.
+    chosen : dict of str -> float
+        Per rule, the chosen lambda (after refinement).
+    rule : str
+        The rule whose choice was used.
+    engine : str
+        ``"direct"`` or ``"cvxpy"``.
+    warnings : list of str
+        E.g. a corner at the edge of the range.
+    evaluations : int
+        Number of distinct lambdas solved.
+    seconds : float
+        Wall time of the sweep, s.
+    lam_range : tuple
+        The search interval as given.
+    """
+
+    lam: np.ndarray
+    residual_norm: np.ndarray
+    info_norm: np.ndarray
+    scores: dict = field(default_factory=dict)
+    chosen: dict = field(default_factory=dict)
+    rule: str = "lcurve"
+    engine: str = "direct"
+    warnings: list = field(default_factory=list)
+    evaluations: int = 0
+    seconds: float = 0.0
+    lam_range: tuple = (1e-6, 1e6)
+
+    @property
+    def lam_chosen(self) -> float:
+        """The lambda of :attr:`rule`."""
+        return self.chosen[self.rule]
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per sampled lambda: lam, residual_norm, info_norm and one column per score."""
+        df = pd.DataFrame({"lam": self.lam, "residual_norm": self.residual_norm,
+                           "info_norm": self.info_norm})
+        for k, v in self.scores.items():
+            df[k] = v
+        return df
+
+    def plot(self, ax=None):
+        """L-curve with every rule's choice marked (see :func:`bvpnav.plot.lcurve`)."""
+        from ..plot import lcurve
+
+        return lcurve(self, ax=ax)
+
+
+# ----------------------------------------------------------------- sweeps
+class DirectSweep:
+    """Exact per-lambda evaluation for least-squares problems."""
+
+    engine = "direct"
+
+    def __init__(self, form, exact_trace_limit: int = 300, need_trace: bool = False, probes: int = 24,
+                 seed: int = 0, tau: float = 1.5):
+        self.form = as_formulation(form)
+        self.exact_trace_limit = exact_trace_limit
+        self.need_trace, self.probes, self.seed, self.tau = need_trace, probes, seed, tau
+        self.model = self.form.model
+        self.terms = self.form.terms()
+        self.lam_terms = [t for t in self.terms if t.mode == "soft" and t.scaled_by_lam]
+        self.fixed_terms = [t for t in self.terms if t.mode == "soft" and not t.scaled_by_lam]
+        self.data = self.form.data_rows()
+        self.cache: dict[float, dict] = {}
+        self._rhs_jac = None
+        self._probe_rhs = None
+
+    def point(self, lam: float, need_trace: bool | None = None, probes: int | None = None,
+              seed: int | None = None) -> dict:
+        """The curve at one lambda (cached): ``rho2``, ``eta2``, ``deta2``, ``x``, ``quasi``
+        and, when asked, ``trace``."""
+        need_trace = self.need_trace if need_trace is None else need_trace
+        probes = self.probes if probes is None else probes
+        seed = self.seed if seed is None else seed
+        key = float(lam)
+        pt = self.cache.get(key)
+        if pt is not None and (not need_trace or "trace" in pt):
+            return pt
+        form = least_squares_form(self.form, lam)
+        m, n = form.D.A.shape
+        try:
+            fac = factor_form(form, self.form)
+        except (RuntimeError, np.linalg.LinAlgError) as exc:
+            raise InputError(f"lambda={lam:g}: the KKT matrix is singular ({exc}); some unknown is "
+                             "not determined by the information") from exc
+        z, _, _ = fac.refined(form.rhs(), 2, 1e-14, window=slice(m, m + n))
+        x = z[m:m + n]
+        scaled = [t.residual.value(x) / t.sigma for t in self.lam_terms]  # S (A x + c)
+        rho2 = float(np.sum(self.data.value(x) ** 2))
+        rho2 += sum(float(np.sum((t.residual.value(x) / t.sigma) ** 2)) for t in self.fixed_terms)
+        eta2 = sum(float(np.sum(r**2)) for r in scaled)
+        # dx/dlam from the same factorization: H x' + E^T mu' = -sum A^T S^2 (A x + c)
+        g = np.zeros(n)
+        for t, r in zip(self.lam_terms, scaled, strict=True):
+            g -= t.residual.A.T @ (r / t.sigma)
+        rhs = np.concatenate([np.zeros(m), g, np.zeros(form.E.m)])
+        dz, _, _ = fac.refined(rhs, 1, window=slice(m, m + n))
+        dx = dz[m:m + n]
+        deta2 = sum(2.0 * float(np.sum(r * ((t.residual.A @ dx) / t.sigma)))
+                    for t, r in zip(self.lam_terms, scaled, strict=True))
+        pos = np.concatenate([self.model.r_index(a) for a in range(self.model.d)])
+        pt = {"lam": key, "rho2": rho2, "eta2": eta2, "deta2": deta2, "x": x,
+              "quasi": float(np.linalg.norm(lam * dx[pos]) / math.sqrt(pos.size))}
+        if need_trace:
+            pt["trace"] = self._trace(form, fac, lam, probes, seed)
+        self.cache[key] = pt
+        return pt
+
+    # --- GCV's trace: d w / d a_hat
+    def _rhs_jacobian_apply(self, Z: np.ndarray) -> np.ndarray:
+        """Change of the augmented right-hand side (at lambda = 1) when the measured
+        accelerations change by ``Z`` (N, d); the form is affine in the data."""
+        def rhs_for(acc):
+            f2 = copy.copy(self.form)
+            f2._model, f2._terms, f2.cache = self.model.with_acc(acc), None, {}
+            return least_squares_form(f2, 1.0).rhs()
+
+        if self._rhs_jac is None:
+            self._rhs_jac = rhs_for(np.zeros_like(self.form.data.acc))
+        return rhs_for(Z) - self._rhs_jac
+
+    def _trace(self, form, fac, lam, probes, seed) -> float:
+        N, d = self.model.N, self.model.d
+        m, n = form.D.A.shape
+        widx = np.concatenate([self.model.w_index(a) for a in range(d)])  # axis-major like Z.T
+        exact = N * d <= self.exact_trace_limit
+        if exact:
+            Zs = [np.eye(N * d)[:, k].reshape(d, N).T for k in range(N * d)]
+        else:
+            rng = np.random.default_rng(seed)
+            Zs = [rng.choice([-1.0, 1.0], size=(N, d)) for _ in range(probes)]
+        if self._probe_rhs is None or self._probe_rhs[0] != (exact, probes, seed):
+            self._probe_rhs = ((exact, probes, seed), Zs,
+                               np.column_stack([self._rhs_jacobian_apply(Z) for Z in Zs]))
+        Zs, R = self._probe_rhs[1], self._probe_rhs[2].copy()
+        R[:m][form.lam_rows] *= math.sqrt(lam)
+        dW = fac.solve(R)[m:m + n][widx]
+        vals = np.array([float(Z.T.ravel() @ dW[:, k]) for k, Z in enumerate(Zs)])
+        return float(vals.sum()) if exact else float(vals.mean())
+
+
+class CvxpySweep:
+    """Runs a fixed-lambda solve stage for each lambda (the compiled DPP problem is re-used).
+
+    Parameters
+    ----------
+    form : Formulation
+    solve_at : callable
+        ``solve_at(lam) -> Solution``: the pipeline's fixed-lambda stage.
+    """
+
+    engine = "cvxpy"
+
+    def __init__(self, form, solve_at: Callable, tau: float = 1.5):
+        self.form = as_formulation(form)
+        self.model = self.form.model
+        self.solve_at = solve_at
+        self.tau = tau
+        self.cache: dict[float, dict] = {}
+
+    def point(self, lam: float, **_) -> dict:
+        """The curve at one lambda (cached): ``rho2``, ``eta2`` and ``x``."""
+        from ..cvx import compiled
+
+        key = float(lam)
+        if key in self.cache:
+            return self.cache[key]
+        x = self.solve_at(key).x
+        rho2 = float(np.sum(self.form.data_rows().value(x) ** 2))
+        eta2 = 0.0
+        for term, pen in compiled(self.form).penalties:
+            v = float(pen.value) if pen.value is not None else np.nan
+            if term.scaled_by_lam:
+                eta2 += v
+            else:
+                rho2 += v
+        pt = {"lam": key, "rho2": rho2, "eta2": eta2, "x": x}
+        self.cache[key] = pt
+        return pt
+
+
+def _check_range(lam_range, points) -> tuple[float, float]:
+    try:
+        lo, hi = (float(v) for v in lam_range)
+    except (TypeError, ValueError):
+        raise InputError(f"lam_range={lam_range!r}: give two numbers (low, high), e.g. "
+                         "lam_range=(1e-6, 1e6)") from None
+    if not (0 < lo < hi and np.isfinite(hi)):
+        raise InputError(f"lam_range={lam_range!r}: need 0 < low < high")
+    if lo < LAM_RANGE[0] or hi > LAM_RANGE[1]:
+        raise InputError(
+            f"lam_range={lam_range!r} reaches beyond {LAM_RANGE[0]:g}..{LAM_RANGE[1]:g}, the lambdas "
+            "double precision can weigh against the data term; sweep inside it (the default "
+            "is (1e-6, 1e6))")
+    if isinstance(points, bool) or not isinstance(points, int | np.integer) or points < 7:
+        raise InputError(f"points={points!r}: the sweep needs an integer of at least 7 points")
+    if points > 1000:
+        raise InputError(f"points={points}: at most 1000 sweep points (each is one solve); the "
+                         "corner is refined by Brent's method anyway, 25 is the default")
+    return lo, hi
+
+
+def _usable_rules(form, names: list[str], rule: str, engine: str) -> list[str]:
+    """The rules that can run here; the chosen ``rule`` itself must, or InputError."""
+    out = []
+    for name in names:
+        needs = get_rule(name).needs
+        if engine == "cvxpy" and "least_squares" in needs:
+            if name == rule:
+                ok = [n for n in rule_names() if "least_squares" not in get_rule(n).needs]
+                raise InputError(f"lam={name!r} needs a linear least-squares problem (hard and soft "
+                                 "items only); this one has robust, band or inequality items. "
+                                 f"Use lam={ok[0]!r}" + "".join(f" or {n!r}" for n in ok[1:]) + ".")
+            continue
+        if "noise" in needs and (form.residual != "acceleration" or not form.sigma_a_given):
+            if name == rule:
+                raise InputError(f"lam={name!r} needs the noise level: use residual='acceleration' "
+                                 "with sigma_a=<accelerometer noise, m/s^2>")
+            continue
+        out.append(name)
+    return out
+
+
+def _sweep(eng, lams, progress):
+    from tqdm.auto import tqdm
+
+    return [eng.point(lam) for lam in tqdm(lams, desc="lambda sweep", disable=not progress, leave=False)]
+
+
+def sweep_curve(form, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6), points: int = 25,
+                tau: float = 1.5, probes: int = 24, seed: int = 0, progress=None, engine: str = "auto",
+                solve_at: Callable | None = None, check_memory: Callable | None = None) -> LambdaCurve:
+    """Sweep lambda over a formulation and apply the selection rules.
+
+    Parameters
+    ----------
+    form : Formulation or NavigationProblem
+        Must have at least one soft item weighted by lambda.
+    rules : sequence of str, optional
+        Rules to evaluate (default: every registered rule); ``rule`` is always included.
+    rule : str
+        The rule whose choice is reported as :attr:`LambdaCurve.lam_chosen`.
+    lam_range : (float, float)
+        Search interval for lambda (dimensionless), log-spaced.
+    points : int
+        Coarse sweep size; every rule is then refined inside its best bracket.
+    tau : float
+        Discrepancy safety factor.
+    probes, seed : int
+        Hutchinson probes of GCV's trace (problems of more than 300 samples x axes) and
+        their seed (results are reproducible).
+    progress : bool, optional
+        Show a tqdm bar; default: when the problem has more than 50,000 unknowns.
+    engine : {"auto", "direct", "cvxpy"}
+    solve_at : callable, optional
+        ``solve_at(lam) -> Solution``, the fixed-lambda solve of the ``cvxpy`` engine
+        (required for it).
+    check_memory : callable, optional
+        Called before the ``direct`` engine runs (refuses a sweep that cannot fit).
+
+    Returns
+    -------
+    LambdaCurve
+    """
+    form = as_formulation(form)
+    t0 = time.perf_counter()
+    asked = set([rule, *(rule_names() if rules is None else rules)])
+    for r in asked:
+        get_rule(r)
+    names = [r for r in rule_names() if r in asked]  # the registry's order, whatever was asked
+    if not form.has_soft_terms:
+        raise InputError("choosing lambda needs at least one soft (or robust) item weighted by lambda; "
+                         "every item is hard, so lambda has no effect: pass a number (e.g. lam=1)")
+    lo, hi = _check_range(lam_range, points)
+    ls = non_least_squares_term(form) is None
+    if engine == "auto":
+        engine = "direct" if ls else "cvxpy"
+    if engine == "direct" and not ls:
+        raise InputError("engine='direct' needs a least-squares problem (no band, robust or "
+                         "inequality items); use engine='cvxpy'")
+    names = _usable_rules(form, names, rule, engine)
+    form.check_scales(lo)  # the sweep's extremes: every weight stays resolvable
+    form.check_scales(hi)
+    form.check_observability()
+    if engine == "direct" and check_memory is not None:
+        check_memory()
+    if progress is None:
+        progress = form.model.size > 50_000
+    need_trace = any("trace" in get_rule(r).needs for r in names)
+    if engine == "direct":
+        eng = DirectSweep(form, need_trace=need_trace, probes=probes, seed=seed, tau=tau)
+    else:
+        if solve_at is None:
+            raise InputError("the cvxpy sweep needs a solve stage (solve_at); use "
+                             "bvpnav.lambda_curve(problem, ...) or problem.solve(lam=<rule>)")
+        eng = CvxpySweep(form, solve_at, tau=tau)
+    lams = np.geomspace(lo, hi, points)
+    pts = _sweep(eng, lams, progress)
+    curve = LambdaCurve(lam=lams, residual_norm=np.sqrt([p["rho2"] for p in pts]),
+                        info_norm=np.sqrt([p["eta2"] for p in pts]), rule=rule, engine=eng.engine,
+                        lam_range=lam_range)
+    s = np.log(lams)
+    for name in names:
+        r = get_rule(name)
+        curve.scores[name] = r.scores(eng, pts, s)
+        curve.chosen[name] = float(r.refine(eng, pts, s, curve.scores[name], curve))
+    curve.evaluations = len(eng.cache)
+    curve.seconds = time.perf_counter() - t0
+    for w in curve.warnings:
+        warnings.warn(w, RuntimeWarning, stacklevel=3)
+    return curve

@@ -1,0 +1,129 @@
+"""From a verified stacked vector to the user's :class:`~bvpnav.Solution`.
+
+:func:`finish` verifies a back end's answer, records the attempt and refuses an answer
+that fails (unless verification is off); :func:`make_solution` turns the vector into
+tidy time-indexed tables (trajectory, acceleration residuals, one row per item), the
+error-model estimates and the warnings a user must see.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from ..errors import Inaccurate, InputError
+from ..formulation import as_formulation
+from ..result import Attempt, Solution, SolveRecords, Verification
+from .verify import verify
+
+__all__ = ["finish", "make_solution"]
+
+
+def _dual_rms(duals: dict | None, label: str) -> float | None:
+    if duals is None or not duals.get(label):
+        return None
+    ds = [np.concatenate([np.asarray(p, dtype=float).ravel() for p in d])
+          if isinstance(d, list | tuple) else np.asarray(d, dtype=float).ravel()
+          for d in duals[label] if d is not None]
+    return float(np.sqrt(np.mean(np.concatenate(ds) ** 2))) if ds else None
+
+
+def _items_table(form, xval: np.ndarray, duals: dict | None) -> tuple[pd.DataFrame, dict]:
+    rows, item_res = [], {}
+    for term in form.terms():
+        r, shown = term.shown(xval)
+        item_res[term.label] = r
+        rows.append({
+            "item": term.label,
+            "class": type(term.item).__name__ if term.item is not None else "prior",
+            "mode": term.mode, "kind": term.kind, "rows": term.residual.m, "units": term.units,
+            "rms": float(np.sqrt(np.mean(shown**2))), "max_abs": float(np.max(np.abs(shown))),
+            "dual_rms": _dual_rms(duals, term.label),
+        })
+    cols = ["item", "class", "mode", "kind", "rows", "units", "rms", "max_abs", "dual_rms"]
+    return pd.DataFrame(rows, columns=cols), item_res
+
+
+def _warnings(form, run: dict, check: Verification | None) -> list[str]:
+    warn = [f"{run.get('solver')}: {w}" for w in run.get("solver_warnings", [])]
+    cond = check.conditioning if check is not None else None
+    if cond is not None:
+        warn += cond["warnings"]
+    if str(run.get("status", "")).endswith("inaccurate"):
+        warn.append(f"{run.get('solver')} reported status {run['status']!r}; the answer passed "
+                    "bvpnav's verification (see stats['verification'])")
+    grid = form.model.grid
+    gaps = grid.gaps()
+    if gaps.size:
+        h, med, t = grid.h, float(np.median(grid.h)), grid.t
+        warn.append(f"{gaps.size} gap(s) longer than 10x the median step {med:g} s: the first, from "
+                    f"sample {gaps[0]} to {gaps[0] + 1} (t={t[gaps[0]]:g} s), is {h[gaps[0]]:g} s "
+                    f"long; results across gaps rely on the linear-acceleration assumption")
+    return warn
+
+
+def make_solution(form, xval: np.ndarray, lam: float, lam_rule: str, records: SolveRecords,
+                  duals: dict | None = None) -> Solution:
+    """The :class:`~bvpnav.Solution` of a stacked vector with its records."""
+    form = as_formulation(form)
+    model = form.model
+    idx = pd.Index(model.grid.t, name="t")
+    cols = {ax: model.node_position(a).value(xval) for a, ax in enumerate(model.axes)}
+    cols.update({"v" + ax: model.node_velocity(a).value(xval) for a, ax in enumerate(model.axes)})
+    parts = model.split(xval)
+    resid = pd.DataFrame({f"w_{ax}": parts["w"][:, a] for a, ax in enumerate(model.axes)}, index=idx)
+    items_df, item_res = _items_table(form, xval, duals)
+    if form.error_model is not None and model.q:
+        params = form.error_model.report(parts["l"], model)
+    else:
+        params = pd.Series(dtype=float, name="estimate")
+    sol = Solution(trajectory=pd.DataFrame(cols, index=idx), residuals=resid, items=items_df,
+                   item_residuals=item_res, lam=float(lam), lam_rule=lam_rule, error_params=params,
+                   stats={}, x=xval, warnings=_warnings(form, records.run, records.verification),
+                   records=records)
+    return sol.record()
+
+
+def finish(form, xval: np.ndarray, lam: float, run: dict, duals, accuracy: str, verify_answer: bool,
+           factored=None) -> Solution:
+    """Verify a back end's answer and make the solution, or raise.
+
+    Parameters
+    ----------
+    run : dict
+        The back end's measurements with ``solver``, ``status``, ``accuracy``, ``options``.
+    verify_answer : bool
+        Refuse an answer that fails verification (:class:`~bvpnav.errors.Inaccurate`).
+
+    Raises
+    ------
+    InputError
+        When the error-model estimate is not finite because of the information itself (a
+        degenerate sensor axis): no other back end can help.
+    Inaccurate
+        When the answer fails verification and ``verify_answer`` is True.
+    """
+    form = as_formulation(form)
+    check = verify(form, xval, lam, accuracy, duals, factored)
+    attempt = Attempt(solver=run["solver"], status=run.get("status"),
+                      reason="verified" if check.verified else "failed verification")
+    cond = check.conditioning or {}
+    degenerate = [dg["message"] for dg in cond.get("degenerate_axes", [])]
+    if degenerate and check.nonfinite and not check.verified:
+        raise InputError(f"{run['solver']}: the error-model estimate is not finite because "
+                         + "; ".join(degenerate))
+    if verify_answer and not check.verified:
+        raise Inaccurate(
+            f"{run['solver']} (status {run.get('status')}, accuracy={accuracy!r}) returned an "
+            f"answer that fails verification: FEM residual {check.fem_residual:.2e}, "
+            f"worst hard-item violation {check.max_violation:.2e} "
+            f"({check.worst_item}), stationarity {check.stationarity}, "
+            f"estimated forward error {check.forward_error}, "
+            + (f"not finite: {'; '.join(check.nonfinite)}, " if check.nonfinite else "")
+            + f"tolerance {check.rtol:.0e}. Try accuracy='high', another solver "
+            "(e.g. solver='direct' for problems without inequalities), or residual="
+            "'acceleration'.",
+            attempts=[attempt],
+        )
+    records = SolveRecords(run=dict(run), attempts=[attempt], verification=check)
+    return make_solution(form, xval, lam, "fixed", records, duals)

@@ -1,0 +1,103 @@
+"""The innermost stage: one formulation at one fixed ``lam``, over a chain of back ends.
+
+:func:`solve_fixed` tries the primary back end, then each fallback, until one answer
+passes verification. Every try is a typed :class:`~bvpnav.result.Attempt` with its status
+and reason: a back end that cannot take the problem or would not fit in memory is
+skipped with the reason; any exception a back end raises (``LinAlgError``, SCS's
+``ValueError``, ``MemoryError``, ...) is a failed attempt, then the next back end runs.
+Infeasibility is a property of the information, not of a back end: it is raised at once,
+naming the conflicting items.
+"""
+
+from __future__ import annotations
+
+import time
+
+from ..backends import Backend, memory_shortfall
+from ..errors import BvpnavError, Infeasible, InputError, SolveError
+from ..result import Attempt, Solution
+from .assemble import finish
+from .options import SolveOptions
+
+__all__ = ["solve_fixed", "attempt"]
+
+
+def attempt(form, backend: Backend, options: dict, lam: float, opts: SolveOptions) -> Solution:
+    """One back end's verified answer at ``lam`` (or an exception)."""
+    why = backend.accepts(form)  # before solving: e.g. a cone item given to a QP solver
+    if why is not None:
+        raise InputError(why)
+    t_start = time.perf_counter()
+    raw = backend.run(form, lam, options, opts.verbose)
+    run = dict(raw.info)
+    run["wall_time"] = time.perf_counter() - t_start
+    run.update(solver=backend.name, accuracy=opts.accuracy, options=options)
+    return finish(form, raw.x, lam, run, raw.duals, opts.accuracy, opts.verify, raw.factored)
+
+
+def _failed(backend: Backend, exc: Exception) -> SolveError:
+    reason = f"{type(exc).__name__}: {exc}"
+    err = SolveError(f"{backend.name} failed: {reason}",
+                     attempts=[Attempt(solver=backend.name, status="error", reason=reason)])
+    err.__cause__ = exc
+    return err
+
+
+def solve_fixed(form, lam: float, opts: SolveOptions) -> Solution:
+    """Solve ``form`` at a fixed ``lam``, falling back over ``opts.chain``.
+
+    Raises
+    ------
+    InputError
+        From the checks before solving (weights, observability) or when the primary back
+        end cannot take the problem.
+    Infeasible
+        Naming the conflicting hard items.
+    SolveError
+        When every attempt failed; ``error.attempts`` lists them.
+    """
+    form.check_scales(lam)
+    form.check_observability()
+    attempts: list[Attempt] = []
+    last_exc: SolveError | None = None
+    for k, (be, op) in enumerate(opts.chain):
+        short = memory_shortfall(be, form) if k else None
+        if short is not None:
+            attempts.append(Attempt(solver=be.name, status="not applicable", reason=short))
+            continue
+        try:
+            sol = attempt(form, be, op, lam, opts)
+        except Infeasible as exc:  # a property of the information
+            exc.attempts = attempts + [Attempt.of(a) for a in exc.attempts]
+            raise
+        except InputError as exc:
+            if k == 0:
+                raise
+            # a fallback that cannot take this problem (e.g. direct with inequalities)
+            attempts.append(Attempt(solver=be.name, status="not applicable", reason=str(exc)))
+            continue
+        except SolveError as exc:
+            attempts.extend(Attempt.of(a) for a in (exc.attempts or [{"solver": be.name, "status": "error",
+                                                                      "reason": str(exc)}]))
+            last_exc = exc
+            if not opts.verify and k == 0:
+                raise
+            continue
+        except (BvpnavError, KeyboardInterrupt, SystemExit):
+            raise
+        except Exception as exc:  # a back end's own failure: recorded, then the next one
+            err = _failed(be, exc)
+            attempts.extend(err.attempts)
+            last_exc = err
+            if not opts.verify and k == 0:
+                raise err from exc
+            continue
+        sol.record(attempts=attempts + sol.records.attempts)
+        if attempts:
+            sol.warnings.append(f"{opts.backend.name} failed ({attempts[0]['reason']}); the answer "
+                                f"comes from {be.name} with options {op}")
+        return sol
+    assert last_exc is not None
+    summary = "; ".join(f"{a['solver']}: {a['status']} ({a['reason']})" for a in attempts)
+    raise type(last_exc)(f"every attempt failed: {summary}. Last error: {last_exc}",
+                         attempts=attempts) from last_exc.__cause__

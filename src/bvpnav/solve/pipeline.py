@@ -1,0 +1,72 @@
+"""The one place that knows the order of the solve stages.
+
+A solve is ``demote(sequential(rule(chain)))``:
+
+1. :func:`~bvpnav.solve.conflicts.with_demotion` — ``on_conflict="demote"``: conflicting
+   hard items are made soft by priority until the rest holds;
+2. :func:`~bvpnav.solve.sequential.with_sequential` — items that must be linearized
+   (:class:`~bvpnav.items.Linearizable`) are iterated by sequential convex solves;
+3. :func:`~bvpnav.solve.rule.with_rule` — a rule name in ``lam`` is resolved by a sweep;
+4. :func:`~bvpnav.solve.chain.solve_fixed` — one formulation at one ``lam`` over the
+   back ends, each answer verified by recomputed residuals.
+
+Each stage takes the inner stage and calls it with a formulation, a ``lam`` and the one
+:class:`~bvpnav.solve.options.SolveOptions` checked before any work; no stage calls back
+up, so every option reaches every stage that needs it.
+"""
+
+from __future__ import annotations
+
+from ..backends import check_memory
+from ..formulation import as_formulation
+from ..result import Solution
+from .chain import solve_fixed
+from .conflicts import with_demotion
+from .options import SolveOptions, prepare
+from .rule import with_rule
+from .sequential import check_sequential, with_sequential
+
+__all__ = ["run", "solve", "solve_sequential", "STAGES"]
+
+#: The stages from the outside in (each wraps the next); the last is the innermost.
+STAGES = (with_demotion, with_sequential, with_rule)
+
+
+def run(form, lam, opts: SolveOptions) -> Solution:
+    """Run the pipeline on a formulation with checked options."""
+    stage = solve_fixed
+    for wrap in reversed(STAGES):
+        stage = wrap(stage)
+    return stage(form, lam, opts)
+
+
+def solve(form, lam=1.0, **options) -> Solution:
+    """Check every option (see :func:`bvpnav.solve.options.prepare`), refuse a primary back
+    end that cannot fit in memory, then run the pipeline."""
+    form = as_formulation(form)
+    opts, lam = prepare(lam, **options)
+    check_sequential(opts.sequential)
+    check_memory(form, opts.backend)  # the primary; a fallback that does not fit is skipped
+    return run(form, lam, opts)
+
+
+def solve_sequential(problem, solver: str = "clarabel", lam: float | str = 1.0, accuracy: str = "default",
+                     verify: bool = True, options: dict | None = None, verbose: bool = False,
+                     fallback="auto", *, tol: float = 1e-4, max_iter: int = 30, initial=None,
+                     lam_each: bool = False, continuation: bool = True,
+                     soft_tol: float | None = None) -> Solution:
+    """Solve a problem with items that need linearization by sequential convex solves.
+
+    The same as ``problem.solve(...)`` with the loop's own options (see
+    :func:`bvpnav.solve.sequential.with_sequential` for them, the report in
+    ``solution.stats["sequential"]`` and the Notes); the other parameters are those of
+    :meth:`bvpnav.NavigationProblem.solve`.
+
+    Returns
+    -------
+    Solution
+    """
+    seq = dict(tol=tol, max_iter=max_iter, initial=initial, lam_each=lam_each, continuation=continuation,
+               soft_tol=soft_tol)
+    return solve(problem, lam, solver=solver, accuracy=accuracy, verify=verify, options=options,
+                 verbose=verbose, fallback=fallback, sequential=seq)

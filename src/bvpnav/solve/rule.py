@@ -1,0 +1,106 @@
+"""The lambda-rule stage: choose ``lam`` by a rule, then hand a fixed ``lam`` inward.
+
+When ``lam`` is a rule name, the sweep (:func:`bvpnav.lam.sweep.sweep_curve`) runs with
+the *inner* stage as its fixed-lambda solve (cvxpy engine) and the chosen lambda is then
+solved by the inner stage with the same options; the :class:`~bvpnav.Solution` carries
+``lam_rule`` and the whole :class:`~bvpnav.lam.sweep.LambdaCurve` in ``solution.curve``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from ..backends import check_memory, resolve_solver
+from ..formulation import as_formulation
+from ..lam.sweep import LambdaCurve, sweep_curve
+from ..result import Solution
+from .chain import solve_fixed
+from .options import SolveOptions, prepare
+
+__all__ = ["with_rule", "lambda_curve", "choose_lambda"]
+
+Stage = Callable[..., Solution]
+
+
+def _curve(form, rule: str, opts: SolveOptions, inner: Stage, rules=None, **sweep) -> LambdaCurve:
+    direct = resolve_solver("direct")
+    return sweep_curve(form, rules=(rule,) if rules is None else rules, rule=rule,
+                       solve_at=lambda lam: inner(form, lam, opts),
+                       check_memory=lambda: check_memory(form, direct), **{**opts.rule, **sweep})
+
+
+def with_rule(inner: Stage) -> Stage:
+    """The stage that resolves a rule name in ``lam`` before calling ``inner``."""
+
+    def stage(form, lam, opts: SolveOptions) -> Solution:
+        if not isinstance(lam, str):
+            return inner(form, lam, opts)
+        curve = _curve(form, lam, opts, inner)
+        sol = inner(form, curve.lam_chosen, opts)
+        sol.lam_rule = lam
+        sol.curve = curve
+        sol.warnings.extend(curve.warnings)
+        return sol
+
+    return stage
+
+
+def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6), points: int = 25,
+                 solver: str = "clarabel", accuracy: str = "default", options=None, tau: float = 1.5,
+                 probes: int = 24, seed: int = 0, progress=None, engine: str = "auto",
+                 solve_kw: dict | None = None) -> LambdaCurve:
+    """Sweep lambda and apply the selection rules.
+
+    Parameters
+    ----------
+    problem : NavigationProblem or Formulation
+        Must have at least one soft item weighted by lambda.
+    rules : sequence of str, optional
+        Rules to evaluate (default every registered rule, :func:`bvpnav.lam.rule_names`);
+        ``rule`` is always included.
+    rule : str
+        The rule whose choice is reported as :attr:`LambdaCurve.lam_chosen`.
+    lam_range : (float, float)
+        Search interval for lambda (dimensionless), log-spaced.
+    points : int
+        Coarse sweep size; every rule is then refined inside its best bracket.
+    solver, accuracy, options
+        For the ``cvxpy`` engine (non-least-squares problems).
+    tau : float
+        Discrepancy safety factor: choose lambda with :math:`\\hat\\rho = \\tau\\,
+        \\mathrm{tr}(I - A_\\lambda)` (the data residual's expected size given the stated
+        noise, only meaningful for ``residual="acceleration"`` with ``sigma_a`` given).
+    probes : int
+        Hutchinson probes for GCV's trace when the problem has more than 300 samples x axes
+        (below that the trace is exact).
+    seed : int
+        Seed of the probes (results are reproducible).
+    progress : bool, optional
+        Show a tqdm bar; default: when the problem is large (more than 50,000 unknowns).
+    engine : {"auto", "direct", "cvxpy"}
+    solve_kw : dict, optional
+        Further options of :meth:`bvpnav.NavigationProblem.solve` (``verify``,
+        ``fallback``, ``verbose``) for the ``cvxpy`` engine's solves.
+
+    Returns
+    -------
+    LambdaCurve
+
+    Notes
+    -----
+    L-curve: maximise the curvature of :math:`(\\log\\rho, \\log\\eta)`; the two
+    outermost sweep points on each side are never chosen (a "corner" there is the range
+    ending, and is reported in ``warnings``). GCV: minimise
+    :math:`G = \\hat\\rho / \\mathrm{tr}(I - A_\\lambda)^2`, with
+    :math:`\\mathrm{tr}(I - A_\\lambda) = -\\mathrm{tr}(\\partial w / \\partial \\hat a)`.
+    Quasi-optimality: minimise :math:`\\|\\lambda\\, dr/d\\lambda\\|`.
+    """
+    form = as_formulation(problem)
+    opts, _ = prepare(1.0, solver=solver, accuracy=accuracy, options=options, **(solve_kw or {}))
+    return _curve(form, rule, opts, solve_fixed, rules=rules, lam_range=lam_range, points=points,
+                  tau=tau, probes=probes, seed=seed, progress=progress, engine=engine)
+
+
+def choose_lambda(problem, rule: str = "lcurve", **kwargs) -> float:
+    """The lambda a rule chooses (see :func:`lambda_curve` for the options)."""
+    return lambda_curve(problem, rules=(rule,), rule=rule, **kwargs).lam_chosen

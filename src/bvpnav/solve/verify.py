@@ -1,0 +1,168 @@
+"""bvpnav's own judgement of an answer: recomputed residuals, never a status word.
+
+:func:`verify` recomputes, from the stacked solution alone, the FEM residual, the
+violation of every hard, band and inequality item, the stationarity of the Lagrangian
+(when the duals are known and the objective is smooth), a forward-error estimate (least
+squares problems: one refinement step on the augmented system) and the conditioning of
+the error-model parameters, and says whether the answer passes the accuracy preset's
+tolerances.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..backends import VERIFY_RTOL
+from ..formulation import as_formulation
+from ..lsq import FORWARD_RTOL, factor_form, forward_error, least_squares_form
+from ..result import Verification
+from .conditioning import assess_conditioning
+
+__all__ = ["verify", "stationarity"]
+
+
+def _worst_violation(form, xval: np.ndarray) -> tuple[float, str | None]:
+    """Largest relative violation over the constraint terms, and its item."""
+    worst, worst_item = 0.0, None
+    for term in form.terms():
+        v = term.violation(xval)
+        if v is None:
+            continue
+        sc = max(float(np.max(term.residual.row_scale(xval))), 1.0)
+        rel = float(np.max(v) / sc)
+        if rel > worst:
+            worst, worst_item = rel, term.label
+    return worst, worst_item
+
+
+def _nonfinite(form, xval: np.ndarray) -> list[str]:
+    """What is NaN or infinite in the solution vector or the reported parameters."""
+    out = []
+    if not np.all(np.isfinite(xval)):
+        out.append(f"{int(np.count_nonzero(~np.isfinite(xval)))} entries of the solution vector")
+    model = form.model
+    if form.error_model is not None and model.q:
+        with np.errstate(all="ignore"):
+            rep = form.error_model.report(model.split(xval)["l"], model)
+        vals = np.asarray(rep, dtype=float)
+        out += [f"error parameter {n} = {v}" for n, v in zip(rep.index, vals, strict=True)
+                if not np.isfinite(v)]
+    return out
+
+
+def _forward(form, xval, lam, duals, factored) -> tuple[float | None, tuple | None]:
+    """The forward-error estimate, factoring once (shared with the conditioning)."""
+    if factored is None and form.model.q:
+        ls = least_squares_form(form, lam)
+        if ls is not None:
+            try:
+                factored = (ls, factor_form(ls, form, "lu"))
+            except (RuntimeError, np.linalg.LinAlgError):  # forward_error's verdict too
+                return float("inf"), None
+    return forward_error(form, xval, lam, duals, factored), factored
+
+
+def verify(form, xval: np.ndarray, lam: float, accuracy: str = "default", duals: dict | None = None,
+           factored: tuple | None = None) -> Verification:
+    """Judge a stacked solution by recomputed residuals.
+
+    Parameters
+    ----------
+    form : Formulation or NavigationProblem
+    xval : ndarray
+        The stacked solution.
+    lam : float
+    accuracy : {"low", "default", "high"}
+        Selects the tolerances (:data:`bvpnav.backends.VERIFY_RTOL`,
+        :data:`bvpnav.lsq.FORWARD_RTOL`).
+    duals : dict, optional
+        cvxpy-convention duals (for stationarity and the forward error).
+    factored : (LeastSquaresForm, BorderedLU), optional
+        The direct back end's factorization at this ``lam``, reused.
+
+    Returns
+    -------
+    Verification
+
+    Notes
+    -----
+    The answer passes when the relative FEM residual is at most ``rtol``, the worst
+    constraint violation at most ``10 rtol``, the stationarity (if known) at most
+    :math:`\\sqrt{rtol}`, the forward error (if known) within the preset's bound, and
+    nothing is NaN or infinite except the parameters of a sensor axis the information
+    leaves undetermined (named in the warnings instead).
+    """
+    form = as_formulation(form)
+    rtol = VERIFY_RTOL[accuracy]
+    model = form.model
+    fem = model.fem_rows()
+    fem_rel = float(np.max(np.abs(fem.value(xval))) / max(np.max(fem.row_scale(xval)), 1e-300))
+    worst, worst_item = _worst_violation(form, xval)
+    stat = None if duals is None else stationarity(form, xval, lam, duals)
+    nonfinite = _nonfinite(form, xval)
+    fwd, factored = _forward(form, xval, lam, duals, factored)
+    conditioning = None
+    if model.q and not np.any(~np.isfinite(xval)):
+        conditioning = assess_conditioning(form, xval, lam, factored)
+        if nonfinite:
+            nonfinite += [dg["message"] for dg in conditioning["degenerate_axes"]]
+    # the parameters of a sensor axis whose kept fraction is zero are undetermined (inf,
+    # NaN) by the information itself; named in warnings, they do not fail the answer.
+    # Anything else not finite does, whatever rounding decided (issue 14).
+    undetermined = sorted({n for dg in (conditioning or {}).get("degenerate_axes", [])
+                           if dg.get("undetermined") for n in dg["parameters"]})
+    unexplained = [s for s in nonfinite if not s.startswith("sensor axis ")
+                   and not any(s.startswith(f"error parameter {n} = ") for n in undetermined)]
+    ok = (fem_rel <= rtol and worst <= rtol * 10 and (stat is None or stat <= np.sqrt(rtol))
+          and (fwd is None or fwd <= FORWARD_RTOL[accuracy]) and not unexplained)
+    return Verification(fem_residual=fem_rel, max_violation=worst, worst_item=worst_item,
+                        stationarity=stat, forward_error=fwd, rtol=rtol, nonfinite=nonfinite,
+                        undetermined=undetermined, conditioning=conditioning, verified=bool(ok))
+
+
+def _gradient_floor(form, xval: np.ndarray, lam: float, data) -> float:
+    """The size the gradient would have if the residuals were as large as the terms that
+    cancel in them (see :func:`stationarity`)."""
+    model = form.model
+    probe = np.zeros(model.size)
+    T = model.grid.duration
+    for a in range(model.d):
+        r_a = model.node_position(a).value(xval)
+        v_a = model.node_velocity(a).value(xval)
+        a_scale = max(float(np.max(np.abs(r_a))) / T**2, float(np.max(np.abs(v_a))) / T)
+        probe[model.w_index(a)] = np.maximum(np.abs(model.data.acc[:, a]), a_scale)
+    floor = float(np.max(np.abs(2.0 * (data.A.T @ data.value(probe)))))
+    for term in form.terms():
+        floor = max(floor, term.gradient_floor(xval, lam))
+    return floor
+
+
+def stationarity(form, xval: np.ndarray, lam: float, duals: dict) -> float | None:
+    """Relative norm of the Lagrangian gradient (None for non-smooth objectives).
+
+    Notes
+    -----
+    The gradient :math:`2 J^T J x + A_{fem}^T y + \\sum_k g_k` (each term's part from the
+    mode x kind table, :meth:`bvpnav.terms.Term.gradient`) is measured against the
+    largest of its parts and a floor: the data-term gradient if the residual were as
+    large as the measurement (at least the acceleration scale the trajectory itself sets,
+    :math:`|r|/T^2` and :math:`|v|/T`), and each weighted term's gradient if its residual
+    were as large as the terms that cancel in it (:math:`|A| |x| + |c|`); so exactly
+    consistent data is not judged against round-off alone.
+    """
+    form = as_formulation(form)
+    data = form.data_rows()
+    y = duals.get("fem")
+    if y is None:
+        return None
+    grads = [2.0 * (data.A.T @ data.value(xval)),
+             form.model.fem_rows().A.T @ np.asarray(y, dtype=float).ravel()]
+    for term in form.terms():
+        g = term.gradient(xval, lam, duals.get(term.label))
+        if g is None:
+            return None
+        grads.append(g)
+    total = np.sum(grads, axis=0)
+    floor = _gradient_floor(form, xval, lam, data)
+    scale = max(max(float(np.max(np.abs(g))) for g in grads), floor, 1e-300)
+    return float(np.max(np.abs(total)) / scale)

@@ -1,0 +1,338 @@
+"""Compiled information: the :class:`Term` and the one table of what a mode means per kind.
+
+An item compiles to a residual (an :class:`~bvpnav.model.Affine` map of the stacked
+unknowns, or a :class:`~bvpnav.model.Cone`); the problem turns it into a :class:`Term`
+with a *mode* (``hard``, ``soft``, ``robust``, ``band``) and a *kind* (``equality``
+``D x - e = 0``, ``inequality`` ``g(x) <= 0``, ``cone`` ``||u_k|| <= s_k``). What the
+4 x 3 combinations mean is written here once, in one class per kind, and every reader
+asks the term:
+
+=================  ======================  ==========================  ==========================
+mode               equality ``r``          inequality ``g``            cone excess ``e_k``
+=================  ======================  ==========================  ==========================
+hard               ``r = 0``               ``g <= 0``                  ``||u_k|| <= s_k``
+band               ``|r| <= tol``          ``g <= tol``                ``||u_k|| <= s_k + tol_k``
+soft               ``lam sum (r/s)^2``     ``lam sum (pos(g)/s)^2``    ``lam sum (pos(e)/s)^2``
+robust             ``lam sum huber/|.|``   ``lam sum pos(g)/s``        ``lam sum pos(e)/s``
+=================  ======================  ==========================  ==========================
+
+(``lam`` multiplies items; error-model priors and bounds are not scaled by it.) Each kind
+answers: its cvxpy constraints and penalty (:meth:`TermKind.constraints`,
+:meth:`TermKind.penalty`), the violation that verification measures, the gradient of its
+part of the Lagrangian (stationarity), the rows it shows in a solution, its role in the
+least-squares view (:meth:`Term.least_squares_role`) and how :func:`bvpnav.describe.describe`
+writes it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import cvxpy as cp
+import numpy as np
+
+from .model import Affine
+
+__all__ = ["Term", "TermKind", "KINDS", "MODES", "CONSTRAINT_MODES", "PENALTY_MODES"]
+
+MODES = ("hard", "soft", "robust", "band")
+#: Modes that compile to constraints, and modes that compile to lambda-weighted penalties.
+CONSTRAINT_MODES = ("hard", "band")
+PENALTY_MODES = ("soft", "robust")
+
+
+@dataclass(eq=False)
+class Term:
+    """One compiled piece of information.
+
+    Attributes
+    ----------
+    label : str
+    item : Item or None
+        ``None`` for terms the problem itself adds (error-model priors and bounds).
+    residual : Affine
+        ``D x - e`` in the item's units (for inequalities: ``g`` with ``g <= 0``; for
+        cones a :class:`~bvpnav.model.Cone`).
+    mode : str
+        ``hard``, ``soft``, ``robust`` or ``band``.
+    kind : str
+        ``equality``, ``inequality`` or ``cone``.
+    sigma, tol : ndarray or None
+        Per-row standard deviation and band half-width, item units.
+    huber : float or None
+        Huber threshold in item units (robust mode); ``None`` means L1.
+    scaled_by_lam : bool
+        Whether the term is multiplied by ``lam`` (items: yes; priors: no).
+    units : str
+        Units of the residual rows.
+    """
+
+    label: str
+    item: Any
+    residual: Affine
+    mode: str
+    kind: str = "equality"
+    sigma: np.ndarray | None = None
+    tol: np.ndarray | None = None
+    huber: float | None = None
+    scaled_by_lam: bool = True
+    units: str = ""
+
+    # ------------------------------------------------------------ the table
+    @property
+    def table(self) -> TermKind:
+        """The kind's entry of the mode x kind table."""
+        return KINDS[self.kind]
+
+    @property
+    def is_constraint(self) -> bool:
+        """Hard or band: compiled to constraints (verified as violations)."""
+        return self.mode in CONSTRAINT_MODES
+
+    @property
+    def is_penalty(self) -> bool:
+        """Soft or robust: a penalty in the objective."""
+        return self.mode in PENALTY_MODES
+
+    def weight(self, lam: float) -> float:
+        """The factor of this term's penalty: ``lam`` for items, 1 for priors."""
+        return float(lam) if self.scaled_by_lam else 1.0
+
+    def least_squares_role(self, surrogate: bool = False) -> str | None:
+        """Where the term goes in the least-squares view: ``"E"`` (equality rows),
+        ``"D"`` (objective rows) or None (not a least-squares row).
+
+        Only equality terms are rows: hard ones equality rows, soft ones objective rows.
+        With ``surrogate`` (the conditioning estimate, which may err towards less
+        information) robust equalities count as soft and bands and other kinds are left
+        out (``None``) instead of making the view impossible.
+        """
+        if self.kind != "equality":
+            return None
+        if self.mode == "hard":
+            return "E"
+        if self.mode == "soft" or (surrogate and self.mode == "robust"):
+            return "D"
+        return None
+
+    def constraints(self, r: cp.Expression) -> list:
+        """cvxpy constraints of this term given its lowered residual ``r``."""
+        return self.table.constraints(self, r) if self.is_constraint else []
+
+    def penalty(self, r: cp.Expression) -> cp.Expression | None:
+        """cvxpy penalty (without ``lam``) of this term, or None for constraints."""
+        return self.table.penalty(self, r) if self.is_penalty else None
+
+    def violation(self, x: np.ndarray) -> np.ndarray | None:
+        """Non-negative violation per row of a constraint term at ``x`` (item units),
+        None for penalty terms."""
+        return self.table.violation(self, x) if self.is_constraint else None
+
+    def gradient(self, x: np.ndarray, lam: float, duals) -> np.ndarray | None:
+        """Gradient of this term's part of the Lagrangian at ``x``; None where it is not
+        smooth or the duals it needs are missing (stationarity cannot be judged)."""
+        return self.table.gradient(self, x, lam, duals)
+
+    def shown(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(raw, shown)``: the residual rows at ``x`` and what a solution reports of
+        them (for inequalities and cones only the violation ``max(., 0)``)."""
+        return self.table.shown(self, x)
+
+    def gradient_floor(self, x: np.ndarray, lam: float) -> float:
+        """The size this penalty's gradient would have if its residual were as large as
+        the terms that cancel in it (``|A| |x| + |c|``); 0 for constraints."""
+        if not self.is_penalty or self.sigma is None:
+            return 0.0
+        size = self.residual.row_scale(x)
+        if self.mode == "robust" and self.huber is not None:
+            size = np.minimum(size, self.huber)
+        w = 2.0 * size / self.sigma**2
+        return float(np.max(self.weight(lam) * (abs(self.residual.A).T @ w)))
+
+
+class TermKind:
+    """One kind's column of the mode x kind table (see the module docstring)."""
+
+    name = ""
+
+    def constraints(self, term: Term, r: cp.Expression) -> list:
+        raise NotImplementedError
+
+    def penalty(self, term: Term, r: cp.Expression) -> cp.Expression:
+        raise NotImplementedError
+
+    def violation(self, term: Term, x: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def gradient(self, term: Term, x: np.ndarray, lam: float, duals) -> np.ndarray | None:
+        raise NotImplementedError
+
+    def shown(self, term: Term, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        r = term.residual.value(x)
+        return r, np.maximum(r, 0)
+
+    def relation(self, term: Term, tol_text: str) -> str:
+        """The constraint's relation as text, e.g. ``= 0`` or ``|.| <= 0.1 m``."""
+        raise NotImplementedError
+
+    def penalty_symbol(self, term: Term) -> str:
+        """The penalty's symbol in :func:`bvpnav.describe.describe`."""
+        return "pos(.)" if term.mode == "robust" else "pos(.)^2"
+
+
+def _constraint_gradient(term: Term, duals, band_pair: bool) -> np.ndarray | None:
+    if not duals or any(d is None for d in duals):
+        return None
+    z = np.asarray(duals[0]).ravel()
+    if band_pair:
+        z = z - np.asarray(duals[1]).ravel()
+    return term.residual.A.T @ z
+
+
+class Equality(TermKind):
+    """``r = D x - e``: hard ``r = 0``, band ``|r| <= tol``, soft squares, robust Huber/L1."""
+
+    name = "equality"
+
+    def constraints(self, term, r):
+        return [r == 0] if term.mode == "hard" else [r <= term.tol, -r <= term.tol]
+
+    def penalty(self, term, r):
+        if term.mode == "soft":
+            return cp.sum_squares(cp.multiply(1.0 / term.sigma, r))
+        if term.huber is None:
+            return cp.norm1(cp.multiply(1.0 / term.sigma, r))
+        return cp.sum(cp.multiply(1.0 / term.sigma**2, cp.huber(r, term.huber)))
+
+    def violation(self, term, x):
+        r = term.residual.value(x)
+        return np.abs(r) if term.mode == "hard" else np.maximum(np.abs(r) - term.tol, 0)
+
+    def gradient(self, term, x, lam, duals):
+        A, r, k = term.residual.A, term.residual.value(x), term.weight(lam)
+        if term.mode == "soft":
+            return k * 2.0 * (A.T @ (r / term.sigma**2))
+        if term.mode == "robust":
+            if term.huber is None:
+                return None
+            g = np.where(np.abs(r) <= term.huber, 2.0 * r, 2.0 * term.huber * np.sign(r))
+            return k * (A.T @ (g / term.sigma**2))
+        return _constraint_gradient(term, duals, band_pair=term.mode == "band")
+
+    def shown(self, term, x):
+        r = term.residual.value(x)
+        return r, r
+
+    def relation(self, term, tol_text):
+        return "= 0" if term.mode == "hard" else f"|.| <= {tol_text} {term.units}"
+
+    def penalty_symbol(self, term):
+        if term.mode == "robust":
+            return "huber" if term.huber else "|.|"
+        return "(.)^2"
+
+
+class Inequality(TermKind):
+    """``g(x) <= 0``: hard, band ``g <= tol``, soft ``pos(g)^2``, robust ``pos(g)``."""
+
+    name = "inequality"
+
+    def constraints(self, term, r):
+        return [r <= 0] if term.mode == "hard" else [r <= term.tol]
+
+    def penalty(self, term, r):
+        if term.mode == "soft":
+            return cp.sum_squares(cp.multiply(1.0 / term.sigma, cp.pos(r)))
+        return cp.sum(cp.multiply(1.0 / term.sigma, cp.pos(r)))
+
+    def violation(self, term, x):
+        r = term.residual.value(x)
+        return np.maximum(r - (term.tol if term.mode == "band" else 0.0), 0)
+
+    def gradient(self, term, x, lam, duals):
+        if term.mode == "soft":
+            A, r = term.residual.A, term.residual.value(x)
+            return term.weight(lam) * 2.0 * (A.T @ (np.maximum(r, 0) / term.sigma**2))
+        if term.mode == "robust":
+            return None
+        return _constraint_gradient(term, duals, band_pair=False)
+
+    def relation(self, term, tol_text):
+        return "<= 0" if term.mode == "hard" else f"<= {tol_text} {term.units}"
+
+
+class SecondOrderCone(TermKind):
+    """Groups ``(s_k, u_k)`` with excess ``e_k = ||u_k|| - s_k``: hard ``e_k <= 0``, band
+    ``e_k <= tol_k``, soft ``sum pos(e_k)^2 / sigma_k^2``, robust ``sum pos(e_k) / sigma_k``.
+
+    Notes
+    -----
+    cvxpy's SOC duals ``(mu, Y)`` enter the Lagrangian as :math:`-(\\mu s + \\langle Y, U\\rangle)`.
+    """
+
+    name = "cone"
+
+    def _split(self, term, r):
+        k = term.residual.size
+        R = cp.reshape(r, (k, term.residual.groups), order="F")
+        return k, R[0, :], R[1:, :]
+
+    def constraints(self, term, r):
+        k, s, U = self._split(term, r)
+        if term.mode == "hard":
+            return [cp.SOC(s, U, axis=0)]
+        return [cp.SOC(s + term.tol[::k], U, axis=0)]
+
+    def penalty(self, term, r):
+        k, s, U = self._split(term, r)
+        excess = cp.pos(cp.norm(U, 2, axis=0) - s)
+        w = 1.0 / term.sigma[::k]
+        if term.mode == "soft":
+            return cp.sum_squares(cp.multiply(w, excess))
+        return cp.sum(cp.multiply(w, excess))
+
+    def violation(self, term, x):
+        k = term.residual.size
+        return np.maximum(term.residual.excess(x) - (term.tol[::k] if term.mode == "band" else 0.0), 0)
+
+    def shown(self, term, x):
+        e = term.residual.excess(x)
+        return e, np.maximum(e, 0)
+
+    def gradient(self, term, x, lam, duals):
+        g = self._gradient(term, x, duals)
+        return None if g is None else (term.weight(lam) * g if term.is_penalty else g)
+
+    def _gradient(self, term, x, duals):
+        res = term.residual
+        k = res.size
+        A = res.A
+        if term.mode in ("hard", "band"):
+            if not duals or duals[0] is None:
+                return None
+            mu, Y = duals[0]
+            z = np.column_stack([np.asarray(mu, dtype=float).ravel(),
+                                 np.asarray(Y, dtype=float).reshape(k - 1, -1).T]).ravel()
+            return -(A.T @ z)
+        if term.mode == "robust":
+            return None
+        v = res.value(x).reshape(res.groups, k)
+        nu = np.linalg.norm(v[:, 1:], axis=1)
+        e = np.maximum(nu - v[:, 0], 0.0)
+        if np.any((e > 0) & (nu == 0)):
+            return None
+        coef = 2.0 * e / term.sigma[::k] ** 2
+        dz = np.zeros_like(v)
+        on = e > 0
+        dz[on, 1:] = coef[on, None] * v[on, 1:] / nu[on, None]
+        dz[on, 0] = -coef[on]
+        return A.T @ dz.ravel()
+
+    def relation(self, term, tol_text):
+        rel = "<= 0" if term.mode == "hard" else f"<= {tol_text} {term.units}"
+        return rel + ", second-order cone per node"
+
+
+#: The table: kind name -> its column.
+KINDS: dict[str, TermKind] = {k.name: k for k in (Equality(), Inequality(), SecondOrderCone())}
