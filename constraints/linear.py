@@ -29,13 +29,15 @@ class Linear(Item):
         Coefficients ``C``; (m, K) or (K,) when the item has one axis. Units: value
         units per quantity unit.
     value : float or array_like, shape (m,)
-        Right-hand sides ``e`` in ``units``.
+        Right-hand sides ``e`` in ``row_units``.
     quantity : {"position", "velocity"}
         What ``q`` is: position (m) or velocity (m/s).
-    units : str
-        Units of the rows, for reports (default ``"m"``).
+    row_units : str
+        Units of the rows (of ``value``, ``sigma`` and ``tol``), default ``"m"``; give
+        e.g. ``"m/s"`` for velocity rows. They are the item's :attr:`units`: the
+        ``units`` column of ``solution.items`` and the units in messages.
     axes, sigma, mode, huber, tol, name
-        See :class:`bvpnav.items.Item`; ``sigma`` in the rows' units.
+        See :class:`bvpnav.items.Item`; ``sigma`` and ``tol`` in ``row_units``.
 
     Notes
     -----
@@ -48,6 +50,11 @@ class Linear(Item):
     value: Any = 0.0
     quantity: str = "position"
     row_units: str = "m"
+
+    @property
+    def units(self) -> str:
+        """The rows' units (``row_units``), shown in ``solution.items["units"]`` and messages."""
+        return self.row_units
 
     def validate(self) -> None:
         t = times(self.t, self.label)
@@ -63,6 +70,9 @@ class Linear(Item):
             )
         if self.quantity not in ("position", "velocity"):
             raise InputError(f"{self.label}: quantity={self.quantity!r}; use 'position' or 'velocity'")
+        if not isinstance(self.row_units, str):
+            raise InputError(f"{self.label}: row_units={self.row_units!r}; give the rows' units as a "
+                             'string, e.g. row_units = "m/s"')
         v = finite(self.value, self.label)
         if v.size not in (1, c.shape[0]):
             raise InputError(f"{self.label}: {v.size} values for {c.shape[0]} rows")

@@ -229,3 +229,18 @@ def test_identify_shows_what_an_unnamed_item_holds():
     prob.add(Position(t=0.0, value=0.0), Position(t=[0.0, 10.0], value=[0.0, 10.0], axes="x"))
     assert [i.identify() for i in prob._items] == [
         "Position (t=[0] s, value=0 m)", "Position#2 (t=[0, 10] s, value=[0, 10] m, axes=['x'])"]
+
+
+def test_linear_row_units_are_its_units():
+    """Linear's rows are in row_units (its docstring said units=, a field it never had, and
+    the report showed every Linear item in m): they reach solution.items["units"]."""
+    assert Linear(t=[2.0], coef=[1.0]).units == "m"
+    drift = Linear(t=[5.0], coef=[1.0], value=0.8, quantity="velocity", row_units="m/s", name="drift")
+    assert drift.units == "m/s"
+    prob = bvpnav.NavigationProblem(bvpnav.ImuData(T, np.zeros(T.size)))
+    sol = prob.add(Position(t=0.0, value=0.0, name="start"), drift).solve()
+    units = dict(zip(sol.items["item"], sol.items["units"], strict=True))
+    assert units["drift"] == "m/s"
+    assert units["start"] == "m"
+    with pytest.raises(bvpnav.InputError, match="row_units=5; give the rows' units as a string"):
+        Linear(t=[2.0], coef=[1.0], row_units=5)

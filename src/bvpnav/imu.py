@@ -77,6 +77,28 @@ def _finite_2d(arr, name: str, columns: Sequence[str] | None = None) -> np.ndarr
     return a
 
 
+def _axis_names(axes: Sequence[str] | str | None, d: int) -> tuple[str, ...]:
+    """The axis names of ``d`` acceleration columns (default x, y, z), checked: strings, one
+    per column, distinct, and naming trajectory columns that do not collide."""
+    if d not in (1, 2, 3):
+        raise InputError(f"acc: {d} axes given; bvpnav handles 1, 2 or 3 axes")
+    if axes is None:
+        axes = DEFAULT_AXES[d]
+    if not isinstance(axes, str) and any(not isinstance(s, str) for s in axes):
+        raise InputError(f"axes: {list(axes)!r}; give axis names as strings, e.g. axes=('x', 'y')")
+    axes = tuple([axes] if isinstance(axes, str) else axes)
+    if len(axes) != d:
+        raise InputError(f"axes: {len(axes)} names {axes} for {d} acceleration columns; give one name "
+                         "per acceleration column")
+    if len(set(axes)) != d:
+        raise InputError(f"axes: names must be distinct, got {axes}; rename the repeated axis")
+    clash = axis_name_clash(axes)
+    if clash is not None:
+        raise InputError(f"axes {axes}: {clash}; trajectory columns are t, <axis>, v<axis>, "
+                         "<axis>_std and v<axis>_std, so rename that axis (e.g. 'x', 'y', 'z')")
+    return axes
+
+
 class ImuData:
     """Sample times with the accelerations that drive r''(t) = a(t).
 
@@ -161,47 +183,35 @@ class ImuData:
                 )
             a = _finite_2d(acc, "acc", axes)
         else:
-            f = _finite_2d(specific_force, "specific_force", ("f_x", "f_y", "f_z"))
-            if f.shape[1] != 3:
-                raise InputError(f"specific_force: expected shape (N, 3), got {f.shape}")
-            if attitude is None:
-                raise InputError("specific_force needs attitude (body to navigation) per sample")
-            rot = self._as_rotation(attitude, n)
-            g = np.array([0.0, 0.0, -STANDARD_GRAVITY]) if gravity is None else as_float_array(
-                gravity, "gravity", "m/s^2"
-            )
-            if g.shape != (3,) or not np.all(np.isfinite(g)):
-                raise InputError(f"gravity: expected 3 finite numbers in m/s^2, got {gravity!r}")
-            if f.shape[0] != n:
-                raise InputError(
-                    f"specific_force has {f.shape[0]} samples but t has {n}; lengths must match: give "
-                    "one specific-force row per time"
-                )
-            self.specific_force, self.attitude, self.gravity = f, rot, g
-            a = rot.apply(f) + g
+            a = self._strapdown(specific_force, attitude, gravity, n)
         if a.shape[0] != n:
             raise InputError(f"acc has {a.shape[0]} samples but t has {n}; lengths must match: give one "
                              "acceleration row per time")
-        d = a.shape[1]
-        if d not in (1, 2, 3):
-            raise InputError(f"acc: {d} axes given; bvpnav handles 1, 2 or 3 axes")
-        if axes is None:
-            axes = DEFAULT_AXES[d]
-        if not isinstance(axes, str) and any(not isinstance(s, str) for s in axes):
-            raise InputError(f"axes: {list(axes)!r}; give axis names as strings, e.g. axes=('x', 'y')")
-        axes = tuple([axes] if isinstance(axes, str) else axes)
-        if len(axes) != d:
-            raise InputError(f"axes: {len(axes)} names {axes} for {d} acceleration columns; give one name "
-                             "per acceleration column")
-        if len(set(axes)) != d:
-            raise InputError(f"axes: names must be distinct, got {axes}; rename the repeated axis")
-        clash = axis_name_clash(axes)
-        if clash is not None:
-            raise InputError(f"axes {axes}: {clash}; trajectory columns are t, <axis>, v<axis>, "
-                             "<axis>_std and v<axis>_std, so rename that axis (e.g. 'x', 'y', 'z')")
+        axes = _axis_names(axes, a.shape[1])
         a.setflags(write=False)
         self.acc: np.ndarray = a
         self.axes: tuple[str, ...] = axes
+
+    def _strapdown(self, specific_force, attitude, gravity, n: int) -> np.ndarray:
+        """Check and keep the strapdown triple; return the navigation-frame acceleration C f + g."""
+        f = _finite_2d(specific_force, "specific_force", ("f_x", "f_y", "f_z"))
+        if f.shape[1] != 3:
+            raise InputError(f"specific_force: expected shape (N, 3), got {f.shape}")
+        if attitude is None:
+            raise InputError("specific_force needs attitude (body to navigation) per sample")
+        rot = self._as_rotation(attitude, n)
+        g = np.array([0.0, 0.0, -STANDARD_GRAVITY]) if gravity is None else as_float_array(
+            gravity, "gravity", "m/s^2"
+        )
+        if g.shape != (3,) or not np.all(np.isfinite(g)):
+            raise InputError(f"gravity: expected 3 finite numbers in m/s^2, got {gravity!r}")
+        if f.shape[0] != n:
+            raise InputError(
+                f"specific_force has {f.shape[0]} samples but t has {n}; lengths must match: give "
+                "one specific-force row per time"
+            )
+        self.specific_force, self.attitude, self.gravity = f, rot, g
+        return rot.apply(f) + g
 
     @classmethod
     def from_gyro(

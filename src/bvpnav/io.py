@@ -374,39 +374,56 @@ def _csv_text(raw: bytes, name: str) -> str:
     return text
 
 
+def _check_table_head(path: Path, suffix: str, head: bytes) -> None:
+    """Refuse a recording by its suffix and first bytes, before a huge file is read whole."""
+    if suffix not in (".csv", ".parquet", ".pq"):
+        raise InputError(f"{str(path)!r}: unknown file type {suffix!r}; give a .csv or .parquet file")
+    found = _sniff(head)
+    if suffix == ".csv" and found is not None:
+        raise InputError(f"{str(path)!r}: this .csv file is {found[0]}, not CSV text; {found[1]}")
+    if suffix != ".csv" and not head.startswith(b"PAR1") and found is not None:
+        raise InputError(f"{str(path)!r}: this {suffix} file is {found[0]}, not Parquet (no PAR1 magic "
+                         f"bytes); {found[1]}")
+
+
 def _read_table(path: Path):
+    """The recording at ``path`` as a DataFrame, read as CSV or Parquet by its suffix."""
+    suffix = path.suffix.lower()
+    raw = read_regular_file(path, "recording",  # a FIFO or device named first
+                            check_head=lambda head: _check_table_head(path, suffix, head))
+    if suffix == ".csv":
+        return _read_csv(raw, path)
+    return _read_parquet(raw, path, suffix)
+
+
+def _read_csv(raw: bytes, path: Path):
+    """A CSV recording's bytes as a DataFrame; every parser failure becomes an InputError."""
     import io as _io
 
     import pandas as pd
 
-    suffix = path.suffix.lower()
+    text = _csv_text(raw, str(path))
+    _check_field_counts(text, str(path))
+    try:
+        df = pd.read_csv(_io.StringIO(text), index_col=False)
+    except pd.errors.EmptyDataError:
+        raise InputError(f"{str(path)!r}: not a readable CSV file (it is empty); a recording needs a "
+                         "header line (t, acc_<axis>) and at least 3 rows") from None
+    except pd.errors.ParserError as exc:
+        raise InputError(f"{str(path)!r}: not a readable CSV file ({str(exc).splitlines()[0]}); every "
+                         "row needs the same number of fields as the header line") from None
+    except (ValueError, OverflowError) as exc:  # e.g. unbalanced quotes, absurd field sizes
+        raise InputError(f"{str(path)!r}: not a readable CSV file ({str(exc).splitlines()[0]}); check "
+                         "the file is comma-separated text with one header line") from None
+    return df
 
-    def head_check(head: bytes) -> None:  # before a huge file is read whole
-        if suffix not in (".csv", ".parquet", ".pq"):
-            raise InputError(f"{str(path)!r}: unknown file type {suffix!r}; give a .csv or .parquet file")
-        found = _sniff(head)
-        if suffix == ".csv" and found is not None:
-            raise InputError(f"{str(path)!r}: this .csv file is {found[0]}, not CSV text; {found[1]}")
-        if suffix != ".csv" and not head.startswith(b"PAR1") and found is not None:
-            raise InputError(f"{str(path)!r}: this {suffix} file is {found[0]}, not Parquet (no PAR1 magic "
-                             f"bytes); {found[1]}")
 
-    raw = read_regular_file(path, "recording", check_head=head_check)  # a FIFO or device named first
-    if suffix == ".csv":
-        text = _csv_text(raw, str(path))
-        _check_field_counts(text, str(path))
-        try:
-            df = pd.read_csv(_io.StringIO(text), index_col=False)
-        except pd.errors.EmptyDataError:
-            raise InputError(f"{str(path)!r}: not a readable CSV file (it is empty); a recording needs a "
-                             "header line (t, acc_<axis>) and at least 3 rows") from None
-        except pd.errors.ParserError as exc:
-            raise InputError(f"{str(path)!r}: not a readable CSV file ({str(exc).splitlines()[0]}); every "
-                             "row needs the same number of fields as the header line") from None
-        except (ValueError, OverflowError) as exc:  # e.g. unbalanced quotes, absurd field sizes
-            raise InputError(f"{str(path)!r}: not a readable CSV file ({str(exc).splitlines()[0]}); check "
-                             "the file is comma-separated text with one header line") from None
-        return df
+def _read_parquet(raw: bytes, path: Path, suffix: str):
+    """A Parquet recording's bytes as a DataFrame (pyarrow needed, PAR1 magic checked)."""
+    import io as _io
+
+    import pandas as pd
+
     try:
         import pyarrow  # noqa: F401
     except ImportError:
@@ -425,6 +442,12 @@ def _read_table(path: Path):
         df = pd.read_parquet(_io.BytesIO(raw))
     except Exception as exc:  # pyarrow raises its own error types for corrupt files
         raise InputError(f"{str(path)!r}: not a readable Parquet file ({exc})") from None
+    _check_parquet_names(df, path)
+    return df
+
+
+def _check_parquet_names(df, path: Path) -> None:
+    """Refuse duplicate, empty or space-padded column names of a Parquet table."""
     names = [str(c) for c in df.columns]
     dup = sorted({c for c in names if names.count(c) > 1})
     if dup:
@@ -438,7 +461,6 @@ def _read_table(path: Path):
     if padded:
         raise InputError(f"{str(path)!r}: column name {padded[0]!r} has leading/trailing whitespace; it "
                          "would name an axis with the spaces in it. Rename the column without them")
-    return df
 
 
 def _check_field_counts(text: str, name: str) -> None:
@@ -465,73 +487,292 @@ def _more_fields(name: str, k: int, line: int, row: list, header: list) -> None:
                          "column in the header")
 
 
+_ISO_HINT = ("set time_unit = \"iso8601\" in the spec's [input] (times become seconds from the first "
+             "sample, recorded in data.time_origin) or store the times as numbers in s")
+
+
 def _time_seconds(df, tcol: str, tunit: str, origin: str | None, name: str, row_ref):
     """The time column in s and what t = 0 is (None: the times as given)."""
-    import numpy as np
     import pandas as pd
-
-    from .timebase import TIME_UNITS, to_seconds
 
     col = df[tcol]
     dtype = col.dtype
-    iso_hint = ("set time_unit = \"iso8601\" in the spec's [input] (times become seconds from the first "
-                "sample, recorded in data.time_origin) or store the times as numbers in s")
     if tunit == "iso8601":
-        if pd.api.types.is_datetime64_any_dtype(dtype):
-            stamps = col
-        elif pd.api.types.is_object_dtype(dtype) or pd.api.types.is_string_dtype(dtype):
-            cells = col.to_numpy()
-            bad = [k for k, v in enumerate(cells) if not isinstance(v, str)]
-            if bad:
-                k = bad[0]
-                raise InputError(f"{name}: {row_ref(k)}, column {tcol!r} is {cells[k]!r}, not an ISO 8601 "
-                                 "timestamp (time_unit = \"iso8601\"); fix or remove that row")
-            stamps = pd.to_datetime(col, format="ISO8601", errors="coerce")
-            nat = np.flatnonzero(stamps.isna().to_numpy())
-            if nat.size:
-                k = int(nat[0])
-                raise InputError(f"{name}: {row_ref(k)}, column {tcol!r} is {cells[k]!r}, not an ISO 8601 "
-                                 "timestamp (e.g. 2026-01-31T12:00:00.125Z); fix or remove that row")
-        else:
-            raise InputError(f"{name}: column {tcol!r} holds {dtype} values but time_unit = \"iso8601\"; "
-                             "store ISO 8601 timestamps there, or give time_unit = \"s\" (ms, us, ns) for "
-                             "numbers")
-        try:
-            t, zero = to_seconds(stamps)
-        except InputError as exc:
-            raise InputError(f"{name}: column {tcol!r}: {exc}") from None
-        return t, zero
+        return _iso_seconds(col, tcol, name, row_ref)
+    _check_time_dtype(dtype, tcol, tunit, name)
+    if pd.api.types.is_object_dtype(dtype) or pd.api.types.is_string_dtype(dtype):
+        _refuse_timestamp_cells(col, tcol, tunit, name, row_ref)
+    if pd.api.types.is_integer_dtype(dtype) and len(col):
+        return _integer_seconds(col, tcol, tunit, origin, name)
+    return None, None
+
+
+def _iso_seconds(col, tcol: str, name: str, row_ref):
+    """Seconds from the first sample and the origin of a column of ISO 8601 timestamps."""
+    import pandas as pd
+
+    from .timebase import to_seconds
+
+    dtype = col.dtype
+    if pd.api.types.is_datetime64_any_dtype(dtype):
+        stamps = col
+    elif pd.api.types.is_object_dtype(dtype) or pd.api.types.is_string_dtype(dtype):
+        stamps = _parse_iso_cells(col, tcol, name, row_ref)
+    else:
+        raise InputError(f"{name}: column {tcol!r} holds {dtype} values but time_unit = \"iso8601\"; "
+                         "store ISO 8601 timestamps there, or give time_unit = \"s\" (ms, us, ns) for "
+                         "numbers")
+    try:
+        t, zero = to_seconds(stamps)
+    except InputError as exc:
+        raise InputError(f"{name}: column {tcol!r}: {exc}") from None
+    return t, zero
+
+
+def _parse_iso_cells(col, tcol: str, name: str, row_ref):
+    """The text cells of a time column as datetimes, naming the first cell that is not one."""
+    import numpy as np
+    import pandas as pd
+
+    cells = col.to_numpy()
+    bad = [k for k, v in enumerate(cells) if not isinstance(v, str)]
+    if bad:
+        k = bad[0]
+        raise InputError(f"{name}: {row_ref(k)}, column {tcol!r} is {cells[k]!r}, not an ISO 8601 "
+                         "timestamp (time_unit = \"iso8601\"); fix or remove that row")
+    stamps = pd.to_datetime(col, format="ISO8601", errors="coerce")
+    nat = np.flatnonzero(stamps.isna().to_numpy())
+    if nat.size:
+        k = int(nat[0])
+        raise InputError(f"{name}: {row_ref(k)}, column {tcol!r} is {cells[k]!r}, not an ISO 8601 "
+                         "timestamp (e.g. 2026-01-31T12:00:00.125Z); fix or remove that row")
+    return stamps
+
+
+def _check_time_dtype(dtype, tcol: str, tunit: str, name: str) -> None:
+    """Refuse a numeric time column of date, duration, bool or other non-number type."""
+    import pandas as pd
+
     if pd.api.types.is_datetime64_any_dtype(dtype) or pd.api.types.is_timedelta64_dtype(dtype):
         raise InputError(f"{name}: column {tcol!r} holds {dtype} values, not numbers in {tunit}; "
-                         + (iso_hint if pd.api.types.is_datetime64_any_dtype(dtype) else
+                         + (_ISO_HINT if pd.api.types.is_datetime64_any_dtype(dtype) else
                             "store the durations as numbers in s"))
     if pd.api.types.is_bool_dtype(dtype) or not (pd.api.types.is_numeric_dtype(dtype)
                                                  or pd.api.types.is_object_dtype(dtype)
                                                  or pd.api.types.is_string_dtype(dtype)):
         raise InputError(f"{name}: column {tcol!r} holds {dtype} values; store times as numbers in {tunit} "
                          "in that column")
-    if pd.api.types.is_object_dtype(dtype) or pd.api.types.is_string_dtype(dtype):
-        v = pd.to_numeric(col, errors="coerce").to_numpy(dtype=float, na_value=np.nan)
-        bad = np.flatnonzero(~np.isfinite(v))
-        if bad.size and isinstance(col.iloc[int(bad[0])], str):
-            cell = col.iloc[int(bad[0])]
-            if not pd.isna(pd.to_datetime(pd.Series([cell]), format="ISO8601", errors="coerce").iloc[0]):
-                raise InputError(f"{name}: {row_ref(int(bad[0]))}, column {tcol!r} is the timestamp "
-                                 f"{cell!r}, not a number in {tunit}; {iso_hint}")
-    if pd.api.types.is_integer_dtype(dtype) and len(col):
-        ints = col.to_numpy()
-        dt = np.diff(ints.astype(np.int64)) if ints.dtype.kind == "i" else None
-        if dt is not None and np.all(dt > 0):
-            if origin == "first":
-                return to_seconds(ints, tunit)
-            big = float(np.max(np.abs(ints.astype(float)))) * TIME_UNITS[tunit]
-            if np.spacing(big) > 0.5 * TIME_UNITS[tunit]:
-                raise InputError(
-                    f"{name}: column {tcol!r} holds integer times up to {int(np.max(np.abs(ints)))} {tunit} "
-                    f"(an epoch?) that float seconds cannot resolve to 1 {tunit}; add time_origin = "
-                    "\"first\" to the spec's [input] (times then count from the first sample, exactly, "
-                    "and the origin is recorded in data.time_origin)")
+
+
+def _refuse_timestamp_cells(col, tcol: str, tunit: str, name: str, row_ref) -> None:
+    """Refuse an ISO timestamp in a numeric time column (time_unit is not "iso8601")."""
+    import numpy as np
+    import pandas as pd
+
+    v = pd.to_numeric(col, errors="coerce").to_numpy(dtype=float, na_value=np.nan)
+    bad = np.flatnonzero(~np.isfinite(v))
+    if bad.size and isinstance(col.iloc[int(bad[0])], str):
+        cell = col.iloc[int(bad[0])]
+        if not pd.isna(pd.to_datetime(pd.Series([cell]), format="ISO8601", errors="coerce").iloc[0]):
+            raise InputError(f"{name}: {row_ref(int(bad[0]))}, column {tcol!r} is the timestamp "
+                             f"{cell!r}, not a number in {tunit}; {_ISO_HINT}")
+
+
+def _integer_seconds(col, tcol: str, tunit: str, origin: str | None, name: str):
+    """Exact seconds of increasing integer times with time_origin = "first" (else (None, None));
+    refuses integer epochs that float seconds cannot resolve to one unit."""
+    import numpy as np
+
+    from .timebase import TIME_UNITS, to_seconds
+
+    ints = col.to_numpy()
+    dt = np.diff(ints.astype(np.int64)) if ints.dtype.kind == "i" else None
+    if dt is not None and np.all(dt > 0):
+        if origin == "first":
+            return to_seconds(ints, tunit)
+        big = float(np.max(np.abs(ints.astype(float)))) * TIME_UNITS[tunit]
+        if np.spacing(big) > 0.5 * TIME_UNITS[tunit]:
+            raise InputError(
+                f"{name}: column {tcol!r} holds integer times up to {int(np.max(np.abs(ints)))} {tunit} "
+                f"(an epoch?) that float seconds cannot resolve to 1 {tunit}; add time_origin = "
+                "\"first\" to the spec's [input] (times then count from the first sample, exactly, "
+                "and the origin is recorded in data.time_origin)")
     return None, None
+
+
+def _input_options(inp: dict, name: str):
+    """The checked ``[input]`` options: (time column, time unit, acceleration unit, time origin,
+    axis -> column map or None)."""
+    from .imu import ACC_UNITS
+    from .timebase import TIME_UNITS
+
+    tcol = inp.get("time", "t")
+    tunit = inp.get("time_unit", "s")
+    unit = inp.get("unit", "m/s^2")
+    origin = inp.get("time_origin")
+    if not isinstance(tcol, str):
+        raise InputError(f"{name}: time={tcol!r}; give the name of the time column as a string")
+    if not isinstance(tunit, str) or (tunit not in TIME_UNITS and tunit != "iso8601"):
+        raise InputError(f"{name}: time_unit={tunit!r}; valid units: {list(TIME_UNITS)} for numbers, or "
+                         "'iso8601' for timestamps")
+    if origin is not None and origin != "first":
+        raise InputError(f"{name}: time_origin={origin!r}; the only choice is \"first\" (count the times "
+                         "from the first sample), or omit it")
+    if not isinstance(unit, str) or unit not in ACC_UNITS:
+        raise InputError(f"{name}: unit={unit!r}; valid acceleration units: {list(ACC_UNITS)}")
+    cols = inp.get("columns")
+    if cols is not None and not (isinstance(cols, dict) and cols
+                                 and all(isinstance(v, str) for v in cols.values())):
+        raise InputError(f"{name}: columns={cols!r}; map axis names to column names, e.g. "
+                         'columns = { x = "acc_x" }')
+    return tcol, tunit, unit, origin, cols
+
+
+def _time_as_column(df, tcol: str, name: str):
+    """``df`` with the time column as a column: a Parquet index named ``tcol`` is moved into
+    the columns; a differently named or unnamed index holding the time is refused."""
+    import pandas as pd
+
+    if tcol not in df.columns and df.index.name is not None:
+        if df.index.name == tcol:  # the time column stored as the Parquet index: unambiguous
+            df = df.reset_index()
+        else:
+            raise InputError(f"{name}: time column {tcol!r} not found; the file's index is named "
+                             f"{df.index.name!r} (the time stored as the Parquet index?): set time = "
+                             f"\"{df.index.name}\" in the spec's [input] if it is the time; columns in the "
+                             f"file: {list(df.columns)}")
+    if tcol not in df.columns and not isinstance(df.index, pd.RangeIndex):
+        raise InputError(f"{name}: time column {tcol!r} not found; the file has an unnamed {df.index.dtype} "
+                         "index (the time stored as the Parquet index without a name?): write the file with "
+                         f"the time as a column named {tcol!r} (df.reset_index(names={tcol!r})); columns "
+                         f"in the file: {list(df.columns)}")
+    return df
+
+
+def _check_separator(df, name: str) -> None:
+    """Refuse a one-column table whose header shows another field separator than ','."""
+    if len(df.columns) == 1:
+        head = str(df.columns[0])
+        for sep, what in ((";", "';'"), ("\t", "tabs"), ("|", "'|'"), (" ", "spaces")):
+            if sep in head.strip():
+                raise InputError(f"{name}: one column {head!r}: the fields seem to be separated by {what}; "
+                                 "bvpnav reads comma-separated CSV, save the file with ',' between fields")
+
+
+def _axis_columns(df, cols: dict | None, name: str) -> dict:
+    """The axis -> column map: ``cols`` as given, or every ``acc_<axis>`` column; refused when
+    the axis names would collide in the trajectory's columns."""
+    from .imu import axis_name_clash
+
+    if cols is None:
+        cols = {str(c)[4:]: c for c in df.columns if str(c).startswith("acc_")}
+        if not cols:
+            raise InputError(f"{name}: no acceleration columns: name them acc_<axis> or map them with "
+                             f"columns = {{ x = \"...\" }} in the spec's [input]; columns in the file: "
+                             f"{list(df.columns)}")
+        clash = axis_name_clash(list(cols))
+        if clash is not None:
+            raise InputError(f"{name}: the columns {list(cols.values())} give the axes {list(cols)}: {clash} "
+                             "(trajectory columns are t, <axis>, v<axis>, <axis>_std, v<axis>_std); rename "
+                             "the column(s) (e.g. acc_x, acc_y, acc_z) or map them with columns = { x = "
+                             "\"...\" } in the spec's [input]")
+    else:
+        clash = axis_name_clash([str(a) for a in cols])
+        if clash is not None:
+            raise InputError(f"{name}: [input] columns = {cols}: {clash} (trajectory columns are t, <axis>, "
+                             "v<axis>, <axis>_std, v<axis>_std); choose other axis names, e.g. "
+                             "columns = { x = \"...\", y = \"...\" }")
+    return cols
+
+
+def _check_columns_present(df, tcol: str, cols: dict, name: str) -> None:
+    """Refuse a column that feeds two roles, and a time or axis column missing from ``df``."""
+    owner: dict[str, str] = {tcol: "the time column"}
+    for a, c in cols.items():
+        if c in owner:
+            raise InputError(f"{name}: column {c!r} is mapped to axis {a!r} but is already {owner[c]}; one "
+                             "column can feed one axis only: map each axis to its own column in the spec's "
+                             "[input] columns = { x = \"...\", y = \"...\" }")
+        owner[c] = f"axis {a!r}"
+    for what, col in [("time", tcol)] + [(f"axis {a}", c) for a, c in cols.items()]:
+        if col not in df.columns:
+            raise InputError(f"{name}: column {col!r} ({what}) not found; columns in the file: "
+                             f"{list(df.columns)}")
+
+
+def _row_ref(line0: int | None):
+    """How messages name row ``k``: ``row k``, with its file line when rows start at line ``line0``."""
+    def row_ref(k: int) -> str:
+        return f"row {k}" + (f" (line {k + line0})" if line0 else "")
+
+    return row_ref
+
+
+def _numeric_column(df, col: str, tcol: str, tunit: str, unit: str, name: str, row_ref):
+    """Column ``col`` as finite floats (its own units), naming the first cell that is not one."""
+    import numpy as np
+    import pandas as pd
+
+    dtype = df[col].dtype
+    if pd.api.types.is_bool_dtype(dtype) or not (pd.api.types.is_numeric_dtype(dtype)
+                                                 or pd.api.types.is_object_dtype(dtype)
+                                                 or pd.api.types.is_string_dtype(dtype)):
+        raise InputError(f"{name}: column {col!r} holds {dtype} values; store "
+                         + ("times as numbers in " + tunit if col == tcol else
+                            f"accelerations as numbers in {unit}") + " in that column")
+    if pd.api.types.is_complex_dtype(dtype):
+        raise InputError(f"{name}: column {col!r} holds complex values; store real accelerations in "
+                         f"{unit} in that column")
+    try:
+        v = pd.to_numeric(df[col], errors="coerce").to_numpy(dtype=float, na_value=np.nan)
+    except (TypeError, ValueError):  # cells holding lists, dicts, bytes ... (Parquet)
+        raise InputError(f"{name}: column {col!r} holds values that are not numbers "
+                         f"(first: {df[col].iloc[0]!r}); store plain numbers in it") from None
+    raw = df[col].to_numpy()
+    bad = np.flatnonzero(~np.isfinite(v))
+    if bad.size:
+        k = int(bad[0])
+        if pd.isna(raw[k]) or str(raw[k]).strip().lower() == "nan":
+            what = "empty or NaN"
+        elif np.isinf(v[k]):
+            what = "infinite"
+        else:
+            what = f"not a number ({raw[k]!r})"
+        raise InputError(f"{name}: {row_ref(k)}, column {col!r} is {what} ({bad.size} bad row(s) in "
+                         "this column); fix or remove those rows")
+    return v
+
+
+def _numeric_seconds(df, tcol: str, tunit: str, origin: str | None, shown, name: str):
+    """(times in s, what t = 0 is) of the numeric time column ``shown`` (in ``tunit``)."""
+    import numpy as np
+
+    from .timebase import TIME_UNITS, check_time_resolution, to_seconds
+
+    zero = None
+    if origin == "first":
+        t, zero = to_seconds(shown, tunit)
+    else:
+        t = shown * TIME_UNITS[tunit]
+    if isinstance(df[tcol].dtype, np.dtype):
+        check_time_resolution(shown, df[tcol].dtype, f"{name}: column {tcol!r}")
+    return t, zero
+
+
+def _check_increasing(t, shown, numeric: bool, tcol: str, name: str, row_ref) -> None:
+    """Refuse times that repeat or go back, naming the row and both times as the file has them."""
+    import numpy as np
+
+    dt = np.diff(t)
+    bad = np.flatnonzero(dt <= 0)
+    if bad.size:
+        k = int(bad[0]) + 1
+        kind = "repeats" if dt[k - 1] == 0 else "goes back from"
+        prev, cur = shown[k - 1], shown[k]
+        fmt = (lambda x: repr(float(x))) if numeric else (lambda x: repr(str(x)))
+        raise InputError(f"{name}: {row_ref(k)}: time {fmt(cur)} {kind} the previous "
+                         f"row's {fmt(prev)} ({tcol!r} must increase strictly); "
+                         "sort the file by time and drop duplicate samples")
 
 
 def read_recording(path: str | os.PathLike, input: dict | None = None):
@@ -573,142 +814,28 @@ def read_recording(path: str | os.PathLike, input: dict | None = None):
         when the index carries the time column's name. No raw parser exception escapes.
     """
     import numpy as np
-    import pandas as pd
 
-    from .imu import ACC_UNITS, ImuData, axis_name_clash
-    from .timebase import TIME_UNITS, check_time_resolution
+    from .imu import ACC_UNITS, ImuData
 
     p = Path(path)
-    inp = dict(input or {})
     name = str(p)
-    tcol = inp.get("time", "t")
-    tunit = inp.get("time_unit", "s")
-    unit = inp.get("unit", "m/s^2")
-    origin = inp.get("time_origin")
-    if not isinstance(tcol, str):
-        raise InputError(f"{name}: time={tcol!r}; give the name of the time column as a string")
-    if not isinstance(tunit, str) or (tunit not in TIME_UNITS and tunit != "iso8601"):
-        raise InputError(f"{name}: time_unit={tunit!r}; valid units: {list(TIME_UNITS)} for numbers, or "
-                         "'iso8601' for timestamps")
-    if origin is not None and origin != "first":
-        raise InputError(f"{name}: time_origin={origin!r}; the only choice is \"first\" (count the times "
-                         "from the first sample), or omit it")
-    if not isinstance(unit, str) or unit not in ACC_UNITS:
-        raise InputError(f"{name}: unit={unit!r}; valid acceleration units: {list(ACC_UNITS)}")
-    cols = inp.get("columns")
-    if cols is not None and not (isinstance(cols, dict) and cols
-                                 and all(isinstance(v, str) for v in cols.values())):
-        raise InputError(f"{name}: columns={cols!r}; map axis names to column names, e.g. "
-                         'columns = { x = "acc_x" }')
-    df = _read_table(p)
-    if tcol not in df.columns and df.index.name is not None:
-        if df.index.name == tcol:  # the time column stored as the Parquet index: unambiguous
-            df = df.reset_index()
-        else:
-            raise InputError(f"{name}: time column {tcol!r} not found; the file's index is named "
-                             f"{df.index.name!r} (the time stored as the Parquet index?): set time = "
-                             f"\"{df.index.name}\" in the spec's [input] if it is the time; columns in the "
-                             f"file: {list(df.columns)}")
-    if tcol not in df.columns and not isinstance(df.index, pd.RangeIndex):
-        raise InputError(f"{name}: time column {tcol!r} not found; the file has an unnamed {df.index.dtype} "
-                         "index (the time stored as the Parquet index without a name?): write the file with "
-                         f"the time as a column named {tcol!r} (df.reset_index(names={tcol!r})); columns "
-                         f"in the file: {list(df.columns)}")
-    if len(df.columns) == 1:
-        head = str(df.columns[0])
-        for sep, what in ((";", "';'"), ("\t", "tabs"), ("|", "'|'"), (" ", "spaces")):
-            if sep in head.strip():
-                raise InputError(f"{name}: one column {head!r}: the fields seem to be separated by {what}; "
-                                 "bvpnav reads comma-separated CSV, save the file with ',' between fields")
-    if cols is None:
-        cols = {str(c)[4:]: c for c in df.columns if str(c).startswith("acc_")}
-        if not cols:
-            raise InputError(f"{name}: no acceleration columns: name them acc_<axis> or map them with "
-                             f"columns = {{ x = \"...\" }} in the spec's [input]; columns in the file: "
-                             f"{list(df.columns)}")
-        clash = axis_name_clash(list(cols))
-        if clash is not None:
-            raise InputError(f"{name}: the columns {list(cols.values())} give the axes {list(cols)}: {clash} "
-                             "(trajectory columns are t, <axis>, v<axis>, <axis>_std, v<axis>_std); rename "
-                             "the column(s) (e.g. acc_x, acc_y, acc_z) or map them with columns = { x = "
-                             "\"...\" } in the spec's [input]")
-    else:
-        clash = axis_name_clash([str(a) for a in cols])
-        if clash is not None:
-            raise InputError(f"{name}: [input] columns = {cols}: {clash} (trajectory columns are t, <axis>, "
-                             "v<axis>, <axis>_std, v<axis>_std); choose other axis names, e.g. "
-                             "columns = { x = \"...\", y = \"...\" }")
-    owner: dict[str, str] = {tcol: "the time column"}
-    for a, c in cols.items():
-        if c in owner:
-            raise InputError(f"{name}: column {c!r} is mapped to axis {a!r} but is already {owner[c]}; one "
-                             "column can feed one axis only: map each axis to its own column in the spec's "
-                             "[input] columns = { x = \"...\", y = \"...\" }")
-        owner[c] = f"axis {a!r}"
-    for what, col in [("time", tcol)] + [(f"axis {a}", c) for a, c in cols.items()]:
-        if col not in df.columns:
-            raise InputError(f"{name}: column {col!r} ({what}) not found; columns in the file: "
-                             f"{list(df.columns)}")
+    tcol, tunit, unit, origin, cols = _input_options(dict(input or {}), name)
+    df = _time_as_column(_read_table(p), tcol, name)
+    _check_separator(df, name)
+    cols = _axis_columns(df, cols, name)
+    _check_columns_present(df, tcol, cols, name)
     if len(df) < 3:
         raise InputError(f"{name}: {len(df)} rows; at least 3 samples are needed")
-    line0 = 2 if p.suffix.lower() == ".csv" else None  # header is line 1
-
-    def row_ref(k: int) -> str:
-        return f"row {k}" + (f" (line {k + line0})" if line0 else "")
-
+    row_ref = _row_ref(2 if p.suffix.lower() == ".csv" else None)  # header is line 1
     t_conv, zero = _time_seconds(df, tcol, tunit, origin, name, row_ref)
-    arrays = {}
-    for col in ([] if t_conv is not None else [tcol]) + list(cols.values()):
-        dtype = df[col].dtype
-        if pd.api.types.is_bool_dtype(dtype) or not (pd.api.types.is_numeric_dtype(dtype)
-                                                     or pd.api.types.is_object_dtype(dtype)
-                                                     or pd.api.types.is_string_dtype(dtype)):
-            raise InputError(f"{name}: column {col!r} holds {dtype} values; store "
-                             + ("times as numbers in " + tunit if col == tcol else
-                                f"accelerations as numbers in {unit}") + " in that column")
-        if pd.api.types.is_complex_dtype(dtype):
-            raise InputError(f"{name}: column {col!r} holds complex values; store real accelerations in "
-                             f"{unit} in that column")
-        try:
-            v = pd.to_numeric(df[col], errors="coerce").to_numpy(dtype=float, na_value=np.nan)
-        except (TypeError, ValueError):  # cells holding lists, dicts, bytes ... (Parquet)
-            raise InputError(f"{name}: column {col!r} holds values that are not numbers "
-                             f"(first: {df[col].iloc[0]!r}); store plain numbers in it") from None
-        raw = df[col].to_numpy()
-        bad = np.flatnonzero(~np.isfinite(v))
-        if bad.size:
-            k = int(bad[0])
-            if pd.isna(raw[k]) or str(raw[k]).strip().lower() == "nan":
-                what = "empty or NaN"
-            elif np.isinf(v[k]):
-                what = "infinite"
-            else:
-                what = f"not a number ({raw[k]!r})"
-            raise InputError(f"{name}: {row_ref(k)}, column {col!r} is {what} ({bad.size} bad row(s) in "
-                             "this column); fix or remove those rows")
-        arrays[col] = v
+    arrays = {col: _numeric_column(df, col, tcol, tunit, unit, name, row_ref)
+              for col in ([] if t_conv is not None else [tcol]) + list(cols.values())}
     if t_conv is not None:
         t, shown = t_conv, df[tcol].to_numpy()
     else:
         shown = arrays[tcol]
-        if origin == "first":
-            from .timebase import to_seconds
-
-            t, zero = to_seconds(shown, tunit)
-        else:
-            t = shown * TIME_UNITS[tunit]
-        if isinstance(df[tcol].dtype, np.dtype):
-            check_time_resolution(shown, df[tcol].dtype, f"{name}: column {tcol!r}")
-    dt = np.diff(t)
-    bad = np.flatnonzero(dt <= 0)
-    if bad.size:
-        k = int(bad[0]) + 1
-        kind = "repeats" if dt[k - 1] == 0 else "goes back from"
-        prev, cur = shown[k - 1], shown[k]
-        fmt = (lambda x: repr(float(x))) if t_conv is None else (lambda x: repr(str(x)))
-        raise InputError(f"{name}: {row_ref(k)}: time {fmt(cur)} {kind} the previous "
-                         f"row's {fmt(prev)} ({tcol!r} must increase strictly); "
-                         "sort the file by time and drop duplicate samples")
+        t, zero = _numeric_seconds(df, tcol, tunit, origin, shown, name)
+    _check_increasing(t, shown, t_conv is None, tcol, name, row_ref)
     acc = np.column_stack([arrays[c] for c in cols.values()]) * ACC_UNITS[unit]
     return ImuData(t=t, acc=acc, axes=list(cols), time_origin=zero)
 
@@ -866,6 +993,66 @@ def _probe_folder(folder: Path) -> OSError | None:
     return None
 
 
+def _input_identities(inputs: dict) -> tuple[dict, dict]:
+    """The given inputs by resolved path and by (device, inode): -> (name, path, True)."""
+    by_real: dict[str, tuple[str, object, bool]] = {}  # resolved path -> (name, path, is an input)
+    by_key: dict[tuple[int, int], tuple[str, object, bool]] = {}  # (device, inode) -> the same
+    for k, p in inputs.items():
+        if p is not None:
+            real, key = _ident(p)
+            by_real.setdefault(real, (k, p, True))
+            if key is not None:
+                by_key.setdefault(key, (k, p, True))
+    return by_real, by_key
+
+
+def _refuse_same_file(opt: str, p, real: str, key, by_real: dict, by_key: dict) -> None:
+    """Refuse output ``opt`` when it is an input or an earlier output (same path or hard link)."""
+    hit, how = by_real.get(real), "the same file as"
+    if hit is None and key is not None and key in by_key:
+        hit, how = by_key[key], "a hard link to"
+    if hit is not None:
+        other, op, is_input = hit
+        if is_input:
+            raise InputError(f"{opt} {str(p)!r} is {how} the input {other} {str(op)!r}: bvpnav never "
+                             f"writes over its inputs; give {opt} another path")
+        raise InputError(f"{opt} {str(p)!r} is {how} the output {other} {str(op)!r}: one output would "
+                         f"overwrite the other; give {opt} another path")
+
+
+def _check_existing_output(opt: str, p: Path) -> None:
+    """Refuse an existing output that is not a regular file, or is read-only."""
+    st = os.stat(p)
+    if not _stat.S_ISREG(st.st_mode):
+        raise InputError(f"{opt} {str(p)!r} is {_kind(st.st_mode)}; bvpnav replaces its outputs "
+                         f"whole, give {opt} the path of a regular file")
+    if not st.st_mode & 0o222:
+        raise InputError(f"{opt} {str(p)!r} is read-only (mode {_stat.S_IMODE(st.st_mode):04o}); "
+                         f"bvpnav does not replace a read-only file: make it writable (chmod u+w) "
+                         f"or give {opt} another path")
+
+
+def _existing_folder(opt: str, p: Path) -> Path:
+    """The nearest existing ancestor of ``p``; refused when it is a file, not a folder."""
+    parent = p.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if parent.exists() and not parent.is_dir():
+        raise InputError(f"{opt} {str(p)!r}: {str(parent)!r} is a file, not a folder; give {opt} a path "
+                         "in a folder")
+    return parent
+
+
+def _check_writable(folders: dict) -> None:
+    """Refuse the first folder (-> (option, path)) where a temporary file cannot be created."""
+    for folder, (opt, p) in folders.items():
+        exc = _probe_folder(Path(folder))
+        if exc is not None:
+            reason, fix = _WRITE_ERRORS.get(exc.errno, (exc.strerror or "it cannot be written", ""))
+            raise InputError(f"{opt} {str(p)!r}: cannot write in {folder!r}: {reason}; give {opt} a path in "
+                             "a folder you can write to" + (f" ({fix})" if fix else ""))
+
+
 def check_outputs(inputs: dict, outputs: dict) -> None:
     """The output policy, checked by every command before any work.
 
@@ -888,26 +1075,10 @@ def check_outputs(inputs: dict, outputs: dict) -> None:
         written (permission, read-only file system), checked by creating and removing a
         temporary file there.
     """
-    by_real: dict[str, tuple[str, object, bool]] = {}  # resolved path -> (name, path, is an input)
-    by_key: dict[tuple[int, int], tuple[str, object, bool]] = {}  # (device, inode) -> the same
-    for k, p in inputs.items():
-        if p is not None:
-            real, key = _ident(p)
-            by_real.setdefault(real, (k, p, True))
-            if key is not None:
-                by_key.setdefault(key, (k, p, True))
+    by_real, by_key = _input_identities(inputs)
     outs = [(k, p, *_ident(p)) for k, p in outputs.items() if p is not None]
     for opt, p, real, key in outs:
-        hit, how = by_real.get(real), "the same file as"
-        if hit is None and key is not None and key in by_key:
-            hit, how = by_key[key], "a hard link to"
-        if hit is not None:
-            other, op, is_input = hit
-            if is_input:
-                raise InputError(f"{opt} {str(p)!r} is {how} the input {other} {str(op)!r}: bvpnav never "
-                                 f"writes over its inputs; give {opt} another path")
-            raise InputError(f"{opt} {str(p)!r} is {how} the output {other} {str(op)!r}: one output would "
-                             f"overwrite the other; give {opt} another path")
+        _refuse_same_file(opt, p, real, key, by_real, by_key)
         by_real[real] = (opt, p, False)
         if key is not None:
             by_key[key] = (opt, p, False)
@@ -915,27 +1086,9 @@ def check_outputs(inputs: dict, outputs: dict) -> None:
     for opt, p, _real, key in outs:
         p = Path(p)
         if key is not None:
-            st = os.stat(p)
-            if not _stat.S_ISREG(st.st_mode):
-                raise InputError(f"{opt} {str(p)!r} is {_kind(st.st_mode)}; bvpnav replaces its outputs "
-                                 f"whole, give {opt} the path of a regular file")
-            if not st.st_mode & 0o222:
-                raise InputError(f"{opt} {str(p)!r} is read-only (mode {_stat.S_IMODE(st.st_mode):04o}); "
-                                 f"bvpnav does not replace a read-only file: make it writable (chmod u+w) "
-                                 f"or give {opt} another path")
-        parent = p.parent
-        while not parent.exists() and parent != parent.parent:
-            parent = parent.parent
-        if parent.exists() and not parent.is_dir():
-            raise InputError(f"{opt} {str(p)!r}: {str(parent)!r} is a file, not a folder; give {opt} a path "
-                             "in a folder")
-        folders.setdefault(os.path.realpath(parent), (opt, p))
-    for folder, (opt, p) in folders.items():
-        exc = _probe_folder(Path(folder))
-        if exc is not None:
-            reason, fix = _WRITE_ERRORS.get(exc.errno, (exc.strerror or "it cannot be written", ""))
-            raise InputError(f"{opt} {str(p)!r}: cannot write in {folder!r}: {reason}; give {opt} a path in "
-                             "a folder you can write to" + (f" ({fix})" if fix else ""))
+            _check_existing_output(opt, p)
+        folders.setdefault(os.path.realpath(_existing_folder(opt, p)), (opt, p))
+    _check_writable(folders)
 
 
 #: Keys every JSON summary written by bvpnav holds (see :func:`summary`).

@@ -2,10 +2,10 @@
 
 A spec lists items by their registered names (``bvpnav.items.registry()``) and error
 models by theirs (:func:`error_model_registry`), with their parameters; the input
-section maps a recording's columns and units. It is parsed with :mod:`tomllib` only and
-can never import or execute code: every name is looked up in the registries, every
-field checked against the class, and anything unknown is an error that names the line
-and lists the valid choices.
+section maps a recording's columns and units. It is parsed with :mod:`tomllib` only
+(``tomli``, the same parser, on Python 3.10) and can never import or execute code: every
+name is looked up in the registries, every field checked against the class, and anything
+unknown is an error that names the line and lists the valid choices.
 
 Example::
 
@@ -42,14 +42,23 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
+import sys
 from typing import Any
 
 import numpy as np
-import tomllib
 
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # Python 3.10: the same parser, packaged as tomli (a dependency there)
+    import tomli as tomllib
+
+from .backends import ACCURACIES
 from .errors import InputError
+from .formulation import RESIDUAL_FORMS
 from .imu import ACC_UNITS as _ACC_UNITS
-from .items import _snake, registry
+from .items import _snake, positive_array, registry
+from .lam import rule_names
+from .problem import NavigationProblem
 from .timebase import TIME_UNITS as _TIME_UNITS
 
 __all__ = ["Spec", "load_spec", "read_spec_text", "parse_spec", "dumps_spec", "problem_to_spec", "to_spec",
@@ -126,7 +135,6 @@ class Spec:
 
     def build(self, data):
         """A :class:`bvpnav.NavigationProblem` for ``data`` (ImuData) from this spec."""
-        from .problem import NavigationProblem
 
         try:
             prob = NavigationProblem(data, error_model=self.error_model(), **self.problem)
@@ -215,89 +223,106 @@ def _instantiate(cls, kind: str, fields: dict, text: str, section: str, index: i
                          f"fields' types and values against the {kind}'s documentation") from None
 
 
+def _finite_number(v, positive: bool) -> bool:
+    """Whether ``v`` is a finite int or float (not a bool), and > 0 if ``positive``."""
+    ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+    return ok and (v > 0 if positive else True)
+
+
 def _check_values(plain: dict, text: str, source: str) -> None:
     """Check the values of ``[problem]``, ``[solve]`` and ``[input]`` (not only their keys)."""
-    from .backends import ACCURACIES
-    from .formulation import RESIDUAL_FORMS
-    from .items import positive_array
-    from .lam import rule_names
+    def at(sec: str):
+        return lambda key: _where(source, _line_of(text, key, sec))
 
-    RULES = rule_names()
+    _check_problem_values(plain["problem"], at("problem"))
+    _check_solve_values(plain["solve"], at("solve"))
+    _check_demotion_values(plain["solve"], at("solve"))
+    _check_input_values(plain["input"], at("input"))
 
-    def where(key: str, sec: str) -> str:
-        return _where(source, _line_of(text, key, sec))
 
-    prob, solve = plain["problem"], plain["solve"]
+def _check_problem_values(prob: dict, where) -> None:
+    """Check ``[problem]``: the residual form and ``sigma_a`` (``where(key)`` names the line)."""
+
     if "residual" in prob and not (isinstance(prob["residual"], str) and prob["residual"] in RESIDUAL_FORMS):
-        raise InputError(f"{where('residual', 'problem')}: residual={prob['residual']!r}; choose one of "
+        raise InputError(f"{where('residual')}: residual={prob['residual']!r}; choose one of "
                          f"{list(RESIDUAL_FORMS)}")
     if "sigma_a" in prob:
         sa = prob["sigma_a"]
         if isinstance(sa, bool) or (isinstance(sa, list) and any(isinstance(v, bool) for v in sa)):
-            raise InputError(f"{where('sigma_a', 'problem')}: sigma_a={sa!r}; give a number in m/s^2")
+            raise InputError(f"{where('sigma_a')}: sigma_a={sa!r}; give a number in m/s^2")
         try:
             arr = positive_array(sa, "sigma_a (m/s^2)", allow_none=False)
         except (InputError, OverflowError) as exc:
-            raise InputError(f"{where('sigma_a', 'problem')}: {exc}") from None
+            raise InputError(f"{where('sigma_a')}: {exc}") from None
         if arr.ndim > 1 or arr.size not in (1, 2, 3):
-            raise InputError(f"{where('sigma_a', 'problem')}: sigma_a={sa!r}; give one number in m/s^2 or "
+            raise InputError(f"{where('sigma_a')}: sigma_a={sa!r}; give one number in m/s^2 or "
                              "one per axis")
+
+
+def _check_solve_values(solve: dict, where) -> None:
+    """Check ``[solve]``'s solver, accuracy, ``lam`` and ``on_conflict``."""
+    RULES = rule_names()
+
     if "solver" in solve and not isinstance(solve["solver"], str):
-        raise InputError(f"{where('solver', 'solve')}: solver={solve['solver']!r}; give a solver name, "
+        raise InputError(f"{where('solver')}: solver={solve['solver']!r}; give a solver name, "
                          'e.g. solver = "direct"')
     if "accuracy" in solve and not (isinstance(solve["accuracy"], str) and solve["accuracy"] in ACCURACIES):
-        raise InputError(f"{where('accuracy', 'solve')}: accuracy={solve['accuracy']!r}; choose one of "
+        raise InputError(f"{where('accuracy')}: accuracy={solve['accuracy']!r}; choose one of "
                          f"{list(ACCURACIES)}")
     if "lam" in solve:
         lam = solve["lam"]
         number = isinstance(lam, (int, float)) and not isinstance(lam, bool)
         if not ((number and math.isfinite(lam) and lam >= 0) or (isinstance(lam, str) and lam in RULES)):
-            raise InputError(f"{where('lam', 'solve')}: lam={lam!r}; give a number >= 0 or a rule: "
+            raise InputError(f"{where('lam')}: lam={lam!r}; give a number >= 0 or a rule: "
                              f"{', '.join(RULES)}")
     if "on_conflict" in solve and solve["on_conflict"] not in ("raise", "demote"):
-        raise InputError(f"{where('on_conflict', 'solve')}: on_conflict={solve['on_conflict']!r}; "
+        raise InputError(f"{where('on_conflict')}: on_conflict={solve['on_conflict']!r}; "
                          'choose "raise" or "demote"')
 
-    def number(v, positive: bool) -> bool:
-        ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-        return ok and (v > 0 if positive else True)
 
+def _check_demotion_values(solve: dict, where) -> None:
+    """Check ``[solve]``'s ``priority`` and ``demote_sigma`` (and that they are not beside an
+    explicit ``on_conflict = "raise"``)."""
     if "priority" in solve:
         pr = solve["priority"]
-        if not (isinstance(pr, dict) and all(number(v, False) for v in pr.values())):
-            raise InputError(f"{where('priority', 'solve')}: priority={pr!r}; give a table of item "
+        if not (isinstance(pr, dict) and all(_finite_number(v, False) for v in pr.values())):
+            raise InputError(f"{where('priority')}: priority={pr!r}; give a table of item "
                              'name = number, e.g. priority = { "survey point" = 10 }')
     # an explicit on_conflict = "raise" beside them contradicts them; without on_conflict they
     # are kept for a later "demote" (tests/test_cli.py switches a spec between the two)
     for key in ("priority", "demote_sigma"):
         if key in solve and solve.get("on_conflict") == "raise":
-            raise InputError(f"{where(key, 'solve')}: {key} is set but on_conflict is 'raise', so it "
+            raise InputError(f"{where(key)}: {key} is set but on_conflict is 'raise', so it "
                              "would be ignored; "
                              f'add on_conflict = "demote" to [solve] (or remove {key})')
     if "demote_sigma" in solve:
         ds = solve["demote_sigma"]
-        ok = number(ds, True) or (isinstance(ds, dict) and all(number(v, True) for v in ds.values()))
+        ok = _finite_number(ds, True) or (isinstance(ds, dict) and all(_finite_number(v, True)
+                                                                       for v in ds.values()))
         if not ok:
-            raise InputError(f"{where('demote_sigma', 'solve')}: demote_sigma={ds!r}; give a number > 0 "
+            raise InputError(f"{where('demote_sigma')}: demote_sigma={ds!r}; give a number > 0 "
                              "(item units) or a table of item name = number > 0")
-    inp = plain["input"]
+
+
+def _check_input_values(inp: dict, where) -> None:
+    """Check ``[input]``: time column, time unit and origin, acceleration unit, columns."""
     if "time" in inp and not isinstance(inp["time"], str):
-        raise InputError(f"{where('time', 'input')}: time={inp['time']!r}; give the "
+        raise InputError(f"{where('time')}: time={inp['time']!r}; give the "
                          'name of the time column as a string, e.g. time = "t"')
     if "time_unit" in inp and not (isinstance(inp["time_unit"], str)
                                    and (inp["time_unit"] in TIME_UNITS or inp["time_unit"] == "iso8601")):
-        raise InputError(f"{where('time_unit', 'input')}: time_unit="
+        raise InputError(f"{where('time_unit')}: time_unit="
                          f"{inp['time_unit']!r}; valid units: {list(TIME_UNITS)} for numbers, or \"iso8601\" "
                          "for timestamps")
     if "time_origin" in inp and inp["time_origin"] != "first":
-        raise InputError(f"{where('time_origin', 'input')}: time_origin={inp['time_origin']!r}; the only "
+        raise InputError(f"{where('time_origin')}: time_origin={inp['time_origin']!r}; the only "
                          'choice is "first" (count the times from the first sample), or omit the key')
     if "unit" in inp and not (isinstance(inp["unit"], str) and inp["unit"] in ACC_UNITS):
-        raise InputError(f"{where('unit', 'input')}: unit={inp['unit']!r}; "
+        raise InputError(f"{where('unit')}: unit={inp['unit']!r}; "
                          f"valid acceleration units: {list(ACC_UNITS)}")
     if "columns" in inp and not (isinstance(inp["columns"], dict) and inp["columns"]
                                  and all(isinstance(v, str) for v in inp["columns"].values())):
-        raise InputError(f"{where('columns', 'input')}: columns must map "
+        raise InputError(f"{where('columns')}: columns must map "
                          'axis names to column names, e.g. columns = { x = "acc_x" }')
 
 
@@ -338,42 +363,56 @@ def _parse_spec(text: str, source: str = "spec") -> Spec:
             line = _line_of(text, None, sec) or _line_of(text, sec)
             raise InputError(f"{_where(source, line)}: unknown section {sec!r}; valid sections: "
                              f"{sorted(_SECTIONS)}")
-    plain = {}
-    for sec in ("input", "problem", "solve"):
-        tab = doc.get(sec, {})
-        if not isinstance(tab, dict):
-            raise InputError(f"{source}: [{sec}] must be a table")
-        for key in tab:
-            if key not in _SECTIONS[sec]:
-                line = _line_of(text, key, sec)
-                raise InputError(f"{_where(source, line)}: unknown key {key!r} in [{sec}]; valid keys: "
-                                 f"{sorted(_SECTIONS[sec])}")
-        plain[sec] = dict(tab)
-    inp = plain["input"]
+    plain = {sec: _plain_table(doc, sec, text, source) for sec in ("input", "problem", "solve")}
     _check_values(plain, text, source)
     reg_items = registry()
     reg_models = error_model_registry()
-    objs = {}
-    for sec, reg, kind in (("item", reg_items, "item"), ("error_model", reg_models, "error model")):
-        entries = doc.get(sec, [])
-        if isinstance(entries, dict):
-            entries = [entries]
-        if not isinstance(entries, list) or not all(isinstance(e, dict) for e in entries):
-            line = _line_of(text, None, sec) or _line_of(text, sec)
-            raise InputError(f"{_where(source, line)}: {sec} must be a list of [[{sec}]] tables, each "
-                             f'with a type = "..." key; valid types: {sorted(reg)}')
-        out = []
-        for k, entry in enumerate(entries):
-            fields = dict(entry)
-            name = fields.pop("type", None)
-            if name is None:
-                raise InputError(f"{_where(source, _line_of(text, None, sec, k))}: [[{sec}]] number "
-                                 f"{k + 1} has no type; valid types: {sorted(reg)}")
-            if str(name).lower() not in reg:
-                raise InputError(f"{_where(source, _line_of(text, 'type', sec, k))}: unknown {kind} "
-                                 f"{name!r}; valid types: {sorted(reg)}")
-            out.append(_instantiate(reg[str(name).lower()], kind, fields, text, sec, k, source))
-        objs[sec] = out
+    objs = {sec: _instances(doc, sec, reg, kind, text, source)
+            for sec, reg, kind in (("item", reg_items, "item"), ("error_model", reg_models, "error model"))}
+    _check_item_names(doc, text, source)
+    where = {k: _where(source, _line_of(text, k, sec)) for sec in ("problem", "solve") for k in plain[sec]}
+    return Spec(plain["input"], plain["problem"], plain["solve"], objs["item"], objs["error_model"], where)
+
+
+def _plain_table(doc: dict, sec: str, text: str, source: str) -> dict:
+    """A copy of the ``[sec]`` table (``{}`` if absent), refused if it is not a table or has an
+    unknown key."""
+    tab = doc.get(sec, {})
+    if not isinstance(tab, dict):
+        raise InputError(f"{source}: [{sec}] must be a table")
+    for key in tab:
+        if key not in _SECTIONS[sec]:
+            line = _line_of(text, key, sec)
+            raise InputError(f"{_where(source, line)}: unknown key {key!r} in [{sec}]; valid keys: "
+                             f"{sorted(_SECTIONS[sec])}")
+    return dict(tab)
+
+
+def _instances(doc: dict, sec: str, reg: dict, kind: str, text: str, source: str) -> list:
+    """The ``[[sec]]`` tables as instances of the registered classes ``reg`` (by ``type``)."""
+    entries = doc.get(sec, [])
+    if isinstance(entries, dict):
+        entries = [entries]
+    if not isinstance(entries, list) or not all(isinstance(e, dict) for e in entries):
+        line = _line_of(text, None, sec) or _line_of(text, sec)
+        raise InputError(f"{_where(source, line)}: {sec} must be a list of [[{sec}]] tables, each "
+                         f'with a type = "..." key; valid types: {sorted(reg)}')
+    out = []
+    for k, entry in enumerate(entries):
+        fields = dict(entry)
+        name = fields.pop("type", None)
+        if name is None:
+            raise InputError(f"{_where(source, _line_of(text, None, sec, k))}: [[{sec}]] number "
+                             f"{k + 1} has no type; valid types: {sorted(reg)}")
+        if str(name).lower() not in reg:
+            raise InputError(f"{_where(source, _line_of(text, 'type', sec, k))}: unknown {kind} "
+                             f"{name!r}; valid types: {sorted(reg)}")
+        out.append(_instantiate(reg[str(name).lower()], kind, fields, text, sec, k, source))
+    return out
+
+
+def _check_item_names(doc: dict, text: str, source: str) -> None:
+    """Refuse two ``[[item]]`` tables with the same name (names identify items)."""
     seen: dict[str, int] = {}
     for k, entry in enumerate(doc.get("item", []) if isinstance(doc.get("item"), list) else []):
         nm = entry.get("name")
@@ -384,8 +423,6 @@ def _parse_spec(text: str, source: str = "spec") -> Spec:
                                  f"named {nm!r}; item names identify items (priority, demote_sigma, "
                                  "messages): rename one of them")
             seen[nm] = k
-    where = {k: _where(source, _line_of(text, k, sec)) for sec in ("problem", "solve") for k in plain[sec]}
-    return Spec(inp, plain["problem"], plain["solve"], objs["item"], objs["error_model"], where)
 
 
 def read_spec_text(path) -> str:
