@@ -146,6 +146,33 @@ def _allowed_columns(model: NavModel, axes: tuple[str, ...]) -> set[int]:
     return cols | set(model.l_index.tolist())
 
 
+def _check_axes(item: Item, model: NavModel, who: str) -> None:
+    """Restricted to one axis, the rows touch that axis's unknowns (and ``l``) only."""
+    candidates = [item]
+    if item.axes is None and not type(item).__name__.startswith("_"):
+        with _rule(who, "example"):
+            candidates.append(type(item).example())
+    for cand in candidates:
+        if cand.axes is not None:
+            one = cand
+            with _rule(who, "axes"):
+                rows = one.compile(model)
+        elif model.d > 1:
+            try:  # refused: values given per axis, or the item needs several axes
+                one = dataclasses.replace(cand, axes=(model.axes[1],))
+                rows = one.compile(model)
+            except InputError:
+                continue
+        else:
+            return
+        cols = set(np.unique(rows.A.nonzero()[1]).tolist())
+        outside = sorted(cols - _allowed_columns(model, tuple(one.axes)))
+        _require(not outside, who, "axes",
+                 f"with axes={list(one.axes)} the rows touch {len(outside)} unknown(s) of other axes "
+                 "(use model.axes_of(self.axes) and pass self.axes to model.position(), ...)")
+        return
+
+
 def _solve_with(item: Item, model: NavModel, hard: bool, who: str) -> None:
     """A tiny end-to-end solve: the item hard beside soft end positions, or soft beside hard ones."""
     from . import constraints
@@ -230,8 +257,10 @@ def check_item(item_or_class: Item | type[Item], model: NavModel | None = None) 
       object: the copy reports the mode and compiles to the same rows;
     - 'refuses bad sigma' / 'refuses bad mode': ``sigma=-1`` and ``mode="sometimes"``
       raise :class:`bvpnav.InputError` naming the class (and the field);
-    - 'axes': restricted to one axis, the rows touch only that axis's unknowns and the
-      error-model parameters;
+    - 'axes': restricted to one axis (the second of the model's; the item's own
+      ``axes`` when it has some), the rows touch only that axis's unknowns and the
+      error-model parameters. An instance whose values name every axis (so it refuses
+      one axis) is checked through its class's ``example()``;
     - 'solves when hard': hard, beside soft positions 0 at both ends, the item gives a
       verified finite solution in which it is reported; 'solves when soft': the same
       with ``sigma=1`` beside hard end positions;
@@ -350,21 +379,7 @@ def _check_item(item: Item, model: NavModel, who: str) -> None:
                  "mode (the framework applies it)")
 
     # --------------------------------------------------------- axis choice
-    if model.d > 1 or item.axes is not None:
-        one = item
-        if item.axes is None:
-            try:
-                one = dataclasses.replace(item, axes=(model.axes[min(1, model.d - 1)],))
-            except InputError:  # the item needs several axes: it keeps its own choice
-                one = None
-        if one is not None and one.axes is not None:
-            with _rule(who, "axes"):
-                rows = one.compile(model)
-            cols = set(np.unique(rows.A.nonzero()[1]).tolist())
-            outside = sorted(cols - _allowed_columns(model, tuple(one.axes)))
-            _require(not outside, who, "axes",
-                     f"with axes={list(one.axes)} the rows touch {len(outside)} unknown(s) of other axes "
-                     "(use model.axes_of(self.axes) and pass self.axes to model.position(), ...)")
+    _check_axes(item, model, who)
 
     # ----------------------------------------------------------- end to end
     _solve_with(item, model, hard=True, who=who)
@@ -387,6 +402,20 @@ def _truth_values(q: int) -> np.ndarray:
     return 0.01 * (1.0 + 0.5 * k / max(q, 1)) * np.where(k % 2, -1.0, 1.0)
 
 
+def _without_priors(em: Any) -> Any:
+    """``em`` without soft priors and bounds (a prior pulls the estimate off the simulated value)."""
+    from .error_models._base import CompositeErrorModel
+
+    if isinstance(em, CompositeErrorModel):
+        return CompositeErrorModel(*[_without_priors(c) for c in em.components])
+    if dataclasses.is_dataclass(em):
+        names = {f.name for f in dataclasses.fields(em)}
+        kw = {k: None for k in ("prior", "sigma", "bounds") if k in names and getattr(em, k) is not None}
+        if kw:
+            return dataclasses.replace(em, **kw)
+    return em
+
+
 def _check_recovery(em: Any, data: ImuData, q: int, who: str) -> None:
     """Simulate a sensor with known internal parameters and solve for them."""
     from . import constraints
@@ -395,20 +424,27 @@ def _check_recovery(em: Any, data: ImuData, q: int, who: str) -> None:
     rule = "recovers its parameters"
     l_true = _truth_values(q)
     with _rule(who, rule):
+        em = _without_priors(em)
         a_true = np.asarray(data.acc, dtype=float)
-        meas = data
-        for _ in range(30):  # a_hat = a_true - G(a_hat) l: columns may depend on the measurement
+        meas, step = data, np.inf
+        scale = max(1.0, float(np.max(np.abs(a_true))))
+        for _ in range(50):  # a_hat = a_true - G(a_hat) l: columns may depend on the measurement
             acc = a_true - np.einsum("nap,p->na", np.asarray(em.columns(meas), dtype=float), l_true)
             step = float(np.max(np.abs(acc - meas.acc)))
             meas = _with_acc(meas, acc)
-            if step <= 1e-15 * max(1.0, float(np.max(np.abs(a_true)))):
+            if step <= 1e-14 * scale:
                 break
+    _require(step <= 1e-14 * scale, who, rule,
+             f"simulating a_hat = a_true - G(a_hat) l by fixed-point iteration did not converge (last "
+             f"change {step:.3g} m/s^2): the columns change too fast with the measurement for "
+             f"parameters of about 0.01")
+    with _rule(who, rule):
         # the truth: the FEM's own double integration of the true accelerations
         t = data.t
         free = NavigationProblem(data).add(constraints.Position(t=float(t[0]), value=0.0),
                                            constraints.Velocity(t=float(t[0]), value=0.0))
-        truth = free.solve(accuracy="high")
-        pos, vel = truth.position(), truth.velocity()
+        integrated = free.solve(accuracy="high")
+        pos, vel = integrated.position(), integrated.velocity()
         k = np.unique(np.linspace(0, t.size - 1, 11).round().astype(int))
         prob = NavigationProblem(meas, error_model=em)
         prob.add(constraints.Position(t=t[k], value=pos[k], name="check positions"),
@@ -417,18 +453,30 @@ def _check_recovery(em: Any, data: ImuData, q: int, who: str) -> None:
     _require(not missing, who, rule, f"on the check data the parameters are not determined by positions "
              f"and velocities at 11 instants ({'; '.join(missing)}); pass data= on which they are")
     with _rule(who, rule):
+        model = NavModel(meas, em)
         sol = prob.solve(accuracy="high")
-        expect = em.report(l_true, NavModel(meas, em))
-    est = sol.error_params
+        expect = em.report(l_true, model)
+        zero = em.report(np.zeros(q), model)
+    names = list(expect.index)
+    simulated = dict(zip(names, np.round(l_true, 6).tolist(), strict=True))
     _require(sol.stats.get("verified"), who, rule, "the solve was not verified")
-    _require(list(est.index) == list(expect.index), who, rule,
-             f"the solution reports {list(est.index)}, the model's report() {list(expect.index)}")
+    # the solver's internal values first (a report could hide a wrong estimate) ...
+    l_est = sol.x[model.l_index]
+    bad = np.flatnonzero(~(np.abs(l_est - l_true) <= 1e-6 * np.abs(l_true)))
+    wrong = ", ".join(f"{names[j]}: {l_est[j]:.9g}" for j in bad)
+    _require(not bad.size, who, rule, f"simulated with internal parameters {simulated}; the solve found "
+             f"internal values {wrong}")
+    # ... then what the user sees: report(l) of the estimate against report(l) of the truth
+    est = sol.error_params
+    _require(list(est.index) == names, who, rule,
+             f"the solution reports {list(est.index)}, the model's report() {names}")
     e, x = est.to_numpy(dtype=float), expect.to_numpy(dtype=float)
-    tol = 1e-6 * np.maximum(np.abs(x), 0.01)
-    bad = np.flatnonzero(~(np.abs(e - x) <= tol))
-    truth = dict(zip(expect.index, np.round(l_true, 6).tolist(), strict=True))
-    wrong = ", ".join(f"{expect.index[j]} = {e[j]:.9g} (expected {x[j]:.9g})" for j in bad)
-    _require(not bad.size, who, rule, f"simulated with internal parameters {truth}; estimated {wrong}")
+    bad = np.flatnonzero(~(np.abs(e - x) <= 1e-6 * np.maximum(np.abs(x), 0.01)))
+    wrong = ", ".join(f"{names[j]} = {e[j]:.9g} (expected {x[j]:.9g})" for j in bad)
+    _require(not bad.size, who, rule, f"simulated with internal parameters {simulated}; reported {wrong}")
+    same = np.flatnonzero(expect.to_numpy(dtype=float) == zero.to_numpy(dtype=float))
+    _require(not same.size, who, "report", "report() ignores the parameter(s) "
+             f"{[names[j] for j in same]}: the same value at l = 0 and at l = {simulated}")
 
 
 def check_error_model(model_or_class: Any, data: ImuData | None = None) -> None:
@@ -472,9 +520,11 @@ def check_error_model(model_or_class: Any, data: ImuData | None = None) -> None:
       parameters ``l`` (about 0.01, both signs) by solving
       ``a_hat = a_true - G(a_hat) l`` by fixed-point iteration (the columns may depend
       on the measurement), positions and velocities at 11 instants are taken from the
-      FEM's integration of ``a_true``, and the solve must report ``report(l)`` to
-      1e-6 relative (absolute 1e-8 below 0.01). Parameters that these measurements
-      cannot determine fail the rule; pass ``data=`` on which they can.
+      FEM's integration of ``a_true``, and the solve (priors and bounds dropped) must
+      find ``l`` to 1e-6 relative and report ``report(l)`` (1e-6 relative, absolute
+      1e-8 below 0.01); ``report()`` must change with every parameter (rule
+      'report'). Parameters that these measurements cannot determine fail the rule;
+      pass ``data=`` on which they can.
     """
     from .error_models._base import as_error_model
 
