@@ -72,6 +72,13 @@ def test_item_that_needs_linearization_is_checked_through_its_linearized_copy():
     check_item(track)
 
 
+def test_an_item_against_a_model_with_an_error_model():
+    """The rows span the parameters too; the tiny solves do without the error model."""
+    t = np.linspace(0.0, 10.0, 101)
+    data = bvpnav.ImuData(t, np.column_stack([np.sin(t), np.cos(t), 0.1 * t]))
+    check_item(bvpnav.constraints.Velocity, bvpnav.NavModel(data, error_models.ScaleFactor()))
+
+
 def test_an_item_on_a_one_axis_model():
     t = np.linspace(0.0, 10.0, 51)
     check_item(bvpnav.constraints.Velocity.example(), bvpnav.NavModel(bvpnav.ImuData(t, np.sin(t))))

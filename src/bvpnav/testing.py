@@ -32,10 +32,14 @@ import cvxpy as cp
 import numpy as np
 import pandas as pd
 
+from .constraints import Position, Velocity
+from .error_models import CompositeErrorModel, ErrorModel
+from .error_models._base import as_error_model
 from .errors import InputError
 from .imu import ImuData
 from .items import MODES, Item, item_class
 from .model import Affine, Cone, NavModel
+from .problem import NavigationProblem
 
 __all__ = ["check_item", "check_error_model"]
 
@@ -175,20 +179,17 @@ def _check_axes(item: Item, model: NavModel, who: str) -> None:
 
 def _solve_with(item: Item, model: NavModel, hard: bool, who: str) -> None:
     """A tiny end-to-end solve: the item hard beside soft end positions, or soft beside hard ones."""
-    from . import constraints
-    from .problem import NavigationProblem
-
     rule = "solves when hard" if hard else "solves when soft"
     t = model.grid.t
     ends = [float(t[0]), float(t[-1])]
     with _rule(who, rule):
         if hard:
-            base = constraints.Position(t=ends, value=0.0, sigma=1.0, name="check_item ends (soft)")
+            base = Position(t=ends, value=0.0, sigma=1.0, name="check_item ends (soft)")
             checked = _switch(item, "hard")
         else:
-            base = constraints.Position(t=ends, value=0.0, name="check_item ends (hard)")
+            base = Position(t=ends, value=0.0, name="check_item ends (hard)")
             checked = _switch(item, "soft", sigma=1.0)
-        prob = NavigationProblem(model.data, error_model=model.error_model)
+        prob = NavigationProblem(model.data)  # no error model: its parameters would need more items
         prob.add(base, checked)
         sol = prob.solve(lam=1.0)
     _require(sol.stats.get("verified"), who, rule, f"the solve was not verified ({sol.stats.get('status')})")
@@ -202,13 +203,10 @@ def _solve_with(item: Item, model: NavModel, hard: bool, who: str) -> None:
 
 def _base_trajectory(model: NavModel, who: str) -> pd.DataFrame:
     """The estimate a sequential loop would start from: positions 0 at both ends."""
-    from . import constraints
-    from .problem import NavigationProblem
-
     t = model.grid.t
     with _rule(who, "linearized"):
         prob = NavigationProblem(model.data)
-        prob.add(constraints.Position(t=[float(t[0]), float(t[-1])], value=0.0))
+        prob.add(Position(t=[float(t[0]), float(t[-1])], value=0.0))
         return prob.solve().trajectory
 
 
@@ -247,7 +245,9 @@ def check_item(item_or_class: Item | type[Item], model: NavModel | None = None) 
     - 'no cvxpy objects': the constructor stores data only;
     - 'pickles': a pickled copy compiles to the same rows (batch runs ship items to
       worker processes);
-    - 'math': ``math()`` is one non-empty line of text (for ``describe()``);
+    - 'math': ``math()`` is one non-empty line of text (for ``describe()``) and
+      ``latex()`` a non-empty string or None; 'repr': ``repr()`` and ``identify()``
+      give text (they name the item in messages);
     - 'compile returns an Affine' / 'compile returns a Cone' (``kind = "cone"``),
       'residual shape' (``m > 0`` rows over all ``model.size`` unknowns), 'residual
       labels' (one per row, if any), 'finite residual', and for cones 'cone groups'
@@ -263,7 +263,8 @@ def check_item(item_or_class: Item | type[Item], model: NavModel | None = None) 
       one axis) is checked through its class's ``example()``;
     - 'solves when hard': hard, beside soft positions 0 at both ends, the item gives a
       verified finite solution in which it is reported; 'solves when soft': the same
-      with ``sigma=1`` beside hard end positions;
+      with ``sigma=1`` beside hard end positions (both on ``model.data`` without the
+      error model, whose parameters these items alone need not determine);
     - 'linearized': an item with ``needs_linearization`` True is not compiled or solved
       itself; its ``linearized(t, trajectory)`` about the solution with positions 0 at
       both ends must no longer need linearization and is put through every rule above.
@@ -321,6 +322,14 @@ def _check_item(item: Item, model: NavModel, who: str) -> None:
         text = item.math()
     _require(isinstance(text, str) and text.strip() and "\n" not in text.strip(), who, "math",
              f"math() returned {text!r}; give one non-empty line of plain-text mathematics")
+    with _rule(who, "math"):
+        tex = item.latex()
+    _require(tex is None or (isinstance(tex, str) and tex.strip()), who, "math",
+             f"latex() returned {tex!r}; give a non-empty mathtext string or None (use math())")
+    with _rule(who, "repr"):
+        shown = (repr(item), item.identify())
+    _require(all(isinstance(v, str) and v for v in shown), who, "repr",
+             "repr() or identify() gave no text (both name the item in messages)")
     with _rule(who, "pickles"):
         copy = pickle.loads(pickle.dumps(item))
     _require(type(copy) is cls, who, "pickles", f"unpickled as {type(copy).__name__}")
@@ -402,10 +411,8 @@ def _truth_values(q: int) -> np.ndarray:
     return 0.01 * (1.0 + 0.5 * k / max(q, 1)) * np.where(k % 2, -1.0, 1.0)
 
 
-def _without_priors(em: Any) -> Any:
+def _without_priors(em: ErrorModel | CompositeErrorModel) -> ErrorModel | CompositeErrorModel:
     """``em`` without soft priors and bounds (a prior pulls the estimate off the simulated value)."""
-    from .error_models._base import CompositeErrorModel
-
     if isinstance(em, CompositeErrorModel):
         return CompositeErrorModel(*[_without_priors(c) for c in em.components])
     if dataclasses.is_dataclass(em):
@@ -416,11 +423,8 @@ def _without_priors(em: Any) -> Any:
     return em
 
 
-def _check_recovery(em: Any, data: ImuData, q: int, who: str) -> None:
+def _check_recovery(em: ErrorModel | CompositeErrorModel, data: ImuData, q: int, who: str) -> None:
     """Simulate a sensor with known internal parameters and solve for them."""
-    from . import constraints
-    from .problem import NavigationProblem
-
     rule = "recovers its parameters"
     l_true = _truth_values(q)
     with _rule(who, rule):
@@ -441,14 +445,14 @@ def _check_recovery(em: Any, data: ImuData, q: int, who: str) -> None:
     with _rule(who, rule):
         # the truth: the FEM's own double integration of the true accelerations
         t = data.t
-        free = NavigationProblem(data).add(constraints.Position(t=float(t[0]), value=0.0),
-                                           constraints.Velocity(t=float(t[0]), value=0.0))
+        free = NavigationProblem(data).add(Position(t=float(t[0]), value=0.0),
+                                           Velocity(t=float(t[0]), value=0.0))
         integrated = free.solve(accuracy="high")
         pos, vel = integrated.position(), integrated.velocity()
         k = np.unique(np.linspace(0, t.size - 1, 11).round().astype(int))
         prob = NavigationProblem(meas, error_model=em)
-        prob.add(constraints.Position(t=t[k], value=pos[k], name="check positions"),
-                 constraints.Velocity(t=t[k], value=vel[k], name="check velocities"))
+        prob.add(Position(t=t[k], value=pos[k], name="check positions"),
+                 Velocity(t=t[k], value=vel[k], name="check velocities"))
         missing = prob.unobservable()
     _require(not missing, who, rule, f"on the check data the parameters are not determined by positions "
              f"and velocities at 11 instants ({'; '.join(missing)}); pass data= on which they are")
@@ -479,7 +483,8 @@ def _check_recovery(em: Any, data: ImuData, q: int, who: str) -> None:
              f"{[names[j] for j in same]}: the same value at l = 0 and at l = {simulated}")
 
 
-def check_error_model(model_or_class: Any, data: ImuData | None = None) -> None:
+def check_error_model(model_or_class: ErrorModel | CompositeErrorModel | type[ErrorModel],
+                      data: ImuData | None = None) -> None:
     """Check that an error model honours the contract of :class:`bvpnav.error_models.ErrorModel`.
 
     Parameters
@@ -526,8 +531,6 @@ def check_error_model(model_or_class: Any, data: ImuData | None = None) -> None:
       'report'). Parameters that these measurements cannot determine fail the rule;
       pass ``data=`` on which they can.
     """
-    from .error_models._base import as_error_model
-
     if isinstance(model_or_class, type):
         cls = model_or_class
         who = f"error model {cls.__name__}"
