@@ -229,6 +229,22 @@ class _NoExample(bvpnav.Item):
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
+class _Cached(_Loop):
+    def compile(self, model):  # keeps the first model's rows
+        if "_rows" not in self.__dict__:
+            object.__setattr__(self, "_rows", super().compile(model))
+        return self.__dict__["_rows"]
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _KeepsExpression(_Loop):
+    def compile(self, model):
+        rows = super().compile(model)
+        object.__setattr__(self, "_expr", rows.expr(model.x))
+        return rows
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
 class _Crashes(_Loop):
     def compile(self, model):
         raise ZeroDivisionError("oops")
@@ -253,6 +269,8 @@ BROKEN_ITEMS = [
     (_Contradiction, "solves when hard"),
     (_BadConeValues, "finite residual"),
     (_NeverLinear, "linearized"),
+    (_Cached, "no state across models"),
+    (_KeepsExpression, "no cvxpy objects"),
     (_Crashes, "compile"),
 ]
 
@@ -407,6 +425,21 @@ BROKEN_MODELS = [
 def test_broken_error_model_fails_naming_the_rule(plugin, rule):
     with pytest.raises(AssertionError, match=rf"^error model {plugin.__name__}: rule '{rule}' broken: "):
         check_error_model(plugin)
+
+
+def test_the_custom_error_model_example_passes(monkeypatch):
+    """examples/custom_error_model.py's BiasDrift, alone and beside a built-in model."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "examples" / "custom_error_model.py"
+    spec = importlib.util.spec_from_file_location("_custom_error_model_example", path)
+    mod = importlib.util.module_from_spec(spec)
+    monkeypatch.setitem(sys.modules, spec.name, mod)  # importable by name, as pickle needs
+    spec.loader.exec_module(mod)
+    check_error_model(mod.BiasDrift)
+    data = bvpnav.simulate.strapdown_3d_2010(rate=10.0).imu_data()
+    check_error_model(mod.BiasDrift() + error_models.Bias(), data)
 
 
 def test_a_non_model_is_refused():

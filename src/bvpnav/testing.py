@@ -150,6 +150,29 @@ def _allowed_columns(model: NavModel, axes: tuple[str, ...]) -> set[int]:
     return cols | set(model.l_index.tolist())
 
 
+def _other_model(model: NavModel) -> NavModel:
+    """The same axes and window on a coarser grid (navigation-frame accelerations)."""
+    t = model.grid.t
+    t2 = np.linspace(float(t[0]), float(t[-1]), max(t.size // 2 + 1, 3))
+    acc = np.column_stack([np.interp(t2, t, model.data.acc[:, a]) for a in range(model.d)])
+    return NavModel(ImuData(t2, acc, axes=model.axes))
+
+
+def _check_other_model(item: Item, model: NavModel, res: Affine, who: str) -> None:
+    """Rows follow the model they are compiled for: the item keeps nothing from one compile."""
+    rule = "no state across models"
+    with _rule(who, rule):
+        other = _other_model(model)
+        rows = item.compile(other)
+        back = item.compile(model)
+    _require(isinstance(rows, Affine) and rows.A.shape[1] == other.size, who, rule,
+             f"compiled for a model of {other.size} unknowns the rows have "
+             f"{getattr(getattr(rows, 'A', None), 'shape', ('?', '?'))[1]} columns: build them from the "
+             "model passed to compile(), cache nothing")
+    _require(isinstance(back, Affine) and _same_rows(res, back), who, rule,
+             "after compiling for another model the rows for the first one changed")
+
+
 def _check_axes(item: Item, model: NavModel, who: str) -> None:
     """Restricted to one axis, the rows touch that axis's unknowns (and ``l``) only."""
     candidates = [item]
@@ -177,18 +200,22 @@ def _check_axes(item: Item, model: NavModel, who: str) -> None:
         return
 
 
-def _solve_with(item: Item, model: NavModel, hard: bool, who: str) -> None:
-    """A tiny end-to-end solve: the item hard beside soft end positions, or soft beside hard ones."""
-    rule = "solves when hard" if hard else "solves when soft"
+def _solve_with(item: Item, model: NavModel, mode: str, who: str) -> None:
+    """A tiny end-to-end solve with the item in ``mode``.
+
+    Hard and band items stand beside soft end positions (a hard item may fix the ends
+    itself), soft and robust ones beside hard end positions (so the problem is
+    determined without them).
+    """
+    rule = f"solves when {mode}"
     t = model.grid.t
     ends = [float(t[0]), float(t[-1])]
     with _rule(who, rule):
-        if hard:
+        if mode in ("hard", "band"):
             base = Position(t=ends, value=0.0, sigma=1.0, name="check_item ends (soft)")
-            checked = _switch(item, "hard")
         else:
             base = Position(t=ends, value=0.0, name="check_item ends (hard)")
-            checked = _switch(item, "soft", sigma=1.0)
+        checked = _switch(item, mode, sigma=1.0)
         prob = NavigationProblem(model.data)  # no error model: its parameters would need more items
         prob.add(base, checked)
         sol = prob.solve(lam=1.0)
@@ -252,7 +279,10 @@ def check_item(item_or_class: Item | type[Item], model: NavModel | None = None) 
       'residual shape' (``m > 0`` rows over all ``model.size`` unknowns), 'residual
       labels' (one per row, if any), 'finite residual', and for cones 'cone groups'
       (``m`` a multiple of the group size, ``excess()`` finite);
-    - 'deterministic': compiling twice gives identical rows;
+    - 'deterministic': compiling twice gives identical rows; 'no state across models':
+      compiled for a coarser grid of the same window the rows span that model's unknowns,
+      and the first model's rows are unchanged afterwards ('no cvxpy objects' is checked
+      again after compiling);
     - 'modes': every mode of :data:`bvpnav.items.MODES` is a switch on the same
       object: the copy reports the mode and compiles to the same rows;
     - 'refuses bad sigma' / 'refuses bad mode': ``sigma=-1`` and ``mode="sometimes"``
@@ -262,9 +292,11 @@ def check_item(item_or_class: Item | type[Item], model: NavModel | None = None) 
       error-model parameters. An instance whose values name every axis (so it refuses
       one axis) is checked through its class's ``example()``;
     - 'solves when hard': hard, beside soft positions 0 at both ends, the item gives a
-      verified finite solution in which it is reported; 'solves when soft': the same
-      with ``sigma=1`` beside hard end positions (both on ``model.data`` without the
-      error model, whose parameters these items alone need not determine);
+      verified finite solution in which it is reported; 'solves when band': the same
+      with ``tol=0.1``; 'solves when soft' and 'solves when robust': the same with
+      ``sigma=1`` (robust: ``huber=1``) beside hard end positions (all on
+      ``model.data`` without the error model, whose parameters these items alone need
+      not determine);
     - 'linearized': an item with ``needs_linearization`` True is not compiled or solved
       itself; its ``linearized(t, trajectory)`` about the solution with positions 0 at
       both ends must no longer need linearization and is put through every rule above.
@@ -376,6 +408,10 @@ def _check_item(item: Item, model: NavModel, who: str) -> None:
         shipped = copy.compile(model)
     _require(isinstance(shipped, Affine) and _same_rows(res, shipped), who, "pickles",
              "a pickled copy compiles to different rows")
+    for key, value in vars(item).items():
+        _require(not _cvxpy_objects(value), who, "no cvxpy objects",
+                 f"compile() left a cvxpy object in attribute {key!r}; return rows, keep no expressions")
+    _check_other_model(item, model, res, who)
 
     # -------------------------------------------------- every mode a switch
     for mode in MODES:
@@ -391,8 +427,8 @@ def _check_item(item: Item, model: NavModel, who: str) -> None:
     _check_axes(item, model, who)
 
     # ----------------------------------------------------------- end to end
-    _solve_with(item, model, hard=True, who=who)
-    _solve_with(item, model, hard=False, who=who)
+    for mode in MODES:
+        _solve_with(item, model, mode, who)
 
 
 # --------------------------------------------------------------- error models
