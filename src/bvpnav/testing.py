@@ -367,7 +367,8 @@ def _check_item(item: Item, model: NavModel, who: str) -> None:
     _require(type(copy) is cls, who, "pickles", f"unpickled as {type(copy).__name__}")
 
     # ------------------------------------------------- bad weights refused
-    plain = dataclasses.replace(item, name=None) if item.name is not None else item
+    with _rule(who, "refuses bad sigma"):  # unnamed, so that messages name the class
+        plain = dataclasses.replace(item, name=None) if item.name is not None else item
     for field, value, word in (("sigma", -1.0, "sigma"), ("mode", "sometimes", "mode")):
         rule = f"refuses bad {field}"
         kw = {"sigma": -1.0, "mode": None} if field == "sigma" else {"mode": "sometimes"}
