@@ -30,6 +30,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import bvpnav
+import bvpnav.testing
 from bvpnav.constraints import Position, Velocity
 from bvpnav.scenarios import quintic_trajectory
 
@@ -59,6 +60,23 @@ class LoopClosure(bvpnav.Item):
     @classmethod
     def example(cls):  # a valid instance, for the library's shared contract tests
         return cls(t0=2.0, t1=8.0)
+
+
+# %% [markdown]
+# ## Check it against the contract
+#
+# `bvpnav.testing.check_item` puts the item through every rule the framework relies on:
+# frozen and free of cvxpy objects, an affine residual over every unknown that is finite,
+# deterministic and the same after pickling (batch runs ship items to other processes),
+# one line of `math()`, every mode a switch on the same rows, bad `sigma`/`mode` refused
+# by name, `axes=` respected, and a tiny hard and soft solve that verifies. A broken rule
+# raises `AssertionError` naming it; without the check the same mistake surfaces later as
+# a puzzling solver failure or a silently wrong batch result. Put this line in your
+# plug-in's tests (`bvpnav.testing.check_error_model` does the same for error models).
+
+# %%
+bvpnav.testing.check_item(LoopClosure)
+print("LoopClosure passes bvpnav.testing.check_item")
 
 
 # %% [markdown]
