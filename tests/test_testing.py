@@ -23,10 +23,11 @@ import scipy.sparse as sp
 import bvpnav
 from bvpnav import error_models
 from bvpnav.constraints import TrackLine
+from bvpnav.cvx import lower
 from bvpnav.error_models import ErrorModel, SensorErrorModel
 from bvpnav.items import MODES, registry
 from bvpnav.model import Affine, Cone
-from bvpnav.testing import check_error_model, check_item
+from bvpnav.testing import check_backend, check_error_model, check_item, check_rule
 
 ITEMS = sorted(registry())
 ERROR_MODELS = sorted(
@@ -240,7 +241,7 @@ class _Cached(_Loop):
 class _KeepsExpression(_Loop):
     def compile(self, model):
         rows = super().compile(model)
-        object.__setattr__(self, "_expr", rows.expr(model.x))
+        object.__setattr__(self, "_expr", lower(rows, cp.Variable(model.size)))
         return rows
 
 
@@ -448,3 +449,94 @@ def test_a_non_model_is_refused():
 
 
 # backends and lambda rules: see check_backend / check_rule
+
+
+@pytest.mark.parametrize("name", bvpnav.available_solvers())
+def test_registered_back_end_passes(name):
+    """Every back end (cvxpy's installed solvers and the direct ones) keeps the contract."""
+    check_backend(bvpnav.backends.resolve_solver(name))
+
+
+@pytest.mark.parametrize("name", bvpnav.lam.rule_names())
+def test_registered_rule_passes(name):
+    check_rule(bvpnav.lam.get_rule(name))
+
+
+class _Sloppy(bvpnav.backends.Backend):
+    """Returns the direct answer moved by 1 mm: fails verification."""
+
+    name = "sloppy"
+    presets = {"default": {}}
+    least_squares_only = True
+
+    def accepts(self, form):
+        return bvpnav.backends.resolve_solver("direct").accepts(form)
+
+    def run(self, form, lam, options, verbose=False):
+        direct = bvpnav.backends.resolve_solver("direct")
+        raw = direct.run(form, lam, bvpnav.backends.solver_options(direct, "default"))
+        raw.x = raw.x + 1e-3
+        return raw
+
+
+class _BadPreset(_Sloppy):
+    name = "bad-preset"
+    presets = {"fast": {}}
+
+
+class _Upper(_Sloppy):
+    name = "Upper"
+
+
+class _Vague(_Sloppy):
+    name = "vague"
+
+    def accepts(self, form):
+        return "no"
+
+
+class _OutsideRule(bvpnav.lam.LambdaRule):
+    name = "outside"
+
+    def scores(self, sweep, pts, s):
+        return np.zeros(len(pts))
+
+    def refine(self, sweep, pts, s, scores, curve):
+        return 1e9
+
+
+class _ShortRule(_OutsideRule):
+    name = "short"
+
+    def scores(self, sweep, pts, s):
+        return np.zeros(3)
+
+
+class _RandomRule(_OutsideRule):
+    name = "random"
+
+    def refine(self, sweep, pts, s, scores, curve):
+        return float(np.exp(np.random.default_rng().uniform(s[0], s[-1])))
+
+
+class _NeedyRule(_OutsideRule):
+    name = "needy"
+    needs = frozenset({"clairvoyance"})
+
+
+@pytest.mark.parametrize("plugin, rule", [
+    (_Sloppy(), "run"), (_BadPreset(), "presets"), (_Upper(), "name"), (_Vague(), "accepts"),
+], ids=lambda p: getattr(p, "name", str(p)))
+def test_broken_back_end_fails_naming_the_rule(plugin, rule):
+    with pytest.raises(AssertionError, match=rf"^back end {plugin.name!r}: rule '{rule}' broken: "):
+        check_backend(plugin)
+
+
+@pytest.mark.parametrize("plugin, rule", [
+    (_OutsideRule(), "refine (direct sweep)"), (_ShortRule(), "scores (direct sweep)"),
+    (_RandomRule(), "deterministic (direct sweep)"), (_NeedyRule(), "needs"),
+], ids=lambda p: getattr(p, "name", str(p)))
+def test_broken_rule_fails_naming_the_rule(plugin, rule):
+    pattern = rf"^lambda rule {plugin.name!r}: rule '{re.escape(rule)}' broken: "
+    with pytest.raises(AssertionError, match=pattern):
+        check_rule(plugin)

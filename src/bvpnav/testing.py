@@ -323,7 +323,7 @@ def _check_item(item: Item, model: NavModel, who: str) -> None:
     name = cls.__name__
     _require(isinstance(item, Item), who, "is an Item", f"{item!r} is not an instance of bvpnav.Item")
     _require(cls.kind in KINDS, who, "is an Item", f"kind = {cls.kind!r}; choose one of {list(KINDS)}")
-    _require(isinstance(cls.units, str), who, "is an Item", f"units = {cls.units!r} must be a string")
+    _require(isinstance(item.units, str), who, "is an Item", f"units = {item.units!r} must be a string")
     if not name.startswith("_"):
         reg = cls.registered_name()
         with _rule(who, "registered"):
@@ -628,3 +628,158 @@ def check_error_model(model_or_class: ErrorModel | CompositeErrorModel | type[Er
                  f"term {getattr(term, 'label', term)!r} has no residual rows over the {model.size} unknowns")
 
     _check_recovery(em, data, q, who)
+
+
+# ------------------------------------------------------------------ back ends
+def _ls_formulation(sigma_a: float | None = None):
+    """A small least-squares problem (hard ends, soft fixes) and a robust copy of it."""
+    from .formulation import Formulation
+
+    t = np.linspace(0.0, 10.0, 41)
+    acc = np.sin(t) + 0.05 * np.cos(7.0 * t)
+    data = ImuData(t=t, acc=acc)
+    ends = Position(t=[0.0, 10.0], value=[0.0, 1.0], name="ends")
+    fixes = dict(t=[3.0, 5.0, 7.0], value=[0.3, 0.5, 0.7], sigma=0.1, name="fixes")
+    ls = Formulation(data, sigma_a=sigma_a, items=[ends, Position(**fixes)])
+    robust = Formulation(data, sigma_a=sigma_a, items=[ends, Position(**fixes, mode="robust", huber=0.2)])
+    return ls, robust
+
+
+def check_backend(backend) -> None:
+    """Check that a back end keeps the :class:`bvpnav.backends.Backend` contract.
+
+    Parameters
+    ----------
+    backend : Backend
+        An instance (registered or not).
+
+    Raises
+    ------
+    AssertionError
+        Naming the back end and the broken rule: a lowercase non-empty ``name``; presets
+        only for ``low``/``default``/``high`` whose options its own option check accepts;
+        an unknown option refused naming it (when it lists its options); a positive
+        ``memory_per_sample`` for both objective forms; ``accepts`` returning None or a
+        reason that names the item it cannot take (or the back end itself); and, on a
+        small least-squares problem it accepts, a finite stacked solution that bvpnav's
+        verification passes at the ``default`` preset and that agrees with the ``direct``
+        back end to 1e-6 m.
+
+    Notes
+    -----
+    The reference is the exact solution of
+    :math:`\\min \\|D x + c\\|^2` s.t. :math:`E x + e = 0` from one sparse factorization
+    (:class:`bvpnav.backends.direct.DirectBackend`).
+    """
+    from .backends import ACCURACIES, check_options, resolve_solver
+    from .solve.verify import verify
+
+    name = getattr(backend, "name", None)
+    who = f"back end {name!r}"
+    _require(isinstance(name, str) and name and name == name.lower(), who, "name",
+             "the name must be a non-empty lowercase string")
+    with _rule(who, "presets"):
+        presets = backend.presets
+        _require(isinstance(presets, dict) and set(presets) <= set(ACCURACIES), who, "presets",
+                 f"presets must be a dict keyed by {list(ACCURACIES)}, got {presets!r}")
+        for acc, opts in presets.items():
+            try:
+                check_options(backend, opts, what=f"presets[{acc!r}]")
+            except InputError as exc:
+                _fail(who, "presets", f"its own preset {acc!r} is refused by its option check: {exc}")
+    with _rule(who, "options"):
+        valid = backend.valid_options()
+        if valid is not None:
+            try:
+                check_options(backend, {"no_such_option_xyz": 1})
+            except InputError as exc:
+                _require("no_such_option_xyz" in str(exc), who, "options",
+                         f"the refusal of an unknown option does not name it: {exc}")
+            else:
+                _fail(who, "options", "an unknown option was accepted although valid_options() lists them")
+    with _rule(who, "memory"):
+        per = backend.memory_per_sample
+        ok = all(isinstance(per.get(f), int | float) and np.isfinite(per.get(f)) and per.get(f) > 0
+                 for f in ("acceleration", "load"))
+        _require(ok, who, "memory", f"memory_per_sample needs positive bytes per sample for "
+                 f"'acceleration' and 'load', got {per!r}")
+    ls, robust = _ls_formulation()
+    with _rule(who, "accepts"):
+        for form in (ls, robust):
+            why = backend.accepts(form)
+            named = isinstance(why, str) and (name in why or any(lab in why for lab in form.labels))
+            _require(why is None or named, who, "accepts",
+                     f"accepts() must return None or a reason naming the item (or the back end), got {why!r}")
+    if backend.accepts(ls) is not None:
+        return
+    with _rule(who, "run"):
+        from .backends import solver_options
+
+        raw = backend.run(ls, 2.0, solver_options(backend, "default"), False)
+        x = np.asarray(raw.x, dtype=float)
+        _require(x.shape == (ls.model.size,) and np.all(np.isfinite(x)), who, "run",
+                 f"run() must return a finite stacked vector of {ls.model.size} entries, got shape {x.shape}")
+        _require(isinstance(raw.info, dict) and "status" in raw.info, who, "run",
+                 "run() must report its status in RawSolve.info['status']")
+        check = verify(ls, x, 2.0, "default", raw.duals, raw.factored)
+        _require(check.verified, who, "run", f"its answer fails bvpnav's verification: {check.as_dict()}")
+        ref = resolve_solver("direct").run(ls, 2.0, solver_options(resolve_solver("direct"), "default"))
+        pos = np.concatenate([ls.model.r_index(a) for a in range(ls.model.d)])
+        err = float(np.max(np.abs(x[pos] - ref.x[pos])))
+        _require(err <= 1e-6, who, "run", f"positions differ from the direct back end by {err:.3g} m")
+
+
+# ------------------------------------------------------------------ lambda rules
+def check_rule(rule) -> None:
+    """Check that a lambda rule keeps the :class:`bvpnav.lam.LambdaRule` contract.
+
+    Parameters
+    ----------
+    rule : LambdaRule
+        An instance (registered or not).
+
+    Raises
+    ------
+    AssertionError
+        Naming the rule and the broken rule of the contract: a non-empty ``name``;
+        ``needs`` a subset of :data:`bvpnav.lam.NEEDS`; on a small least-squares problem
+        (direct sweep) ``scores`` one number per sampled lambda and ``refine`` a lambda
+        inside the sweep's range, the same on a second run; and, unless the rule needs
+        least squares, the same on the cvxpy sweep of a problem with a robust item.
+    """
+    from .lam import NEEDS
+    from .lam.sweep import CvxpySweep, DirectSweep, LambdaCurve
+    from .solve.chain import solve_fixed
+    from .solve.options import prepare
+
+    name = getattr(rule, "name", None)
+    who = f"lambda rule {name!r}"
+    _require(isinstance(name, str) and name, who, "name", "the name must be a non-empty string")
+    _require(set(getattr(rule, "needs", ())) <= set(NEEDS), who, "needs",
+             f"needs must be a subset of {list(NEEDS)}, got {getattr(rule, 'needs', None)!r}")
+    ls, robust = _ls_formulation(sigma_a=0.05)
+    lams = np.geomspace(1e-3, 1e3, 13)
+    s = np.log(lams)
+    opts, _ = prepare(1.0, fallback=None)
+    sweeps = [("direct", lambda: DirectSweep(ls, need_trace="trace" in rule.needs))]
+    if "least_squares" not in rule.needs:
+        sweeps.append(("cvxpy", lambda: CvxpySweep(robust, lambda lam: solve_fixed(robust, lam, opts))))
+    for engine, make in sweeps:
+        chosen = []
+        for _ in range(2):
+            sweep = make()
+            pts = [sweep.point(lam) for lam in lams]
+            curve = LambdaCurve(lam=lams, residual_norm=np.sqrt([p["rho2"] for p in pts]),
+                                info_norm=np.sqrt([p["eta2"] for p in pts]), rule=name,
+                                engine=engine, lam_range=(1e-3, 1e3))
+            with _rule(who, f"scores ({engine} sweep)"):
+                sc = np.asarray(rule.scores(sweep, pts, s), dtype=float)
+                _require(sc.shape == lams.shape, who, f"scores ({engine} sweep)",
+                         f"one score per sampled lambda expected ({lams.size}), got shape {sc.shape}")
+            with _rule(who, f"refine ({engine} sweep)"):
+                lam = float(rule.refine(sweep, pts, s, sc, curve))
+                _require(np.isfinite(lam) and lams[0] <= lam <= lams[-1], who, f"refine ({engine} sweep)",
+                         f"the chosen lambda {lam!r} is not inside the sweep's range 1e-3..1e3")
+            chosen.append(lam)
+        _require(chosen[0] == chosen[1], who, f"deterministic ({engine} sweep)",
+                 f"two runs chose {chosen[0]!r} and {chosen[1]!r}")

@@ -128,7 +128,18 @@ class CvxpyBackend(Backend):
         solver = SOLVER_MAP_CONIC.get(self.cvxpy_name)
         return solver is not None and SOC in getattr(solver, "SUPPORTED_CONSTRAINTS", ())
 
+    def takes_quadratics(self) -> bool:
+        """Whether the solver takes the quadratic data term (a QP solver, or a conic solver
+        with second-order cones); LP/MILP-only solvers (cvxpy's SCIPY) do not."""
+        from cvxpy.reductions.solvers.defines import SOLVER_MAP_QP
+
+        return self.cvxpy_name in SOLVER_MAP_QP or self.takes_cones()
+
     def accepts(self, form) -> str | None:
+        if not self.takes_quadratics():
+            return (f"solver {self.name!r} solves linear programs only: it takes no quadratic "
+                    "objective, and every bvpnav problem has one (the data term). Use "
+                    "solver='clarabel' (or 'osqp', 'scs')")
         if self.takes_cones():
             return None
         for term in form.terms():
