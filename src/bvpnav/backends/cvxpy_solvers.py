@@ -82,6 +82,21 @@ def _clarabel_settings() -> dict[str, Any] | None:
             if not a.startswith("_") and not callable(getattr(settings, a))}
 
 
+def _osqp_settings() -> dict[str, Any] | None:
+    try:
+        from osqp.ext_builtin import OSQPSettings
+    except ImportError:  # pragma: no cover - another OSQP build: it judges its options itself
+        return None
+    settings = OSQPSettings()
+    return {a: getattr(settings, a) for a in dir(settings) if not a.startswith("_")}
+
+
+#: Solvers whose settings bvpnav can list (names checked before any work; Clarabel's values
+#: are type-checked too); others judge their options themselves (a refusal is a recorded
+#: failed attempt, see :func:`bvpnav.solve.chain.solve_fixed`).
+_SETTINGS = {"clarabel": _clarabel_settings, "osqp": _osqp_settings}
+
+
 def _type_of(default) -> tuple[str, Any] | None:
     """(description, check) for a setting's default value's type."""
     if isinstance(default, bool):
@@ -105,10 +120,9 @@ class CvxpyBackend(Backend):
 
     # ------------------------------------------------------------ options
     def valid_options(self) -> list[str] | None:
-        if self.name == "clarabel":
-            settings = _clarabel_settings()
-            return None if settings is None else sorted(set(settings) | _cvxpy_keywords())
-        return None
+        listed = _SETTINGS.get(self.name)
+        settings = listed() if listed is not None else None
+        return None if settings is None else sorted(set(settings) | _cvxpy_keywords())
 
     def check_value(self, key: str, value) -> str | None:
         if self.name != "clarabel":

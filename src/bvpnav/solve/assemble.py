@@ -46,6 +46,10 @@ def _items_table(form, xval: np.ndarray, duals: dict | None) -> tuple[pd.DataFra
 
 def _warnings(form, run: dict, check: Verification | None) -> list[str]:
     warn = [f"{run.get('solver')}: {w}" for w in run.get("solver_warnings", [])]
+    if run.get("preset_applied") is False:
+        warn.append(f"{run.get('solver')}: bvpnav has no accuracy presets for this solver; it ran with "
+                    f"its own default tolerances (accuracy={run.get('accuracy')!r} set only bvpnav's "
+                    "verification tolerance); pass options=... to tighten them")
     cond = check.conditioning if check is not None else None
     if cond is not None:
         warn += cond["warnings"]

@@ -31,7 +31,8 @@ def attempt(form, backend: Backend, options: dict, lam: float, opts: SolveOption
     raw = backend.run(form, lam, options, opts.verbose)
     run = dict(raw.info)
     run["wall_time"] = time.perf_counter() - t_start
-    run.update(solver=backend.name, accuracy=opts.accuracy, options=options)
+    run.update(solver=backend.name, accuracy=opts.accuracy, options=options,
+               preset_applied=opts.accuracy in backend.presets)
     return finish(form, raw.x, lam, run, raw.duals, opts.accuracy, opts.verify, raw.factored)
 
 
