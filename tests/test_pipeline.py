@@ -140,3 +140,16 @@ def test_typed_records_build_the_stats():
     assert sol.stats["demoted"] == [d.as_dict() for d in rec.demoted]
     # records read like the dicts they replace
     assert rec.attempts[-1]["reason"] == "verified" and rec.attempts[-1].get("conflicts") is None
+
+
+def test_the_run_and_its_timings_are_typed_and_flattened_into_the_stats():
+    sol = ls_problem().solve(solver="direct")
+    run = sol.records.run
+    assert isinstance(run, bvpnav.result.Run) and isinstance(run.timings, bvpnav.result.Timings)
+    assert run.solver == "direct" and run.preset_applied and run.options == sol.stats["options"]
+    assert run.timings.wall_time >= run.timings.solve_time > 0
+    for key in ("solve_time", "setup_time", "compile_time", "wall_time"):
+        assert sol.stats[key] == getattr(run.timings, key)
+    assert sol.stats["factorization"] == run.details["factorization"]  # back-end specific
+    cv = ls_problem().solve(solver="clarabel").records.run
+    assert cv.timings.cvxpy_time >= cv.timings.solve_time > 0 and cv.details == {}

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from . import __version__
 from .errors import BvpnavError, InputError
 from .io import (
     check_implicit_outputs,
@@ -39,6 +40,7 @@ from .io import (
     write_table,
     write_trajectory,
 )
+from .spec import parse_spec, read_spec_text
 
 __all__ = ["solve_kwargs", "solve_recording", "run_batch", "fingerprint", "resume_reason",
            "RECORDING_SUFFIXES", "SUMMARY_COLUMNS"]
@@ -92,8 +94,6 @@ def fingerprint(path, spec_text: str | None, solver=None, lam=None, fmt: str | N
     """What a result depends on: bvpnav's version, the spec text's SHA-256, the options that
     change results (``solver``, ``lam``, ``format``) and the recording's size, mtime (ns) and
     SHA-256 (``recording``, computed from ``path`` when not given)."""
-    from . import __version__
-
     opts = json.loads(json.dumps({"solver": solver, "lam": lam, "format": fmt}))
     return {"bvpnav": __version__, "spec_sha256": None if spec_text is None else _sha256(spec_text),
             "options": opts, "recording": recording or _recording_fingerprint(path)}
@@ -176,8 +176,6 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
 
 def _task(path: str, spec_text: str, spec_source: str, out: str, solver, lam, note: str = "") -> dict:
     """One batch task (runs on a worker): never raises an ``Exception``, returns a summary row."""
-    from .spec import parse_spec
-
     t0 = time.perf_counter()
     try:
         spec = parse_spec(spec_text, spec_source)
@@ -332,8 +330,6 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
         another run, ``workers`` < 1, a scheduler that cannot be reached; all before any
         recording is solved.
     """
-    from .spec import parse_spec, read_spec_text
-
     directory, out_dir = Path(directory), Path(out_dir)
     if not directory.is_dir():
         raise InputError(f"{str(directory)!r} is not a folder of recordings; give the folder that holds "

@@ -8,7 +8,10 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from .backends import ACCURACIES, available_solvers, check_options, resolve_solver
 from .errors import BvpnavError, InputError, SolveError
+from .lsq import least_squares_form, non_least_squares_term
+from .solve import check_lam, choose_lambda
 
 __all__ = ["compare_solvers", "COLUMNS"]
 
@@ -45,8 +48,6 @@ def _listed(value, what: str) -> list:
 def _check_names(problem, solvers, presets, options) -> None:
     """InputError before any run for unknown solver or preset names (all of them named,
     with the valid ones) and for options keyed by a solver that is not compared."""
-    from .backends import ACCURACIES, available_solvers, check_options, resolve_solver
-
     solvers, presets = _listed(solvers, "solvers"), _listed(presets, "presets")
     have = available_solvers()
     bad = [s for s in solvers if not isinstance(s, str) or s.strip().lower() not in have]
@@ -104,21 +105,14 @@ def compare_solvers(problem, solvers: Sequence[str] | None = None, presets: Sequ
     Runs use ``fallback=None`` and ``verify=False`` so each row shows that solver's own
     answer; ``verified`` then says whether bvpnav would have accepted it.
     """
-    from .backends import available_solvers
-    from .lsq import least_squares_form, non_least_squares_term
-
     if solvers is None:
         have = set(available_solvers())
         solvers = [s for s in ("clarabel", "osqp") if s in have]
         if non_least_squares_term(problem) is None:
             solvers += ["direct", "csne"]
     _check_names(problem, solvers, presets, options)
-    from .solve import check_lam
-
     lam = check_lam(lam)
     if isinstance(lam, str):
-        from .solve import choose_lambda
-
         lam = choose_lambda(problem, lam)
     ref = _reference_positions(reference, problem)
     form = least_squares_form(problem, lam)

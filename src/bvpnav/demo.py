@@ -21,7 +21,9 @@ import numpy as np
 
 from .baselines import trapezoid
 from .constraints import Position, Velocity
+from .io import atomic_savefig, check_figure_path, check_outputs
 from .problem import NavigationProblem
+from .samples import check_seed
 from .scenarios import tikhonov2011
 
 __all__ = ["run_demo"]
@@ -54,12 +56,8 @@ def run_demo(png: str | None = "bvpnav-demo.png", seed: int = 0, quiet: bool = F
     dict
         RMS position errors (m) by method, the lambda used, and the figure path.
     """
-    from .samples import check_seed
-
     seed = check_seed(seed)
     if png:  # the output policy, before the work
-        from .io import check_figure_path, check_outputs
-
         check_figure_path(png, "png")
         check_outputs({}, {"png": png})
     sc = tikhonov2011(seed=seed)
@@ -118,8 +116,6 @@ def run_demo(png: str | None = "bvpnav-demo.png", seed: int = 0, quiet: bool = F
         ax2.set_xlabel("t (s)")
         ax2.legend(fontsize=8)
         fig.tight_layout()
-        from .io import atomic_savefig
-
         atomic_savefig(fig, png)
         plt.close(fig)
         out["png"] = str(png)

@@ -8,6 +8,7 @@ import numpy as np
 import pandas as pd
 from scipy.spatial.transform import Rotation
 
+from .attitude import integrate_gyro
 from .errors import InputError
 from .grid import TimeGrid
 from .timebase import as_float_array
@@ -245,8 +246,6 @@ class ImuData:
         \\omega_k \\times \\omega_{k+1}` (see :func:`bvpnav.attitude.integrate_gyro`);
         then :math:`a_i = C_i f_i + g`. The rates are kept in ``data.gyro``.
         """
-        from .attitude import integrate_gyro
-
         grid = TimeGrid(t)
         rot = integrate_gyro(grid.t, gyro, initial_attitude)
         out = cls(grid.t, specific_force=specific_force, attitude=rot, gravity=gravity)

@@ -15,6 +15,8 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from .errors import InputError
+from .imu import ACC_UNITS, ImuData, axis_name_clash
+from .timebase import TIME_UNITS, check_time_resolution, to_seconds
 
 __all__ = ["atomic_path", "atomic_write_text", "atomic_write_bytes", "atomic_savefig", "read_recording",
            "write_table", "write_trajectory", "summary", "write_json"]
@@ -511,8 +513,6 @@ def _iso_seconds(col, tcol: str, name: str, row_ref):
     """Seconds from the first sample and the origin of a column of ISO 8601 timestamps."""
     import pandas as pd
 
-    from .timebase import to_seconds
-
     dtype = col.dtype
     if pd.api.types.is_datetime64_any_dtype(dtype):
         stamps = col
@@ -583,8 +583,6 @@ def _integer_seconds(col, tcol: str, tunit: str, origin: str | None, name: str):
     refuses integer epochs that float seconds cannot resolve to one unit."""
     import numpy as np
 
-    from .timebase import TIME_UNITS, to_seconds
-
     ints = col.to_numpy()
     dt = np.diff(ints.astype(np.int64)) if ints.dtype.kind == "i" else None
     if dt is not None and np.all(dt > 0):
@@ -603,9 +601,6 @@ def _integer_seconds(col, tcol: str, tunit: str, origin: str | None, name: str):
 def _input_options(inp: dict, name: str):
     """The checked ``[input]`` options: (time column, time unit, acceleration unit, time origin,
     axis -> column map or None)."""
-    from .imu import ACC_UNITS
-    from .timebase import TIME_UNITS
-
     tcol = inp.get("time", "t")
     tunit = inp.get("time_unit", "s")
     unit = inp.get("unit", "m/s^2")
@@ -662,8 +657,6 @@ def _check_separator(df, name: str) -> None:
 def _axis_columns(df, cols: dict | None, name: str) -> dict:
     """The axis -> column map: ``cols`` as given, or every ``acc_<axis>`` column; refused when
     the axis names would collide in the trajectory's columns."""
-    from .imu import axis_name_clash
-
     if cols is None:
         cols = {str(c)[4:]: c for c in df.columns if str(c).startswith("acc_")}
         if not cols:
@@ -747,8 +740,6 @@ def _numeric_seconds(df, tcol: str, tunit: str, origin: str | None, shown, name:
     """(times in s, what t = 0 is) of the numeric time column ``shown`` (in ``tunit``)."""
     import numpy as np
 
-    from .timebase import TIME_UNITS, check_time_resolution, to_seconds
-
     zero = None
     if origin == "first":
         t, zero = to_seconds(shown, tunit)
@@ -814,8 +805,6 @@ def read_recording(path: str | os.PathLike, input: dict | None = None):
         when the index carries the time column's name. No raw parser exception escapes.
     """
     import numpy as np
-
-    from .imu import ACC_UNITS, ImuData
 
     p = Path(path)
     name = str(p)

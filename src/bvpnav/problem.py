@@ -104,7 +104,6 @@ class NavigationProblem:
         self._error_model = value
         self._form, self._model = None, None
 
-    # ------------------------------------------------------------ pickling
     def __getstate__(self) -> dict:
         """The problem's definition without its caches (cvxpy's compiled problem holds
         solver objects that cannot be pickled; the rest is cheap to rebuild)."""
@@ -112,7 +111,6 @@ class NavigationProblem:
         state.update(_form=None, _model=None)
         return state
 
-    # ----------------------------------------------------------- building
     def add(self, *items: Item) -> NavigationProblem:
         """Add one or more items; returns the problem for chaining.
 
@@ -183,33 +181,13 @@ class NavigationProblem:
 
     # ------------------------------------------------------ teaching
     def describe(self, format: str = "text", lam: float | None = None, conditioning: bool = True) -> str:
-        """The assembled problem in readable mathematics (see :func:`bvpnav.describe.describe`).
-
-        Parameters
-        ----------
-        format : {"text", "latex"}
-            Plain text, or LaTeX lines that render with matplotlib's mathtext.
-        lam : float, optional
-            The lambda to print (default: the problem's current value).
-        conditioning : bool
-            Include a condition estimate of the KKT matrix (one sparse LU).
-
-        Returns
-        -------
-        str
-        """
+        """The assembled problem in readable mathematics, as plain text or LaTeX lines, with
+        ``lam`` (default: the current value) and a KKT condition estimate (see
+        :func:`bvpnav.describe.describe` for the parameters)."""
         return _describe.describe(self.formulation, format=format, lam=lam, conditioning=conditioning)
 
     def matrices(self) -> _describe.Matrices:
-        """The assembled matrices (K, M, f, F, A_eq, b_eq, J, D, e, sigma, legend, layout)
-        for a solve by hand; see :class:`bvpnav.describe.Matrices`.
-
-        Notes
-        -----
-        The problem is :math:`\\min_x \\|J x\\|^2 + \\lambda \\|(D x - e)/\\sigma\\|^2`
-        subject to :math:`A_{eq} x = b_{eq}`, whose first rows are the FEM equations
-        :math:`K r + B v - f - F l + M w = 0`.
-        """
+        """The assembled matrices for a solve by hand (see :func:`bvpnav.describe.matrices`)."""
         return _describe.matrices(self.formulation)
 
     def unobservable(self) -> list[str]:
@@ -235,55 +213,49 @@ class NavigationProblem:
     ) -> Solution:
         """Solve and verify, falling back to other back ends when an answer fails.
 
+        Every option is checked before any work (a wrong one is named with the valid
+        values) and reaches every stage of the pipeline (:mod:`bvpnav.solve.pipeline`).
+
         Parameters
         ----------
         solver : str
             Case-insensitive solver name (``bvpnav.available_solvers()``).
         lam : float or str
-            Regularization weight (dimensionless ratio of the item terms to the data
-            term): 0 or within :data:`bvpnav.formulation.LAM_RANGE` (1e-12 to 1e12), or the name of a rule
-            that chooses it (``"lcurve"``, ``"gcv"``, ``"discrepancy"``, ``"quasi"``).
+            Weight of the item terms relative to the data term (dimensionless): 0 or
+            1e-12..1e12 (:data:`bvpnav.formulation.LAM_RANGE`), or a rule that chooses it
+            (``"lcurve"``, ``"gcv"``, ``"discrepancy"``, ``"quasi"``, or a registered one).
         accuracy : {"low", "default", "high"}
             Preset mapped to the solver's options and to the verification tolerance.
         verify : bool
-            Recompute residuals and refuse answers that fail (default True; switch off
-            only to inspect a failure: the result then says ``verified=False``).
+            Refuse answers that fail bvpnav's recomputed residuals (default True; off only
+            to inspect a failure: the result then says ``verified=False``).
         options : dict, optional
-            Extra solver options, on top of the preset. Names are checked before solving
-            for Clarabel (its settings and cvxpy's own keywords) and the direct back ends
-            (names and values); other solvers judge their options themselves (a refusal
-            is a failed attempt).
+            Extra solver options on top of the preset. Clarabel's, OSQP's and the direct
+            back ends' are checked before solving; other solvers judge theirs (a refusal is
+            a failed attempt).
         fallback : "auto", sequence or None
-            What to try when the answer fails verification or the solver errs: a
-            sequence of solver names or ``(name, options)`` pairs (the primary's
-            ``options`` are not passed on). ``"auto"`` is :data:`bvpnav.solve.DEFAULT_FALLBACK`:
-            Clarabel with static regularization switched on (it helps small problems
-            with many hard rows, hurts large ones; plain Clarabel after another primary
-            solver), the direct back end (skipped, with the reason recorded, when the
-            problem is not equality-constrained least squares), then SCS. ``None`` or
-            ``()`` disables it. Every attempt is recorded in
-            ``solution.stats["attempts"]`` with its status and reason.
+            Solver names or ``(name, options)`` pairs to try when an answer fails or the
+            solver errs (the primary's ``options`` are not passed on). ``"auto"`` is
+            :data:`bvpnav.solve.DEFAULT_FALLBACK`: Clarabel with static regularization,
+            ``direct`` (skipped with the reason when not least squares), then SCS. ``None``
+            disables it. Every attempt is in ``stats["attempts"]`` with its reason.
         on_conflict : {"raise", "demote"}
-            What to do when the hard information cannot hold together. ``"raise"``
-            (default) raises :class:`~bvpnav.errors.Infeasible` naming the conflicting
-            items. ``"demote"`` turns the lowest-priority item of each conflicting set
-            into a soft item and solves again, until the rest is consistent; the
-            result's ``stats["demoted"]`` and ``warnings`` say which items were
-            demoted, with what sigma and which conflict they belonged to.
+            Hard information that cannot hold together raises
+            :class:`~bvpnav.errors.Infeasible` naming the conflicting items, or with
+            ``"demote"`` the lowest-priority item of each conflict becomes soft until the
+            rest holds (``stats["demoted"]`` and ``warnings`` say which, with what sigma).
         priority : mapping of str to float, optional
-            Item label -> priority for ``on_conflict="demote"``: higher means more
-            trusted, kept hard longer. Unlisted items have priority 0; among equal
-            priorities the item added last is demoted first.
+            Item label -> priority for demotion (higher is kept hard longer; default 0,
+            among equals the item added last goes first).
         demote_sigma : float or mapping of str to float, optional
-            Standard deviation (item units) given to a demoted item, one number for all
-            or per label; default 1.0 (e.g. 1 m for a position, 1 m/s for a velocity).
+            Sigma (item units) of a demoted item, one for all or per label; default 1.0.
         sequential : dict, optional
-            Options of the sequential loop for items that must be linearized (``tol`` in m,
-            ``max_iter``, ``initial``, ``lam_each``, ``continuation``, ``soft_tol`` in m;
+            Options of the sequential loop for items that must be linearized (``tol`` and
+            ``soft_tol`` in m, ``max_iter``, ``initial``, ``lam_each``, ``continuation``;
             see :func:`bvpnav.solve.sequential.with_sequential`).
         rule : dict, optional
-            Options of the lambda sweep when ``lam`` is a rule name (``lam_range``,
-            ``points``, ``tau``, ``probes``, ``seed``, ``progress``, ``engine``; see
+            Options of the lambda sweep for a rule (``lam_range``, ``points``, ``tau``,
+            ``probes``, ``seed``, ``progress``, ``engine``; see
             :func:`bvpnav.solve.lambda_curve`).
 
         Returns
@@ -293,18 +265,13 @@ class NavigationProblem:
         Raises
         ------
         InputError
-            Before solving, for bad input or information that leaves unknowns free: an
-            option of the wrong type or value (named, with the valid ones), a weight that
-            double precision cannot resolve
-            (:meth:`bvpnav.formulation.Formulation.check_scales`), or a problem whose
-            memory estimate exceeds the available memory
-            (:func:`bvpnav.backends.check_memory`, naming what would fit).
+            Before solving: a wrong option, a weight double precision cannot resolve,
+            information that leaves unknowns free, or a memory estimate beyond the
+            available memory (naming what would fit).
         SolveError
             (``Infeasible``, ``Unbounded``, ``Inaccurate``) when every attempt failed;
-            ``error.attempts`` lists each attempt's status and reason. Any exception a
-            back end raises (e.g. ``LinAlgError``, SCS's ``ValueError``, ``MemoryError``)
-            is such a failed attempt (status ``"error"``), then the next back end runs;
-            a fallback whose memory estimate does not fit is skipped with its reason.
+            ``error.attempts`` lists each. A back end's own exception (``LinAlgError``,
+            ``MemoryError``, ...) is a failed attempt, then the next back end runs.
         """
         return pipeline.solve(self.formulation, lam, solver=solver, accuracy=accuracy, verify=verify,
                               options=options, verbose=verbose, fallback=fallback,

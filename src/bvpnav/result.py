@@ -11,7 +11,8 @@ import pandas as pd
 
 from .errors import InputError
 
-__all__ = ["Solution", "Attempt", "Verification", "SequentialReport", "Demotion", "SolveRecords"]
+__all__ = ["Solution", "Attempt", "Verification", "SequentialReport", "Demotion", "Timings", "Run",
+           "SolveRecords"]
 
 
 class _Record(Mapping):
@@ -179,22 +180,104 @@ class Demotion(_Record):
 
 
 @dataclass(eq=False)
+class Timings(_Record):
+    """Where the time of the winning attempt went, s (None where a back end does not say).
+
+    Attributes
+    ----------
+    compile_time : float or None
+        cvxpy's compilation of the problem (0 for the direct back ends).
+    setup_time, solve_time : float or None
+        The solver's own setup and solve.
+    cvxpy_time : float or None
+        The whole ``Problem.solve`` call (cvxpy back ends).
+    wall_time : float
+        The whole attempt, back-end call to answer.
+    """
+
+    compile_time: float | None = None
+    setup_time: float | None = None
+    solve_time: float | None = None
+    cvxpy_time: float | None = None
+    wall_time: float | None = None
+    _optional = ("cvxpy_time",)
+
+
+#: Keys of a back end's measurements that are timings.
+_TIMING_KEYS = ("compile_time", "setup_time", "solve_time", "cvxpy_time", "wall_time")
+
+
+@dataclass(eq=False)
+class Run(_Record):
+    """The winning back end's run.
+
+    Attributes
+    ----------
+    solver : str
+    status : str
+        The back end's own status word.
+    accuracy : str
+    options : dict
+        The options in force (preset plus the user's).
+    preset_applied : bool
+        Whether bvpnav had a preset for this back end and accuracy.
+    iterations : int or None
+    objective : float or None
+    timings : Timings
+    solver_warnings : list of str
+    details : dict
+        Back-end specific measurements (e.g. ``refinements``, ``correction``,
+        ``factorization`` of the direct back end).
+    """
+
+    solver: str
+    status: Any
+    accuracy: str = "default"
+    options: dict = field(default_factory=dict)
+    preset_applied: bool = True
+    iterations: Any = None
+    objective: Any = None
+    timings: Timings = field(default_factory=Timings)
+    solver_warnings: list = field(default_factory=list)
+    details: dict = field(default_factory=dict)
+
+    @classmethod
+    def of(cls, info: dict) -> Run:
+        """A :class:`Run` from a back end's measurements (``RawSolve.info``) plus ``solver``,
+        ``accuracy``, ``options``, ``preset_applied`` and ``wall_time``."""
+        known = {"solver", "status", "accuracy", "options", "preset_applied", "iterations", "objective",
+                 "solver_warnings", *_TIMING_KEYS}
+        return cls(solver=info["solver"], status=info.get("status"), accuracy=info.get("accuracy", "default"),
+                   options=dict(info.get("options") or {}), preset_applied=info.get("preset_applied", True),
+                   iterations=info.get("iterations"), objective=info.get("objective"),
+                   timings=Timings(**{k: info[k] for k in _TIMING_KEYS if k in info}),
+                   solver_warnings=list(info.get("solver_warnings", [])),
+                   details={k: v for k, v in info.items() if k not in known})
+
+    def flat(self) -> dict[str, Any]:
+        """The run as the flat keys of ``Solution.stats`` (timings and details inline)."""
+        out = {k: getattr(self, k) for k in ("solver", "status", "accuracy", "options", "preset_applied",
+                                             "iterations", "objective", "solver_warnings")}
+        out.update(self.timings.as_dict())
+        out.update(self.details)
+        return out
+
+
+@dataclass(eq=False)
 class SolveRecords:
     """The typed records the solve stages return; ``Solution.stats`` is built from them.
 
     Attributes
     ----------
-    run : dict
-        The winning back end's measurements (``status``, ``iterations``, ``solve_time``,
-        ``setup_time``, ``compile_time``, ``wall_time`` in s, ``objective``, ...) and
-        ``solver``, ``accuracy``, ``options`` in force.
+    run : Run or None
+        The winning back end's run (status, iterations, timings, options in force).
     attempts : list of Attempt
     verification : Verification or None
     sequential : SequentialReport or None
     demoted : list of Demotion or None
     """
 
-    run: dict = field(default_factory=dict)
+    run: Run | None = None
     attempts: list = field(default_factory=list)
     verification: Verification | None = None
     sequential: SequentialReport | None = None
@@ -202,7 +285,7 @@ class SolveRecords:
 
     def stats(self) -> dict[str, Any]:
         """The ``Solution.stats`` dict (plain values: it is written to JSON by batch runs)."""
-        out = dict(self.run)
+        out = self.run.flat() if self.run is not None else {}
         if self.verification is not None:
             out["verification"] = self.verification.as_dict()
             out["verified"] = self.verification.verified

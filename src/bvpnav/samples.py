@@ -12,8 +12,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from .constraints import AverageVelocity, Position, Symmetry, Velocity
+from .error_models import Bias
 from .errors import InputError
-from .io import atomic_write_text, write_table
+from .imu import ImuData
+from .io import atomic_write_text, check_outputs, write_table
+from .problem import NavigationProblem
+from .scenarios import quintic_trajectory, tikhonov2011
 from .spec import to_spec
 
 __all__ = ["SAMPLES", "write_sample"]
@@ -21,11 +26,6 @@ __all__ = ["SAMPLES", "write_sample"]
 
 def _tikhonov2011(seed: int, rate: float | None):
     """The 2011 paper's Example 1 (quintic, biased and scaled, unit noise; cubic prior)."""
-    from .constraints import Position
-    from .imu import ImuData
-    from .problem import NavigationProblem
-    from .scenarios import tikhonov2011
-
     sc = tikhonov2011(rate=rate or 50.0, seed=seed)
     t = sc.t
     tp = np.concatenate([t[1:11], t[-11:-1]])
@@ -38,12 +38,6 @@ def _tikhonov2011(seed: int, rate: float | None):
 
 def _shuttle(seed: int, rate: float | None):
     """A shuttle run out 10 m and back in 20 s: symmetry, stopwatch, bias model."""
-    from .constraints import AverageVelocity, Position, Symmetry, Velocity
-    from .error_models import Bias
-    from .imu import ImuData
-    from .problem import NavigationProblem
-    from .scenarios import quintic_trajectory
-
     p, _, a = quintic_trajectory()
     rate = rate or 50.0
     t = np.linspace(0.0, 20.0, int(round(20 * rate)) + 1)
@@ -108,8 +102,6 @@ def write_sample(name: str, out, seed: int = 0, rate: float | None = None, force
         Unknown scenario, bad seed or rate (naming the rates allowed), existing files
         without ``force``, or an output that cannot be written (see :func:`bvpnav.io.check_outputs`).
     """
-    from .io import check_outputs
-
     if name not in SAMPLES:
         raise InputError(f"unknown scenario {name!r}; choose one of {sorted(SAMPLES)}")
     if rate is not None and not (np.isfinite(rate) and rate > 0):

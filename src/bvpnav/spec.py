@@ -52,10 +52,12 @@ if sys.version_info >= (3, 11):
 else:  # Python 3.10: the same parser, packaged as tomli (a dependency there)
     import tomli as tomllib
 
+from . import error_models as em
 from .backends import ACCURACIES
 from .errors import InputError
 from .formulation import RESIDUAL_FORMS
 from .imu import ACC_UNITS as _ACC_UNITS
+from .io import read_regular_file
 from .items import _snake, positive_array, registry
 from .lam import rule_names
 from .problem import NavigationProblem
@@ -80,8 +82,6 @@ _SECTIONS = {
 
 def error_model_registry() -> dict[str, type]:
     """Concrete error-model classes by registered name (snake case of the class name)."""
-    from . import error_models as em
-
     out: dict[str, type] = {}
     abstract = {"ErrorModel", "SensorErrorModel", "CompositeErrorModel"}
 
@@ -432,8 +432,6 @@ def read_spec_text(path) -> str:
     ``/dev/stdin`` would block forever); it is opened read-only. A UTF-8 byte-order mark
     is accepted and dropped (an encoding marker some editors write, not part of the TOML).
     """
-    from .io import read_regular_file
-
     raw = read_regular_file(path, "spec", max_bytes=MAX_SPEC_BYTES)
     try:
         return raw.decode("utf-8-sig")

@@ -32,14 +32,21 @@ import cvxpy as cp
 import numpy as np
 import pandas as pd
 
+from .backends import ACCURACIES, check_options, resolve_solver, solver_options
 from .constraints import Position, Velocity
 from .error_models import CompositeErrorModel, ErrorModel
 from .error_models._base import as_error_model
 from .errors import InputError
+from .formulation import Formulation
 from .imu import ImuData
 from .items import MODES, Item, item_class
+from .lam import NEEDS
+from .lam.sweep import CvxpySweep, DirectSweep, LambdaCurve
 from .model import Affine, Cone, NavModel
 from .problem import NavigationProblem
+from .solve.chain import solve_fixed
+from .solve.options import prepare
+from .solve.verify import verify
 
 __all__ = ["check_item", "check_error_model"]
 
@@ -633,8 +640,6 @@ def check_error_model(model_or_class: ErrorModel | CompositeErrorModel | type[Er
 # ------------------------------------------------------------------ back ends
 def _ls_formulation(sigma_a: float | None = None):
     """A small least-squares problem (hard ends, soft fixes) and a robust copy of it."""
-    from .formulation import Formulation
-
     t = np.linspace(0.0, 10.0, 41)
     acc = np.sin(t) + 0.05 * np.cos(7.0 * t)
     data = ImuData(t=t, acc=acc)
@@ -671,9 +676,6 @@ def check_backend(backend) -> None:
     :math:`\\min \\|D x + c\\|^2` s.t. :math:`E x + e = 0` from one sparse factorization
     (:class:`bvpnav.backends.direct.DirectBackend`).
     """
-    from .backends import ACCURACIES, check_options, resolve_solver
-    from .solve.verify import verify
-
     name = getattr(backend, "name", None)
     who = f"back end {name!r}"
     _require(isinstance(name, str) and name and name == name.lower(), who, "name",
@@ -713,8 +715,6 @@ def check_backend(backend) -> None:
     if backend.accepts(ls) is not None:
         return
     with _rule(who, "run"):
-        from .backends import solver_options
-
         raw = backend.run(ls, 2.0, solver_options(backend, "default"), False)
         x = np.asarray(raw.x, dtype=float)
         _require(x.shape == (ls.model.size,) and np.all(np.isfinite(x)), who, "run",
@@ -747,11 +747,6 @@ def check_rule(rule) -> None:
         inside the sweep's range, the same on a second run; and, unless the rule needs
         least squares, the same on the cvxpy sweep of a problem with a robust item.
     """
-    from .lam import NEEDS
-    from .lam.sweep import CvxpySweep, DirectSweep, LambdaCurve
-    from .solve.chain import solve_fixed
-    from .solve.options import prepare
-
     name = getattr(rule, "name", None)
     who = f"lambda rule {name!r}"
     _require(isinstance(name, str) and name, who, "name", "the name must be a non-empty string")

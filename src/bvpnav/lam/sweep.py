@@ -34,9 +34,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from ..cvx import compiled
 from ..errors import InputError
 from ..formulation import LAM_RANGE, as_formulation
 from ..lsq import factor_form, least_squares_form, non_least_squares_term
+from ..plot import lcurve
 from . import get_rule, rule_names
 
 __all__ = ["LambdaCurve", "DirectSweep", "CvxpySweep", "sweep_curve"]
@@ -103,8 +105,6 @@ class LambdaCurve:
 
     def plot(self, ax=None):
         """L-curve with every rule's choice marked (see :func:`bvpnav.plot.lcurve`)."""
-        from ..plot import lcurve
-
         return lcurve(self, ax=ax)
 
 
@@ -223,8 +223,6 @@ class CvxpySweep:
 
     def point(self, lam: float, **_) -> dict:
         """The curve at one lambda (cached): ``rho2``, ``eta2`` and ``x``."""
-        from ..cvx import compiled
-
         key = float(lam)
         if key in self.cache:
             return self.cache[key]

@@ -13,7 +13,7 @@ import pandas as pd
 
 from ..errors import Inaccurate, InputError
 from ..formulation import as_formulation
-from ..result import Attempt, Solution, SolveRecords, Verification
+from ..result import Attempt, Run, Solution, SolveRecords, Verification
 from .verify import verify
 
 __all__ = ["finish", "make_solution"]
@@ -44,17 +44,17 @@ def _items_table(form, xval: np.ndarray, duals: dict | None) -> tuple[pd.DataFra
     return pd.DataFrame(rows, columns=cols), item_res
 
 
-def _warnings(form, run: dict, check: Verification | None) -> list[str]:
-    warn = [f"{run.get('solver')}: {w}" for w in run.get("solver_warnings", [])]
-    if run.get("preset_applied") is False:
-        warn.append(f"{run.get('solver')}: bvpnav has no accuracy presets for this solver; it ran with "
-                    f"its own default tolerances (accuracy={run.get('accuracy')!r} set only bvpnav's "
+def _warnings(form, run: Run | None, check: Verification | None) -> list[str]:
+    warn = [] if run is None else [f"{run.solver}: {w}" for w in run.solver_warnings]
+    if run is not None and not run.preset_applied:
+        warn.append(f"{run.solver}: bvpnav has no accuracy presets for this solver; it ran with "
+                    f"its own default tolerances (accuracy={run.accuracy!r} set only bvpnav's "
                     "verification tolerance); pass options=... to tighten them")
     cond = check.conditioning if check is not None else None
     if cond is not None:
         warn += cond["warnings"]
-    if str(run.get("status", "")).endswith("inaccurate"):
-        warn.append(f"{run.get('solver')} reported status {run['status']!r}; the answer passed "
+    if run is not None and str(run.status).endswith("inaccurate"):
+        warn.append(f"{run.solver} reported status {run.status!r}; the answer passed "
                     "bvpnav's verification (see stats['verification'])")
     grid = form.model.grid
     gaps = grid.gaps()
@@ -129,5 +129,5 @@ def finish(form, xval: np.ndarray, lam: float, run: dict, duals, accuracy: str, 
             "'acceleration'.",
             attempts=[attempt],
         )
-    records = SolveRecords(run=dict(run), attempts=[attempt], verification=check)
+    records = SolveRecords(run=Run.of(run), attempts=[attempt], verification=check)
     return make_solution(form, xval, lam, "fixed", records, duals)
