@@ -7,19 +7,9 @@ CLI) and to put it through the shared contract test.
 
 from __future__ import annotations
 
-import importlib
-import pkgutil
-
 from bvpnav.items import Item, registry
+from bvpnav.plugins import discover, export
 
 __all__ = ["Item", "registry"]
 
-for _info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
-    if _info.name.startswith("_"):
-        continue
-    _mod = importlib.import_module(f"{__name__}.{_info.name}")
-    for _name in getattr(_mod, "__all__", ()):
-        globals()[_name] = getattr(_mod, _name)
-        __all__.append(_name)
-
-del _info, _mod, _name
+__all__ += export(globals(), discover(__name__, __path__))

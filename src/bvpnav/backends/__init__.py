@@ -17,9 +17,7 @@ back end is one file (here, or anywhere that calls :func:`register_backend`), ch
 from __future__ import annotations
 
 import difflib
-import importlib
 import os
-import pkgutil
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -27,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, SolverNotFound
+from ..plugins import discover
 
 __all__ = [
     "ACCURACIES",
@@ -142,18 +141,9 @@ def register_factory(factory) -> None:
     _FACTORIES.append(factory)
 
 
-_LOADED = False
-
-
 def _discover() -> None:
     """Import every module of this folder once (each registers its back ends)."""
-    global _LOADED
-    if _LOADED:
-        return
-    _LOADED = True
-    for info in pkgutil.iter_modules(__path__):
-        if not info.name.startswith("_"):
-            importlib.import_module(f"{__name__}.{info.name}")
+    discover(__name__, __path__)
 
 
 def registry() -> dict[str, Backend]:

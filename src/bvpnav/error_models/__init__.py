@@ -35,9 +35,7 @@ and ``columns(data)`` (see ``examples/custom_error_model.py``).
 
 from __future__ import annotations
 
-import importlib
-import pkgutil
-
+from ..plugins import discover, export
 from ._base import (
     CompositeErrorModel,
     ErrorModel,
@@ -60,12 +58,4 @@ __all__ = [
     "sensor_signal",
 ]
 
-for _info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
-    if _info.name.startswith("_"):
-        continue
-    _mod = importlib.import_module(f"{__name__}.{_info.name}")
-    for _name in getattr(_mod, "__all__", ()):
-        globals()[_name] = getattr(_mod, _name)
-        __all__.append(_name)
-
-del _info, _mod, _name
+__all__ += export(globals(), discover(__name__, __path__))

@@ -14,12 +14,10 @@ anywhere that calls :func:`register_rule`), checked by :func:`bvpnav.testing.che
 
 from __future__ import annotations
 
-import importlib
-import pkgutil
-
 import numpy as np
 
 from ..errors import InputError
+from ..plugins import discover
 
 __all__ = ["LambdaRule", "register_rule", "unregister_rule", "get_rule", "rule_names", "NEEDS",
            "edge_warning"]
@@ -84,19 +82,9 @@ def unregister_rule(name: str) -> None:
     _RULES.pop(name, None)
 
 
-_LOADED = False
-
-
 def _discover() -> None:
-    global _LOADED
-    if _LOADED:
-        return
-    _LOADED = True
-    for name in BUILTIN:
-        importlib.import_module(f"{__name__}.{name}")
-    for info in pkgutil.iter_modules(__path__):
-        if not info.name.startswith("_") and info.name not in BUILTIN and info.name != "sweep":
-            importlib.import_module(f"{__name__}.{info.name}")
+    """Import every rule module of this folder once, the built-ins first."""
+    discover(__name__, __path__, first=BUILTIN, skip=("sweep",))
 
 
 def rule_names() -> tuple[str, ...]:
