@@ -250,7 +250,7 @@ def project_onto_polyline(vertices, t, positions, ambiguity: float = 0.5,
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class TrackLine(Item, Linearizable):
+class TrackLine(Linearizable, Item):
     """The object moves along a known planar polyline (timing unknown).
 
     Parameters

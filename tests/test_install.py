@@ -39,3 +39,8 @@ def test_wheel_contains_every_constraints_file(tmp_path):
     for name in FILES:
         assert f"bvpnav/constraints/{name}" in names, name
     assert "bvpnav/__init__.py" in names and "bvpnav/problem.py" in names
+    # and every module of the core, sub-packages included (a package missing from
+    # pyproject's list is silently left out of the wheel; the editable install hides it)
+    core = ROOT / "src" / "bvpnav"
+    for path in sorted(core.rglob("*.py")):
+        assert f"bvpnav/{path.relative_to(core).as_posix()}" in names, path

@@ -153,3 +153,76 @@ def test_the_run_and_its_timings_are_typed_and_flattened_into_the_stats():
     assert sol.stats["factorization"] == run.details["factorization"]  # back-end specific
     cv = ls_problem().solve(solver="clarabel").records.run
     assert cv.timings.cvxpy_time >= cv.timings.solve_time > 0 and cv.details == {}
+
+
+# ------------------------------------------- found by the independent review of the redesign
+def test_lambda_curve_evaluates_every_registered_rule_by_default():
+    prob = ls_problem()
+    prob.sigma_a = 0.05  # the discrepancy rule needs the noise level
+    curve = bvpnav.lambda_curve(prob)
+    assert set(curve.chosen) == set(bvpnav.lam.rule_names()) == {"lcurve", "gcv", "discrepancy", "quasi"}
+
+
+def test_setting_sigma_a_after_construction_changes_the_solution():
+    prob = ls_problem()
+    before = prob.solve(solver="direct").position()
+    prob.sigma_a = 0.01
+    assert prob.sigma_a_given and prob.formulation.sigma_a[0] == 0.01
+    after = prob.solve(solver="direct").position()
+    assert np.max(np.abs(after - before)) > 1e-3  # the data term weighs 10^4 times more
+    with pytest.raises(bvpnav.InputError, match="sigma_a"):
+        prob.sigma_a = -1.0
+
+
+def test_a_formulation_gives_unnamed_items_unique_labels():
+    from bvpnav.formulation import Formulation
+
+    data = bvpnav.ImuData(t=T, acc=ACC)
+    form = Formulation(data, items=[Position(t=0.0, value=0.0), Position(t=10.0, value=1.0),
+                                    Position(t=5.0, value=0.5, sigma=0.1)])
+    assert form.labels == ["Position", "Position#2", "Position#3"]
+    sol = bvpnav.solve.solve(form, solver="direct")
+    assert abs(sol.position()[-1] - 1.0) < 1e-9 and sol.stats["verified"]
+
+
+@pytest.mark.parametrize("kw, culprit", [
+    (dict(lam="gcv", rule={"bogus": 1}), r"rule: unknown option\(s\) \['bogus'\]; valid: \['lam_range'"),
+    (dict(lam="gcv", rule="points"), r"rule='points': give a dict"),
+    (dict(lam="gcv", rule={"lam_range": (1.0, 0.5)}), r"lam_range=\(1.0, 0.5\): need 0 < low < high"),
+    (dict(sequential={"max_iters": 3}), r"sequential: unknown option\(s\) \['max_iters'\]; valid: \['tol'"),
+    (dict(sequential="x"), r"sequential='x': give a dict"),
+])
+def test_rule_and_sequential_options_are_checked_before_any_work(monkeypatch, kw, culprit):
+    monkeypatch.setattr(chain, "attempt", lambda *a, **k: pytest.fail("a back end ran"))
+    with pytest.raises(bvpnav.InputError, match=culprit):
+        track_problem().solve(**kw)
+
+
+def test_lambda_curve_solve_kw_keeps_the_explicit_arguments_and_refuses_what_it_ignores(spy):
+    curve = bvpnav.lambda_curve(robust_problem(), rules=("lcurve",), points=9, solver="clarabel",
+                                solve_kw=dict(solver="scs", verify=False, fallback=None))
+    assert curve.engine == "cvxpy" and {c["solver"] for c in spy} == {"clarabel"}
+    assert all(c["verify"] is False and c["chain"] == ["clarabel"] for c in spy)
+    with pytest.raises(bvpnav.InputError, match=r"solve_kw: \['on_conflict'\] do not apply"):
+        bvpnav.lambda_curve(robust_problem(), solve_kw={"on_conflict": "demote"})
+
+
+def test_a_rule_needing_the_trace_must_need_least_squares():
+    class Traced(bvpnav.lam.LambdaRule):
+        name = "traced"
+        needs = frozenset({"trace"})
+
+    with pytest.raises(bvpnav.InputError, match="needs 'trace' but not 'least_squares'"):
+        bvpnav.lam.register_rule(Traced())
+    assert "traced" not in bvpnav.lam.rule_names()
+
+
+def test_build_is_a_mapping_and_failed_attempts_are_plain_dicts():
+    import json
+
+    cvx = ls_problem().build()
+    assert "lam" in cvx and set(dict(cvx)) >= {"problem", "lam", "x", "fem", "cons", "penalties"}
+    with pytest.raises(bvpnav.Infeasible) as err:
+        conflict_problem().solve()
+    json.dumps(err.value.attempts)  # JSON-ready, as before the typed records
+    assert err.value.attempts[-1]["conflicts"] == ["a", "b"]

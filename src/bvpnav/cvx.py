@@ -12,7 +12,8 @@ very same constraints).
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import cvxpy as cp
@@ -32,7 +33,7 @@ def lower(rows: Affine, x: cp.Expression) -> cp.Expression:
 
 
 @dataclass(eq=False)
-class CvxProblem:
+class CvxProblem(Mapping):
     """The compiled cvxpy problem and its parts.
 
     Attributes
@@ -61,7 +62,18 @@ class CvxProblem:
 
     def __getitem__(self, key: str) -> Any:
         """Dictionary-style access (``build()["problem"]``), as in earlier releases."""
+        if key not in self._names():
+            raise KeyError(key)
         return getattr(self, key)
+
+    def _names(self) -> list[str]:
+        return [f.name for f in fields(self)]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._names())
+
+    def __len__(self) -> int:
+        return len(self._names())
 
     def duals(self) -> dict:
         """``{"fem": y, label: [y per constraint]}`` after a solve (cvxpy's sign convention)."""

@@ -175,7 +175,7 @@ class Formulation:
         self.sigma_a_given = sigma_a is not None
         _check_acc(data)
         self.error_model = error_model
-        self.items: tuple[Item, ...] = tuple(items)
+        self.items: tuple[Item, ...] = tuple(label_items(items))  # unique labels (a no-op when they are)
         self._model = model
         self._terms: list[Term] | None = None
         self._observable = False

@@ -313,7 +313,9 @@ class Item:
 class Linearizable:
     """The declared contract of an item that is nonlinear in the unknowns.
 
-    Mix it into an :class:`Item` (``class TrackLine(Item, Linearizable)``). The sequential
+    Mix it in before :class:`Item` (``class TrackLine(Linearizable, Item)``: then an item that
+    forgets :attr:`needs_linearization` fails loudly instead of reading Item's False). The
+    sequential
     convex loop (:mod:`bvpnav.solve.sequential`) handles exactly the items that are
     instances of this class and whose :attr:`needs_linearization` is True; it calls the
     methods below and nothing else.
@@ -337,7 +339,9 @@ class Linearizable:
         """Sigma (item units) of a soft stand-in for a hard or band linearized copy.
 
         Override it (and :meth:`with_mode`) to take a continuation: the loop iterates such
-        an item soft first. The base method means "no continuation"."""
+        an item soft first with this sigma. The base method means "no continuation"; an
+        override returning None means none for this linearization (the item is iterated
+        in its own mode)."""
         return None
 
     def with_mode(self, mode: str, sigma=None, tol=None, huber=None) -> Item:

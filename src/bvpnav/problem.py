@@ -74,7 +74,7 @@ class NavigationProblem:
         form = Formulation(data, residual=residual, sigma_a=sigma_a, error_model=error_model)
         self.data = data
         self._residual = residual
-        self.sigma_a = form.sigma_a
+        self._sigma_a = form.sigma_a
         self._error_model = error_model
         self._sigma_a_given = form.sigma_a_given
         self._items: list[Item] = []
@@ -93,6 +93,22 @@ class NavigationProblem:
         Formulation(self.data, value, self.sigma_a if self._sigma_a_given else None)  # checks it
         self._residual = value
         self._form, self._model = None, None
+
+    @property
+    def sigma_a(self) -> np.ndarray:
+        """Accelerometer noise per axis, m/s^2; setting it (checked) starts a new formulation."""
+        return self._sigma_a
+
+    @sigma_a.setter
+    def sigma_a(self, value) -> None:
+        form = Formulation(self.data, self.residual, value)  # checks it
+        self._sigma_a, self._sigma_a_given = form.sigma_a, form.sigma_a_given
+        self._form, self._model = None, None
+
+    @property
+    def sigma_a_given(self) -> bool:
+        """Whether ``sigma_a`` was stated (else 1 m/s^2 and ``lam`` absorbs the scale)."""
+        return self._sigma_a_given
 
     @property
     def error_model(self):

@@ -40,6 +40,8 @@ class _Record(Mapping):
         """A plain dict (what ``Solution.stats`` holds)."""
         return {k: getattr(self, k) for k in self._keys()}
 
+    copy = as_dict
+
 
 @dataclass(eq=False)
 class Attempt(_Record):
@@ -62,6 +64,11 @@ class Attempt(_Record):
     reason: str
     conflicts: list | None = None
     _optional = ("conflicts",)
+
+    @staticmethod
+    def plain(records) -> list[dict]:
+        """Attempts as plain dicts (what exceptions carry: JSON-ready)."""
+        return [Attempt.of(r).as_dict() for r in records]
 
     @classmethod
     def of(cls, rec) -> Attempt:
@@ -112,7 +119,7 @@ class Verification(_Record):
 
 @dataclass(eq=False)
 class SequentialReport(_Record):
-    """What the sequential convex loop did (see :func:`bvpnav.solve.sequential.solve_sequential`).
+    """What the sequential convex loop did (see :func:`bvpnav.solve.sequential.with_sequential`).
 
     Attributes
     ----------

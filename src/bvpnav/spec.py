@@ -534,7 +534,7 @@ def dumps_spec(spec: Spec) -> str:
 def problem_to_spec(problem, solve: dict | None = None, input: dict | None = None) -> Spec:
     """The :class:`Spec` of a problem (its items, error model, form and sigma_a)."""
     prob_kw: dict[str, Any] = {"residual": problem.residual}
-    if problem._sigma_a_given:
+    if problem.sigma_a_given:
         sa = problem.sigma_a
         prob_kw["sigma_a"] = float(sa[0]) if np.all(sa == sa[0]) else sa.tolist()
     em = problem.error_model

@@ -666,7 +666,8 @@ def check_backend(backend) -> None:
         an unknown option refused naming it (when it lists its options); a positive
         ``memory_per_sample`` for both objective forms; ``accepts`` returning None or a
         reason that names the item it cannot take (or the back end itself); and, on a
-        small least-squares problem it accepts, a finite stacked solution that bvpnav's
+        small least-squares problem (which every back end must accept), a finite stacked
+        solution that bvpnav's
         verification passes at the ``default`` preset and that agrees with the ``direct``
         back end to 1e-6 m.
 
@@ -712,9 +713,9 @@ def check_backend(backend) -> None:
             named = isinstance(why, str) and (name in why or any(lab in why for lab in form.labels))
             _require(why is None or named, who, "accepts",
                      f"accepts() must return None or a reason naming the item (or the back end), got {why!r}")
-    if backend.accepts(ls) is not None:
-        return
     with _rule(who, "run"):
+        why = backend.accepts(ls)
+        _require(why is None, who, "run", f"it refuses plain equality-constrained least squares: {why}")
         raw = backend.run(ls, 2.0, solver_options(backend, "default"), False)
         x = np.asarray(raw.x, dtype=float)
         _require(x.shape == (ls.model.size,) and np.all(np.isfinite(x)), who, "run",
@@ -750,8 +751,11 @@ def check_rule(rule) -> None:
     name = getattr(rule, "name", None)
     who = f"lambda rule {name!r}"
     _require(isinstance(name, str) and name, who, "name", "the name must be a non-empty string")
-    _require(set(getattr(rule, "needs", ())) <= set(NEEDS), who, "needs",
-             f"needs must be a subset of {list(NEEDS)}, got {getattr(rule, 'needs', None)!r}")
+    needs = getattr(rule, "needs", None)
+    _require(isinstance(needs, set | frozenset) and needs <= set(NEEDS), who, "needs",
+             f"needs must be a (frozen)set, a subset of {list(NEEDS)}, got {needs!r}")
+    _require("trace" not in needs or "least_squares" in needs, who, "needs",
+             "a rule that needs 'trace' needs 'least_squares' too (only the direct sweep has it)")
     ls, robust = _ls_formulation(sigma_a=0.05)
     lams = np.geomspace(1e-3, 1e3, 13)
     s = np.log(lams)

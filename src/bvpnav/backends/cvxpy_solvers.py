@@ -235,12 +235,15 @@ _CACHE: dict[str, CvxpyBackend] = {}
 
 
 def _installed() -> list[CvxpyBackend]:
-    """One back end per installed cvxpy solver (objects kept, so patches and state stick)."""
+    """One back end per installed cvxpy solver that takes a quadratic objective (objects
+    kept, so patches and state stick). LP/MILP-only solvers (cvxpy's SCIPY) are not offered:
+    every bvpnav problem has a quadratic data term."""
     out = []
     for s in cp.installed_solvers():
         if s not in _CACHE:
             _CACHE[s] = CvxpyBackend(s)
-        out.append(_CACHE[s])
+        if _CACHE[s].takes_quadratics():
+            out.append(_CACHE[s])
     return out
 
 

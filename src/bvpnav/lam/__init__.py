@@ -69,10 +69,14 @@ def register_rule(rule: LambdaRule) -> LambdaRule:
     """Add (or replace) a rule under its name."""
     if not isinstance(getattr(rule, "name", None), str) or not rule.name:
         raise InputError(f"register_rule({rule!r}): a rule needs a non-empty name")
-    unknown = set(rule.needs) - set(NEEDS)
+    needs = set(getattr(rule, "needs", ()))
+    unknown = needs - set(NEEDS)
     if unknown:
         raise InputError(f"register_rule({rule.name!r}): unknown needs {sorted(unknown)}; valid: "
                          f"{list(NEEDS)}")
+    if "trace" in needs and "least_squares" not in needs:
+        raise InputError(f"register_rule({rule.name!r}): needs 'trace' but not 'least_squares'; only the "
+                         "direct sweep of a least-squares problem computes the trace: declare both")
     _RULES[rule.name] = rule
     return rule
 

@@ -41,7 +41,7 @@ from ..lsq import factor_form, least_squares_form, non_least_squares_term
 from ..plot import lcurve
 from . import get_rule, rule_names
 
-__all__ = ["LambdaCurve", "DirectSweep", "CvxpySweep", "sweep_curve"]
+__all__ = ["LambdaCurve", "DirectSweep", "CvxpySweep", "sweep_curve", "check_range"]
 
 
 @dataclass
@@ -238,6 +238,11 @@ class CvxpySweep:
         pt = {"lam": key, "rho2": rho2, "eta2": eta2, "x": x}
         self.cache[key] = pt
         return pt
+
+
+def check_range(lam_range, points) -> tuple[float, float]:
+    """``(low, high)`` of a sweep, or :class:`InputError` naming a bad range or point count."""
+    return _check_range(lam_range, points)
 
 
 def _check_range(lam_range, points) -> tuple[float, float]:

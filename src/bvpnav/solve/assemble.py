@@ -127,7 +127,7 @@ def finish(form, xval: np.ndarray, lam: float, run: dict, duals, accuracy: str, 
             + f"tolerance {check.rtol:.0e}. Try accuracy='high', another solver "
             "(e.g. solver='direct' for problems without inequalities), or residual="
             "'acceleration'.",
-            attempts=[attempt],
+            attempts=[attempt.as_dict()],
         )
     records = SolveRecords(run=Run.of(run), attempts=[attempt], verification=check)
     return make_solution(form, xval, lam, "fixed", records, duals)

@@ -69,7 +69,7 @@ def solve_fixed(form, lam: float, opts: SolveOptions) -> Solution:
         try:
             sol = attempt(form, be, op, lam, opts)
         except Infeasible as exc:  # a property of the information
-            exc.attempts = attempts + [Attempt.of(a) for a in exc.attempts]
+            exc.attempts = Attempt.plain(attempts + list(exc.attempts))
             raise
         except InputError as exc:
             if k == 0:
@@ -82,6 +82,7 @@ def solve_fixed(form, lam: float, opts: SolveOptions) -> Solution:
                                                                       "reason": str(exc)}]))
             last_exc = exc
             if not opts.verify and k == 0:
+                exc.attempts = Attempt.plain(exc.attempts)
                 raise
             continue
         except (BvpnavError, KeyboardInterrupt, SystemExit):
@@ -91,6 +92,7 @@ def solve_fixed(form, lam: float, opts: SolveOptions) -> Solution:
             attempts.extend(err.attempts)
             last_exc = err
             if not opts.verify and k == 0:
+                err.attempts = Attempt.plain(err.attempts)
                 raise err from exc
             continue
         sol.record(attempts=attempts + sol.records.attempts)
@@ -101,4 +103,4 @@ def solve_fixed(form, lam: float, opts: SolveOptions) -> Solution:
     assert last_exc is not None
     summary = "; ".join(f"{a['solver']}: {a['status']} ({a['reason']})" for a in attempts)
     raise type(last_exc)(f"every attempt failed: {summary}. Last error: {last_exc}",
-                         attempts=attempts) from last_exc.__cause__
+                         attempts=Attempt.plain(attempts)) from last_exc.__cause__

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numbers
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -19,8 +19,15 @@ from ..backends import Backend, resolve_solver, solver_options
 from ..errors import BvpnavError, InputError
 from ..formulation import LAM_RANGE
 from ..lam import rule_names
+from ..lam.sweep import check_range
 
-__all__ = ["SolveOptions", "prepare", "check_lam", "DEFAULT_FALLBACK", "fallback_chain"]
+__all__ = ["SolveOptions", "prepare", "check_lam", "DEFAULT_FALLBACK", "fallback_chain", "RULE_KEYS",
+           "SEQUENTIAL_KEYS"]
+
+#: Options of the lambda sweep a solve with a rule name takes (``solve(rule={...})``).
+RULE_KEYS = ("lam_range", "points", "tau", "probes", "seed", "progress", "engine")
+#: Options of the sequential loop (``solve(sequential={...})``).
+SEQUENTIAL_KEYS = ("tol", "max_iter", "initial", "lam_each", "continuation", "soft_tol")
 
 #: The automatic fallback chain (``fallback="auto"``) after a primary Clarabel attempt:
 #: Clarabel again with static regularization, the direct sparse back end (equality-
@@ -98,10 +105,6 @@ class SolveOptions:
         """The primary back end's name."""
         return self.backend.name
 
-    def replace(self, **changes) -> SolveOptions:
-        """A copy with some options changed (the chain is rebuilt when needed)."""
-        return replace(self, **changes)
-
 
 def _fallback_entries(backend: Backend, fallback) -> list:
     how = ("use 'auto', None, or a list of solver names or (name, options) pairs, e.g. "
@@ -163,6 +166,17 @@ def prepare(lam=1.0, solver: str = "clarabel", accuracy: str = "default", verify
     for name, flag in (("verify", verify), ("verbose", verbose)):
         if not isinstance(flag, bool | np.bool_):
             raise InputError(f"{name}={flag!r}: must be True or False")
+    for what, given, valid in (("sequential", sequential, SEQUENTIAL_KEYS), ("rule", rule, RULE_KEYS)):
+        if given is None:
+            continue
+        if not isinstance(given, Mapping):
+            raise InputError(f"{what}={given!r}: give a dict of options, e.g. {what}={{{valid[0]!r}: ...}}, "
+                             f"with keys from {list(valid)}")
+        unknown = sorted(str(k) for k in given if k not in valid)
+        if unknown:
+            raise InputError(f"{what}: unknown option(s) {unknown}; valid: {list(valid)}")
+    if isinstance(lam, str) and rule:
+        check_range(rule.get("lam_range", (1e-6, 1e6)), rule.get("points", 25))
     backend = resolve_solver(solver)
     primary = solver_options(backend, accuracy, options)
     chain = [(backend, primary)] + fallback_chain(backend, accuracy, options, fallback)

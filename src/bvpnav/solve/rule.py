@@ -11,7 +11,9 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from ..backends import check_memory, resolve_solver
+from ..errors import InputError
 from ..formulation import as_formulation
+from ..lam import rule_names
 from ..lam.sweep import LambdaCurve, sweep_curve
 from ..result import Solution
 from .chain import solve_fixed
@@ -96,8 +98,15 @@ def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6
     Quasi-optimality: minimise :math:`\\|\\lambda\\, dr/d\\lambda\\|`.
     """
     form = as_formulation(problem)
-    opts, _ = prepare(1.0, solver=solver, accuracy=accuracy, options=options, **(solve_kw or {}))
-    return _curve(form, rule, opts, solve_fixed, rules=rules, lam_range=lam_range, points=points,
+    extra = dict(solve_kw or {})
+    ignored = sorted(set(extra) - {"verify", "fallback", "verbose", "solver", "accuracy", "options"})
+    if ignored:
+        raise InputError(f"solve_kw: {ignored} do not apply to the sweep's fixed-lambda solves; it "
+                         "takes 'verify', 'fallback' and 'verbose' (and solver, accuracy, options)")
+    extra.update(solver=solver, accuracy=accuracy, options=options)  # the explicit ones win
+    opts, _ = prepare(1.0, **extra)
+    return _curve(form, rule, opts, solve_fixed, rules=rule_names() if rules is None else rules,
+                  lam_range=lam_range, points=points,
                   tau=tau, probes=probes, seed=seed, progress=progress, engine=engine)
 
 

@@ -117,8 +117,12 @@ def _initial_trajectory(form, initial, nonlin, inner: Stage, lam, opts) -> tuple
 
 
 def _continued(lin, lam_soft: float):
-    """Soft copy of a linearized hard/band item for the continuation phase; (item, sigma in m)."""
-    sigma = float(lin.continuation_sigma())
+    """Soft copy of a linearized hard/band item for the continuation phase; (item, sigma in
+    m), or (the item itself, None) when it declines a continuation this time."""
+    sigma = lin.continuation_sigma()
+    if sigma is None:
+        return lin, None
+    sigma = float(sigma)
     return lin.with_mode("soft", sigma=sigma * np.sqrt(lam_soft)), sigma
 
 
@@ -149,7 +153,9 @@ class _Loop:
             if counts is not None:
                 self.counts[it.label] = counts
             if self.soft and it.label in self.cont:
-                lin, sig[it.label] = _continued(lin, self.lam_soft)
+                lin, s = _continued(lin, self.lam_soft)
+                if s is not None:
+                    sig[it.label] = s
             items.append(lin)
         self.sigmas.append(sig)
         return self.form.with_items(items)
