@@ -71,54 +71,31 @@ class NavigationProblem:
         error_model=None,
         items: Iterable[Item] = (),
     ):
-        form = Formulation(data, residual=residual, sigma_a=sigma_a, error_model=error_model)
         self.data = data
-        self._residual = residual
-        self._sigma_a = form.sigma_a
-        self._error_model = error_model
-        self._sigma_a_given = form.sigma_a_given
+        self._base = Formulation(data, residual=residual, sigma_a=sigma_a, error_model=error_model)
         self._items: list[Item] = []
         self._form: Formulation | None = None
         self._model: NavModel | None = None
         for it in items:
             self.add(it)
 
-    @property
-    def residual(self) -> str:
-        """The objective form; setting it (checked) starts a new formulation."""
-        return self._residual
-
-    @residual.setter
-    def residual(self, value: str) -> None:
-        Formulation(self.data, value, self.sigma_a if self._sigma_a_given else None)  # checks it
-        self._residual = value
+    def _redefine(self, **change) -> None:
+        """The definition with ``change`` (checked by :class:`Formulation`); caches dropped."""
+        kw = dict(residual=self.residual, sigma_a=self.sigma_a if self.sigma_a_given else None,
+                  error_model=self.error_model)
+        self._base = Formulation(self.data, **{**kw, **change})
         self._form, self._model = None, None
 
-    @property
-    def sigma_a(self) -> np.ndarray:
-        """Accelerometer noise per axis, m/s^2; setting it (checked) starts a new formulation."""
-        return self._sigma_a
-
-    @sigma_a.setter
-    def sigma_a(self, value) -> None:
-        form = Formulation(self.data, self.residual, value)  # checks it
-        self._sigma_a, self._sigma_a_given = form.sigma_a, form.sigma_a_given
-        self._form, self._model = None, None
-
-    @property
-    def sigma_a_given(self) -> bool:
-        """Whether ``sigma_a`` was stated (else 1 m/s^2 and ``lam`` absorbs the scale)."""
-        return self._sigma_a_given
-
-    @property
-    def error_model(self):
-        """The sensor error model (None for none); setting it starts a new formulation."""
-        return self._error_model
-
-    @error_model.setter
-    def error_model(self, value) -> None:
-        self._error_model = value
-        self._form, self._model = None, None
+    residual = property(lambda self: self._base.residual, lambda self, v: self._redefine(residual=v),
+                        doc="The objective form; setting it (checked) starts a new formulation.")
+    sigma_a = property(lambda self: self._base.sigma_a, lambda self, v: self._redefine(sigma_a=v),
+                       doc="Accelerometer noise per axis, m/s^2; setting it (checked) starts a new "
+                           "formulation.")
+    error_model = property(lambda self: self._base.error_model,
+                           lambda self, v: self._redefine(error_model=v),
+                           doc="The sensor error model (None for none); setting it starts a new formulation.")
+    sigma_a_given = property(lambda self: self._base.sigma_a_given,
+                             doc="Whether ``sigma_a`` was stated (else 1 m/s^2; ``lam`` absorbs the scale).")
 
     def __getstate__(self) -> dict:
         """The problem's definition without its caches (cvxpy's compiled problem holds
@@ -145,7 +122,7 @@ class NavigationProblem:
         copy has no error-model parameters.
         """
         new = NavigationProblem(self.data, residual=self.residual,
-                                sigma_a=self.sigma_a if self._sigma_a_given else None,
+                                sigma_a=self.sigma_a if self.sigma_a_given else None,
                                 error_model=self.error_model if error_model else None, items=items)
         if error_model:
             new._model = self._model
@@ -155,8 +132,7 @@ class NavigationProblem:
     def formulation(self) -> Formulation:
         """What the problem is now: an immutable :class:`Formulation` of its items."""
         if self._form is None:
-            self._form = Formulation(self.data, self.residual,
-                                     self.sigma_a if self._sigma_a_given else None,
+            self._form = Formulation(self.data, self.residual, self.sigma_a if self.sigma_a_given else None,
                                      self.error_model, self._items, model=self._model)
         if self._model is None:
             self._model = self._form.model

@@ -91,6 +91,11 @@ def _osqp_settings() -> dict[str, Any] | None:
     return {a: getattr(settings, a) for a in dir(settings) if not a.startswith("_")}
 
 
+#: Earlier spellings of settings, per solver, translated before the solve (OSQP 1.x renamed
+#: ``polish`` to ``polishing`` and silently ignores the old name: a user's polish=False did
+#: nothing).
+ALIASES: dict[str, dict[str, str]] = {"osqp": {"polish": "polishing"}}
+
 #: Solvers whose settings bvpnav can list (names checked before any work; Clarabel's values
 #: are type-checked too); others judge their options themselves (a refusal is a recorded
 #: failed attempt, see :func:`bvpnav.solve.chain.solve_fixed`).
@@ -122,7 +127,9 @@ class CvxpyBackend(Backend):
     def valid_options(self) -> list[str] | None:
         listed = _SETTINGS.get(self.name)
         settings = listed() if listed is not None else None
-        return None if settings is None else sorted(set(settings) | _cvxpy_keywords())
+        if settings is None:
+            return None
+        return sorted(set(settings) | _cvxpy_keywords() | set(ALIASES.get(self.name, {})))
 
     def check_value(self, key: str, value) -> str | None:
         if self.name != "clarabel":
@@ -170,6 +177,8 @@ class CvxpyBackend(Backend):
         cvx = compiled(form)
         prob: cp.Problem = cvx.problem
         cvx.lam.value = lam
+        alias = ALIASES.get(self.name, {})
+        options = {alias.get(k, k): v for k, v in options.items()}
         t0 = time.perf_counter()
         try:
             with warnings.catch_warnings(record=True) as caught:
