@@ -7,7 +7,7 @@ import warnings
 
 import numpy as np
 import pytest
-from conftest import load_example
+from _helpers import load_example
 
 import bvpnav
 from bvpnav.constraints import Position, TrackLine
@@ -23,7 +23,7 @@ from bvpnav.simulate import Motion, sample_times
 from bvpnav.solve import solve_sequential
 from bvpnav.spec import dumps_spec, parse_spec, to_spec
 
-EX = pathlib.Path(__file__).resolve().parents[1] / "examples"
+EX = pathlib.Path(__file__).resolve().parents[2] / "examples"
 
 
 # ------------------------------------------------------------ geometry

@@ -6,36 +6,14 @@ import warnings
 
 import numpy as np
 import pytest
+from _helpers import known_noise, table1
 
 import bvpnav
 from bvpnav.constraints import Position
 from bvpnav.lam.lcurve import curvature as _curvature
 from bvpnav.lam.lcurve import spline_curvature as _spline_curvature
 from bvpnav.lam.sweep import DirectSweep as _DirectSweep
-from bvpnav.scenarios import tikhonov2011
 from bvpnav.solve import lambda_curve
-
-
-def table1(seed=0, scale=0.05, bias=-0.5):
-    sc = tikhonov2011(scale=scale, bias=bias, seed=seed)
-    t = sc.t
-    tp = np.concatenate([t[:10], t[-10:]])
-    prob = bvpnav.NavigationProblem(sc.data, residual="load").add(
-        Position(t=[0.0, 10.0], value=[0.0, 10.0]),
-        Position(t=tp, value=sc.prior(tp), sigma=1.0, name="prior"))
-    return prob, sc
-
-
-def known_noise(seed, n=1001, sa=0.3, sp=0.01):
-    """Accelerometer noise sa and position noise sp stated correctly: lambda = 1 is the
-    maximum-likelihood weight (2011 paper, Section 2.2)."""
-    rng = np.random.default_rng(seed)
-    t = np.linspace(0.0, 10.0, n)
-    acc = -np.sin(t) + rng.normal(0, sa, n)
-    z = np.sin(t) + rng.normal(0, sp, n)
-    prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=acc), sigma_a=sa)
-    prob.add(Position(t=t, value=z, sigma=sp))
-    return prob, np.sin(t)
 
 
 def test_exact_curvature_matches_spline_of_dense_sweep():
