@@ -6,7 +6,7 @@ import inspect
 
 import numpy as np
 import pytest
-from conftest import load_example
+from _helpers import load_example
 
 load = load_example
 

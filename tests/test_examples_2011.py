@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import load_example
+from _helpers import load_example
 
 import bvpnav
 

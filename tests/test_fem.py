@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from conftest import exact_piecewise_linear, quintic
+from _helpers import exact_piecewise_linear, quintic
 
 import bvpnav
 from bvpnav import fem

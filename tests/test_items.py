@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import quintic
+from _helpers import quintic
 
 import bvpnav
 from bvpnav.constraints import (

@@ -4,45 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
-from conftest import cubic_prior, quintic
+from _helpers import kkt_reference, quintic, table1_problem
 
 import bvpnav
 from bvpnav.constraints import Position, Velocity
-
-
-def table1_problem(n, residual="acceleration", seed=1, scale=0.05, bias=-0.5):
-    """The 2011 paper's scenario: quintic, biased/scaled/noisy accelerometer, both ends
-    fixed, the cubic prior as soft positions on the first and last N/50 samples."""
-    p, v, a = quintic()
-    t = np.linspace(0.0, 10.0, n)
-    rng = np.random.default_rng(seed)
-    acc = (1 + scale) * a(t) + rng.normal(bias, 1.0, n)
-    prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=acc), residual=residual)
-    k = max(n // 50, 1)
-    tp = np.concatenate([t[:k], t[-k:]])
-    prob.add(Position(t=[0.0, 10.0], value=[0.0, 10.0]),
-             Position(t=tp, value=cubic_prior()(tp), sigma=1.0, name="prior"))
-    return prob, p(t)
-
-
-def kkt_reference(prob, lam, refinements=3):
-    """An independent reference: the KKT system of the same problem, sparse LU plus
-    iterative refinement (written here from the definitions, not from bvpnav.lsq)."""
-    m = prob.model
-    terms = prob.terms()
-    E = bvpnav.Affine.vstack([m.fem_rows()] + [t.residual for t in terms if t.mode == "hard"])
-    D = bvpnav.Affine.vstack([prob.data_rows()] + [t.residual * (np.sqrt(lam) / t.sigma)
-                                                   for t in terms if t.mode == "soft"])
-    H = (D.A.T @ D.A).tocsc()
-    K = sp.bmat([[2 * H, E.A.T], [E.A, None]]).tocsc()
-    rhs = np.concatenate([-2 * (D.A.T @ D.c), -E.c])
-    lu = spla.splu(K)
-    z = lu.solve(rhs)
-    for _ in range(refinements):
-        z += lu.solve(rhs - K @ z)
-    return z[: m.size]
 
 
 def test_solver_names_are_case_insensitive_and_unknown_lists_installed():

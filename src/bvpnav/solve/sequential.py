@@ -16,7 +16,7 @@ linearized about a trajectory estimate). The pipeline's sequential stage
    until the change is below a looser ``soft_tol``, and only then in the requested mode.
 
 Why the continuation. Measured on the noise-free test track of
-``tests/test_track_line.py`` from a start 2 m off: a hard track without it stalls at
+``tests/solve/test_sequential.py`` from a start 2 m off: a hard track without it stalls at
 about 1.1 m RMS error (changes of 0.007-0.08 m per iteration, still 0.59 m after 80
 iterations), with about 50 samples at the resting end dropped as beyond the path. The
 dropped samples are a symptom, not the cause: with ``beyond_ends="clamp"`` nothing is

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_problem import kkt_reference, table1_problem
+from _helpers import kkt_reference, table1_problem
 
 import bvpnav
 from bvpnav.constraints import Position, Velocity

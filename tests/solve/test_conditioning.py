@@ -35,7 +35,7 @@ import numpy as np
 import pandas as pd
 import pytest
 import scipy.linalg as sla
-from conftest import load_example
+from _helpers import load_example
 
 import bvpnav
 from bvpnav.constraints import Position, Velocity

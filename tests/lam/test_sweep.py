@@ -1,0 +1,105 @@
+"""The lambda sweep (bvpnav.lam.sweep) and its rules together: derivatives, traces, known
+answers, the cvxpy engine, errors, plots. Per rule: test_lcurve.py, test_quasi.py."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from _helpers import known_noise, table1
+
+import bvpnav
+from bvpnav.constraints import Position
+from bvpnav.lam.sweep import DirectSweep as _DirectSweep
+from bvpnav.solve import lambda_curve
+
+
+def test_derivative_identity_rho_prime_equals_minus_lam_eta_prime():
+    prob, _ = table1()
+    eng = _DirectSweep(prob)
+    lam, eps = 2.0, 1e-5
+    a, b, c = eng.point(lam * (1 - eps)), eng.point(lam), eng.point(lam * (1 + eps))
+    d_rho = (c["rho2"] - a["rho2"]) / (2 * lam * eps)
+    d_eta = (c["eta2"] - a["eta2"]) / (2 * lam * eps)
+    assert abs(d_eta - b["deta2"]) < 1e-5 * abs(b["deta2"])
+    assert abs(d_rho + lam * b["deta2"]) < 1e-5 * abs(d_rho)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_gcv_and_discrepancy_find_the_ml_weight_with_known_noise(seed):
+    prob, truth = known_noise(seed)
+    curve = lambda_curve(prob, rules=("gcv", "discrepancy", "quasi"), rule="gcv")
+    assert 0.4 < curve.chosen["gcv"] < 2.5
+    # discrepancy with tau = 1.5 over-smooths by design, but stays within a decade
+    assert 1.0 < curve.chosen["discrepancy"] < 10.0
+    # at the chosen lambda the defining equation holds
+    p = _DirectSweep(prob).point(curve.chosen["discrepancy"], need_trace=True)
+    assert abs(p["rho2"] - 1.5 * abs(p["trace"])) < 1e-3 * p["rho2"]
+    sol = prob.solve(lam="gcv", solver="direct")
+    assert sol.lam_rule == "gcv" and sol.lam == pytest.approx(sol.curve.chosen["gcv"])
+    assert sol.rms_error(truth) < 1.2 * prob.solve(lam=1.0, solver="direct").rms_error(truth)
+
+
+def test_hutchinson_trace_agrees_with_exact_trace():
+    prob, _ = known_noise(0, n=251)
+    exact = _DirectSweep(prob).point(1.0, need_trace=True)["trace"]  # N <= 300: exact columns
+    est = [_DirectSweep(prob, exact_trace_limit=0).point(1.0, need_trace=True, probes=100,
+                                                          seed=s)["trace"] for s in range(4)]
+    # Rademacher probes: standard error sqrt(2 ||B||_F^2 / P) <= sqrt(2 |tr B| / P) per estimate
+    se = np.sqrt(2 * abs(exact) / 100 / 4)
+    assert abs(np.mean(est) - exact) < 4 * se
+
+
+def test_cvxpy_engine_for_robust_items_matches_direct_curve_shape():
+    # acceleration form: Clarabel is accurate there (the load form limits it to ~1e-4)
+    prob, _ = table1()
+    prob.residual = "acceleration"
+    robust, _ = table1()
+    robust.residual = "acceleration"
+    items = robust.items
+    items[1] = Position(t=items[1].t, value=items[1].value, sigma=1.0, mode="robust", huber=1e3,
+                        name="prior")
+    robust = robust.with_items(items)
+    a = lambda_curve(prob, rules=("lcurve",), lam_range=(1e1, 1e7), points=17)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        b = lambda_curve(robust, rules=("lcurve",), lam_range=(1e1, 1e7), points=17,
+                         solver="clarabel", accuracy="high")
+    assert b.engine == "cvxpy"
+    # a Huber threshold far above the residuals is least squares: same curve
+    np.testing.assert_allclose(b.residual_norm, a.residual_norm, rtol=1e-4)
+    assert abs(np.log(b.lam_chosen / a.lam_chosen)) < np.log(1.3)
+
+
+def test_rule_errors_name_the_fix():
+    prob, _ = table1()
+    with pytest.raises(bvpnav.InputError, match="sigma_a"):
+        prob.solve(lam="discrepancy")
+    with pytest.raises(bvpnav.InputError, match="choose one of"):
+        prob.solve(lam="lcurvee")
+    hard = bvpnav.NavigationProblem(prob.data).add(Position(t=[0.0, 10.0], value=[0.0, 10.0]))
+    with pytest.raises(bvpnav.InputError, match="every item is hard"):
+        hard.solve(lam="lcurve")
+
+
+def test_plots_mark_every_rule_and_write_atomically(tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from bvpnav import plot
+    from bvpnav.io import atomic_savefig
+
+    prob, sc = table1()
+    curve = lambda_curve(prob, rules=("lcurve", "gcv", "quasi"), points=13, lam_range=(1e-3, 1e3))
+    fig = curve.plot()
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert sum(lab.split(":")[0] in curve.chosen for lab in labels) == 3
+    assert any("(used)" in lab and lab.startswith("lcurve") for lab in labels)
+    sol = prob.solve(solver="direct", lam=curve.lam_chosen)
+    f2 = plot.errors({"I": sol}, sc.position)
+    rms = float(f2.axes[0].get_legend().get_texts()[0].get_text().split("RMS ")[1].split(" m")[0])
+    assert abs(rms - sol.rms_error(sc.position)) < 1e-3 * rms + 1e-12
+    out = tmp_path / "lcurve.png"
+    atomic_savefig(fig, out)
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
