@@ -442,7 +442,8 @@ class Solution:
         if len(self.error_params):
             ep = self.error_params
             more = f", ... {len(ep) - 4} more" if len(ep) > 4 else ""
-            lines.append("  error model: " + ", ".join(f"{k} = {v:.4g}" for k, v in ep.head(4).items()) + more)
+            est = ", ".join(f"{k} = {v:.4g}" for k, v in ep.head(4).items())
+            lines.append(f"  error model: {est}{more}")
         if self.warnings:
             lines.append(f"  {len(self.warnings)} warning(s): see .warnings")
         return "\n".join(lines)
