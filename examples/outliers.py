@@ -37,8 +37,8 @@ the simulated truth, the mean of the largest error within 2 s of an outlying fix
 "pull", m), and the soft/robust ratio per realisation.
 
 Run ``python examples/outliers.py`` (50 Hz, 20 realisations) or ``--small`` (20 Hz,
-5 realisations). With ``BVPNAV_FIGURES`` set (a directory) the script also writes
-``outliers.png`` (the first realisation) there.
+5 realisations). With ``BVPNAV_FIGURES`` set (a directory; or ``--figures DIR``) the script also
+writes ``outliers.png`` (the first realisation) there.
 
 Notes
 -----
@@ -209,14 +209,17 @@ def _figure(sc: dict, sols: dict, folder: Path) -> None:
 
 
 def main(argv=None) -> pd.DataFrame:
-    """Command line: ``--small`` (20 Hz, 5 realisations), ``--rate``, ``--seeds``."""
+    """Command line: ``--small`` (20 Hz, 5 realisations), ``--rate``, ``--seeds``, ``--figures DIR``
+    (default ``$BVPNAV_FIGURES``)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--small", action="store_true", help="20 Hz, 5 realisations (quick)")
     ap.add_argument("--rate", type=float, default=50.0, help="sampling rate, Hz")
     ap.add_argument("--seeds", type=int, default=20, help="realisations")
+    ap.add_argument("--figures", metavar="DIR", default=os.environ.get("BVPNAV_FIGURES"),
+                    help="write PNG figures here (default: $BVPNAV_FIGURES, if set)")
     args = ap.parse_args(argv)
     rate, seeds = (20.0, 5) if args.small else (args.rate, args.seeds)
-    return run(rate, seeds, figures=os.environ.get("BVPNAV_FIGURES"))
+    return run(rate, seeds, figures=args.figures)
 
 
 if __name__ == "__main__":

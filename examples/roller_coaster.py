@@ -22,8 +22,8 @@ Printed: RMS distance of the estimate to the true path and RMS position error ag
 simulated truth (m), the loop's iterations and last change per iteration, and timings.
 
 Run ``python examples/roller_coaster.py`` (full size, 1000 Hz) or ``--small`` (100 Hz,
-the test size; also ``BVPNAV_SMALL=1``). ``--figures DIR`` (or ``BVPNAV_FIGURES``) writes
-``roller_coaster.png``.
+the test size; also ``BVPNAV_SMALL=1``). With ``BVPNAV_FIGURES`` set (a directory, as for every
+example; or ``--figures DIR``) ``roller_coaster.png`` is written there.
 """
 
 from __future__ import annotations
@@ -226,7 +226,8 @@ def _figure(vertices, keep, out: Path) -> None:
 def main(argv=None) -> pd.DataFrame:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--small", action="store_true", help="100 Hz instead of 1000 Hz (test size)")
-    ap.add_argument("--figures", default=os.environ.get("BVPNAV_FIGURES"), help="write PNG figures here")
+    ap.add_argument("--figures", metavar="DIR", default=os.environ.get("BVPNAV_FIGURES"),
+                    help="write PNG figures here (default: $BVPNAV_FIGURES, if set)")
     args = ap.parse_args(argv)
     return run(small=args.small or os.environ.get("BVPNAV_SMALL") == "1", figures=args.figures)
 

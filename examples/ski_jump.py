@@ -68,8 +68,8 @@ x-z position error over the flight, after landing and overall (means over
 realisations), the ratio per realisation, the loop's report and the error-model
 estimates of the first realisation. Run ``python examples/ski_jump.py`` (200 Hz,
 8 realisations, about a minute) or ``--small`` (50 Hz, 4 realisations). With
-``BVPNAV_FIGURES`` set (a directory) ``ski_jump.png`` (first realisation) is written
-there.
+``BVPNAV_FIGURES`` set (a directory; or ``--figures DIR``) ``ski_jump.png`` (first
+realisation) is written there.
 
 Notes
 -----
@@ -446,16 +446,18 @@ def _figure(sc: dict, info: dict, sols: dict, folder: Path) -> None:
 
 def main(argv=None) -> dict:
     """Command line: ``--small`` (50 Hz, 4 realisations), ``--rate``, ``--seeds``, ``--solver``,
-    ``--true-attitude``."""
+    ``--true-attitude``, ``--figures DIR`` (default ``$BVPNAV_FIGURES``)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--small", action="store_true", help="50 Hz, 4 realisations (quick)")
     ap.add_argument("--rate", type=float, default=200.0, help="sampling rate, Hz (a multiple of 25)")
     ap.add_argument("--seeds", type=int, default=8, help="noise realisations")
     ap.add_argument("--solver", default="clarabel")
     ap.add_argument("--true-attitude", action="store_true", help="use the true attitude, not the gyro's")
+    ap.add_argument("--figures", metavar="DIR", default=os.environ.get("BVPNAV_FIGURES"),
+                    help="write PNG figures here (default: $BVPNAV_FIGURES, if set)")
     args = ap.parse_args(argv)
     rate, seeds = (50.0, 4) if args.small else (args.rate, args.seeds)
-    return run(rate, seeds, figures=os.environ.get("BVPNAV_FIGURES"), solver=args.solver,
+    return run(rate, seeds, figures=args.figures, solver=args.solver,
                attitude="true" if args.true_attitude else "gyro")
 
 

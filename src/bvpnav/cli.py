@@ -15,9 +15,12 @@ table suffixes must be formats bvpnav writes, and the output folders must be wri
 from __future__ import annotations
 
 import argparse
+import logging
 import os
 import signal
 import sys
+import time
+import warnings
 
 from . import __version__
 from .errors import BvpnavError, InputError, SolveError, SolverNotFound
@@ -49,6 +52,47 @@ EPILOG = ("Exit codes: 0 ok, 2 bad input, 3 infeasible or failed solve (compare:
           "(BVPNAV_DEBUG=1 shows the traceback).")
 EXIT_INTERRUPT, EXIT_TERM = 130, 143
 
+_log = logging.getLogger("bvpnav.cli")
+
+
+def verbosity(args) -> int:
+    """``-q`` -> -1 (errors only), nothing -> 0, ``-v`` -> 1 (INFO), ``-vv`` -> 2 (DEBUG)."""
+    v = int(getattr(args, "verbose", 0) or 0)
+    if getattr(args, "quiet", False):
+        if v:
+            raise InputError("-q and -v together: give -v (more: INFO, -vv DEBUG) or -q (errors only), "
+                             "not both")
+        return -1
+    return v
+
+
+def configure_logging(level: int) -> None:
+    """Set up the ``bvpnav`` logger for a verbosity (see :func:`verbosity`).
+
+    Uses :func:`bvpnav.log.configure` when that module exists; otherwise one stderr
+    handler on the ``bvpnav`` logger (replaced, not added, on a second call):
+    ERROR for -1, WARNING for 0, INFO for 1, DEBUG for 2 or more.
+    """
+    try:
+        from . import log
+    except ImportError:
+        log = None
+    if log is not None and hasattr(log, "configure"):
+        log.configure(level)
+        return
+    logger = logging.getLogger("bvpnav")
+    levels = (logging.WARNING, logging.INFO, logging.DEBUG)
+    logger.setLevel(logging.ERROR if level < 0 else levels[min(level, 2)])
+    for h in list(logger.handlers):
+        if getattr(h, "_bvpnav_cli", False):
+            logger.removeHandler(h)
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("bvpnav: %(levelname)s: %(message)s" if level < 2 else
+                                           "bvpnav: %(levelname)s [%(name)s]: %(message)s"))
+    handler._bvpnav_cli = True
+    logger.addHandler(handler)
+    logger.propagate = False
+
 
 def _cmd_demo(args) -> int:
     from .demo import run_demo
@@ -58,7 +102,7 @@ def _cmd_demo(args) -> int:
         raise InputError(f"unknown scenario {args.scenario!r}; choose one of {sorted(SCENARIOS)}")
     if args.plot:
         _check(args, {}, {"--plot": args.plot}, figures=("--plot",))
-    run_demo(png=args.plot, seed=args.seed, quiet=args.quiet)
+    run_demo(png=args.plot, seed=args.seed, quiet=verbosity(args) < 0)
     return EXIT_OK
 
 
@@ -94,8 +138,86 @@ def _load(args):
 
 
 def _say(args, text: str) -> None:
-    if not getattr(args, "quiet", False):
+    if verbosity(args) >= 0:
         print(text)
+
+
+def _lam_range(args):
+    """``--lam-range LO HI`` as two floats, or InputError saying what is wrong and the fix."""
+    if args.lam_range is None:
+        return None
+    import numpy as np
+
+    from .formulation import LAM_RANGE
+
+    text = " ".join(args.lam_range)
+    try:
+        lo, hi = (float(v) for v in args.lam_range)
+    except ValueError:
+        raise InputError(f"--lam-range {text}: give two numbers LOW HIGH, e.g. --lam-range 1e-4 "
+                         "1e4") from None
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo < hi):
+        raise InputError(f"--lam-range {text}: need 0 < LOW < HIGH (finite), e.g. --lam-range 1e-4 1e4")
+    if lo < LAM_RANGE[0] or hi > LAM_RANGE[1]:
+        raise InputError(f"--lam-range {text}: reaches beyond {LAM_RANGE[0]:g} .. {LAM_RANGE[1]:g}, the "
+                         "lambdas double precision can weigh against the data term; sweep inside it (default "
+                         "1e-6 1e6)")
+    return lo, hi
+
+
+def _points(args) -> int:
+    if not 7 <= args.points <= 1000:
+        raise InputError(f"--points {args.points}: give 7 to 1000 sweep points (each is one solve; the "
+                         "chosen lambda is refined anyway; default 25)")
+    return args.points
+
+
+def read_truth(path, sol, implicit: bool = False):
+    """True positions (N, d) from a truth table (``t`` and one column per axis, m; the
+    ``truth.csv`` that ``bvpnav simulate`` writes), at the solution's sample times.
+
+    A truth sampled at other times is interpolated linearly when it covers the
+    recording's window. Raises InputError naming the file and the fix; with
+    ``implicit=True`` (a ``truth.csv`` found beside the recording) returns None instead.
+    """
+    from pathlib import Path
+
+    import numpy as np
+    import pandas as pd
+
+    where = "truth.csv beside the recording" if implicit else f"--truth {str(path)!r}"
+    try:
+        if Path(path).suffix.lower() == ".parquet":
+            df = pd.read_parquet(path)
+        else:
+            df = pd.read_csv(path)
+        axes = sol._pos_cols
+        missing = [c for c in ["t", *axes] if c not in df.columns]
+        if missing:
+            raise InputError(f"{where}: no column(s) {missing}; it has {list(df.columns)}. A truth file has "
+                             f"t (s) and one position column per axis {axes} (m), like the truth.csv "
+                             "`bvpnav simulate` writes")
+        tt = df["t"].to_numpy(dtype=float)
+        vals = df[axes].to_numpy(dtype=float)
+        if not (np.all(np.isfinite(tt)) and np.all(np.isfinite(vals))):
+            raise InputError(f"{where}: holds empty or non-numeric cells; give finite numbers")
+        t = sol.t
+        if tt.shape == t.shape and np.allclose(tt, t, rtol=0, atol=1e-9 * max(1.0, abs(t[-1]))):
+            return vals
+        if tt.size < 2 or np.any(np.diff(tt) <= 0) or tt[0] > t[0] + 1e-9 or tt[-1] < t[-1] - 1e-9:
+            raise InputError(f"{where}: its times ({tt.size} rows, {tt[0]:g} .. {tt[-1]:g} s) do not "
+                             f"cover the recording's {t.size} samples ({t[0]:g} .. {t[-1]:g} s) in "
+                             "increasing order; give the truth at the recording's times")
+        return np.column_stack([np.interp(t, tt, vals[:, j]) for j in range(len(axes))])
+    except InputError:
+        if implicit:
+            _log.warning("not drawing %s: it does not match this recording", where)
+            return None
+        raise
+    except (OSError, ValueError) as exc:
+        if implicit:
+            return None
+        raise InputError(f"{where}: cannot be read ({exc}); give a CSV with t and positions") from None
 
 
 def _cmd_simulate(args) -> int:
@@ -116,7 +238,8 @@ def _cmd_solve(args) -> int:
     if args.summary is not None and Path(args.summary).suffix.lower() != ".json":
         raise InputError(f"--summary {args.summary!r}: the summary is JSON; end its name with .json")
     opt_summary = "--summary" if args.summary is not None else "--summary (default: --out with .json)"
-    _check(args, {"INPUT": args.input, "--spec": args.spec},
+    inputs = {"INPUT": args.input, "--spec": args.spec, **({"--truth": args.truth} if args.truth else {})}
+    _check(args, inputs,
            {"--out": args.out, opt_summary: summary, "--plot": args.plot},
            figures=("--plot",), tables=("--out",))
     if args.summary is None:  # a path bvpnav chose: replace only a summary of its own
@@ -125,18 +248,40 @@ def _cmd_solve(args) -> int:
         check_implicit_outputs({opt_summary: (summary, "summary")},
                                "move it away, or give --summary PATH to write the summary elsewhere (or to "
                                "replace that file)")
+    truth_path, implicit = args.truth, False
+    if truth_path is None and args.plot and Path(args.input).name == "recording.csv":
+        beside = Path(args.input).with_name("truth.csv")  # what `bvpnav simulate` writes
+        if beside.is_file():
+            truth_path, implicit = beside, True
+    if args.truth is not None and not Path(args.truth).is_file():
+        raise InputError(f"--truth {args.truth!r}: no such file; give the CSV of true positions (t and one "
+                         "column per axis, m), e.g. the truth.csv `bvpnav simulate` writes")
     spec_text = read_spec_text(args.spec)
     spec = parse_spec(spec_text, str(args.spec))
+    _log.info("spec %s: %d item(s) (%s), error model %s", args.spec, len(spec.items),
+              ", ".join(f"{it.label} {it.mode}" for it in spec.items) or "none",
+              " + ".join(type(m).__name__ for m in spec.error_models) or "none")
+    t0 = time.perf_counter()
     sol, row = solve_recording(args.input, spec, args.out, solver=args.solver, lam=_lam(args.lam),
                                summary_path=summary, spec_text=spec_text)
+    _log.info("solved in %.3g s (solver %s, %s); wrote %s and %s", time.perf_counter() - t0,
+              row["solver"], row["status"], args.out, summary)
+    _log.debug("solver options in force: %s", sol.stats.get("options"))
+    truth = read_truth(truth_path, sol, implicit=implicit) if truth_path is not None else None
+    if truth is not None:
+        _log.info("truth from %s", truth_path)
     if args.plot:
         from . import plot
         from .io import atomic_savefig
 
-        fig = plot.trajectory({f"bvpnav ({sol.stats.get('solver')})": sol})
-        atomic_savefig(fig, args.plot, "--plot", dpi=110)
+        fig = plot.solution(sol, items=spec.items, truth=truth)
+        atomic_savefig(fig, args.plot, "--plot", dpi=90)
+        _log.info("figure written to %s", args.plot)
     _say(args, f"{row['samples']} samples; lam = {sol.lam:.6g} ({sol.lam_rule}); solver {row['solver']} "
                f"({row['status']}, verified); wrote {args.out}")
+    if truth is not None:
+        _say(args, f"RMS position error against the truth ({truth_path}): "
+                   f"{sol.rms_error(truth):.4g} m")
     for w in sol.warnings:
         _say(args, f"warning: {w}")
     return EXIT_OK
@@ -157,9 +302,13 @@ def _cmd_lcurve(args) -> int:
                          "by commas, e.g. --rules lcurve,gcv")
     _check(args, {"INPUT": args.input, "--spec": args.spec}, {"--plot": args.plot, "--out": args.out},
            figures=("--plot",), tables=("--out",))
+    lam_range, points = _lam_range(args), _points(args)
     spec, prob = _load(args)
-    curve = lambda_curve(prob, rules=rules, rule=rules[0], points=args.points,
-                         progress=False if args.quiet else None)
+    kw = {} if lam_range is None else {"lam_range": lam_range}
+    curve = lambda_curve(prob, rules=rules, rule=rules[0], points=points,
+                         progress=False if verbosity(args) < 0 else None, **kw)
+    _log.info("sweep: %d lambdas in %g .. %g, %d evaluations, %.3g s (%s engine)", len(curve.lam),
+              curve.lam_range[0], curve.lam_range[1], curve.evaluations, curve.seconds, curve.engine)
     fig = curve.plot()
     atomic_savefig(fig, args.plot, "--plot", dpi=110)
     if args.out:
@@ -192,7 +341,7 @@ def _cmd_compare(args) -> int:
         from . import plot
         from .io import atomic_savefig
 
-        atomic_savefig(plot.comparison(table), args.plot, "--plot", dpi=110)
+        atomic_savefig(plot.comparison(table), args.plot, "--plot", dpi=90)
     cols = ["solver", "preset", "status", "verified", "wall_time", "forward_error", "max_violation"]
     _say(args, table[cols].to_string(index=False, float_format="{:.3g}".format))
     if not table["verified"].astype(bool).any():
@@ -204,13 +353,15 @@ def _cmd_compare(args) -> int:
 
 
 def _cmd_batch(args) -> int:
+    from pathlib import Path
+
     from .batch import run_batch
 
     df = run_batch(args.directory, args.spec, args.out, scheduler=args.scheduler, workers=args.workers,
-                   solver=args.solver, lam=_lam(args.lam), resume=args.resume, progress=not args.quiet,
+                   solver=args.solver, lam=_lam(args.lam), resume=args.resume, progress=verbosity(args) >= 0,
                    suffix="." + args.format)
     bad = df[~df.ok.astype(bool)]
-    _say(args, f"{len(df)} recordings, {len(bad)} failed; summary: {args.out}/summary.csv")
+    _say(args, f"{len(df)} recordings, {len(bad)} failed; summary: {Path(args.out) / 'summary.csv'}")
     for _, r in bad.iterrows():  # the full error (an internal error's traceback) is in summary.csv
         _say(args, f"  FAILED {r.recording}: {str(r.error).split(' | ')[0]}")
     return EXIT_OK if bad.empty else EXIT_SOLVE
@@ -224,18 +375,29 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"bvpnav {__version__}")
+    # -v/-q on every subcommand (after its name: bvpnav solve ... -v)
+    talk = argparse.ArgumentParser(add_help=False)
+    group = talk.add_argument_group("output")
+    group.add_argument("-v", "--verbose", action="count", default=0,
+                       help="say more on stderr: -v what bvpnav does (INFO), -vv solver details (DEBUG)")
+    group.add_argument("-q", "--quiet", action="store_true", help="errors only: no report, warning or "
+                       "progress bar")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    demo = sub.add_parser(
+
+    def add(name, **kw):
+        return sub.add_parser(name, parents=[talk], **kw)
+
+    demo = add(
         "demo", help="run a bundled scenario and compare methods",
         description="Run the 2011 paper's quintic scenario (biased, scaled, noisy accelerometer) "
-                    "three ways -- trapezoid time-stepping, FEM with both ends fixed, FEM with "
-                    "Tikhonov information -- print RMS position errors and write a PNG.",
+                    "four ways -- trapezoid time-stepping, FEM with both ends fixed, FEM with "
+                    "Tikhonov information (the 2011 paper), FEM with the four boundary values "
+                    "(bvpnav's default) -- print RMS position errors and write a PNG.",
     )
     demo.add_argument("scenario", nargs="?", default="tikhonov2011", help="scenario name")
     demo.add_argument("--plot", default="bvpnav-demo.png", metavar="PNG",
                       help="figure path (default: %(default)s)")
     demo.add_argument("--seed", type=int, default=0, help="noise seed (default: %(default)s)")
-    demo.add_argument("--quiet", action="store_true", help="print nothing")
     demo.set_defaults(func=_cmd_demo)
 
     def common(p, lam=True):
@@ -244,9 +406,8 @@ def build_parser() -> argparse.ArgumentParser:
         if lam:
             p.add_argument("--lam", metavar="LAM", help="lambda: a number or a rule (lcurve, gcv, "
                            "discrepancy, quasi); default from the spec")
-        p.add_argument("--quiet", action="store_true", help="print nothing")
 
-    sim = sub.add_parser(
+    sim = add(
         "simulate", help="write a synthetic recording and its spec",
         formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Write DIR/recording.csv (t in s, acc_<axis> in m/s^2), DIR/spec.toml (what is "
@@ -259,10 +420,9 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--rate", type=float, default=None, help="sampling rate, Hz (scenario default)")
     sim.add_argument("--force", action="store_true", help="replace recording.csv, spec.toml, truth.csv "
                      "if DIR already holds them (default: refuse)")
-    sim.add_argument("--quiet", action="store_true", help="print nothing")
     sim.set_defaults(func=_cmd_simulate)
 
-    solve = sub.add_parser(
+    solve = add(
         "solve", help="solve one recording",
         description="Solve a recording with a spec; write the trajectory (t, positions in m, "
                     "velocities in m/s; CSV or Parquet by OUT's suffix) and a JSON summary beside it "
@@ -271,12 +431,17 @@ def build_parser() -> argparse.ArgumentParser:
     common(solve)
     solve.add_argument("--out", required=True, metavar="OUT", help="trajectory file (.csv or .parquet)")
     solve.add_argument("--summary", metavar="JSON", help="summary path (default: OUT with .json)")
-    solve.add_argument("--plot", metavar="PNG", help="also draw the trajectory (format from the suffix: "
-                       ".png, .pdf, .svg ...)")
+    solve.add_argument("--plot", metavar="PNG", help="also draw the solution (format from the suffix: "
+                       ".png, .pdf, .svg ...): position and velocity per axis with the items where they "
+                       "act, the residuals, the path for 2-3 axes, and the truth if known")
+    solve.add_argument("--truth", metavar="FILE", help="true positions (CSV or Parquet: t in s and one "
+                       "column per axis in m, like the truth.csv `bvpnav simulate` writes): drawn on "
+                       "--plot and the RMS error printed. Default with --plot: truth.csv beside an "
+                       "INPUT named recording.csv, if there is one")
     solve.add_argument("--solver", help="override the spec's solver (e.g. clarabel, osqp, direct, csne)")
     solve.set_defaults(func=_cmd_solve)
 
-    lc = sub.add_parser(
+    lc = add(
         "lcurve", help="sweep lambda and plot the L-curve",
         description="Sweep lambda, evaluate the selection rules and plot the L-curve with each "
                     "rule's choice marked.")
@@ -285,10 +450,12 @@ def build_parser() -> argparse.ArgumentParser:
     lc.add_argument("--rules", default="lcurve,gcv,quasi", help="rules, comma separated "
                     "(default: %(default)s; discrepancy needs sigma_a)")
     lc.add_argument("--points", type=int, default=25, help="sweep size (default: %(default)s)")
+    lc.add_argument("--lam-range", nargs=2, metavar=("LO", "HI"), help="sweep lambda from LO to HI "
+                    "(log-spaced; default 1e-6 1e6); widen it when a rule's choice is at the edge")
     lc.add_argument("--out", metavar="CSV", help="also write the sweep as a table")
     lc.set_defaults(func=_cmd_lcurve)
 
-    cmp_ = sub.add_parser(
+    cmp_ = add(
         "compare", help="solve one recording with several solvers",
         description="One problem, several solvers and presets: status, times, bvpnav's verification "
                     "and errors, one row each (failures are rows too). Exit code 3 if no row is "
@@ -301,7 +468,7 @@ def build_parser() -> argparse.ArgumentParser:
     cmp_.add_argument("--plot", metavar="PNG", help="draw the table")
     cmp_.set_defaults(func=_cmd_compare)
 
-    bt = sub.add_parser(
+    bt = add(
         "batch", help="solve every recording in a folder (Dask)",
         description="Solve every *.csv/*.parquet in DIR with one spec on dask.distributed: an "
                     "in-process LocalCluster by default, or --scheduler ADDRESS for a cluster. A "
@@ -321,7 +488,6 @@ def build_parser() -> argparse.ArgumentParser:
     bt.add_argument("--resume", action="store_true", help="skip recordings already solved with the same "
                     "spec, options and recording content (their JSON summary's fingerprint); solve the "
                     "others again, saying why in summary.csv's resume column")
-    bt.add_argument("--quiet", action="store_true", help="no progress bar, print nothing")
     bt.set_defaults(func=_cmd_batch)
     return parser
 
@@ -362,7 +528,12 @@ def main(argv: list[str] | None = None) -> int:
 def _dispatch(args) -> int:
     debug = os.environ.get("BVPNAV_DEBUG", "") not in ("", "0")
     try:
-        return int(args.func(args))
+        level = verbosity(args)
+        configure_logging(level)
+        with warnings.catch_warnings():
+            if level < 0:  # -q: errors only
+                warnings.simplefilter("ignore")
+            return int(args.func(args))
     except (InputError, SolverNotFound) as exc:  # a bad file, spec or argument
         print(f"bvpnav: error: {exc}", file=sys.stderr)
         return EXIT_INPUT

@@ -1,4 +1,4 @@
-"""The bundled demonstration: one recording, three ways of navigating it.
+"""The bundled demonstration: one recording, four ways of navigating it.
 
 ``bvpnav demo`` runs the 2011 paper's quintic scenario with a biased, scaled, noisy
 accelerometer (seeded) and compares

@@ -1,14 +1,15 @@
 """Figures: the L-curve with every rule's choice, trajectories and errors, solver comparisons.
 
-Every function takes an optional matplotlib ``Axes`` and returns the ``Figure``; nothing
-is shown or saved (use :func:`bvpnav.io.atomic_savefig` to write a file atomically).
+Every function returns the ``Figure``; those that draw one panel take an optional
+matplotlib ``Axes``. Nothing is shown or saved (use :func:`bvpnav.io.atomic_savefig` to
+write a file atomically). matplotlib is imported only when a figure is drawn.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["lcurve", "trajectory", "errors", "comparison"]
+__all__ = ["lcurve", "solution", "trajectory", "errors", "comparison"]
 
 _MARKERS = {"lcurve": ("o", "C3"), "gcv": ("s", "C0"), "discrepancy": ("^", "C2"), "quasi": ("D", "C1")}
 
@@ -53,18 +54,280 @@ def lcurve(curve, ax=None, annotate: bool = True):
     return fig
 
 
+def _truth_array(truth, sol) -> np.ndarray | None:
+    """True positions as shape (N, d) at the solution's samples, or InputError."""
+    if truth is None:
+        return None
+    from .errors import InputError
+
+    if hasattr(truth, "columns"):  # a table with one column per axis (t as column or index)
+        missing = [a for a in sol._pos_cols if a not in truth.columns]
+        if missing:
+            raise InputError(f"truth: no column for axis/axes {missing}; it has {list(truth.columns)} "
+                             f"(give one column per axis {sol._pos_cols}, positions in m)")
+        truth = truth[sol._pos_cols].to_numpy(dtype=float)
+    arr = np.asarray(truth, dtype=float)
+    n, d = len(sol.t), len(sol._pos_cols)
+    if arr.size != n * d:
+        raise InputError(f"truth of shape {arr.shape} does not match the solution's {n} samples x "
+                         f"{d} axes {sol._pos_cols}; give true positions in m at the sample times")
+    return arr.reshape(n, d)
+
+
 def trajectory(solutions: dict, truth=None, axis: str | None = None, ax=None):
-    """Position against time for several solutions (``{label: Solution}``), with the truth (m)."""
+    """Position against time for several solutions (``{label: Solution}``), with the truth (m).
+
+    With several axes (``axis=None``) each line is labelled ``"<label> <axis>"`` and the
+    truth of an axis is drawn in that axis' colour, dashed.
+    """
     fig, ax = _axes(ax, figsize=(8, 4))
     t = None
-    for label, sol in solutions.items():
+    colours = {}
+    for k, (label, sol) in enumerate(solutions.items()):
         t = sol.t
-        ax.plot(t, sol.position(axis), label=label)
+        axes = sol._pos_cols if axis is None else [sol._axis(axis, "position")]
+        for j, a in enumerate(axes):
+            name = label if len(axes) == 1 else f"{label} {a}"
+            (line,) = ax.plot(t, sol.position(a), label=name, color=f"C{(k * len(axes) + j) % 10}")
+            colours.setdefault(a, line.get_color())
     if truth is not None and t is not None:
-        ax.plot(t, np.asarray(truth), "k", lw=2, alpha=0.6, label="truth")
+        tr = np.asarray(truth, dtype=float)
+        tr = tr.reshape(len(t), -1)
+        names = list(colours) if tr.shape[1] == len(colours) else [None] * tr.shape[1]
+        for j, a in enumerate(names):
+            one = tr.shape[1] == 1
+            ax.plot(t, tr[:, j], "k" if one else "--", color="k" if one else colours.get(a, "k"),
+                    lw=2, alpha=0.6, label="truth" if one else f"truth {a}")
     ax.set_xlabel("t (s)")
-    ax.set_ylabel("position (m)")
+    ax.set_ylabel("position (m)" if axis is None else f"position {axis} (m)")
     ax.legend(fontsize=8)
+    return fig
+
+
+#: How each built-in item is drawn by :func:`solution`: the panel it acts on.
+_ITEM_STYLE = {"position": ("o", "C3"), "velocity": ("s", "C2"), "average_velocity": ("-", "C1"),
+               "zero_velocity": ("", "C4"), "symmetry": ("", "C5"), "speed_limit": ("", "C6"),
+               "position_bound": ("", "C7"), "track_line": ("-", "C8")}
+
+
+def _item_axes(item, axes: list) -> list:
+    return [a for a in (item.axes if item.axes is not None else axes) if a in axes]
+
+
+def _item_values(item, value, k: int, axes_of_item: list) -> np.ndarray:
+    from .items import as_values
+
+    return np.asarray(as_values(value, k, len(axes_of_item), f"{item.label}: value"), float).reshape(
+        k, len(axes_of_item))
+
+
+def _item_name(item) -> str:
+    return f"{item.label} ({item.mode})"
+
+
+def _span(item, t_range) -> tuple[float, float]:
+    t0, t1 = getattr(item, "t0", None), getattr(item, "t1", None)
+    return (t_range[0] if t0 is None else float(t0)), (t_range[1] if t1 is None else float(t1))
+
+
+def _draw_known(item, kind, on, p, name, mk, col, hollow):
+    tk = np.atleast_1d(np.asarray(item.t, float))
+    vals = _item_values(item, item.value, tk.size, on)
+    panels = p["pos"] if kind == "position" else p["vel"]
+    for j, a in enumerate(on):
+        panels[a].plot(tk, vals[:, j], mk, color=col, mfc=hollow, ms=7, mew=1.5, zorder=5, label=name)
+
+
+def _draw_average_velocity(item, kind, on, p, name, mk, col, hollow):
+    t0 = np.atleast_1d(np.asarray(item.t0, float))
+    t1 = np.atleast_1d(np.asarray(item.t1, float))
+    vals = _item_values(item, item.value, t0.size, on)
+    for j, a in enumerate(on):
+        for i in range(t0.size):
+            p["vel"][a].plot([t0[i], t1[i]], [vals[i, j]] * 2, "-", color=col, lw=3, alpha=0.8,
+                             solid_capstyle="butt", zorder=5, label=name)
+
+
+def _draw_zero_velocity(item, kind, on, p, name, mk, col, hollow):
+    t0 = np.atleast_1d(np.asarray(item.t0, float))
+    t1 = np.atleast_1d(np.asarray(item.t1, float))
+    for a in on:
+        for i in range(t0.size):
+            p["vel"][a].axvspan(t0[i], t1[i], color=col, alpha=0.15, lw=0, label=name)
+
+
+def _draw_symmetry(item, kind, on, p, name, mk, col, hollow):
+    for a in on:
+        for c in np.atleast_1d(np.asarray(item.about, float)):
+            p["pos"][a].axvline(c, color=col, ls=":", lw=1.5, label=name)
+
+
+def _draw_speed_limit(item, kind, on, p, name, mk, col, hollow):
+    lo, hi = _span(item, p["t_range"])
+    for a in on:
+        for sgn in (1, -1):
+            p["vel"][a].plot([lo, hi], [sgn * item.v_max] * 2, "--", color=col, lw=1, label=name)
+
+
+def _draw_position_bound(item, kind, on, p, name, mk, col, hollow):
+    for which, tt in (("lower", item.lower_t), ("upper", item.upper_t)):
+        v = getattr(item, which)
+        if v is None:
+            continue
+        v = np.atleast_1d(np.asarray(v, float))
+        if tt is None:  # a constant bound over the item's interval
+            if v.size != 1:
+                continue  # one bound per axis: not drawn
+            tt, v = np.array(_span(item, p["t_range"])), np.repeat(v, 2)
+        tt = np.atleast_1d(np.asarray(tt, float))
+        if v.size == tt.size:
+            for a in on:
+                p["pos"][a].plot(tt, v, "--", color=col, lw=1, label=name)
+
+
+def _draw_track_line(item, kind, on, p, name, mk, col, hollow):
+    path = p["path"]
+    if path is not None and list(item.axes or ()) == path._bvpnav_axes:
+        path.plot(np.asarray(item.x, float), np.asarray(item.y, float), "-", color=col, lw=4, alpha=0.3,
+                  label=name)
+
+
+_DRAW = {"position": _draw_known, "velocity": _draw_known, "average_velocity": _draw_average_velocity,
+         "zero_velocity": _draw_zero_velocity, "symmetry": _draw_symmetry, "speed_limit": _draw_speed_limit,
+         "position_bound": _draw_position_bound, "track_line": _draw_track_line}
+
+
+def _draw_items(items, axes: list, pos_ax: dict, vel_ax: dict, path_ax, t_range) -> None:
+    """Draw each item where it acts: positions and velocities as markers at their times,
+    average velocities as segments over their intervals, stationary intervals and
+    symmetry centres as shading and lines, speed limits and position bounds as limits,
+    a track on the path panel. Other items (half-spaces, linear rows, plug-ins) are not
+    drawn; they are in the summary's item table."""
+    panels = {"pos": pos_ax, "vel": vel_ax, "path": path_ax, "t_range": t_range}
+    for item in items or ():
+        try:
+            kind = type(item).registered_name()
+        except AttributeError:
+            continue
+        if kind not in _DRAW:
+            continue
+        mk, col = _ITEM_STYLE[kind]
+        _DRAW[kind](item, kind, _item_axes(item, axes), panels, _item_name(item), mk, col,
+                    "none" if item.mode != "hard" else col)
+
+
+def _legend(ax, **kw) -> None:
+    """A legend with one entry per label (items draw one artist per instant or axis)."""
+    handles, labels = ax.get_legend_handles_labels()
+    seen = {}
+    for h, lab in zip(handles, labels, strict=True):
+        seen.setdefault(lab, h)
+    if seen:
+        ax.legend(list(seen.values()), list(seen), **kw)
+
+
+def solution(sol, items=None, truth=None, label: str | None = None):
+    """The whole solution on one figure: a panel per quantity.
+
+    One row per axis with its position (m) and velocity (m/s) against time; then the
+    acceleration residuals ``w`` (m/s^2, the correction the estimate implies at each
+    sample, one line per axis), and for 2 or 3 axes the path in the horizontal plane
+    (the first two axes, equal scales). For 1 axis with a truth, that panel is the
+    position error instead.
+
+    Parameters
+    ----------
+    sol : Solution
+    items : sequence of Item, optional
+        The problem's items (``problem.items`` or ``spec.items``), drawn where they act:
+        known positions and velocities as markers at their times (filled: hard; hollow:
+        soft, robust or band), average velocities as segments over their intervals,
+        stationary intervals shaded, symmetry centres as dotted lines, speed limits and
+        position bounds as dashed limits, a :class:`~bvpnav.constraints.TrackLine` on the
+        path panel.
+    truth : array_like or DataFrame, optional
+        True positions (m) at the sample times, shape (N,) or (N, d), or a table with one
+        column per axis (e.g. ``truth.csv`` written by ``bvpnav simulate``).
+    label : str, optional
+        Legend label of the estimate (default ``"bvpnav (<solver>)"``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Its axes titled ``"position <axis>"``, ``"velocity <axis>"``, ``"residuals"``,
+        ``"path <a>-<b>"`` or ``"position error"``.
+    """
+    import matplotlib.pyplot as plt
+
+    axes = list(sol._pos_cols)
+    d = len(axes)
+    tru = _truth_array(truth, sol)
+    label = label or f"bvpnav ({sol.stats.get('solver')})"
+    extra = d >= 2 or tru is not None
+    rows = d + 1
+    fig = plt.figure(figsize=(9, 2.1 * rows + 0.6), layout="constrained")
+    grid = fig.add_gridspec(rows, 2)
+    t = sol.t
+    pos_ax, vel_ax = {}, {}
+    first = None
+    for i, a in enumerate(axes):
+        pa = fig.add_subplot(grid[i, 0], sharex=first)
+        first = first or pa
+        va = fig.add_subplot(grid[i, 1], sharex=first)
+        pa.plot(t, sol.position(a), color="C0", lw=1.5, label=label)
+        va.plot(t, sol.velocity(a), color="C0", lw=1.5, label=label)
+        if tru is not None:
+            pa.plot(t, tru[:, i], color="k", lw=2.5, alpha=0.35, label="truth", zorder=1)
+        pa.set_title(f"position {a}", fontsize=10)
+        va.set_title(f"velocity {a}", fontsize=10)
+        pa.set_ylabel(f"{a} (m)")
+        va.set_ylabel(f"v{a} (m/s)")
+        pos_ax[a], vel_ax[a] = pa, va
+    res = fig.add_subplot(grid[d, 0] if extra else grid[d, :], sharex=first)
+    for j, a in enumerate(axes):
+        col = f"w_{a}"
+        if col in sol.residuals:
+            res.plot(sol.residuals.index.to_numpy(), sol.residuals[col].to_numpy(), lw=0.8,
+                     color=f"C{j}", label=f"w {a}")
+    res.axhline(0, color="k", lw=0.5)
+    res.set_title("residuals", fontsize=10)
+    res.set_ylabel("w (m/s$^2$)")
+    res.set_xlabel("t (s)")
+    if d > 1:
+        res.legend(fontsize=7, ncol=d)
+    path = None
+    if d >= 2:
+        path = fig.add_subplot(grid[d, 1])
+        h = axes[:2]
+        path._bvpnav_axes = h
+        p = sol.position()
+        path.plot(p[:, 0], p[:, 1], color="C0", lw=1.5, label=label)
+        path.plot(p[:1, 0], p[:1, 1], "o", color="C0", ms=5, label="start")
+        if tru is not None:
+            path.plot(tru[:, 0], tru[:, 1], color="k", lw=2.5, alpha=0.35, label="truth", zorder=1)
+        path.set_title(f"path {h[0]}-{h[1]}", fontsize=10)
+        path.set_xlabel(f"{h[0]} (m)")
+        path.set_ylabel(f"{h[1]} (m)")
+        path.set_aspect("equal", adjustable="datalim")
+    elif tru is not None:
+        err = fig.add_subplot(grid[d, 1], sharex=first)
+        e = sol.position(axes[0]) - tru[:, 0]
+        err.plot(t, e, color="C0", lw=1, label=f"RMS {np.sqrt(np.mean(e ** 2)):.3g} m")
+        err.axhline(0, color="k", lw=0.5)
+        err.set_title("position error", fontsize=10)
+        err.set_ylabel(f"{axes[0]} - truth (m)")
+        err.set_xlabel("t (s)")
+        err.legend(fontsize=7)
+    _draw_items(items, axes, pos_ax, vel_ax, path, (float(t[0]), float(t[-1])))
+    for a in axes:
+        _legend(pos_ax[a], fontsize=7)
+        if len(vel_ax[a].get_legend_handles_labels()[1]) > 1:
+            _legend(vel_ax[a], fontsize=7)
+    if path is not None:
+        _legend(path, fontsize=7)
+    fig.suptitle(f"lambda = {sol.lam:.3g} ({sol.lam_rule}); {sol.stats.get('solver')} "
+                 f"{sol.stats.get('status')}" + (", verified" if sol.stats.get("verified") else ""),
+                 fontsize=10)
     return fig
 
 
@@ -87,22 +350,72 @@ def errors(solutions: dict, truth, axis: str | None = None, ax=None):
     return fig
 
 
-def comparison(table, ax=None):
-    """Solve time (s, log scale) against accuracy for a :func:`bvpnav.compare_solvers` table.
+def _decade_axis(a, vals) -> None:
+    """Log x axis over whole decades with labels at the decades only (``0.01``, ``1e-10``):
+    no crowded minor labels however narrow the range; room on the right for the values."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
-    Failed or unverified runs are drawn hollow, so they are visible, not hidden.
+    v = np.asarray(vals, float)
+    v = v[np.isfinite(v) & (v > 0)]
+    lo, hi = (np.floor(np.log10(v.min())), np.ceil(np.log10(v.max()))) if v.size else (-3.0, 0.0)
+    hi = max(hi, lo + 1) + 0.6  # the value labels
+    a.set_xscale("log")
+    a.set_xlim(10 ** lo, 10 ** hi)
+    step = max(1, int(np.ceil((hi - lo) / 6)))
+    a.xaxis.set_major_locator(LogLocator(base=10.0 ** step, numticks=12))
+    a.xaxis.set_major_formatter(FuncFormatter(lambda x, _: f"{x:g}"))
+    a.xaxis.set_minor_formatter(NullFormatter())
+    a.grid(axis="x", which="major", lw=0.4, alpha=0.5)
+
+
+def comparison(table, ax=None):
+    """Wall time and accuracy of each run of a :func:`bvpnav.compare_solvers` table.
+
+    Two panels of horizontal bars, one bar per run (``solver/preset``, named on the
+    vertical axis so long names stay readable): the wall time (s, log scale; the
+    ``wall_time`` column, as ``bvpnav compare`` prints it) and the accuracy (the
+    ``rms_error`` against the reference when the table has one, else the estimated
+    ``forward_error``, else the ``fem_residual``). Failed or unverified runs are drawn
+    hatched and hollow with their status, so they are visible, not hidden.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+    ax : sequence of two matplotlib Axes, optional
     """
-    fig, ax = _axes(ax, figsize=(7, 5))
-    ycol = "rms_error" if "rms_error" in table and table["rms_error"].notna().any() else "fem_residual"
-    for k, row in enumerate(table.itertuples(index=False)):
-        d = row._asdict()
-        x, y = d.get("solve_time"), d.get(ycol)
-        if x is None or y is None or not np.isfinite(x) or not np.isfinite(y):
-            continue
-        ok = d.get("verified", False)
-        ax.loglog([max(x, 1e-6)], [max(y, 1e-16)], "o", color=f"C{k % 10}",
-                  mfc=None if ok else "none", ms=8, label=f"{d['solver']}/{d['preset']} ({d['status']})")
-    ax.set_xlabel("solve time (s)")
-    ax.set_ylabel(ycol.replace("_", " "))
-    ax.legend(fontsize=7)
+    import matplotlib.pyplot as plt
+
+    def usable(col):
+        return col in table and np.isfinite(table[col].to_numpy(dtype=float)).any()
+
+    ycol = next((c for c in ("rms_error", "forward_error", "fem_residual") if usable(c)), "fem_residual")
+    n = len(table)
+    if ax is None:
+        fig, (a_t, a_e) = plt.subplots(1, 2, figsize=(9, 1.2 + 0.45 * max(n, 1)), sharey=True,
+                                       layout="constrained")
+    else:
+        a_t, a_e = ax
+        fig = a_t.figure
+    names = [f"{r.solver}/{r.preset}" for r in table.itertuples(index=False)]
+    yk = np.arange(n)[::-1]
+    for a, col, unit in ((a_t, "wall_time", "s"), (a_e, ycol, "")):
+        vals = table[col].to_numpy(dtype=float) if col in table else np.full(n, np.nan)
+        for k, row in enumerate(table.itertuples(index=False)):
+            d = row._asdict()
+            ok = bool(d.get("verified", False))
+            v = vals[k]
+            if not np.isfinite(v):
+                a.text(0.02, yk[k], f"({d.get('status')})", transform=a.get_yaxis_transform(),
+                       va="center", fontsize=8, color="0.4")
+                continue
+            a.barh(yk[k], max(v, 1e-300), height=0.6, left=1e-300, color=f"C{k % 10}" if ok else "none",
+                   edgecolor=f"C{k % 10}", hatch=None if ok else "//", lw=1.5)
+            a.text(v, yk[k], f" {v:.3g}{(' ' + unit) if unit else ''}"
+                   + ("" if ok else f" ({d.get('status')}, not verified)"), va="center", fontsize=8)
+        _decade_axis(a, vals)
+    a_t.set_yticks(yk, names, fontsize=9)
+    a_t.set_xlabel("wall time (s)")
+    a_t.set_title("wall time", fontsize=10)
+    a_e.set_xlabel(ycol.replace("_", " ") + (" (m)" if ycol == "rms_error" else " (relative)"))
+    a_e.set_title(ycol.replace("_", " "), fontsize=10)
     return fig

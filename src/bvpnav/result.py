@@ -422,9 +422,28 @@ class Solution:
         return float(np.sqrt(np.mean((self.position() - truth) ** 2)))
 
     def __repr__(self) -> str:
+        """A few lines: samples and window, axes; lambda and its rule; solver, status and
+        verification; the RMS residual of the first items (item units); the first error-model
+        estimates; how many warnings."""
         s = self.stats
-        return (
-            f"Solution(N={len(self.trajectory)}, axes={self._pos_cols}, lam={self.lam:g} "
-            f"({self.lam_rule}), solver={s.get('solver')}, status={s.get('status')}, "
-            f"verified={s.get('verified')})"
-        )
+        t = self.t
+        window = f" ({t[0]:g} .. {t[-1]:g} s)" if len(t) else ""
+        verified = {True: "verified", False: "NOT verified"}.get(s.get("verified"), "verification unknown")
+        lines = [f"Solution: {len(self.trajectory)} samples{window}, axes {', '.join(self._pos_cols)}",
+                 f"  lam = {self.lam:.4g} ({self.lam_rule}); solver {s.get('solver')}: {s.get('status')}, "
+                 f"{verified}"]
+        if len(self.items):
+            parts = []
+            for r in self.items.head(4).itertuples(index=False):
+                rms = getattr(r, "rms", float("nan"))
+                parts.append(f"{r.item} {r.mode} {rms:.2g} {r.units}")
+            more = f", ... {len(self.items) - 4} more" if len(self.items) > 4 else ""
+            lines.append("  item residuals (rms): " + ", ".join(parts) + more)
+        if len(self.error_params):
+            ep = self.error_params
+            more = f", ... {len(ep) - 4} more" if len(ep) > 4 else ""
+            est = ", ".join(f"{k} = {v:.4g}" for k, v in ep.head(4).items())
+            lines.append(f"  error model: {est}{more}")
+        if self.warnings:
+            lines.append(f"  {len(self.warnings)} warning(s): see .warnings")
+        return "\n".join(lines)
