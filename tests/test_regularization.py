@@ -148,10 +148,12 @@ def test_plots_mark_every_rule_and_write_atomically(tmp_path):
     from bvpnav.io import atomic_savefig
 
     prob, sc = table1()
+    # the load form: gcv needs the acceleration residual and is skipped (logged at INFO)
     curve = lambda_curve(prob, rules=("lcurve", "gcv", "quasi"), points=13, lam_range=(1e-3, 1e3))
     fig = curve.plot()
     labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
-    assert sum(lab.split(":")[0] in curve.chosen for lab in labels) == 3
+    assert set(curve.chosen) == {"lcurve", "quasi"}
+    assert sum(lab.split(":")[0] in curve.chosen for lab in labels) == 2
     assert any("(used)" in lab and lab.startswith("lcurve") for lab in labels)
     sol = prob.solve(solver="direct", lam=curve.lam_chosen)
     f2 = plot.errors({"I": sol}, sc.position)
