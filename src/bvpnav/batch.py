@@ -17,6 +17,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
+import logging
 import os
 import signal
 import time
@@ -40,7 +41,11 @@ from .io import (
     write_table,
     write_trajectory,
 )
+from .log import once
+from .log import progress as progress_bar
 from .spec import parse_spec, read_spec_text
+
+log = logging.getLogger(__name__)
 
 __all__ = ["solve_kwargs", "solve_recording", "run_batch", "fingerprint", "resume_reason",
            "RECORDING_SUFFIXES", "SUMMARY_COLUMNS"]
@@ -276,7 +281,7 @@ def _plan_outputs(files: list[Path], out_dir: Path, suffix: str) -> list[Path]:
 
 
 def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, workers: int = 2,
-              solver: str | None = None, lam=None, resume: bool = False, progress: bool = True,
+              solver: str | None = None, lam=None, resume: bool = False, progress: bool | None = None,
               suffix: str = ".csv") -> pd.DataFrame:
     """Solve every recording in a folder with one spec, on Dask.
 
@@ -310,8 +315,10 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
         text, solver, lam, format, the recording's content, bvpnav's version) and its
         trajectory exists unchanged and readable; every other recording is solved again,
         and the ``resume`` column of its row says why (e.g. ``re-solved: spec changed``).
-    progress : bool
-        Show a progress bar (tqdm).
+    progress : bool, optional
+        A progress bar of the recordings done (tqdm): True always, False never, None
+        (default) when stderr is a terminal. Each finished recording is also logged at
+        INFO on ``bvpnav.batch``.
     suffix : {".csv", ".parquet"}
         Trajectory file type.
 
@@ -448,7 +455,12 @@ def _run(files, outs, spec_text, spec_source, scheduler, workers, solver, lam, r
             note = f"re-solved: {reason}"
         jobs.append((str(p), spec_text, spec_source, str(out), solver, lam, note))
     if jobs and scheduler == "serial":
-        rows += [_task(*job) for job in jobs]
+        # once(): a warning shared by many recordings is issued once (each summary records it)
+        with once(), progress_bar(total=len(jobs), desc="recordings", unit="rec", enabled=progress) as bar:
+            for job in jobs:
+                rows.append(_task(*job))
+                _done(rows[-1], len(rows), len(jobs))
+                bar.update(1)
     elif jobs:
         rows += _run_on_dask(jobs, scheduler, workers, progress, client)
     return rows
@@ -468,6 +480,14 @@ def _workers_ignore_ctrl_c():
         yield
     finally:
         signal.signal(signal.SIGINT, old)
+
+
+def _done(row: dict, k: int, n: int) -> None:
+    if row.get("ok"):
+        log.info("recording %d/%d done: %s (lam=%s, solver %s, %.3g s)", k, n, row["recording"],
+                 row.get("lam"), row.get("solver"), row.get("seconds") or 0.0)
+    else:
+        log.info("recording %d/%d failed: %s: %s", k, n, row["recording"], row.get("error"))
 
 
 def _run_on_dask(jobs, scheduler, workers, progress, client=None) -> list[dict]:
@@ -493,11 +513,7 @@ def _run_on_dask(jobs, scheduler, workers, progress, client=None) -> list[dict]:
         client = _connect(scheduler)
     try:
         futures = {client.submit(_task, *job, pure=False): job for job in jobs}
-        bar = None
-        if progress:
-            from tqdm.auto import tqdm
-
-            bar = tqdm(total=len(futures), desc="recordings", unit="rec")
+        bar = progress_bar(total=len(futures), desc="recordings", unit="rec", enabled=progress)
         rows = []
         for fut in as_completed(list(futures)):
             try:
@@ -509,10 +525,9 @@ def _run_on_dask(jobs, scheduler, workers, progress, client=None) -> list[dict]:
                              "error": f"{type(exc).__name__}: the worker process solving it died ({exc}), "
                                       "often from lack of memory: solve it alone with `bvpnav solve`, in "
                                       "shorter windows, or with fewer --workers"})
-            if bar is not None:
-                bar.update(1)
-        if bar is not None:
-            bar.close()
+            _done(rows[-1], len(rows), len(futures))
+            bar.update(1)
+        bar.close()
         return rows
     finally:
         if own:

@@ -4,7 +4,9 @@ A rule is an object with the :class:`LambdaRule` contract: a ``name`` (what user
 ``lam=``), what it ``needs`` (``"least_squares"``: the exact sweep of a linear
 least-squares problem; ``"trace"``: the influence trace; ``"noise"``: a stated
 accelerometer noise), ``scores(sweep, pts, s)`` (its score at every sampled lambda) and
-``refine(sweep, pts, s, scores, curve)`` (the chosen lambda, refined between samples).
+``refine(sweep, pts, s, scores, curve)`` (the chosen lambda, refined between samples);
+``"acceleration"``: the data term is the acceleration residual (``residual="acceleration"``,
+with or without ``sigma_a``).
 One generic sweep (:func:`bvpnav.lam.sweep.sweep_curve`) runs every rule.
 
 The family is a discovered folder, like ``bvpnav.constraints``: each module here defines
@@ -23,7 +25,10 @@ __all__ = ["LambdaRule", "register_rule", "unregister_rule", "get_rule", "rule_n
            "edge_warning"]
 
 #: What a rule may need from the sweep.
-NEEDS = ("least_squares", "trace", "noise")
+NEEDS = ("least_squares", "trace", "noise", "acceleration")
+
+#: How to widen the sweep, from Python and from the command line.
+WIDEN = "widen lam_range=(low, high) (CLI: --lam-range)"
 
 #: The built-in rules in the order they are listed (and evaluated).
 BUILTIN = ("lcurve", "gcv", "discrepancy", "quasi")
@@ -105,13 +110,34 @@ def get_rule(name: str) -> LambdaRule:
     raise InputError(f"lam rule {name!r} is not known; choose one of {list(_RULES)} or a number")
 
 
-def edge_warning(curve, name: str, k: int, guard: int) -> None:
-    """Warn in ``curve`` when the best sample ``k`` lies within ``guard`` of an end."""
+def edge_warning(curve, name: str, k: int, guard: int, scores=None, best: str = "max") -> bool:
+    """Warn in ``curve`` when the best sample ``k`` may lie beyond the range.
+
+    Sample ``k`` is the best of those a rule may choose (``guard`` samples at each end are
+    excluded). It is at the edge when ``k`` is the first or last of them *and*, given
+    ``scores``, the score still improves towards the end of the range (the excluded samples
+    there score better, or ``k`` is an end sample): a local extremum at the first or last
+    allowed sample is interior, and its refined lambda lies between the samples. Without
+    ``scores`` every ``k`` within ``guard`` of an end warns. Returns True when it warned.
+    """
     n = len(curve.lam)
-    if k <= guard or k >= n - 1 - guard:
-        curve.warnings.append(
-            f"{name}: the best value lies at the edge of lam_range={curve.lam_range} "
-            f"(lam={curve.lam[k]:.3g}); widen the range")
+    low, high = k <= guard, k >= n - 1 - guard
+    if not (low or high):
+        return False
+    if scores is not None and 0 < k < n - 1:
+        sc = np.asarray(scores, dtype=float)
+        outer = sc[:k] if low else sc[k + 1:]
+        better = outer > sc[k] if best == "max" else outer < sc[k]
+        if not np.any(better):
+            return False
+    side = "low" if low else "high"
+    lo, hi = (float(v) for v in curve.lam_range)
+    fix = (f"lam_range=({max(lo / 1e3, 1e-12):g}, {hi:g})" if low
+           else f"lam_range=({lo:g}, {min(hi * 1e3, 1e12):g})")  # inside formulation.LAM_RANGE
+    curve.warnings.append(
+        f"{name}: the best value lies at the {side} edge of lam_range=({lo:g}, {hi:g}) (best sample "
+        f"lam={curve.lam[k]:.3g}), the optimum may lie beyond it: {WIDEN}, e.g. {fix}")
+    return True
 
 
 def bracket(s: np.ndarray, k: int) -> tuple[float, float]:

@@ -7,7 +7,7 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from . import LambdaRule, register_rule
+from . import WIDEN, LambdaRule, register_rule
 
 __all__ = ["Discrepancy"]
 
@@ -34,7 +34,8 @@ class Discrepancy(LambdaRule):
         cross = np.nonzero(sign[:-1] * sign[1:] < 0)[0]
         if cross.size == 0:
             curve.warnings.append("discrepancy: the residual never matches the stated noise in the "
-                                  "range (is sigma_a right?); taking the closest point")
+                                  "range; taking the closest point: check sigma_a= (the accelerometer noise, "
+                                  f"m/s^2), adjust tau= (default 1.5), or {WIDEN}")
             return float(curve.lam[int(np.argmin(np.abs(scores)))])
         k = int(cross[-1])
 

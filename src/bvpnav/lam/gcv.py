@@ -25,7 +25,10 @@ class GCV(LambdaRule):
     -----
     :math:`\\mathrm{tr}(I - A_\\lambda) = -\\mathrm{tr}(\\partial w / \\partial \\hat a)`, by exact
     columns for small problems and Hutchinson's randomized estimator for large ones (see
-    :class:`bvpnav.lam.sweep.DirectSweep`).
+    :class:`bvpnav.lam.sweep.DirectSweep`). GCV treats the data residual as independent
+    observations; in the load form the data term :math:`\\|M w\\|^2` is mass-matrix
+    weighted (correlated), and on the 2011 example the function decreases to the edge of
+    the range (a warning says so).
     """
 
     name = "gcv"
@@ -36,7 +39,7 @@ class GCV(LambdaRule):
 
     def refine(self, sweep, pts, s, scores, curve):
         k = int(np.argmin(scores))
-        edge_warning(curve, self.name, k, 0)
+        edge_warning(curve, self.name, k, 0, scores, best="min")
         a, b = bracket(s, k)
         res = minimize_scalar(lambda u: gcv(sweep.point(math.exp(u))), bounds=(a, b), method="bounded",
                               options={"xatol": 1e-3})

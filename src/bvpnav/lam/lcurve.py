@@ -8,7 +8,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.optimize import minimize_scalar
 
-from . import LambdaRule, bracket, edge_warning, register_rule
+from . import WIDEN, LambdaRule, bracket, edge_warning, register_rule
 
 __all__ = ["LCurve", "curvature", "spline_curvature"]
 
@@ -69,9 +69,11 @@ class LCurve(LambdaRule):
     def refine(self, sweep, pts, s, scores, curve):
         inner = np.arange(2, len(s) - 2)
         k = int(inner[np.argmax(scores[inner])])
-        edge_warning(curve, self.name, k, 2)
+        edge_warning(curve, self.name, k, 2, scores, best="max")
         if scores[k] <= 0:
-            curve.warnings.append("lcurve: the curve has no convex corner in the range")
+            curve.warnings.append("lcurve: the curve has no convex corner in lam_range=("
+                                  f"{curve.lam_range[0]:g}, {curve.lam_range[1]:g}); {WIDEN}, or "
+                                  "choose another rule (e.g. lam='quasi')")
         a, b = bracket(s, k)
         if sweep.engine == "direct":
             res = minimize_scalar(lambda u: -curvature(sweep.point(math.exp(u))), bounds=(a, b),

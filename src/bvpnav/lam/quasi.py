@@ -7,7 +7,7 @@ import math
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from . import LambdaRule, bracket, register_rule
+from . import WIDEN, LambdaRule, bracket, register_rule
 
 __all__ = ["Quasi"]
 
@@ -37,7 +37,8 @@ class Quasi(LambdaRule):
         q = scores
         loc = [k for k in range(1, len(s) - 1) if q[k] < q[k - 1] and q[k] <= q[k + 1]]
         if not loc:
-            curve.warnings.append("quasi: no interior local minimum in lam_range; widen the range")
+            curve.warnings.append(f"quasi: no interior local minimum in lam_range=({curve.lam_range[0]:g}, "
+                                  f"{curve.lam_range[1]:g}); {WIDEN}")
             loc = [int(np.argmin(q[1:-1])) + 1]
         k = min(loc, key=lambda j: q[j])
         if sweep.engine != "direct":

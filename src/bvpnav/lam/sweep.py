@@ -25,9 +25,9 @@ Two sweeps:
 from __future__ import annotations
 
 import copy
+import logging
 import math
 import time
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -37,11 +37,16 @@ import pandas as pd
 from ..cvx import compiled
 from ..errors import InputError
 from ..formulation import LAM_RANGE, as_formulation
+from ..log import once, progress_enabled, sweeping
+from ..log import progress as progress_bar
+from ..log import warn as _warn
 from ..lsq import factor_form, least_squares_form, non_least_squares_term
 from ..plot import lcurve
 from . import get_rule, rule_names
 
 __all__ = ["LambdaCurve", "DirectSweep", "CvxpySweep", "sweep_curve", "check_range"]
+
+log = logging.getLogger(__name__)
 
 
 @dataclass
@@ -282,15 +287,23 @@ def _usable_rules(form, names: list[str], rule: str, engine: str) -> list[str]:
             if name == rule:
                 raise InputError(f"lam={name!r} needs the noise level: use residual='acceleration' "
                                  "with sigma_a=<accelerometer noise, m/s^2>")
+            log.info("rule %s skipped: it needs residual='acceleration' with sigma_a", name)
+            continue
+        if "acceleration" in needs and form.residual != "acceleration":
+            if name == rule:
+                raise InputError(f"lam={name!r} needs the acceleration residual (it treats the measured "
+                                 "accelerations as independent observations): use residual='acceleration' "
+                                 "(sigma_a optional), or another rule, e.g. lam='lcurve'")
+            log.info("rule %s skipped: it needs residual='acceleration' (this problem has %r)", name,
+                     form.residual)
             continue
         out.append(name)
     return out
 
 
 def _sweep(eng, lams, progress):
-    from tqdm.auto import tqdm
-
-    return [eng.point(lam) for lam in tqdm(lams, desc="lambda sweep", disable=not progress, leave=False)]
+    with progress_bar(lams, desc="lambda sweep", unit="lam", enabled=progress) as bar:
+        return [eng.point(lam) for lam in bar]
 
 
 def sweep_curve(form, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6), points: int = 25,
@@ -316,7 +329,8 @@ def sweep_curve(form, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6), p
         Hutchinson probes of GCV's trace (problems of more than 300 samples x axes) and
         their seed (results are reproducible).
     progress : bool, optional
-        Show a tqdm bar; default: when the problem has more than 50,000 unknowns.
+        Show a tqdm bar (True always, False never); default: when stderr is a terminal (see
+        :func:`bvpnav.log.progress_enabled`).
     engine : {"auto", "direct", "cvxpy"}
     solve_at : callable, optional
         ``solve_at(lam) -> Solution``, the fixed-lambda solve of the ``cvxpy`` engine
@@ -327,7 +341,20 @@ def sweep_curve(form, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6), p
     Returns
     -------
     LambdaCurve
+
+    Notes
+    -----
+    Each of ``curve.warnings`` is issued once through :mod:`warnings` (a
+    :class:`bvpnav.log.BvpnavWarning`, attributed to the caller's line); the chosen lambdas
+    are logged at INFO on ``bvpnav.lam.sweep``.
     """
+    with once():
+        return _sweep_curve(form, rules, rule, lam_range, points, tau, probes, seed, progress, engine,
+                            solve_at, check_memory)
+
+
+def _sweep_curve(form, rules, rule, lam_range, points, tau, probes, seed, progress, engine, solve_at,
+                 check_memory) -> LambdaCurve:
     form = as_formulation(form)
     t0 = time.perf_counter()
     asked = set([rule, *(rule_names() if rules is None else rules)])
@@ -350,8 +377,7 @@ def sweep_curve(form, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6), p
     form.check_observability()
     if engine == "direct" and check_memory is not None:
         check_memory()
-    if progress is None:
-        progress = form.model.size > 50_000
+    progress = progress_enabled(progress)
     need_trace = any("trace" in get_rule(r).needs for r in names)
     if engine == "direct":
         eng = DirectSweep(form, need_trace=need_trace, probes=probes, seed=seed, tau=tau)
@@ -361,17 +387,23 @@ def sweep_curve(form, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6), p
                              "bvpnav.lambda_curve(problem, ...) or problem.solve(lam=<rule>)")
         eng = CvxpySweep(form, solve_at, tau=tau)
     lams = np.geomspace(lo, hi, points)
-    pts = _sweep(eng, lams, progress)
-    curve = LambdaCurve(lam=lams, residual_norm=np.sqrt([p["rho2"] for p in pts]),
-                        info_norm=np.sqrt([p["eta2"] for p in pts]), rule=rule, engine=eng.engine,
-                        lam_range=lam_range)
-    s = np.log(lams)
-    for name in names:
-        r = get_rule(name)
-        curve.scores[name] = r.scores(eng, pts, s)
-        curve.chosen[name] = float(r.refine(eng, pts, s, curve.scores[name], curve))
+    with sweeping():
+        pts = _sweep(eng, lams, progress)
+        curve = LambdaCurve(lam=lams, residual_norm=np.sqrt([p["rho2"] for p in pts]),
+                            info_norm=np.sqrt([p["eta2"] for p in pts]), rule=rule, engine=eng.engine,
+                            lam_range=lam_range)
+        s = np.log(lams)
+        for name in names:
+            r = get_rule(name)
+            curve.scores[name] = r.scores(eng, pts, s)
+            curve.chosen[name] = float(r.refine(eng, pts, s, curve.scores[name], curve))
     curve.evaluations = len(eng.cache)
     curve.seconds = time.perf_counter() - t0
+    curve.warnings[:] = list(dict.fromkeys(curve.warnings))  # each once
+    log.info("lambda sweep: engine %s, %d points over lam_range=(%g, %g), %d evaluations, %.3g s; %s",
+             eng.engine, points, lo, hi, curve.evaluations, curve.seconds,
+             ", ".join(f"{n} lam={v:.6g}" + (" (used)" if n == rule else "")
+                       for n, v in curve.chosen.items()))
     for w in curve.warnings:
-        warnings.warn(w, RuntimeWarning, stacklevel=3)
+        _warn(w)
     return curve

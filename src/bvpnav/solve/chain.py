@@ -11,15 +11,19 @@ naming the conflicting items.
 
 from __future__ import annotations
 
+import logging
 import time
 
 from ..backends import Backend, memory_shortfall
 from ..errors import BvpnavError, Infeasible, InputError, SolveError
+from ..log import in_sweep
 from ..result import Attempt, Solution
 from .assemble import finish
 from .options import SolveOptions
 
 __all__ = ["solve_fixed", "attempt"]
+
+log = logging.getLogger(__name__)
 
 
 def attempt(form, backend: Backend, options: dict, lam: float, opts: SolveOptions) -> Solution:
@@ -27,13 +31,34 @@ def attempt(form, backend: Backend, options: dict, lam: float, opts: SolveOption
     why = backend.accepts(form)  # before solving: e.g. a cone item given to a QP solver
     if why is not None:
         raise InputError(why)
+    log.debug("%s at lam=%g: options in force %s (accuracy %r)", backend.name, lam, options, opts.accuracy)
     t_start = time.perf_counter()
     raw = backend.run(form, lam, options, opts.verbose)
     run = dict(raw.info)
     run["wall_time"] = time.perf_counter() - t_start
     run.update(solver=backend.name, accuracy=opts.accuracy, options=options,
                preset_applied=opts.accuracy in backend.presets)
-    return finish(form, raw.x, lam, run, raw.duals, opts.accuracy, opts.verify, raw.factored)
+    sol = finish(form, raw.x, lam, run, raw.duals, opts.accuracy, opts.verify, raw.factored)
+    if log.isEnabledFor(logging.DEBUG):
+        log.debug("%s at lam=%g: verification %s", backend.name, lam, sol.stats.get("verification"))
+    return sol
+
+
+def _next(opts: SolveOptions, k: int) -> str:
+    return f"trying {opts.chain[k + 1][0].name}" if k + 1 < len(opts.chain) else "no back end left"
+
+
+def _fell_back(opts: SolveOptions, k: int, be: Backend, status: str, reason: str) -> None:
+    log.info("%s at attempt %d: %s (%s); %s", be.name, k + 1, status, reason, _next(opts, k))
+
+
+def _answered(sol: Solution, be: Backend, lam: float, k: int) -> None:
+    st = sol.stats
+    times = ", ".join(f"{key} {st[key]:.3g} s" for key in ("wall_time", "solve_time", "setup_time",
+                                                          "compile_time") if isinstance(st.get(key), float))
+    log.log(logging.DEBUG if in_sweep() else logging.INFO,
+            "%s answered at lam=%g (attempt %d, %s, %s): %s", be.name, lam, k + 1, st.get("status"),
+            "verified" if st.get("verified") else "not verified", times)
 
 
 def _failed(backend: Backend, exc: Exception) -> SolveError:
@@ -65,6 +90,7 @@ def solve_fixed(form, lam: float, opts: SolveOptions) -> Solution:
         short = memory_shortfall(be, form) if k else None
         if short is not None:
             attempts.append(Attempt(solver=be.name, status="not applicable", reason=short))
+            _fell_back(opts, k, be, "not applicable", short)
             continue
         try:
             sol = attempt(form, be, op, lam, opts)
@@ -76,6 +102,7 @@ def solve_fixed(form, lam: float, opts: SolveOptions) -> Solution:
                 raise
             # a fallback that cannot take this problem (e.g. direct with inequalities)
             attempts.append(Attempt(solver=be.name, status="not applicable", reason=str(exc)))
+            _fell_back(opts, k, be, "not applicable", str(exc))
             continue
         except SolveError as exc:
             attempts.extend(Attempt.of(a) for a in (exc.attempts or [{"solver": be.name, "status": "error",
@@ -84,6 +111,7 @@ def solve_fixed(form, lam: float, opts: SolveOptions) -> Solution:
             if not opts.verify and k == 0:
                 exc.attempts = Attempt.plain(exc.attempts)
                 raise
+            _fell_back(opts, k, be, "failed", str(exc))
             continue
         except (BvpnavError, KeyboardInterrupt, SystemExit):
             raise
@@ -94,7 +122,9 @@ def solve_fixed(form, lam: float, opts: SolveOptions) -> Solution:
             if not opts.verify and k == 0:
                 err.attempts = Attempt.plain(err.attempts)
                 raise err from exc
+            _fell_back(opts, k, be, "error", err.attempts[0]["reason"])
             continue
+        _answered(sol, be, lam, k)
         sol.record(attempts=attempts + sol.records.attempts)
         if attempts:
             sol.warnings.append(f"{opts.backend.name} failed ({attempts[0]['reason']}); the answer "

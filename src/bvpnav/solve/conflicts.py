@@ -10,6 +10,7 @@ the modified formulation. Every round removes one hard item, so the loop ends.
 from __future__ import annotations
 
 import dataclasses
+import logging
 from collections.abc import Callable
 
 from ..cvx import conflicting_items
@@ -21,6 +22,8 @@ from .options import SolveOptions
 __all__ = ["with_demotion", "conflicting_items", "check_demotion"]
 
 Stage = Callable[..., Solution]
+
+log = logging.getLogger(__name__)
 
 
 def _demoted(form, label: str, sigma: float):
@@ -86,6 +89,8 @@ def with_demotion(inner: Stage) -> Stage:
                 sigma = float(sig_map.get(victim, sig_default))
                 demoted.append(Demotion(item=victim, sigma=sigma, priority=priority.get(victim, 0.0),
                                         conflict=conflict))
+                log.info("conflicting hard items %s: demoting %r to soft with sigma=%g (round %d)",
+                         list(conflict), victim, sigma, len(demoted))
                 current = _demoted(current, victim, sigma)
         sol.record(demoted=demoted)
         ident = {it.label: it.identify() for it in form.items}  # unnamed items: what they hold

@@ -27,7 +27,7 @@ __all__ = ["SolveOptions", "prepare", "check_lam", "DEFAULT_FALLBACK", "fallback
 #: Options of the lambda sweep a solve with a rule name takes (``solve(rule={...})``).
 RULE_KEYS = ("lam_range", "points", "tau", "probes", "seed", "progress", "engine")
 #: Options of the sequential loop (``solve(sequential={...})``).
-SEQUENTIAL_KEYS = ("tol", "max_iter", "initial", "lam_each", "continuation", "soft_tol")
+SEQUENTIAL_KEYS = ("tol", "max_iter", "initial", "lam_each", "continuation", "soft_tol", "progress")
 
 #: The automatic fallback chain (``fallback="auto"``) after a primary Clarabel attempt:
 #: Clarabel again with static regularization, the direct sparse back end (equality-
@@ -69,7 +69,13 @@ class SolveOptions:
     backend : Backend
         The primary back end.
     accuracy : str
-    verify, verbose : bool
+    verify : bool
+    verbose : bool
+        Pass the solver's own output through: cvxpy's ``verbose=True`` (its compilation
+        and the solver's iteration log, printed to stdout by cvxpy and the solver, not
+        through :mod:`logging`); the direct back end has no output of its own. bvpnav's
+        own records (attempts, fallbacks, chosen lambda, iterations, timings) are on the
+        ``bvpnav`` logger (:mod:`bvpnav.log`), independent of this flag.
     options : dict or None
         The user's extra options for the primary back end.
     fallback : Any
@@ -81,7 +87,7 @@ class SolveOptions:
         For ``on_conflict="demote"``.
     sequential : dict
         Options of the sequential loop (``tol``, ``max_iter``, ``initial``,
-        ``lam_each``, ``continuation``, ``soft_tol``).
+        ``lam_each``, ``continuation``, ``soft_tol``, ``progress``).
     rule : dict
         Options of the lambda sweep (``lam_range``, ``points``, ``tau``, ``probes``,
         ``seed``, ``progress``, ``engine``).

@@ -13,12 +13,28 @@ A solve is ``demote(sequential(rule(chain)))``:
 Each stage takes the inner stage and calls it with a formulation, a ``lam`` and the one
 :class:`~bvpnav.solve.options.SolveOptions` checked before any work; no stage calls back
 up, so every option reaches every stage that needs it.
+
+What a solve tells you, and where:
+
+- ``solution.warnings``: everything worth a look (fallbacks, demotions, conditioning,
+  rule and loop warnings); those about a choice you can change (a rule's best value at
+  the edge of ``lam_range``, a sequential loop that did not converge) are also issued
+  through :mod:`warnings` as :class:`bvpnav.log.BvpnavWarning`, once per call and
+  attributed to your line;
+- the ``bvpnav`` logger (:mod:`bvpnav.log`; silent unless logging is configured): at
+  INFO each fallback attempt and its reason, the back end that answered with its
+  timings, the chosen lambda and rule, each sequential iteration; at DEBUG the solver
+  options in force and the verification measures;
+- ``verbose=True``: the solver's own output (cvxpy's ``verbose``, printed to stdout by
+  cvxpy and the solver);
+- progress bars (tqdm) on lambda sweeps and sequential loops when stderr is a terminal.
 """
 
 from __future__ import annotations
 
 from ..backends import check_memory
 from ..formulation import as_formulation
+from ..log import once
 from ..result import Solution
 from .chain import solve_fixed
 from .conflicts import with_demotion
@@ -37,12 +53,19 @@ def run(form, lam, opts: SolveOptions) -> Solution:
     stage = solve_fixed
     for wrap in reversed(STAGES):
         stage = wrap(stage)
-    return stage(form, lam, opts)
+    with once():  # each warning once per call, however many stages and iterations raise it
+        return stage(form, lam, opts)
 
 
 def solve(form, lam=1.0, **options) -> Solution:
     """Check every option (see :func:`bvpnav.solve.options.prepare`), refuse a primary back
-    end that cannot fit in memory, then run the pipeline."""
+    end that cannot fit in memory, then run the pipeline.
+
+    ``verbose=True`` passes the solver's own output through (cvxpy's ``verbose``: its
+    compilation and the solver's iteration log, on stdout); bvpnav's own account of the
+    solve is on the ``bvpnav`` logger at INFO and DEBUG (see the module docstring and
+    :mod:`bvpnav.log`), whatever ``verbose`` is.
+    """
     form = as_formulation(form)
     opts, lam = prepare(lam, **options)
     check_sequential(opts.sequential)
@@ -54,7 +77,7 @@ def solve_sequential(problem, solver: str = "clarabel", lam: float | str = 1.0, 
                      verify: bool = True, options: dict | None = None, verbose: bool = False,
                      fallback="auto", *, tol: float = 1e-4, max_iter: int = 30, initial=None,
                      lam_each: bool = False, continuation: bool = True,
-                     soft_tol: float | None = None) -> Solution:
+                     soft_tol: float | None = None, progress: bool | None = None) -> Solution:
     """Solve a problem with items that need linearization by sequential convex solves.
 
     The same as ``problem.solve(...)`` with the loop's own options (see
@@ -67,6 +90,6 @@ def solve_sequential(problem, solver: str = "clarabel", lam: float | str = 1.0, 
     Solution
     """
     seq = dict(tol=tol, max_iter=max_iter, initial=initial, lam_each=lam_each, continuation=continuation,
-               soft_tol=soft_tol)
+               soft_tol=soft_tol, progress=progress)
     return solve(problem, lam, solver=solver, accuracy=accuracy, verify=verify, options=options,
                  verbose=verbose, fallback=fallback, sequential=seq)

@@ -8,6 +8,7 @@ solved by the inner stage with the same options; the :class:`~bvpnav.Solution` c
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable
 
 from ..backends import check_memory, resolve_solver
@@ -22,6 +23,8 @@ from .options import SolveOptions, prepare
 __all__ = ["with_rule", "lambda_curve", "choose_lambda"]
 
 Stage = Callable[..., Solution]
+
+log = logging.getLogger(__name__)
 
 
 def _curve(form, rule: str, opts: SolveOptions, inner: Stage, rules=None, **sweep) -> LambdaCurve:
@@ -38,10 +41,13 @@ def with_rule(inner: Stage) -> Stage:
         if not isinstance(lam, str):
             return inner(form, lam, opts)
         curve = _curve(form, lam, opts, inner)
+        log.info("rule %s chose lam=%.6g (engine %s, %d evaluations, %.3g s); solving at it", lam,
+                 curve.lam_chosen, curve.engine, curve.evaluations, curve.seconds)
         sol = inner(form, curve.lam_chosen, opts)
         sol.lam_rule = lam
         sol.curve = curve
-        sol.warnings.extend(curve.warnings)
+        # already issued by the sweep (once); recorded here for the CLI and the JSON summary
+        sol.warnings.extend(w for w in curve.warnings if w not in sol.warnings)
         return sol
 
     return stage
@@ -78,7 +84,8 @@ def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6
     seed : int
         Seed of the probes (results are reproducible).
     progress : bool, optional
-        Show a tqdm bar; default: when the problem is large (more than 50,000 unknowns).
+        Show a tqdm bar (True always, False never); default: when stderr is a terminal (never
+        in pipes, files or tests; see :func:`bvpnav.log.progress_enabled`).
     engine : {"auto", "direct", "cvxpy"}
     solve_kw : dict, optional
         Further options of :meth:`bvpnav.NavigationProblem.solve` (``verify``,
@@ -87,9 +94,15 @@ def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6
     Returns
     -------
     LambdaCurve
+        Its ``warnings`` (e.g. a rule's best value at the edge of ``lam_range``) are each
+        issued once through :mod:`warnings` as :class:`bvpnav.log.BvpnavWarning`, reported
+        at the caller's line.
 
     Notes
     -----
+    Rules that cannot run on this problem are skipped (logged at INFO on
+    ``bvpnav.lam.sweep``), e.g. ``gcv`` in the load form or ``discrepancy`` without
+    ``sigma_a``; the chosen rule itself must run, or :class:`~bvpnav.InputError` says why.
     L-curve: maximise the curvature of :math:`(\\log\\rho, \\log\\eta)`; the two
     outermost sweep points on each side are never chosen (a "corner" there is the range
     ending, and is reported in ``warnings``). GCV: minimise

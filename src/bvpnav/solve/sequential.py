@@ -34,8 +34,8 @@ then converges in one or two steps (measured: 3 soft + 1 hard iteration, 7e-12 m
 
 from __future__ import annotations
 
+import logging
 import time
-import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -44,6 +44,7 @@ import pandas as pd
 
 from ..errors import InputError
 from ..items import Linearizable
+from ..log import progress, warn
 from ..result import SequentialReport, Solution
 from .options import SolveOptions
 
@@ -51,9 +52,11 @@ __all__ = ["with_sequential", "check_sequential", "SEQUENTIAL_DEFAULTS"]
 
 Stage = Callable[..., Solution]
 
+log = logging.getLogger(__name__)
+
 #: Options of the loop and their defaults (see :func:`with_sequential`).
 SEQUENTIAL_DEFAULTS: dict[str, Any] = {"tol": 1e-4, "max_iter": 30, "initial": None, "lam_each": False,
-                                       "continuation": True, "soft_tol": None}
+                                       "continuation": True, "soft_tol": None, "progress": None}
 
 
 def _real(v) -> float:
@@ -78,6 +81,8 @@ def check_sequential(options: dict) -> dict:
     if not (np.isfinite(soft_tol) and soft_tol > 0):
         raise InputError(f"soft_tol={soft_tol!r}: must be a positive distance in m")
     o["soft_tol"] = soft_tol
+    if o["progress"] is not None and not isinstance(o["progress"], bool | np.bool_):
+        raise InputError(f"progress={o['progress']!r}: True, False or None (a bar when stderr is a terminal)")
     return o
 
 
@@ -190,7 +195,9 @@ def _not_converged(loop: _Loop) -> str:
             + (f"(and {len(mc) - len(final)} soft continuation iteration(s)) " if loop.cont else "")
             + f"the largest position change is {mc[-1]:.3g} m > tol={loop.o['tol']:g} m (changes: "
             + ", ".join(f"{c:.3g}" for c in mc)
-            + "). Raise max_iter, give a better initial estimate, or loosen tol")
+            + f"). Raise max_iter (solve(..., sequential={{'max_iter': {2 * int(loop.o['max_iter'])}}}) or "
+            "bvpnav.solve.solve_sequential(..., max_iter=...)), give a better initial estimate (initial=), "
+            "or loosen tol (tol=, in m)")
 
 
 def _iterate(loop: _Loop, inner: Stage, opts: SolveOptions, traj: pd.DataFrame) -> tuple[Solution, bool]:
@@ -199,20 +206,30 @@ def _iterate(loop: _Loop, inner: Stage, opts: SolveOptions, traj: pd.DataFrame) 
     axes = list(loop.form.model.axes)
     prev = traj[axes].to_numpy()
     n_phase = 0
-    while True:
-        sub = loop.linearized_form(t, traj)
-        sol = inner(sub, loop.lam_soft if loop.soft else loop.lam_now, opts)
-        prev = loop.note(sol, prev)
-        traj = sol.trajectory[axes]
-        n_phase += 1
-        limit = loop.o["soft_tol"] if loop.soft else loop.o["tol"]
-        done = loop.max_change[-1] < limit
-        if done or n_phase >= int(loop.o["max_iter"]):
-            loop.phases.append({"mode": "soft" if loop.soft else "final", "iterations": n_phase,
-                                "tol": limit, "converged": bool(done)})
-            if not loop.soft:
-                return sol, done
-            loop.soft, n_phase = False, 0
+    with progress(desc="sequential loop", unit="iter", enabled=loop.o["progress"]) as bar:
+        while True:
+            sub = loop.linearized_form(t, traj)
+            sol = inner(sub, loop.lam_soft if loop.soft else loop.lam_now, opts)
+            prev = loop.note(sol, prev)
+            traj = sol.trajectory[axes]
+            n_phase += 1
+            limit = loop.o["soft_tol"] if loop.soft else loop.o["tol"]
+            done = loop.max_change[-1] < limit
+            mode = "soft" if loop.soft else "final"
+            log.info("sequential iteration %d (%s phase, %d): max change %.3g m (rms %.3g m, tol %g m), "
+                     "lam=%g",
+                     len(loop.max_change), mode, n_phase, loop.max_change[-1], loop.rms_change[-1], limit,
+                     loop.lams[-1])
+            bar.update(1)
+            bar.set_postfix_str(f"{mode}, max change {loop.max_change[-1]:.2g} m", refresh=False)
+            if done or n_phase >= int(loop.o["max_iter"]):
+                loop.phases.append({"mode": mode, "iterations": n_phase, "tol": limit,
+                                    "converged": bool(done)})
+                if not loop.soft:
+                    return sol, done
+                log.info("sequential loop: soft continuation ended after %d iteration(s) (%s); now %s",
+                         n_phase, "converged" if done else "max_iter reached", "the requested modes")
+                loop.soft, n_phase = False, 0
 
 
 def with_sequential(inner: Stage) -> Stage:
@@ -237,10 +254,17 @@ def with_sequential(inner: Stage) -> Stage:
     soft_tol : float, optional
         Tolerance in m on the largest position change that ends the soft phase; default
         ``max(tol, 0.01 m)``.
+    progress : bool, optional
+        A tqdm bar of the iterations: True always, False never, None (default) when stderr
+        is a terminal.
 
     The returned solution is the last iteration's, with ``records.sequential`` (a
     :class:`~bvpnav.result.SequentialReport`, also ``stats["sequential"]``); when the loop
-    did not converge, a warning is issued and added to ``solution.warnings``.
+    did not converge, a :class:`bvpnav.log.BvpnavWarning` is issued (once, at the caller's
+    line) and added to ``solution.warnings``. Each iteration is logged at INFO on
+    ``bvpnav.solve.sequential`` (largest and RMS position change, phase, lambda), and a
+    progress bar counts the iterations when stderr is a terminal (``rule={"progress":
+    False}`` turns it off).
 
     Notes
     -----
@@ -275,15 +299,20 @@ def with_sequential(inner: Stage) -> Stage:
         t_start = time.perf_counter()
         traj, origin = _initial_trajectory(form, o["initial"], nonlin, inner, lam, opts)
         loop = _Loop(form, nonlin, o, lam)
+        log.info("sequential loop over %s: initial estimate from %s; continuation for %s",
+                 [it.label for it in nonlin], origin, sorted(loop.cont) or "none")
         sol, converged = _iterate(loop, inner, opts, traj)
-        sol.record(sequential=loop.report(converged, origin, time.perf_counter() - t_start))
+        seconds = time.perf_counter() - t_start
+        sol.record(sequential=loop.report(converged, origin, seconds))
+        log.info("sequential loop %s after %d iteration(s), %.3g s", "converged" if converged else
+                 "did not converge", len(loop.max_change), seconds)
         if loop.rule is not None:
             sol.lam_rule = loop.rule if o["lam_each"] else f"{loop.rule} (first linearization)"
             sol.curve = loop.curve
         if not converged:
             msg = _not_converged(loop)
             sol.warnings.append(msg)
-            warnings.warn(msg, RuntimeWarning, stacklevel=4)
+            warn(msg)
         return sol
 
     return stage
