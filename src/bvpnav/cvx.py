@@ -6,7 +6,8 @@ hard items become constraints, the data term and the soft and robust items the o
 kind table (:mod:`bvpnav.terms`). The framework, not the plug-in, checks that the result
 is DCP and DPP and names the culprit item. :func:`conflicting_items` finds which hard
 items cannot hold together (a deletion filter over feasibility problems built from the
-very same constraints).
+very same constraints). cvxpy is imported by :func:`build` and the feasibility checks on
+first use, not with this module.
 """
 
 from __future__ import annotations
@@ -14,13 +15,14 @@ from __future__ import annotations
 import warnings
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, fields
-from typing import Any
-
-import cvxpy as cp
+from typing import TYPE_CHECKING, Any
 
 from .errors import ConvexityError
 from .formulation import as_formulation
 from .model import Affine
+
+if TYPE_CHECKING:
+    import cvxpy as cp
 
 __all__ = ["CvxProblem", "lower", "build", "compiled", "conflicting_items"]
 
@@ -91,6 +93,8 @@ def build(form) -> CvxProblem:
     ConvexityError
         Naming the item whose penalty is not DCP, or not DPP in ``lam``.
     """
+    import cvxpy as cp
+
     form = as_formulation(form)
     model = form.model
     x = cp.Variable(model.size, name="x")
@@ -134,6 +138,8 @@ def compiled(form) -> CvxProblem:
 def _feasible(cvx: CvxProblem, labels) -> bool:
     """Whether the FEM equations and the constraints of the items ``labels`` can all hold
     (the very constraints :func:`build` compiled, modes included)."""
+    import cvxpy as cp
+
     cons = [cvx.fem] + [c for label in labels for c in cvx.cons[label]]
     prob = cp.Problem(cp.Minimize(0), cons)
     try:
