@@ -24,7 +24,10 @@ from .model import Affine
 if TYPE_CHECKING:
     import cvxpy as cp
 
-__all__ = ["CvxProblem", "lower", "build", "compiled", "conflicting_items"]
+__all__ = ["CvxProblem", "lower", "build", "compiled", "current_lam", "conflicting_items"]
+
+#: The value of the ``lam`` Parameter when :func:`build` creates it.
+INITIAL_LAM = 1.0
 
 
 def lower(rows: Affine, x: cp.Expression) -> cp.Expression:
@@ -98,7 +101,7 @@ def build(form) -> CvxProblem:
     form = as_formulation(form)
     model = form.model
     x = cp.Variable(model.size, name="x")
-    lam = cp.Parameter(nonneg=True, value=1.0, name="lam")
+    lam = cp.Parameter(nonneg=True, value=INITIAL_LAM, name="lam")
     fem_rows = model.fem_rows()
     fem_con = lower(fem_rows, x) == 0
     objective = cp.sum_squares(lower(form.data_rows(), x))
@@ -133,6 +136,13 @@ def compiled(form) -> CvxProblem:
     if cvx is None:
         cvx = form.cache["cvx"] = build(form)
     return cvx
+
+
+def current_lam(form) -> float:
+    """The ``lam`` Parameter's current value (the last cvxpy solve's), without building the
+    problem: :data:`INITIAL_LAM` while it is not built."""
+    cvx = as_formulation(form).cache.get("cvx")
+    return INITIAL_LAM if cvx is None else float(cvx.lam.value)
 
 
 def _feasible(cvx: CvxProblem, labels) -> bool:
