@@ -8,11 +8,16 @@ wall and CPU (user + system) seconds per command, and the ratio of ``import bvpn
 in this one run. ``import cvxpy`` and an empty interpreter are there for reference.
 Also listed: which heavy packages ``import bvpnav`` loads (none should be).
 
+The children inherit the environment: with ``PYTHONDONTWRITEBYTECODE`` set, an editable
+bvpnav is compiled from source on every start while pandas and cvxpy have the ``.pyc``
+files their installation wrote. ``--bytecode`` gives the children a bytecode cache (a
+temporary ``PYTHONPYCACHEPREFIX``, filled by the warm-up round), as installing a wheel does.
+
 The aims (issue "A library people can learn from"): ``import bvpnav`` at most 1.5x
 ``import pandas``, ``bvpnav --help`` under 1 s. Timings belong here, never in tests
 (``tests/test_startup.py`` checks only what is imported).
 
-Run ``python examples/benchmarks/startup.py [--runs 11]``.
+Run ``python examples/benchmarks/startup.py [--runs 11] [--bytecode]``.
 """
 
 from __future__ import annotations
@@ -24,6 +29,7 @@ import shutil
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
 
 HEAVY = ("cvxpy", "matplotlib", "tqdm", "scipy.optimize", "scipy.interpolate", "scipy.integrate",
@@ -51,22 +57,22 @@ def commands() -> dict[str, list[str]]:
     }
 
 
-def run_once(cmd: list[str]) -> tuple[float, float]:
+def run_once(cmd: list[str], env: dict | None = None) -> tuple[float, float]:
     """(wall s, CPU s) of one run of ``cmd`` (its output discarded; a failure raises)."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=True)
+    subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=True, env=env)
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     return wall, cpu
 
 
-def loaded_by_import() -> list[str]:
+def loaded_by_import(env: dict | None = None) -> list[str]:
     """The packages of :data:`HEAVY` that ``import bvpnav`` loads, in a fresh process."""
     code = ("import sys, bvpnav; print(' '.join(m for m in sys.argv[1:] if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code, *HEAVY], capture_output=True, text=True,
-                         check=True)
+                         check=True, env=env)
     return out.stdout.split()
 
 
@@ -74,13 +80,24 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=11, help="counted runs per command (default 11)")
     ap.add_argument("--warmup", type=int, default=1, help="uncounted rounds first (default 1)")
+    ap.add_argument("--bytecode", action="store_true",
+                    help="give the children a bytecode cache (as an installed wheel has)")
     args = ap.parse_args(argv)
+    with tempfile.TemporaryDirectory(prefix="bvpnav-pyc-") as cache:
+        env = None
+        if args.bytecode:
+            env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+            env["PYTHONPYCACHEPREFIX"] = cache
+        report(args, env)
+
+
+def report(args, env: dict | None) -> None:
     cmds = commands()
     times: dict[str, list[tuple[float, float]]] = {name: [] for name in cmds}
-    for k in range(args.warmup + args.runs):
+    for k in range(max(args.warmup, 1 if env else 0) + args.runs):
         for name, cmd in cmds.items():
-            wall, cpu = run_once(cmd)
-            if k >= args.warmup:
+            wall, cpu = run_once(cmd, env)
+            if k >= max(args.warmup, 1 if env else 0):
                 times[name].append((wall, cpu))
 
     def med(name: str, i: int) -> float:
@@ -89,8 +106,10 @@ def main(argv=None):
     def ratio(a: str, b: str, i: int) -> float:
         return statistics.median(x[i] / y[i] for x, y in zip(times[a], times[b], strict=True))
 
+    env_now = os.environ if env is None else env
+    cached = "on" if not env_now.get("PYTHONDONTWRITEBYTECODE") else "off (PYTHONDONTWRITEBYTECODE)"
     print(f"start-up, median of {args.runs} runs per command (fresh processes, taking turns; "
-          f"Python {sys.version.split()[0]}, {os.cpu_count()} CPUs)")
+          f"Python {sys.version.split()[0]}, {os.cpu_count()} CPUs; bytecode cache {cached})")
     print(f"{'command':<18}{'wall s':>9}{'cpu s':>9}{'min wall':>10}{'max wall':>10}")
     for name in cmds:
         walls = [t[0] for t in times[name]]
@@ -100,7 +119,7 @@ def main(argv=None):
         print(f"{a} / {b}: wall {ratio(a, b, 0):.2f}x, cpu {ratio(a, b, 1):.2f}x "
               "(median of the per-round ratios)")
     print(f"bvpnav --help: median wall {med('bvpnav --help', 0):.3f} s")
-    heavy = loaded_by_import()
+    heavy = loaded_by_import(env)
     print(f"loaded by `import bvpnav` of {', '.join(HEAVY)}: {', '.join(heavy) or 'none'}")
 
 

@@ -71,12 +71,12 @@ __all__ = [
     "simulate",
 ]
 
-#: Imported on first attribute access (PEP 562), not by ``import bvpnav``: what pulls in a
-#: scipy subpackage the core does not need: ``solve``, ``lam`` and ``compare`` (the sparse
-#: factorizations, scipy.sparse.linalg and scipy.optimize), ``attitude`` (scipy.spatial),
-#: ``baselines`` (scipy.integrate), ``simulate`` (scipy.interpolate). Name -> (module,
-#: attribute or None for the module itself). cvxpy and matplotlib are imported where they
-#: are used (:mod:`bvpnav.cvx`, :mod:`bvpnav.terms`, the cvxpy back ends, :mod:`bvpnav.plot`).
+#: Names imported on first attribute access (PEP 562), not by ``import bvpnav``, because each
+#: pulls in scipy subpackages that building a problem does not need: ``solve``, ``lam`` and
+#: ``compare`` (scipy.sparse.linalg, scipy.optimize), ``attitude`` (scipy.spatial),
+#: ``baselines`` (scipy.integrate), ``simulate`` (scipy.interpolate). Name -> (submodule,
+#: attribute, or None for the submodule itself). cvxpy and matplotlib are imported where
+#: they are used (:mod:`bvpnav.cvx`, :mod:`bvpnav.terms`, the cvxpy back ends, :mod:`bvpnav.plot`).
 _LAZY = {
     "attitude": ("attitude", None),
     "baselines": ("baselines", None),
