@@ -16,7 +16,6 @@ from typing import Any
 import numpy as np
 import pandas as pd
 import scipy.sparse as sp
-from scipy.spatial import cKDTree
 
 from bvpnav.errors import InputError
 from bvpnav.items import Item, Linearizable
@@ -167,6 +166,8 @@ def project_onto_polyline(vertices, t, positions, ambiguity: float = 0.5,
     chunk = max(1, _CHUNK_ELEMENTS // nseg)
     # candidate segments: within dv + ambiguity (dv, the distance to the nearest vertex, bounds the
     # distance to the polyline) of the sample, so their midpoints are within that + L_max / 2
+    from scipy.spatial import cKDTree  # heavy; not loaded by `import bvpnav.constraints`
+
     dv = cKDTree(V).query(Q)[0]
     mtree = cKDTree(A + 0.5 * d)
     for k0 in range(0, n, chunk):

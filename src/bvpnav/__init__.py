@@ -20,10 +20,11 @@ Quick start::
 
 from __future__ import annotations
 
-from . import attitude, baselines, error_models, lam, scenarios, simulate, solve
+import importlib
+
+from . import error_models, scenarios
 from ._version import __version__
 from .backends import available_solvers
-from .compare import compare_solvers
 from .errors import (
     BvpnavError,
     ConvexityError,
@@ -40,7 +41,6 @@ from .items import Item
 from .model import Affine, NavModel
 from .problem import NavigationProblem
 from .result import Solution
-from .solve import lambda_curve
 
 __all__ = [
     "__version__",
@@ -70,3 +70,33 @@ __all__ = [
     "scenarios",
     "simulate",
 ]
+
+#: Names imported on first attribute access (PEP 562), not by ``import bvpnav``, because each
+#: pulls in scipy subpackages that building a problem does not need: ``solve``, ``lam`` and
+#: ``compare`` (scipy.sparse.linalg, scipy.optimize), ``attitude`` (scipy.spatial),
+#: ``baselines`` (scipy.integrate), ``simulate`` (scipy.interpolate). Name -> (submodule,
+#: attribute, or None for the submodule itself). cvxpy and matplotlib are imported where
+#: they are used (:mod:`bvpnav.cvx`, :mod:`bvpnav.terms`, the cvxpy back ends, :mod:`bvpnav.plot`).
+_LAZY = {
+    "attitude": ("attitude", None),
+    "baselines": ("baselines", None),
+    "compare_solvers": ("compare", "compare_solvers"),
+    "lam": ("lam", None),
+    "lambda_curve": ("solve", "lambda_curve"),
+    "simulate": ("simulate", None),
+    "solve": ("solve", None),
+}
+
+
+def __getattr__(name: str):
+    if name not in _LAZY:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    module, attr = _LAZY[name]
+    mod = importlib.import_module(f"{__name__}.{module}")  # binds the submodule here too
+    value = mod if attr is None else getattr(mod, attr)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))

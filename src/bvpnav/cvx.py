@@ -6,7 +6,8 @@ hard items become constraints, the data term and the soft and robust items the o
 kind table (:mod:`bvpnav.terms`). The framework, not the plug-in, checks that the result
 is DCP and DPP and names the culprit item. :func:`conflicting_items` finds which hard
 items cannot hold together (a deletion filter over feasibility problems built from the
-very same constraints).
+very same constraints). cvxpy is imported by :func:`build` and the feasibility checks on
+first use, not with this module.
 """
 
 from __future__ import annotations
@@ -14,15 +15,19 @@ from __future__ import annotations
 import warnings
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, fields
-from typing import Any
-
-import cvxpy as cp
+from typing import TYPE_CHECKING, Any
 
 from .errors import ConvexityError
 from .formulation import as_formulation
 from .model import Affine
 
-__all__ = ["CvxProblem", "lower", "build", "compiled", "conflicting_items"]
+if TYPE_CHECKING:
+    import cvxpy as cp
+
+__all__ = ["CvxProblem", "lower", "build", "compiled", "current_lam", "conflicting_items"]
+
+#: The value of the ``lam`` Parameter when :func:`build` creates it.
+INITIAL_LAM = 1.0
 
 
 def lower(rows: Affine, x: cp.Expression) -> cp.Expression:
@@ -91,10 +96,12 @@ def build(form) -> CvxProblem:
     ConvexityError
         Naming the item whose penalty is not DCP, or not DPP in ``lam``.
     """
+    import cvxpy as cp
+
     form = as_formulation(form)
     model = form.model
     x = cp.Variable(model.size, name="x")
-    lam = cp.Parameter(nonneg=True, value=1.0, name="lam")
+    lam = cp.Parameter(nonneg=True, value=INITIAL_LAM, name="lam")
     fem_rows = model.fem_rows()
     fem_con = lower(fem_rows, x) == 0
     objective = cp.sum_squares(lower(form.data_rows(), x))
@@ -131,9 +138,18 @@ def compiled(form) -> CvxProblem:
     return cvx
 
 
+def current_lam(form) -> float:
+    """The ``lam`` Parameter's current value (the last cvxpy solve's), without building the
+    problem: :data:`INITIAL_LAM` while it is not built."""
+    cvx = as_formulation(form).cache.get("cvx")
+    return INITIAL_LAM if cvx is None else float(cvx.lam.value)
+
+
 def _feasible(cvx: CvxProblem, labels) -> bool:
     """Whether the FEM equations and the constraints of the items ``labels`` can all hold
     (the very constraints :func:`build` compiled, modes included)."""
+    import cvxpy as cp
+
     cons = [cvx.fem] + [c for label in labels for c in cvx.cons[label]]
     prob = cp.Problem(cp.Minimize(0), cons)
     try:

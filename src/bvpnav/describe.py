@@ -16,7 +16,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .cvx import compiled
+from .cvx import current_lam
 from .errors import InputError
 from .formulation import as_formulation
 from .lsq import least_squares_form
@@ -177,7 +177,7 @@ def describe(problem, format: str = "text", lam: float | None = None,
     problem = as_formulation(problem)
     model = problem.model
     if lam is None:
-        lam = float(compiled(problem).lam.value)
+        lam = current_lam(problem)
     g = model.grid
     h = g.h
     terms = problem.terms()

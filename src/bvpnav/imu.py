@@ -3,15 +3,17 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
-from scipy.spatial.transform import Rotation
 
-from .attitude import integrate_gyro
 from .errors import InputError
 from .grid import TimeGrid
 from .timebase import as_float_array
+
+if TYPE_CHECKING:
+    from scipy.spatial.transform import Rotation
 
 __all__ = ["ImuData", "STANDARD_GRAVITY", "ACC_UNITS", "DEFAULT_AXES", "RESERVED_NAMES",
            "axis_name_clash"]
@@ -246,6 +248,8 @@ class ImuData:
         \\omega_k \\times \\omega_{k+1}` (see :func:`bvpnav.attitude.integrate_gyro`);
         then :math:`a_i = C_i f_i + g`. The rates are kept in ``data.gyro``.
         """
+        from .attitude import integrate_gyro  # scipy.spatial: loaded for strapdown data only
+
         grid = TimeGrid(t)
         rot = integrate_gyro(grid.t, gyro, initial_attitude)
         out = cls(grid.t, specific_force=specific_force, attitude=rot, gravity=gravity)
@@ -256,6 +260,8 @@ class ImuData:
 
     @staticmethod
     def _as_rotation(attitude, n: int) -> Rotation:
+        from scipy.spatial.transform import Rotation  # loaded for strapdown data only
+
         if isinstance(attitude, Rotation):
             rot = attitude
             if rot.single or len(rot) != n:

@@ -4,25 +4,28 @@ The problem holds the data, the objective form, the error model and the items th
 adds. What the problem *is* lives below it (:class:`~bvpnav.formulation.Formulation`:
 items compiled to terms; :mod:`bvpnav.cvx`: the DPP cvxpy problem); how it is *solved*
 lives in :mod:`bvpnav.solve` (checked options, stages that compose, verified answers);
-this class hands off to them.
+this class hands off to them. Those hand-offs (:mod:`bvpnav.solve`, :mod:`bvpnav.describe`)
+are imported on first use, so that ``import bvpnav`` does not load the factorizations,
+the lambda rules and their scipy subpackages.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import describe as _describe
 from .cvx import CvxProblem, compiled
 from .formulation import Formulation, label_items, original
 from .imu import ImuData
 from .items import Item
 from .model import Affine, NavModel
 from .result import Solution, Verification
-from .solve import pipeline
-from .solve.verify import verify as _verify
 from .terms import Term
+
+if TYPE_CHECKING:
+    from .describe import Matrices
 
 __all__ = ["NavigationProblem"]
 
@@ -176,11 +179,15 @@ class NavigationProblem:
         """The assembled problem in readable mathematics, as plain text or LaTeX lines, with
         ``lam`` (default: the current value) and a KKT condition estimate (see
         :func:`bvpnav.describe.describe` for the parameters)."""
-        return _describe.describe(self.formulation, format=format, lam=lam, conditioning=conditioning)
+        from .describe import describe
 
-    def matrices(self) -> _describe.Matrices:
+        return describe(self.formulation, format=format, lam=lam, conditioning=conditioning)
+
+    def matrices(self) -> Matrices:
         """The assembled matrices for a solve by hand (see :func:`bvpnav.describe.matrices`)."""
-        return _describe.matrices(self.formulation)
+        from .describe import matrices
+
+        return matrices(self.formulation)
 
     def unobservable(self) -> list[str]:
         """Names of unknown directions that no item pins down (empty when all are; see
@@ -265,6 +272,8 @@ class NavigationProblem:
             ``error.attempts`` lists each. A back end's own exception (``LinAlgError``,
             ``MemoryError``, ...) is a failed attempt, then the next back end runs.
         """
+        from .solve import pipeline
+
         return pipeline.solve(self.formulation, lam, solver=solver, accuracy=accuracy, verify=verify,
                               options=options, verbose=verbose, fallback=fallback,
                               on_conflict=on_conflict, priority=priority, demote_sigma=demote_sigma,
@@ -281,7 +290,9 @@ class NavigationProblem:
             ``stationarity``, ``forward_error``, ``rtol``, ``nonfinite``, ``undetermined``,
             ``conditioning`` and ``verified``.
         """
-        return _verify(self.formulation, xval, lam, accuracy, duals, factored)
+        from .solve.verify import verify
+
+        return verify(self.formulation, xval, lam, accuracy, duals, factored)
 
     def __repr__(self) -> str:
         return (f"NavigationProblem(N={self.data.n}, axes={list(self.data.axes)}, "

@@ -21,18 +21,21 @@ answers: its cvxpy constraints and penalty (:meth:`TermKind.constraints`,
 :meth:`TermKind.penalty`), the violation that verification measures, the gradient of its
 part of the Lagrangian (stationarity), the rows it shows in a solution, its role in the
 least-squares view (:meth:`Term.least_squares_role`) and how :func:`bvpnav.describe.describe`
-writes it.
+writes it. cvxpy is imported by the lowering methods only, on first use: the direct back
+ends, verification and ``import bvpnav`` never load it.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import cvxpy as cp
 import numpy as np
 
 from .model import Affine
+
+if TYPE_CHECKING:
+    import cvxpy as cp
 
 __all__ = ["Term", "TermKind", "KINDS", "MODES", "CONSTRAINT_MODES", "PENALTY_MODES"]
 
@@ -199,6 +202,8 @@ class Equality(TermKind):
         return [r == 0] if term.mode == "hard" else [r <= term.tol, -r <= term.tol]
 
     def penalty(self, term, r):
+        import cvxpy as cp
+
         if term.mode == "soft":
             return cp.sum_squares(cp.multiply(1.0 / term.sigma, r))
         if term.huber is None:
@@ -242,6 +247,8 @@ class Inequality(TermKind):
         return [r <= 0] if term.mode == "hard" else [r <= term.tol]
 
     def penalty(self, term, r):
+        import cvxpy as cp
+
         if term.mode == "soft":
             return cp.sum_squares(cp.multiply(1.0 / term.sigma, cp.pos(r)))
         return cp.sum(cp.multiply(1.0 / term.sigma, cp.pos(r)))
@@ -274,17 +281,23 @@ class SecondOrderCone(TermKind):
     name = "cone"
 
     def _split(self, term, r):
+        import cvxpy as cp
+
         k = term.residual.size
         R = cp.reshape(r, (k, term.residual.groups), order="F")
         return k, R[0, :], R[1:, :]
 
     def constraints(self, term, r):
+        import cvxpy as cp
+
         k, s, U = self._split(term, r)
         if term.mode == "hard":
             return [cp.SOC(s, U, axis=0)]
         return [cp.SOC(s + term.tol[::k], U, axis=0)]
 
     def penalty(self, term, r):
+        import cvxpy as cp
+
         k, s, U = self._split(term, r)
         excess = cp.pos(cp.norm(U, 2, axis=0) - s)
         w = 1.0 / term.sigma[::k]

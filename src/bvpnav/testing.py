@@ -24,11 +24,11 @@ from __future__ import annotations
 
 import dataclasses
 import pickle
+import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
-import cvxpy as cp
 import numpy as np
 import pandas as pd
 
@@ -83,7 +83,11 @@ def _default_data() -> ImuData:
 
 
 def _cvxpy_objects(value: Any) -> bool:
-    """True if ``value`` is, or directly holds, a cvxpy expression or constraint."""
+    """True if ``value`` is, or directly holds, a cvxpy expression or constraint (none can
+    exist before cvxpy is imported, so this does not import it)."""
+    cp = sys.modules.get("cvxpy")
+    if cp is None:
+        return False
     kinds = (cp.Expression, cp.Constraint)
     if isinstance(value, kinds):
         return True

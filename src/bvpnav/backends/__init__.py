@@ -9,9 +9,10 @@ its own recomputed residuals (:mod:`bvpnav.solve.verify`), never by a status wor
 
 The family is a discovered folder, like ``bvpnav.constraints``: each module here
 defines back ends and registers them with :func:`register_backend` on import; cvxpy's
-installed solvers are back ends too (:mod:`bvpnav.backends.cvxpy_solvers`). Adding a
-back end is one file (here, or anywhere that calls :func:`register_backend`), checked by
-:func:`bvpnav.testing.check_backend`.
+installed solvers are back ends too (:mod:`bvpnav.backends.cvxpy_solvers`, a factory that
+imports cvxpy only when a lookup needs it: registered back ends such as ``direct`` are
+found without it). Adding a back end is one file (here, or anywhere that calls
+:func:`register_backend`), checked by :func:`bvpnav.testing.check_backend`.
 """
 
 from __future__ import annotations
@@ -166,8 +167,11 @@ def resolve_solver(name: str) -> Backend:
     """Back end for a case-insensitive name; unknown names list what is installed."""
     if not isinstance(name, str):
         raise SolverNotFound(f"solver must be a name (str), got {name!r}")
-    table = registry()
     key = name.strip().lower()
+    _discover()
+    if key in _BACKENDS:  # registered back ends win over the factories' (see registry()),
+        return _BACKENDS[key]  # so 'direct' is found without asking cvxpy what is installed
+    table = registry()
     if key in table:
         return table[key]
     raise SolverNotFound(

@@ -5,6 +5,10 @@ its lowercase name. Clarabel (the default), OSQP and SCS have measured accuracy 
 another installed solver runs with its own defaults, and the result records that no
 preset was applied (``stats["options"]`` is then the user's options alone).
 
+cvxpy itself is imported when a cvxpy back end is first looked up (the factory asks
+``cvxpy.installed_solvers()``) or run, not with this module: ``import bvpnav`` and the
+direct back ends do not load it.
+
 Presets
 -------
 ``low``, ``default`` and ``high`` map to each solver's own options (below) and to the
@@ -19,16 +23,18 @@ import inspect
 import numbers
 import time
 import warnings
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import cvxpy as cp
 import numpy as np
 
 from ..cvx import compiled, conflicting_items
 from ..errors import Infeasible, SolveError, Unbounded
 from . import Backend, RawSolve, register_factory
 
-__all__ = ["PRESETS", "CvxpyBackend"]
+if TYPE_CHECKING:
+    import cvxpy as cp
+
+__all__ = ["PRESETS", "CvxpyBackend", "conic_solvers"]
 
 #: Solver options per preset, by cvxpy's (upper-case) solver name.
 PRESETS: dict[str, dict[str, dict[str, Any]]] = {
@@ -67,6 +73,8 @@ CVXPY_MEMORY = {"acceleration": 5750.0, "load": 5750.0}
 
 def _cvxpy_keywords() -> set[str]:
     """cvxpy's own keywords of ``Problem.solve`` (accepted with every cvxpy solver)."""
+    import cvxpy as cp
+
     params = inspect.signature(cp.Problem._solve).parameters
     return {k for k, p in params.items() if k not in ("self", "solver")
             and p.kind is not inspect.Parameter.VAR_KEYWORD}
@@ -165,7 +173,7 @@ class CvxpyBackend(Backend):
             return None
         for term in form.terms():
             if term.kind == "cone":
-                conic = [n for n in ("clarabel", "scs") if n.upper() in cp.installed_solvers()]
+                conic = conic_solvers()
                 return (f"solver {self.name!r} cannot take item {term.label!r} (kind {term.kind!r}, "
                         f"mode {term.mode!r}): it is a QP solver and this item is a second-order "
                         f"cone. Use solver={conic[0] if conic else 'clarabel'!r}"
@@ -174,6 +182,8 @@ class CvxpyBackend(Backend):
 
     # ---------------------------------------------------------------- run
     def run(self, form, lam: float, options: dict, verbose: bool = False) -> RawSolve:
+        import cvxpy as cp
+
         cvx = compiled(form)
         prob: cp.Problem = cvx.problem
         cvx.lam.value = lam
@@ -206,6 +216,8 @@ class CvxpyBackend(Backend):
 
     def _raise_for(self, status: str, form, cvx) -> None:
         """Raise for an infeasible (naming the conflicting items), unbounded or empty answer."""
+        import cvxpy as cp
+
         if status in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE):
             raise self._infeasible(status, form)
         if status in (cp.UNBOUNDED, cp.UNBOUNDED_INACCURATE):
@@ -243,10 +255,20 @@ class CvxpyBackend(Backend):
 _CACHE: dict[str, CvxpyBackend] = {}
 
 
+def conic_solvers() -> list[str]:
+    """The installed cvxpy solvers that take every bvpnav item (second-order cones
+    included), of Clarabel and SCS: the solvers error messages suggest."""
+    import cvxpy as cp
+
+    return [n for n in ("clarabel", "scs") if n.upper() in cp.installed_solvers()]
+
+
 def _installed() -> list[CvxpyBackend]:
     """One back end per installed cvxpy solver that takes a quadratic objective (objects
     kept, so patches and state stick). LP/MILP-only solvers (cvxpy's SCIPY) are not offered:
     every bvpnav problem has a quadratic data term."""
+    import cvxpy as cp
+
     out = []
     for s in cp.installed_solvers():
         if s not in _CACHE:

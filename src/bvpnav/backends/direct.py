@@ -25,13 +25,13 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
 from ..errors import InputError, SolveError
 from ..lsq import BorderedLU, least_squares_form, non_least_squares_term, solve_least_squares
 from . import Backend, RawSolve, register_backend
+from .cvxpy_solvers import conic_solvers
 
 __all__ = ["DirectBackend", "CsneBackend"]
 
@@ -74,7 +74,7 @@ class _LeastSquaresBackend(Backend):
         term = non_least_squares_term(form)
         if term is None:
             return None
-        conic = [n for n in ("clarabel", "scs") if n.upper() in cp.installed_solvers()]
+        conic = conic_solvers()
         return (f"solver {self.name!r} cannot take item {term.label!r} (kind {term.kind!r}, mode "
                 f"{term.mode!r}): it solves equality-constrained least squares only. Use "
                 f"solver={conic[0] if conic else 'clarabel'!r}"
