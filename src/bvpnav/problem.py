@@ -3,10 +3,8 @@
 The problem holds the data, the objective form, the error model and the items the user
 adds. What the problem *is* lives below it (:class:`~bvpnav.formulation.Formulation`:
 items compiled to terms; :mod:`bvpnav.cvx`: the DPP cvxpy problem); how it is *solved*
-lives in :mod:`bvpnav.solve` (checked options, stages that compose, verified answers);
-this class hands off to them. Those hand-offs (:mod:`bvpnav.solve`, :mod:`bvpnav.describe`)
-are imported on first use, so that ``import bvpnav`` does not load the factorizations,
-the lambda rules and their scipy subpackages.
+lives in :mod:`bvpnav.solve`; this class hands off to them (imported on first use, so that
+``import bvpnav`` loads no factorization, lambda rule or their scipy subpackages).
 """
 
 from __future__ import annotations
@@ -223,11 +221,20 @@ class NavigationProblem:
             Weight of the item terms relative to the data term (dimensionless): 0 or
             1e-12..1e12 (:data:`bvpnav.formulation.LAM_RANGE`), or a rule that chooses it
             (``"lcurve"``, ``"gcv"``, ``"discrepancy"``, ``"quasi"``, or a registered one).
+            Its value depends on the objective form: the acceleration form's data term is
+            normalised by ``sigma_a``, the load form's carries the mass matrix (about one
+            step h per row), so a lam chosen for one form (or, in the load form, one rate)
+            is not one for the other: choose it again with a rule.
         accuracy : {"low", "default", "high"}
             Preset mapped to the solver's options and to the verification tolerance.
         verify : bool
             Refuse answers that fail bvpnav's recomputed residuals (default True; off only
             to inspect a failure: the result then says ``verified=False``).
+        verbose : bool
+            Pass the solver's own output through (cvxpy's ``verbose=True``; the direct back
+            ends print nothing). bvpnav's own account of the solve (attempts, the chosen
+            lambda, sequential iterations, timings) is on the ``bvpnav`` logger at INFO and
+            DEBUG whatever ``verbose`` is (see :mod:`bvpnav.log`).
         options : dict, optional
             Extra solver options on top of the preset. Clarabel's, OSQP's and the direct
             back ends' are checked before solving; other solvers judge theirs (a refusal is
@@ -249,12 +256,10 @@ class NavigationProblem:
         demote_sigma : float or mapping of str to float, optional
             Sigma (item units) of a demoted item, one for all or per label; default 1.0.
         sequential : dict, optional
-            Options of the sequential loop for items that must be linearized (``tol`` and
-            ``soft_tol`` in m, ``max_iter``, ``initial``, ``lam_each``, ``continuation``;
-            see :func:`bvpnav.solve.sequential.with_sequential`).
+            Options of the loop for items that must be linearized (``tol``, ``soft_tol`` in
+            m, ``max_iter``, ...; :func:`bvpnav.solve.sequential.with_sequential`).
         rule : dict, optional
-            Options of the lambda sweep for a rule (``lam_range``, ``points``, ``tau``,
-            ``probes``, ``seed``, ``progress``, ``engine``; see
+            Options of the lambda sweep (``lam_range``, ``points``, ...;
             :func:`bvpnav.solve.lambda_curve`).
 
         Returns
@@ -281,15 +286,8 @@ class NavigationProblem:
 
     def verify(self, xval: np.ndarray, lam: float, accuracy: str = "default", duals: dict | None = None,
                factored: tuple | None = None) -> Verification:
-        """Judge a stacked solution by recomputed residuals (see :func:`bvpnav.solve.verify.verify`).
-
-        Returns
-        -------
-        Verification
-            Reads like a dict: ``fem_residual``, ``max_violation``, ``worst_item``,
-            ``stationarity``, ``forward_error``, ``rtol``, ``nonfinite``, ``undetermined``,
-            ``conditioning`` and ``verified``.
-        """
+        """Judge a stacked solution by recomputed residuals: a :class:`~bvpnav.result.Verification`
+        (see :func:`bvpnav.solve.verify.verify`)."""
         from .solve.verify import verify
 
         return verify(self.formulation, xval, lam, accuracy, duals, factored)

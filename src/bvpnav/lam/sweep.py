@@ -49,7 +49,7 @@ __all__ = ["LambdaCurve", "DirectSweep", "CvxpySweep", "sweep_curve", "check_ran
 log = logging.getLogger(__name__)
 
 
-@dataclass
+@dataclass(repr=False)
 class LambdaCurve:
     """A lambda sweep and the rules' choices.
 
@@ -94,6 +94,18 @@ class LambdaCurve:
     evaluations: int = 0
     seconds: float = 0.0
     lam_range: tuple = (1e-6, 1e6)
+
+    def __repr__(self) -> str:
+        """One line: how many lambdas over which range, each rule's choice, the rule used,
+        the engine, the evaluations and time, and how many warnings (no arrays)."""
+        lo, hi = self.lam_range
+        chosen = ", ".join(f"{r} {v:.4g}" for r, v in self.chosen.items()) or "none"
+        text = (f"LambdaCurve({len(self.lam)} lambdas over {lo:g} .. {hi:g}; chosen: {chosen}; "
+                f"used: {self.rule}; {self.engine} engine, {self.evaluations} evaluations, "
+                f"{self.seconds:.3g} s")
+        if self.warnings:
+            text += f"; {len(self.warnings)} warning(s), see .warnings"
+        return text + ")"
 
     @property
     def lam_chosen(self) -> float:
