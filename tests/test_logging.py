@@ -290,3 +290,17 @@ def _no_delay(fn):
         return fn(*a, **kw)
 
     return wrapped
+
+
+def test_a_cli_run_from_python_leaves_no_handler_filter_or_level_behind(tmp_path, capsys):
+    """``bvpnav.cli.main([...])`` configures logging for its run only: afterwards the
+    package logger has its NullHandler alone, its level, and the warning filters as before
+    (a run inside a test session used to leave a stderr handler for every later test)."""
+    from bvpnav.cli import main
+
+    logger = logging.getLogger("bvpnav")
+    before = (list(logger.handlers), logger.level, list(warnings.filters))
+    code = main(["solve", "-vv", str(tmp_path / "missing.csv"), "--spec", str(tmp_path / "x.toml"),
+                 "--out", str(tmp_path / "out.csv")])
+    assert code == 2 and "bvpnav: error:" in capsys.readouterr().err
+    assert (list(logger.handlers), logger.level, list(warnings.filters)) == before

@@ -22,7 +22,7 @@ import sys
 import time
 import warnings
 
-from . import __version__
+from . import __version__, log
 from .errors import BvpnavError, InputError, SolveError, SolverNotFound
 
 EXIT_OK, EXIT_BUG, EXIT_INPUT, EXIT_SOLVE = 0, 1, 2, 3
@@ -64,34 +64,6 @@ def verbosity(args) -> int:
                              "not both")
         return -1
     return v
-
-
-def configure_logging(level: int) -> None:
-    """Set up the ``bvpnav`` logger for a verbosity (see :func:`verbosity`).
-
-    Uses :func:`bvpnav.log.configure` when that module exists; otherwise one stderr
-    handler on the ``bvpnav`` logger (replaced, not added, on a second call):
-    ERROR for -1, WARNING for 0, INFO for 1, DEBUG for 2 or more.
-    """
-    try:
-        from . import log
-    except ImportError:
-        log = None
-    if log is not None and hasattr(log, "configure"):
-        log.configure(level)
-        return
-    logger = logging.getLogger("bvpnav")
-    levels = (logging.WARNING, logging.INFO, logging.DEBUG)
-    logger.setLevel(logging.ERROR if level < 0 else levels[min(level, 2)])
-    for h in list(logger.handlers):
-        if getattr(h, "_bvpnav_cli", False):
-            logger.removeHandler(h)
-    handler = logging.StreamHandler(sys.stderr)
-    handler.setFormatter(logging.Formatter("bvpnav: %(levelname)s: %(message)s" if level < 2 else
-                                           "bvpnav: %(levelname)s [%(name)s]: %(message)s"))
-    handler._bvpnav_cli = True
-    logger.addHandler(handler)
-    logger.propagate = False
 
 
 def _cmd_demo(args) -> int:
@@ -529,8 +501,7 @@ def _dispatch(args) -> int:
     debug = os.environ.get("BVPNAV_DEBUG", "") not in ("", "0")
     try:
         level = verbosity(args)
-        configure_logging(level)
-        with warnings.catch_warnings():
+        with log.configured(level), warnings.catch_warnings():
             if level < 0:  # -q: errors only
                 warnings.simplefilter("ignore")
             return int(args.func(args))

@@ -35,8 +35,8 @@ import os
 import sys
 import warnings
 
-__all__ = ["BvpnavWarning", "configure", "warn", "once", "progress", "progress_enabled", "logger",
-           "in_sweep", "sweeping", "issued"]
+__all__ = ["BvpnavWarning", "configure", "configured", "warn", "once", "progress", "progress_enabled",
+           "logger", "in_sweep", "sweeping", "issued"]
 
 logger = logging.getLogger("bvpnav")
 logger.addHandler(logging.NullHandler())
@@ -199,3 +199,21 @@ def configure(verbosity: int = 0, *, quiet_warnings: bool = True) -> logging.Han
     if quiet_warnings:
         warnings.filterwarnings("ignore", category=BvpnavWarning)
     return handler
+
+
+@contextlib.contextmanager
+def configured(verbosity: int = 0, *, quiet_warnings: bool = True):
+    """:func:`configure` for the duration of a block (one command-line run), then the
+    ``bvpnav`` logger's handlers and level, the progress switch and the warning filters as
+    they were: ``bvpnav.cli.main([...])`` called from Python leaves no global state behind.
+    """
+    global _PROGRESS_OFF
+    handlers, level, progress_off = list(logger.handlers), logger.level, _PROGRESS_OFF
+    with warnings.catch_warnings():
+        configure(verbosity, quiet_warnings=quiet_warnings)
+        try:
+            yield
+        finally:
+            logger.handlers[:] = handlers
+            logger.setLevel(level)
+            _PROGRESS_OFF = progress_off
