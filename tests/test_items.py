@@ -244,3 +244,17 @@ def test_linear_row_units_are_its_units():
     assert units["start"] == "m"
     with pytest.raises(bvpnav.InputError, match="row_units=5; give the rows' units as a string"):
         Linear(t=[2.0], coef=[1.0], row_units=5)
+
+
+def test_item_reprs_are_short_whatever_the_data():
+    """An item with 1000 instants prints in one short line: mode, name, the fields that are
+    set, more than 4 numbers as count and range (the dataclass repr printed every field,
+    None ones and whole arrays)."""
+    t = np.linspace(0.0, 10.0, 1000)
+    item = Position(t=t, value=np.zeros(1000), sigma=0.5, name="prior")
+    assert repr(item) == ("Position(mode='soft', name='prior', sigma=0.5, t=<1000 values, 0 .. 10>, "
+                          "value=<1000 values, 0 .. 0>)")
+    ends = Position(t=[0.0, 10.0], value=[0.0, 1.0])
+    assert repr(ends) == "Position(mode='hard', t=[0.0, 10.0], value=[0.0, 1.0])"
+    for name, cls in bvpnav.items.registry().items():
+        assert len(repr(cls.example())) < 300, name

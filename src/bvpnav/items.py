@@ -144,6 +144,8 @@ class Item:
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
+        if "__repr__" not in cls.__dict__:  # before @dataclass, which keeps a __repr__ it finds
+            cls.__repr__ = Item.__repr__
         if not cls.__name__.startswith("_"):
             register(cls)
 
@@ -306,8 +308,11 @@ class Item:
         return out
 
     def __repr__(self) -> str:
-        args = ", ".join(f"{k}={v!r}" for k, v in self.params().items())
-        return f"{type(self).__name__}({args})"
+        """``Position(mode='hard', name='ends', t=[0.0, 10.0], value=[0.0, 10.0])``: the mode,
+        the name and the other fields that are set; more than 4 numbers by count and range."""
+        parts = [f"mode={self.mode!r}"] + ([f"name={self.name!r}"] if self.name else [])
+        parts += [f"{k}={_repr_value(v)}" for k, v in self.params().items() if k not in ("mode", "name")]
+        return f"{type(self).__name__}({', '.join(parts)})"
 
 
 class Linearizable:
@@ -351,6 +356,18 @@ class Linearizable:
     def linearization_counts(self) -> dict[str, int] | None:
         """Per-row status counts of the linearization (e.g. rows kept or dropped), or None."""
         return None
+
+
+def _repr_value(v) -> str:
+    """A field for a repr: up to 4 numbers as they are, more as ``<N values, lo .. hi>``."""
+    if isinstance(v, list):
+        try:
+            a = np.asarray(v, dtype=float)
+        except (TypeError, ValueError):
+            return repr(v)
+        if a.size > 4:
+            return f"<{a.size} values, {np.nanmin(a):.4g} .. {np.nanmax(a):.4g}>"
+    return repr(v)
 
 
 def _short(v, n: int = 4) -> str:
