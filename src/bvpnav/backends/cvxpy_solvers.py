@@ -34,7 +34,7 @@ from . import Backend, RawSolve, register_factory
 if TYPE_CHECKING:
     import cvxpy as cp
 
-__all__ = ["PRESETS", "CvxpyBackend", "conic_solvers"]
+__all__ = ["PRESETS", "CvxpyBackend", "conic_solvers", "use_conic"]
 
 #: Solver options per preset, by cvxpy's (upper-case) solver name.
 PRESETS: dict[str, dict[str, dict[str, Any]]] = {
@@ -173,11 +173,9 @@ class CvxpyBackend(Backend):
             return None
         for term in form.terms():
             if term.kind == "cone":
-                conic = conic_solvers()
                 return (f"solver {self.name!r} cannot take item {term.label!r} (kind {term.kind!r}, "
                         f"mode {term.mode!r}): it is a QP solver and this item is a second-order "
-                        f"cone. Use solver={conic[0] if conic else 'clarabel'!r}"
-                        + (f" or solver={conic[1]!r}" if len(conic) > 1 else "") + ".")
+                        f"cone. {use_conic()}.")
         return None
 
     # ---------------------------------------------------------------- run
@@ -261,6 +259,14 @@ def conic_solvers() -> list[str]:
     import cvxpy as cp
 
     return [n for n in ("clarabel", "scs") if n.upper() in cp.installed_solvers()]
+
+
+def use_conic() -> str:
+    """The suggestion of a refusal: ``Use solver='clarabel' or solver='scs'`` (the installed
+    ones of :func:`conic_solvers`; Clarabel when none is)."""
+    conic = conic_solvers()
+    return (f"Use solver={conic[0] if conic else 'clarabel'!r}"
+            + (f" or solver={conic[1]!r}" if len(conic) > 1 else ""))
 
 
 def _installed() -> list[CvxpyBackend]:

@@ -31,7 +31,7 @@ import scipy.sparse as sp
 from ..errors import InputError, SolveError
 from ..lsq import BorderedLU, least_squares_form, non_least_squares_term, solve_least_squares
 from . import Backend, RawSolve, register_backend
-from .cvxpy_solvers import conic_solvers
+from .cvxpy_solvers import use_conic
 
 __all__ = ["DirectBackend", "CsneBackend"]
 
@@ -74,11 +74,8 @@ class _LeastSquaresBackend(Backend):
         term = non_least_squares_term(form)
         if term is None:
             return None
-        conic = conic_solvers()
         return (f"solver {self.name!r} cannot take item {term.label!r} (kind {term.kind!r}, mode "
-                f"{term.mode!r}): it solves equality-constrained least squares only. Use "
-                f"solver={conic[0] if conic else 'clarabel'!r}"
-                + (f" or solver={conic[1]!r}" if len(conic) > 1 else "")
+                f"{term.mode!r}): it solves equality-constrained least squares only. {use_conic()}"
                 + (", or give the item mode='soft'." if term.kind == "equality" else "."))
 
 

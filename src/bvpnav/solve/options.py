@@ -22,12 +22,15 @@ from ..lam import rule_names
 from ..lam.sweep import check_range
 
 __all__ = ["SolveOptions", "prepare", "check_lam", "DEFAULT_FALLBACK", "fallback_chain", "RULE_KEYS",
-           "SEQUENTIAL_KEYS"]
+           "SEQUENTIAL_KEYS", "SEQUENTIAL_DEFAULTS"]
 
 #: Options of the lambda sweep a solve with a rule name takes (``solve(rule={...})``).
 RULE_KEYS = ("lam_range", "points", "tau", "probes", "seed", "progress", "engine")
-#: Options of the sequential loop (``solve(sequential={...})``).
-SEQUENTIAL_KEYS = ("tol", "max_iter", "initial", "lam_each", "continuation", "soft_tol", "progress")
+#: Options of the sequential loop and their defaults (``solve(sequential={...})``; see
+#: :func:`bvpnav.solve.sequential.with_sequential`).
+SEQUENTIAL_DEFAULTS: dict[str, Any] = {"tol": 1e-4, "max_iter": 30, "initial": None, "lam_each": False,
+                                       "continuation": True, "soft_tol": None, "progress": None}
+SEQUENTIAL_KEYS = tuple(SEQUENTIAL_DEFAULTS)
 
 #: The automatic fallback chain (``fallback="auto"``) after a primary Clarabel attempt:
 #: Clarabel again with static regularization, the direct sparse back end (equality-

@@ -37,7 +37,6 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable
-from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -46,7 +45,7 @@ from ..errors import InputError
 from ..items import Linearizable
 from ..log import progress, warn
 from ..result import SequentialReport, Solution
-from .options import SolveOptions
+from .options import SEQUENTIAL_DEFAULTS, SolveOptions
 
 __all__ = ["with_sequential", "check_sequential", "SEQUENTIAL_DEFAULTS"]
 
@@ -54,9 +53,6 @@ Stage = Callable[..., Solution]
 
 log = logging.getLogger(__name__)
 
-#: Options of the loop and their defaults (see :func:`with_sequential`).
-SEQUENTIAL_DEFAULTS: dict[str, Any] = {"tol": 1e-4, "max_iter": 30, "initial": None, "lam_each": False,
-                                       "continuation": True, "soft_tol": None, "progress": None}
 
 
 def _real(v) -> float:
