@@ -207,6 +207,7 @@ class NavigationProblem:
         demote_sigma: float | Mapping[str, float] | None = None,
         sequential: dict | None = None,
         rule: dict | None = None,
+        uncertainty: bool | str = False,
     ) -> Solution:
         """Solve and verify, falling back to other back ends when an answer fails.
 
@@ -261,6 +262,14 @@ class NavigationProblem:
         rule : dict, optional
             Options of the lambda sweep (``lam_range``, ``points``, ...;
             :func:`bvpnav.solve.lambda_curve`).
+        uncertainty : bool or "scaled"
+            Add standard deviations: ``<axis>_std`` (m) and ``v<axis>_std`` (m/s) columns
+            to ``trajectory``, ``error_params_std``, ``covariance(...)`` and
+            ``stats["uncertainty"]`` (see :mod:`bvpnav.solve.uncertainty`). True: the
+            covariance of the weights as stated (the posterior covariance when ``lam = 1``
+            and the sigmas are the true noise); ``"scaled"``: multiplied by the
+            a-posteriori variance factor (for sigmas that are only relative, or a ``lam``
+            chosen by a rule). O(N) time and memory.
 
         Returns
         -------
@@ -282,7 +291,7 @@ class NavigationProblem:
         return pipeline.solve(self.formulation, lam, solver=solver, accuracy=accuracy, verify=verify,
                               options=options, verbose=verbose, fallback=fallback,
                               on_conflict=on_conflict, priority=priority, demote_sigma=demote_sigma,
-                              sequential=sequential, rule=rule)
+                              sequential=sequential, rule=rule, uncertainty=uncertainty)
 
     def verify(self, xval: np.ndarray, lam: float, accuracy: str = "default", duals: dict | None = None,
                factored: tuple | None = None) -> Verification:

@@ -12,7 +12,7 @@ import pandas as pd
 from .errors import InputError
 
 __all__ = ["Solution", "Attempt", "Verification", "SequentialReport", "Demotion", "Timings", "Run",
-           "SolveRecords"]
+           "SolveRecords", "Uncertainty"]
 
 
 class _Record(Mapping):
@@ -271,6 +271,49 @@ class Run(_Record):
 
 
 @dataclass(eq=False)
+class Uncertainty(_Record):
+    """How the standard deviations of a solution were obtained and what they mean.
+
+    Attributes
+    ----------
+    scale : str
+        ``"stated"``: the covariance of the weights as given (the posterior covariance
+        when ``lam = 1`` and every sigma is the true noise); ``"scaled"``: multiplied by
+        ``variance_factor``.
+    variance_factor : float
+        A-posteriori variance factor: the weighted residual sum of squares over ``dof``
+        (about 1 when the stated sigmas are right).
+    dof : int
+        Degrees of freedom: objective rows minus unknowns plus hard rows.
+    model : str
+        ``"exact"`` (least squares), ``"quadratic model"`` (robust, band or inequality
+        items: the quadratic model at the solution, an approximation) or ``"last
+        linearization"`` (items linearized by the sequential loop).
+    method : str
+        How the covariance was computed.
+    border : int
+        Unknowns handled through the Schur complement.
+    block : int
+        Size of the node blocks.
+    softened : float
+        0, or the scaled variance given to hard items' rows (see
+        :data:`bvpnav.covariance.SOFTEN`).
+    time : float
+        Seconds spent.
+    """
+
+    scale: str
+    variance_factor: float
+    dof: int
+    model: str
+    method: str
+    border: int
+    block: int
+    softened: float
+    time: float
+
+
+@dataclass(eq=False)
 class SolveRecords:
     """The typed records the solve stages return; ``Solution.stats`` is built from them.
 
@@ -282,6 +325,7 @@ class SolveRecords:
     verification : Verification or None
     sequential : SequentialReport or None
     demoted : list of Demotion or None
+    uncertainty : Uncertainty or None
     """
 
     run: Run | None = None
@@ -289,6 +333,7 @@ class SolveRecords:
     verification: Verification | None = None
     sequential: SequentialReport | None = None
     demoted: list | None = None
+    uncertainty: Uncertainty | None = None
 
     def stats(self) -> dict[str, Any]:
         """The ``Solution.stats`` dict (plain values: it is written to JSON by batch runs)."""
@@ -303,6 +348,8 @@ class SolveRecords:
             out["sequential"] = self.sequential.as_dict()
         if self.demoted is not None:
             out["demoted"] = [d.as_dict() for d in self.demoted]
+        if self.uncertainty is not None:
+            out["uncertainty"] = self.uncertainty.as_dict()
         return out
 
 
@@ -314,7 +361,8 @@ class Solution:
     ----------
     trajectory : pandas.DataFrame
         Index ``t`` (s). Columns ``x``, ``y``, ``z`` (positions, m) and ``vx``, ``vy``,
-        ``vz`` (velocities, m/s) for the axes present (named after the data's axes).
+        ``vz`` (velocities, m/s) for the axes present (named after the data's axes);
+        with ``solve(uncertainty=...)`` also ``x_std``, ... (m) and ``vx_std``, ... (m/s).
     residuals : pandas.DataFrame
         Index ``t`` (s). Columns ``w_<axis>``: the acceleration correction
         ``a_c - a_hat - G l`` in m/s^2 that the estimate implies at each sample.
@@ -342,7 +390,10 @@ class Solution:
         The lambda sweep, when a rule chose ``lam``.
     records : SolveRecords
         The typed records of the solve (attempts, verification, sequential report,
-        demotions, the winning run's measurements).
+        demotions, the winning run's measurements, the uncertainty).
+    error_params_std : pandas.Series
+        Standard deviations of :attr:`error_params` (same units; first order in the
+        reported parametrization), with ``solve(uncertainty=...)``; else empty.
     """
 
     trajectory: pd.DataFrame
@@ -357,6 +408,32 @@ class Solution:
     warnings: list[str] = field(default_factory=list)
     curve: Any = None
     records: SolveRecords = field(default_factory=SolveRecords)
+    error_params_std: pd.Series = field(default_factory=lambda: pd.Series(dtype=float, name="std"))
+    _cov: dict = field(default_factory=dict, repr=False)
+
+    def covariance(self, what: str = "error_params"):
+        """A covariance computed by ``solve(uncertainty=...)``.
+
+        Parameters
+        ----------
+        what : {"error_params", "state"}
+            ``"error_params"``: a DataFrame over the reported error-model parameters
+            (their units squared). ``"state"``: an ndarray of shape (N, 2 d, 2 d), per
+            sample the covariance of the positions then the velocities in the order of
+            the axes (m^2, m^2/s, m^2/s^2).
+
+        Raises
+        ------
+        InputError
+            Without ``uncertainty`` in the solve, or for another ``what``.
+        """
+        if not self._cov:
+            raise InputError("covariance(): this solution has none; solve with uncertainty=True "
+                             "(or 'scaled')")
+        if what not in self._cov:
+            raise InputError(f"covariance({what!r}): choose one of {sorted(self._cov)}")
+        out = self._cov[what]
+        return out.copy()
 
     def record(self, **records) -> Solution:
         """Set typed records (``attempts=``, ``sequential=``, ``demoted=``, ...) and
@@ -403,7 +480,7 @@ class Solution:
 
     @property
     def _pos_cols(self) -> list[str]:
-        return [c for c in self.trajectory.columns if not c.startswith("v")]
+        return [c for c in self.trajectory.columns if not c.startswith("v") and not c.endswith("_std")]
 
     @property
     def t(self) -> np.ndarray:

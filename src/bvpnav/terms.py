@@ -119,6 +119,24 @@ class Term:
             return "D"
         return None
 
+    def quadratic_rows(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Rows of this term in its quadratic model at ``x`` (the view of the covariance).
+
+        Returns
+        -------
+        held, squared : ndarray of int
+            Rows held as equalities (hard equalities; active inequalities and band edges;
+            an L1 penalty at its kink) and rows that enter squared with weight
+            :math:`\\sqrt{w}/\\sigma` (soft rows; Huber rows inside the threshold; soft
+            inequalities that are violated). Other rows have no curvature at ``x``.
+
+        Notes
+        -----
+        A row counts as active when it is within ``1e-6 (|A| |x| + |c|)`` of its bound.
+        Cones are left out (they can only add information).
+        """
+        return self.table.quadratic_rows(self, x)
+
     def constraints(self, r: cp.Expression) -> list:
         """cvxpy constraints of this term given its lowered residual ``r``."""
         return self.table.constraints(self, r) if self.is_constraint else []
@@ -179,9 +197,19 @@ class TermKind:
         """The constraint's relation as text, e.g. ``= 0`` or ``|.| <= 0.1 m``."""
         raise NotImplementedError
 
+    def quadratic_rows(self, term: Term, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """See :meth:`Term.quadratic_rows`."""
+        none = np.zeros(0, dtype=int)
+        return none, none
+
     def penalty_symbol(self, term: Term) -> str:
         """The penalty's symbol in :func:`bvpnav.describe.describe`."""
         return "pos(.)" if term.mode == "robust" else "pos(.)^2"
+
+
+def _active_tol(term: Term, x: np.ndarray) -> np.ndarray:
+    """How close to its bound a row must be to count as active at ``x`` (item units)."""
+    return 1e-6 * np.maximum(term.residual.row_scale(x), 1e-300)
 
 
 def _constraint_gradient(term: Term, duals, band_pair: bool) -> np.ndarray | None:
@@ -232,6 +260,19 @@ class Equality(TermKind):
     def relation(self, term, tol_text):
         return "= 0" if term.mode == "hard" else f"|.| <= {tol_text} {term.units}"
 
+    def quadratic_rows(self, term, x):
+        r, atol = term.residual.value(x), _active_tol(term, x)
+        every = np.arange(r.size)
+        if term.mode == "hard":
+            return every, every[:0]
+        if term.mode == "soft":
+            return every[:0], every
+        if term.mode == "band":
+            return np.flatnonzero(np.abs(r) >= term.tol - atol), every[:0]
+        if term.huber is None:  # L1: only its kink holds a row
+            return np.flatnonzero(np.abs(r) <= atol), every[:0]
+        return every[:0], np.flatnonzero(np.abs(r) <= term.huber)
+
     def penalty_symbol(self, term):
         if term.mode == "robust":
             return "huber" if term.huber else "|.|"
@@ -267,6 +308,16 @@ class Inequality(TermKind):
 
     def relation(self, term, tol_text):
         return "<= 0" if term.mode == "hard" else f"<= {tol_text} {term.units}"
+
+    def quadratic_rows(self, term, x):
+        g, atol = term.residual.value(x), _active_tol(term, x)
+        none = np.zeros(0, dtype=int)
+        if term.mode == "soft":
+            return none, np.flatnonzero(g > atol)
+        bound = term.tol if term.mode == "band" else 0.0
+        if term.mode == "robust":  # pos(g): its kink at g = 0
+            return np.flatnonzero(np.abs(g) <= atol), none
+        return np.flatnonzero(g >= bound - atol), none
 
 
 class SecondOrderCone(TermKind):

@@ -22,7 +22,7 @@ from ..lam import rule_names
 from ..lam.sweep import check_range
 
 __all__ = ["SolveOptions", "prepare", "check_lam", "DEFAULT_FALLBACK", "fallback_chain", "RULE_KEYS",
-           "SEQUENTIAL_KEYS", "SEQUENTIAL_DEFAULTS"]
+           "SEQUENTIAL_KEYS", "SEQUENTIAL_DEFAULTS", "UNCERTAINTY"]
 
 #: Options of the lambda sweep a solve with a rule name takes (``solve(rule={...})``).
 RULE_KEYS = ("lam_range", "points", "tau", "probes", "seed", "progress", "engine")
@@ -31,6 +31,8 @@ RULE_KEYS = ("lam_range", "points", "tau", "probes", "seed", "progress", "engine
 SEQUENTIAL_DEFAULTS: dict[str, Any] = {"tol": 1e-4, "max_iter": 30, "initial": None, "lam_each": False,
                                        "continuation": True, "soft_tol": None, "progress": None}
 SEQUENTIAL_KEYS = tuple(SEQUENTIAL_DEFAULTS)
+#: Values of ``solve(uncertainty=...)`` other than True and False.
+UNCERTAINTY = ("scaled",)
 
 #: The automatic fallback chain (``fallback="auto"``) after a primary Clarabel attempt:
 #: Clarabel again with static regularization, the direct sparse back end (equality-
@@ -94,6 +96,9 @@ class SolveOptions:
     rule : dict
         Options of the lambda sweep (``lam_range``, ``points``, ``tau``, ``probes``,
         ``seed``, ``progress``, ``engine``).
+    uncertainty : bool or str
+        False, True (the covariance of the weights as stated) or ``"scaled"`` (times the
+        a-posteriori variance factor); see :mod:`bvpnav.solve.uncertainty`.
     """
 
     backend: Backend
@@ -108,6 +113,7 @@ class SolveOptions:
     demote_sigma: Any = None
     sequential: dict = field(default_factory=dict)
     rule: dict = field(default_factory=dict)
+    uncertainty: Any = False
 
     @property
     def solver(self) -> str:
@@ -159,7 +165,8 @@ def fallback_chain(backend: Backend, accuracy: str, options, fallback) -> list:
 def prepare(lam=1.0, solver: str = "clarabel", accuracy: str = "default", verify: bool = True,
             options: dict | None = None, verbose: bool = False, fallback="auto",
             on_conflict: str = "raise", priority=None, demote_sigma=None,
-            sequential: dict | None = None, rule: dict | None = None) -> tuple[SolveOptions, Any]:
+            sequential: dict | None = None, rule: dict | None = None,
+            uncertainty=False) -> tuple[SolveOptions, Any]:
     """Check every option before any work: ``(SolveOptions, lam)`` (``lam`` as a float or
     a rule name, see :func:`check_lam`).
 
@@ -184,6 +191,9 @@ def prepare(lam=1.0, solver: str = "clarabel", accuracy: str = "default", verify
         unknown = sorted(str(k) for k in given if k not in valid)
         if unknown:
             raise InputError(f"{what}: unknown option(s) {unknown}; valid: {list(valid)}")
+    if not (isinstance(uncertainty, bool | np.bool_) or uncertainty in UNCERTAINTY):
+        raise InputError(f"uncertainty={uncertainty!r}: give False, True (the covariance of the "
+                         "stated noise) or 'scaled' (scaled by the a-posteriori variance factor)")
     if isinstance(lam, str) and rule:
         check_range(rule.get("lam_range", (1e-6, 1e6)), rule.get("points", 25))
     backend = resolve_solver(solver)
@@ -193,5 +203,6 @@ def prepare(lam=1.0, solver: str = "clarabel", accuracy: str = "default", verify
                         options=None if options is None else dict(options), fallback=fallback,
                         chain=chain, on_conflict=on_conflict, priority=priority,
                         demote_sigma=demote_sigma, sequential=dict(sequential or {}),
-                        rule=dict(rule or {}))
+                        rule=dict(rule or {}),
+                        uncertainty=uncertainty if isinstance(uncertainty, str) else bool(uncertainty))
     return opts, lam

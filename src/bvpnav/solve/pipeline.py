@@ -8,7 +8,10 @@ A solve is ``demote(sequential(rule(chain)))``:
    (:class:`~bvpnav.items.Linearizable`) are iterated by sequential convex solves;
 3. :func:`~bvpnav.solve.rule.with_rule` — a rule name in ``lam`` is resolved by a sweep;
 4. :func:`~bvpnav.solve.chain.solve_fixed` — one formulation at one ``lam`` over the
-   back ends, each answer verified by recomputed residuals.
+   back ends, each answer verified by recomputed residuals;
+
+and, with ``uncertainty``, :func:`~bvpnav.solve.uncertainty.attach_uncertainty` on the
+answer, with the formulation it solves (the demoted or last linearized one).
 
 Each stage takes the inner stage and calls it with a formulation, a ``lam`` and the one
 :class:`~bvpnav.solve.options.SolveOptions` checked before any work; no stage calls back
@@ -41,6 +44,7 @@ from .conflicts import with_demotion
 from .options import SolveOptions, prepare
 from .rule import with_rule
 from .sequential import check_sequential, with_sequential
+from .uncertainty import attach_uncertainty
 
 __all__ = ["run", "solve", "solve_sequential", "STAGES"]
 
@@ -54,7 +58,11 @@ def run(form, lam, opts: SolveOptions) -> Solution:
     for wrap in reversed(STAGES):
         stage = wrap(stage)
     with once():  # each warning once per call, however many stages and iterations raise it
-        return stage(form, lam, opts)
+        sol = stage(form, lam, opts)
+    used = sol.__dict__.pop("_formulation", form)  # the formulation the answer solves
+    if opts.uncertainty:
+        sol = attach_uncertainty(sol, used, opts.uncertainty)
+    return sol
 
 
 def solve(form, lam=1.0, **options) -> Solution:

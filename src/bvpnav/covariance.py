@@ -1,0 +1,403 @@
+"""The covariance of an answer: positions, velocities and error-model parameters, in O(N).
+
+The acceleration form is a maximum a-posteriori estimate under a stated Gaussian noise
+model: the data rows are the nodal acceleration residuals :math:`w_j/\\sigma_a`, the soft
+rows the items' misfits over their sigmas, the hard rows hold exactly. Written as
+least squares with equality constraints,
+
+.. math:: \\min_x \\|D x + c\\|^2 \\quad \\text{s.t.} \\quad E x + e = 0,
+
+the estimate is linear in the noise, and when the rows of ``D x + c`` at the truth are
+independent with unit variance its covariance is the ``x`` block of the inverse of the
+KKT matrix
+
+.. math::
+
+    K = \\begin{bmatrix} D^T D & E^T \\\\ E & 0 \\end{bmatrix}, \\qquad
+    \\operatorname{Cov}(\\hat x) = (K^{-1})_{xx} = N (N^T D^T D N)^{-1} N^T,
+
+with ``N`` a basis of the null space of ``E``: the covariance on the manifold of the hard
+constraints (zero in every direction a hard item fixes).
+
+How it is computed: the unknowns and rows are grouped by time node (positions,
+residuals and FEM multipliers of node ``j``, and the rows of local items next to them),
+which makes ``K`` block tridiagonal except for a border: the end velocities, the first
+position, the error-model parameters and the rows of non-local items (average
+velocities, symmetry). The block-tridiagonal part is factorised by cyclic reduction
+(:mod:`bvpnav.selinv`), which also gives its inverse on its own pattern; the border enters
+through its Schur complement (a few right-hand sides). Everything is O(N) in time and
+memory and vectorized.
+
+For problems that are not least squares (robust, band and inequality items) the same is
+done for the quadratic model at the solution (:meth:`bvpnav.terms.Term.quadratic_rows`:
+active inequalities and band edges held as equalities, Huber rows by their curvature);
+that is an approximation. For items that are linearized (``TrackLine``) it is the
+covariance of the last linearization.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from .errors import InputError, SolveError
+from .formulation import as_formulation
+from .lsq import LeastSquaresForm, least_squares_form
+from .model import Affine
+from .selinv import CyclicReduction
+
+__all__ = ["Covariance", "posterior", "quadratic_model", "SOFTEN"]
+
+#: Variance (in equilibrated units, where the KKT entries are about 1) given to the rows of
+#: hard items when the exact block pivots are singular: the hard items then act as soft
+#: ones with a standard deviation of 1e-5 of those units, which changes the covariance by
+#: about that relative amount and keeps every pivot's condition number near 1e10.
+SOFTEN = 1e-10
+
+
+def quadratic_model(form, x: np.ndarray, lam: float) -> tuple[LeastSquaresForm, bool]:
+    """The least-squares form of the problem, or of its quadratic model at ``x``.
+
+    Returns
+    -------
+    ls : LeastSquaresForm
+    exact : bool
+        True when the problem is least squares (``ls`` is the problem itself).
+    """
+    form = as_formulation(form)
+    ls = least_squares_form(form, lam)
+    if ls is not None:
+        return ls, True
+    model = form.model
+    obj, eq = [form.data_rows()], [model.fem_rows()]
+    blocks = [("fem", slice(0, eq[0].m))]
+    start = eq[0].m
+    for term in form.terms():
+        held, squared = term.quadratic_rows(x)
+        if held.size:
+            eq.append(term.residual.rows(held))
+            blocks.append((term.label, slice(start, start + held.size)))
+            start += held.size
+        if squared.size:
+            sig = np.broadcast_to(np.asarray(term.sigma, dtype=float), (term.residual.m,))[squared]
+            obj.append(term.residual.rows(squared) * (np.sqrt(term.weight(lam)) / sig))
+    return LeastSquaresForm(Affine.vstack(obj), Affine.vstack(eq), blocks), False
+
+
+@dataclass(eq=False)
+class Covariance:
+    """Covariance of a solution (see the module Notes for what it is).
+
+    Attributes
+    ----------
+    state : ndarray, shape (N, 2 d, 2 d)
+        Per sample, the covariance of ``(r_1..r_d, v_1..v_d)`` (m^2, m^2/s, m^2/s^2), in
+        the order of the data's axes.
+    params : ndarray, shape (q, q)
+        Covariance of the error-model parameters in their internal parametrization.
+    variance_factor : float
+        A-posteriori variance factor :math:`\\hat\\sigma_0^2 = \\|D \\hat x + c\\|^2 / f`.
+    dof : int
+        Degrees of freedom ``f``: objective rows minus unknowns plus hard rows.
+    exact : bool
+        False when this is the covariance of the quadratic model at the solution.
+    border : int
+        Unknowns handled by the Schur complement (error-model parameters, end
+        velocities, first positions, non-local rows).
+    block : int
+        Size of the node blocks of the block-tridiagonal part.
+    softened : float
+        0, or the variance (in equilibrated units, ~1) given to the hard items' rows
+        because some stretch of nodes was singular on its own (see :data:`SOFTEN`).
+    """
+
+    state: np.ndarray
+    params: np.ndarray
+    variance_factor: float
+    dof: int
+    exact: bool
+    border: int
+    block: int
+    softened: float = 0.0
+
+    def std(self) -> tuple[np.ndarray, np.ndarray]:
+        """Standard deviations of positions (m) and velocities (m/s), each (N, d)."""
+        d = self.state.shape[1] // 2
+        var = np.clip(np.diagonal(self.state, axis1=1, axis2=2), 0.0, None)
+        return np.sqrt(var[:, :d]), np.sqrt(var[:, d:])
+
+
+class _Layout:
+    """Where every unknown and row of the KKT matrix sits: a node block and slot, or the border."""
+
+    def __init__(self, node: np.ndarray, extra: np.ndarray, nodes: int, d: int):
+        T = node.size
+        local = np.flatnonzero(node >= 0)
+        # base unknowns (r, w, FEM multiplier) first in each node, then item rows
+        order = local[np.lexsort((local, extra[local], node[local]))]
+        nd = node[order]
+        starts = np.searchsorted(nd, np.arange(nodes))
+        slot = np.arange(order.size) - starts[nd]
+        counts = np.bincount(nd, minlength=nodes)
+        base = 3 * d
+        cap = self._cap(counts, base, nodes)
+        over = order[slot >= cap]
+        node = node.copy()
+        node[over] = -1
+        keep = slot < cap
+        self.node = node
+        self.slot = np.full(T, -1)
+        self.slot[order[keep]] = slot[keep]
+        self.b = int(min(max(counts.max(initial=1), 1), cap))
+        self.nodes = nodes
+        self.border = np.flatnonzero(node < 0)
+        self.bpos = np.full(T, -1)
+        self.bpos[self.border] = np.arange(self.border.size)
+
+    @staticmethod
+    def _cap(counts: np.ndarray, base: int, nodes: int) -> int:
+        """Block size that minimizes the work: n b^3 for the blocks plus n b^2 per row moved
+        to the border."""
+        top = int(counts.max(initial=base))
+        best, cost_best = top, np.inf
+        for b in range(min(base, top), top + 1):
+            moved = int(np.clip(counts - b, 0, None).sum())
+            cost = nodes * b**3 + 2.0 * moved * nodes * b**2
+            if cost < cost_best:
+                best, cost_best = b, cost
+        return best
+
+    def flat(self, idx: np.ndarray) -> np.ndarray:
+        return self.node[idx] * self.b + self.slot[idx]
+
+
+def _row_nodes(A: sp.csr_matrix, colnode: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Lowest and highest node of each row's local columns (``lo > hi`` for rows with none)."""
+    A = sp.csr_matrix(A)
+    m = A.shape[0]
+    nn = colnode[A.indices]
+    rows = np.repeat(np.arange(m), np.diff(A.indptr))
+    big = np.iinfo(np.int64).max
+    lo = np.full(m, big, dtype=np.int64)
+    hi = np.full(m, -1, dtype=np.int64)
+    loc = nn >= 0
+    np.minimum.at(lo, rows[loc], nn[loc])
+    np.maximum.at(hi, rows[loc], nn[loc])
+    return lo, hi
+
+
+def _equilibrate(K: sp.csr_matrix, sweeps: int = 4) -> np.ndarray:
+    """Symmetric Ruiz scaling ``s`` so that ``diag(s) K diag(s)`` has rows of max-norm near 1."""
+    s = np.ones(K.shape[0])
+    A = abs(K).tocsr()
+    for _ in range(sweeps):
+        B = sp.diags(s) @ A @ sp.diags(s)
+        r = np.sqrt(np.asarray(B.max(axis=1).todense()).ravel())
+        r[r == 0] = 1.0
+        s /= r
+    return s
+
+
+class _Posterior:
+    """The factorised, bordered KKT matrix and its selected inverse."""
+
+    def __init__(self, ls: LeastSquaresForm, model, group: int = 1, soften: float = 0.0):
+        N, d = model.N, model.d
+        n = model.size
+        colnode = np.full(n, -1, dtype=np.int64)
+        for a in range(d):
+            colnode[model.r_index(a)[1:]] = np.arange(1, N)
+            colnode[model.w_index(a)] = np.arange(N)
+        D, E = ls.D.A.tocsr(), ls.E.A.tocsr()
+        D.eliminate_zeros()  # an explicit zero must not tie a row to a node
+        E.eliminate_zeros()
+        lo, hi = _row_nodes(D, colnode)
+        span = hi - lo
+        fold = (span <= 1) | (hi < 0)          # into D^T D: couples two neighbouring nodes at most
+        rho = np.flatnonzero(~fold)
+        Df, Dr = D[np.flatnonzero(fold)], D[rho]
+        elo, ehi = _row_nodes(E, colnode)
+        # a row on one or two nodes sits at the first (a velocity row at node j restricted
+        # to node j is parallel to the FEM row there), a row on three at the middle one
+        espan = ehi - elo
+        enode = np.where(ehi < 0, -1, np.where(espan <= 1, elo, np.where(espan == 2, elo + 1, -1)))
+        fem = ls.eq_blocks[0][1]
+        enode[fem] = np.tile(np.arange(N), d)  # FEM row j of each axis sits at node j
+        rnode = np.where(span[rho] == 2, lo[rho] + 1, -1)
+        nr, p = rho.size, E.shape[0]
+        T = n + nr + p
+        node = np.concatenate([colnode, rnode, enode])
+        node = np.where(node >= 0, node // group, -1)  # nodes grouped g at a time
+        extra = np.zeros(T, dtype=np.int64)
+        extra[n:] = 2
+        extra[n + nr + np.arange(fem.start, fem.stop)] = 1
+        self.layout = _Layout(node, extra, -(-N // group), d * group)
+        H = (Df.T @ Df).tocsr()
+        K = sp.bmat([[H, Dr.T, E.T], [Dr, -sp.identity(nr), None], [E, None, None]], format="csr")
+        self.n = n
+        self.s = s = _equilibrate(K)
+        Ks = (sp.diags(s) @ K @ sp.diags(s)).tocsr()
+        if soften:  # hard items' multipliers: -soften on the (scaled) diagonal
+            reg = np.zeros(T)
+            reg[n + nr + fem.stop:] = -soften
+            Ks = (Ks + sp.diags(reg)).tocsr()
+        Ks = Ks.tocoo()
+        self._assemble(Ks)
+
+    def _assemble(self, Ks: sp.coo_matrix) -> None:
+        lay = self.layout
+        b, nb, k = lay.b, lay.nodes, lay.border.size
+        i, j, v = Ks.row, Ks.col, Ks.data
+        ni, nj = lay.node[i], lay.node[j]
+        Dg = np.zeros((nb, b, b))
+        Ub = np.zeros((max(nb - 1, 0), b, b))
+        Bk = np.zeros((nb, b, k))
+        C = np.zeros((k, k))
+        ll = (ni >= 0) & (nj >= 0)
+        if np.any(ll & (np.abs(ni - nj) > 1)):
+            raise SolveError("uncertainty: internal error, a coupling between distant nodes")
+        same = ll & (ni == nj)
+        Dg[ni[same], lay.slot[i[same]], lay.slot[j[same]]] = v[same]
+        up = ll & (nj == ni + 1)
+        Ub[ni[up], lay.slot[i[up]], lay.slot[j[up]]] = v[up]
+        lb = (ni >= 0) & (nj < 0)
+        Bk[ni[lb], lay.slot[i[lb]], lay.bpos[j[lb]]] = v[lb]
+        bb = (ni < 0) & (nj < 0)
+        C[lay.bpos[i[bb]], lay.bpos[j[bb]]] = v[bb]
+        used = np.zeros((nb, b), dtype=bool)
+        loc = np.flatnonzero(lay.node >= 0)
+        used[lay.node[loc], lay.slot[loc]] = True
+        pn, ps = np.nonzero(~used)
+        Dg[pn, ps, ps] = 1.0  # padding: decoupled unit unknowns
+        self.cr = CyclicReduction(Dg, Ub)
+        self.Zd, self.Zu = self.cr.selected_inverse()
+        self.Y = self.cr.solve(Bk) if k else np.zeros((nb, b, 0))
+        S = C - np.einsum("nbk,nbl->kl", Bk, self.Y)
+        if k:
+            try:
+                Sinv = np.linalg.inv(S)
+            except np.linalg.LinAlgError as exc:
+                raise np.linalg.LinAlgError("singular border Schur complement") from exc
+            if not np.all(np.isfinite(Sinv)) or np.linalg.cond(S) > 1e15:
+                raise np.linalg.LinAlgError("singular border Schur complement")
+        else:
+            Sinv = np.zeros((0, 0))
+        self.Sinv = 0.5 * (Sinv + Sinv.T)
+
+    # ------------------------------------------------------------ queries
+    def _split(self, Q: sp.csr_matrix):
+        """Scaled query rows as padded local (node, slot, value) arrays, the local rows as a
+        sparse matrix over the flat block index, and the border part (dense)."""
+        lay = self.layout
+        Q = sp.csr_matrix(Q @ sp.diags(self.s[:self.n]))
+        Q.eliminate_zeros()
+        m = Q.shape[0]
+        cols, vals = Q.indices, Q.data
+        rows = np.repeat(np.arange(m), np.diff(Q.indptr))
+        loc = lay.node[cols] >= 0
+        L = sp.csr_matrix((vals[loc], (rows[loc], lay.flat(cols[loc]))), shape=(m, lay.nodes * lay.b))
+        Bq = np.zeros((m, lay.border.size))
+        Bq[rows[~loc], lay.bpos[cols[~loc]]] = vals[~loc]
+        width = int(np.diff(L.indptr).max(initial=0))
+        pos = np.arange(L.nnz) - np.repeat(L.indptr[:-1], np.diff(L.indptr))
+        lrows = np.repeat(np.arange(m), np.diff(L.indptr))
+        nodes = np.zeros((m, width), dtype=np.int64)
+        slots = np.zeros((m, width), dtype=np.int64)
+        pv = np.zeros((m, width))
+        nodes[lrows, pos] = L.indices // lay.b
+        slots[lrows, pos] = L.indices % lay.b
+        pv[lrows, pos] = L.data
+        return (nodes, slots, pv), L, Bq
+
+    def query(self, Q: sp.csr_matrix) -> tuple:
+        """Prepare query rows over ``x`` for :meth:`cross` (each row local to two adjacent
+        nodes plus any border columns)."""
+        padded, L, Bq = self._split(Q)
+        u = L @ self.Y.reshape(self.layout.nodes * self.layout.b, -1) - Bq
+        return padded, u, u @ self.Sinv
+
+    def cross(self, q1: tuple, q2: tuple) -> np.ndarray:
+        """``diag(Q1 Cov Q2^T)`` for two prepared queries (:meth:`query`)."""
+        (n1, s1, v1), _, uS1 = q1
+        (n2, s2, v2), u2, _ = q2
+        a_n, b_n = n1[:, :, None], n2[:, None, :]
+        a_s, b_s = s1[:, :, None], s2[:, None, :]
+        real = (v1[:, :, None] != 0) & (v2[:, None, :] != 0)
+        dn = np.where(real, b_n - a_n, 0)
+        if np.any(np.abs(dn) > 1):
+            raise SolveError("uncertainty: a query row spans more than two nodes")
+        nb = self.layout.nodes
+        z = np.where(dn == 0, self.Zd[a_n, a_s, b_s], 0.0)
+        if nb > 1:
+            top = nb - 2
+            z = np.where(dn == 1, self.Zu[np.clip(a_n, 0, top), a_s, b_s], z)
+            z = np.where(dn == -1, self.Zu[np.clip(b_n, 0, top), b_s, a_s], z)
+        local = np.einsum("mi,mij,mj->m", v1, z, v2)
+        return local + np.einsum("mk,mk->m", uS1, u2)
+
+    def params(self, l_index: np.ndarray) -> np.ndarray:
+        """Covariance of unknowns that are all in the border (the error-model parameters)."""
+        pos = self.layout.bpos[l_index]
+        if np.any(pos < 0):
+            raise SolveError("uncertainty: internal error, a parameter is not in the border")
+        s = self.s[l_index]
+        return s[:, None] * self.Sinv[np.ix_(pos, pos)] * s[None, :]
+
+
+def posterior(form, x: np.ndarray, lam: float) -> Covariance:
+    """The covariance of the estimate ``x`` of ``form`` at ``lam`` (see the module Notes).
+
+    Parameters
+    ----------
+    form : Formulation or NavigationProblem
+    x : ndarray
+        The solution (stacked unknowns); it chooses the active rows of a quadratic model.
+    lam : float
+        The weight the soft items had.
+
+    Returns
+    -------
+    Covariance
+
+    Raises
+    ------
+    InputError
+        When the information does not determine every unknown (the KKT matrix is
+        singular), naming what to add.
+    """
+    form = as_formulation(form)
+    model = form.model
+    ls, exact = quadratic_model(form, x, lam)
+    post, soften = None, 0.0
+    try:
+        try:
+            post = _Posterior(ls, model)
+        except np.linalg.LinAlgError:
+            # hard items that fix a stretch of the trajectory on their own (a hard
+            # zero-velocity interval) make some runs of nodes singular by themselves; their
+            # multipliers are then given a tiny negative diagonal, i.e. they are treated as
+            # soft rows with a standard deviation of 1e-5 of the scaled units
+            soften = SOFTEN
+            post = _Posterior(ls, model, soften=soften)
+    except np.linalg.LinAlgError as exc:
+        raise InputError(f"uncertainty: the covariance does not exist ({exc}): the information "
+                         "does not determine every unknown, or hard items repeat each other at "
+                         "one instant. Add position or velocity information, give repeated "
+                         "items mode='soft', or solve without uncertainty") from exc
+    d = model.d
+    queries = [post.query(model.node_position(a).A) for a in range(d)]
+    queries += [post.query(model.node_velocity(a).A) for a in range(d)]
+    state = np.empty((model.N, 2 * d, 2 * d))
+    for i in range(2 * d):
+        for k in range(i, 2 * d):
+            c = post.cross(queries[i], queries[k])
+            state[:, i, k] = c
+            state[:, k, i] = c
+    params = post.params(model.l_index) if model.q else np.zeros((0, 0))
+    resid = ls.D.value(x)
+    dof = int(ls.D.m - model.size + ls.E.m)
+    vf = float(resid @ resid / dof) if dof > 0 else float("nan")
+    return Covariance(state=state, params=params, variance_factor=vf, dof=dof, exact=exact,
+                      border=int(post.layout.border.size), block=int(post.layout.b), softened=soften)

@@ -1,0 +1,113 @@
+"""The last stage of a solve: standard deviations of the answer (``solve(uncertainty=...)``).
+
+What the numbers are (:mod:`bvpnav.covariance` computes them, in O(N)):
+
+- with ``uncertainty=True`` the covariance of the estimate under the weights as stated:
+  the data rows weighted by ``1/sigma_a`` per sample, each soft item by
+  ``sqrt(lam)/sigma``, error-model priors by ``1/sigma``. With ``lam = 1`` and sigmas that
+  are the true noise this is the posterior covariance of the MAP estimate (and the
+  covariance of its error over repeated noise);
+- with ``uncertainty="scaled"`` the same multiplied by the a-posteriori variance factor
+  :math:`\\hat\\sigma_0^2 = \\|D\\hat x + c\\|^2 / f` (the weighted residual sum of squares
+  over its degrees of freedom, as in geodetic adjustment): the answer for sigmas that
+  are only relative, or a ``lam`` chosen by a rule. The load form has no noise model in
+  its data term, so it is always scaled.
+
+Hard items give zero variance in what they fix. For robust, band and inequality items
+it is the covariance of the quadratic model at the solution, for linearized items
+(``TrackLine``) that of the last linearization: approximations, recorded in
+``stats["uncertainty"]["model"]``.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pandas as pd
+from scipy import stats as _stats
+
+from ..covariance import posterior
+from ..formulation import as_formulation
+from ..log import warn
+from ..result import Solution, Uncertainty
+
+__all__ = ["attach_uncertainty", "param_jacobian"]
+
+
+def param_jacobian(form, l: np.ndarray) -> np.ndarray:
+    """Jacobian of the reported error-model parameters with respect to the internal ones
+    (central differences; exact for the linear ones), shape (q_reported, q)."""
+    form = as_formulation(form)
+    model = form.model
+    l = np.asarray(l, dtype=float)
+    cols = []
+    for k in range(l.size):
+        h = 1e-6 * max(1.0, abs(l[k]))
+        lp, lm = l.copy(), l.copy()
+        lp[k] += h
+        lm[k] -= h
+        cols.append((form.error_model.report(lp, model).to_numpy(dtype=float)
+                     - form.error_model.report(lm, model).to_numpy(dtype=float)) / (2 * h))
+    return np.column_stack(cols)
+
+
+def _variance_warning(vf: float, dof: int, scale: str) -> str | None:
+    """A warning when the variance factor rejects the stated noise at the 1 % level."""
+    if scale != "stated" or dof < 1 or not np.isfinite(vf):
+        return None
+    lo, hi = _stats.chi2.ppf([0.005, 0.995], dof) / dof
+    if lo <= vf <= hi:
+        return None
+    side = "larger" if vf > hi else "smaller"
+    return (f"uncertainty: the a-posteriori variance factor is {vf:.3g} ({dof} degrees of freedom; "
+            f"{lo:.3g}..{hi:.3g} expected if the stated sigmas were right): the residuals are "
+            f"{side} than sigma_a and the items' sigmas say, by about a factor {np.sqrt(vf):.3g}. "
+            "The standard deviations assume the stated noise; use uncertainty='scaled' to scale "
+            "them by the residuals, or correct sigma_a / the items' sigma")
+
+
+def attach_uncertainty(sol: Solution, form, how) -> Solution:
+    """Add standard deviations and covariances to ``sol`` (see the module docstring)."""
+    t0 = time.perf_counter()
+    form = as_formulation(form)
+    model = form.model
+    cov = posterior(form, sol.x, sol.lam)
+    scale = "scaled" if how == "scaled" or form.residual == "load" else "stated"
+    k = cov.variance_factor if scale == "scaled" else 1.0
+    if not np.isfinite(k):
+        k = 1.0
+    state = cov.state * k
+    rstd, vstd = (np.sqrt(np.clip(np.diagonal(state, axis1=1, axis2=2), 0, None))[:, s]
+                  for s in (slice(0, model.d), slice(model.d, None)))
+    for a, ax in enumerate(model.axes):
+        sol.trajectory[f"{ax}_std"] = rstd[:, a]
+        sol.trajectory[f"v{ax}_std"] = vstd[:, a]
+    sol._cov["state"] = state
+    if model.q and form.error_model is not None:
+        J = param_jacobian(form, sol.x[model.l_index])
+        P = J @ (cov.params * k) @ J.T
+        names = list(sol.error_params.index)
+        sol._cov["error_params"] = pd.DataFrame(P, index=names, columns=names)
+        std = pd.Series(np.sqrt(np.clip(np.diag(P), 0, None)), index=sol.error_params.index, name="std")
+        std.attrs["units"] = dict(sol.error_params.attrs.get("units", {}))
+        sol.error_params_std = std
+    else:
+        sol._cov["error_params"] = pd.DataFrame()
+    what = ("last linearization" if form.nonlinear_items else
+            "exact" if cov.exact else "quadratic model")
+    msg = _variance_warning(cov.variance_factor, cov.dof, scale)
+    if msg is not None:  # a choice the user can change: also through warnings
+        sol.warnings.append(msg)
+        warn(msg)
+    if cov.softened:
+        sol.warnings.append(
+            f"uncertainty: some stretch of nodes is fixed by hard items on its own, so their rows "
+            f"were given a tiny variance ({cov.softened:g} in scaled units): the standard "
+            "deviations are accurate to about 1e-5 relative, and those of what the hard items fix "
+            "are near zero rather than zero")
+    rec = Uncertainty(scale=scale, variance_factor=float(cov.variance_factor), dof=int(cov.dof),
+                      model=what, method="block-tridiagonal selected inversion (cyclic reduction) "
+                      "with the border by its Schur complement", border=cov.border, block=cov.block,
+                      softened=float(cov.softened), time=time.perf_counter() - t0)
+    return sol.record(uncertainty=rec)
