@@ -46,7 +46,7 @@ from .errors import InputError, SolveError
 from .formulation import as_formulation
 from .lsq import LeastSquaresForm, least_squares_form
 from .model import Affine
-from .selinv import CyclicReduction
+from .selinv import CyclicReduction, equilibrated_inverse
 
 __all__ = ["Covariance", "posterior", "quadratic_model", "SOFTEN"]
 
@@ -277,11 +277,9 @@ class _Posterior:
         S = C - np.einsum("nbk,nbl->kl", Bk, self.Y)
         if k:
             try:
-                Sinv = np.linalg.inv(S)
+                Sinv = equilibrated_inverse(S[None])[0]
             except np.linalg.LinAlgError as exc:
-                raise np.linalg.LinAlgError("singular border Schur complement") from exc
-            if not np.all(np.isfinite(Sinv)) or np.linalg.cond(S) > 1e15:
-                raise np.linalg.LinAlgError("singular border Schur complement")
+                raise np.linalg.LinAlgError(f"singular border Schur complement ({exc})") from exc
         else:
             Sinv = np.zeros((0, 0))
         self.Sinv = 0.5 * (Sinv + Sinv.T)

@@ -27,15 +27,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["CyclicReduction", "block_tridiagonal_dense"]
+__all__ = ["CyclicReduction", "block_tridiagonal_dense", "equilibrated_inverse", "PIVOT_COND"]
 
 #: Largest infinity-norm condition number accepted for a pivot block.
 PIVOT_COND = 1e13
 
 
-def _inv(blocks: np.ndarray) -> np.ndarray:
-    """Batched inverse with a conditioning check on the symmetrically equilibrated block
-    (so that a block whose unknowns merely have different units is not refused)."""
+def equilibrated_inverse(blocks: np.ndarray) -> np.ndarray:
+    """Inverses of a stack of square blocks (k, b, b), refusing singular ones.
+
+    Each block is scaled symmetrically to unit row maxima before LU with partial pivoting,
+    and refused (:class:`numpy.linalg.LinAlgError`) when the scaled block's infinity-norm
+    condition number exceeds :data:`PIVOT_COND`: a block whose unknowns merely have
+    different units is not refused, a singular one is.
+    """
     diag = np.sqrt(np.abs(blocks).max(axis=2))
     diag[diag == 0] = 1.0
     scale = 1.0 / diag
@@ -114,7 +119,7 @@ class CyclicReduction:
             no = odd.size
             has_right = odd + 1 < n
             no2 = int(has_right.sum())  # odd blocks with a right neighbour come first
-            Dinv = _inv(D[odd])
+            Dinv = equilibrated_inverse(D[odd])
             F1 = Dinv @ _t(U[odd - 1])            # D_o^{-1} A[o, o-1]
             F2 = Dinv[:no2] @ U[odd[:no2]]        # D_o^{-1} A[o, o+1]
             even = np.arange(0, n, 2)
@@ -126,7 +131,7 @@ class CyclicReduction:
             Un = -(U[odd[:no2] - 1] @ F2)         # between e = o - 1 and e + 2 = o + 1
             self.levels.append(_Level(n, U, Dinv, F1, F2))
             D, U, n = 0.5 * (Dn + _t(Dn)), Un, even.size
-        self._top = _inv(D)
+        self._top = equilibrated_inverse(D)
 
     def solve(self, R: np.ndarray) -> np.ndarray:
         """Solve ``A X = R`` for ``R`` of shape (n, b) or (n, b, k)."""

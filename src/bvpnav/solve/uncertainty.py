@@ -94,8 +94,8 @@ def attach_uncertainty(sol: Solution, form, how) -> Solution:
         sol.error_params_std = std
     else:
         sol._cov["error_params"] = pd.DataFrame()
-    what = ("last linearization" if form.nonlinear_items else
-            "exact" if cov.exact else "quadratic model")
+    linearized = sol.records.sequential is not None or bool(form.nonlinear_items)
+    what = "last linearization" if linearized else "exact" if cov.exact else "quadratic model"
     msg = _variance_warning(cov.variance_factor, cov.dof, scale)
     if msg is not None:  # a choice the user can change: also through warnings
         sol.warnings.append(msg)
