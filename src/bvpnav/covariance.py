@@ -190,11 +190,18 @@ def _row_nodes(A: sp.csr_matrix, colnode: np.ndarray) -> tuple[np.ndarray, np.nd
 
 def _equilibrate(K: sp.csr_matrix, sweeps: int = 4) -> np.ndarray:
     """Symmetric Ruiz scaling ``s`` so that ``diag(s) K diag(s)`` has rows of max-norm near 1."""
-    s = np.ones(K.shape[0])
-    A = abs(K).tocsr()
+    K = sp.csr_matrix(K)
+    T = K.shape[0]
+    rows = np.repeat(np.arange(T), np.diff(K.indptr))
+    cols, vals = K.indices, np.abs(K.data)
+    s = np.ones(T)
+    nonempty = np.diff(K.indptr) > 0
+    starts = K.indptr[:-1][nonempty]
     for _ in range(sweeps):
-        B = sp.diags(s) @ A @ sp.diags(s)
-        r = np.sqrt(np.asarray(B.max(axis=1).todense()).ravel())
+        r = np.zeros(T)
+        if vals.size:
+            r[nonempty] = np.maximum.reduceat(vals * s[rows] * s[cols], starts)
+        r = np.sqrt(r)
         r[r == 0] = 1.0
         s /= r
     return s
@@ -238,7 +245,8 @@ class _Posterior:
         K = sp.bmat([[H, Dr.T, E.T], [Dr, -sp.identity(nr), None], [E, None, None]], format="csr")
         self.n = n
         self.s = s = _equilibrate(K)
-        Ks = (sp.diags(s) @ K @ sp.diags(s)).tocsr()
+        Ks = K.tocoo()
+        Ks = sp.csr_matrix((Ks.data * s[Ks.row] * s[Ks.col], (Ks.row, Ks.col)), shape=K.shape)
         if soften:  # hard items' multipliers: -soften on the (scaled) diagonal
             reg = np.zeros(T)
             reg[n + nr + fem.stop:] = -soften
