@@ -303,6 +303,11 @@ class TrackLine(Linearizable, Item):
     (:meth:`continuation_sigma`, :meth:`with_mode`): hard rows from a far start fix the
     estimate on the path at wrong arc lengths, from which the iteration recovers only
     slowly (see :mod:`bvpnav.solve.sequential`).
+
+    With ``solve(uncertainty=...)`` the standard deviations are those of the last
+    linearization (the tangent rows at the final estimate): an approximation that ignores
+    the path's curvature and the choice of segment, good where the estimate is close to
+    the path compared with its radius of curvature.
     """
 
     x: Any

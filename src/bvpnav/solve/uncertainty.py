@@ -104,7 +104,7 @@ def attach_uncertainty(sol: Solution, form, how) -> Solution:
         sol.warnings.append(
             f"uncertainty: some stretch of nodes is fixed by hard items on its own, so their rows "
             f"were given a tiny variance ({cov.softened:g} in scaled units): the standard "
-            "deviations are accurate to about 1e-5 relative, and those of what the hard items fix "
+            "deviations are accurate to about 1e-4 relative, and those of what the hard items fix "
             "are near zero rather than zero")
     rec = Uncertainty(scale=scale, variance_factor=float(cov.variance_factor), dof=int(cov.dof),
                       model=what, method="block-tridiagonal selected inversion (cyclic reduction) "
