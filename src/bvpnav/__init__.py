@@ -21,10 +21,9 @@ Quick start::
 from __future__ import annotations
 
 import importlib
+from typing import TYPE_CHECKING
 
-from . import error_models, scenarios
 from ._version import __version__
-from .backends import available_solvers
 from .errors import (
     BvpnavError,
     ConvexityError,
@@ -35,12 +34,18 @@ from .errors import (
     SolverNotFound,
     Unbounded,
 )
-from .grid import TimeGrid
-from .imu import ImuData
-from .items import Item
-from .model import Affine, NavModel
-from .problem import NavigationProblem
-from .result import Solution
+
+if TYPE_CHECKING:  # the lazy names below, for type checkers and IDEs
+    from . import attitude, baselines, error_models, lam, scenarios, simulate, solve
+    from .backends import available_solvers
+    from .compare import compare_solvers
+    from .grid import TimeGrid
+    from .imu import ImuData
+    from .items import Item
+    from .model import Affine, NavModel
+    from .problem import NavigationProblem
+    from .result import Solution
+    from .solve import lambda_curve
 
 __all__ = [
     "__version__",
@@ -71,13 +76,25 @@ __all__ = [
     "simulate",
 ]
 
-#: Names imported on first attribute access (PEP 562), not by ``import bvpnav``, because each
-#: pulls in scipy subpackages that building a problem does not need: ``solve``, ``lam`` and
-#: ``compare`` (scipy.sparse.linalg, scipy.optimize), ``attitude`` (scipy.spatial),
-#: ``baselines`` (scipy.integrate), ``simulate`` (scipy.interpolate). Name -> (submodule,
-#: attribute, or None for the submodule itself). cvxpy and matplotlib are imported where
-#: they are used (:mod:`bvpnav.cvx`, :mod:`bvpnav.terms`, the cvxpy back ends, :mod:`bvpnav.plot`).
+#: Names imported on first attribute access (PEP 562), not by ``import bvpnav``: the package
+#: itself imports only its version and exceptions (no numpy), so ``bvpnav --help`` and
+#: ``bvpnav --version`` start in a fraction of a second. The problem's classes pull in numpy,
+#: pandas and scipy.sparse on first use; ``solve``, ``lam`` and ``compare`` also
+#: scipy.sparse.linalg and scipy.optimize, ``attitude`` scipy.spatial, ``baselines``
+#: scipy.integrate, ``simulate`` scipy.interpolate. Name -> (submodule, attribute, or None for
+#: the submodule itself). cvxpy and matplotlib are imported where they are used
+#: (:mod:`bvpnav.cvx`, :mod:`bvpnav.terms`, the cvxpy back ends, :mod:`bvpnav.plot`).
 _LAZY = {
+    "Affine": ("model", "Affine"),
+    "ImuData": ("imu", "ImuData"),
+    "Item": ("items", "Item"),
+    "NavModel": ("model", "NavModel"),
+    "NavigationProblem": ("problem", "NavigationProblem"),
+    "Solution": ("result", "Solution"),
+    "TimeGrid": ("grid", "TimeGrid"),
+    "available_solvers": ("backends", "available_solvers"),
+    "error_models": ("error_models", None),
+    "scenarios": ("scenarios", None),
     "attitude": ("attitude", None),
     "baselines": ("baselines", None),
     "compare_solvers": ("compare", "compare_solvers"),

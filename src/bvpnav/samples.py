@@ -9,17 +9,11 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-import numpy as np
-import pandas as pd
-
-from .constraints import AverageVelocity, Position, Symmetry, Velocity
-from .error_models import Bias
 from .errors import InputError
-from .imu import ImuData
-from .io import atomic_write_text, check_outputs, write_table
-from .problem import NavigationProblem
-from .scenarios import quintic_trajectory, tikhonov2011
-from .spec import to_spec
+
+# numpy, pandas and the problem's classes are imported by the functions that use them:
+# the command line's parser reads SAMPLES (names and one-line descriptions) for --help,
+# which must not pay for them
 
 __all__ = ["SAMPLES", "write_sample"]
 
@@ -28,11 +22,20 @@ def _clean(values) -> list[float]:
     """Computed values at 15 significant digits (``0.00047872``, not the polynomial's
     ``0.00047871999999999997``): the spec is written with each float's shortest round-trip
     text, so the problem solved and the one in the spec are the same problem."""
+    import numpy as np
+
     return [float(f"{v:.15g}") for v in np.asarray(values, dtype=float).ravel()]
 
 
 def _tikhonov2011(seed: int, rate: float | None):
     """The 2011 paper's Example 1 (quintic, biased and scaled, unit noise; cubic prior)."""
+    import numpy as np
+
+    from .constraints import Position
+    from .imu import ImuData
+    from .problem import NavigationProblem
+    from .scenarios import tikhonov2011
+
     sc = tikhonov2011(rate=rate or 50.0, seed=seed)
     t = sc.t
     tp = np.concatenate([t[1:11], t[-11:-1]])
@@ -45,6 +48,14 @@ def _tikhonov2011(seed: int, rate: float | None):
 
 def _shuttle(seed: int, rate: float | None):
     """A shuttle run out 10 m and back in 20 s: symmetry, stopwatch, bias model."""
+    import numpy as np
+
+    from .constraints import AverageVelocity, Position, Symmetry, Velocity
+    from .error_models import Bias
+    from .imu import ImuData
+    from .problem import NavigationProblem
+    from .scenarios import quintic_trajectory
+
     p, _, a = quintic_trajectory()
     rate = rate or 50.0
     t = np.linspace(0.0, 20.0, int(round(20 * rate)) + 1)
@@ -109,6 +120,12 @@ def write_sample(name: str, out, seed: int = 0, rate: float | None = None, force
         Unknown scenario, bad seed or rate (naming the rates allowed), existing files
         without ``force``, or an output that cannot be written (see :func:`bvpnav.io.check_outputs`).
     """
+    import numpy as np
+    import pandas as pd
+
+    from .io import atomic_write_text, check_outputs, write_table
+    from .spec import to_spec
+
     if name not in SAMPLES:
         raise InputError(f"unknown scenario {name!r}; choose one of {sorted(SAMPLES)}")
     if rate is not None and not (np.isfinite(rate) and rate > 0):
