@@ -105,3 +105,21 @@ def test_lazy_names_resolve():
     assert lambda_curve is original and simulate.__name__ == "bvpnav.simulate"
     with pytest.raises(AttributeError, match="no attribute 'nonexistent'"):
         bvpnav.nonexistent  # noqa: B018
+
+
+def test_help_and_version_load_neither_numpy_nor_pandas():
+    """``bvpnav --help`` builds its parser (the sample names and descriptions included)
+    from the package's version and exceptions alone: what makes it start in well under
+    a second (timed in examples/benchmarks/startup.py)."""
+    out = run_python("""
+        import contextlib, io, json, sys
+        from bvpnav.cli import main
+        for argv in (["--help"], ["simulate", "--help"], ["--version"]):
+            with contextlib.redirect_stdout(io.StringIO()):
+                try:
+                    main(argv)
+                except SystemExit:
+                    pass
+        print(json.dumps({m: m in sys.modules for m in ("numpy", "pandas", "scipy")}))
+    """)
+    assert out == {"numpy": False, "pandas": False, "scipy": False}
