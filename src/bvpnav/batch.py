@@ -6,10 +6,15 @@ it, so a batch gives bit-identical results to solving the recordings one by one.
 
 Every finished recording's JSON summary carries a ``run`` record: the fingerprint of what
 produced it (bvpnav version, SHA-256 of the spec text, the options that change results --
-solver, lam, format -- and the recording's size, mtime and SHA-256) and the size and
+solver, lam, uncertainty, format -- and the recording's size, mtime and SHA-256) and the size and
 SHA-256 of the trajectory written. ``run_batch(..., resume=True)`` skips a recording only
 when that fingerprint matches and the trajectory is there, unchanged and readable;
 otherwise it solves it again and the summary row's ``resume`` column says why.
+
+With ``uncertainty`` (the spec's ``[solve]`` key or the override) each trajectory also
+has the standard deviations ``<axis>_std`` (m) and ``v<axis>_std`` (m/s), after the
+positions and velocities, and the JSON summary an ``uncertainty`` record
+(:func:`uncertainty_summary`) and a ``std`` beside each error-model estimate.
 """
 
 from __future__ import annotations
@@ -24,6 +29,7 @@ import time
 import traceback
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from . import __version__
@@ -48,7 +54,7 @@ from .spec import parse_spec, read_spec_text
 log = logging.getLogger(__name__)
 
 __all__ = ["solve_kwargs", "solve_recording", "run_batch", "fingerprint", "resume_reason",
-           "RECORDING_SUFFIXES", "SUMMARY_COLUMNS"]
+           "uncertainty_option", "uncertainty_summary", "RECORDING_SUFFIXES", "SUMMARY_COLUMNS"]
 
 #: File types a batch picks up.
 RECORDING_SUFFIXES = (".csv", ".parquet", ".pq")
@@ -68,13 +74,30 @@ def display_path(path) -> str:
     return os.fsencode(path).decode("utf-8", "backslashreplace")
 
 
-def solve_kwargs(spec, solver: str | None = None, lam=None) -> dict:
-    """Keyword arguments of ``solve()`` from the spec's ``[solve]`` table and overrides."""
+def uncertainty_option(value, option: str = "uncertainty") -> bool | str | None:
+    """An ``uncertainty`` override checked: None (the spec decides), False, True or
+    ``"scaled"``; :class:`InputError` naming ``option`` and the valid values otherwise."""
+    from .solve.options import UNCERTAINTY
+
+    if value is None or isinstance(value, (bool, np.bool_)):
+        return None if value is None else bool(value)
+    if isinstance(value, str) and value in UNCERTAINTY:
+        return value
+    raise InputError(f"{option}={value!r}: give True (standard deviations under the stated noise), "
+                     "'scaled' (scaled by the a-posteriori variance factor), False, or None for the "
+                     "spec's [solve] uncertainty")
+
+
+def solve_kwargs(spec, solver: str | None = None, lam=None, uncertainty=None) -> dict:
+    """Keyword arguments of ``solve()`` from the spec's ``[solve]`` table and overrides
+    (``uncertainty``: None keeps the spec's, False/True/``"scaled"`` replace it)."""
     kw = dict(spec.solve)
     if solver is not None:
         kw["solver"] = solver
     if lam is not None:
         kw["lam"] = lam
+    if uncertainty is not None:
+        kw["uncertainty"] = uncertainty
     if "fallback" in kw and kw["fallback"] in ("none", False):
         kw["fallback"] = None
     return kw
@@ -95,17 +118,97 @@ def _recording_fingerprint(path) -> dict:
 
 
 def fingerprint(path, spec_text: str | None, solver=None, lam=None, fmt: str | None = None,
-                recording: dict | None = None) -> dict:
+                recording: dict | None = None, uncertainty=None) -> dict:
     """What a result depends on: bvpnav's version, the spec text's SHA-256, the options that
-    change results (``solver``, ``lam``, ``format``) and the recording's size, mtime (ns) and
-    SHA-256 (``recording``, computed from ``path`` when not given)."""
-    opts = json.loads(json.dumps({"solver": solver, "lam": lam, "format": fmt}))
+    change results (``solver``, ``lam``, ``format``, ``uncertainty``) and the recording's
+    size, mtime (ns) and SHA-256 (``recording``, computed from ``path`` when not given).
+
+    The spec's own ``[solve]`` keys (``uncertainty`` among them) are covered by the spec
+    text's hash; the options are the overrides (None: not overridden). ``uncertainty`` is
+    recorded only when it is overridden, so the fingerprints of runs without it are those
+    bvpnav wrote before the option existed (a missing key reads as None in
+    :func:`resume_reason`)."""
+    opts = {"solver": solver, "lam": lam, "format": fmt}
+    if uncertainty is not None:
+        opts["uncertainty"] = uncertainty
+    opts = json.loads(json.dumps(opts))
     return {"bvpnav": __version__, "spec_sha256": None if spec_text is None else _sha256(spec_text),
             "options": opts, "recording": recording or _recording_fingerprint(path)}
 
 
+def _std_columns_last(sol) -> None:
+    """Order ``sol.trajectory``'s columns as written: positions, velocities, then the
+    position standard deviations and the velocity ones, each in axis order (``x, y, vx,
+    vy, x_std, y_std, vx_std, vy_std``). Only the order changes; without standard
+    deviations nothing does."""
+    cols = list(sol.trajectory.columns)
+    base = [c for c in cols if not c.endswith("_std")]
+    if len(base) == len(cols):
+        return
+    std = [c + "_std" for c in base if c + "_std" in cols]
+    order = base + std + [c for c in cols if c not in base and c not in std]
+    if order != cols:
+        sol.trajectory = sol.trajectory[order]
+
+
+def _plain(v):
+    """A JSON-ready copy: numpy scalars and arrays as Python values, non-finite floats as None."""
+    if isinstance(v, dict):
+        return {str(k): _plain(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple, np.ndarray)):
+        return [_plain(x) for x in (v.tolist() if isinstance(v, np.ndarray) else v)]
+    if isinstance(v, np.generic):
+        v = v.item()
+    if isinstance(v, float) and not np.isfinite(v):
+        return None
+    if isinstance(v, (str, int, float, bool)) or v is None:
+        return v
+    return str(v)
+
+
+def uncertainty_summary(sol) -> dict | None:
+    """The ``uncertainty`` record of a JSON summary, or None for a solve without it.
+
+    Parameters
+    ----------
+    sol : Solution
+        Solved with ``uncertainty=True`` or ``"scaled"``.
+
+    Returns
+    -------
+    dict or None
+        ``sol.stats["uncertainty"]`` (``scale``: ``"stated"`` or ``"scaled"``,
+        ``variance_factor``, ``dof``, ``model``, ``method``, ``border``, ``block``,
+        ``softened``, ``time``) as plain JSON values, with ``columns`` (the trajectory's
+        standard-deviation columns) and ``std``: the median and largest standard deviation
+        of each (m or m/s).
+    """
+    rec = sol.stats.get("uncertainty")
+    if not rec:
+        return None
+    out = _plain(dict(rec))
+    cols = [c for c in sol.trajectory.columns if c.endswith("_std")]
+    out["columns"] = cols
+    out["std"] = {c[: -len("_std")]: {"median": _plain(float(np.median(sol.trajectory[c]))),
+                                      "max": _plain(float(np.max(sol.trajectory[c])))}
+                  for c in cols if len(sol.trajectory)}
+    return out
+
+
+def _add_uncertainty(summ: dict, sol) -> None:
+    """Put the uncertainty record and each error-model estimate's std into a summary."""
+    rec = uncertainty_summary(sol)
+    if rec is None:
+        return
+    std = getattr(sol, "error_params_std", None)
+    for k, entry in summ.get("error_model", {}).items():
+        if std is not None and k in std.index:
+            entry["std"] = _plain(float(std[k]))
+    summ["uncertainty"] = rec
+
+
 def solve_recording(path, spec, out, solver: str | None = None, lam=None, summary_path=None,
-                    spec_text: str | None = None):
+                    spec_text: str | None = None, uncertainty=None):
     """Solve one recording file with a spec; write the trajectory and its JSON summary.
 
     Parameters
@@ -117,6 +220,12 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
         Trajectory output (``.csv`` or ``.parquet``), written atomically.
     solver, lam : optional
         Overrides of the spec's ``[solve]`` table.
+    uncertainty : bool or "scaled", optional
+        Override of the spec's ``[solve]`` ``uncertainty`` (None: the spec's). With
+        standard deviations the trajectory has ``<axis>_std`` (m) and ``v<axis>_std`` (m/s)
+        after the velocities (``sol.trajectory`` is put in that column order too), and the
+        summary an ``uncertainty`` record (:func:`uncertainty_summary`) and each
+        error-model estimate a ``std``.
     summary_path : path-like, optional
         JSON summary (default: ``out`` with suffix ``.json``; at that default path an
         existing file is replaced only if it is a bvpnav JSON summary, see
@@ -138,6 +247,7 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
         recording changes while it is being solved (nothing is written then).
     """
     t0 = time.perf_counter()
+    uncertainty = uncertainty_option(uncertainty)
     out = Path(out)
     implicit = summary_path is None
     summary_path = Path(summary_path) if summary_path is not None else out.with_suffix(".json")
@@ -159,16 +269,19 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
         raise InputError(f"recording {str(path)!r} changed while it was being solved; nothing was written: "
                          "wait until it is complete and run again")
     prob = spec.build(data)
-    sol = prob.solve(**solve_kwargs(spec, solver, lam))
+    sol = prob.solve(**solve_kwargs(spec, solver, lam, uncertainty))
     now = _recording_fingerprint(path)
     if (now["size"], now["sha256"]) != (rec_fp["size"], rec_fp["sha256"]):
         raise InputError(f"recording {str(path)!r} changed while it was being solved; nothing was written: "
                          "wait until it is complete and run again")
+    _std_columns_last(sol)
     write_trajectory(sol, out)
     written = file_fingerprint(out)
     summ = summary(sol, prob)
+    _add_uncertainty(summ, sol)
     summ["run"] = {"recording": display_path(path), "samples": int(data.grid.n),
-                   "fingerprint": fingerprint(path, spec_text, solver, lam, fmt, recording=rec_fp),
+                   "fingerprint": fingerprint(path, spec_text, solver, lam, fmt, recording=rec_fp,
+                                              uncertainty=uncertainty),
                    "trajectory": {"path": display_path(out), "size": written["size"],
                                   "sha256": written["sha256"]}}
     write_json(summ, summary_path)
@@ -179,12 +292,13 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     return sol, row
 
 
-def _task(path: str, spec_text: str, spec_source: str, out: str, solver, lam, note: str = "") -> dict:
+def _task(path: str, spec_text: str, spec_source: str, out: str, solver, lam, uncertainty=None,
+          note: str = "") -> dict:
     """One batch task (runs on a worker): never raises an ``Exception``, returns a summary row."""
     t0 = time.perf_counter()
     try:
         spec = parse_spec(spec_text, spec_source)
-        row = solve_recording(path, spec, out, solver, lam, spec_text=spec_text)[1]
+        row = solve_recording(path, spec, out, solver, lam, spec_text=spec_text, uncertainty=uncertainty)[1]
         row["resume"] = note
         return row
     except BvpnavError as exc:
@@ -232,7 +346,8 @@ def resume_reason(recording, out, summary_path, current: dict) -> tuple[str | No
     if old.get("spec_sha256") is None or old.get("spec_sha256") != current["spec_sha256"]:
         return "spec changed", js
     oo, co = old.get("options") or {}, current["options"]
-    changed = [f"{k}: {oo.get(k)!r} -> {co.get(k)!r}" for k in co if oo.get(k) != co.get(k)]
+    keys = list(co) + [k for k in oo if k not in co]  # an override given before and not now counts
+    changed = [f"{k}: {oo.get(k)!r} -> {co.get(k)!r}" for k in keys if oo.get(k) != co.get(k)]
     if changed:
         return "options changed (" + ", ".join(changed) + ")", js
     orec, crec = old.get("recording") or {}, current["recording"]
@@ -282,7 +397,7 @@ def _plan_outputs(files: list[Path], out_dir: Path, suffix: str) -> list[Path]:
 
 def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, workers: int = 2,
               solver: str | None = None, lam=None, resume: bool = False, progress: bool | None = None,
-              suffix: str = ".csv") -> pd.DataFrame:
+              suffix: str = ".csv", uncertainty=None) -> pd.DataFrame:
     """Solve every recording in a folder with one spec, on Dask.
 
     Parameters
@@ -312,7 +427,7 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
         Overrides of the spec's ``[solve]`` table.
     resume : bool
         Skip a recording only when its JSON summary's fingerprint matches this run (spec
-        text, solver, lam, format, the recording's content, bvpnav's version) and its
+        text, solver, lam, uncertainty, format, the recording's content, bvpnav's version) and its
         trajectory exists unchanged and readable; every other recording is solved again,
         and the ``resume`` column of its row says why (e.g. ``re-solved: spec changed``).
     progress : bool, optional
@@ -321,6 +436,9 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
         INFO on ``bvpnav.batch``.
     suffix : {".csv", ".parquet"}
         Trajectory file type.
+    uncertainty : bool or "scaled", optional
+        Override of the spec's ``[solve]`` ``uncertainty`` (None: the spec's); see
+        :func:`solve_recording` for the columns and the summary record.
 
     Returns
     -------
@@ -343,6 +461,7 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
                          "the *.csv / *.parquet files")
     if suffix not in (".csv", ".parquet"):
         raise InputError(f"suffix={suffix!r}: the trajectory format is '.csv' or '.parquet'")
+    uncertainty = uncertainty_option(uncertainty)
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise InputError(f"--workers {workers!r}: the number of local workers must be an integer >= 1, "
                          "e.g. --workers 2")
@@ -378,7 +497,7 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
     client = _connect(scheduler) if scheduler not in (None, "serial") else None
     try:
         return _batch_into(files, outs, out_dir, spec_text, str(spec_path), scheduler, workers, solver,
-                           lam, resume, progress, suffix, client)
+                           lam, resume, progress, suffix, client, uncertainty)
     finally:
         if client is not None:
             client.close()
@@ -417,7 +536,7 @@ def _connect(scheduler: str):
 
 
 def _batch_into(files, outs, out_dir, spec_text, spec_source, scheduler, workers, solver, lam, resume,
-                progress, suffix, client) -> pd.DataFrame:
+                progress, suffix, client, uncertainty=None) -> pd.DataFrame:
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -426,7 +545,7 @@ def _batch_into(files, outs, out_dir, spec_text, spec_source, scheduler, workers
     with output_lock(out_dir, "--out"):
         try:
             rows = _run(files, outs, spec_text, spec_source, scheduler, workers, solver, lam, resume,
-                        progress, suffix, client)
+                        progress, suffix, client, uncertainty)
             df = pd.DataFrame(rows, columns=SUMMARY_COLUMNS)
             df = df.sort_values("recording", kind="stable").reset_index(drop=True)
             write_table(df, out_dir / SUMMARY_NAME)
@@ -436,12 +555,12 @@ def _batch_into(files, outs, out_dir, spec_text, spec_source, scheduler, workers
 
 
 def _run(files, outs, spec_text, spec_source, scheduler, workers, solver, lam, resume, progress,
-         suffix, client=None) -> list[dict]:
+         suffix, client=None, uncertainty=None) -> list[dict]:
     jobs, rows = [], []
     for p, out in zip(files, outs, strict=True):
         note = ""
         if resume:
-            current = fingerprint(p, spec_text, solver, lam, suffix)
+            current = fingerprint(p, spec_text, solver, lam, suffix, uncertainty=uncertainty)
             reason, js = resume_reason(p, out, out.with_suffix(".json"), current)
             if reason is None:
                 run = js["run"]
@@ -453,7 +572,7 @@ def _run(files, outs, spec_text, spec_source, scheduler, workers, solver, lam, r
                              "output": display_path(out), "resume": "skipped: fingerprint matches"})
                 continue
             note = f"re-solved: {reason}"
-        jobs.append((str(p), spec_text, spec_source, str(out), solver, lam, note))
+        jobs.append((str(p), spec_text, spec_source, str(out), solver, lam, uncertainty, note))
     if jobs and scheduler == "serial":
         # once(): a warning shared by many recordings is issued once (each summary records it)
         with once(), progress_bar(total=len(jobs), desc="recordings", unit="rec", enabled=progress) as bar:

@@ -87,6 +87,63 @@ def _lam(text: str | None):
         return text  # a rule name, checked by solve()
 
 
+#: ``--uncertainty`` values and what they mean to ``solve(uncertainty=...)``.
+UNCERTAINTY_CHOICES = {"stated": True, "scaled": "scaled", "off": False}
+
+
+def _uncertainty(args) -> bool | str | None:
+    """``--uncertainty [stated|scaled|off]`` as ``solve(uncertainty=...)``'s value (None:
+    not given, the spec decides), or InputError naming the value and the choices."""
+    value = getattr(args, "uncertainty", None)
+    if value is None:
+        return None
+    if value not in UNCERTAINTY_CHOICES:
+        hint = ""
+        if os.path.splitext(str(value))[1].lower() in (".csv", ".parquet", ".pq", ".toml"):
+            hint = ("; it took the file name that followed it: put --uncertainty after the input, or "
+                    "write --uncertainty=stated")
+        raise InputError(f"--uncertainty {value!r}: choose stated (the default when no value is "
+                         "given: standard deviations under the stated noise), scaled (scaled by the "
+                         f"a-posteriori variance factor) or off (none, whatever the spec says){hint}")
+    return UNCERTAINTY_CHOICES[value]
+
+
+def _uncertainty_report(sol, out, asked=None) -> list[str]:
+    """Lines of the printed report about the standard deviations (none without them);
+    ``asked``: the ``uncertainty`` the solve was given."""
+    from .batch import uncertainty_summary
+
+    rec = uncertainty_summary(sol)
+    if rec is None:
+        return []
+    vf, dof = rec.get("variance_factor"), rec.get("dof")
+    vf_text = "n/a" if vf is None else f"{vf:.4g}"
+    if rec.get("scale") == "scaled":
+        what = f"are scaled by the a-posteriori variance factor {vf_text} ({dof} degrees of freedom)"
+        if asked is True:
+            what += "; the load form has no noise model, so they are always scaled"
+    else:
+        what = (f"assume the stated noise (sigma_a and the items' sigma); the a-posteriori variance "
+                f"factor is {vf_text} on {dof} degrees of freedom (about 1 if those sigmas are right)")
+    std = rec.get("std", {})
+
+    def fmt(keys, unit):
+        return ", ".join(f"{k} {std[k]['median']:.3g} {unit}" for k in keys if std.get(k, {}).get("median")
+                         is not None)
+
+    axes = sol._pos_cols
+    lines = [f"uncertainty ({rec.get('model')} covariance): the standard deviations {what}",
+             f"  median std: position {fmt(axes, 'm')}; velocity {fmt(['v' + a for a in axes], 'm/s')} "
+             f"(columns {', '.join(rec.get('columns', []))} in {out})"]
+    ep_std = getattr(sol, "error_params_std", None)
+    if ep_std is not None and len(ep_std):
+        units = ep_std.attrs.get("units", {})
+        lines.append("  error model: " + ", ".join(
+            f"{k} = {sol.error_params[k]:.4g} +/- {ep_std[k]:.2g}{(' ' + units[k]) if units.get(k) else ''}"
+            for k in ep_std.index))
+    return lines
+
+
 def _check(args, inputs: dict, outputs: dict, figures=(), tables=()) -> None:
     """The output policy before any work: suffixes, then :func:`bvpnav.io.check_outputs`."""
     from .io import check_figure_path, check_outputs, check_table_path
@@ -206,6 +263,7 @@ def _cmd_solve(args) -> int:
     from .batch import solve_recording
     from .spec import parse_spec, read_spec_text
 
+    uncertainty = _uncertainty(args)
     summary = args.summary if args.summary is not None else str(Path(args.out).with_suffix(".json"))
     if args.summary is not None and Path(args.summary).suffix.lower() != ".json":
         raise InputError(f"--summary {args.summary!r}: the summary is JSON; end its name with .json")
@@ -235,7 +293,7 @@ def _cmd_solve(args) -> int:
               " + ".join(type(m).__name__ for m in spec.error_models) or "none")
     t0 = time.perf_counter()
     sol, row = solve_recording(args.input, spec, args.out, solver=args.solver, lam=_lam(args.lam),
-                               summary_path=summary, spec_text=spec_text)
+                               summary_path=summary, spec_text=spec_text, uncertainty=uncertainty)
     _log.info("solved in %.3g s (solver %s, %s); wrote %s and %s", time.perf_counter() - t0,
               row["solver"], row["status"], args.out, summary)
     _log.debug("solver options in force: %s", sol.stats.get("options"))
@@ -254,6 +312,9 @@ def _cmd_solve(args) -> int:
     if truth is not None:
         _say(args, f"RMS position error against the truth ({truth_path}): "
                    f"{sol.rms_error(truth):.4g} m")
+    asked = uncertainty if uncertainty is not None else spec.solve.get("uncertainty")
+    for line in _uncertainty_report(sol, args.out, asked):
+        _say(args, line)
     for w in sol.warnings:
         _say(args, f"warning: {w}")
     return EXIT_OK
@@ -331,7 +392,7 @@ def _cmd_batch(args) -> int:
 
     df = run_batch(args.directory, args.spec, args.out, scheduler=args.scheduler, workers=args.workers,
                    solver=args.solver, lam=_lam(args.lam), resume=args.resume, progress=verbosity(args) >= 0,
-                   suffix="." + args.format)
+                   suffix="." + args.format, uncertainty=_uncertainty(args))
     bad = df[~df.ok.astype(bool)]
     _say(args, f"{len(df)} recordings, {len(bad)} failed; summary: {Path(args.out) / 'summary.csv'}")
     for _, r in bad.iterrows():  # the full error (an internal error's traceback) is in summary.csv
@@ -372,6 +433,14 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--seed", type=int, default=0, help="noise seed (default: %(default)s)")
     demo.set_defaults(func=_cmd_demo)
 
+    def uncertainty_flag(p, where: str):
+        p.add_argument("--uncertainty", nargs="?", const="stated", default=None, metavar="HOW",
+                       help="also the standard deviations: <axis>_std (m) and v<axis>_std (m/s) columns "
+                            f"{where}, and the summary's uncertainty record and error-model std. HOW: "
+                            "stated (the default: under sigma_a and the items' sigma as given), scaled "
+                            "(times the a-posteriori variance factor: for sigmas that are only "
+                            "relative) or off; overrides the spec's [solve] uncertainty")
+
     def common(p, lam=True):
         p.add_argument("input", metavar="INPUT", help="recording: .csv or .parquet")
         p.add_argument("--spec", required=True, metavar="SPEC", help="spec file (TOML)")
@@ -399,7 +468,9 @@ def build_parser() -> argparse.ArgumentParser:
         description="Solve a recording with a spec; write the trajectory (t, positions in m, "
                     "velocities in m/s; CSV or Parquet by OUT's suffix) and a JSON summary beside it "
                     "(lambda and rule, error-model estimates with units, solver statistics, item "
-                    "residuals). Outputs are written atomically; the input is never modified.")
+                    "residuals). With --uncertainty (or uncertainty = true in the spec's [solve]) also "
+                    "their standard deviations. Outputs are written atomically; the input is never "
+                    "modified.")
     common(solve)
     solve.add_argument("--out", required=True, metavar="OUT", help="trajectory file (.csv or .parquet)")
     solve.add_argument("--summary", metavar="JSON", help="summary path (default: OUT with .json)")
@@ -411,6 +482,7 @@ def build_parser() -> argparse.ArgumentParser:
                        "--plot and the RMS error printed. Default with --plot: truth.csv beside an "
                        "INPUT named recording.csv, if there is one")
     solve.add_argument("--solver", help="override the spec's solver (e.g. clarabel, osqp, direct, csne)")
+    uncertainty_flag(solve, "in OUT, a +/-2 sigma band on --plot")
     solve.set_defaults(func=_cmd_solve)
 
     lc = add(
@@ -456,9 +528,11 @@ def build_parser() -> argparse.ArgumentParser:
     bt.add_argument("--workers", type=int, default=2, help="local workers (default: %(default)s)")
     bt.add_argument("--solver", help="override the spec's solver")
     bt.add_argument("--lam", metavar="LAM", help="override the spec's lambda")
+    uncertainty_flag(bt, "in each trajectory")
     bt.add_argument("--format", choices=("csv", "parquet"), default="csv", help="trajectory files")
     bt.add_argument("--resume", action="store_true", help="skip recordings already solved with the same "
-                    "spec, options and recording content (their JSON summary's fingerprint); solve the "
+                    "spec, options (--solver, --lam, --uncertainty, --format) and recording content "
+                    "(their JSON summary's fingerprint); solve the "
                     "others again, saying why in summary.csv's resume column")
     bt.set_defaults(func=_cmd_batch)
     return parser

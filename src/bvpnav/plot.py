@@ -3,6 +3,11 @@
 Every function returns the ``Figure``; those that draw one panel take an optional
 matplotlib ``Axes``. Nothing is shown or saved (use :func:`bvpnav.io.atomic_savefig` to
 write a file atomically). matplotlib is imported only when a figure is drawn.
+
+A solution solved with ``uncertainty=True`` or ``"scaled"`` (its trajectory has
+``<axis>_std`` and ``v<axis>_std`` columns) is drawn by :func:`trajectory` and
+:func:`solution` with a light band of +/- 2 standard deviations (labelled ``"±2σ"``)
+around its positions and velocities.
 """
 
 from __future__ import annotations
@@ -12,6 +17,27 @@ import numpy as np
 __all__ = ["lcurve", "solution", "trajectory", "errors", "comparison"]
 
 _MARKERS = {"lcurve": ("o", "C3"), "gcv": ("s", "C0"), "discrepancy": ("^", "C2"), "quasi": ("D", "C1")}
+
+
+#: Opacity of the +/- 2 sigma bands.
+BAND_ALPHA = 0.2
+#: Label of the +/- 2 sigma bands.
+BAND_LABEL = "±2σ"
+
+
+def _std(sol, column: str) -> np.ndarray | None:
+    """The standard deviations in ``column`` of the solution's trajectory, or None."""
+    traj = getattr(sol, "trajectory", None)
+    if traj is None or column not in traj.columns:
+        return None
+    return traj[column].to_numpy(dtype=float)
+
+
+def _band(ax, t, centre, std, color, label: str = BAND_LABEL) -> None:
+    """Shade ``centre`` +/- 2 ``std`` (a PolyCollection behind the lines)."""
+    centre = np.asarray(centre, dtype=float)
+    ax.fill_between(t, centre - 2 * std, centre + 2 * std, color=color, alpha=BAND_ALPHA, lw=0,
+                    zorder=0.5, label=label)
 
 
 def _axes(ax, **kw):
@@ -78,7 +104,9 @@ def trajectory(solutions: dict, truth=None, axis: str | None = None, ax=None):
     """Position against time for several solutions (``{label: Solution}``), with the truth (m).
 
     With several axes (``axis=None``) each line is labelled ``"<label> <axis>"`` and the
-    truth of an axis is drawn in that axis' colour, dashed.
+    truth of an axis is drawn in that axis' colour, dashed. A solution with standard
+    deviations (``solve(uncertainty=...)``) gets a band of +/- 2 std in its line's colour,
+    labelled ``"<line label> ±2σ"``.
     """
     fig, ax = _axes(ax, figsize=(8, 4))
     t = None
@@ -90,6 +118,9 @@ def trajectory(solutions: dict, truth=None, axis: str | None = None, ax=None):
             name = label if len(axes) == 1 else f"{label} {a}"
             (line,) = ax.plot(t, sol.position(a), label=name, color=f"C{(k * len(axes) + j) % 10}")
             colours.setdefault(a, line.get_color())
+            std = _std(sol, f"{a}_std")
+            if std is not None:
+                _band(ax, t, sol.position(a), std, line.get_color(), label=f"{name} {BAND_LABEL}")
     if truth is not None and t is not None:
         tr = np.asarray(truth, dtype=float)
         tr = tr.reshape(len(t), -1)
@@ -235,6 +266,11 @@ def solution(sol, items=None, truth=None, label: str | None = None):
     (the first two axes, equal scales). For 1 axis with a truth, that panel is the
     position error instead.
 
+    A solution with standard deviations (``solve(uncertainty=...)``: ``<axis>_std`` and
+    ``v<axis>_std`` columns) has a light band of +/- 2 std around each position and
+    velocity (and around zero on the position error panel), labelled ``"±2σ"``; the title
+    says whether they are under the stated noise or scaled.
+
     Parameters
     ----------
     sol : Solution
@@ -276,6 +312,10 @@ def solution(sol, items=None, truth=None, label: str | None = None):
         va = fig.add_subplot(grid[i, 1], sharex=first)
         pa.plot(t, sol.position(a), color="C0", lw=1.5, label=label)
         va.plot(t, sol.velocity(a), color="C0", lw=1.5, label=label)
+        for panel, centre, col in ((pa, sol.position(a), f"{a}_std"), (va, sol.velocity(a), f"v{a}_std")):
+            std = _std(sol, col)
+            if std is not None:
+                _band(panel, t, centre, std, "C0")
         if tru is not None:
             pa.plot(t, tru[:, i], color="k", lw=2.5, alpha=0.35, label="truth", zorder=1)
         pa.set_title(f"position {a}", fontsize=10)
@@ -313,6 +353,9 @@ def solution(sol, items=None, truth=None, label: str | None = None):
         err = fig.add_subplot(grid[d, 1], sharex=first)
         e = sol.position(axes[0]) - tru[:, 0]
         err.plot(t, e, color="C0", lw=1, label=f"RMS {np.sqrt(np.mean(e ** 2)):.3g} m")
+        std = _std(sol, f"{axes[0]}_std")
+        if std is not None:
+            _band(err, t, np.zeros_like(e), std, "C0")
         err.axhline(0, color="k", lw=0.5)
         err.set_title("position error", fontsize=10)
         err.set_ylabel(f"{axes[0]} - truth (m)")
@@ -326,9 +369,21 @@ def solution(sol, items=None, truth=None, label: str | None = None):
     if path is not None:
         _legend(path, fontsize=7)
     fig.suptitle(f"lambda = {sol.lam:.3g} ({sol.lam_rule}); {sol.stats.get('solver')} "
-                 f"{sol.stats.get('status')}" + (", verified" if sol.stats.get("verified") else ""),
-                 fontsize=10)
+                 f"{sol.stats.get('status')}" + (", verified" if sol.stats.get("verified") else "")
+                 + _band_note(sol), fontsize=10)
     return fig
+
+
+def _band_note(sol) -> str:
+    """What the bands hold, for the title (empty without standard deviations)."""
+    rec = sol.stats.get("uncertainty") or {}
+    if not rec or not any(str(c).endswith("_std") for c in sol.trajectory.columns):
+        return ""
+    if rec.get("scale") == "scaled":
+        vf = rec.get("variance_factor")
+        return f"; {BAND_LABEL} scaled by the variance factor" + (
+            f" {vf:.3g}" if isinstance(vf, float) and np.isfinite(vf) else "")
+    return f"; {BAND_LABEL} under the stated noise"
 
 
 def errors(solutions: dict, truth, axis: str | None = None, ax=None):

@@ -26,6 +26,8 @@ Example::
     solver = "direct"
     accuracy = "default"
     lam = "lcurve"                # a number or a rule: lcurve, gcv, discrepancy, quasi
+    uncertainty = true            # optional: standard deviations too (true: the stated
+                                  # noise; "scaled": by the a-posteriori variance factor)
 
     [[error_model]]
     type = "bias"
@@ -61,6 +63,7 @@ from .io import read_regular_file
 from .items import _snake, positive_array, registry
 from .lam import rule_names
 from .problem import NavigationProblem
+from .solve.options import UNCERTAINTY
 from .timebase import TIME_UNITS as _TIME_UNITS
 
 __all__ = ["Spec", "load_spec", "read_spec_text", "parse_spec", "dumps_spec", "problem_to_spec", "to_spec",
@@ -74,7 +77,8 @@ ACC_UNITS = _ACC_UNITS
 _SECTIONS = {
     "input": {"time", "time_unit", "time_origin", "columns", "unit"},
     "problem": {"residual", "sigma_a"},
-    "solve": {"solver", "accuracy", "lam", "fallback", "on_conflict", "priority", "demote_sigma"},
+    "solve": {"solver", "accuracy", "lam", "fallback", "on_conflict", "priority", "demote_sigma",
+              "uncertainty"},
     "error_model": None,  # array of tables, checked per model
     "item": None,  # array of tables, checked per item
 }
@@ -108,7 +112,9 @@ class Spec:
     problem : dict
         Keyword arguments of :class:`bvpnav.NavigationProblem` (``residual``, ``sigma_a``).
     solve : dict
-        Keyword arguments of :meth:`bvpnav.NavigationProblem.solve`.
+        Keyword arguments of :meth:`bvpnav.NavigationProblem.solve` (``solver``,
+        ``accuracy``, ``lam``, ``fallback``, ``on_conflict``, ``priority``,
+        ``demote_sigma``, ``uncertainty``).
     items : list
         Item instances.
     error_models : list
@@ -260,7 +266,7 @@ def _check_problem_values(prob: dict, where) -> None:
 
 
 def _check_solve_values(solve: dict, where) -> None:
-    """Check ``[solve]``'s solver, accuracy, ``lam`` and ``on_conflict``."""
+    """Check ``[solve]``'s solver, accuracy, ``lam``, ``on_conflict`` and ``uncertainty``."""
     RULES = rule_names()
 
     if "solver" in solve and not isinstance(solve["solver"], str):
@@ -278,6 +284,22 @@ def _check_solve_values(solve: dict, where) -> None:
     if "on_conflict" in solve and solve["on_conflict"] not in ("raise", "demote"):
         raise InputError(f"{where('on_conflict')}: on_conflict={solve['on_conflict']!r}; "
                          'choose "raise" or "demote"')
+    if "uncertainty" in solve:
+        _check_uncertainty(solve["uncertainty"], where)
+
+
+def _check_uncertainty(value, where) -> None:
+    """Check ``[solve]``'s ``uncertainty``: a TOML boolean or one of :data:`UNCERTAINTY`."""
+    if isinstance(value, bool) or (isinstance(value, str) and value in UNCERTAINTY):
+        return
+    hint, low = "", value.strip().lower() if isinstance(value, str) else None
+    if low in ("true", "false", "stated", "yes", "no", "on", "off"):
+        hint = " (a TOML boolean has no quotes: write uncertainty = true or false)"
+    elif low in UNCERTAINTY:
+        hint = f" (in lower case: uncertainty = \"{low}\")"
+    raise InputError(f"{where('uncertainty')}: uncertainty={value!r}; give true (standard deviations "
+                     'under the stated noise), "scaled" (scaled by the a-posteriori variance factor) '
+                     f"or false{hint}")
 
 
 def _check_demotion_values(solve: dict, where) -> None:
@@ -338,7 +360,8 @@ def parse_spec(text: str, source: str = "spec") -> Spec:
     InputError
         For TOML syntax errors, unknown sections, keys, item or error-model names, and
         invalid values (of ``[input]``, ``[problem]`` and ``[solve]`` too: residual form,
-        ``sigma_a`` > 0, solver name, accuracy preset, ``lam`` >= 0 or a rule; and values
+        ``sigma_a`` > 0, solver name, accuracy preset, ``lam`` >= 0 or a rule,
+        ``uncertainty`` true, false or ``"scaled"``; and values
         of the wrong TOML type anywhere), naming the line and listing the valid choices;
         for values nested too deeply to read, and for two items with the same name.
     """
@@ -554,7 +577,8 @@ def to_spec(problem, solve: dict | None = None, input: dict | None = None) -> st
     ----------
     problem : NavigationProblem
     solve : dict, optional
-        The ``[solve]`` table (solver, accuracy, lam).
+        The ``[solve]`` table (solver, accuracy, lam, uncertainty, ...: keyword arguments
+        of :meth:`~bvpnav.NavigationProblem.solve`).
     input : dict, optional
         The ``[input]`` table (time column and unit, axis columns, acceleration unit).
 
