@@ -240,6 +240,28 @@ def test_track_line_is_the_last_linearization():
     assert sol.trajectory["y_std"].iloc[mid] < 0.5 * sol.trajectory["x_std"].iloc[mid]
 
 
+def test_hard_items_that_repeat_each_other_still_have_their_covariance():
+    """The shuttle sample: two hard average velocities whose sum repeats the hard end
+    positions. The KKT matrix is singular (in its multipliers only); the covariance on the
+    manifold exists and equals the null-space formula N (N^T D^T D N)^{-1} N^T."""
+    import scipy.linalg as sl
+
+    from bvpnav.samples import SAMPLES
+
+    *_, prob, _ = SAMPLES["shuttle"](0, 10.0)
+    sol = prob.solve(solver="direct", uncertainty=True)
+    form = prob.formulation
+    ls, _ = quadratic_model(form, sol.x, 1.0)
+    D, E = ls.D.A.toarray(), ls.E.A.toarray()
+    assert np.linalg.matrix_rank(E) == E.shape[0] - 1      # one hard row repeats the others
+    Nb = sl.null_space(E)
+    P = Nb @ np.linalg.solve(Nb.T @ (D.T @ D) @ Nb, Nb.T)
+    ref = dense_state(form, P)
+    assert np.abs(sol.covariance("state") - ref).max() <= 1e-9 * np.abs(ref).max()
+    u = sol.stats["uncertainty"]
+    assert u["dof"] == D.shape[0] - D.shape[1] + E.shape[0] - 1
+
+
 def test_singular_information_is_refused_with_the_fix():
     # velocity information only: the position offset is free
     p = bvpnav.NavigationProblem(_data_1d(), sigma_a=0.02)

@@ -101,7 +101,7 @@ class Covariance:
     variance_factor : float
         A-posteriori variance factor :math:`\\hat\\sigma_0^2 = \\|D \\hat x + c\\|^2 / f`.
     dof : int
-        Degrees of freedom ``f``: objective rows minus unknowns plus hard rows.
+        Degrees of freedom ``f``: objective rows minus unknowns plus independent hard rows.
     exact : bool
         False when this is the covariance of the quadratic model at the solution.
     border : int
@@ -189,9 +189,9 @@ def _row_nodes(A: sp.csr_matrix, colnode: np.ndarray) -> tuple[np.ndarray, np.nd
     return lo, hi
 
 
-def _equilibrate(K: sp.csr_matrix, sweeps: int = 4) -> np.ndarray:
-    """Symmetric Ruiz scaling ``s`` so that ``diag(s) K diag(s)`` has rows of max-norm near 1."""
-    K = sp.csr_matrix(K)
+def _equilibrate(K: sp.csr_matrix, sweeps: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    """Symmetric Ruiz scaling ``s`` so that ``diag(s) K diag(s)`` has rows of max-norm near 1;
+    also the row index of every stored entry (``K`` is CSR)."""
     T = K.shape[0]
     rows = np.repeat(np.arange(T), np.diff(K.indptr))
     cols, vals = K.indices, np.abs(K.data)
@@ -205,22 +205,49 @@ def _equilibrate(K: sp.csr_matrix, sweeps: int = 4) -> np.ndarray:
         r = np.sqrt(r)
         r[r == 0] = 1.0
         s /= r
-    return s
+    return s, rows
+
+
+def _axis_span(A: sp.csr_matrix, colaxis: np.ndarray) -> np.ndarray:
+    """True for rows whose node columns belong to more than one axis."""
+    m = A.shape[0]
+    ax = colaxis[A.indices]
+    rows = np.repeat(np.arange(m), np.diff(A.indptr))
+    loc = ax >= 0
+    lo = np.full(m, np.iinfo(np.int64).max, dtype=np.int64)
+    hi = np.full(m, -1, dtype=np.int64)
+    np.minimum.at(lo, rows[loc], ax[loc])
+    np.maximum.at(hi, rows[loc], ax[loc])
+    return (hi >= 0) & (hi != lo)
 
 
 class _Posterior:
-    """The factorised, bordered KKT matrix and its selected inverse."""
+    """The factorised, bordered KKT matrix and its selected inverse.
 
-    def __init__(self, ls: LeastSquaresForm, model, group: int = 1, soften: float = 0.0):
+    When no row couples two axes at a node (the usual case: items per axis, error-model
+    parameters in the border), each axis is its own chain of nodes and the chains are
+    laid end to end (blocks of 3 unknowns instead of 3 d): cyclic reduction costs b^3 per
+    block, so that is d^2 times cheaper. A row that couples axes (``TrackLine``, a
+    ``HalfSpace`` with an oblique normal) makes one chain with all axes per node.
+    """
+
+    def __init__(self, ls: LeastSquaresForm, model, soften: float = 0.0):
         N, d = model.N, model.d
         n = model.size
-        colnode = np.full(n, -1, dtype=np.int64)
-        for a in range(d):
-            colnode[model.r_index(a)[1:]] = np.arange(1, N)
-            colnode[model.w_index(a)] = np.arange(N)
         D, E = ls.D.A.tocsr(), ls.E.A.tocsr()
         D.eliminate_zeros()  # an explicit zero must not tie a row to a node
         E.eliminate_zeros()
+        colaxis = np.full(n, -1, dtype=np.int64)
+        for a in range(d):
+            colaxis[model.r_index(a)[1:]] = a
+            colaxis[model.w_index(a)] = a
+        coupled = d > 1 and (bool(np.any(_axis_span(D, colaxis))) or bool(np.any(_axis_span(E, colaxis))))
+        self.chain = None if coupled or d == 1 else N   # nodes per independent chain
+        colnode = np.full(n, -1, dtype=np.int64)
+        for a in range(d):
+            off = 0 if coupled else a * N
+            colnode[model.r_index(a)[1:]] = off + np.arange(1, N)
+            colnode[model.w_index(a)] = off + np.arange(N)
         lo, hi = _row_nodes(D, colnode)
         span = hi - lo
         fold = (span <= 1) | (hi < 0)          # into D^T D: couples two neighbouring nodes at most
@@ -232,33 +259,39 @@ class _Posterior:
         espan = ehi - elo
         enode = np.where(ehi < 0, -1, np.where(espan <= 1, elo, np.where(espan == 2, elo + 1, -1)))
         fem = ls.eq_blocks[0][1]
-        enode[fem] = np.tile(np.arange(N), d)  # FEM row j of each axis sits at node j
+        per_axis = np.arange(N)
+        enode[fem] = (np.tile(per_axis, d) if coupled
+                      else np.concatenate([a * N + per_axis for a in range(d)]))  # FEM row j at node j
         rnode = np.where(span[rho] == 2, lo[rho] + 1, -1)
         nr, p = rho.size, E.shape[0]
         T = n + nr + p
         node = np.concatenate([colnode, rnode, enode])
-        node = np.where(node >= 0, node // group, -1)  # nodes grouped g at a time
         extra = np.zeros(T, dtype=np.int64)
         extra[n:] = 2
         extra[n + nr + np.arange(fem.start, fem.stop)] = 1
-        self.layout = _Layout(node, extra, -(-N // group), d * group)
+        self.layout = _Layout(node, extra, N if coupled else d * N, d if coupled else 1)
         H = (Df.T @ Df).tocsr()
+        del Df, D
         K = sp.bmat([[H, Dr.T, E.T], [Dr, -sp.identity(nr), None], [E, None, None]], format="csr")
+        del H, Dr, E
         self.n = n
-        self.s = s = _equilibrate(K)
-        Ks = K.tocoo()
-        Ks = sp.csr_matrix((Ks.data * s[Ks.row] * s[Ks.col], (Ks.row, Ks.col)), shape=K.shape)
+        self.first_multiplier = n + nr   # global indices from here on are multipliers
+        self.s, rows = _equilibrate(K)
+        s = self.s
+        i, j, v = rows, K.indices, K.data * s[rows] * s[K.indices]
+        del K
         if soften:  # hard items' multipliers: -soften on the (scaled) diagonal
-            reg = np.zeros(T)
-            reg[n + nr + fem.stop:] = -soften
-            Ks = (Ks + sp.diags(reg)).tocsr()
-        Ks = Ks.tocoo()
-        self._assemble(Ks)
+            extra_i = np.arange(n + nr + fem.stop, T)
+            i = np.concatenate([i, extra_i])
+            j = np.concatenate([j, extra_i])
+            v = np.concatenate([v, np.full(extra_i.size, -soften)])
+        self._assemble(i, j, v)
 
-    def _assemble(self, Ks: sp.coo_matrix) -> None:
+    def _assemble(self, i: np.ndarray, j: np.ndarray, v: np.ndarray) -> None:
+        """Scatter the scaled KKT entries ``(i, j, v)`` into node blocks, border coupling and
+        border block; factorise; selected inverse; the border's Schur complement."""
         lay = self.layout
         b, nb, k = lay.b, lay.nodes, lay.border.size
-        i, j, v = Ks.row, Ks.col, Ks.data
         ni, nj = lay.node[i], lay.node[j]
         Dg = np.zeros((nb, b, b))
         Ub = np.zeros((max(nb - 1, 0), b, b))
@@ -280,18 +313,46 @@ class _Posterior:
         used[lay.node[loc], lay.slot[loc]] = True
         pn, ps = np.nonzero(~used)
         Dg[pn, ps, ps] = 1.0  # padding: decoupled unit unknowns
-        self.cr = CyclicReduction(Dg, Ub)
-        self.Zd, self.Zu = self.cr.selected_inverse()
-        self.Y = self.cr.solve(Bk) if k else np.zeros((nb, b, 0))
+        del i, j, v, ni, nj
+        c = 1 if self.chain is None else nb // self.chain   # independent chains, factorised together
+        m = nb // c
+        Ufull = np.concatenate([Ub, np.zeros((1, b, b))])   # boundary blocks between chains are 0
+        self.cr = CyclicReduction(Dg.reshape(c, m, b, b), Ufull.reshape(c, m, b, b)[:, :m - 1])
+        del Dg, Ub, Ufull
+        Zd, Zu = self.cr.selected_inverse()
+        self.Zd = Zd.reshape(nb, b, b)
+        self.Zu = np.concatenate([Zu, np.zeros((c, 1, b, b))], axis=1).reshape(nb, b, b)[:nb - 1]
+        del Zd, Zu
+        self.Y = self.cr.solve(Bk.reshape(c, m, b, k)).reshape(nb, b, k) if k else np.zeros((nb, b, 0))
         S = C - np.einsum("nbk,nbl->kl", Bk, self.Y)
+        self.redundant = 0
         if k:
             try:
                 Sinv = equilibrated_inverse(S[None])[0]
-            except np.linalg.LinAlgError as exc:
-                raise np.linalg.LinAlgError(f"singular border Schur complement ({exc})") from exc
+            except np.linalg.LinAlgError:
+                Sinv = self._generalized_inverse(S)
         else:
             Sinv = np.zeros((0, 0))
         self.Sinv = 0.5 * (Sinv + Sinv.T)
+
+    def _generalized_inverse(self, S: np.ndarray) -> np.ndarray:
+        """A generalized inverse of a singular border block whose null space holds only
+        multipliers: hard rows that repeat each other (two average velocities whose sum
+        is the end positions). Any generalized inverse gives the same ``x`` block of the
+        KKT inverse, so the covariance is exact; a null direction that moves an unknown
+        (information that does not determine it) is refused."""
+        scale = np.sqrt(np.abs(S).max(axis=1))
+        scale[scale == 0] = 1.0
+        Ss = S / scale[:, None] / scale[None, :]
+        lam, V = np.linalg.eigh(0.5 * (Ss + Ss.T))
+        null = np.abs(lam) <= 1e-11 * np.abs(lam).max()
+        primal = self.layout.border < self.first_multiplier
+        moved = np.abs(V[primal][:, null]).max(initial=0.0) if primal.any() else 0.0
+        if moved > 1e-6 or null.all():
+            raise np.linalg.LinAlgError("singular border Schur complement: an unknown is not determined")
+        self.redundant = int(null.sum())
+        inv = (V[:, ~null] / lam[~null]) @ V[:, ~null].T
+        return inv / scale[:, None] / scale[None, :]
 
     # ------------------------------------------------------------ queries
     def _split(self, Q: sp.csr_matrix):
@@ -332,11 +393,13 @@ class _Posterior:
         a_n, b_n = n1[:, :, None], n2[:, None, :]
         a_s, b_s = s1[:, :, None], s2[:, None, :]
         real = (v1[:, :, None] != 0) & (v2[:, None, :] != 0)
+        if self.chain is not None:  # independent chains: no local coupling between them
+            real &= (a_n // self.chain) == (b_n // self.chain)
         dn = np.where(real, b_n - a_n, 0)
         if np.any(np.abs(dn) > 1):
             raise SolveError("uncertainty: a query row spans more than two nodes")
         nb = self.layout.nodes
-        z = np.where(dn == 0, self.Zd[a_n, a_s, b_s], 0.0)
+        z = np.where(real & (dn == 0), self.Zd[a_n, a_s, b_s], 0.0)
         if nb > 1:
             top = nb - 2
             z = np.where(dn == 1, self.Zu[np.clip(a_n, 0, top), a_s, b_s], z)
@@ -381,7 +444,7 @@ def posterior(form, x: np.ndarray, lam: float) -> Covariance:
     try:
         try:
             post = _Posterior(ls, model)
-        except np.linalg.LinAlgError:
+        except np.linalg.LinAlgError:  # a run of nodes singular on its own
             # hard items that fix a stretch of the trajectory on their own (a hard
             # zero-velocity interval) make some runs of nodes singular by themselves; their
             # multipliers are then given a tiny negative diagonal, i.e. they are treated as
@@ -404,7 +467,7 @@ def posterior(form, x: np.ndarray, lam: float) -> Covariance:
             state[:, k, i] = c
     params = post.params(model.l_index) if model.q else np.zeros((0, 0))
     resid = ls.D.value(x)
-    dof = int(ls.D.m - model.size + ls.E.m)
+    dof = int(ls.D.m - model.size + ls.E.m - post.redundant)  # independent hard rows only
     vf = float(resid @ resid / dof) if dof > 0 else float("nan")
     return Covariance(state=state, params=params, variance_factor=vf, dof=dof, exact=exact,
                       border=int(post.layout.border.size), block=int(post.layout.b), softened=soften)

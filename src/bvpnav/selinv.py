@@ -41,19 +41,19 @@ def equilibrated_inverse(blocks: np.ndarray) -> np.ndarray:
     condition number exceeds :data:`PIVOT_COND`: a block whose unknowns merely have
     different units is not refused, a singular one is.
     """
-    diag = np.sqrt(np.abs(blocks).max(axis=2))
+    diag = np.sqrt(np.abs(blocks).max(axis=-1))
     diag[diag == 0] = 1.0
     scale = 1.0 / diag
-    Bs = blocks * scale[:, :, None] * scale[:, None, :]
+    Bs = blocks * scale[..., :, None] * scale[..., None, :]
     try:
         inv_s = np.linalg.inv(Bs)
     except np.linalg.LinAlgError as exc:
         raise np.linalg.LinAlgError("singular pivot block") from exc
-    cond = np.abs(Bs).sum(axis=2).max(axis=1) * np.abs(inv_s).sum(axis=2).max(axis=1)
+    cond = np.abs(Bs).sum(axis=-1).max(axis=-1) * np.abs(inv_s).sum(axis=-1).max(axis=-1)
     bad = ~np.isfinite(cond) | (cond > PIVOT_COND)
     if np.any(bad):
         raise np.linalg.LinAlgError(f"singular pivot block (condition number {np.nanmax(cond):.1e})")
-    return inv_s * scale[:, :, None] * scale[:, None, :]
+    return inv_s * scale[..., :, None] * scale[..., None, :]
 
 
 def _t(a: np.ndarray) -> np.ndarray:
@@ -74,9 +74,10 @@ class CyclicReduction:
 
     Parameters
     ----------
-    D : ndarray, shape (n, b, b)
-        Diagonal blocks (each symmetric).
-    U : ndarray, shape (n - 1, b, b)
+    D : ndarray, shape (n, b, b) or (c, n, b, b)
+        Diagonal blocks (each symmetric); with a leading axis, ``c`` independent chains
+        of the same length factorised together.
+    U : ndarray, shape (n - 1, b, b) or (c, n - 1, b, b)
         Upper blocks, ``U[i] = A[i, i+1]`` (the lower ones are their transposes).
 
     Raises
@@ -109,56 +110,61 @@ class CyclicReduction:
     def __init__(self, D: np.ndarray, U: np.ndarray):
         D = np.asarray(D, dtype=float)
         U = np.asarray(U, dtype=float)
-        n, b, _ = D.shape
-        if U.shape != (max(n - 1, 0), b, b):
-            raise ValueError(f"upper blocks of shape {U.shape}; expected {(max(n - 1, 0), b, b)}")
+        self.batched = D.ndim == 4
+        if not self.batched:
+            D, U = D[None], U[None]
+        c, n, b, _ = D.shape
+        if U.shape != (c, max(n - 1, 0), b, b):
+            raise ValueError(f"upper blocks of shape {U.shape}; expected {(c, max(n - 1, 0), b, b)}")
         self.n, self.b = n, b
         self.levels: list[_Level] = []
         while n > 1:
             odd = np.arange(1, n, 2)
             no = odd.size
-            has_right = odd + 1 < n
-            no2 = int(has_right.sum())  # odd blocks with a right neighbour come first
-            Dinv = equilibrated_inverse(D[odd])
-            F1 = Dinv @ _t(U[odd - 1])            # D_o^{-1} A[o, o-1]
-            F2 = Dinv[:no2] @ U[odd[:no2]]        # D_o^{-1} A[o, o+1]
-            even = np.arange(0, n, 2)
-            Dn = D[even].copy()
+            no2 = int((odd + 1 < n).sum())  # odd blocks with a right neighbour come first
+            Dinv = equilibrated_inverse(D[:, odd])
+            F1 = Dinv @ _t(U[:, odd - 1])             # D_o^{-1} A[o, o-1]
+            F2 = Dinv[:, :no2] @ U[:, odd[:no2]]      # D_o^{-1} A[o, o+1]
+            Dn = D[:, 0::2].copy()
             # right odd neighbour o = e + 1 of even e (e = o - 1): A[e,o] D_o^-1 A[o,e]
-            Dn[:no] -= U[odd - 1] @ F1
+            Dn[:, :no] -= U[:, odd - 1] @ F1
             # left odd neighbour o = e - 1 of even e (e = o + 1): A[e,o] D_o^-1 A[o,e]
-            Dn[1:no2 + 1] -= _t(U[odd[:no2]]) @ F2
-            Un = -(U[odd[:no2] - 1] @ F2)         # between e = o - 1 and e + 2 = o + 1
+            Dn[:, 1:no2 + 1] -= _t(U[:, odd[:no2]]) @ F2
+            Un = -(U[:, odd[:no2] - 1] @ F2)          # between e = o - 1 and e + 2 = o + 1
             self.levels.append(_Level(n, U, Dinv, F1, F2))
-            D, U, n = 0.5 * (Dn + _t(Dn)), Un, even.size
+            D, U, n = 0.5 * (Dn + _t(Dn)), Un, Dn.shape[1]
         self._top = equilibrated_inverse(D)
 
     def solve(self, R: np.ndarray) -> np.ndarray:
-        """Solve ``A X = R`` for ``R`` of shape (n, b) or (n, b, k)."""
+        """Solve ``A X = R`` for ``R`` of shape (n, b) or (n, b, k) (with a leading chain
+        axis when the matrix has one)."""
         R = np.asarray(R, dtype=float)
-        vec = R.ndim == 2
+        if not self.batched:
+            R = R[None]
+        vec = R.ndim == 3
         r = R[..., None] if vec else R.copy()
         stack = []
         for lv in self.levels:
             odd = np.arange(1, lv.n, 2)
-            no2 = lv.F2.shape[0]
-            g = lv.Dinv @ r[odd]                  # D_o^{-1} r_o
-            rn = r[0::2].copy()
-            rn[:odd.size] -= lv.U[odd - 1] @ g
-            rn[1:no2 + 1] -= _t(lv.U[odd[:no2]]) @ g[:no2]
+            no2 = lv.F2.shape[1]
+            g = lv.Dinv @ r[:, odd]                   # D_o^{-1} r_o
+            rn = r[:, 0::2].copy()
+            rn[:, :odd.size] -= lv.U[:, odd - 1] @ g
+            rn[:, 1:no2 + 1] -= _t(lv.U[:, odd[:no2]]) @ g[:, :no2]
             stack.append(g)
             r = rn
         x = self._top @ r
         for lv, g in zip(reversed(self.levels), reversed(stack), strict=True):
             odd = np.arange(1, lv.n, 2)
-            no2 = lv.F2.shape[0]
-            xo = g - lv.F1 @ x[:odd.size]
-            xo[:no2] -= lv.F2 @ x[1:no2 + 1]
-            full = np.empty((lv.n,) + x.shape[1:])
-            full[0::2] = x
-            full[odd] = xo
+            no2 = lv.F2.shape[1]
+            xo = g - lv.F1 @ x[:, :odd.size]
+            xo[:, :no2] -= lv.F2 @ x[:, 1:no2 + 1]
+            full = np.empty((x.shape[0], lv.n) + x.shape[2:])
+            full[:, 0::2] = x
+            full[:, odd] = xo
             x = full
-        return x[..., 0] if vec else x
+        x = x[..., 0] if vec else x
+        return x if self.batched else x[0]
 
     def selected_inverse(self) -> tuple[np.ndarray, np.ndarray]:
         """The blocks of ``A^{-1}`` on the pattern of ``A``.
@@ -169,26 +175,29 @@ class CyclicReduction:
             ``Z[i, i]``.
         Zu : ndarray, shape (n - 1, b, b)
             ``Z[i, i+1]``.
+
+        With a leading chain axis when the matrix has one.
         """
         Zd = self._top.copy()
-        Zu = np.empty((0, self.b, self.b))
+        c = Zd.shape[0]
+        Zu = np.empty((c, 0, self.b, self.b))
         for lv in reversed(self.levels):
             odd = np.arange(1, lv.n, 2)
-            no, no2 = odd.size, lv.F2.shape[0]
+            no, no2 = odd.size, lv.F2.shape[1]
             # Z[o, o-1] and Z[o, o+1] from the even system's blocks
-            Zo_l = -(lv.F1 @ Zd[:no])
-            Zo_l[:no2] -= lv.F2 @ _t(Zu[:no2])
-            Zo_r = -(lv.F1[:no2] @ Zu[:no2]) - lv.F2 @ Zd[1:no2 + 1]
+            Zo_l = -(lv.F1 @ Zd[:, :no])
+            Zo_l[:, :no2] -= lv.F2 @ _t(Zu[:, :no2])
+            Zo_r = -(lv.F1[:, :no2] @ Zu[:, :no2]) - lv.F2 @ Zd[:, 1:no2 + 1]
             Zoo = lv.Dinv - lv.F1 @ _t(Zo_l)
-            Zoo[:no2] -= lv.F2 @ _t(Zo_r)
-            Zd_new = np.empty((lv.n, self.b, self.b))
-            Zd_new[0::2] = Zd
-            Zd_new[odd] = 0.5 * (Zoo + _t(Zoo))
-            Zu_new = np.empty((lv.n - 1, self.b, self.b))
-            Zu_new[odd - 1] = _t(Zo_l)             # Z[o-1, o]
-            Zu_new[odd[:no2]] = Zo_r               # Z[o, o+1]
+            Zoo[:, :no2] -= lv.F2 @ _t(Zo_r)
+            Zd_new = np.empty((c, lv.n, self.b, self.b))
+            Zd_new[:, 0::2] = Zd
+            Zd_new[:, odd] = 0.5 * (Zoo + _t(Zoo))
+            Zu_new = np.empty((c, lv.n - 1, self.b, self.b))
+            Zu_new[:, odd - 1] = _t(Zo_l)              # Z[o-1, o]
+            Zu_new[:, odd[:no2]] = Zo_r                # Z[o, o+1]
             Zd, Zu = Zd_new, Zu_new
-        return Zd, Zu
+        return (Zd, Zu) if self.batched else (Zd[0], Zu[0])
 
 
 def block_tridiagonal_dense(D: np.ndarray, U: np.ndarray) -> np.ndarray:
