@@ -48,7 +48,7 @@ extensions = [
 ]
 # No intersphinx: the build must work without network access.
 exclude_patterns = [
-    "_build", "_ext", "conf.py", "_readme_proposal.md", "**/.ipynb_checkpoints", "jupyter_execute",
+    "_build", "_ext", "conf.py", "**/.ipynb_checkpoints", "jupyter_execute",
 ]
 templates_path = ["_templates"]
 source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".py": "myst-nb"}

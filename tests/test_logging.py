@@ -221,8 +221,8 @@ def test_configure_keeps_python_from_showing_them_a_second_time(restore_logging)
 
 def test_tutorial_04_does_not_warn():
     """Tutorial 04 at 15 points warned 'at the edge' for an L-curve corner at 9e3 in
-    (1e-6, 1e6). (The README's `bvpnav lcurve` example still warns for GCV on the load
-    form: left for issue 20, see the session note.)"""
+    (1e-6, 1e6). (The README's `bvpnav lcurve` example: see
+    test_readme_lcurve_example_does_not_warn.)"""
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         readme = lambda_curve(table1_load(), rules=("lcurve", "quasi"))
@@ -304,3 +304,28 @@ def test_a_cli_run_from_python_leaves_no_handler_filter_or_level_behind(tmp_path
                  "--out", str(tmp_path / "out.csv")])
     assert code == 2 and "bvpnav: error:" in capsys.readouterr().err
     assert (list(logger.handlers), logger.level, list(warnings.filters)) == before
+
+
+def test_readme_lcurve_example_does_not_warn(tmp_path, capsys):
+    """The README's `bvpnav simulate tikhonov2011` + `bvpnav lcurve` lines: the load form's
+    default rules leave GCV out (its independence assumption fails on the mass-matrix
+    weighted residual, and its function falls to the edge of any range there), so the
+    example prints its choices and no warning; GCV stays in the acceleration form's
+    defaults and runs on the load form when asked for."""
+    from bvpnav.cli import default_rules, main
+
+    assert default_rules("load") == ("lcurve", "quasi")
+    assert "gcv" in default_rules("acceleration")
+    rec = tmp_path / "rec"
+    assert main(["simulate", "tikhonov2011", "--out", str(rec), "-q"]) == 0
+    capsys.readouterr()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert main(["lcurve", str(rec / "recording.csv"), "--spec", str(rec / "spec.toml"),
+                     "--plot", str(tmp_path / "l.png")]) == 0
+    out = capsys.readouterr()
+    assert "lcurve" in out.out and "quasi" in out.out and "gcv" not in out.out
+    assert "warning" not in (out.out + out.err).lower()
+    assert main(["lcurve", str(rec / "recording.csv"), "--spec", str(rec / "spec.toml"), "--rules", "gcv",
+                 "--plot", str(tmp_path / "g.png")]) == 0
+    assert "edge" in capsys.readouterr().out   # asked for, it runs and says where it landed

@@ -290,7 +290,7 @@ def test_columns_and_accessors_with_uncertainty():
     sol = _strapdown_3d().solve(solver="direct", uncertainty=True)
     cols = list(sol.trajectory.columns)
     assert cols[:6] == ["x", "y", "z", "vx", "vy", "vz"]
-    assert set(cols[6:]) == {"x_std", "y_std", "z_std", "vx_std", "vy_std", "vz_std"}
+    assert cols[6:] == ["x_std", "y_std", "z_std", "vx_std", "vy_std", "vz_std"]
     assert sol.position().shape == (sol.t.size, 3)       # the std columns are not axes
     assert list(sol.error_params_std.index) == list(sol.error_params.index)
     cov = sol.covariance("error_params")

@@ -378,3 +378,17 @@ def test_solve_recording_puts_the_std_columns_after_the_velocities(rec, tmp_path
     sol, _ = solve_recording(rec / "recording.csv", load_spec(rec / "spec.toml"), tmp_path / "a.csv")
     assert list(sol.trajectory.columns) == ["x", "y", "vx", "vy", *STD_COLUMNS]
     assert list(pd.read_csv(tmp_path / "a.csv").columns) == ["t", *sol.trajectory.columns]
+
+
+@pytest.mark.parametrize("header, ours", [
+    ("t,x,vx", True), ("t,x,vx,x_std,vx_std", True),
+    ("t,x,y,vx,vy,x_std,y_std,vx_std,vy_std", True),
+    ("t,x,vx,vx_std,x_std", False), ("t,x,vx,x_std", False), ("t,x,vx,y_std,vy_std", False)])
+def test_a_trajectory_with_std_columns_is_recognised_as_bvpnavs(tmp_path, header, ours):
+    """An interrupted batch run leaves a trajectory without its JSON; the next run into that
+    folder may replace it only if it is recognisably bvpnav's own output, std columns too."""
+    from bvpnav.io import _trajectory_columns
+
+    path = tmp_path / "rec.csv"
+    path.write_text(header + "\n" + ",".join(["0"] * len(header.split(","))) + "\n")
+    assert _trajectory_columns(path) is ours

@@ -1109,7 +1109,8 @@ def _starts_like_summary(path: Path) -> bool:
 
 
 def _trajectory_columns(path: Path) -> bool:
-    """Whether the table's columns are a bvpnav trajectory's: ``t``, positions, ``v<axis>``."""
+    """Whether the table's columns are a bvpnav trajectory's: ``t``, positions, ``v<axis>``,
+    optionally followed by the standard deviation of each (``<column>_std``)."""
     try:
         if path.suffix.lower() == ".csv":
             with open(path, encoding="utf-8", errors="replace", newline="") as fh:
@@ -1120,9 +1121,13 @@ def _trajectory_columns(path: Path) -> bool:
             cols = list(pq.read_schema(path).names)
     except Exception:  # unreadable: not recognisably ours
         return False
-    k = (len(cols) - 1) // 2
-    return (len(cols) >= 3 and len(cols) % 2 == 1 and cols[0] == "t"
-            and cols[1 + k:] == ["v" + c for c in cols[1:1 + k]])
+    std = [c for c in cols if c.endswith("_std")]
+    base = cols[:len(cols) - len(std)]
+    if std and std != [c + "_std" for c in base[1:]]:
+        return False
+    k = (len(base) - 1) // 2
+    return (len(base) >= 3 and len(base) % 2 == 1 and base[0] == "t"
+            and base[1 + k:] == ["v" + c for c in base[1:1 + k]])
 
 
 def check_implicit_outputs(outputs: dict, fix: str) -> None:

@@ -14,7 +14,7 @@ Presets
 ``low``, ``default`` and ``high`` map to each solver's own options (below) and to the
 relative tolerance of bvpnav's verification (:data:`bvpnav.backends.VERIFY_RTOL`).
 Clarabel's static regularization is switched off in every preset: with it on, the FEM
-problems at N >= 1e5 fail to converge (measured; see README "Solvers").
+problems at N >= 1e5 fail to converge (measured; see docs/guide/solvers.md).
 """
 
 from __future__ import annotations
@@ -65,8 +65,8 @@ PRESETS: dict[str, dict[str, dict[str, Any]]] = {
 }
 
 #: Peak resident bytes per sample and axis, measured at N = 1,000,000 (one axis, Table 2
-#: shape, each run in its own process, data and problem included; README "Comparing
-#: solvers"): Clarabel 5.75 GB (acceleration form; the load form was not run). Other cvxpy
+#: shape, each run in its own process, data and problem included; docs/results.md and the
+#: README's memory line): Clarabel 5.75 GB (acceleration form; the load form was not run). Other cvxpy
 #: solvers (not measured) are taken as Clarabel: cvxpy's compiled problem dominates.
 CVXPY_MEMORY = {"acceleration": 5750.0, "load": 5750.0}
 

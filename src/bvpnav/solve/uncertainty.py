@@ -80,8 +80,9 @@ def attach_uncertainty(sol: Solution, form, how) -> Solution:
     state = cov.state * k
     rstd, vstd = (np.sqrt(np.clip(np.diagonal(state, axis1=1, axis2=2), 0, None))[:, s]
                   for s in (slice(0, model.d), slice(model.d, None)))
-    for a, ax in enumerate(model.axes):
+    for a, ax in enumerate(model.axes):  # x_std, y_std, ..., then vx_std, ...: as the values
         sol.trajectory[f"{ax}_std"] = rstd[:, a]
+    for a, ax in enumerate(model.axes):
         sol.trajectory[f"v{ax}_std"] = vstd[:, a]
     sol._cov["state"] = state
     if model.q and form.error_model is not None:
