@@ -40,6 +40,7 @@ from .io import (
     check_table_path,
     file_fingerprint,
     output_lock,
+    plain_json,
     read_recording,
     remove_stale_temporaries,
     summary,
@@ -136,36 +137,6 @@ def fingerprint(path, spec_text: str | None, solver=None, lam=None, fmt: str | N
             "options": opts, "recording": recording or _recording_fingerprint(path)}
 
 
-def _std_columns_last(sol) -> None:
-    """Order ``sol.trajectory``'s columns as written: positions, velocities, then the
-    position standard deviations and the velocity ones, each in axis order (``x, y, vx,
-    vy, x_std, y_std, vx_std, vy_std``). Only the order changes; without standard
-    deviations nothing does."""
-    cols = list(sol.trajectory.columns)
-    base = [c for c in cols if not c.endswith("_std")]
-    if len(base) == len(cols):
-        return
-    std = [c + "_std" for c in base if c + "_std" in cols]
-    order = base + std + [c for c in cols if c not in base and c not in std]
-    if order != cols:
-        sol.trajectory = sol.trajectory[order]
-
-
-def _plain(v):
-    """A JSON-ready copy: numpy scalars and arrays as Python values, non-finite floats as None."""
-    if isinstance(v, dict):
-        return {str(k): _plain(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple, np.ndarray)):
-        return [_plain(x) for x in (v.tolist() if isinstance(v, np.ndarray) else v)]
-    if isinstance(v, np.generic):
-        v = v.item()
-    if isinstance(v, float) and not np.isfinite(v):
-        return None
-    if isinstance(v, (str, int, float, bool)) or v is None:
-        return v
-    return str(v)
-
-
 def uncertainty_summary(sol) -> dict | None:
     """The ``uncertainty`` record of a JSON summary, or None for a solve without it.
 
@@ -186,11 +157,11 @@ def uncertainty_summary(sol) -> dict | None:
     rec = sol.stats.get("uncertainty")
     if not rec:
         return None
-    out = _plain(dict(rec))
+    out = plain_json(dict(rec))
     cols = [c for c in sol.trajectory.columns if c.endswith("_std")]
     out["columns"] = cols
-    out["std"] = {c[: -len("_std")]: {"median": _plain(float(np.median(sol.trajectory[c]))),
-                                      "max": _plain(float(np.max(sol.trajectory[c])))}
+    out["std"] = {c[: -len("_std")]: {"median": plain_json(float(np.median(sol.trajectory[c]))),
+                                      "max": plain_json(float(np.max(sol.trajectory[c])))}
                   for c in cols if len(sol.trajectory)}
     return out
 
@@ -203,7 +174,7 @@ def _add_uncertainty(summ: dict, sol) -> None:
     std = getattr(sol, "error_params_std", None)
     for k, entry in summ.get("error_model", {}).items():
         if std is not None and k in std.index:
-            entry["std"] = _plain(float(std[k]))
+            entry["std"] = plain_json(float(std[k]))
     summ["uncertainty"] = rec
 
 
@@ -274,7 +245,6 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     if (now["size"], now["sha256"]) != (rec_fp["size"], rec_fp["sha256"]):
         raise InputError(f"recording {str(path)!r} changed while it was being solved; nothing was written: "
                          "wait until it is complete and run again")
-    _std_columns_last(sol)
     write_trajectory(sol, out)
     written = file_fingerprint(out)
     summ = summary(sol, prob)

@@ -859,25 +859,30 @@ def write_trajectory(solution, path: str | os.PathLike) -> None:
     write_table(solution.trajectory.reset_index(), path)
 
 
+def plain_json(v):
+    """A JSON-ready copy: dicts, lists, tuples and arrays recursively, numpy scalars as Python
+    values, non-finite floats as None, anything else as its text."""
+    import numpy as np
+
+    if isinstance(v, dict):
+        return {str(k): plain_json(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [plain_json(x) for x in v]
+    if isinstance(v, np.ndarray):
+        return plain_json(v.tolist())
+    if isinstance(v, np.generic):
+        v = v.item()
+    if isinstance(v, float) and not np.isfinite(v):
+        return None
+    if isinstance(v, (str, int, float, bool)) or v is None:
+        return v
+    return str(v)
+
+
 def summary(solution, problem) -> dict:
     """A JSON-ready summary: lambda and rule, error-model estimates with units, solver
     statistics and item residuals."""
-    import numpy as np
 
-    def clean(v):
-        if isinstance(v, dict):
-            return {str(k): clean(x) for k, x in v.items()}
-        if isinstance(v, (list, tuple)):
-            return [clean(x) for x in v]
-        if isinstance(v, np.ndarray):
-            return clean(v.tolist())
-        if isinstance(v, np.generic):
-            v = v.item()
-        if isinstance(v, float) and not np.isfinite(v):
-            return None
-        if isinstance(v, (str, int, float, bool)) or v is None:
-            return v
-        return str(v)
 
     units = {}
     em = problem.error_model
@@ -887,7 +892,7 @@ def summary(solution, problem) -> dict:
     st = solution.stats
     keep = ("solver", "status", "verified", "accuracy", "iterations", "compile_time", "solve_time",
             "wall_time", "factorization", "verification", "attempts", "demoted", "sequential")
-    return clean({
+    return plain_json({
         "lam": solution.lam, "lam_rule": solution.lam_rule,
         "error_model": {k: {"estimate": float(v), "units": units.get(k, "")}
                         for k, v in solution.error_params.items()},
