@@ -55,14 +55,25 @@ def exact_piecewise_linear(t, acc, r0, v0):
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
-def load_example(name: str):
-    """Import ``examples/<name>.py`` afresh as module ``_example_<name>`` (registered in
-    ``sys.modules`` so that dataclasses and inspect can find it)."""
-    spec = importlib.util.spec_from_file_location(f"_example_{name}", EXAMPLES / f"{name}.py")
+def _load(module: str, path: Path):
+    spec = importlib.util.spec_from_file_location(module, path)
     mod = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = mod
     spec.loader.exec_module(mod)
     return mod
+
+
+def load_example(name: str):
+    """Import ``examples/<name>.py`` afresh as module ``_example_<name>`` (registered in
+    ``sys.modules`` so that dataclasses and inspect can find it)."""
+    return _load(f"_example_{name}", EXAMPLES / f"{name}.py")
+
+
+def load_benchmark_module(name: str):
+    """Import ``examples/benchmarks/<name>.py`` (a module the benchmark scripts import as
+    ``from <name> import ...``, e.g. ``_calibration``) afresh as module ``_benchmark_<name>``,
+    registered in ``sys.modules`` like :func:`load_example`'s."""
+    return _load(f"_benchmark_{name}", EXAMPLES / "benchmarks" / f"{name}.py")
 
 
 # ------------------------------------------------------------ the 2011 paper's Table 1 problem
