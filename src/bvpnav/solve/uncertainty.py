@@ -78,8 +78,7 @@ def attach_uncertainty(sol: Solution, form, how) -> Solution:
     if not np.isfinite(k):
         k = 1.0
     state = cov.state * k
-    rstd, vstd = (np.sqrt(np.clip(np.diagonal(state, axis1=1, axis2=2), 0, None))[:, s]
-                  for s in (slice(0, model.d), slice(model.d, None)))
+    rstd, vstd = (np.sqrt(k) * s for s in cov.std())
     for a, ax in enumerate(model.axes):  # x_std, y_std, ..., then vx_std, ...: as the values
         sol.trajectory[f"{ax}_std"] = rstd[:, a]
     for a, ax in enumerate(model.axes):
