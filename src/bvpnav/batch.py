@@ -150,9 +150,9 @@ def uncertainty_summary(sol) -> dict | None:
     dict or None
         ``sol.stats["uncertainty"]`` (``scale``: ``"stated"`` or ``"scaled"``,
         ``variance_factor``, ``dof``, ``model``, ``method``, ``border``, ``block``,
-        ``softened``, ``time``) as plain JSON values, with ``columns`` (the trajectory's
-        standard-deviation columns) and ``std``: the median and largest standard deviation
-        of each (m or m/s).
+        ``hard_rows_in_border``, ``border_condition``, ``pivot_condition``, ``time``) as plain
+        JSON values, with ``columns`` (the trajectory's standard-deviation columns) and
+        ``std``: the median and largest standard deviation of each (m or m/s).
     """
     rec = sol.stats.get("uncertainty")
     if not rec:

@@ -46,16 +46,19 @@ from .errors import InputError, SolveError
 from .formulation import as_formulation
 from .lsq import LeastSquaresForm, least_squares_form
 from .model import Affine
-from .selinv import CyclicReduction, equilibrated_inverse
+from .selinv import CyclicReduction, equilibrated_inverse, reset_worst_pivot, worst_pivot
 
-__all__ = ["Covariance", "posterior", "quadratic_model", "SOFTEN"]
+__all__ = ["Covariance", "posterior", "quadratic_model", "MAX_BORDER_ROWS", "BORDER_COND_WARN"]
 
-#: Variance (in equilibrated units, where the KKT entries are about 1) given to the rows of
-#: hard items when the exact block pivots are singular: the hard items then act as soft
-#: ones with a standard deviation of 1e-5 of those units, which changes the covariance by
-#: about 1e-4 relative (measured: 5.5e-5 on the test suite's every-item-kind problem) and
-#: keeps every pivot's condition number near 1e10.
-SOFTEN = 1e-10
+#: Most hard-item rows the fallback layout takes into the border (each one costs a
+#: right-hand side of N blocks); beyond it such problems are refused with the fix.
+MAX_BORDER_ROWS = 2000
+
+#: Equilibrated condition number (of the border's Schur complement, or of a block pivot)
+#: above which the standard deviations are flagged as possibly inaccurate: their error
+#: grows like the condition number times the rounding unit (measured: 2e-7 at 6e12, 0.2
+#: at 1e14, below 1e-9 under 1e10), as with nearly repeated hard rows.
+BORDER_COND_WARN = 1e10
 
 
 def quadratic_model(form, x: np.ndarray, lam: float) -> tuple[LeastSquaresForm, bool]:
@@ -109,9 +112,15 @@ class Covariance:
         velocities, first positions, non-local rows).
     block : int
         Size of the node blocks of the block-tridiagonal part.
-    softened : float
-        0, or the variance (in equilibrated units, ~1) given to the hard items' rows
-        because some stretch of nodes was singular on its own (see :data:`SOFTEN`).
+    hard_rows_in_border : int
+        0, or how many hard-item rows were moved into the border because some run of
+        nodes was singular on its own with them (a hard zero-velocity interval): the
+        covariance is exact either way.
+    border_condition : float
+        Equilibrated condition number of the border's Schur complement (of its
+        non-null part when hard rows repeat each other).
+    pivot_condition : float
+        The largest equilibrated condition number of the block pivots.
     """
 
     state: np.ndarray
@@ -121,7 +130,9 @@ class Covariance:
     exact: bool
     border: int
     block: int
-    softened: float = 0.0
+    hard_rows_in_border: int = 0
+    border_condition: float = 1.0
+    pivot_condition: float = 1.0
 
     def std(self) -> tuple[np.ndarray, np.ndarray]:
         """Standard deviations of positions (m) and velocities (m/s), each (N, d)."""
@@ -231,7 +242,7 @@ class _Posterior:
     ``HalfSpace`` with an oblique normal) makes one chain with all axes per node.
     """
 
-    def __init__(self, ls: LeastSquaresForm, model, soften: float = 0.0):
+    def __init__(self, ls: LeastSquaresForm, model, hard_to_border: bool = False):
         N, d = model.N, model.d
         n = model.size
         D, E = ls.D.A.tocsr(), ls.E.A.tocsr()
@@ -259,6 +270,8 @@ class _Posterior:
         espan = ehi - elo
         enode = np.where(ehi < 0, -1, np.where(espan <= 1, elo, np.where(espan == 2, elo + 1, -1)))
         fem = ls.eq_blocks[0][1]
+        if hard_to_border:  # the fallback: every hard-item row through the Schur complement
+            enode[fem.stop:] = -1
         per_axis = np.arange(N)
         enode[fem] = (np.tile(per_axis, d) if coupled
                       else np.concatenate([a * N + per_axis for a in range(d)]))  # FEM row j at node j
@@ -280,11 +293,6 @@ class _Posterior:
         s = self.s
         i, j, v = rows, K.indices, K.data * s[rows] * s[K.indices]
         del K
-        if soften:  # hard items' multipliers: -soften on the (scaled) diagonal
-            extra_i = np.arange(n + nr + fem.stop, T)
-            i = np.concatenate([i, extra_i])
-            j = np.concatenate([j, extra_i])
-            v = np.concatenate([v, np.full(extra_i.size, -soften)])
         self._assemble(i, j, v)
 
     def _assemble(self, i: np.ndarray, j: np.ndarray, v: np.ndarray) -> None:
@@ -326,9 +334,13 @@ class _Posterior:
         self.Y = self.cr.solve(Bk.reshape(c, m, b, k)).reshape(nb, b, k) if k else np.zeros((nb, b, 0))
         S = C - np.einsum("nbk,nbl->kl", Bk, self.Y)
         self.redundant = 0
+        self.border_cond = 1.0
         if k:
             try:
-                Sinv = equilibrated_inverse(S[None])[0]
+                Sinv = equilibrated_inverse(S[None], record=False)[0]
+                scale = np.sqrt(np.abs(S).max(axis=1))
+                scale[scale == 0] = 1.0
+                self.border_cond = float(np.linalg.cond(S / scale[:, None] / scale[None, :]))
             except np.linalg.LinAlgError:
                 Sinv = self._generalized_inverse(S)
         else:
@@ -345,12 +357,17 @@ class _Posterior:
         scale[scale == 0] = 1.0
         Ss = S / scale[:, None] / scale[None, :]
         lam, V = np.linalg.eigh(0.5 * (Ss + Ss.T))
-        null = np.abs(lam) <= 1e-11 * np.abs(lam).max()
+        # exactly repeated rows leave eigenvalues at rounding (2e-17 relative on the shuttle
+        # sample); nearly repeated ones (an interval ending 1e-4 s from a sample) leave
+        # 1e-14: those are kept, and the condition number they give is warned about
+        null = np.abs(lam) <= 1e-15 * np.abs(lam).max()
         primal = self.layout.border < self.first_multiplier
         moved = np.abs(V[primal][:, null]).max(initial=0.0) if primal.any() else 0.0
         if moved > 1e-6 or null.all():
             raise np.linalg.LinAlgError("singular border Schur complement: an unknown is not determined")
         self.redundant = int(null.sum())
+        kept = np.abs(lam[~null])
+        self.border_cond = float(kept.max() / kept.min())
         inv = (V[:, ~null] / lam[~null]) @ V[:, ~null].T
         return inv / scale[:, None] / scale[None, :]
 
@@ -440,22 +457,30 @@ def posterior(form, x: np.ndarray, lam: float) -> Covariance:
     form = as_formulation(form)
     model = form.model
     ls, exact = quadratic_model(form, x, lam)
-    post, soften = None, 0.0
+    hard_rows = int(ls.E.m - ls.eq_blocks[0][1].stop)
+    moved = 0
     try:
         try:
+            reset_worst_pivot()
             post = _Posterior(ls, model)
-        except np.linalg.LinAlgError:  # a run of nodes singular on its own
+        except np.linalg.LinAlgError:
             # hard items that fix a stretch of the trajectory on their own (a hard
-            # zero-velocity interval) make some runs of nodes singular by themselves; their
-            # multipliers are then given a tiny negative diagonal, i.e. they are treated as
-            # soft rows with a standard deviation of 1e-5 of the scaled units (SOFTEN)
-            soften = SOFTEN
-            post = _Posterior(ls, model, soften=soften)
+            # zero-velocity interval) can make a run of nodes singular by itself: their rows
+            # then go through the border's Schur complement, which stays exact
+            if hard_rows > MAX_BORDER_ROWS:
+                raise InputError(
+                    f"uncertainty: {hard_rows} hard-item rows fix stretches of the trajectory on "
+                    f"their own, more than the {MAX_BORDER_ROWS} the O(N) covariance can take "
+                    "through its border: give the long hard items (zero-velocity intervals) "
+                    "mode='soft' with a small sigma (e.g. sigma=1e-3 m/s), or solve without "
+                    "uncertainty") from None
+            moved = hard_rows
+            reset_worst_pivot()
+            post = _Posterior(ls, model, hard_to_border=True)
     except np.linalg.LinAlgError as exc:
         raise InputError(f"uncertainty: the covariance does not exist ({exc}): the information "
-                         "does not determine every unknown, or hard items repeat each other at "
-                         "one instant. Add position or velocity information, give repeated "
-                         "items mode='soft', or solve without uncertainty") from exc
+                         "does not determine every unknown. Add position or velocity "
+                         "information, or solve without uncertainty") from exc
     d = model.d
     queries = [post.query(model.node_position(a).A) for a in range(d)]
     queries += [post.query(model.node_velocity(a).A) for a in range(d)]
@@ -470,4 +495,6 @@ def posterior(form, x: np.ndarray, lam: float) -> Covariance:
     dof = int(ls.D.m - model.size + ls.E.m - post.redundant)  # independent hard rows only
     vf = float(resid @ resid / dof) if dof > 0 else float("nan")
     return Covariance(state=state, params=params, variance_factor=vf, dof=dof, exact=exact,
-                      border=int(post.layout.border.size), block=int(post.layout.b), softened=soften)
+                      border=int(post.layout.border.size), block=int(post.layout.b),
+                      hard_rows_in_border=moved, border_condition=post.border_cond,
+                      pivot_condition=worst_pivot())

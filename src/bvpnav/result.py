@@ -295,9 +295,12 @@ class Uncertainty(_Record):
         Unknowns handled through the Schur complement.
     block : int
         Size of the node blocks.
-    softened : float
-        0, or the scaled variance given to hard items' rows (see
-        :data:`bvpnav.covariance.SOFTEN`).
+    hard_rows_in_border : int
+        Hard-item rows taken through the Schur complement because a run of nodes was
+        singular with them (0 normally; the covariance is exact either way).
+    border_condition, pivot_condition : float
+        Equilibrated condition numbers of the border's Schur complement and the worst
+        block pivot (above :data:`bvpnav.covariance.BORDER_COND_WARN` the solution warns).
     time : float
         Seconds spent.
     """
@@ -309,7 +312,9 @@ class Uncertainty(_Record):
     method: str
     border: int
     block: int
-    softened: float
+    hard_rows_in_border: int
+    border_condition: float
+    pivot_condition: float
     time: float
 
 

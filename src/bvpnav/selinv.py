@@ -29,11 +29,25 @@ import numpy as np
 
 __all__ = ["CyclicReduction", "block_tridiagonal_dense", "equilibrated_inverse", "PIVOT_COND"]
 
+#: The largest pivot condition number seen since :func:`reset_worst_pivot` (a diagnostic).
+_WORST = [0.0]
+
+
+def reset_worst_pivot() -> None:
+    """Start recording the worst pivot condition number (:func:`worst_pivot`) afresh."""
+    _WORST[0] = 0.0
+
+
+def worst_pivot() -> float:
+    """The largest equilibrated pivot condition number since :func:`reset_worst_pivot`."""
+    return _WORST[0]
+
+
 #: Largest infinity-norm condition number accepted for a pivot block.
 PIVOT_COND = 1e13
 
 
-def equilibrated_inverse(blocks: np.ndarray) -> np.ndarray:
+def equilibrated_inverse(blocks: np.ndarray, record: bool = True) -> np.ndarray:
     """Inverses of a stack of square blocks (k, b, b), refusing singular ones.
 
     Each block is scaled symmetrically to unit row maxima before LU with partial pivoting,
@@ -50,6 +64,8 @@ def equilibrated_inverse(blocks: np.ndarray) -> np.ndarray:
     except np.linalg.LinAlgError as exc:
         raise np.linalg.LinAlgError("singular pivot block") from exc
     cond = np.abs(Bs).sum(axis=-1).max(axis=-1) * np.abs(inv_s).sum(axis=-1).max(axis=-1)
+    if record and cond.size:  # the pivots' worst, for the diagnostic
+        _WORST[0] = max(_WORST[0], float(np.nanmax(cond)))
     bad = ~np.isfinite(cond) | (cond > PIVOT_COND)
     if np.any(bad):
         raise np.linalg.LinAlgError(f"singular pivot block (condition number {np.nanmax(cond):.1e})")

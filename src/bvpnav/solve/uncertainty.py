@@ -27,7 +27,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats as _stats
 
-from ..covariance import posterior
+from ..covariance import BORDER_COND_WARN, posterior
 from ..formulation import as_formulation
 from ..log import warn
 from ..result import Solution, Uncertainty
@@ -100,14 +100,23 @@ def attach_uncertainty(sol: Solution, form, how) -> Solution:
     if msg is not None:  # a choice the user can change: also through warnings
         sol.warnings.append(msg)
         warn(msg)
-    if cov.softened:
+    worst = max(cov.border_condition, cov.pivot_condition)
+    if worst > BORDER_COND_WARN:
         sol.warnings.append(
-            f"uncertainty: some stretch of nodes is fixed by hard items on its own, so their rows "
-            f"were given a tiny variance ({cov.softened:g} in scaled units): the standard "
-            "deviations are accurate to about 1e-4 relative, and those of what the hard items fix "
-            "are near zero rather than zero")
+            f"uncertainty: the covariance computation is ill-conditioned (condition number "
+            f"{worst:.1e}; errors grow like it times 1e-16): hard items that nearly repeat each other (two "
+            "at almost the same instant, or an interval that ends a hair from a sample) leave "
+            "the standard deviations inaccurate; merge such items or give one of them "
+            "mode='soft'")
+    if sol.lam_rule != "fixed" and scale == "stated":
+        sol.warnings.append(
+            f"uncertainty: lam = {sol.lam:.4g} was chosen by {sol.lam_rule!r}, so the stated "
+            "covariance weighs each soft item as if its sigma were sigma/sqrt(lam); "
+            "uncertainty='scaled' calibrates it by the residuals instead")
     rec = Uncertainty(scale=scale, variance_factor=float(cov.variance_factor), dof=int(cov.dof),
                       model=what, method="block-tridiagonal selected inversion (cyclic reduction) "
                       "with the border by its Schur complement", border=cov.border, block=cov.block,
-                      softened=float(cov.softened), time=time.perf_counter() - t0)
+                      hard_rows_in_border=int(cov.hard_rows_in_border),
+                      border_condition=float(cov.border_condition),
+                      pivot_condition=float(cov.pivot_condition), time=time.perf_counter() - t0)
     return sol.record(uncertainty=rec)
