@@ -46,7 +46,7 @@ from .errors import InputError, SolveError
 from .formulation import as_formulation
 from .lsq import LeastSquaresForm, least_squares_form
 from .model import Affine
-from .selinv import CyclicReduction, equilibrated_inverse, reset_worst_pivot, worst_pivot
+from .selinv import CyclicReduction, equilibrated_inverse, symmetric_scale
 
 __all__ = ["Covariance", "posterior", "quadratic_model", "MAX_BORDER_ROWS", "BORDER_COND_WARN"]
 
@@ -186,7 +186,8 @@ class _Layout:
 
 
 def _row_nodes(A: sp.csr_matrix, colnode: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Lowest and highest node of each row's local columns (``lo > hi`` for rows with none)."""
+    """Lowest and highest label (node, or axis) of each row's columns with a label >= 0
+    (``lo > hi`` for rows with none)."""
     A = sp.csr_matrix(A)
     m = A.shape[0]
     nn = colnode[A.indices]
@@ -219,19 +220,6 @@ def _equilibrate(K: sp.csr_matrix, sweeps: int = 4) -> tuple[np.ndarray, np.ndar
     return s, rows
 
 
-def _axis_span(A: sp.csr_matrix, colaxis: np.ndarray) -> np.ndarray:
-    """True for rows whose node columns belong to more than one axis."""
-    m = A.shape[0]
-    ax = colaxis[A.indices]
-    rows = np.repeat(np.arange(m), np.diff(A.indptr))
-    loc = ax >= 0
-    lo = np.full(m, np.iinfo(np.int64).max, dtype=np.int64)
-    hi = np.full(m, -1, dtype=np.int64)
-    np.minimum.at(lo, rows[loc], ax[loc])
-    np.maximum.at(hi, rows[loc], ax[loc])
-    return (hi >= 0) & (hi != lo)
-
-
 class _Posterior:
     """The factorised, bordered KKT matrix and its selected inverse.
 
@@ -252,7 +240,8 @@ class _Posterior:
         for a in range(d):
             colaxis[model.r_index(a)[1:]] = a
             colaxis[model.w_index(a)] = a
-        coupled = d > 1 and (bool(np.any(_axis_span(D, colaxis))) or bool(np.any(_axis_span(E, colaxis))))
+        coupled = d > 1 and any(bool(np.any((hi >= 0) & (hi != lo)))  # a row on two axes
+                                for lo, hi in (_row_nodes(D, colaxis), _row_nodes(E, colaxis)))
         self.chain = None if coupled or d == 1 else N   # nodes per independent chain
         colnode = np.full(n, -1, dtype=np.int64)
         for a in range(d):
@@ -337,10 +326,9 @@ class _Posterior:
         self.border_cond = 1.0
         if k:
             try:
-                Sinv = equilibrated_inverse(S[None], record=False)[0]
-                scale = np.sqrt(np.abs(S).max(axis=1))
-                scale[scale == 0] = 1.0
-                self.border_cond = float(np.linalg.cond(S / scale[:, None] / scale[None, :]))
+                Sinv = equilibrated_inverse(S[None])[0]
+                scale = symmetric_scale(S)
+                self.border_cond = float(np.linalg.cond(S * scale[:, None] * scale[None, :]))
             except np.linalg.LinAlgError:
                 Sinv = self._generalized_inverse(S)
         else:
@@ -353,9 +341,8 @@ class _Posterior:
         is the end positions). Any generalized inverse gives the same ``x`` block of the
         KKT inverse, so the covariance is exact; a null direction that moves an unknown
         (information that does not determine it) is refused."""
-        scale = np.sqrt(np.abs(S).max(axis=1))
-        scale[scale == 0] = 1.0
-        Ss = S / scale[:, None] / scale[None, :]
+        scale = symmetric_scale(S)
+        Ss = S * scale[:, None] * scale[None, :]
         lam, V = np.linalg.eigh(0.5 * (Ss + Ss.T))
         # exactly repeated rows leave eigenvalues at rounding (2e-17 relative on the shuttle
         # sample); nearly repeated ones (an interval ending 1e-4 s from a sample) leave
@@ -369,7 +356,7 @@ class _Posterior:
         kept = np.abs(lam[~null])
         self.border_cond = float(kept.max() / kept.min())
         inv = (V[:, ~null] / lam[~null]) @ V[:, ~null].T
-        return inv / scale[:, None] / scale[None, :]
+        return inv * scale[:, None] * scale[None, :]
 
     # ------------------------------------------------------------ queries
     def _split(self, Q: sp.csr_matrix):
@@ -461,7 +448,6 @@ def posterior(form, x: np.ndarray, lam: float) -> Covariance:
     moved = 0
     try:
         try:
-            reset_worst_pivot()
             post = _Posterior(ls, model)
         except np.linalg.LinAlgError:
             # hard items that fix a stretch of the trajectory on their own (a hard
@@ -475,7 +461,6 @@ def posterior(form, x: np.ndarray, lam: float) -> Covariance:
                     "mode='soft' with a small sigma (e.g. sigma=1e-3 m/s), or solve without "
                     "uncertainty") from None
             moved = hard_rows
-            reset_worst_pivot()
             post = _Posterior(ls, model, hard_to_border=True)
     except np.linalg.LinAlgError as exc:
         raise InputError(f"uncertainty: the covariance does not exist ({exc}): the information "
@@ -497,4 +482,4 @@ def posterior(form, x: np.ndarray, lam: float) -> Covariance:
     return Covariance(state=state, params=params, variance_factor=vf, dof=dof, exact=exact,
                       border=int(post.layout.border.size), block=int(post.layout.b),
                       hard_rows_in_border=moved, border_condition=post.border_cond,
-                      pivot_condition=worst_pivot())
+                      pivot_condition=post.cr.pivot_condition)

@@ -27,49 +27,42 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["CyclicReduction", "block_tridiagonal_dense", "equilibrated_inverse", "PIVOT_COND"]
-
-#: The largest pivot condition number seen since :func:`reset_worst_pivot` (a diagnostic).
-_WORST = [0.0]
-
-
-def reset_worst_pivot() -> None:
-    """Start recording the worst pivot condition number (:func:`worst_pivot`) afresh."""
-    _WORST[0] = 0.0
-
-
-def worst_pivot() -> float:
-    """The largest equilibrated pivot condition number since :func:`reset_worst_pivot`."""
-    return _WORST[0]
-
+__all__ = ["CyclicReduction", "block_tridiagonal_dense", "equilibrated_inverse", "symmetric_scale",
+           "PIVOT_COND"]
 
 #: Largest infinity-norm condition number accepted for a pivot block.
 PIVOT_COND = 1e13
 
 
-def equilibrated_inverse(blocks: np.ndarray, record: bool = True) -> np.ndarray:
-    """Inverses of a stack of square blocks (k, b, b), refusing singular ones.
-
-    Each block is scaled symmetrically to unit row maxima before LU with partial pivoting,
-    and refused (:class:`numpy.linalg.LinAlgError`) when the scaled block's infinity-norm
-    condition number exceeds :data:`PIVOT_COND`: a block whose unknowns merely have
-    different units is not refused, a singular one is.
-    """
+def symmetric_scale(blocks: np.ndarray) -> np.ndarray:
+    """Per-row factors ``s`` (..., b) with which ``s_i A_ij s_j`` has rows of max-norm about
+    1 (one Ruiz step); rows of zeros get 1."""
     diag = np.sqrt(np.abs(blocks).max(axis=-1))
     diag[diag == 0] = 1.0
-    scale = 1.0 / diag
+    return 1.0 / diag
+
+
+def equilibrated_inverse(blocks: np.ndarray, return_condition: bool = False):
+    """Inverses of a stack of square blocks (k, b, b), refusing singular ones.
+
+    Each block is scaled symmetrically to unit row maxima (:func:`symmetric_scale`) before
+    LU with partial pivoting, and refused (:class:`numpy.linalg.LinAlgError`) when the
+    scaled block's infinity-norm condition number exceeds :data:`PIVOT_COND`: a block whose
+    unknowns merely have different units is not refused, a singular one is. With
+    ``return_condition``, also the largest of those condition numbers.
+    """
+    scale = symmetric_scale(blocks)
     Bs = blocks * scale[..., :, None] * scale[..., None, :]
     try:
         inv_s = np.linalg.inv(Bs)
     except np.linalg.LinAlgError as exc:
         raise np.linalg.LinAlgError("singular pivot block") from exc
     cond = np.abs(Bs).sum(axis=-1).max(axis=-1) * np.abs(inv_s).sum(axis=-1).max(axis=-1)
-    if record and cond.size:  # the pivots' worst, for the diagnostic
-        _WORST[0] = max(_WORST[0], float(np.nanmax(cond)))
     bad = ~np.isfinite(cond) | (cond > PIVOT_COND)
     if np.any(bad):
         raise np.linalg.LinAlgError(f"singular pivot block (condition number {np.nanmax(cond):.1e})")
-    return inv_s * scale[..., :, None] * scale[..., None, :]
+    inv = inv_s * scale[..., :, None] * scale[..., None, :]
+    return (inv, float(cond.max(initial=1.0))) if return_condition else inv
 
 
 def _t(a: np.ndarray) -> np.ndarray:
@@ -134,11 +127,13 @@ class CyclicReduction:
             raise ValueError(f"upper blocks of shape {U.shape}; expected {(c, max(n - 1, 0), b, b)}")
         self.n, self.b = n, b
         self.levels: list[_Level] = []
+        self.pivot_condition = 1.0  # the largest equilibrated condition number of a pivot
         while n > 1:
             odd = np.arange(1, n, 2)
             no = odd.size
             no2 = int((odd + 1 < n).sum())  # odd blocks with a right neighbour come first
-            Dinv = equilibrated_inverse(D[:, odd])
+            Dinv, worst = equilibrated_inverse(D[:, odd], return_condition=True)
+            self.pivot_condition = max(self.pivot_condition, worst)
             F1 = Dinv @ _t(U[:, odd - 1])             # D_o^{-1} A[o, o-1]
             F2 = Dinv[:, :no2] @ U[:, odd[:no2]]      # D_o^{-1} A[o, o+1]
             Dn = D[:, 0::2].copy()
@@ -149,7 +144,8 @@ class CyclicReduction:
             Un = -(U[:, odd[:no2] - 1] @ F2)          # between e = o - 1 and e + 2 = o + 1
             self.levels.append(_Level(n, U, Dinv, F1, F2))
             D, U, n = 0.5 * (Dn + _t(Dn)), Un, Dn.shape[1]
-        self._top = equilibrated_inverse(D)
+        self._top, worst = equilibrated_inverse(D, return_condition=True)
+        self.pivot_condition = max(self.pivot_condition, worst)
 
     def solve(self, R: np.ndarray) -> np.ndarray:
         """Solve ``A X = R`` for ``R`` of shape (n, b) or (n, b, k) (with a leading chain
