@@ -17,7 +17,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 import bvpnav
-from bvpnav.constraints import Position
+from bvpnav.constraints import Position, Velocity
 from bvpnav.scenarios import tikhonov2011
 
 
@@ -131,3 +131,14 @@ def known_noise(seed, n=1001, sa=0.3, sp=0.01):
     prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=acc), sigma_a=sa)
     prob.add(Position(t=t, value=z, sigma=sp))
     return prob, np.sin(t)
+
+
+# ------------------------------------------------------------ conflicting information
+def conflict_problem(*extra):
+    """Ten seconds at rest with hard ends at 0 m and a hard zero velocity at 2 s, plus
+    ``extra`` items: the base of the conflict tests (a hard item that contradicts it is
+    named, or demoted)."""
+    t = np.linspace(0.0, 10.0, 201)
+    prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=np.zeros_like(t)))
+    return prob.add(Position(t=[0.0, 10.0], value=[0.0, 0.0], name="ends"),
+                    Velocity(t=2.0, value=0.0, name="v at 2 s"), *extra)

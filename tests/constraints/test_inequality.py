@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _helpers import conflict_problem
 
 import bvpnav
 from bvpnav.constraints import HalfSpace, Position, PositionBound, SpeedLimit, Velocity
@@ -189,13 +190,6 @@ def test_speed_limit_on_an_interval_leaves_the_rest_free():
 
 
 # ------------------------------------------------------------------ (d) conflicts
-def conflict_problem(*extra):
-    t = np.linspace(0.0, 10.0, 201)
-    prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=np.zeros_like(t)))
-    return prob.add(Position(t=[0.0, 10.0], value=[0.0, 0.0], name="ends"),
-                    Velocity(t=2.0, value=0.0, name="v at 2 s"), *extra)
-
-
 def test_bound_conflicting_with_a_hard_position_is_named():
     prob = conflict_problem(Position(t=5.0, value=5.0, name="fix"),
                             PositionBound(upper=3.0, t0=4.0, t1=6.0, name="ceiling"))
