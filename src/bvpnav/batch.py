@@ -40,6 +40,7 @@ from .io import (
     check_table_path,
     file_fingerprint,
     output_lock,
+    parquet_frame,
     plain_json,
     read_recording,
     remove_stale_temporaries,
@@ -335,7 +336,7 @@ def resume_reason(recording, out, summary_path, current: dict) -> tuple[str | No
     if (got["size"], got["sha256"]) != (traj.get("size"), traj.get("sha256")):
         return f"trajectory {out.name} changed since it was written", js
     try:
-        df = pd.read_csv(out) if out.suffix.lower() == ".csv" else pd.read_parquet(out)
+        df = pd.read_csv(out) if out.suffix.lower() == ".csv" else parquet_frame(out)
     except Exception:  # any parser failure means: solve again
         return f"trajectory {out.name} unreadable", js
     if "t" not in df.columns or len(df) != run.get("samples"):

@@ -216,8 +216,10 @@ def read_truth(path, sol, implicit: bool = False):
 
     where = "truth.csv beside the recording" if implicit else f"--truth {str(path)!r}"
     try:
-        if Path(path).suffix.lower() == ".parquet":
-            df = pd.read_parquet(path)
+        if Path(path).suffix.lower() in (".parquet", ".pq"):
+            from .io import parquet_frame
+
+            df = parquet_frame(path)
         else:
             df = pd.read_csv(path)
         axes = sol._pos_cols
