@@ -48,7 +48,7 @@ from .solve.chain import solve_fixed
 from .solve.options import prepare
 from .solve.verify import verify
 
-__all__ = ["check_item", "check_error_model"]
+__all__ = ["check_item", "check_error_model", "check_backend", "check_rule", "check_reader"]
 
 #: Kinds an item may declare (``Item.kind``).
 KINDS = ("equality", "inequality", "cone")
@@ -786,3 +786,97 @@ def check_rule(rule) -> None:
             chosen.append(lam)
         _require(chosen[0] == chosen[1], who, f"deterministic ({engine} sweep)",
                  f"two runs chose {chosen[0]!r} and {chosen[1]!r}")
+
+
+def check_reader(reader, folder) -> Any:
+    """Check that a reader keeps the :class:`bvpnav.readers.Reader` contract.
+
+    Parameters
+    ----------
+    reader : Reader
+        A registered reader.
+    folder : path-like
+        An empty folder for its example file (e.g. pytest's ``tmp_path``).
+
+    Returns
+    -------
+    Recording
+        What the reader read from its own example (for further checks by its test).
+
+    Raises
+    ------
+    AssertionError
+        Naming the reader and the broken rule: a lowercase registered ``name``, lowercase
+        ``suffixes`` (``".ext"`` or ``"/"`` for folders), string ``options`` that do not
+        shadow the frame options, an ``extra`` when it has ``modules``, a description;
+        ``example`` writes a file that ``reader_for`` picks and ``sniff`` recognises;
+        ``read`` leaves it byte-identical and returns a :class:`Recording` with finite,
+        strictly increasing times, either navigation-frame ``acc`` (N, d) or
+        ``specific_force`` (N, 3) with gyro (N, 3) and/or an attitude of length N, items
+        that are :class:`bvpnav.Item` instances, notes that are strings; ``imu_data``
+        gives an :class:`ImuData` of N samples; and a truncated copy either reads or raises
+        :class:`bvpnav.InputError` naming the file (never another exception).
+    """
+    from pathlib import Path
+
+    from . import readers
+    from .strapdown import FRAME_OPTIONS
+
+    name = getattr(reader, "name", None)
+    who = f"reader {name!r}"
+    _require(isinstance(name, str) and name and name == name.lower(), who, "name",
+             "the name must be a non-empty lowercase string")
+    _require(readers.registry().get(name) is reader, who, "registered", "register_reader(reader) on import")
+    _require(reader.suffixes and all(isinstance(s, str) and s == s.lower() and (s == "/" or s.startswith("."))
+                                     for s in reader.suffixes), who, "suffixes",
+             f"lowercase '.ext' (or '/' for a folder), got {reader.suffixes!r}")
+    _require(all(isinstance(o, str) for o in reader.options) and not (set(reader.options) & FRAME_OPTIONS),
+             who, "options", f"strings, none of the frame options {sorted(FRAME_OPTIONS)}")
+    _require(not reader.modules or isinstance(reader.extra, str), who, "extra",
+             "a reader with optional modules names the extra that installs them")
+    _require(isinstance(reader.description, str) and reader.description, who, "description", "one line")
+    folder = Path(folder)
+    with _rule(who, "example"):
+        path = Path(reader.example(folder))
+    _require(path.exists(), who, "example", f"example() returned {path}, which does not exist")
+    picked = readers.reader_for(path)
+    _require(picked is reader, who, "reader_for", f"its example {path.name} is picked by {picked!r}")
+    if not path.is_dir():
+        with open(path, "rb") as fh:
+            head = fh.read(readers.HEAD_BYTES)
+        _require(reader.sniff(head), who, "sniff", f"sniff() does not recognise its own example {path.name}")
+    files = [path] if path.is_file() else sorted(p for p in path.rglob("*") if p.is_file())
+    before = {p: p.read_bytes() for p in files}
+    with _rule(who, "read"):
+        rec = readers.read(path, {"format": name})
+    _require(all(p.read_bytes() == b for p, b in before.items()), who, "read-only", "read() changed the file")
+    _require(isinstance(rec, readers.Recording), who, "read", f"returned {type(rec).__name__}, not Recording")
+    t = np.asarray(rec.t)
+    _require(t.ndim == 1 and t.size >= 3 and np.all(np.isfinite(t)) and np.all(np.diff(t) > 0), who, "times",
+             "t: at least 3 finite, strictly increasing times in s")
+    n = t.size
+    if rec.acc is not None:
+        _require(rec.specific_force is None and np.shape(rec.acc)[0] == n, who, "channels",
+                 "acc (N, d) and no specific_force")
+    else:
+        _require(rec.specific_force is not None and np.shape(rec.specific_force) == (n, 3), who, "channels",
+                 "specific_force (N, 3) when there is no acc")
+        _require(rec.gyro is not None or rec.attitude is not None, who, "channels",
+                 "specific force comes with gyro rates or an attitude")
+        _require(rec.gyro is None or np.shape(rec.gyro) == (n, 3), who, "channels", "gyro (N, 3) in rad/s")
+        _require(rec.attitude is None or len(rec.attitude) == n, who, "channels", "one attitude per sample")
+    _require(all(isinstance(i, Item) for i in rec.items), who, "items", "items are bvpnav Item instances")
+    _require(all(isinstance(s, str) for s in rec.notes), who, "notes", "notes are sentences (str)")
+    with _rule(who, "imu_data"):
+        data = rec.imu_data()
+    _require(isinstance(data, ImuData) and data.n == n, who, "imu_data", "an ImuData of the same N samples")
+    if path.is_file():
+        cut = folder / f"truncated{path.suffix}"
+        cut.write_bytes(before[path][: max(1, len(before[path]) // 2)])
+        try:
+            readers.read(cut, {"format": name})
+        except InputError as exc:
+            _require(cut.name in str(exc), who, "corrupt file", f"the message does not name the file: {exc}")
+        except Exception as exc:  # noqa: BLE001 - the rule is: no other exception type
+            _fail(who, "corrupt file", f"a truncated file raised {type(exc).__name__}: {exc}")
+    return rec

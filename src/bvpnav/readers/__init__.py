@@ -1,0 +1,290 @@
+"""Readers: how a file becomes samples (and information) for bvpnav.
+
+Every reader is an object with the :class:`Reader` contract: a lowercase ``name``, the
+file ``suffixes`` it claims, ``sniff(head)`` (does this file look like mine?), the
+``options`` it takes from the spec's ``[input]``, the optional dependencies it needs
+(``modules``, installed with ``pip install 'bvpnav[<extra>]'``), ``read(path, options)``
+returning a :class:`Recording`, and ``example(folder)`` writing a tiny valid file (the
+contract test reads it back: :func:`bvpnav.testing.check_reader`).
+
+The family is a discovered folder, like ``bvpnav.constraints``: each module here defines
+one reader and registers it with :func:`register_reader` on import. Adding a format is
+one file.
+
+A :class:`Recording` holds what the file says, in SI units and the sensor's own frame:
+navigation-frame acceleration, or the strapdown channels (specific force, gyro rates,
+an attitude) with their frames stated; information found in the file (GNSS fixes,
+odometry) as items; and ``notes``: everything the reader did to the data (resampling a
+sensor onto the accelerometer's times, aligning two clocks), said, never silent.
+:meth:`Recording.imu_data` turns it into :class:`bvpnav.ImuData`.
+"""
+
+from __future__ import annotations
+
+import difflib
+import importlib
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from ..errors import InputError
+from ..plugins import discover
+
+if TYPE_CHECKING:  # pragma: no cover
+    import numpy as np
+    from scipy.spatial.transform import Rotation
+
+    from ..imu import ImuData
+
+__all__ = [
+    "Recording",
+    "Reader",
+    "register_reader",
+    "unregister_reader",
+    "registry",
+    "get_reader",
+    "reader_for",
+    "read",
+    "require",
+]
+
+#: Leading bytes a reader's ``sniff`` sees.
+HEAD_BYTES = 4096
+
+
+@dataclass(frozen=True, eq=False)
+class Recording:
+    """What one file holds, in SI units, before it becomes :class:`bvpnav.ImuData`.
+
+    Parameters
+    ----------
+    t : ndarray, shape (N,)
+        Sample times in s from ``time_origin``, strictly increasing.
+    source : str
+        The file (and topic, sensor) the samples came from, for messages.
+    time_origin : str or None
+        What ``t = 0`` is: an absolute instant (``"2026-05-01T10:00:00.123456789Z"`` or
+        ``"1700000000000000000 ns"`` since the Unix epoch) or None when the file's times
+        are relative (then no other clock can be aligned to them without an offset).
+    acc : ndarray, shape (N, d), optional
+        Navigation-frame acceleration in m/s^2 (the table readers' classic form).
+    axes : tuple of str, optional
+        Axis names of ``acc``.
+    specific_force : ndarray, shape (N, 3), optional
+        What the accelerometer triad measured, m/s^2, sensor axes.
+    gyro : ndarray, shape (N, 3), optional
+        Angular rates, rad/s, sensor axes.
+    attitude : scipy.spatial.transform.Rotation, optional
+        Sensor-to-reference rotation per sample, as the file gives it.
+    attitude_frame : str, optional
+        The reference frame of ``attitude``: ``"enu"`` or ``"ned"`` (or a free text the
+        reader states, e.g. ``"arbitrary heading, z up"``).
+    items : tuple of Item
+        Information found in the file (GNSS fixes as :class:`Position` items, odometry as
+        :class:`Velocity` items), on the same clock as ``t``.
+    notes : tuple of str
+        What the reader did: every resampling, alignment or conversion, one sentence each.
+    meta : dict
+        Anything else worth keeping (topic names, device, geodetic origin).
+
+    Notes
+    -----
+    A recording either has ``acc`` (navigation frame already) or ``specific_force``; with
+    ``specific_force`` the attitude comes from ``attitude`` or from integrating ``gyro``
+    (:meth:`bvpnav.ImuData.from_gyro`), and the navigation-frame acceleration is
+    :math:`a = C_{nb} f + g`.
+    """
+
+    t: np.ndarray
+    source: str
+    time_origin: str | None = None
+    acc: np.ndarray | None = None
+    axes: tuple[str, ...] | None = None
+    specific_force: np.ndarray | None = None
+    gyro: np.ndarray | None = None
+    attitude: Rotation | None = None
+    attitude_frame: str | None = None
+    items: tuple = ()
+    notes: tuple[str, ...] = ()
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def n(self) -> int:
+        """Number of samples."""
+        return int(len(self.t))
+
+    @property
+    def is_strapdown(self) -> bool:
+        """True when the samples are body-frame specific force (and gyro/attitude)."""
+        return self.specific_force is not None
+
+    def imu_data(self, frame_options: Mapping[str, Any] | None = None) -> ImuData:
+        """The samples as :class:`bvpnav.ImuData` (navigation-frame acceleration).
+
+        Parameters
+        ----------
+        frame_options : mapping, optional
+            The strapdown part of the spec's ``[input]`` (frame, gravity, body-to-sensor
+            rotation, initial attitude); see :func:`bvpnav.strapdown.imu_data`.
+        """
+        from ..strapdown import imu_data
+
+        return imu_data(self, dict(frame_options or {}))
+
+
+class Reader:
+    """The contract of a file format.
+
+    Attributes
+    ----------
+    name : str
+        Lowercase name, chosen in the spec with ``[input] format = "<name>"``.
+    suffixes : tuple of str
+        Lower-case file suffixes it claims (``".bag"``); a folder reader claims ``"/"``.
+    options : frozenset of str
+        The ``[input]`` keys it reads (besides ``format``); others are refused by name.
+    modules : tuple of str
+        Optional modules it imports (``"rosbags"``); :func:`require` names the extra.
+    extra : str or None
+        The ``pip install 'bvpnav[<extra>]'`` that brings ``modules``.
+    description : str
+        One line for ``bvpnav readers`` and the docs.
+    """
+
+    name: str = ""
+    suffixes: tuple[str, ...] = ()
+    options: frozenset = frozenset()
+    modules: tuple[str, ...] = ()
+    extra: str | None = None
+    description: str = ""
+
+    def sniff(self, head: bytes) -> bool:
+        """Whether a file starting with ``head`` (up to 4 kB) is in this format."""
+        return False
+
+    def read(self, path: Path, options: Mapping[str, Any]) -> Recording:
+        """Read ``path`` (never modified) with the checked ``[input]`` options."""
+        raise NotImplementedError
+
+    def example(self, folder: Path) -> Path:
+        """Write a tiny valid file of this format into ``folder``; its path."""
+        raise NotImplementedError
+
+    def check_options(self, options: Mapping[str, Any], where: str) -> None:
+        """Refuse ``[input]`` keys this reader does not take, naming the valid ones."""
+        bad = sorted(set(options) - set(self.options) - {"format"})
+        if bad:
+            close = difflib.get_close_matches(bad[0], sorted(self.options), n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise InputError(f"{where}: [input] {bad[0]!r} is not an option of the {self.name!r} reader"
+                             f"{hint}; its options: {sorted(self.options)}")
+
+    def __repr__(self) -> str:
+        return f"<reader {self.name!r} {list(self.suffixes)}>"
+
+
+_READERS: dict[str, Reader] = {}
+
+
+def register_reader(reader: Reader) -> Reader:
+    """Register a reader under its name (replacing one of the same name); returns it."""
+    if not isinstance(reader, Reader) or not reader.name or reader.name != reader.name.lower():
+        raise TypeError(f"{reader!r}: a reader is a Reader instance with a lowercase name")
+    _READERS[reader.name] = reader
+    return reader
+
+
+def unregister_reader(name: str) -> None:
+    """Remove a registered reader (tests)."""
+    _READERS.pop(name, None)
+
+
+def _discover() -> None:
+    discover(__name__, __path__, first=("table",))
+
+
+def registry() -> dict[str, Reader]:
+    """Every reader by name."""
+    _discover()
+    return dict(_READERS)
+
+
+def get_reader(name: str) -> Reader:
+    """The reader called ``name``; an unknown name lists the known ones."""
+    table = registry()
+    if not isinstance(name, str) or name.lower() not in table:
+        close = difflib.get_close_matches(str(name), sorted(table), n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        raise InputError(f"[input] format = {name!r} is not a known reader{hint}; readers: {sorted(table)}")
+    return table[name.lower()]
+
+
+def _head(path: Path) -> bytes:
+    if path.is_dir():
+        return b""
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(HEAD_BYTES)
+    except OSError:
+        return b""
+
+
+def reader_for(path: str | os.PathLike, format: str | None = None) -> Reader:
+    """The reader for ``path``: the one named ``format``, else the one whose suffix and
+    ``sniff`` agree, else the one whose suffix matches. A file no reader claims is refused
+    with the list of formats."""
+    if format is not None:
+        return get_reader(format)
+    p = Path(path)
+    suffix = "/" if p.is_dir() else p.suffix.lower()
+    table = registry()
+    claim = [r for r in table.values() if suffix in r.suffixes]
+    if len(claim) > 1:
+        head = _head(p)
+        sniffed = [r for r in claim if r.sniff(head)]
+        claim = sniffed or claim[:1]
+    if claim:
+        return claim[0]
+    known = sorted({s for r in table.values() for s in r.suffixes if s != "/"})
+    raise InputError(f"{str(p)!r}: no reader for {suffix!r} files; known suffixes: {known} (or set "
+                     f"[input] format = one of {sorted(table)})")
+
+
+def require(reader: Reader, path: str | os.PathLike | None = None) -> None:
+    """Import the reader's optional modules, or refuse naming the ``pip install``."""
+    for mod in reader.modules:
+        try:
+            importlib.import_module(mod)
+        except ImportError:
+            where = f"{str(path)!r}: " if path is not None else ""
+            raise InputError(f"{where}reading {reader.name} files needs {mod} "
+                             f"(pip install 'bvpnav[{reader.extra}]')") from None
+
+
+def read(path: str | os.PathLike, input: Mapping[str, Any] | None = None) -> Recording:
+    """Read a file with the reader its ``[input]`` names (``format``) or its suffix picks.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file (or folder, for folder formats); opened read-only, never modified.
+    input : mapping, optional
+        The spec's ``[input]`` table. ``format`` picks the reader; the strapdown keys
+        (:data:`bvpnav.strapdown.FRAME_OPTIONS`) go to :meth:`Recording.imu_data`; the
+        rest are the reader's own options.
+
+    Returns
+    -------
+    Recording
+    """
+    from ..strapdown import FRAME_OPTIONS
+
+    opts = dict(input or {})
+    p = Path(path)
+    reader = reader_for(p, opts.get("format"))
+    mine = {k: v for k, v in opts.items() if k not in FRAME_OPTIONS and k != "format"}
+    reader.check_options(mine, str(p))
+    require(reader, p)
+    return reader.read(p, mine)

@@ -1,0 +1,216 @@
+"""From a recording's strapdown channels to navigation-frame acceleration.
+
+A reader gives what the sensor measured, in the sensor's axes: specific force, gyro
+rates, perhaps an orientation from the device. This module applies what the spec's
+``[input]`` says about frames and turns it into :class:`bvpnav.ImuData`:
+
+- ``frame``: the navigation frame, ``"enu"`` (default; axes x = east, y = north,
+  z = up) or ``"ned"`` (x = north, y = east, z = down);
+- ``gravity``: a magnitude in m/s^2 (default 9.80665, along "down"), a vector of three
+  numbers in the navigation frame, or ``"wgs84"`` (normal gravity at ``latitude``,
+  degrees, and ``height``, m above the ellipsoid: :func:`bvpnav.geodesy.normal_gravity`);
+- ``body_to_sensor``: the rotation ``R`` with ``v_sensor = R v_body`` (default identity),
+  as ``{ euler = [a, b, c], sequence = "xyz", degrees = true }`` or
+  ``{ quaternion = [x, y, z, w], scalar = "last" }``;
+- ``initial_attitude``: body-to-navigation attitude at the first sample, when the
+  attitude is integrated from gyro rates (same two forms; default identity);
+- ``attitude_frame``: the reference frame of an orientation given in the file
+  (``"enu"`` or ``"ned"``), when the reader cannot know it.
+
+Conventions are those of :mod:`bvpnav.attitude`: ``C`` rotates body vectors into the
+navigation frame, ``v_nav = C v_body``; rates are body rates relative to the navigation
+frame (Earth rotation neglected).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .errors import InputError
+from .imu import STANDARD_GRAVITY, ImuData
+
+if TYPE_CHECKING:  # pragma: no cover
+    from scipy.spatial.transform import Rotation
+
+    from .readers import Recording
+
+__all__ = ["FRAME_OPTIONS", "FRAMES", "imu_data", "rotation_option", "gravity_vector", "frame_change"]
+
+#: The ``[input]`` keys about frames (read here, not by the readers).
+FRAME_OPTIONS = frozenset({"frame", "gravity", "latitude", "height", "body_to_sensor", "initial_attitude",
+                           "attitude_frame"})
+
+#: Navigation frames: name -> what its axes are.
+FRAMES = {"enu": "x = east, y = north, z = up", "ned": "x = north, y = east, z = down"}
+
+#: Rotation taking ENU vectors to NED: (e, n, u) -> (n, e, -u).
+_ENU_TO_NED = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+
+
+def frame_change(src: str, dst: str) -> np.ndarray:
+    """The 3x3 matrix taking vectors in frame ``src`` to frame ``dst`` (``enu``/``ned``)."""
+    for f in (src, dst):
+        if f not in FRAMES:
+            raise InputError(f"frame {f!r}: valid navigation frames: {sorted(FRAMES)}")
+    return np.eye(3) if src == dst else _ENU_TO_NED.copy()  # the map is its own inverse
+
+
+def rotation_option(value: Any, what: str) -> Rotation:
+    """A constant rotation from a spec table.
+
+    Parameters
+    ----------
+    value : mapping
+        ``{ euler = [a, b, c], sequence = "xyz", degrees = true }`` (scipy's
+        :meth:`Rotation.from_euler`: lower-case sequence extrinsic, upper-case intrinsic;
+        ``degrees`` default true) or ``{ quaternion = [x, y, z, w], scalar = "last" }``
+        (``scalar = "first"`` for ``[w, x, y, z]``; unit norm to 1e-6).
+    what : str
+        The option's name for messages.
+    """
+    from scipy.spatial.transform import Rotation
+
+    form = 'give { euler = [a, b, c], sequence = "xyz", degrees = true } or { quaternion = [x, y, z, w], ' \
+           'scalar = "last" }'
+    if not isinstance(value, Mapping) or not ({"euler", "quaternion"} & set(value)):
+        raise InputError(f"[input] {what} = {value!r}: {form}")
+    if "euler" in value:
+        extra = sorted(set(value) - {"euler", "sequence", "degrees"})
+        angles, seq, deg = value["euler"], value.get("sequence", "xyz"), value.get("degrees", True)
+        ok = (isinstance(angles, (list, tuple)) and len(angles) == 3
+              and all(isinstance(a, (int, float)) and not isinstance(a, bool) and math.isfinite(a)
+                      for a in angles))
+        if extra or not ok or not isinstance(deg, bool) or not _valid_sequence(seq):
+            raise InputError(f"[input] {what} = {dict(value)!r}: {form} (three finite angles; sequence of "
+                             "three axes from x, y, z, all lower case (extrinsic) or all upper case "
+                             "(intrinsic); degrees = true or false)")
+        return Rotation.from_euler(seq, [float(a) for a in angles], degrees=deg)
+    extra = sorted(set(value) - {"quaternion", "scalar"})
+    q, scalar = value["quaternion"], value.get("scalar", "last")
+    ok = (isinstance(q, (list, tuple)) and len(q) == 4
+          and all(isinstance(a, (int, float)) and not isinstance(a, bool) and math.isfinite(a) for a in q))
+    if extra or not ok or scalar not in ("first", "last"):
+        raise InputError(f"[input] {what} = {dict(value)!r}: {form} (four finite numbers; scalar = \"first\" "
+                         "or \"last\")")
+    q = np.asarray(q, dtype=float)
+    if scalar == "first":
+        q = np.roll(q, -1)
+    if abs(np.linalg.norm(q) - 1.0) > 1e-6:
+        raise InputError(f"[input] {what}: quaternion {value['quaternion']} has norm "
+                         f"{np.linalg.norm(q):.6g}, not 1; give a unit quaternion")
+    return Rotation.from_quat(q)
+
+
+def _valid_sequence(seq: Any) -> bool:
+    return (isinstance(seq, str) and len(seq) == 3 and (seq.islower() or seq.isupper())
+            and set(seq.lower()) <= set("xyz") and seq[0].lower() != seq[1].lower()
+            and seq[1].lower() != seq[2].lower())
+
+
+def gravity_vector(options: Mapping[str, Any], frame: str) -> np.ndarray:
+    """Gravity in the navigation frame, m/s^2, from ``gravity`` (and ``latitude``, ``height``).
+
+    Notes
+    -----
+    A magnitude ``g`` points down: :math:`(0, 0, -g)` in ENU, :math:`(0, 0, g)` in NED.
+    ``"wgs84"`` is the normal gravity of the WGS-84 ellipsoid at the given latitude and
+    height (:func:`bvpnav.geodesy.normal_gravity`).
+    """
+    g = options.get("gravity", STANDARD_GRAVITY)
+    lat, h = options.get("latitude"), options.get("height")
+    if g == "wgs84":
+        if not isinstance(lat, (int, float)) or isinstance(lat, bool) or not -90 <= lat <= 90:
+            raise InputError(f'[input] gravity = "wgs84" needs latitude (degrees, -90..90), got {lat!r}: add '
+                             "latitude = <deg> (and height = <m>)")
+        if h is None:
+            h = 0.0
+        if not isinstance(h, (int, float)) or isinstance(h, bool) or not math.isfinite(h):
+            raise InputError(f"[input] height = {h!r}: give the height above the WGS-84 ellipsoid in m")
+        from .geodesy import normal_gravity
+
+        g = normal_gravity(float(lat), float(h))
+    elif lat is not None or h is not None:
+        raise InputError('[input] latitude/height only go with gravity = "wgs84" (normal gravity there); '
+                         "drop them or set gravity = \"wgs84\"")
+    if isinstance(g, (int, float)) and not isinstance(g, bool):
+        if not (math.isfinite(g) and 9.7 <= g <= 9.9):
+            raise InputError(f"[input] gravity = {g!r}: a magnitude in m/s^2 near the Earth's (9.78..9.84); "
+                             "give e.g. 9.80665, a vector [gx, gy, gz], or \"wgs84\"")
+        return np.array([0.0, 0.0, -float(g) if frame == "enu" else float(g)])
+    ok = (isinstance(g, (list, tuple)) and len(g) == 3
+          and all(isinstance(a, (int, float)) and not isinstance(a, bool) and math.isfinite(a) for a in g))
+    if not ok:
+        raise InputError(f"[input] gravity = {g!r}: give a magnitude in m/s^2 (e.g. 9.80665), a vector "
+                         "[gx, gy, gz] in the navigation frame, or \"wgs84\" with latitude and height")
+    return np.asarray(g, dtype=float)
+
+
+def imu_data(rec: Recording, options: Mapping[str, Any]) -> ImuData:
+    """:class:`bvpnav.ImuData` from a :class:`~bvpnav.readers.Recording` and the frame options.
+
+    Parameters
+    ----------
+    rec : Recording
+        The reader's output.
+    options : mapping
+        The ``[input]`` keys of :data:`FRAME_OPTIONS`; others are ignored.
+
+    Returns
+    -------
+    ImuData
+
+    Notes
+    -----
+    With ``R`` the body-to-sensor rotation (:math:`v_s = R v_b`), the body-frame specific
+    force and rates are :math:`f_b = R^T f_s`, :math:`\\omega_b = R^T \\omega_s`. With an
+    orientation :math:`C_{rs}` from the file (sensor to its reference frame r) the
+    body-to-navigation attitude is :math:`C_{nb} = T_{nr} C_{rs} R` (:math:`T_{nr}` the
+    fixed ENU/NED change); otherwise it is integrated from :math:`\\omega_b` starting at
+    ``initial_attitude``. Then :math:`a = C_{nb} f_b + g`.
+    """
+    from scipy.spatial.transform import Rotation
+
+    used = {k: v for k, v in options.items() if k in FRAME_OPTIONS}
+    if not rec.is_strapdown:
+        if used:
+            raise InputError(f"{rec.source}: [input] {sorted(used)} describe strapdown data (specific force "
+                             "and gyro/attitude), but the recording is navigation-frame acceleration; drop "
+                             "them, or name the specific-force columns")
+        return ImuData(t=rec.t, acc=rec.acc, axes=rec.axes, time_origin=rec.time_origin)
+    frame = used.get("frame", "enu")
+    if frame not in FRAMES:
+        raise InputError(f"[input] frame = {frame!r}: valid navigation frames: "
+                         + ", ".join(f"{k!r} ({v})" for k, v in FRAMES.items()))
+    g = gravity_vector(used, frame)
+    mount = (rotation_option(used["body_to_sensor"], "body_to_sensor") if "body_to_sensor" in used
+             else Rotation.identity())
+    f_b = mount.inv().apply(rec.specific_force)
+    if rec.attitude is not None:
+        ref = used.get("attitude_frame", rec.attitude_frame)
+        if ref not in FRAMES:
+            raise InputError(f"{rec.source}: the orientation's reference frame is {ref!r}; set [input] "
+                             "attitude_frame = \"enu\" or \"ned\" (what the device's orientation is "
+                             "relative to)")
+        if "initial_attitude" in used:
+            raise InputError(f"{rec.source}: the file gives the orientation; initial_attitude is for "
+                             "attitudes integrated from gyro rates: drop it")
+        change = Rotation.from_matrix(frame_change(ref, frame))
+        c_nb = change * rec.attitude * mount
+        data = ImuData(t=rec.t, specific_force=f_b, attitude=c_nb, gravity=g, time_origin=rec.time_origin)
+        if rec.gyro is not None:
+            w = mount.inv().apply(rec.gyro)
+            w.setflags(write=False)
+            data.gyro = w
+        return data
+    if rec.gyro is None:
+        raise InputError(f"{rec.source}: specific force without an attitude or gyro rates; give the gyro "
+                         "columns ([input] gyro = [...]) or the orientation ([input] attitude = {...})")
+    c0 = (rotation_option(used["initial_attitude"], "initial_attitude") if "initial_attitude" in used
+          else None)
+    data = ImuData.from_gyro(rec.t, f_b, mount.inv().apply(rec.gyro), initial_attitude=c0, gravity=g)
+    data.time_origin = rec.time_origin
+    return data
