@@ -26,7 +26,7 @@ import bvpnav
 from bvpnav.cli import main
 from bvpnav.constraints import AverageVelocity, Position, Symmetry, Velocity, ZeroVelocity
 from bvpnav.errors import InputError
-from bvpnav.io import read_recording
+from bvpnav.readers import read_recording
 from bvpnav.samples import write_sample
 from bvpnav.spec import load_spec, parse_spec
 

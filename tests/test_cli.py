@@ -12,8 +12,8 @@ import pytest
 
 import bvpnav
 from bvpnav.error_models import Bias, Misalignment, ScaleFactor, UnknownGravity
-from bvpnav.io import read_recording
 from bvpnav.items import registry
+from bvpnav.readers import read_recording
 from bvpnav.spec import error_model_registry, load_spec, parse_spec, to_spec
 
 

@@ -15,7 +15,8 @@ import bvpnav.batch
 import bvpnav.io
 from bvpnav.batch import run_batch
 from bvpnav.cli import main
-from bvpnav.io import read_recording, write_table
+from bvpnav.io import write_table
+from bvpnav.readers import read_recording
 from bvpnav.samples import write_sample
 from bvpnav.spec import load_spec
 

@@ -23,8 +23,8 @@ from hypothesis import strategies as st
 
 import bvpnav
 from bvpnav.errors import InputError
-from bvpnav.io import read_recording
 from bvpnav.items import registry
+from bvpnav.readers import read_recording
 from bvpnav.spec import Spec, _toml_value, dumps_spec, error_model_registry, parse_spec
 
 ROOT = Path(__file__).resolve().parents[1]

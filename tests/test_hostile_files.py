@@ -43,7 +43,7 @@ import bvpnav.batch
 import bvpnav.io
 from bvpnav.cli import main
 from bvpnav.errors import InputError
-from bvpnav.io import read_recording
+from bvpnav.readers import read_recording
 from bvpnav.samples import write_sample
 from bvpnav.spec import load_spec
 

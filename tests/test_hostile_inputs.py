@@ -29,8 +29,8 @@ import bvpnav
 from bvpnav.constraints import AverageVelocity, Position, Velocity
 from bvpnav.errors import Infeasible, InputError
 from bvpnav.grid import TimeGrid
-from bvpnav.io import read_recording
 from bvpnav.items import registry
+from bvpnav.readers import read_recording
 from bvpnav.samples import write_sample
 from bvpnav.spec import load_spec, parse_spec, to_spec
 from bvpnav.timebase import to_seconds
@@ -654,7 +654,7 @@ _LIMITED = """
 import resource, sys
 resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))  # a regression fails, not eats memory
 from bvpnav.errors import InputError
-from bvpnav.io import read_recording
+from bvpnav.readers import read_recording
 from bvpnav.spec import load_spec
 try:
     load_spec(sys.argv[2]) if sys.argv[1] == "spec" else read_recording(sys.argv[2])

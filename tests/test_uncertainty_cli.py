@@ -24,7 +24,7 @@ import bvpnav
 from bvpnav import plot
 from bvpnav.batch import run_batch, solve_recording
 from bvpnav.cli import main
-from bvpnav.io import read_recording
+from bvpnav.readers import read_recording
 from bvpnav.spec import load_spec, parse_spec, to_spec
 
 SIGMA_A = 0.05

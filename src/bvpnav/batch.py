@@ -42,7 +42,6 @@ from .io import (
     output_lock,
     parquet_frame,
     plain_json,
-    read_recording,
     remove_stale_temporaries,
     summary,
     write_json,
@@ -51,6 +50,7 @@ from .io import (
 )
 from .log import once
 from .log import progress as progress_bar
+from .readers import read_recording
 from .spec import parse_spec, read_spec_text
 
 log = logging.getLogger(__name__)

@@ -158,7 +158,7 @@ def _check(args, inputs: dict, outputs: dict, figures=(), tables=()) -> None:
 
 
 def _load(args):
-    from .io import read_recording
+    from .readers import read_recording
     from .spec import load_spec
 
     spec = load_spec(args.spec)

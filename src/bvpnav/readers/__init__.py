@@ -48,6 +48,7 @@ __all__ = [
     "reader_for",
     "read",
     "require",
+    "read_recording",
 ]
 
 #: Leading bytes a reader's ``sniff`` sees.
@@ -283,8 +284,47 @@ def read(path: str | os.PathLike, input: Mapping[str, Any] | None = None) -> Rec
 
     opts = dict(input or {})
     p = Path(path)
+    if not p.is_dir() and not p.is_file():  # missing, a FIFO, a device: named before any suffix
+        from ..io import read_regular_file
+
+        read_regular_file(p, "recording")
     reader = reader_for(p, opts.get("format"))
     mine = {k: v for k, v in opts.items() if k not in FRAME_OPTIONS and k != "format"}
     reader.check_options(mine, str(p))
     require(reader, p)
     return reader.read(p, mine)
+
+
+def read_recording(path: str | os.PathLike, input: dict | None = None):
+    """Read a recording into :class:`bvpnav.ImuData` with the reader ``[input]`` picks.
+
+    The reader is chosen by ``input["format"]`` or the file's suffix (CSV and Parquet by
+    default: :class:`bvpnav.readers.table.TableReader`, whose options and checks are listed
+    there); strapdown channels become navigation-frame acceleration by the frame options
+    (:mod:`bvpnav.strapdown`).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file; opened read-only, never modified.
+    input : dict, optional
+        The spec's ``[input]`` table.
+
+    Returns
+    -------
+    ImuData
+
+    Raises
+    ------
+    InputError
+        Naming the file and the column, row or record, with the fix; also when the file
+        holds information (GNSS fixes, odometry), which an ``ImuData`` cannot carry: read
+        it with :func:`bvpnav.readers.read` to get ``recording.items`` too.
+    """
+    rec = read(path, input)
+    if rec.items:
+        raise InputError(f"{str(path)!r} holds {len(rec.items)} information item(s) besides the samples "
+                         f"({', '.join(sorted({type(i).__name__ for i in rec.items}))}); read_recording "
+                         "returns the samples only: use rec = bvpnav.readers.read(path, input), then "
+                         "rec.imu_data(input) and rec.items")
+    return rec.imu_data(input)
