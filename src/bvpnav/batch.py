@@ -41,6 +41,7 @@ from .io import (
     file_fingerprint,
     output_lock,
     parquet_frame,
+    path_stamp,
     plain_json,
     remove_stale_temporaries,
     summary,
@@ -50,7 +51,7 @@ from .io import (
 )
 from .log import once
 from .log import progress as progress_bar
-from .readers import read_recording
+from .readers import read
 from .spec import parse_spec, read_spec_text
 
 log = logging.getLogger(__name__)
@@ -228,19 +229,20 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     if implicit:
         check_implicit_outputs({"summary_path (default: out with .json)": (summary_path, "summary")},
                                "move it away or give summary_path (--summary) another path")
-    try:  # size and mtime before reading: a recording still being written is caught below
-        st = os.stat(path)
-        before = (st.st_size, st.st_mtime_ns)
-    except OSError:  # missing, a folder, a FIFO ...: the reader says so, naming the fix
-        before = None
+    # size and mtime before reading: a recording still being written is caught below (None:
+    # missing, a FIFO ...: the reader says so, naming the fix)
+    before = path_stamp(path)
     # the reader first: it looks at the file's head before reading it whole, so a file that is
     # no recording (a 40 GB preallocated log, a zip) is refused at once, before it is hashed
-    data = read_recording(path, spec.input)
+    rec = read(path, spec.input)
+    data = rec.imu_data(spec.input)
     rec_fp = _recording_fingerprint(path)
     if before is not None and before != (rec_fp["size"], rec_fp["mtime_ns"]):
         raise InputError(f"recording {str(path)!r} changed while it was being solved; nothing was written: "
                          "wait until it is complete and run again")
-    prob = spec.build(data)
+    for note in rec.notes:
+        log.info("%s: %s", display_path(path), note)
+    prob = spec.build(data, info=rec.items)
     sol = prob.solve(**solve_kwargs(spec, solver, lam, uncertainty))
     now = _recording_fingerprint(path)
     if (now["size"], now["sha256"]) != (rec_fp["size"], rec_fp["sha256"]):

@@ -158,12 +158,14 @@ def _check(args, inputs: dict, outputs: dict, figures=(), tables=()) -> None:
 
 
 def _load(args):
-    from .readers import read_recording
+    from .readers import read
     from .spec import load_spec
 
     spec = load_spec(args.spec)
-    data = read_recording(args.input, spec.input)
-    return spec, spec.build(data)
+    rec = read(args.input, spec.input)
+    for note in rec.notes:
+        _log.info("%s: %s", args.input, note)
+    return spec, spec.build(rec.imu_data(spec.input), info=rec.items)
 
 
 def _say(args, text: str) -> None:
@@ -459,7 +461,8 @@ def build_parser() -> argparse.ArgumentParser:
                             "relative) or off; overrides the spec's [solve] uncertainty")
 
     def common(p, lam=True):
-        p.add_argument("input", metavar="INPUT", help="recording: .csv or .parquet")
+        p.add_argument("input", metavar="INPUT", help="recording: .csv, .parquet, or any format of `bvpnav "
+                       "readers` (its [input] format, or the suffix, picks the reader)")
         p.add_argument("--spec", required=True, metavar="SPEC", help="spec file (TOML)")
         if lam:
             p.add_argument("--lam", metavar="LAM", help="lambda: a number or a rule (lcurve, gcv, "

@@ -34,7 +34,7 @@ import socket as _socket  # noqa: E402
 import stat as _stat  # noqa: E402
 
 __all__ += ["check_outputs", "check_figure_path", "check_table_path", "remove_stale_temporaries",
-            "file_fingerprint", "output_lock", "TABLE_SUFFIXES",
+            "file_fingerprint", "path_stamp", "output_lock", "TABLE_SUFFIXES",
            "bvpnav_summary", "check_implicit_outputs", "SUMMARY_KEYS"]
 
 #: Suffixes :func:`write_table` writes.
@@ -650,17 +650,30 @@ def check_implicit_outputs(outputs: dict, fix: str) -> None:
 
 
 def file_fingerprint(path: str | os.PathLike) -> dict:
-    """Size (bytes), modification time (ns) and SHA-256 of a regular file's content.
+    """Size (bytes), modification time (ns) and SHA-256 of a regular file's content, or of a
+    folder's regular files (a ROS 2 bag, a phone export): their relative paths and contents
+    in name order, total size, latest mtime.
 
     Raises
     ------
     OSError
-        If it cannot be read, or is not a regular file (a FIFO is never opened: that
-        would block).
+        If it cannot be read, or is not a regular file or folder (a FIFO is never opened:
+        that would block).
     """
     import hashlib
 
-    if not _stat.S_ISREG(os.stat(path).st_mode):
+    mode = os.stat(path).st_mode
+    if _stat.S_ISDIR(mode):
+        root = Path(path)
+        files = sorted(p for p in root.rglob("*") if p.is_file())
+        h = hashlib.sha256()
+        size, mtime = 0, 0
+        for p in files:
+            fp = file_fingerprint(p)
+            h.update(p.relative_to(root).as_posix().encode() + b"\0" + fp["sha256"].encode())
+            size, mtime = size + fp["size"], max(mtime, fp["mtime_ns"])
+        return {"size": size, "mtime_ns": mtime, "sha256": h.hexdigest()}
+    if not _stat.S_ISREG(mode):
         raise OSError(_errno.EINVAL, "not a regular file", str(path))
     h = hashlib.sha256()
     with open(path, "rb") as fh:
@@ -668,6 +681,19 @@ def file_fingerprint(path: str | os.PathLike) -> dict:
         for block in iter(lambda: fh.read(1 << 20), b""):
             h.update(block)
     return {"size": st.st_size, "mtime_ns": st.st_mtime_ns, "sha256": h.hexdigest()}
+
+
+def path_stamp(path: str | os.PathLike) -> tuple[int, int] | None:
+    """(size, mtime in ns) of a file, or of a folder's files (as :func:`file_fingerprint`
+    counts them), without reading them; None when it cannot be stat'ed or is neither."""
+    try:
+        st = os.stat(path)
+        if _stat.S_ISDIR(st.st_mode):
+            stats = [p.stat() for p in sorted(Path(path).rglob("*")) if p.is_file()]
+            return sum(s.st_size for s in stats), max((s.st_mtime_ns for s in stats), default=0)
+        return (st.st_size, st.st_mtime_ns) if _stat.S_ISREG(st.st_mode) else None
+    except OSError:
+        return None
 
 
 @contextlib.contextmanager

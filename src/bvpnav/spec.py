@@ -75,7 +75,7 @@ TIME_UNITS = _TIME_UNITS
 ACC_UNITS = _ACC_UNITS
 
 _SECTIONS = {
-    "input": {"time", "time_unit", "time_origin", "columns", "unit"},
+    "input": None,  # the readers' options and the frame options: see _input_keys()
     "problem": {"residual", "sigma_a"},
     "solve": {"solver", "accuracy", "lam", "fallback", "on_conflict", "priority", "demote_sigma",
               "uncertainty"},
@@ -139,8 +139,16 @@ class Spec:
             out = out + m
         return out
 
-    def build(self, data):
-        """A :class:`bvpnav.NavigationProblem` for ``data`` (ImuData) from this spec."""
+    def build(self, data, info=()):
+        """A :class:`bvpnav.NavigationProblem` for ``data`` (ImuData) from this spec.
+
+        Parameters
+        ----------
+        data : ImuData
+        info : sequence of Item, optional
+            Information the recording itself holds (a reader's ``Recording.items``: GNSS
+            fixes, odometry), added after the spec's items; a name used by both is refused.
+        """
 
         try:
             prob = NavigationProblem(data, error_model=self.error_model(), **self.problem)
@@ -150,6 +158,8 @@ class Spec:
                 raise
             raise InputError(f"{self.where[key]}: {exc}") from None
         prob.add(*self.items)
+        if info:
+            prob.add(*info)
         labels = prob.item_labels
         for key in ("priority", "demote_sigma"):
             table = self.solve.get(key)
@@ -327,7 +337,22 @@ def _check_demotion_values(solve: dict, where) -> None:
 
 
 def _check_input_values(inp: dict, where) -> None:
-    """Check ``[input]``: time column, time unit and origin, acceleration unit, columns."""
+    """Check ``[input]``: reader, time column, time unit and origin, acceleration unit, columns,
+    strapdown columns and frames."""
+    if "format" in inp:
+        from .readers import get_reader
+
+        try:
+            get_reader(inp["format"])
+        except InputError as exc:
+            raise InputError(f"{where('format')}: {exc}") from None
+    _check_frame_values(inp, where)
+    for key, k in (("specific_force", 3), ("gyro", 3)):
+        v = inp.get(key)
+        if v is not None and not (isinstance(v, list) and len(v) == k and all(isinstance(c, str) and c
+                                                                             for c in v)):
+            raise InputError(f"{where(key)}: {key} = {v!r}; give the {k} column names in axis order, e.g. "
+                             f"{key} = {[f'{key[0]}_{a}' for a in 'xyz']}")
     if "time" in inp and not isinstance(inp["time"], str):
         raise InputError(f"{where('time')}: time={inp['time']!r}; give the "
                          'name of the time column as a string, e.g. time = "t"')
@@ -346,6 +371,30 @@ def _check_input_values(inp: dict, where) -> None:
                                  and all(isinstance(v, str) for v in inp["columns"].values())):
         raise InputError(f"{where('columns')}: columns must map "
                          'axis names to column names, e.g. columns = { x = "acc_x" }')
+
+
+def _check_frame_values(inp: dict, where) -> None:
+    """Check the frame options of ``[input]`` (navigation frame, gravity, rotations), naming the line."""
+    from . import strapdown
+
+    frame = inp.get("frame", "enu")
+    if frame not in strapdown.FRAMES:
+        raise InputError(f"{where('frame')}: frame = {frame!r}; valid navigation frames: "
+                         + ", ".join(f"{k!r} ({v})" for k, v in strapdown.FRAMES.items()))
+    if "attitude_frame" in inp and inp["attitude_frame"] not in strapdown.FRAMES:
+        raise InputError(f"{where('attitude_frame')}: attitude_frame = {inp['attitude_frame']!r}; the "
+                         f"orientation's reference frame is one of {sorted(strapdown.FRAMES)}")
+    keys = [k for k in ("gravity", "latitude", "height") if k in inp]
+    try:
+        strapdown.gravity_vector(inp, frame)
+    except InputError as exc:
+        raise InputError(f"{where(keys[0] if keys else 'gravity')}: {exc}") from None
+    for key in ("body_to_sensor", "initial_attitude"):
+        if key in inp:
+            try:
+                strapdown.rotation_option(inp[key], key)
+            except InputError as exc:
+                raise InputError(f"{where(key)}: {exc}") from None
 
 
 #: Largest spec file read, bytes (a spec is a small text file).
@@ -403,12 +452,28 @@ def _plain_table(doc: dict, sec: str, text: str, source: str) -> dict:
     tab = doc.get(sec, {})
     if not isinstance(tab, dict):
         raise InputError(f"{source}: [{sec}] must be a table")
+    allowed = _input_keys(tab.get("format")) if sec == "input" else _SECTIONS[sec]
     for key in tab:
-        if key not in _SECTIONS[sec]:
+        if key not in allowed:
             line = _line_of(text, key, sec)
-            raise InputError(f"{_where(source, line)}: unknown key {key!r} in [{sec}]; valid keys: "
-                             f"{sorted(_SECTIONS[sec])}")
+            whose = f" (of the {tab['format']!r} reader)" if sec == "input" and "format" in tab else ""
+            raise InputError(f"{_where(source, line)}: unknown key {key!r} in [{sec}]{whose}; valid keys: "
+                             f"{sorted(allowed)}")
     return dict(tab)
+
+
+def _input_keys(fmt: Any = None) -> set[str]:
+    """The keys ``[input]`` may hold: ``format``, the frame options, and the options of the
+    reader ``fmt`` names (of every reader when it is not given: the file's suffix decides)."""
+    from .readers import get_reader, registry
+    from .strapdown import FRAME_OPTIONS
+
+    keys = {"format", *FRAME_OPTIONS}
+    if isinstance(fmt, str) and fmt.lower() in registry():  # an unknown format is named with its line later
+        return keys | set(get_reader(fmt).options)
+    for reader in registry().values():
+        keys |= set(reader.options)
+    return keys
 
 
 def _instances(doc: dict, sec: str, reg: dict, kind: str, text: str, source: str) -> list:
