@@ -162,7 +162,8 @@ def shoe_statistic(specific_force, gyro, window: int, *, sigma_a: float = SHOE_S
     where :math:`T_n < \\gamma`. This is the published definition and OpenShoe's. gaitmap's
     ``find_static_samples_shoe`` differs: it takes the gravity direction from the mean of
     the *whole* recording instead of each window's :math:`\\bar f_n`, uses g = 9.81 m/s^2,
-    gyro rates in deg/s, and windows that advance by half their length (its defaults:
+    gyro rates in deg/s, windows that advance by half their length, and calls a window
+    still when its statistic is ``<=`` the threshold (its defaults:
     0.15 s windows, variances 3.5e-9 (m/s^2)^2 and 1.3e-7 (deg/s)^2, threshold 2.31e9,
     i.e. :math:`\\gamma\\sigma_a^2` = 8.1 (m/s^2)^2 and :math:`\\gamma\\sigma_\\omega^2` =
     0.091 (rad/s)^2; OpenShoe's defaults used here give 3 (m/s^2)^2 and the same

@@ -182,8 +182,8 @@ def walking(rate: float = 100.0, n_strides: int = 10, *, stride_time: float = 1.
     :math:`64 h \\tau^3 (1 - \\tau)^3` and the pitch proportional to
     :math:`\\tau^3 (1 - \\tau)^3 (1 - \\tau/0.6)`: position, velocity, acceleration,
     attitude and body rate are continuous, and exactly constant (zero rates) in the
-    stances. With the defaults the foot reaches about 4.4 m/s and 25 m/s^2, the gyros
-    about 7 rad/s, as foot-mounted IMUs measure in walking. The sensors read
+    stances. With the defaults the foot reaches about 4.5 m/s and 25 m/s^2 and the gyros
+    about 6 rad/s, as foot-mounted IMUs measure in walking. The sensors read
     :math:`\\hat u = u + b + n` (see :class:`bvpnav.simulate.SensorErrors`).
     """
     from scipy.interpolate import PPoly
