@@ -474,3 +474,82 @@ def comparison(table, ax=None):
     a_e.set_xlabel(ycol.replace("_", " ") + (" (m)" if ycol == "rms_error" else " (relative)"))
     a_e.set_title(ycol.replace("_", " "), fontsize=10)
     return fig
+
+
+def stationary(data, result, path=None, *, method: str = "shoe", **detector_kw):
+    """Check a stationary detection: the statistic against its threshold, the signals, the intervals.
+
+    Three panels against time (s), the stationary intervals shaded on each: the
+    detector's per-sample statistic (log scale) with the threshold as a dashed line (a
+    sample is stationary below it); the specific-force magnitude :math:`\\|f\\|` (m/s^2)
+    with g; the gyro magnitude :math:`\\|\\omega\\|` (rad/s, log scale) when the data has
+    gyro rates. Where the statistic of the moving samples comes close to the line, the
+    threshold is marginal.
+
+    Parameters
+    ----------
+    data : ImuData
+        The strapdown data the detection ran on.
+    result : bvpnav.detect.Detection or list of (float, float)
+        ``stationary(..., return_statistic=True)``, or intervals ``(t0, t1)`` in s (then
+        the statistic is computed with ``method`` and ``detector_kw`` by
+        :func:`bvpnav.detect.stationary`, and the given intervals are shaded).
+    path : str or os.PathLike, optional
+        Also write the figure there, atomically, in the format of its suffix
+        (:func:`bvpnav.io.atomic_savefig`).
+    method : str
+        Detector of the statistic when ``result`` is a list of intervals.
+    **detector_kw
+        Its settings (``window``, ``threshold``, ``sigma_a``, ...), likewise.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Its axes titled ``"statistic"``, ``"specific force"`` and (with gyro rates)
+        ``"angular rate"``.
+    """
+    import matplotlib.pyplot as plt
+
+    from .detect import Detection
+    from .detect import stationary as detect_stationary
+
+    det = result if isinstance(result, Detection) else detect_stationary(
+        data, method, return_statistic=True, **detector_kw)
+    intervals = det.intervals if isinstance(result, Detection) else [tuple(map(float, iv)) for iv in result]
+    t = data.t
+    rows = 3 if data.gyro is not None else 2
+    fig, axs = plt.subplots(rows, 1, figsize=(9, 1.9 * rows + 0.8), sharex=True, layout="constrained")
+    stat = np.maximum(np.asarray(det.statistic, float), np.finfo(float).tiny)
+    axs[0].semilogy(t, stat, color="C0", lw=1, label=f"{det.method} statistic")
+    axs[0].axhline(det.threshold, color="C3", ls="--", lw=1.2, label=f"threshold {det.threshold:.3g}")
+    axs[0].set_ylabel("statistic (1)")
+    axs[0].set_title("statistic", fontsize=10)
+    fn = np.linalg.norm(data.specific_force, axis=1)
+    g = det.params.get("gravity")
+    axs[1].plot(t, fn, color="C0", lw=0.8, label="|f|")
+    axs[1].axhline(g, color="k", lw=0.6, ls=":", label=f"g = {g:g} m/s$^2$")
+    acc_thr = det.params.get("acc_threshold")
+    if acc_thr is not None:
+        axs[1].axhspan(g - acc_thr, g + acc_thr, color="C3", alpha=0.1, lw=0, label="g ± acc_threshold")
+    axs[1].set_ylabel("|f| (m/s$^2$)")
+    axs[1].set_title("specific force", fontsize=10)
+    if data.gyro is not None:
+        wn = np.maximum(np.linalg.norm(data.gyro, axis=1), np.finfo(float).tiny)
+        axs[2].semilogy(t, wn, color="C0", lw=0.8, label="|ω|")
+        if det.params.get("gyro_threshold") is not None:
+            axs[2].axhline(det.params["gyro_threshold"], color="C3", ls="--", lw=1.2, label="gyro_threshold")
+        axs[2].set_ylabel("|ω| (rad/s)")
+        axs[2].set_title("angular rate", fontsize=10)
+    for a in axs:
+        for k, (t0, t1) in enumerate(intervals):
+            a.axvspan(t0, t1, color="C2", alpha=0.15, lw=0, label="stationary" if k == 0 else None)
+        _legend(a, fontsize=7, loc="upper right")
+    axs[-1].set_xlabel("t (s)")
+    share = sum(t1 - t0 for t0, t1 in intervals) / max(float(t[-1] - t[0]), np.finfo(float).tiny)
+    fig.suptitle(f"{det.method}: window {det.window} samples, threshold {det.threshold:.3g}; "
+                 f"{len(intervals)} intervals, {100 * share:.0f} % of the time stationary", fontsize=10)
+    if path is not None:
+        from .io import atomic_savefig
+
+        atomic_savefig(fig, path)
+    return fig

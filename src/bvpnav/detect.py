@@ -1,0 +1,510 @@
+"""Stationary intervals from the IMU itself: where the sensor is still (zero-velocity detection).
+
+:func:`stationary` finds the intervals in which a strapdown IMU (body-frame specific
+force and gyro rates) is at rest, as ``(t0, t1)`` pairs in s that go straight into
+:class:`bvpnav.constraints.ZeroVelocity` (see :func:`zero_velocity_items`). Two detectors:
+
+- ``"shoe"``: the stance hypothesis optimal detector (SHOE), the generalized likelihood
+  ratio test of Skog, Händel, Nilsson and Rantakokko, "Zero-velocity detection -- an
+  algorithm evaluation", IEEE Trans. Biomed. Eng. 57(11), 2657-2666, 2010 (the
+  detector of OpenShoe and, with differences listed in :func:`shoe_statistic`, of
+  gaitmap's ``ShoeZuptDetector``);
+- ``"magnitude"``: moving-window means of :math:`|\\,\\|f\\| - g\\,|` and, where there are
+  gyro rates, of :math:`\\|\\omega\\|` below two thresholds.
+
+Windows are counted in samples (``window``), not seconds: the published statistic is a
+sum over W consecutive samples, and so it stays that on non-uniform time steps. Every
+statistic is computed with sliding-window views of the samples (no Python loop over
+samples); the per-window work is done in blocks to bound the memory.
+
+Example::
+
+    from bvpnav import detect
+    intervals = detect.stationary(data)               # [(t0, t1), ...] in s
+    prob.add(*detect.zero_velocity_items(intervals, sigma=0.01))
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
+
+from .errors import InputError
+from .imu import STANDARD_GRAVITY
+
+if TYPE_CHECKING:
+    from .imu import ImuData
+
+__all__ = [
+    "Detection",
+    "METHODS",
+    "SHOE_SIGMA_A",
+    "SHOE_SIGMA_W",
+    "SHOE_THRESHOLD",
+    "MAGNITUDE_ACC_THRESHOLD",
+    "MAGNITUDE_GYRO_THRESHOLD",
+    "DEFAULT_WINDOW",
+    "stationary",
+    "stationary_mask",
+    "shoe_statistic",
+    "magnitude_statistic",
+    "intervals_from_mask",
+    "zero_velocity_items",
+]
+
+#: The detectors :func:`stationary` knows.
+METHODS = ("shoe", "magnitude")
+#: SHOE's default accelerometer noise standard deviation, m/s^2 (OpenShoe's setting).
+SHOE_SIGMA_A = 0.01
+#: SHOE's default gyro noise standard deviation, rad/s (OpenShoe's 0.1 deg/s).
+SHOE_SIGMA_W = float(np.deg2rad(0.1))
+#: SHOE's default threshold gamma (dimensionless; OpenShoe's 0.3e5 with the sigmas above).
+SHOE_THRESHOLD = 3.0e4
+#: The magnitude detector's default threshold on the window mean of ``| |f| - g |``, m/s^2.
+MAGNITUDE_ACC_THRESHOLD = 0.5
+#: The magnitude detector's default threshold on the window mean of ``|omega|``, rad/s.
+MAGNITUDE_GYRO_THRESHOLD = 0.5
+#: Default window length W, samples (OpenShoe's setting).
+DEFAULT_WINDOW = 3
+
+#: Window rows computed at once (bounds the temporaries to about 8 MB).
+_BLOCK_VALUES = 1 << 20
+
+
+@dataclass(frozen=True, eq=False)
+class Detection:
+    """What :func:`stationary` found, with the statistic it decided on.
+
+    Attributes
+    ----------
+    intervals : list of (float, float)
+        Stationary intervals ``(t0, t1)`` in s, sorted, non-overlapping, ``t0 < t1``.
+    mask : ndarray of bool, shape (N,)
+        Per-sample decision before ``min_duration`` (True: stationary).
+    statistic : ndarray, shape (N,)
+        Per-sample statistic: the smallest statistic of the windows holding the sample
+        (SHOE: dimensionless :math:`T`; magnitude: the larger of the two ratios
+        statistic / threshold). ``mask == (statistic < threshold)``.
+    threshold : float
+        The threshold the statistic was compared with (1 for ``"magnitude"``).
+    method : str
+    window : int
+        Window length W in samples.
+    params : dict
+        The detector's settings (noise levels, thresholds, gravity, min_duration).
+    """
+
+    intervals: list
+    mask: np.ndarray
+    statistic: np.ndarray
+    threshold: float
+    method: str
+    window: int
+    params: dict
+
+
+# ----------------------------------------------------------------- statistics
+def _window_blocks(n_windows: int, width: int):
+    """Slices of window indices, each small enough for the temporaries of one block."""
+    step = max(1, _BLOCK_VALUES // max(1, width))
+    return (slice(s, min(s + step, n_windows)) for s in range(0, n_windows, step))
+
+
+def _window_sum(x: np.ndarray, window: int) -> np.ndarray:
+    """Sum of ``x`` (N,) over each window of ``window`` consecutive samples: (N - W + 1,)."""
+    views = sliding_window_view(x, window)
+    out = np.empty(views.shape[0])
+    for sl in _window_blocks(views.shape[0], window):
+        out[sl] = views[sl].sum(axis=1)
+    return out
+
+
+def shoe_statistic(specific_force, gyro, window: int, *, sigma_a: float = SHOE_SIGMA_A,
+                   sigma_w: float = SHOE_SIGMA_W, gravity: float = STANDARD_GRAVITY) -> np.ndarray:
+    """The SHOE test statistic of every window of ``window`` consecutive samples.
+
+    Parameters
+    ----------
+    specific_force : array_like, shape (N, 3)
+        Body-frame specific force, m/s^2.
+    gyro : array_like, shape (N, 3)
+        Body rates, rad/s.
+    window : int
+        Window length W, samples (1 <= W <= N).
+    sigma_a : float
+        Accelerometer white-noise standard deviation, m/s^2.
+    sigma_w : float
+        Gyro white-noise standard deviation, rad/s.
+    gravity : float
+        Magnitude of gravity g, m/s^2.
+
+    Returns
+    -------
+    ndarray, shape (N - W + 1,)
+        :math:`T_n` (dimensionless) of the window of samples ``n .. n + W - 1``.
+
+    Notes
+    -----
+    Skog et al. (2010), eq. (12):
+
+    .. math::
+
+        T_n = \\frac{1}{W} \\sum_{l=n}^{n+W-1} \\left( \\frac{1}{\\sigma_a^2}
+            \\left\\| f_l - g \\frac{\\bar f_n}{\\|\\bar f_n\\|} \\right\\|^2
+            + \\frac{1}{\\sigma_\\omega^2} \\|\\omega_l\\|^2 \\right),
+        \\qquad \\bar f_n = \\frac{1}{W} \\sum_{l=n}^{n+W-1} f_l,
+
+    the generalized likelihood ratio of "still" (specific force of magnitude g along an
+    unknown direction, zero rates, white noise) against "moving"; the sensor is still
+    where :math:`T_n < \\gamma`. This is the published definition and OpenShoe's. gaitmap's
+    ``find_static_samples_shoe`` differs: it takes the gravity direction from the mean of
+    the *whole* recording instead of each window's :math:`\\bar f_n`, uses g = 9.81 m/s^2,
+    gyro rates in deg/s, windows that advance by half their length, and calls a window
+    still when its statistic is ``<=`` the threshold (its defaults:
+    0.15 s windows, variances 3.5e-9 (m/s^2)^2 and 1.3e-7 (deg/s)^2, threshold 2.31e9,
+    i.e. :math:`\\gamma\\sigma_a^2` = 8.1 (m/s^2)^2 and :math:`\\gamma\\sigma_\\omega^2` =
+    0.091 (rad/s)^2; OpenShoe's defaults used here give 3 (m/s^2)^2 and the same
+    0.091 (rad/s)^2). Only the products :math:`\\gamma\\sigma_a^2` and
+    :math:`\\gamma\\sigma_\\omega^2` matter for the decision.
+    """
+    f = np.asarray(specific_force, dtype=float)
+    w = np.asarray(gyro, dtype=float)
+    views = sliding_window_view(f, window, axis=0)  # (N - W + 1, 3, W), no copy
+    out = np.empty(views.shape[0])
+    for sl in _window_blocks(views.shape[0], 3 * window):
+        fw = views[sl]
+        mean = fw.mean(axis=2)
+        u = mean / np.linalg.norm(mean, axis=1, keepdims=True)
+        out[sl] = np.square(fw - gravity * u[:, :, None]).sum(axis=(1, 2))
+    gyro_energy = _window_sum(np.einsum("ij,ij->i", w, w), window)
+    return (out / sigma_a**2 + gyro_energy / sigma_w**2) / window
+
+
+def magnitude_statistic(specific_force, gyro, window: int, *,
+                        acc_threshold: float = MAGNITUDE_ACC_THRESHOLD,
+                        gyro_threshold: float | None = MAGNITUDE_GYRO_THRESHOLD,
+                        gravity: float = STANDARD_GRAVITY) -> np.ndarray:
+    """The magnitude detector's statistic of every window of ``window`` samples.
+
+    Parameters
+    ----------
+    specific_force : array_like, shape (N, 3)
+        Body-frame specific force, m/s^2.
+    gyro : array_like, shape (N, 3), or None
+        Body rates, rad/s; None (or ``gyro_threshold=None``): acceleration only.
+    window : int
+        Window length W, samples.
+    acc_threshold : float
+        Threshold on the window mean of :math:`|\\|f_l\\| - g|`, m/s^2.
+    gyro_threshold : float or None
+        Threshold on the window mean of :math:`\\|\\omega_l\\|`, rad/s.
+    gravity : float
+        g, m/s^2.
+
+    Returns
+    -------
+    ndarray, shape (N - W + 1,)
+        Dimensionless; the window is still where it is below 1.
+
+    Notes
+    -----
+    .. math::
+
+        S_n = \\max\\left( \\frac{1}{W a_{th}} \\sum_{l=n}^{n+W-1} \\bigl|\\|f_l\\| - g\\bigr|,\\;
+            \\frac{1}{W \\omega_{th}} \\sum_{l=n}^{n+W-1} \\|\\omega_l\\| \\right)
+
+    (the second term only with gyro rates), so :math:`S_n < 1` exactly when both window
+    means are below their thresholds.
+    """
+    f = np.asarray(specific_force, dtype=float)
+    acc = _window_sum(np.abs(np.linalg.norm(f, axis=1) - gravity), window) / (window * acc_threshold)
+    if gyro is None or gyro_threshold is None:
+        return acc
+    rate = _window_sum(np.linalg.norm(np.asarray(gyro, dtype=float), axis=1), window)
+    return np.maximum(acc, rate / (window * gyro_threshold))
+
+
+def _per_sample_min(stat: np.ndarray, window: int) -> np.ndarray:
+    """Per sample, the smallest statistic of the windows that hold it: (N,) from (N - W + 1,)."""
+    pad = np.full(window - 1, np.inf)
+    return sliding_window_view(np.concatenate([pad, stat, pad]), window).min(axis=1)
+
+
+# --------------------------------------------------------------------- checks
+def _positive(name: str, value, unit: str) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}={value!r}: give a positive number in {unit}") from None
+    if isinstance(value, bool) or not (np.isfinite(v) and v > 0):
+        raise InputError(f"{name}={value!r}: must be a finite number > 0 ({unit})")
+    return v
+
+
+def _channels(data, method: str) -> tuple[np.ndarray, np.ndarray | None]:
+    """The specific force (N, 3) and gyro rates (N, 3) or None of ``data``, checked."""
+    from .imu import ImuData
+
+    if not isinstance(data, ImuData):
+        raise InputError(f"data: got {type(data).__name__}; give a bvpnav.ImuData with body-frame "
+                         "specific force and gyro rates, e.g. ImuData.from_gyro(t, specific_force, gyro)")
+    if data.specific_force is None:
+        raise InputError(
+            f"method={method!r} needs the body-frame specific force, but data has navigation-frame "
+            "accelerations only (ImuData(t, acc=...), gravity removed); build the data from the raw "
+            "sensor channels: ImuData.from_gyro(t, specific_force, gyro) (m/s^2, rad/s)")
+    w = data.gyro
+    if w is not None:
+        w = np.asarray(w, dtype=float)
+        if w.shape != (data.n, 3) or not np.all(np.isfinite(w)):
+            raise InputError(f"data.gyro: expected {data.n} finite rows of 3 rates (rad/s), got shape "
+                             f"{w.shape}; build the data with ImuData.from_gyro(t, specific_force, gyro)")
+    if method == "shoe" and w is None:
+        raise InputError(
+            "method='shoe' needs gyro rates, but data.gyro is None (ImuData built with an attitude, "
+            "not from gyro rates); build it with ImuData.from_gyro(t, specific_force, gyro), or use "
+            "method='magnitude', which can run on the acceleration alone")
+    return data.specific_force, w
+
+
+def _window(window, n: int) -> int:
+    if window is None:
+        window = DEFAULT_WINDOW
+    if isinstance(window, (bool, float)) or not isinstance(window, (int, np.integer)):
+        raise InputError(f"window={window!r}: give the window length as a whole number of samples "
+                         f"(the default is {DEFAULT_WINDOW}; at r Hz, s seconds are about round(s * r) + 1 "
+                         "samples)")
+    if window < 2:
+        raise InputError(f"window={window}: a window needs at least 2 samples (so that every "
+                         "stationary interval has t0 < t1); give window >= 2")
+    if window > n:
+        raise InputError(f"window={window} samples is longer than the data ({n} samples); give a "
+                         f"window of at most {n} samples (the default is {DEFAULT_WINDOW})")
+    return int(window)
+
+
+def _settings(method: str, threshold, sigma_a, sigma_w, acc_threshold, gyro_threshold,
+              has_gyro: bool) -> dict:
+    """The detector's settings with the defaults filled in, or InputError for a misplaced one."""
+    if method not in METHODS:
+        raise InputError(f"method={method!r}; choose one of {list(METHODS)}")
+    if method == "shoe":
+        misplaced = {"acc_threshold": acc_threshold,
+                     "gyro_threshold": None if gyro_threshold == "auto" else gyro_threshold}
+        given = [k for k, v in misplaced.items() if v is not None]
+        if given:
+            raise InputError(f"{', '.join(given)}: settings of method='magnitude'; SHOE takes threshold= "
+                             "(gamma), sigma_a= (m/s^2) and sigma_w= (rad/s)")
+        return {"threshold": _positive("threshold", SHOE_THRESHOLD if threshold is None else threshold, "1"),
+                "sigma_a": _positive("sigma_a", SHOE_SIGMA_A if sigma_a is None else sigma_a, "m/s^2"),
+                "sigma_w": _positive("sigma_w", SHOE_SIGMA_W if sigma_w is None else sigma_w, "rad/s")}
+    given = [k for k, v in {"threshold": threshold, "sigma_a": sigma_a, "sigma_w": sigma_w}.items()
+             if v is not None]
+    if given:
+        raise InputError(f"{', '.join(given)}: settings of method='shoe'; the magnitude detector takes "
+                         "acc_threshold= (m/s^2) and gyro_threshold= (rad/s, or None for acceleration "
+                         "only)")
+    acc = _positive("acc_threshold", MAGNITUDE_ACC_THRESHOLD if acc_threshold is None else acc_threshold,
+                    "m/s^2")
+    if isinstance(gyro_threshold, str):
+        if gyro_threshold != "auto":
+            raise InputError(f"gyro_threshold={gyro_threshold!r}: give a number in rad/s, None "
+                             "(acceleration only) or 'auto'")
+        gyr = MAGNITUDE_GYRO_THRESHOLD if has_gyro else None
+    elif gyro_threshold is None:
+        gyr = None
+    else:
+        gyr = _positive("gyro_threshold", gyro_threshold, "rad/s")
+        if not has_gyro:
+            raise InputError(f"gyro_threshold={gyro_threshold!r}, but data.gyro is None; build the data "
+                             "with ImuData.from_gyro(t, specific_force, gyro), or give gyro_threshold=None "
+                             "for the acceleration-only test")
+    return {"acc_threshold": acc, "gyro_threshold": gyr, "threshold": 1.0}
+
+
+# ------------------------------------------------------------------ detection
+def stationary_mask(data: ImuData, method: str = "shoe", *, window: int | None = None,
+                    threshold: float | None = None, sigma_a: float | None = None,
+                    sigma_w: float | None = None, acc_threshold: float | None = None,
+                    gyro_threshold: float | str | None = "auto",
+                    gravity: float = STANDARD_GRAVITY) -> tuple[np.ndarray, np.ndarray]:
+    """Per-sample stationary decision and the statistic it was made on.
+
+    Parameters are those of :func:`stationary` (without ``min_duration``).
+
+    Returns
+    -------
+    mask : ndarray of bool, shape (N,)
+        True where the sample lies in at least one window whose statistic is below the
+        threshold.
+    statistic : ndarray, shape (N,)
+        Per sample, the smallest window statistic over the W windows that hold it
+        (dimensionless), so that ``mask == (statistic < threshold)``.
+    """
+    mask, stat, _, _ = _detect(data, method, window, threshold, sigma_a, sigma_w, acc_threshold,
+                               gyro_threshold, gravity)
+    return mask, stat
+
+
+def _detect(data, method, window, threshold, sigma_a, sigma_w, acc_threshold, gyro_threshold, gravity):
+    """(mask, per-sample statistic, window, settings) of one detector run."""
+    f, w = _channels(data, method)
+    g = _positive("gravity", gravity, "m/s^2")
+    cfg = _settings(method, threshold, sigma_a, sigma_w, acc_threshold, gyro_threshold, w is not None)
+    W = _window(window, data.n)
+    if method == "shoe":
+        stat = shoe_statistic(f, w, W, sigma_a=cfg["sigma_a"], sigma_w=cfg["sigma_w"], gravity=g)
+    else:
+        stat = magnitude_statistic(f, w, W, acc_threshold=cfg["acc_threshold"],
+                                   gyro_threshold=cfg["gyro_threshold"], gravity=g)
+    per_sample = _per_sample_min(stat, W)
+    cfg["gravity"] = g
+    return per_sample < cfg["threshold"], per_sample, W, cfg
+
+
+def stationary(data: ImuData, method: str = "shoe", *, window: int | None = None,
+               threshold: float | None = None, sigma_a: float | None = None, sigma_w: float | None = None,
+               acc_threshold: float | None = None, gyro_threshold: float | str | None = "auto",
+               gravity: float = STANDARD_GRAVITY, min_duration: float = 0.0,
+               return_statistic: bool = False) -> list[tuple[float, float]] | Detection:
+    """Intervals in which the IMU is stationary, detected from its own samples.
+
+    Parameters
+    ----------
+    data : ImuData
+        Strapdown data with the body-frame specific force ``data.specific_force``
+        (N, 3, m/s^2) and, for SHOE, the gyro rates ``data.gyro`` (N, 3, rad/s), as
+        :meth:`bvpnav.ImuData.from_gyro` builds it. Times may be non-uniform.
+    method : {"shoe", "magnitude"}
+        The SHOE likelihood-ratio test (needs gyro rates) or the magnitude test (see the
+        module docstring).
+    window : int, optional
+        Window length W in **samples** (2 <= W <= N), default :data:`DEFAULT_WINDOW`
+        (3, OpenShoe's). In seconds a window spans W - 1 sample steps, so at r Hz a window
+        of s seconds is about ``round(s * r) + 1`` samples.
+    threshold : float, optional
+        SHOE: the threshold :math:`\\gamma` (dimensionless), default
+        :data:`SHOE_THRESHOLD`. Not for ``"magnitude"``.
+    sigma_a, sigma_w : float, optional
+        SHOE: accelerometer (m/s^2) and gyro (rad/s) noise standard deviations, default
+        :data:`SHOE_SIGMA_A`, :data:`SHOE_SIGMA_W`. Only the products with the threshold
+        matter (:math:`\\gamma\\sigma_a^2` in (m/s^2)^2, :math:`\\gamma\\sigma_\\omega^2` in
+        (rad/s)^2).
+    acc_threshold : float, optional
+        Magnitude test: threshold on the window mean of :math:`|\\|f\\| - g|`, m/s^2,
+        default :data:`MAGNITUDE_ACC_THRESHOLD`.
+    gyro_threshold : float, None or "auto"
+        Magnitude test: threshold on the window mean of :math:`\\|\\omega\\|`, rad/s.
+        ``"auto"`` (default): :data:`MAGNITUDE_GYRO_THRESHOLD` when ``data.gyro`` is
+        set, else the acceleration alone; None: the acceleration alone.
+    gravity : float
+        Magnitude of gravity g, m/s^2.
+    min_duration : float
+        Intervals shorter than this (``t1 - t0 < min_duration``, s) are **dropped** from
+        the result (they stay in ``Detection.mask``). Default 0: every detected run is
+        kept.
+    return_statistic : bool
+        Return a :class:`Detection` (intervals, per-sample mask and statistic,
+        threshold, window) instead of the list of intervals.
+
+    Returns
+    -------
+    list of (float, float) or Detection
+        Intervals ``(t0, t1)`` in s: the first and last sample time of each run of
+        stationary samples; sorted, non-overlapping, ``t0 < t1`` (a run has at least W
+        >= 2 samples), each valid as ``ZeroVelocity(t0=t0, t1=t1)``.
+
+    Raises
+    ------
+    InputError
+        Data without specific force (navigation-frame only) or, for SHOE, without gyro
+        rates; a window that is not a whole number in [2, N]; a threshold, noise level or
+        gravity that is not a positive number; a setting of the other method.
+
+    Notes
+    -----
+    With the window statistic :math:`T_n` of the samples :math:`n .. n+W-1` (SHOE:
+    :func:`shoe_statistic`; magnitude: :func:`magnitude_statistic` with threshold 1),
+    sample :math:`k` is stationary when some window holding it is below the threshold,
+
+    .. math:: \\min_{n:\\, n \\le k \\le n+W-1} T_n < \\gamma,
+
+    which is OpenShoe's rule (a window below :math:`\\gamma` marks all its W samples) and
+    gaitmap's with windows overlapping by W - 1 samples.
+    """
+    if isinstance(min_duration, bool) or not np.isfinite(min_duration) or min_duration < 0:
+        raise InputError(f"min_duration={min_duration!r}: give a duration >= 0 in s (0 keeps every "
+                         "interval)")
+    mask, stat, W, cfg = _detect(data, method, window, threshold, sigma_a, sigma_w, acc_threshold,
+                                 gyro_threshold, gravity)
+    intervals = intervals_from_mask(data.t, mask, min_duration=min_duration)
+    if not return_statistic:
+        return intervals
+    cfg["min_duration"] = float(min_duration)
+    mask.setflags(write=False)
+    stat.setflags(write=False)
+    return Detection(intervals=intervals, mask=mask, statistic=stat, threshold=cfg["threshold"],
+                     method=method, window=W, params=cfg)
+
+
+def intervals_from_mask(t, mask, *, min_duration: float = 0.0) -> list[tuple[float, float]]:
+    """The runs of True in a per-sample mask as ``(t0, t1)`` intervals in s.
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Increasing sample times, s.
+    mask : array_like of bool, shape (N,)
+    min_duration : float
+        Runs with ``t1 - t0 < min_duration`` (s) are dropped. A run of a single sample
+        has ``t0 == t1`` and cannot be a ``ZeroVelocity`` interval: it is always dropped
+        (:func:`stationary` never makes one; its runs have at least W >= 2 samples).
+
+    Returns
+    -------
+    list of (float, float)
+        First and last sample time of each run, sorted and non-overlapping.
+    """
+    t = np.asarray(t, dtype=float)
+    m = np.asarray(mask, dtype=bool)
+    if m.shape != t.shape or t.ndim != 1:
+        raise InputError(f"mask of shape {m.shape} for times of shape {t.shape}; give one boolean per "
+                         "sample time")
+    edges = np.diff(np.concatenate([[0], m.view(np.int8), [0]]))
+    starts = np.flatnonzero(edges == 1)
+    ends = np.flatnonzero(edges == -1) - 1
+    t0, t1 = t[starts], t[ends]
+    keep = (t1 > t0) & (t1 - t0 >= min_duration)
+    return [(float(a), float(b)) for a, b in zip(t0[keep], t1[keep], strict=True)]
+
+
+def zero_velocity_items(intervals, **item_kw: Any) -> list:
+    """One :class:`bvpnav.constraints.ZeroVelocity` per interval.
+
+    Parameters
+    ----------
+    intervals : list of (float, float) or Detection
+        ``(t0, t1)`` in s, e.g. from :func:`stationary`.
+    **item_kw
+        Passed to every item (``sigma`` in m/s, ``mode``, ``axes``, ``huber``, ...);
+        ``name`` gets the interval's number appended (``"stance 0"``, ...).
+
+    Returns
+    -------
+    list of ZeroVelocity
+    """
+    from bvpnav.constraints import ZeroVelocity
+
+    if isinstance(intervals, Detection):
+        intervals = intervals.intervals
+    name = item_kw.pop("name", None)
+    out = []
+    for k, (t0, t1) in enumerate(intervals):
+        kw = dict(item_kw)
+        if name is not None:
+            kw["name"] = f"{name} {k}"
+        out.append(ZeroVelocity(t0=float(t0), t1=float(t1), **kw))
+    return out
