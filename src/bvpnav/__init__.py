@@ -68,12 +68,15 @@ __all__ = [
     "available_solvers",
     "baselines",
     "compare_solvers",
+    "detect",
     "error_models",
     "lam",
     "lambda_curve",
+    "readers",
     "solve",
     "scenarios",
     "simulate",
+    "strapdown",
 ]
 
 #: Names imported on first attribute access (PEP 562), not by ``import bvpnav``: the package
@@ -102,6 +105,9 @@ _LAZY = {
     "lambda_curve": ("solve", "lambda_curve"),
     "simulate": ("simulate", None),
     "solve": ("solve", None),
+    "detect": ("detect", None),
+    "readers": ("readers", None),
+    "strapdown": ("strapdown", None),
 }
 
 

@@ -324,6 +324,59 @@ def _cmd_solve(args) -> int:
     return EXIT_OK
 
 
+def _cmd_stationary(args) -> int:
+    import numpy as np
+
+    from . import detect
+    from .readers import read
+    from .spec import load_spec
+
+    _check(args, {"INPUT": args.input, "--spec": args.spec}, {"--plot": args.plot, "--out": args.out},
+           figures=("--plot",), tables=("--out",))
+    spec = load_spec(args.spec)
+    rec = read(args.input, spec.input)
+    data = rec.imu_data(spec.input)
+    opts = {k: v for k, v in spec.stationary.items() if k not in ("sigma", "mode", "name")}
+    if args.method is not None:
+        opts["method"] = args.method
+    if "gravity" not in opts and data.gravity is not None:
+        opts["gravity"] = float(np.linalg.norm(data.gravity))
+    found = detect.stationary(data, return_statistic=True, **opts)
+    still = sum(b - a for a, b in found.intervals)
+    span = data.t[-1] - data.t[0]
+    _say(args, f"{len(found.intervals)} stationary interval(s), {still:.4g} s of {span:.4g} s "
+               f"({found.method}, window {found.window} samples, threshold {found.threshold:.4g})")
+    for a, b in found.intervals[:20]:
+        _say(args, f"  {a:.4f} .. {b:.4f} s")
+    if len(found.intervals) > 20:
+        _say(args, f"  ... {len(found.intervals) - 20} more" + (f" (all in {args.out})" if args.out else ""))
+    if args.out:
+        import pandas as pd
+
+        from .io import write_table
+
+        write_table(pd.DataFrame(found.intervals, columns=["t0", "t1"]), args.out, "--out")
+    if args.plot:
+        from . import plot
+        from .io import atomic_savefig
+
+        atomic_savefig(plot.stationary(data, found), args.plot, "--plot", dpi=90)
+        _say(args, f"figure written to {args.plot}")
+    return EXIT_OK
+
+
+def _cmd_readers(args) -> int:
+    import importlib.util
+
+    from .readers import registry
+
+    for r in registry().values():
+        missing = [m for m in r.modules if importlib.util.find_spec(m) is None]
+        state = f"needs pip install 'bvpnav[{r.extra}]'" if missing else "ready"
+        _say(args, f"{r.name:<8} {', '.join(r.suffixes):<22} {state:<34} {r.description}")
+    return EXIT_OK
+
+
 def default_rules(residual: str) -> tuple[str, ...]:
     """The rules ``bvpnav lcurve`` evaluates without ``--rules``.
 
@@ -532,6 +585,23 @@ def build_parser() -> argparse.ArgumentParser:
     cmp_.add_argument("--out", metavar="CSV", help="write the table")
     cmp_.add_argument("--plot", metavar="PNG", help="draw the table")
     cmp_.set_defaults(func=_cmd_compare)
+
+    st = add(
+        "stationary", help="find the stationary intervals of a strapdown recording",
+        description="Detect where the IMU is at rest (SHOE or magnitude detector, the spec's "
+                    "[stationary] options) and print the intervals; --plot draws the statistic with its "
+                    "threshold and the signals with the intervals shaded, to check the threshold before "
+                    "[stationary] adds them to a solve as ZeroVelocity items.")
+    common(st, lam=False)
+    st.add_argument("--method", choices=("shoe", "magnitude"), help="override the spec's [stationary] method")
+    st.add_argument("--plot", metavar="PNG", help="draw the detector's statistic and the intervals")
+    st.add_argument("--out", metavar="CSV", help="write the intervals (t0, t1 in s)")
+    st.set_defaults(func=_cmd_stationary)
+
+    rd = add("readers", help="list the file formats bvpnav reads",
+             description="Every reader: its name ([input] format), the suffixes it claims, whether its "
+                         "optional dependencies are installed, and what it reads.")
+    rd.set_defaults(func=_cmd_readers)
 
     bt = add(
         "batch", help="solve every recording in a folder (Dask)",

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["lcurve", "solution", "trajectory", "errors", "comparison"]
+__all__ = ["lcurve", "solution", "trajectory", "errors", "comparison", "stationary"]
 
 _MARKERS = {"lcurve": ("o", "C3"), "gcv": ("s", "C0"), "discrepancy": ("^", "C2"), "quasi": ("D", "C1")}
 

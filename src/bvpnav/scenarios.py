@@ -13,7 +13,7 @@ import numpy as np
 
 from .imu import ImuData
 
-__all__ = ["Scenario", "tikhonov2011", "quintic_trajectory", "cubic_prior", "SCENARIOS"]
+__all__ = ["Scenario", "tikhonov2011", "walking", "quintic_trajectory", "cubic_prior", "SCENARIOS"]
 
 
 @dataclass(eq=False)

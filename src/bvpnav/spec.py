@@ -79,9 +79,17 @@ _SECTIONS = {
     "problem": {"residual", "sigma_a"},
     "solve": {"solver", "accuracy", "lam", "fallback", "on_conflict", "priority", "demote_sigma",
               "uncertainty"},
+    "stationary": None,  # detector options and the items' fields: see _STATIONARY_KEYS
     "error_model": None,  # array of tables, checked per model
     "item": None,  # array of tables, checked per item
 }
+
+
+#: ``[stationary]``: the options of :func:`bvpnav.detect.stationary`, then the fields of the
+#: :class:`ZeroVelocity` items made from the intervals (``name`` gets a number appended).
+_STATIONARY_KEYS = {"method", "window", "threshold", "sigma_a", "sigma_w", "acc_threshold", "gyro_threshold",
+                    "gravity", "min_duration"}
+_STATIONARY_ITEM_KEYS = {"sigma", "mode", "name"}
 
 
 def error_model_registry() -> dict[str, type]:
@@ -129,6 +137,37 @@ class Spec:
     #: Where each ``[problem]``/``[solve]`` key was written (``"spec.toml, line 12"``), for
     #: errors found only once the data is known (empty when built in code).
     where: dict = dataclasses.field(default_factory=dict, compare=False, repr=False)
+    #: ``[stationary]``: detect the stationary intervals in the recording and add a
+    #: :class:`ZeroVelocity` item for each (empty: no detection). See :meth:`stationary_items`.
+    stationary: dict = dataclasses.field(default_factory=dict)
+
+    def stationary_items(self, data) -> list:
+        """The :class:`ZeroVelocity` items of ``[stationary]`` for ``data`` (strapdown), or [].
+
+        The detector (:func:`bvpnav.detect.stationary`) takes the ``[stationary]`` options
+        (``method`` default ``"shoe"``; ``gravity`` default the recording's gravity
+        magnitude); ``sigma``/``mode`` make the items soft or hard (hard by default) and
+        ``name`` (default ``"stationary"``) is numbered per interval.
+        """
+        if not self.stationary:
+            return []
+        from . import detect
+
+        opts = {k: v for k, v in self.stationary.items() if k in _STATIONARY_KEYS}
+        item_kw = {k: v for k, v in self.stationary.items() if k in _STATIONARY_ITEM_KEYS}
+        item_kw.setdefault("name", "stationary")
+        if "gravity" not in opts and getattr(data, "gravity", None) is not None:
+            opts["gravity"] = float(np.linalg.norm(data.gravity))
+        at = self.where.get("stationary", "[stationary]")
+        try:
+            intervals = detect.stationary(data, **opts)
+        except InputError as exc:
+            raise InputError(f"{at}: {exc}") from None
+        if not intervals:
+            raise InputError(f"{at}: the {opts.get('method', 'shoe')} detector found no stationary "
+                             "interval in the recording; check the threshold with `bvpnav stationary INPUT "
+                             "--spec SPEC --plot PNG` (or bvpnav.plot.stationary), or drop [stationary]")
+        return detect.zero_velocity_items(intervals, **item_kw)
 
     def error_model(self):
         """The combined error model, or None."""
@@ -160,6 +199,9 @@ class Spec:
         prob.add(*self.items)
         if info:
             prob.add(*info)
+        stationary = self.stationary_items(data)
+        if stationary:
+            prob.add(*stationary)
         labels = prob.item_labels
         for key in ("priority", "demote_sigma"):
             table = self.solve.get(key)
@@ -254,6 +296,22 @@ def _check_values(plain: dict, text: str, source: str) -> None:
     _check_solve_values(plain["solve"], at("solve"))
     _check_demotion_values(plain["solve"], at("solve"))
     _check_input_values(plain["input"], at("input"))
+    _check_stationary_values(plain["stationary"], at("stationary"))
+
+
+def _check_stationary_values(tab: dict, where) -> None:
+    """Check ``[stationary]``: the detector's name and the items' name and mode (the rest is
+    checked by the detector and the item, with the section's line)."""
+    if not tab:
+        return
+    from .detect import METHODS
+
+    if tab.get("method", "shoe") not in METHODS:
+        raise InputError(f"{where('method')}: method = {tab['method']!r}; stationary detectors: "
+                         f"{list(METHODS)}")
+    for key in ("name", "mode"):
+        if key in tab and not isinstance(tab[key], str):
+            raise InputError(f"{where(key)}: {key} = {tab[key]!r}; give a string, e.g. {key} = \"...\"")
 
 
 def _check_problem_values(prob: dict, where) -> None:
@@ -435,7 +493,7 @@ def _parse_spec(text: str, source: str = "spec") -> Spec:
             line = _line_of(text, None, sec) or _line_of(text, sec)
             raise InputError(f"{_where(source, line)}: unknown section {sec!r}; valid sections: "
                              f"{sorted(_SECTIONS)}")
-    plain = {sec: _plain_table(doc, sec, text, source) for sec in ("input", "problem", "solve")}
+    plain = {sec: _plain_table(doc, sec, text, source) for sec in ("input", "problem", "solve", "stationary")}
     _check_values(plain, text, source)
     reg_items = registry()
     reg_models = error_model_registry()
@@ -443,7 +501,10 @@ def _parse_spec(text: str, source: str = "spec") -> Spec:
             for sec, reg, kind in (("item", reg_items, "item"), ("error_model", reg_models, "error model"))}
     _check_item_names(doc, text, source)
     where = {k: _where(source, _line_of(text, k, sec)) for sec in ("problem", "solve") for k in plain[sec]}
-    return Spec(plain["input"], plain["problem"], plain["solve"], objs["item"], objs["error_model"], where)
+    if plain["stationary"]:
+        where["stationary"] = _where(source, _line_of(text, None, "stationary"))
+    return Spec(plain["input"], plain["problem"], plain["solve"], objs["item"], objs["error_model"], where,
+                stationary=plain["stationary"])
 
 
 def _plain_table(doc: dict, sec: str, text: str, source: str) -> dict:
@@ -452,7 +513,8 @@ def _plain_table(doc: dict, sec: str, text: str, source: str) -> dict:
     tab = doc.get(sec, {})
     if not isinstance(tab, dict):
         raise InputError(f"{source}: [{sec}] must be a table")
-    allowed = _input_keys(tab.get("format")) if sec == "input" else _SECTIONS[sec]
+    allowed = (_input_keys(tab.get("format")) if sec == "input" else
+               _STATIONARY_KEYS | _STATIONARY_ITEM_KEYS if sec == "stationary" else _SECTIONS[sec])
     for key in tab:
         if key not in allowed:
             line = _line_of(text, key, sec)
@@ -606,7 +668,7 @@ def _fields_of(obj, skip=()) -> dict:
 def dumps_spec(spec: Spec) -> str:
     """TOML text for a :class:`Spec` (the inverse of :func:`parse_spec`)."""
     lines = ["# bvpnav spec (written by bvpnav)"]
-    for sec in ("input", "problem", "solve"):
+    for sec in ("input", "problem", "solve", "stationary"):
         tab = getattr(spec, sec)
         if tab:
             lines += ["", f"[{sec}]"] + [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in tab.items()]
