@@ -1,7 +1,10 @@
 """Synthetic recordings with their specs, for trying the command line without data.
 
-Each sample writes ``recording.csv`` (``t`` in s, ``acc_<axis>`` in m/s^2),
-``spec.toml`` and ``truth.csv`` (true positions, m) into a folder.
+Each sample writes ``recording.csv``, ``spec.toml`` and ``truth.csv`` (true positions, m)
+into a folder. The recording is navigation-frame acceleration (``t`` in s, ``acc_<axis>``
+in m/s^2) or, for the strapdown samples, what an IMU measures in its own axes (specific
+force ``f_x, f_y, f_z`` in m/s^2, gyro rates ``w_x, w_y, w_z`` in rad/s, or an
+orientation as quaternion columns), with the spec's ``[input]`` saying so.
 """
 
 from __future__ import annotations
@@ -43,7 +46,7 @@ def _tikhonov2011(seed: int, rate: float | None):
     prob.add(Position(t=[0.0, 10.0], value=[0.0, 10.0], name="ends"),
              Position(t=tp, value=_clean(sc.prior(tp)), sigma=1.0, name="cubic prior"))
     solve = {"solver": "direct", "accuracy": "default", "lam": "lcurve"}
-    return t, sc.data.acc, sc.position[:, None], prob, solve
+    return _nav_sample(t, sc.data.acc, sc.position[:, None], prob, solve)
 
 
 def _shuttle(seed: int, rate: float | None):
@@ -68,13 +71,93 @@ def _shuttle(seed: int, rate: float | None):
              Symmetry(about=10.0, sigma=0.01, name="mirror"),
              AverageVelocity(t0=[0.0, 10.0], t1=[10.0, 20.0], value=[1.0, -1.0], name="stopwatch"))
     solve = {"solver": "direct", "accuracy": "default", "lam": 1.0}
-    return t, acc, p(mirror)[:, None], prob, solve
+    return _nav_sample(t, acc, p(mirror)[:, None], prob, solve)
+
+
+def _nav_sample(t, acc, truth, prob, solve) -> dict:
+    """The parts of a navigation-frame sample: recording, truth, spec (problem, solve, input)."""
+    import pandas as pd
+
+    axes = prob.data.axes
+    return {"recording": pd.DataFrame({"t": t, **{f"acc_{ax}": acc[:, k] for k, ax in enumerate(axes)}}),
+            "truth": pd.DataFrame({"t": t, **{ax: truth[:, k] for k, ax in enumerate(axes)}}),
+            "problem": prob, "solve": solve,
+            "input": {"time": "t", "time_unit": "s", "columns": {ax: f"acc_{ax}" for ax in axes},
+                      "unit": "m/s^2"}}
+
+
+def _strapdown_frame(t, f, w=None, quat=None) -> dict:
+    """Columns of a strapdown recording: t, specific force, gyro rates and/or quaternion (w first)."""
+    import pandas as pd
+
+    cols = {"t": t, **{f"f_{a}": f[:, k] for k, a in enumerate("xyz")}}
+    if w is not None:
+        cols.update({f"w_{a}": w[:, k] for k, a in enumerate("xyz")})
+    if quat is not None:  # scipy is scalar-last; the file is scalar-first, as the spec states
+        cols.update({f"q{a}": quat[:, k] for a, k in zip("wxyz", (3, 0, 1, 2), strict=True)})
+    return pd.DataFrame(cols)
+
+
+def _walking(seed: int, rate: float | None):
+    """A foot-mounted IMU walking 10 strides (strapdown: specific force + gyro; stance detected)."""
+    import numpy as np
+    import pandas as pd
+
+    from .constraints import Position
+    from .imu import ImuData
+    from .problem import NavigationProblem
+    from .scenarios import walking
+
+    sc = walking(rate=rate or 100.0, n_strides=10, seed=seed)
+    d = sc.data
+    q0 = _clean(d.attitude[0].as_quat())
+    q0 = _clean(np.asarray(q0) / np.linalg.norm(q0))
+    init = {"quaternion": q0, "scalar": "last"}
+    prob = NavigationProblem(ImuData(t=d.t, acc=d.acc, axes=("x", "y", "z")))
+    prob.add(Position(t=[0.0], value=_clean(sc.position[0]), name="start"))
+    t = d.t
+    return {"recording": _strapdown_frame(t, d.specific_force, w=d.gyro),
+            "truth": pd.DataFrame({"t": t, **{a: sc.position[:, k] for k, a in enumerate("xyz")}}),
+            "problem": prob, "solve": {"solver": "direct", "accuracy": "default", "lam": 1.0},
+            "input": {"time": "t", "time_unit": "s", "specific_force": ["f_x", "f_y", "f_z"],
+                      "gyro": ["w_x", "w_y", "w_z"], "gyro_unit": "rad/s", "unit": "m/s^2", "frame": "enu",
+                      "initial_attitude": init},
+            "stationary": {"method": "shoe", "name": "stance"}}
+
+
+def _strapdown3d(seed: int, rate: float | None):
+    """The 2010 paper's 3-D strapdown motion: body-frame IMU and orientation, nine-parameter model."""
+    import pandas as pd
+
+    from .constraints import Position, Velocity
+    from .error_models import Bias, ScaleFactor, UnknownGravity
+    from .imu import ImuData
+    from .problem import NavigationProblem
+    from .simulate import strapdown_3d_2010
+
+    sim = strapdown_3d_2010(rate=rate or 100.0, noise=0.02, seed=seed)
+    t = sim.t
+    data = sim.imu_data(gravity=[0.0, 0.0, -9.80665])
+    prob = NavigationProblem(ImuData(t=t, specific_force=sim.specific_force, attitude=sim.attitude),
+                             error_model=ScaleFactor() + Bias() + UnknownGravity(), sigma_a=0.02)
+    pos = sim.position(t)
+    ends = [_clean(pos[0]), _clean(pos[-1])]
+    tv = [float(t[0]), float(t[-1]) / 2.0, float(t[-1])]
+    prob.add(Position(t=[t[0], t[-1]], value=ends, name="ends"),
+             Velocity(t=tv, value=[_clean(v) for v in sim.velocity(tv)], name="velocities"))
+    return {"recording": _strapdown_frame(t, sim.specific_force, quat=data.attitude.as_quat()),
+            "truth": pd.DataFrame({"t": t, **{a: pos[:, k] for k, a in enumerate("xyz")}}),
+            "problem": prob, "solve": {"solver": "direct", "accuracy": "default", "lam": 1.0},
+            "input": {"time": "t", "time_unit": "s", "specific_force": ["f_x", "f_y", "f_z"], "unit": "m/s^2",
+                      "attitude": {"quaternion": ["qw", "qx", "qy", "qz"], "scalar": "first"},
+                      "attitude_frame": "enu", "frame": "enu"}}
 
 
 #: Sample scenarios by name.
-SAMPLES = {"tikhonov2011": _tikhonov2011, "shuttle": _shuttle}
+SAMPLES = {"tikhonov2011": _tikhonov2011, "shuttle": _shuttle, "walking": _walking,
+           "strapdown3d": _strapdown3d}
 #: Duration of each sample's recording, s.
-DURATIONS = {"tikhonov2011": 10.0, "shuttle": 20.0}
+DURATIONS = {"tikhonov2011": 10.0, "shuttle": 20.0, "walking": 12.65, "strapdown3d": 20.0}
 #: Fewest samples a sample recording may have (its items need samples near both ends).
 MIN_SAMPLES = 41
 #: Most samples a sample recording may have (a CSV of about 50 MB).
@@ -121,10 +204,9 @@ def write_sample(name: str, out, seed: int = 0, rate: float | None = None, force
         without ``force``, or an output that cannot be written (see :func:`bvpnav.io.check_outputs`).
     """
     import numpy as np
-    import pandas as pd
 
     from .io import atomic_write_text, check_outputs, write_table
-    from .spec import to_spec
+    from .spec import dumps_spec, problem_to_spec
 
     if name not in SAMPLES:
         raise InputError(f"unknown scenario {name!r}; choose one of {sorted(SAMPLES)}")
@@ -150,15 +232,13 @@ def write_sample(name: str, out, seed: int = 0, rate: float | None = None, force
                          "files it did not write in this run; give --out a new or empty folder, or add "
                          "--force to replace them")
     check_outputs({}, {f"--out ({p.name})": p for p in paths})
-    t, acc, truth, prob, solve = SAMPLES[name](seed, rate)
+    part = SAMPLES[name](seed, rate)
     out.mkdir(parents=True, exist_ok=True)
-    axes = prob.data.axes
-    rec = pd.DataFrame({"t": t, **{f"acc_{ax}": acc[:, k] for k, ax in enumerate(axes)}})
-    tru = pd.DataFrame({"t": t, **{ax: truth[:, k] for k, ax in enumerate(axes)}})
-    inp = {"time": "t", "time_unit": "s", "columns": {ax: f"acc_{ax}" for ax in axes}, "unit": "m/s^2"}
-    write_table(rec, paths[0])
+    spec = problem_to_spec(part["problem"], solve=part["solve"], input=part["input"])
+    spec.stationary = dict(part.get("stationary", {}))
+    write_table(part["recording"], paths[0])
     header = (f"# bvpnav sample scenario {name!r} (seed {seed}): "
               f"{SAMPLES[name].__doc__.strip().splitlines()[0]}\n")
-    atomic_write_text(paths[1], header + to_spec(prob, solve=solve, input=inp))
-    write_table(tru, paths[2])
+    atomic_write_text(paths[1], header + dumps_spec(spec))
+    write_table(part["truth"], paths[2])
     return paths
