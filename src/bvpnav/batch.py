@@ -51,7 +51,7 @@ from .io import (
 )
 from .log import once
 from .log import progress as progress_bar
-from .readers import read
+from .readers import align, read
 from .spec import parse_spec, read_spec_text
 
 log = logging.getLogger(__name__)
@@ -181,13 +181,14 @@ def _add_uncertainty(summ: dict, sol) -> None:
 
 
 def solve_recording(path, spec, out, solver: str | None = None, lam=None, summary_path=None,
-                    spec_text: str | None = None, uncertainty=None):
+                    spec_text: str | None = None, uncertainty=None, information=(),
+                    clock_offset: float | None = None, same_clock: bool = False):
     """Solve one recording file with a spec; write the trajectory and its JSON summary.
 
     Parameters
     ----------
     path : path-like
-        Recording (CSV or Parquet), read-only.
+        Recording (any reader's format: CSV, Parquet, a bag ...), read-only.
     spec : bvpnav.spec.Spec
     out : path-like
         Trajectory output (``.csv`` or ``.parquet``), written atomically.
@@ -206,6 +207,11 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     spec_text : str, optional
         The spec's text, for the fingerprint in the summary's ``run`` record (see
         :func:`fingerprint`); None records no spec hash, so ``resume`` re-solves.
+    information : sequence of path-like
+        Files holding more information (an NMEA log: GNSS fixes), read by their suffix's
+        reader and put on the recording's clock by :func:`bvpnav.readers.align`.
+    clock_offset, same_clock : optional
+        How those files' clocks relate to the recording's (see :func:`bvpnav.readers.align`).
 
     Returns
     -------
@@ -225,7 +231,8 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     implicit = summary_path is None
     summary_path = Path(summary_path) if summary_path is not None else out.with_suffix(".json")
     fmt = check_table_path(out, "out")
-    check_outputs({"recording": path}, {"out": out, "summary_path": summary_path})
+    check_outputs({"recording": path, **{f"information {k + 1}": p for k, p in enumerate(information)}},
+                  {"out": out, "summary_path": summary_path})
     if implicit:
         check_implicit_outputs({"summary_path (default: out with .json)": (summary_path, "summary")},
                                "move it away or give summary_path (--summary) another path")
@@ -240,9 +247,16 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     if before is not None and before != (rec_fp["size"], rec_fp["mtime_ns"]):
         raise InputError(f"recording {str(path)!r} changed while it was being solved; nothing was written: "
                          "wait until it is complete and run again")
-    for note in rec.notes:
+    info = list(rec.items)
+    notes = list(rec.notes)
+    for extra in information:
+        more = read(extra, {})
+        items, said = align(more, rec, clock_offset=clock_offset, same_clock=same_clock)
+        info += items
+        notes += list(more.notes) + said
+    for note in notes:
         log.info("%s: %s", display_path(path), note)
-    prob = spec.build(data, info=rec.items)
+    prob = spec.build(data, info=info)
     sol = prob.solve(**solve_kwargs(spec, solver, lam, uncertainty))
     now = _recording_fingerprint(path)
     if (now["size"], now["sha256"]) != (rec_fp["size"], rec_fp["sha256"]):
@@ -252,7 +266,8 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     written = file_fingerprint(out)
     summ = summary(sol, prob)
     _add_uncertainty(summ, sol)
-    summ["run"] = {"recording": display_path(path), "samples": int(data.grid.n),
+    summ["run"] = {"recording": display_path(path), "samples": int(data.grid.n), "notes": notes,
+                   "information": [display_path(p) for p in information],
                    "fingerprint": fingerprint(path, spec_text, solver, lam, fmt, recording=rec_fp,
                                               uncertainty=uncertainty),
                    "trajectory": {"path": display_path(out), "size": written["size"],

@@ -272,7 +272,8 @@ def _cmd_solve(args) -> int:
     if args.summary is not None and Path(args.summary).suffix.lower() != ".json":
         raise InputError(f"--summary {args.summary!r}: the summary is JSON; end its name with .json")
     opt_summary = "--summary" if args.summary is not None else "--summary (default: --out with .json)"
-    inputs = {"INPUT": args.input, "--spec": args.spec, **({"--truth": args.truth} if args.truth else {})}
+    inputs = {"INPUT": args.input, "--spec": args.spec, **({"--truth": args.truth} if args.truth else {}),
+              **{f"--info {p}": p for p in args.info}}
     _check(args, inputs,
            {"--out": args.out, opt_summary: summary, "--plot": args.plot},
            figures=("--plot",), tables=("--out",))
@@ -297,7 +298,9 @@ def _cmd_solve(args) -> int:
               " + ".join(type(m).__name__ for m in spec.error_models) or "none")
     t0 = time.perf_counter()
     sol, row = solve_recording(args.input, spec, args.out, solver=args.solver, lam=_lam(args.lam),
-                               summary_path=summary, spec_text=spec_text, uncertainty=uncertainty)
+                               summary_path=summary, spec_text=spec_text, uncertainty=uncertainty,
+                               information=args.info, clock_offset=args.clock_offset,
+                               same_clock=args.same_clock)
     _log.info("solved in %.3g s (solver %s, %s); wrote %s and %s", time.perf_counter() - t0,
               row["solver"], row["status"], args.out, summary)
     _log.debug("solver options in force: %s", sol.stats.get("options"))
@@ -556,6 +559,16 @@ def build_parser() -> argparse.ArgumentParser:
                        "INPUT named recording.csv, if there is one")
     solve.add_argument("--solver", help="override the spec's solver (e.g. clarabel, osqp, direct, csne)")
     uncertainty_flag(solve, "in OUT, a +/-2 sigma band on --plot")
+    solve.add_argument("--info", action="append", default=[], metavar="FILE",
+                       help="a file of more information (e.g. an NMEA log: GNSS fixes as position items), "
+                            "read by its suffix; repeat for several. Its clock is aligned explicitly: ISO "
+                            "timestamps with a time zone by themselves, otherwise --clock-offset or "
+                            "--same-clock")
+    solve.add_argument("--clock-offset", type=float, metavar="SECONDS",
+                       help="seconds to add to the --info files' times to put them on INPUT's clock")
+    solve.add_argument("--same-clock", action="store_true",
+                       help="the --info files and INPUT count time from one epoch (e.g. Unix nanoseconds): "
+                            "shift by the difference of their origins")
     solve.set_defaults(func=_cmd_solve)
 
     lc = add(

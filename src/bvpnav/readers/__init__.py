@@ -49,6 +49,7 @@ __all__ = [
     "read",
     "require",
     "read_recording",
+    "align",
 ]
 
 #: Leading bytes a reader's ``sniff`` sees.
@@ -328,3 +329,134 @@ def read_recording(path: str | os.PathLike, input: dict | None = None):
                          "returns the samples only: use rec = bvpnav.readers.read(path, input), then "
                          "rec.imu_data(input) and rec.items")
     return rec.imu_data(input)
+
+
+def _origin_ns(origin: str | None) -> tuple[str, int] | None:
+    """(clock kind, integer ns) of a time origin: ``("utc", ns since the Unix epoch)`` for an
+    ISO timestamp with a zone (naive ones are refused by returning None), ``("<unit>", ns)``
+    for a numeric origin (``"1700000000000000000 ns"``), None when it cannot be read."""
+    import re
+
+    if not isinstance(origin, str):
+        return None
+    m = re.fullmatch(r"(-?\d+) (s|ms|us|ns)", origin.strip())
+    if m:
+        per = {"s": 10**9, "ms": 10**6, "us": 10**3, "ns": 1}[m.group(2)]
+        return "epoch", int(m.group(1)) * per
+    try:
+        import pandas as pd
+
+        ts = pd.Timestamp(origin)
+    except (ValueError, TypeError):
+        return None
+    if ts.tzinfo is None:
+        return None
+    return "utc", int(ts.tz_convert("UTC").as_unit("ns").value)
+
+
+def _shifted(item, dt: float):
+    """A copy of ``item`` with its instants (``t``, ``t0``, ``t1``) moved by ``dt`` s."""
+    import dataclasses
+
+    import numpy as np
+
+    changes = {f: np.asarray(getattr(item, f), dtype=float) + dt for f in ("t", "t0", "t1")
+               if hasattr(item, f) and getattr(item, f) is not None}
+    return dataclasses.replace(item, **changes)
+
+
+def _inside(item, lo: float, hi: float):
+    """(the part of ``item`` inside ``[lo, hi]``, instants dropped): rows of ``t`` outside the
+    window are removed with their ``value``/``sigma`` rows; None when nothing is left."""
+    import dataclasses
+
+    import numpy as np
+
+    if not hasattr(item, "t"):
+        return item, 0
+    t = np.atleast_1d(np.asarray(item.t, dtype=float))
+    keep = (t >= lo) & (t <= hi)
+    if keep.all():
+        return item, 0
+    if not keep.any():
+        return None, int(t.size)
+    changes = {"t": t[keep]}
+    for f in ("value", "sigma"):
+        v = getattr(item, f, None)
+        if v is not None and np.ndim(v) >= 1 and np.shape(v)[0] == t.size:
+            changes[f] = np.asarray(v)[keep]
+    return dataclasses.replace(item, **changes), int((~keep).sum())
+
+
+def align(info: Recording, to: Recording, *, clock_offset: float | None = None,
+          same_clock: bool = False) -> tuple[list, list[str]]:
+    """The information items of one file on the clock of another recording.
+
+    Parameters
+    ----------
+    info : Recording
+        The file holding the information (an NMEA log, a bag's fixes).
+    to : Recording
+        The recording whose samples are solved (its ``t`` and ``time_origin``).
+    clock_offset : float, optional
+        Seconds to add to ``info``'s times to put them on ``to``'s: the explicit alignment
+        (e.g. a GNSS log and an IMU whose clocks share nothing).
+    same_clock : bool
+        Both files' times are on one clock: shift by the difference of their origins.
+        Needed for numeric origins (``"<n> ns"``), which may be epochs or uptimes; ISO
+        timestamps with a time zone on both sides are aligned without it.
+
+    Returns
+    -------
+    (list of Item, list of str)
+        The shifted items, restricted to ``to``'s window, and the notes saying what was
+        done (the shift, the instants left out).
+
+    Raises
+    ------
+    InputError
+        When the clocks cannot be aligned from what is known (naming both origins and the
+        options that would align them), and when no instant falls inside the window.
+
+    Notes
+    -----
+    With origins :math:`o_i` and :math:`o_r`, an instant :math:`t_i` of ``info`` becomes
+    :math:`t = t_i + (o_i - o_r)` (in integer nanoseconds, then seconds), or
+    :math:`t = t_i + \\text{clock\\_offset}`.
+    """
+    notes: list[str] = []
+    if clock_offset is not None and same_clock:
+        raise InputError("give either clock_offset (seconds between the clocks) or same_clock, not both")
+    if clock_offset is not None:
+        dt = float(clock_offset)
+        notes.append(f"{info.source}: times shifted by the given clock offset {dt:+.9g} s")
+    else:
+        a, b = _origin_ns(info.time_origin), _origin_ns(to.time_origin)
+        both_utc = a is not None and b is not None and a[0] == b[0] == "utc"
+        if a is None or b is None or (not both_utc and not same_clock) or (same_clock and a[0] != b[0]):
+            raise InputError(
+                f"cannot put {info.source} (t = 0 at {info.time_origin!r}) on the clock of {to.source} "
+                f"(t = 0 at {to.time_origin!r}): their clocks are not known to be one. Give the offset "
+                "(--clock-offset SECONDS: added to the information's times), or --same-clock when both "
+                "count from one epoch (e.g. both Unix-epoch nanoseconds); ISO timestamps with a time zone "
+                "are aligned by themselves")
+        dt = (a[1] - b[1]) * 1e-9
+        notes.append(f"{info.source}: times shifted by {dt:+.9f} s (origin {info.time_origin} -> "
+                     f"{to.time_origin})")
+    lo, hi = float(to.t[0]), float(to.t[-1])
+    out, dropped, total = [], 0, 0
+    for item in info.items:
+        moved = _shifted(item, dt)
+        kept, gone = _inside(moved, lo, hi)
+        total += int(getattr(moved, "t", [0]).size) if hasattr(moved, "t") else 1
+        dropped += gone
+        if kept is not None:
+            out.append(kept)
+    if dropped:
+        notes.append(f"{info.source}: {dropped} of {total} instant(s) lie outside the recording's window "
+                     f"[{lo:.6g}, {hi:.6g}] s and are left out")
+    if not out and info.items:
+        raise InputError(f"{info.source}: no instant of its {len(info.items)} item(s) falls inside the "
+                         f"recording's window [{lo:.6g}, {hi:.6g}] s after the shift of {dt:+.6g} s; check "
+                         "the clock offset")
+    return out, notes
