@@ -36,8 +36,6 @@ from .imu import STANDARD_GRAVITY, ImuData
 if TYPE_CHECKING:  # pragma: no cover
     from scipy.spatial.transform import Rotation
 
-    from .readers import Recording
-
 __all__ = ["FRAME_OPTIONS", "FRAMES", "imu_data", "rotation_option", "gravity_vector", "frame_change"]
 
 #: The ``[input]`` keys about frames (read here, not by the readers).
@@ -149,13 +147,14 @@ def gravity_vector(options: Mapping[str, Any], frame: str) -> np.ndarray:
     return np.asarray(g, dtype=float)
 
 
-def imu_data(rec: Recording, options: Mapping[str, Any]) -> ImuData:
+def imu_data(rec: Any, options: Mapping[str, Any]) -> ImuData:
     """:class:`bvpnav.ImuData` from a :class:`~bvpnav.readers.Recording` and the frame options.
 
     Parameters
     ----------
-    rec : Recording
-        The reader's output.
+    rec : bvpnav.readers.Recording
+        The reader's output (this module sits below the readers, so the type is not
+        imported here).
     options : mapping
         The ``[input]`` keys of :data:`FRAME_OPTIONS`; others are ignored.
 

@@ -403,8 +403,9 @@ def align(info: Recording, to: Recording, *, clock_offset: float | None = None,
         (e.g. a GNSS log and an IMU whose clocks share nothing).
     same_clock : bool
         Both files' times are on one clock: shift by the difference of their origins.
-        Needed for numeric origins (``"<n> ns"``), which may be epochs or uptimes; ISO
-        timestamps with a time zone on both sides are aligned without it.
+        Needed for numeric origins (``"<n> ns"``), which may be Unix epochs or uptimes
+        (with it, a numeric origin counts from the Unix epoch, so it also aligns with an ISO
+        timestamp); ISO timestamps with a time zone on both sides are aligned without it.
 
     Returns
     -------
@@ -433,7 +434,7 @@ def align(info: Recording, to: Recording, *, clock_offset: float | None = None,
     else:
         a, b = _origin_ns(info.time_origin), _origin_ns(to.time_origin)
         both_utc = a is not None and b is not None and a[0] == b[0] == "utc"
-        if a is None or b is None or (not both_utc and not same_clock) or (same_clock and a[0] != b[0]):
+        if a is None or b is None or (not both_utc and not same_clock):
             raise InputError(
                 f"cannot put {info.source} (t = 0 at {info.time_origin!r}) on the clock of {to.source} "
                 f"(t = 0 at {to.time_origin!r}): their clocks are not known to be one. Give the offset "
