@@ -85,7 +85,8 @@ def _numbers(v: Any, what: str, units: str) -> np.ndarray:
         raise InputError(f"{what}: expected a scalar or a 1-D array in {units}, got shape {arr.shape}")
     bad = np.flatnonzero(~np.isfinite(arr))
     if bad.size:
-        raise InputError(f"{what}: entry {int(bad[0])} is {arr[bad[0]]!r}; values must be finite ({units})")
+        raise InputError(f"{what}: entry {int(bad[0])} is {float(arr[bad[0]])!r}; values must be finite "
+                         f"({units})")
     return arr
 
 
@@ -93,7 +94,7 @@ def _latitudes(lat: Any, what: str) -> np.ndarray:
     arr = _numbers(lat, what, "degrees")
     bad = np.flatnonzero(np.abs(arr) > 90.0)
     if bad.size:
-        raise InputError(f"{what}: entry {int(bad[0])} is {arr[bad[0]]!r} degrees; latitudes lie in "
+        raise InputError(f"{what}: entry {int(bad[0])} is {float(arr[bad[0]])!r} degrees; latitudes lie in "
                          "[-90, 90] (latitude and longitude swapped?)")
     return arr
 
@@ -108,7 +109,7 @@ def _origin(origin: Any) -> tuple[float, float, float]:
     if arr.shape != (3,) or not np.all(np.isfinite(arr)):
         raise InputError(f"origin = {origin!r}: {form} (three finite numbers)")
     if abs(arr[0]) > 90.0:
-        raise InputError(f"origin = {origin!r}: latitude {arr[0]!r} is outside [-90, 90]; {form}")
+        raise InputError(f"origin = {origin!r}: latitude {float(arr[0])!r} is outside [-90, 90]; {form}")
     return float(arr[0]), float(arr[1]), float(arr[2])
 
 
@@ -213,7 +214,8 @@ def local_to_geodetic(xyz: Any, origin: Sequence[float], frame: str = "enu"
     bad = np.argwhere(~np.isfinite(arr))
     if bad.size:
         i, j = (int(v) for v in bad[0])
-        raise InputError(f"local_to_geodetic: xyz[{i}, {j}] is {arr[i, j]!r}; coordinates must be finite")
+        raise InputError(f"local_to_geodetic: xyz[{i}, {j}] is {float(arr[i, j])!r}; coordinates must be "
+                         "finite")
     pm = _pymap3d("local_to_geodetic")
     conv = pm.enu2geodetic if frame == "enu" else pm.ned2geodetic
     la, lo, h = conv(arr[:, 0], arr[:, 1], arr[:, 2], lat0, lon0, h0, deg=True)
@@ -297,8 +299,8 @@ def _sigma_rows(sigma: Any, n: int, frame: str) -> np.ndarray:
     bad = np.argwhere(~(np.isfinite(arr) & (arr > 0)))
     if bad.size:
         i, j = (int(v) for v in bad[0])
-        raise InputError(f"position_items: sigma of fix {i}, axis {j} is {arr[i, j]!r}; sigmas are finite "
-                         "positive numbers in m (omit sigma for hard fixes)")
+        raise InputError(f"position_items: sigma of fix {i}, axis {j} is {float(arr[i, j])!r}; sigmas are "
+                         "finite positive numbers in m (omit sigma for hard fixes)")
     return arr
 
 

@@ -143,8 +143,8 @@ def format_rmc(tod_s: float, date: _dt.date, lat: float, lon: float, speed: floa
 def format_gst(tod_s: float, sd_lat: float, sd_lon: float, sd_alt: float, *, talker: str = "GP") -> str:
     """A GST sentence with the latitude, longitude and altitude error sigmas in m."""
     rms = math.sqrt(sd_lat**2 + sd_lon**2)
-    return sentence(f"{talker}GST,{_hms(tod_s)},{rms:.3f},{max(sd_lat, sd_lon):.3f},{min(sd_lat, sd_lon):.3f},"
-                    f"0.0,{sd_lat:.3f},{sd_lon:.3f},{sd_alt:.3f}")
+    return sentence(f"{talker}GST,{_hms(tod_s)},{rms:.3f},{max(sd_lat, sd_lon):.3f},"
+                    f"{min(sd_lat, sd_lon):.3f},0.0,{sd_lat:.3f},{sd_lon:.3f},{sd_alt:.3f}")
 
 
 # ------------------------------------------------------------------ reading
@@ -262,8 +262,8 @@ def _base_date(path: Path, lines: list, days: list[int], option: Any) -> _dt.dat
             base, where = implied, f"the RMC date of line {ln.no}"
         elif implied != base:
             raise InputError(f"{path}: line {ln.no}: the RMC date {date} disagrees with {where} "
-                             f"(the times imply {_dt.date.fromordinal(base.toordinal() + d)}): a gap of a day "
-                             "or more, or a wrong [input] date; cut the log there or fix the date")
+                             f"(the times imply {_dt.date.fromordinal(base.toordinal() + d)}): a gap of a "
+                             "day or more, or a wrong [input] date; cut the log there or fix the date")
     return base
 
 
@@ -358,8 +358,8 @@ def _origin_option(options: Mapping[str, Any], first: tuple[float, float, float]
     if isinstance(v, str) and v == "first":
         return first, "the first valid fix"
     if isinstance(v, str) or isinstance(v, bool):
-        raise InputError(f"{path}: [input] origin = {v!r}: give \"first\" or [lat, lon, h] (degrees, degrees, "
-                         "m above the WGS-84 ellipsoid)")
+        raise InputError(f"{path}: [input] origin = {v!r}: give \"first\" or [lat, lon, h] (degrees, "
+                         "degrees, m above the WGS-84 ellipsoid)")
     try:
         return _origin(v), "[input] origin"
     except InputError as exc:
@@ -387,7 +387,8 @@ class NmeaReader(Reader):
                          "velocity_sigma", "date", "skip_bad_lines"})
     modules = ("pynmea2", "pymap3d")
     extra = "gnss"
-    description = "NMEA 0183 GNSS log (GGA fixes, RMC speed/course): Position and Velocity items, no IMU samples"
+    description = ("NMEA 0183 GNSS log (GGA fixes, RMC speed/course): Position and Velocity items, "
+                   "no IMU samples")
 
     def sniff(self, head: bytes) -> bool:
         """Strict: most non-empty lines are ``$``-sentences and at least one is a
@@ -454,8 +455,8 @@ class NmeaReader(Reader):
                             _clock(n0 % DAY_NS), rollovers)
         meta = {"geodetic_origin": list(origin), "frame": cfg.frame, "n_fixes": len(fixes),
                 "talkers": sorted({ln.msg.talker for ln in lines})}
-        return Recording(t=t, source=str(path), time_origin=origin_iso, items=tuple(items), notes=tuple(notes),
-                         meta=meta)
+        return Recording(t=t, source=str(path), time_origin=origin_iso, items=tuple(items),
+                         notes=tuple(notes), meta=meta)
 
     @staticmethod
     def _sigma(fix: tuple, cfg: _Settings) -> tuple[float, float, float]:
@@ -494,13 +495,13 @@ class NmeaReader(Reader):
         if rollovers:
             notes.append(f"The times cross midnight UTC {rollovers} time(s): a day added at each rollover.")
         if no_geoid:
-            notes.append(f"{no_geoid} fixes have no geoid separation: their height is the altitude above mean "
-                         "sea level, not above the ellipsoid.")
+            notes.append(f"{no_geoid} fixes have no geoid separation: their height is the altitude above "
+                         "mean sea level, not above the ellipsoid.")
         if drops:
             notes.append(f"Dropped GGA sentences: {_count(drops)}.")
         if n_vel:
-            notes.append(f"{n_vel} RMC speeds and courses over ground as a soft horizontal Velocity item (axes "
-                         f"x, y of {cfg.frame.upper()}), sigma {cfg.velocity_sigma:g} m/s per axis.")
+            notes.append(f"{n_vel} RMC speeds and courses over ground as a soft horizontal Velocity item "
+                         f"(axes x, y of {cfg.frame.upper()}), sigma {cfg.velocity_sigma:g} m/s per axis.")
         if vdrops or n_vel_before:
             extra = dict(vdrops)
             if n_vel_before:
