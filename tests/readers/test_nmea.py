@@ -245,3 +245,28 @@ def test_end_to_end_fixes_and_imu_recover_the_trajectory(tmp_path):
     assert np.linalg.norm(err, axis=1).max() < 1.2
     verr = traj[["vx", "vy"]].to_numpy() - vel(ti)[:, :2]
     assert np.abs(verr).max() < 0.2
+
+
+def test_damaged_logs_raise_only_input_errors_naming_the_file(tmp_path):
+    """Random character changes, cuts and short sentences (valid checksums included): the
+    log reads or raises InputError naming the file, never another exception."""
+    rng = np.random.default_rng(11)
+    text = "".join(s + "\r\n" for s in example_lines())
+    o = EXAMPLE["origin"]
+    fields = format_gga(100.0, o[0], o[1], o[2])[1:-3].split(",")
+    cases = [sentence(",".join(fields[:k])) + "\r\n" for k in range(1, len(fields))]
+    cases += [sentence(",".join(fields[:k] + ["x"] + fields[k + 1:])) + "\r\n" for k in range(1, len(fields))]
+    for _ in range(80):
+        chars = list(text)
+        for i in rng.integers(0, len(chars), rng.integers(1, 4)):
+            chars[i] = chr(int(rng.choice([ord(","), ord("."), ord("*"), 0, 200, *range(48, 91)])))
+        cases.append("".join(chars))
+    cases.append(text[: int(rng.integers(1, len(text)))])
+    path = tmp_path / "damaged.nmea"
+    for case in cases:
+        path.write_text(case, encoding="latin-1")
+        for opts in ({}, {"skip_bad_lines": True}):
+            try:
+                readers.read(path, {"format": "nmea", **opts})
+            except bvpnav.InputError as exc:
+                assert "damaged.nmea" in str(exc), exc

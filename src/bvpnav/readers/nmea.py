@@ -154,7 +154,34 @@ class _Line:
     kind: str  # GGA, RMC, GST
     tod_ns: int
     data: tuple[str, ...]
-    msg: Any
+    latlon: tuple[float, float] | None  # degrees, when the sentence has a position
+    talker: str
+
+
+#: Fields a sentence needs (GGA up to the geoid separation, RMC up to the date, GST all).
+_FIELDS = {"GGA": 11, "RMC": 9, "GST": 8}
+_LATLON = {"GGA": 1, "RMC": 2}  # index of the latitude field
+
+
+def _angle(field: str, hemi: str, deg_digits: int, limit: float, hemis: str) -> float:
+    m = re.fullmatch(r"(\d{" + str(deg_digits) + r"})(\d{2}(?:\.\d*)?)", field)
+    if not m or hemi not in hemis or float(m[2]) >= 60.0:
+        raise ValueError(f"{field!r},{hemi!r} is not a {'latitude' if limit == 90 else 'longitude'} "
+                         f"({'d' * deg_digits}mm.mmm,{hemis[0]}|{hemis[1]})")
+    v = int(m[1]) + float(m[2]) / 60.0
+    if v > limit:
+        raise ValueError(f"{field!r},{hemi!r}: {v!r} degrees is beyond {limit:g}")
+    return v if hemi == hemis[0] else -v
+
+
+def _position(kind: str, data: tuple[str, ...]) -> tuple[float, float] | None:
+    """(lat, lon) in degrees of a GGA/RMC sentence; None when the fields are empty."""
+    if kind not in _LATLON:
+        return None
+    i = _LATLON[kind]
+    if not (data[i] or data[i + 2]):
+        return None
+    return _angle(data[i], data[i + 1], 2, 90.0, "NS"), _angle(data[i + 2], data[i + 3], 3, 180.0, "EW")
 
 
 def _tod_ns(field: str) -> int:
@@ -174,7 +201,10 @@ def _date(field: str, what: str) -> _dt.date:
     if not m:
         raise ValueError(f"{what} date field {field!r} is not ddmmyy")
     yy = int(m[3])
-    return _dt.date(2000 + yy if yy < 80 else 1900 + yy, int(m[2]), int(m[1]))
+    try:
+        return _dt.date(2000 + yy if yy < 80 else 1900 + yy, int(m[2]), int(m[1]))
+    except ValueError:
+        raise ValueError(f"{what} date field {field!r} is not a valid date (ddmmyy)") from None
 
 
 @dataclass
@@ -209,7 +239,11 @@ def _scan(path: Path, text: str, skip_bad: bool) -> _Scan:
                 out.ignored[kind or type(msg).__name__] += 1
                 continue
             data = tuple(str(d) for d in msg.data)
-            out.lines.append(_Line(no, kind, _tod_ns(data[0]), data, msg))
+            if len(data) < _FIELDS[kind]:
+                raise ValueError(f"a {kind} sentence has at least {_FIELDS[kind]} fields, this one "
+                                 f"{len(data)}")
+            out.lines.append(_Line(no, kind, _tod_ns(data[0]), data, _position(kind, data),
+                                   msg.talker))
         except (pynmea2.ParseError, ValueError, IndexError) as exc:
             reason = exc.args[0] if exc.args and isinstance(exc.args[0], str) else str(exc)
             reason = "bad checksum (" + reason + ")" if isinstance(exc, pynmea2.ChecksumError) else reason
@@ -256,7 +290,7 @@ def _base_date(path: Path, lines: list, days: list[int], option: Any) -> _dt.dat
         try:
             date = _date(ln.data[8], "RMC")
         except ValueError as exc:
-            raise InputError(f"{path}: line {ln.no}: {exc}") from None
+            raise InputError(f"{path}: line {ln.no}: {exc}; repair or delete the line") from None
         implied = _dt.date.fromordinal(date.toordinal() - d)
         if base is None:
             base, where = implied, f"the RMC date of line {ln.no}"
@@ -282,14 +316,14 @@ def _fix(ln: _Line, drops: Counter) -> tuple[float, float, float, float | None] 
     if q not in _GOOD_QUALITY:
         drops[f"quality {q} ({_DROP_QUALITY.get(q, 'unknown')})"] += 1
         return None
-    if not (d[1] and d[3]) or _float(d[8]) is None:
+    if ln.latlon is None or _float(d[8]) is None:
         drops["no latitude, longitude or altitude"] += 1
         return None
     sep = _float(d[10])
     if sep is None:
         drops["__no_geoid"] += 1
     hdop = _float(d[7])
-    return ln.msg.latitude, ln.msg.longitude, _float(d[8]) + (sep or 0.0), hdop if hdop and hdop > 0 else None
+    return *ln.latlon, _float(d[8]) + (sep or 0.0), hdop if hdop and hdop > 0 else None
 
 
 def _gst_sigmas(ln: _Line) -> tuple[float, float, float] | None:
@@ -454,7 +488,7 @@ class NmeaReader(Reader):
                             origin, origin_from, sum(f[4] is not None for f in fixes), origin_iso,
                             _clock(n0 % DAY_NS), rollovers)
         meta = {"geodetic_origin": list(origin), "frame": cfg.frame, "n_fixes": len(fixes),
-                "talkers": sorted({ln.msg.talker for ln in lines})}
+                "talkers": sorted({ln.talker for ln in lines})}
         return Recording(t=t, source=str(path), time_origin=origin_iso, items=tuple(items),
                          notes=tuple(notes), meta=meta)
 
