@@ -187,6 +187,13 @@ def test_out_of_order_and_void_rmc(tmp_path):
     rec = readers.read(_write(tmp_path, lines, "v.nmea"), {"format": "nmea"})
     assert len(rec.items) == 1 and rec.time_origin.startswith("2026-05-01T00:01:40")
     assert any("status void" in n for n in rec.notes)
+    repeated = example_lines()
+    repeated.insert(3, repeated[2])  # the first RMC twice
+    rec = readers.read(_write(tmp_path, repeated, "r.nmea"), {"format": "nmea"})
+    assert _items(rec)[1].t.size == 11 and any("1 repeated time" in n for n in rec.notes)
+    repeated.insert(2, repeated[1])  # the first GGA twice
+    with pytest.raises(bvpnav.InputError, match=r"r2\.nmea: line 3: a second fix at 10:00:00"):
+        readers.read(_write(tmp_path, repeated, "r2.nmea"), {"format": "nmea"})
 
 
 def test_missing_pynmea2_names_the_extra(tmp_path, monkeypatch):

@@ -333,9 +333,13 @@ def _gst_sigmas(ln: _Line) -> tuple[float, float, float] | None:
     return None
 
 
-def _velocity(ln: _Line, drops: Counter) -> tuple[float, float] | None:
-    """(v_east, v_north) in m/s of a valid RMC, or None (counted in ``drops``)."""
+def _velocity(ln: _Line, drops: Counter, times: list[int], n: int) -> tuple[float, float] | None:
+    """(v_east, v_north) in m/s of a valid RMC at ``n`` ns after ``times``, or None (counted
+    in ``drops``)."""
     d = ln.data
+    if times and n <= times[-1]:
+        drops["repeated time"] += 1
+        return None
     if d[1] != "A" or (len(d) > 11 and d[11] == "N"):
         drops["status void"] += 1
         return None
@@ -463,7 +467,7 @@ class NmeaReader(Reader):
                 fixes.append((*f[:3], f[3], sig))
                 ft.append(n)
                 last = (ln.no, n)
-            elif ln.kind == "RMC" and cfg.velocity and (v := _velocity(ln, vdrops)) is not None:
+            elif ln.kind == "RMC" and cfg.velocity and (v := _velocity(ln, vdrops, vt, n)) is not None:
                 vel.append(v)
                 vt.append(n)
         if not fixes:
