@@ -61,8 +61,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from ..errors import InputError
 from . import Reader, Recording, register_reader
 
@@ -439,6 +437,8 @@ class NmeaReader(Reader):
         return nmea >= 0.8 * len(lines) and any(_FIX.match(ln) for ln in lines)
 
     def read(self, path: Path, options: Mapping[str, Any]) -> Recording:
+        import numpy as np
+
         from ..geodesy import geodetic_to_local
 
         path = Path(path)
@@ -569,6 +569,8 @@ EXAMPLE = {"origin": (48.1173, 11.5167, 520.0), "velocity": (8.0, 6.0), "date": 
 def example_lines(start: float | None = None, n: int | None = None) -> list[str]:
     """The example log's sentences (GGA + RMC per epoch; one GSV), from :data:`EXAMPLE`'s
     straight-line motion on a flat local ENU frame converted with pymap3d."""
+    import numpy as np
+
     from ..geodesy import local_to_geodetic
 
     e = EXAMPLE
