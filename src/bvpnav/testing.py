@@ -858,6 +858,9 @@ def check_reader(reader, folder) -> Any:
     if rec.acc is not None:
         _require(rec.specific_force is None and np.shape(rec.acc)[0] == n, who, "channels",
                  "acc (N, d) and no specific_force")
+    elif rec.is_information:
+        _require(len(rec.items) > 0, who, "channels",
+                 "an information-only recording (no acc, no specific_force) has items")
     else:
         _require(rec.specific_force is not None and np.shape(rec.specific_force) == (n, 3), who, "channels",
                  "specific_force (N, 3) when there is no acc")
@@ -867,9 +870,11 @@ def check_reader(reader, folder) -> Any:
         _require(rec.attitude is None or len(rec.attitude) == n, who, "channels", "one attitude per sample")
     _require(all(isinstance(i, Item) for i in rec.items), who, "items", "items are bvpnav Item instances")
     _require(all(isinstance(s, str) for s in rec.notes), who, "notes", "notes are sentences (str)")
-    with _rule(who, "imu_data"):
-        data = rec.imu_data()
-    _require(isinstance(data, ImuData) and data.n == n, who, "imu_data", "an ImuData of the same N samples")
+    if not rec.is_information:
+        with _rule(who, "imu_data"):
+            data = rec.imu_data()
+        _require(isinstance(data, ImuData) and data.n == n, who, "imu_data",
+                 "an ImuData of the same N samples")
     if path.is_file():
         cut = folder / f"truncated{path.suffix}"
         cut.write_bytes(before[path][: max(1, len(before[path]) // 2)])

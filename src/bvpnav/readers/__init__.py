@@ -122,6 +122,12 @@ class Recording:
         """True when the samples are body-frame specific force (and gyro/attitude)."""
         return self.specific_force is not None
 
+    @property
+    def is_information(self) -> bool:
+        """True for an information-only recording (a GNSS log): no ``acc``, no
+        ``specific_force``, only ``items`` on the clock of ``t``."""
+        return self.acc is None and self.specific_force is None
+
     def imu_data(self, frame_options: Mapping[str, Any] | None = None) -> ImuData:
         """The samples as :class:`bvpnav.ImuData` (navigation-frame acceleration).
 
