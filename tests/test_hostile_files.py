@@ -602,7 +602,7 @@ def test_a_recording_deleted_during_a_batch_is_a_failed_row(work, monkeypatch, c
 
 
 def test_a_recording_that_changes_during_its_solve_writes_nothing(work, monkeypatch, capsys):
-    real = bvpnav.batch.read_recording
+    real = bvpnav.batch.read
 
     def read_then_append(path, *args, **kwargs):
         data = real(path, *args, **kwargs)
@@ -610,7 +610,7 @@ def test_a_recording_that_changes_during_its_solve_writes_nothing(work, monkeypa
             fh.write("20.2,0.5\n")
         return data
 
-    monkeypatch.setattr(bvpnav.batch, "read_recording", read_then_append)
+    monkeypatch.setattr(bvpnav.batch, "read", read_then_append)
     others = snapshot(work / "spec.toml", work / "traj.csv", work / "traj.json")
     code, err = cli(solve_argv(work, "--out", work / "new.csv"), capsys)
     assert code == EXIT_INPUT, err

@@ -248,7 +248,7 @@ def test_hard_items_that_repeat_each_other_still_have_their_covariance():
 
     from bvpnav.samples import SAMPLES
 
-    *_, prob, _ = SAMPLES["shuttle"](0, 10.0)
+    prob = SAMPLES["shuttle"](0, 10.0)["problem"]
     sol = prob.solve(solver="direct", uncertainty=True)
     form = prob.formulation
     ls, _ = quadratic_model(form, sol.x, 1.0)

@@ -51,7 +51,7 @@ from .io import (
 )
 from .log import once
 from .log import progress as progress_bar
-from .readers import align, read
+from .readers import align, read, reader_for
 from .spec import parse_spec, read_spec_text
 
 log = logging.getLogger(__name__)
@@ -249,8 +249,9 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
                          "wait until it is complete and run again")
     info = list(rec.items)
     notes = list(rec.notes)
-    for extra in information:
-        more = read(extra, {})
+    frame = spec.input.get("frame", "enu")
+    for extra in information:  # fixes in the recording's navigation frame, where the reader converts
+        more = read(extra, {"local_frame": frame} if "local_frame" in reader_for(extra).options else {})
         items, said = align(more, rec, clock_offset=clock_offset, same_clock=same_clock)
         info += items
         notes += list(more.notes) + said

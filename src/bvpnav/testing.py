@@ -811,11 +811,13 @@ def check_reader(reader, folder) -> Any:
         shadow the frame options, an ``extra`` when it has ``modules``, a description;
         ``example`` writes a file that ``reader_for`` picks and ``sniff`` recognises;
         ``read`` leaves it byte-identical and returns a :class:`Recording` with finite,
-        strictly increasing times, either navigation-frame ``acc`` (N, d) or
-        ``specific_force`` (N, 3) with gyro (N, 3) and/or an attitude of length N, items
-        that are :class:`bvpnav.Item` instances, notes that are strings; ``imu_data``
-        gives an :class:`ImuData` of N samples; and a truncated copy either reads or raises
-        :class:`bvpnav.InputError` naming the file (never another exception).
+        strictly increasing times, either navigation-frame ``acc`` (N, d), or
+        ``specific_force`` (N, 3) with gyro (N, 3) and/or an attitude of length N, or
+        neither with at least one item (information only); items that are
+        :class:`bvpnav.Item` instances, notes that are strings; ``imu_data`` gives an
+        :class:`ImuData` of N samples (unless information only); and a truncated copy
+        either reads or raises :class:`bvpnav.InputError` naming the file (never another
+        exception).
     """
     from pathlib import Path
 

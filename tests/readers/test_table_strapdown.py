@@ -173,10 +173,11 @@ def test_a_strapdown_spec_round_trips(tmp_path):
     (("latitude = 47.5", "latitude = 147.5"), r"s\.toml, line 6: .*needs latitude \(degrees, -90\.\.90\)"),
     (("gyro_unit = \"deg/s\"", "gyro_units = \"deg/s\""), r"s\.toml, line 4: unknown key 'gyro_units' in "
                                                         r"\[input\]"),
-    (("sequence = \"xyz\"", "sequence = \"xyx\""), r"line 9: .*body_to_sensor"),
-    (("method = \"magnitude\"", "method = \"mean\""), r"line 13: method = 'mean'; stationary detectors"),
-    (("[[item]]", "format = \"tables\"\n[[item]]"), r"format = 'tables' is not a known reader \(did you mean "
-                                                    r"'table'\?\)"),
+    (("sequence = \"xyz\"", "sequence = \"xxy\""), r"line 9: .*body_to_sensor"),
+    (("method = \"magnitude\"", "method = \"mean\""),
+     r"line 13: method = 'mean'; stationary detectors"),
+    (("[input]", "[input]\nformat = \"tables\""),
+     r"line 2: \[input\] format = 'tables' is not a known reader \(did you mean 'table'\?\)"),
 ])
 def test_spec_mistakes_in_frames_name_the_line(edit, pattern):
     with pytest.raises(InputError, match=pattern):

@@ -93,7 +93,9 @@ class Recording:
 
     Notes
     -----
-    A recording either has ``acc`` (navigation frame already) or ``specific_force``; with
+    A recording has ``acc`` (navigation frame already), or ``specific_force``, or neither
+    (an *information-only* file such as a GNSS log: its ``items`` go beside another
+    recording's samples through :func:`align`); with
     ``specific_force`` the attitude comes from ``attitude`` or from integrating ``gyro``
     (:meth:`bvpnav.ImuData.from_gyro`), and the navigation-frame acceleration is
     :math:`a = C_{nb} f + g`.
