@@ -177,8 +177,8 @@ def imu_data(rec: Any, options: Mapping[str, Any]) -> ImuData:
     if rec.acc is None and rec.specific_force is None:
         kinds = ", ".join(sorted({type(i).__name__ for i in rec.items})) or "nothing"
         raise InputError(f"{rec.source} holds information only ({kinds}), no IMU samples: solve a "
-                         "recording of IMU samples and give this file beside it (bvpnav solve RECORDING --info "
-                         "FILE; in Python: bvpnav.readers.align(info, recording))")
+                         "recording of IMU samples and give this file beside it (bvpnav solve RECORDING "
+                         "--info FILE; in Python: bvpnav.readers.align(info, recording))")
     if not rec.is_strapdown:
         if used:
             raise InputError(f"{rec.source}: [input] {sorted(used)} describe strapdown data (specific force "
