@@ -182,7 +182,7 @@ def _add_uncertainty(summ: dict, sol) -> None:
 
 def solve_recording(path, spec, out, solver: str | None = None, lam=None, summary_path=None,
                     spec_text: str | None = None, uncertainty=None, information=(),
-                    clock_offset: float | None = None, same_clock: bool = False):
+                    clock_offset: float | None = None, same_clock: bool = False, origin=None):
     """Solve one recording file with a spec; write the trajectory and its JSON summary.
 
     Parameters
@@ -212,6 +212,11 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
         reader and put on the recording's clock by :func:`bvpnav.readers.align`.
     clock_offset, same_clock : optional
         How those files' clocks relate to the recording's (see :func:`bvpnav.readers.align`).
+    origin : (float, float, float), optional
+        Geodetic origin (latitude, longitude in degrees, height in m, WGS-84) of the local
+        frame, for the information files that convert geodetic fixes; default the
+        recording's own (a bag's first fix), else each file's first fix. The origin used
+        is the row's ``geodetic_origin`` and the summary's ``run.geodetic_origin``.
 
     Returns
     -------
@@ -250,8 +255,14 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     info = list(rec.items)
     notes = list(rec.notes)
     frame = spec.input.get("frame", "enu")
-    for extra in information:  # fixes in the recording's navigation frame, where the reader converts
-        more = read(extra, {"local_frame": frame} if "local_frame" in reader_for(extra).options else {})
+    geo = list(origin) if origin is not None else rec.meta.get("geodetic_origin")
+    for extra in information:  # fixes in the recording's local frame: its frame, one origin
+        takes = reader_for(extra).options
+        opts = {"local_frame": frame} if "local_frame" in takes else {}
+        if geo is not None and "origin" in takes:
+            opts["origin"] = [float(v) for v in geo]
+        more = read(extra, opts)
+        geo = geo if geo is not None else more.meta.get("geodetic_origin")
         items, said = align(more, rec, clock_offset=clock_offset, same_clock=same_clock)
         info += items
         notes += list(more.notes) + said
@@ -268,6 +279,7 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     summ = summary(sol, prob)
     _add_uncertainty(summ, sol)
     summ["run"] = {"recording": display_path(path), "samples": int(data.grid.n), "notes": notes,
+                   "geodetic_origin": geo,
                    "information": [display_path(p) for p in information],
                    "fingerprint": fingerprint(path, spec_text, solver, lam, fmt, recording=rec_fp,
                                               uncertainty=uncertainty),
@@ -277,7 +289,7 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     row = {"recording": display_path(path), "ok": True, "error": "", "samples": data.grid.n, "lam": sol.lam,
            "lam_rule": sol.lam_rule, "solver": sol.stats.get("solver"), "status": sol.stats.get("status"),
            "verified": bool(sol.stats.get("verified")), "seconds": time.perf_counter() - t0,
-           "output": display_path(out), "resume": ""}
+           "output": display_path(out), "resume": "", "geodetic_origin": geo}
     return sol, row
 
 

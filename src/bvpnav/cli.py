@@ -275,8 +275,8 @@ def _cmd_solve(args) -> int:
     inputs = {"INPUT": args.input, "--spec": args.spec, **({"--truth": args.truth} if args.truth else {}),
               **{f"--info {p}": p for p in args.info}}
     _check(args, inputs,
-           {"--out": args.out, opt_summary: summary, "--plot": args.plot},
-           figures=("--plot",), tables=("--out",))
+           {"--out": args.out, opt_summary: summary, "--plot": args.plot, "--geodetic": args.geodetic},
+           figures=("--plot",), tables=("--out", "--geodetic"))
     if args.summary is None:  # a path bvpnav chose: replace only a summary of its own
         from .io import check_implicit_outputs
 
@@ -300,10 +300,13 @@ def _cmd_solve(args) -> int:
     sol, row = solve_recording(args.input, spec, args.out, solver=args.solver, lam=_lam(args.lam),
                                summary_path=summary, spec_text=spec_text, uncertainty=uncertainty,
                                information=args.info, clock_offset=args.clock_offset,
-                               same_clock=args.same_clock)
+                               same_clock=args.same_clock, origin=args.origin)
     _log.info("solved in %.3g s (solver %s, %s); wrote %s and %s", time.perf_counter() - t0,
               row["solver"], row["status"], args.out, summary)
     _log.debug("solver options in force: %s", sol.stats.get("options"))
+    if args.geodetic:
+        _write_geodetic(sol, row.get("geodetic_origin"), args.geodetic, spec.input.get("frame", "enu"))
+        _log.info("geodetic trajectory written to %s", args.geodetic)
     truth = read_truth(truth_path, sol, implicit=implicit) if truth_path is not None else None
     if truth is not None:
         _log.info("truth from %s", truth_path)
@@ -378,6 +381,24 @@ def _cmd_readers(args) -> int:
         state = f"needs pip install 'bvpnav[{r.extra}]'" if missing else "ready"
         _say(args, f"{r.name:<8} {', '.join(r.suffixes):<22} {state:<34} {r.description}")
     return EXIT_OK
+
+
+def _write_geodetic(sol, origin, path, frame: str) -> None:
+    """Write t, lat, lon (degrees), height (m, WGS-84) of a 3-axis solution about ``origin``."""
+    from .geodesy import trajectory_to_geodetic
+    from .io import write_table
+
+    if origin is None:
+        raise InputError("--geodetic: the local frame's geodetic origin is not known (the recording and "
+                         "the --info files hold no geodetic fixes); give it with --origin LAT LON HEIGHT "
+                         "(degrees, degrees, m above the WGS-84 ellipsoid)")
+    axes = tuple(sol._pos_cols)
+    if len(axes) != 3:
+        raise InputError(f"--geodetic: the solution has {len(axes)} axis/axes {list(axes)}; geodetic "
+                         "coordinates need the three axes of the local frame (x, y, z)")
+    df = sol.trajectory.reset_index()[["t", *axes]]
+    geo = trajectory_to_geodetic(df, origin, frame=frame, axes=axes)
+    write_table(geo[["t", "lat", "lon", "height"]], path, "--geodetic")
 
 
 def default_rules(residual: str) -> tuple[str, ...]:
@@ -566,6 +587,12 @@ def build_parser() -> argparse.ArgumentParser:
                             "--same-clock")
     solve.add_argument("--clock-offset", type=float, metavar="SECONDS",
                        help="seconds to add to the --info files' times to put them on INPUT's clock")
+    solve.add_argument("--geodetic", metavar="OUT", help="also write the trajectory in geodetic coordinates: "
+                       "t, lat, lon (degrees), height (m above the WGS-84 ellipsoid), CSV or Parquet; needs "
+                       "3 axes and a geodetic origin (from the GNSS fixes, or --origin)")
+    solve.add_argument("--origin", nargs=3, type=float, metavar=("LAT", "LON", "HEIGHT"),
+                       help="geodetic origin of the local frame (degrees, degrees, m): for --info fixes and "
+                            "--geodetic (default: the first fix)")
     solve.add_argument("--same-clock", action="store_true",
                        help="the --info files and INPUT count time from one epoch (e.g. Unix nanoseconds): "
                             "shift by the difference of their origins")
