@@ -11,7 +11,7 @@ from scipy.spatial.transform import Rotation
 
 from bvpnav.errors import InputError
 from bvpnav.readers import get_reader, read, reader_for
-from bvpnav.readers.phone import write_example_export, write_export
+from bvpnav.readers.phone import write_example_export, write_export, zip_export
 from bvpnav.testing import check_reader
 
 T0 = 1_718_030_736_872_695_300
@@ -34,8 +34,18 @@ def _rot(t):
 
 
 def test_contract(tmp_path):
-    rec = check_reader(get_reader("phone"), tmp_path)
+    rec = check_reader(get_reader("phone"), tmp_path)  # its example is a .zip
     assert rec.attitude is not None and rec.attitude_frame == "enu" and rec.gyro is not None
+
+
+def test_folder_is_read_and_a_bag_folder_is_refused(tmp_path):
+    ex = write_example_export(tmp_path / "e", duration=2.0)
+    rec = read(ex.path, {"format": "phone"})
+    assert rec.n == ex.acc_ns.size and rec.source.endswith("TotalAcceleration.csv")
+    (tmp_path / "bag").mkdir()
+    (tmp_path / "bag" / "metadata.yaml").write_text("rosbag2_bagfile_information: {}\n")
+    with pytest.raises(InputError, match='ROS 2 bag folder.*format = "rosbag"'):
+        read(tmp_path / "bag", {"format": "phone"})
 
 
 def test_times_exact_units_and_truth(tmp_path):
@@ -137,10 +147,8 @@ def test_orientation_option_and_gyro_integration(tmp_path):
 
 def test_zip_export(tmp_path):
     ex = write_example_export(tmp_path / "e", duration=2.0)
-    archive = tmp_path / "export.zip"
-    with zipfile.ZipFile(archive, "w") as z:
-        for p in sorted(ex.path.iterdir(), key=lambda p: p.name != "TotalAcceleration.csv"):
-            z.write(p, f"Recording 2024-06-10/{p.name}")
+    archive = zip_export(ex.path, tmp_path / "export.zip")
+    assert zipfile.ZipFile(archive).namelist()[0] == "e/TotalAcceleration.csv"
     reader = get_reader("phone")
     assert reader_for(archive) is reader and reader.sniff(archive.read_bytes()[:4096])
     a, b = read(archive), read(ex.path, {"format": "phone"})

@@ -56,7 +56,8 @@ from . import Reader, Recording, register_reader
 if TYPE_CHECKING:  # pragma: no cover
     from ..simulate import Simulation
 
-__all__ = ["PhoneReader", "SENSOR_FILES", "write_export", "write_example_export", "ExampleExport"]
+__all__ = ["PhoneReader", "SENSOR_FILES", "write_export", "write_example_export", "zip_export",
+           "ExampleExport"]
 
 #: The files read, by role.
 SENSOR_FILES = {"total": "TotalAcceleration.csv", "user": "Accelerometer.csv", "gravity": "Gravity.csv",
@@ -224,6 +225,9 @@ class PhoneReader(Reader):
         for key, v in (("orientation", use_att), ("crop", crop)):
             if not isinstance(v, bool):
                 raise InputError(f"[input] {key} = {v!r}: true or false")
+        if path.is_dir() and (path / "metadata.yaml").is_file():
+            raise InputError(f"{str(path)!r} holds metadata.yaml: a ROS 2 bag folder, not a phone export; "
+                             "set [input] format = \"rosbag\"")
         export = _Export(path)
         notes: list[str] = []
         ns, f, master = self._specific_force(export, mode, crop, notes)
@@ -291,8 +295,11 @@ class PhoneReader(Reader):
         return ns[keep], f[keep]
 
     def example(self, folder: Path) -> Path:
-        """A 2 s export folder (TotalAcceleration, Gyroscope, Orientation on their own clocks)."""
-        return write_example_export(Path(folder) / "sensorlogger", duration=2.0).path
+        """A 2 s export as the app shares it: a .zip of TotalAcceleration, Gyroscope and
+        Orientation.csv on their own clocks (a .zip, which only this reader claims; a
+        folder is claimed by the rosbag reader too)."""
+        ex = write_example_export(Path(folder) / "sensorlogger", duration=2.0)
+        return zip_export(ex.path, Path(folder) / "sensorlogger.zip")
 
 
 def _check_gravity(f: np.ndarray, att, where: str) -> None:
@@ -362,6 +369,18 @@ def write_export(folder, *, acc_ns, acc, gyro_ns=None, gyro=None, orientation_ns
                    {"qz": q[:, 2], "qy": q[:, 1], "qx": q[:, 0], "qw": q[:, 3]}, start)
     (folder / "Metadata.csv").write_text("version,device name,platform\n1,bvpnav example,android\n")
     return folder
+
+
+def zip_export(folder, archive) -> Path:
+    """Zip an export folder as the app shares it (files under one folder, the specific-force
+    file first so that :meth:`PhoneReader.sniff` sees its name); the archive's path."""
+    folder, archive = Path(folder), Path(archive)
+    first = (SENSOR_FILES["total"], SENSOR_FILES["user"])
+    files = sorted((p for p in folder.iterdir() if p.is_file()), key=lambda p: (p.name not in first, p.name))
+    with zipfile.ZipFile(archive, "w", compression=zipfile.ZIP_DEFLATED) as z:
+        for p in files:
+            z.write(p, f"{folder.name}/{p.name}")
+    return archive
 
 
 @dataclass(frozen=True, eq=False)

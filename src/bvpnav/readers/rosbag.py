@@ -149,8 +149,10 @@ def _bag_target(path: Path) -> Path:
     """What to open: the bag folder for a folder or a storage file beside metadata.yaml."""
     if path.is_dir():
         if not (path / "metadata.yaml").is_file():
-            raise InputError(f"{str(path)!r}: a ROS 2 bag folder holds metadata.yaml, this one does not; "
-                             "give the bag folder, a .db3/.mcap storage file or a ROS 1 .bag file")
+            hint = (" (it looks like a phone export: set [input] format = \"phone\")"
+                    if any(path.glob("*Acceleration.csv")) else "")
+            raise InputError(f"{str(path)!r}: a ROS 2 bag folder holds metadata.yaml, this one does not"
+                             f"{hint}; give the bag folder, a .db3/.mcap storage file or a ROS 1 .bag file")
         return path
     if path.suffix.lower() in (".db3", ".mcap") and (path.parent / "metadata.yaml").is_file():
         return path.parent
