@@ -237,3 +237,31 @@ def test_end_to_end_solve_recovers_truth(tmp_path):
     rec = read(exact.path, {"format": "rosbag", "origin": list(exact.origin)})
     sol = bvpnav.NavigationProblem(rec.imu_data()).add(rec.items[0]).solve()
     assert np.abs(sol.position() - truth).max() < 1e-3
+
+
+def test_ros1_bag(tmp_path):
+    """A ROS 1 .bag (rosbags' ROS 1 writer, Noetic types): the same channels and exact times."""
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS1_NOETIC)
+    types = store.types
+    vec, quat = types["geometry_msgs/msg/Vector3"], types["geometry_msgs/msg/Quaternion"]
+    path = tmp_path / "run.bag"
+    ns = [START + k * 5_000_000 for k in range(8)]
+    with Writer(path) as writer:
+        conn = writer.add_connection("/imu", IMU_TYPE, typestore=store)
+        for k, t in enumerate(ns):
+            header = types["std_msgs/msg/Header"](seq=k, stamp=types["builtin_interfaces/msg/Time"](
+                sec=t // 10**9, nanosec=t % 10**9), frame_id="imu")
+            msg = types[IMU_TYPE](header=header, orientation=quat(0.0, 0.0, 0.0, 1.0),
+                                  orientation_covariance=np.r_[-1.0, np.zeros(8)],
+                                  angular_velocity=vec(0.01 * k, 0.0, 0.0),
+                                  angular_velocity_covariance=np.zeros(9),
+                                  linear_acceleration=vec(0.0, 0.0, 9.8),
+                                  linear_acceleration_covariance=np.zeros(9))
+            writer.write(conn, t + 1000, store.serialize_ros1(msg, IMU_TYPE))
+    assert get_reader("rosbag").sniff(path.read_bytes()[:4096]) and reader_for(path).name == "rosbag"
+    rec = read(path)
+    assert rec.time_origin == f"{START} ns" and np.array_equal(rec.t, np.arange(8) * 5_000_000 * 1e-9)
+    assert np.allclose(rec.gyro[:, 0], 0.01 * np.arange(8)) and rec.attitude is None
