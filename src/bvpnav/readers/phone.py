@@ -3,15 +3,15 @@
 Supported layout (Sensor Logger for Android/iOS, "CSV" export; a folder, or the ``.zip``
 the app shares, with the files at its top or in one subfolder):
 
-========================  ===============================================  ==========
-file                      columns                                          units
-========================  ===============================================  ==========
-``TotalAcceleration.csv`` ``time, seconds_elapsed, z, y, x``               m/s^2
-``Accelerometer.csv``     same (user acceleration: gravity removed)        m/s^2
-``Gravity.csv``           same (the gravity part of the total)             m/s^2
-``Gyroscope.csv``         same                                             rad/s
-``Orientation.csv``       ``time, seconds_elapsed, qz, qy, qx, qw, ...``   --
-========================  ===============================================  ==========
+=========================  ==============================================  =====
+file                       columns                                         units
+=========================  ==============================================  =====
+``TotalAcceleration.csv``  ``time, seconds_elapsed, z, y, x``              m/s^2
+``Accelerometer.csv``      same (user acceleration: gravity removed)       m/s^2
+``Gravity.csv``            same (the gravity part of the total)            m/s^2
+``Gyroscope.csv``          same                                            rad/s
+``Orientation.csv``        ``time, seconds_elapsed, qz, qy, qx, qw, ...``  --
+=========================  ==============================================  =====
 
 ``time`` is integer ns since the Unix epoch (each sensor on its own sample instants,
 one phone clock); ``seconds_elapsed`` is not used. Other files (Metadata.csv,
