@@ -252,7 +252,7 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     if before is not None and before != (rec_fp["size"], rec_fp["mtime_ns"]):
         raise InputError(f"recording {str(path)!r} changed while it was being solved; nothing was written: "
                          "wait until it is complete and run again")
-    info = list(rec.items)
+    info = list(rec.items_in(spec.input.get("frame", "enu")))
     notes = list(rec.notes)
     frame = spec.input.get("frame", "enu")
     geo = list(origin) if origin is not None else rec.meta.get("geodetic_origin")

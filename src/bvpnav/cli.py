@@ -165,7 +165,7 @@ def _load(args):
     rec = read(args.input, spec.input)
     for note in rec.notes:
         _log.info("%s: %s", args.input, note)
-    return spec, spec.build(rec.imu_data(spec.input), info=rec.items)
+    return spec, spec.build(rec.imu_data(spec.input), info=rec.items_in(spec.input.get("frame", "enu")))
 
 
 def _say(args, text: str) -> None:

@@ -130,6 +130,20 @@ class Recording:
         ``specific_force``, only ``items`` on the clock of ``t``."""
         return self.acc is None and self.specific_force is None
 
+    def items_in(self, frame: str) -> tuple:
+        """The recording's items, checked to be in the navigation frame ``frame``.
+
+        A reader that converts geodetic fixes states the local frame of its items in
+        ``meta["frame"]``; items in another frame than the one solved in are refused (with
+        the fix), never silently mixed.
+        """
+        own = self.meta.get("frame")
+        if self.items and own is not None and own != frame:
+            raise InputError(f"{self.source}: its {len(self.items)} item(s) (GNSS fixes, odometry) are in the "
+                             f"local {own.upper()} frame but the spec's [input] frame is {frame!r}; set frame = "
+                             f"\"{own}\" (or convert the items yourself)")
+        return tuple(self.items)
+
     def imu_data(self, frame_options: Mapping[str, Any] | None = None) -> ImuData:
         """The samples as :class:`bvpnav.ImuData` (navigation-frame acceleration).
 
@@ -232,8 +246,14 @@ def get_reader(name: str) -> Reader:
 
 
 def _head(path: Path) -> bytes:
+    """The first bytes of a file; of a folder, the names of its files and of its subfolders'
+    files (sorted, one per line), which is what a folder reader's ``sniff`` recognises."""
     if path.is_dir():
-        return b""
+        try:
+            names = sorted({p.name for p in path.rglob("*") if p.is_file()})
+        except OSError:
+            return b""
+        return "\n".join(names[:200]).encode("utf-8", "replace")[:HEAD_BYTES]
     try:
         with open(path, "rb") as fh:
             return fh.read(HEAD_BYTES)

@@ -63,54 +63,20 @@ _ROS1_MAGIC = b"#ROSBAG V2.0"
 _MCAP_MAGIC = b"\x89MCAP0\r\n"
 _SQLITE_MAGIC = b"SQLite format 3\x00"
 
-# WGS-84 ellipsoid (the GNSS datum of NavSatFix).
-_A = 6378137.0
-_F = 1.0 / 298.257223563
-_E2 = _F * (2.0 - _F)
-
-
-# ------------------------------------------------------------------ geodesy (private)
-def _ecef(lat_deg, lon_deg, h) -> np.ndarray:
-    """WGS-84 geodetic (deg, deg, m) to Earth-centred Earth-fixed (m), shape (K, 3)."""
-    lat, lon = np.radians(np.asarray(lat_deg, float)), np.radians(np.asarray(lon_deg, float))
-    h = np.asarray(h, float)
-    n = _A / np.sqrt(1.0 - _E2 * np.sin(lat) ** 2)
-    return np.column_stack([(n + h) * np.cos(lat) * np.cos(lon), (n + h) * np.cos(lat) * np.sin(lon),
-                            (n * (1.0 - _E2) + h) * np.sin(lat)])
-
-
-def _enu_matrix(lat0_deg: float, lon0_deg: float) -> np.ndarray:
-    """Rows: east, north, up unit vectors (ECEF) at the origin."""
-    la, lo = math.radians(lat0_deg), math.radians(lon0_deg)
-    return np.array([[-math.sin(lo), math.cos(lo), 0.0],
-                     [-math.sin(la) * math.cos(lo), -math.sin(la) * math.sin(lo), math.cos(la)],
-                     [math.cos(la) * math.cos(lo), math.cos(la) * math.sin(lo), math.sin(la)]])
-
-
+# ------------------------------------------------------------------ geodesy
 def _geodetic_to_enu(lat, lon, h, origin: tuple[float, float, float]) -> np.ndarray:
-    """Local ENU (m, shape (K, 3)) of WGS-84 points about ``origin`` (lat deg, lon deg, h m).
+    """Local ENU (m, shape (K, 3)) of WGS-84 points about ``origin`` (lat deg, lon deg, h m),
+    by :func:`bvpnav.geodesy.geodetic_to_local` (pymap3d)."""
+    from ..geodesy import geodetic_to_local
 
-    Exact (ECEF difference rotated into the origin's tangent frame). To be replaced by
-    ``bvpnav.geodesy.geodetic_to_local(lat, lon, h, origin, "enu")`` once that exists.
-    """
-    d = _ecef(lat, lon, h) - _ecef([origin[0]], [origin[1]], [origin[2]])
-    return d @ _enu_matrix(origin[0], origin[1]).T
+    return geodetic_to_local(lat, lon, h, origin, "enu")
 
 
 def _enu_to_geodetic(enu, origin: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Inverse of :func:`_geodetic_to_enu`: (lat deg, lon deg, h m), iterated to < 1e-9 m."""
-    xyz = (_ecef([origin[0]], [origin[1]], [origin[2]])
-           + np.atleast_2d(enu) @ _enu_matrix(origin[0], origin[1]))
-    x, y, z = xyz.T
-    p = np.hypot(x, y)
-    lon = np.arctan2(y, x)
-    lat = np.arctan2(z, p * (1.0 - _E2))
-    h = np.zeros_like(p)
-    for _ in range(12):
-        n = _A / np.sqrt(1.0 - _E2 * np.sin(lat) ** 2)
-        h = p / np.cos(lat) - n
-        lat = np.arctan2(z, p * (1.0 - _E2 * n / (n + h)))
-    return np.degrees(lat), np.degrees(lon), h
+    """Inverse of :func:`_geodetic_to_enu`: (lat deg, lon deg, h m)."""
+    from ..geodesy import local_to_geodetic
+
+    return local_to_geodetic(np.atleast_2d(enu), origin, "enu")
 
 
 # --------------------------------------------------------------------------- options
@@ -403,7 +369,7 @@ class RosbagReader(Reader):
     suffixes = (".bag", ".mcap", ".db3", "/")
     options = frozenset({"topic", "gnss_topic", "odometry_topic", "stamp", "origin", "gnss_sigma",
                          "odometry_sigma"})
-    modules = ("rosbags",)
+    modules = ("rosbags", "pymap3d")
     extra = "ros"
     description = "ROS 1 .bag / ROS 2 bag (folder, .db3, .mcap): Imu, NavSatFix and Odometry topics"
 
@@ -451,7 +417,7 @@ class RosbagReader(Reader):
                         "the Unix epoch, ROS time); every item is on this clock.")
         meta: dict = {"topics": dict(topics), "imu_topic": imu, "gnss_topic": gnss, "odometry_topic": odom,
                       "stamp": stamp, "frame_id": msgs[imu][0][1].header.frame_id,
-                      "first_stamp_ns": int(ns[0])}
+                      "first_stamp_ns": int(ns[0]), "frame": "enu"}
         window = (int(ns[0]), int(ns[-1]))
         items = []
         if gnss is not None:
