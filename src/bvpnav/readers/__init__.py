@@ -139,9 +139,9 @@ class Recording:
         """
         own = self.meta.get("frame")
         if self.items and own is not None and own != frame:
-            raise InputError(f"{self.source}: its {len(self.items)} item(s) (GNSS fixes, odometry) are in the "
-                             f"local {own.upper()} frame but the spec's [input] frame is {frame!r}; set frame = "
-                             f"\"{own}\" (or convert the items yourself)")
+            raise InputError(f"{self.source}: its {len(self.items)} item(s) (GNSS fixes, odometry) are in "
+                             f"the local {own.upper()} frame but the spec's [input] frame is {frame!r}; set "
+                             f"frame = \"{own}\" (or convert the items yourself)")
         return tuple(self.items)
 
     def imu_data(self, frame_options: Mapping[str, Any] | None = None) -> ImuData:
