@@ -289,7 +289,7 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     row = {"recording": display_path(path), "ok": True, "error": "", "samples": data.grid.n, "lam": sol.lam,
            "lam_rule": sol.lam_rule, "solver": sol.stats.get("solver"), "status": sol.stats.get("status"),
            "verified": bool(sol.stats.get("verified")), "seconds": time.perf_counter() - t0,
-           "output": display_path(out), "resume": "", "geodetic_origin": geo}
+           "output": display_path(out), "resume": "", "geodetic_origin": geo, "items": list(prob.items)}
     return sol, row
 
 
@@ -300,6 +300,7 @@ def _task(path: str, spec_text: str, spec_source: str, out: str, solver, lam, un
     try:
         spec = parse_spec(spec_text, spec_source)
         row = solve_recording(path, spec, out, solver, lam, spec_text=spec_text, uncertainty=uncertainty)[1]
+        row.pop("items", None)  # the problem's items stay on the worker
         row["resume"] = note
         return row
     except BvpnavError as exc:

@@ -314,7 +314,7 @@ def _cmd_solve(args) -> int:
         from . import plot
         from .io import atomic_savefig
 
-        fig = plot.solution(sol, items=spec.items, truth=truth)
+        fig = plot.solution(sol, items=row.get("items", spec.items), truth=truth)  # the files' items too
         atomic_savefig(fig, args.plot, "--plot", dpi=90)
         _log.info("figure written to %s", args.plot)
     _say(args, f"{row['samples']} samples; lam = {sol.lam:.6g} ({sol.lam_rule}); solver {row['solver']} "

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
+import json
 
 import numpy as np
 import pandas as pd
@@ -95,3 +96,35 @@ def test_without_a_stated_clock_relation_the_log_is_refused(drive, tmp_path):
                     tmp_path / "t2.csv", "--geodetic", tmp_path / "g.csv"])
     assert_clean_failure(proc, EXIT_INPUT, r"--geodetic: the local frame's geodetic origin is not known",
                          r"--origin LAT LON HEIGHT")
+
+
+def test_a_ros2_bag_with_imu_and_navsatfix_to_a_trajectory_and_a_plot_in_one_call(tmp_path):
+    pytest.importorskip("rosbags")
+    from bvpnav.readers.rosbag import write_example_bag
+
+    bag = write_example_bag(tmp_path / "drive", duration=8.0, rate=50.0, accel_noise=0.05, gyro_noise=0.002,
+                            seed=4)
+    spec = '[problem]\nsigma_a = 0.05\n\n[solve]\nsolver = "direct"\nlam = 1.0\n'
+    (tmp_path / "spec.toml").write_text(spec)
+    out, png, geo = tmp_path / "traj.csv", tmp_path / "traj.png", tmp_path / "geo.csv"
+    proc = run_cli(["solve", bag.path, "--spec", tmp_path / "spec.toml", "--out", out, "--plot", png,
+                    "--geodetic", geo, "-v"])
+    assert proc.returncode == EXIT_OK, proc.stderr
+    assert "t = 0 at the first Imu stamp" in proc.stderr  # the reader's notes are said
+    traj = pd.read_csv(out).set_index("t")
+    truth = bag.truth
+    np.testing.assert_allclose(traj.index, truth.index, rtol=0, atol=1e-12)
+    err = np.abs(traj[["x", "y", "z"]].to_numpy() - truth[["x", "y", "z"]].to_numpy()).max()
+    assert err < 0.3, err  # 0.05 m fixes every 1 s, 0.05 m/s^2 accelerometer noise
+    assert png.stat().st_size > 20_000
+    g = pd.read_csv(geo)
+    used = json.loads(out.with_suffix(".json").read_text())["run"]["geodetic_origin"]  # the first fix
+    e, n, u = pymap3d.geodetic2enu(g.lat, g.lon, g.height, *used)
+    np.testing.assert_allclose(np.column_stack([e, n, u]), traj[["x", "y", "z"]], rtol=0, atol=1e-3)
+    e, n, u = pymap3d.geodetic2enu(g.lat, g.lon, g.height, *bag.origin)  # the truth's own frame
+    assert np.abs(np.column_stack([e, n, u]) - truth[["x", "y", "z"]].to_numpy()).max() < 0.3
+    ned = tmp_path / "ned.toml"
+    ned.write_text('[input]\nframe = "ned"\n\n' + (tmp_path / "spec.toml").read_text())
+    proc = run_cli(["solve", bag.path, "--spec", ned, "--out", tmp_path / "t3.csv"])
+    assert_clean_failure(proc, EXIT_INPUT, r'set frame = "enu"',
+                         r"are in the local ENU frame but the spec's \[input\] frame is 'ned'")
