@@ -32,6 +32,7 @@ DOCS = ROOT / "docs"
 TUTORIAL = ROOT / "examples" / "tutorial"
 SCRIPTS = sorted(TUTORIAL.glob("[0-9][0-9]_*.py"))
 GUIDES = ["items", "error_models", "solvers", "lambda", "uncertainty", "files_cli", "batch", "strapdown",
+          "readers",
           "safety"]
 #: Where a fetch would go: the discard port on loopback, closed (connection refused).
 NO_NETWORK = "http://127.0.0.1:9"
