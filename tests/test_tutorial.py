@@ -14,7 +14,7 @@ SCRIPTS = sorted(TUTORIAL.glob("[0-9][0-9]_*.py"))
 
 
 def test_the_series_is_complete_and_in_percent_format():
-    assert [p.name[:2] for p in SCRIPTS] == [f"{k:02d}" for k in range(1, 8)]
+    assert [p.name[:2] for p in SCRIPTS] == [f"{k:02d}" for k in range(1, 9)]
     for p in SCRIPTS:
         text = p.read_text()
         assert "format_name: percent" in text and text.count("# %%") >= 3, p.name

@@ -1,0 +1,1 @@
+../../examples/tutorial/08_real_files.py
