@@ -255,7 +255,13 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     info = list(rec.items_in(spec.input.get("frame", "enu")))
     notes = list(rec.notes)
     frame = spec.input.get("frame", "enu")
-    geo = list(origin) if origin is not None else rec.meta.get("geodetic_origin")
+    own = rec.meta.get("geodetic_origin")
+    if origin is not None and own is not None and not np.allclose(origin, own, rtol=0, atol=1e-9):
+        raise InputError(f"--origin {list(origin)}: the recording's own fixes are in the local frame about "
+                         f"{list(own)} (its first fix or its [input] origin); give that origin in the spec's "
+                         "[input] origin = [lat, lon, h] instead, so that every item and the geodetic output "
+                         "share one frame")
+    geo = list(origin) if origin is not None else own
     for extra in information:  # fixes in the recording's local frame: its frame, one origin
         takes = reader_for(extra).options
         opts = {"local_frame": frame} if "local_frame" in takes else {}
