@@ -268,6 +268,10 @@ def _cmd_solve(args) -> int:
     from .spec import parse_spec, read_spec_text
 
     uncertainty = _uncertainty(args)
+    if not args.info and (args.clock_offset is not None or args.same_clock):
+        opt = "--clock-offset" if args.clock_offset is not None else "--same-clock"
+        raise InputError(f"{opt} relates the clock of an --info file to INPUT's, but no --info file is "
+                         "given: add --info FILE or drop the option")
     summary = args.summary if args.summary is not None else str(Path(args.out).with_suffix(".json"))
     if args.summary is not None and Path(args.summary).suffix.lower() != ".json":
         raise InputError(f"--summary {args.summary!r}: the summary is JSON; end its name with .json")

@@ -436,10 +436,11 @@ def _check_frame_values(inp: dict, where) -> None:
     from . import strapdown
 
     frame = inp.get("frame", "enu")
-    if frame not in strapdown.FRAMES:
+    if not isinstance(frame, str) or frame not in strapdown.FRAMES:
         raise InputError(f"{where('frame')}: frame = {frame!r}; valid navigation frames: "
                          + ", ".join(f"{k!r} ({v})" for k, v in strapdown.FRAMES.items()))
-    if "attitude_frame" in inp and inp["attitude_frame"] not in strapdown.FRAMES:
+    if "attitude_frame" in inp and not (isinstance(inp["attitude_frame"], str)
+                                        and inp["attitude_frame"] in strapdown.FRAMES):
         raise InputError(f"{where('attitude_frame')}: attitude_frame = {inp['attitude_frame']!r}; the "
                          f"orientation's reference frame is one of {sorted(strapdown.FRAMES)}")
     keys = [k for k in ("gravity", "latitude", "height") if k in inp]

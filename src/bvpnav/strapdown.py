@@ -186,7 +186,7 @@ def imu_data(rec: Any, options: Mapping[str, Any]) -> ImuData:
                              "them, or name the specific-force columns")
         return ImuData(t=rec.t, acc=rec.acc, axes=rec.axes, time_origin=rec.time_origin)
     frame = used.get("frame", "enu")
-    if frame not in FRAMES:
+    if not isinstance(frame, str) or frame not in FRAMES:
         raise InputError(f"[input] frame = {frame!r}: valid navigation frames: "
                          + ", ".join(f"{k!r} ({v})" for k, v in FRAMES.items()))
     g = gravity_vector(used, frame)
@@ -195,7 +195,7 @@ def imu_data(rec: Any, options: Mapping[str, Any]) -> ImuData:
     f_b = mount.inv().apply(rec.specific_force)
     if rec.attitude is not None:
         ref = used.get("attitude_frame", rec.attitude_frame)
-        if ref not in FRAMES:
+        if not isinstance(ref, str) or ref not in FRAMES:
             raise InputError(f"{rec.source}: the orientation's reference frame is {ref!r}; set [input] "
                              "attitude_frame = \"enu\" or \"ned\" (what the device's orientation is "
                              "relative to)")
@@ -210,6 +210,11 @@ def imu_data(rec: Any, options: Mapping[str, Any]) -> ImuData:
             w.setflags(write=False)
             data.gyro = w
         return data
+    if "attitude_frame" in used:
+        raise InputError(f"{rec.source}: [input] attitude_frame says what a file's orientation is "
+                         "relative to, but this recording has no orientation (the attitude is integrated "
+                         "from the gyro rates, starting at initial_attitude in the navigation frame): drop "
+                         "attitude_frame")
     if rec.gyro is None:
         raise InputError(f"{rec.source}: specific force without an attitude or gyro rates; give the gyro "
                          "columns ([input] gyro = [...]) or the orientation ([input] attitude = {...})")

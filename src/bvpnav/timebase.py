@@ -321,4 +321,4 @@ def to_seconds(values: Any, unit: str | None = None) -> tuple[np.ndarray, str]:
     bad = np.flatnonzero(~np.isfinite(f))
     if bad.size:
         raise InputError(f"to_seconds: entry {int(bad[0])} is {f[bad[0]]!r}; times must be finite")
-    return (f - f[0]) * TIME_UNITS[unit], f"{f[0]!r} {unit}"
+    return (f - f[0]) * TIME_UNITS[unit], f"{float(f[0])!r} {unit}"

@@ -222,3 +222,55 @@ def test_the_readers_command_lists_every_reader():
     assert proc.returncode == EXIT_OK, proc.stderr
     for name in readers.registry():
         assert any(line.startswith(name) for line in proc.stdout.splitlines()), proc.stdout
+
+
+# --------------------------------------------------------------- found by an independent review
+def test_a_float_epoch_origin_is_stated_as_its_number_and_aligns_with_same_clock(tmp_path):
+    from bvpnav.readers import _origin_ns, align
+
+    t = 1777629600.5 + np.arange(101) * 0.01
+    pd.DataFrame({"t": t, "acc_x": 0.0}).to_csv(tmp_path / "f.csv", index=False, float_format="%.17g")
+    rec = readers.read(tmp_path / "f.csv", {"time_origin": "first"})
+    assert rec.time_origin == "1777629600.5 s"
+    assert _origin_ns(rec.time_origin) == ("epoch", 1777629600_500000000)
+    from bvpnav.constraints import Position
+
+    info = readers.Recording(t=np.array([0.0]), source="i", time_origin="1777629600000000000 ns",
+                             items=(Position(t=1.0, value=0.0),))
+    items, _ = align(info, rec, same_clock=True)
+    assert items[0].t.tolist() == [0.5]
+
+
+def test_iso_times_across_a_daylight_saving_switch_are_read_in_utc(tmp_path):
+    import datetime as dt
+
+    zone = [dt.timezone(dt.timedelta(hours=1))] * 3 + [dt.timezone(dt.timedelta(hours=2))] * 3
+    base = dt.datetime(2026, 3, 29, 0, 59, 59, 980000, tzinfo=dt.timezone.utc)
+    stamps = [(base + dt.timedelta(seconds=0.01 * k)).astimezone(z).isoformat() for k, z in enumerate(zone)]
+    assert stamps[2].endswith("+01:00") and stamps[3].endswith("+02:00")  # 01:59:59.99 -> 03:00:00.00
+    pd.DataFrame({"t": stamps, "acc_x": 0.0}).to_csv(tmp_path / "dst.csv", index=False)
+    rec = readers.read(tmp_path / "dst.csv", {"time_unit": "iso8601"})
+    np.testing.assert_allclose(np.diff(rec.t), 0.01, rtol=0, atol=1e-9)
+    mixed = stamps[:3] + [s[:-6] for s in stamps[3:]]
+    pd.DataFrame({"t": mixed, "acc_x": 0.0}).to_csv(tmp_path / "mixed.csv", index=False)
+    with pytest.raises(InputError, match=r"row 3 .* without a time zone, unlike row 0"):
+        readers.read(tmp_path / "mixed.csv", {"time_unit": "iso8601"})
+
+
+@pytest.mark.parametrize("key", ["frame", "attitude_frame"])
+def test_a_list_where_a_frame_name_goes_names_the_line(key):
+    with pytest.raises(InputError, match=rf"s\.toml, line 2: {key} = \['enu'\]"):
+        parse_spec(f'[input]\n{key} = ["enu"]\n', "s.toml")
+
+
+def test_attitude_frame_without_an_orientation_and_clock_options_without_info_are_refused(sim, tmp_path):
+    path = _write(tmp_path / "g.csv", sim.t, f_=sim.specific_force, w_=sim.gyro)
+    with pytest.raises(InputError, match="has no orientation .* drop attitude_frame"):
+        _read(path, specific_force=["f_0", "f_1", "f_2"], gyro=["w_0", "w_1", "w_2"], attitude_frame="enu")
+    with pytest.raises(InputError, match=r'euler = \["yaw", "pitch", "roll"\], sequence = "ZYX"'):
+        _read(path, specific_force=["f_0", "f_1", "f_2"], attitude={"euler": ["f_0", "f_1", "f_2"]})
+    (tmp_path / "s.toml").write_text("[solve]\nsolver = \"direct\"\n")
+    proc = run_cli(["solve", path, "--spec", tmp_path / "s.toml", "--out", tmp_path / "o.csv",
+                    "--clock-offset", "5"])
+    assert_clean_failure(proc, EXIT_INPUT, r"--clock-offset relates the clock of an --info file",
+                         r"add --info FILE or drop the option")

@@ -367,10 +367,12 @@ def _origin_ns(origin: str | None) -> tuple[str, int] | None:
 
     if not isinstance(origin, str):
         return None
-    m = re.fullmatch(r"(-?\d+) (s|ms|us|ns)", origin.strip())
-    if m:
+    m = re.fullmatch(r"(-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?) (s|ms|us|ns)", origin.strip())
+    if m:  # "<integer> ns" exactly; a float origin ("1777629600.5 s") to the ns its digits say
+        from decimal import Decimal
+
         per = {"s": 10**9, "ms": 10**6, "us": 10**3, "ns": 1}[m.group(2)]
-        return "epoch", int(m.group(1)) * per
+        return "epoch", int((Decimal(m.group(1)) * per).to_integral_value())
     try:
         import pandas as pd
 

@@ -293,7 +293,14 @@ def _parse_iso_cells(col, tcol: str, name: str, row_ref):
         k = bad[0]
         raise InputError(f"{name}: {row_ref(k)}, column {tcol!r} is {cells[k]!r}, not an ISO 8601 "
                          "timestamp (time_unit = \"iso8601\"); fix or remove that row")
-    stamps = pd.to_datetime(col, format="ISO8601", errors="coerce")
+    zoned = np.array([bool(_re.search(r"(Z|[+-]\d\d(:?\d\d)?)$", v.strip())) for v in cells])
+    if zoned.any() and not zoned.all():
+        k = int(np.flatnonzero(zoned != zoned[0])[0])
+        raise InputError(f"{name}: {row_ref(k)}, column {tcol!r} is {cells[k]!r}, "
+                         f"{'with' if zoned[k] else 'without'} a time zone, unlike row 0 ({cells[0]!r}); a "
+                         "naive timestamp's zone is not guessed: give every timestamp its offset (or none)")
+    # every cell with its own offset (a daylight-saving switch changes it mid-file): compared in UTC
+    stamps = pd.to_datetime(col, format="ISO8601", errors="coerce", utc=bool(zoned.all()))
     nat = np.flatnonzero(stamps.isna().to_numpy())
     if nat.size:
         k = int(nat[0])
@@ -533,8 +540,8 @@ def _column_list(value: Any, key: str, k: int, name: str) -> list[str]:
 def _attitude_columns(value: Any, name: str) -> tuple[str, list[str], dict]:
     """(kind, columns, convention) of ``[input] attitude``: quaternion or Euler-angle columns."""
     form = ('give attitude = { quaternion = ["qw", "qx", "qy", "qz"], scalar = "first" } (or scalar = '
-            '"last" with [x, y, z, w] columns), or attitude = { euler = ["roll", "pitch", "yaw"], '
-            'sequence = "ZYX", degrees = true }')
+            '"last" with [x, y, z, w] columns), or attitude = { euler = ["yaw", "pitch", "roll"], '
+            'sequence = "ZYX", degrees = true } (the angles in the order of the sequence)')
     if not isinstance(value, Mapping) or len({"quaternion", "euler"} & set(value)) != 1:
         raise InputError(f"{name}: [input] attitude = {value!r}; {form}")
     if "quaternion" in value:
@@ -571,7 +578,7 @@ def _strapdown_roles(inp: Mapping[str, Any], name: str) -> tuple[dict, dict]:
         roles.update({f"gyro {a}": c for a, c in zip("xyz", gy, strict=True)})
         parsed["gyro"] = gy
     gu = inp.get("gyro_unit", "rad/s")
-    if gu not in GYRO_UNITS:
+    if not isinstance(gu, str) or gu not in GYRO_UNITS:
         raise InputError(f"{name}: [input] gyro_unit = {gu!r}; valid gyro units: {list(GYRO_UNITS)}")
     if "gyro_unit" in inp and "gyro" not in inp:
         raise InputError(f"{name}: [input] gyro_unit without gyro columns; add gyro = [...] or drop it")
