@@ -293,19 +293,24 @@ def _parse_iso_cells(col, tcol: str, name: str, row_ref):
         k = bad[0]
         raise InputError(f"{name}: {row_ref(k)}, column {tcol!r} is {cells[k]!r}, not an ISO 8601 "
                          "timestamp (time_unit = \"iso8601\"); fix or remove that row")
-    zoned = np.array([bool(_re.search(r"(Z|[+-]\d\d(:?\d\d)?)$", v.strip())) for v in cells])
-    if zoned.any() and not zoned.all():
-        k = int(np.flatnonzero(zoned != zoned[0])[0])
-        raise InputError(f"{name}: {row_ref(k)}, column {tcol!r} is {cells[k]!r}, "
-                         f"{'with' if zoned[k] else 'without'} a time zone, unlike row 0 ({cells[0]!r}); a "
-                         "naive timestamp's zone is not guessed: give every timestamp its offset (or none)")
-    # every cell with its own offset (a daylight-saving switch changes it mid-file): compared in UTC
-    stamps = pd.to_datetime(col, format="ISO8601", errors="coerce", utc=bool(zoned.all()))
+    # parsed in UTC first (mixed offsets, e.g. a daylight-saving switch, cannot be parsed otherwise):
+    # only to name the first cell that is no timestamp at all
+    stamps = pd.to_datetime(col, format="ISO8601", errors="coerce", utc=True)
     nat = np.flatnonzero(stamps.isna().to_numpy())
     if nat.size:
         k = int(nat[0])
         raise InputError(f"{name}: {row_ref(k)}, column {tcol!r} is {cells[k]!r}, not an ISO 8601 "
                          "timestamp (e.g. 2026-01-31T12:00:00.125Z); fix or remove that row")
+    # a zone is an offset after a time of day ("...T12:00:00+02:00", "...T120000Z"), not a date's day
+    zone = _re.compile(r"[T ]\d{2}(:?\d{2}){0,2}([.,]\d+)?(Z|[+-]\d{2}(:?\d{2})?)$")
+    zoned = np.array([bool(zone.search(v.strip())) for v in cells])
+    if zoned.any() and not zoned.all():
+        k = int(np.flatnonzero(zoned != zoned[0])[0])
+        raise InputError(f"{name}: {row_ref(k)}, column {tcol!r} is {cells[k]!r}, "
+                         f"{'with' if zoned[k] else 'without'} a time zone, unlike row 0 ({cells[0]!r}); a "
+                         "naive timestamp's zone is not guessed: give every timestamp its offset (or none)")
+    if not zoned.all():  # all naive: kept naive (their zone is not guessed to be UTC)
+        stamps = pd.to_datetime(col, format="ISO8601", errors="coerce")
     return stamps
 
 
