@@ -252,9 +252,9 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     if before is not None and before != (rec_fp["size"], rec_fp["mtime_ns"]):
         raise InputError(f"recording {str(path)!r} changed while it was being solved; nothing was written: "
                          "wait until it is complete and run again")
-    info = list(rec.items_in(spec.input.get("frame", "enu")))
-    notes = list(rec.notes)
     frame = spec.input.get("frame", "enu")
+    info = list(rec.items_in(frame))
+    notes = list(rec.notes)
     own = rec.meta.get("geodetic_origin")
     if origin is not None and own is not None and not np.allclose(origin, own, rtol=0, atol=1e-9):
         raise InputError(f"--origin {list(origin)}: the recording's own fixes are in the local frame about "

@@ -335,8 +335,6 @@ def _cmd_solve(args) -> int:
 
 
 def _cmd_stationary(args) -> int:
-    import numpy as np
-
     from . import detect
     from .readers import read
     from .spec import load_spec
@@ -346,11 +344,9 @@ def _cmd_stationary(args) -> int:
     spec = load_spec(args.spec)
     rec = read(args.input, spec.input)
     data = rec.imu_data(spec.input)
-    opts = {k: v for k, v in spec.stationary.items() if k not in ("sigma", "mode", "name")}
+    opts = spec.stationary_options(data)
     if args.method is not None:
         opts["method"] = args.method
-    if "gravity" not in opts and data.gravity is not None:
-        opts["gravity"] = float(np.linalg.norm(data.gravity))
     found = detect.stationary(data, return_statistic=True, **opts)
     still = sum(b - a for a, b in found.intervals)
     span = data.t[-1] - data.t[0]

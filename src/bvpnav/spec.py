@@ -141,6 +141,15 @@ class Spec:
     #: :class:`ZeroVelocity` item for each (empty: no detection). See :meth:`stationary_items`.
     stationary: dict = dataclasses.field(default_factory=dict)
 
+    def stationary_options(self, data) -> dict:
+        """The keyword arguments of :func:`bvpnav.detect.stationary` that ``[stationary]`` gives
+        for ``data``: its detector keys, with ``gravity`` defaulting to the recording's gravity
+        magnitude (m/s^2)."""
+        opts = {k: v for k, v in self.stationary.items() if k in _STATIONARY_KEYS}
+        if "gravity" not in opts and getattr(data, "gravity", None) is not None:
+            opts["gravity"] = float(np.linalg.norm(data.gravity))
+        return opts
+
     def stationary_items(self, data) -> list:
         """The :class:`ZeroVelocity` items of ``[stationary]`` for ``data`` (strapdown), or [].
 
@@ -153,11 +162,9 @@ class Spec:
             return []
         from . import detect
 
-        opts = {k: v for k, v in self.stationary.items() if k in _STATIONARY_KEYS}
+        opts = self.stationary_options(data)
         item_kw = {k: v for k, v in self.stationary.items() if k in _STATIONARY_ITEM_KEYS}
         item_kw.setdefault("name", "stationary")
-        if "gravity" not in opts and getattr(data, "gravity", None) is not None:
-            opts["gravity"] = float(np.linalg.norm(data.gravity))
         at = self.where.get("stationary", "[stationary]")
         try:
             intervals = detect.stationary(data, **opts)
