@@ -170,7 +170,8 @@ def propagate(data, rate_cols: np.ndarray, initial_cols: np.ndarray) -> np.ndarr
     .. math:: \\psi_1 = \\psi_0, \\qquad \\psi_{k+1} = \\psi_k + C_{k+1} J_r(\\phi_k)\\, \\delta\\phi_k,
 
     .. math:: \\delta\\phi_k = \\tfrac{h_k}{2}(\\delta\\omega_k + \\delta\\omega_{k+1})
-              + \\tfrac{h_k^2}{12}(\\delta\\omega_k \\times \\omega_{k+1} + \\omega_k \\times \\delta\\omega_{k+1}),
+              + \\tfrac{h_k^2}{12}(\\delta\\omega_k \\times \\omega_{k+1}
+              + \\omega_k \\times \\delta\\omega_{k+1}),
 
     with :math:`J_r` the right Jacobian of SO(3). It is the derivative of the discrete
     integration itself, so the re-integrated attitude differs from the linearized one

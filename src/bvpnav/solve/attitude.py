@@ -197,11 +197,15 @@ class _Loop:
         model = form.model
         parts = model.split(sol.x)
         names = list(model.param_names)
-        delta = {n: float(v) for n, v in zip(names, parts["l"], strict=True) if n in values or n in self.names}
+        delta = {n: float(v) for n, v in zip(names, parts["l"], strict=True) if n in self.names}
         new = {n: values.get(n, 0.0) + delta.get(n, 0.0) for n in self.names}
-        rate = sum(c.rate_columns(data) @ np.array([delta[n] for n in c.names(data)]) for c in self.comps)
-        init = sum(c.initial_columns(data) @ np.array([delta[n] for n in c.names(data)]) for c in self.comps)
-        psi = propagate(data, np.asarray(rate, dtype=float)[:, :, None], np.asarray(init, dtype=float)[:, None])
+        rate = np.zeros((data.n, 3))
+        init = np.zeros(3)
+        for c in self.comps:
+            d = np.array([delta[n] for n in c.names(data)])
+            rate = rate + c.rate_columns(data) @ d
+            init = init + c.initial_columns(data) @ d
+        psi = propagate(data, rate[:, :, None], init[:, None])
         change = float(np.max(np.linalg.norm(psi[:, :, 0], axis=1)))
         return new, change, sol
 

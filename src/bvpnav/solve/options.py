@@ -204,7 +204,8 @@ def prepare(lam=1.0, solver: str = "clarabel", accuracy: str = "default", verify
         from .attitude import check_attitude
 
         if not isinstance(attitude, Mapping):
-            raise InputError(f"attitude={attitude!r}: give a dict of options, e.g. attitude={{'max_iter': 50}}")
+            raise InputError(f"attitude={attitude!r}: give a dict of options, e.g. "
+                             "attitude={'max_iter': 50}")
         check_attitude(attitude)
     backend = resolve_solver(solver)
     primary = solver_options(backend, accuracy, options)
