@@ -468,7 +468,8 @@ def _without_priors(em: ErrorModel | CompositeErrorModel) -> ErrorModel | Compos
         return CompositeErrorModel(*[_without_priors(c) for c in em.components])
     if dataclasses.is_dataclass(em):
         names = {f.name for f in dataclasses.fields(em)}
-        kw = {k: None for k in ("prior", "sigma", "bounds", "drift") if k in names and getattr(em, k) is not None}
+        kw = {k: None for k in ("prior", "sigma", "bounds", "drift")
+              if k in names and getattr(em, k) is not None}
         if kw:
             return dataclasses.replace(em, **kw)
     return em
