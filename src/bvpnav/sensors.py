@@ -419,6 +419,9 @@ def from_datasheet(*, acc_noise: Any = None, acc_bias: Any = None, acc_bias_walk
     for f, v in given.items():
         if v is None:
             continue
+        if f == "heading" and isinstance(v, float) and v == math.inf:
+            values[f] = v  # unknown heading, also over a base that has one
+            continue
         values[f] = _quantity(v, f)
         if one_sided and f in ("acc_noise", "gyro_noise"):
             values[f] /= math.sqrt(2.0)
