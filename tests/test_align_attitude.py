@@ -280,6 +280,8 @@ def test_align_refuses_what_it_cannot_use():
         align(t, f[:, :2], stationary=slice(0, 100), yaw=0.0)
     with pytest.raises(InputError, match="yaw="):
         align(t, f, stationary=slice(0, 100), yaw="north")
+    with pytest.raises(InputError, match=r"gyro: shape \(400, 2\); expected \(400, 3\)"):
+        align(t, f, stationary=slice(100, None), yaw=0.0, gyro=np.zeros((400, 2)))
 
 
 def test_aligned_noisy_consumer_start_is_within_the_grade_tilt():

@@ -465,7 +465,11 @@ def align(t, specific_force, *, stationary, positions=None, position_times=None,
         from .attitude import integrate_gyro
 
         k = int(rows[0])
-        delta = integrate_gyro(tt[: k + 1], _array(gyro, "gyro", "rad/s")[: k + 1])[-1]
+        rates = _array(gyro, "gyro", "rad/s")
+        if rates.shape != (tt.size, 3):
+            raise InputError(f"gyro: shape {rates.shape}; expected ({tt.size}, 3), one body rate (x, y, z, "
+                             "rad/s) per sample of t")
+        delta = integrate_gyro(tt[: k + 1], rates[: k + 1])[-1]
         back = Rotation.from_euler("YX", [pitch, roll]) * delta.inv()
         _, pitch, roll = back.as_euler("ZYX")
     elif gyro is not None:
