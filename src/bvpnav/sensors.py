@@ -18,7 +18,10 @@ grade           acc noise  acc bias   acc walk   gyro       gyro bias  gyro walk
 
 Noise densities are continuous-time white-noise intensities (the Kalibr / GTSAM
 convention): the standard deviation of one sample at ``rate_hz`` is
-``density * sqrt(rate_hz)`` (see :meth:`SensorGrade.sigma_a`). Use
+``density * sqrt(rate_hz)`` (see :meth:`SensorGrade.sigma_a`). bvpnav neglects the Earth's
+rotation (7.29e-5 rad/s), which a gyro measures like a bias: against the navigation
+grade's gyro bias sigma (5e-8 rad/s) it is large, so remove it from the rates first or
+widen that prior. Use
 :func:`from_datasheet` for a particular sensor::
 
     from bvpnav.sensors import grade, from_datasheet
