@@ -82,6 +82,54 @@ def _substeps(t: np.ndarray, f: np.ndarray, w: np.ndarray, nodes: np.ndarray):
     return dt, fm, wm, seg
 
 
+def _imu_factors(params, zero_bias, nn, dt, fm, wm, seg):
+    """CombinedImuFactors between consecutive nodes and the preintegrated rotations."""
+    bounds = np.append(np.searchsorted(seg, np.arange(nn)), seg.size)  # first step per interval
+    imu, drot = [], []
+    for i in range(nn - 1):
+        pim = gtsam.PreintegratedCombinedMeasurements(params, zero_bias)
+        for s in range(bounds[i], bounds[i + 1]):
+            pim.integrateMeasurement(fm[s], wm[s], dt[s])
+        imu.append(gtsam.CombinedImuFactor(X(i), V(i), X(i + 1), V(i + 1), B(i), B(i + 1), pim))
+        drot.append(pim.deltaRij())
+    return imu, drot
+
+
+def _params(gravity_z: float, gr: dict[str, float], scale: float = 1.0):
+    """Preintegration parameters, the IMU white-noise sigmas multiplied by ``scale``."""
+    params = gtsam.PreintegrationCombinedParams.MakeSharedU(gravity_z)
+    eye = np.eye(3)
+    params.setAccelerometerCovariance((scale * gr["acc_noise"]) ** 2 * eye)
+    params.setGyroscopeCovariance((scale * gr["gyro_noise"]) ** 2 * eye)
+    params.setIntegrationCovariance(1e-8 * eye)
+    params.setBiasAccCovariance(max(gr["acc_bias_walk"], 1e-12) ** 2 * eye)
+    params.setBiasOmegaCovariance(max(gr["gyro_bias_walk"], 1e-12) ** 2 * eye)
+    return params
+
+
+def _priors(r0, pos0, vel0, gr, velocity_prior):
+    """Prior factors at the first node: attitude (tilt, heading), velocity, bias."""
+    cov_nav = np.diag([gr["tilt"] ** 2, gr["tilt"] ** 2, gr["heading"] ** 2])
+    # Pose3 tangent is body-frame (R exp(xi)): rotate the nav-frame covariance into the body.
+    # A Pose3 prior (a Rot3 prior cannot sit on a Pose3 key) with the translation left free
+    # (1e4 m): the fixes, each at its own node, anchor the position.
+    cov6 = np.zeros((6, 6))
+    cov6[:3, :3] = r0.T @ cov_nav @ r0
+    cov6[3:, 3:] = 1e8 * np.eye(3)
+    out = [gtsam.PriorFactorPose3(X(0), gtsam.Pose3(gtsam.Rot3(r0), pos0),
+                                  gtsam.noiseModel.Gaussian.Covariance(cov6))]
+    if velocity_prior is None:
+        v_val, v_sig = vel0, np.full(3, 10.0)
+    else:
+        v_val = np.asarray(velocity_prior[0], dtype=float).reshape(3)
+        v_sig = np.broadcast_to(np.asarray(velocity_prior[1], dtype=float), (3,)).copy()
+    out.append(gtsam.PriorFactorVector(V(0), v_val, gtsam.noiseModel.Diagonal.Sigmas(v_sig)))
+    b_sig = np.array([gr["acc_bias"]] * 3 + [gr["gyro_bias"]] * 3)
+    zero = gtsam.imuBias.ConstantBias(np.zeros(3), np.zeros(3))
+    out.append(gtsam.PriorFactorConstantBias(B(0), zero, gtsam.noiseModel.Diagonal.Sigmas(b_sig)))
+    return out
+
+
 def gtsam_smoother(
     t,
     specific_force,
@@ -99,6 +147,7 @@ def gtsam_smoother(
     max_iterations: int = 100,
     relative_tol: float = 1e-8,
     heading_starts: int = 1,
+    anneal: tuple[float, ...] = (),
 ) -> dict[str, Any]:
     """Batch factor-graph smoother (GTSAM IMU preintegration + GNSS fixes, LM).
 
@@ -133,7 +182,9 @@ def gtsam_smoother(
         Prior on the velocity at ``t[0]``: value (3,) m/s and sigma (float or (3,)) m/s.
         Default: the first fixes' finite difference with sigma 10 m/s.
     max_iterations : int
-        Levenberg-Marquardt iteration limit.
+        Levenberg-Marquardt iteration limit (per solve). With 60 s between fixes LM
+        from the fix-interpolated start can reach it before converging: compare the
+        returned ``iterations`` with it, and raise it (about 300) or use ``anneal``.
     relative_tol : float
         Levenberg-Marquardt relative decrease of the error at which to stop.
     heading_starts : int
@@ -141,6 +192,11 @@ def gtsam_smoother(
         given one and the given one rotated about the navigation z by ``2 pi k / n``;
         the solution with the lowest final graph error is returned. Default 1 (only
         the given start; LM then converges from heading errors up to about 1 rad).
+    anneal : sequence of float
+        Continuation for long gaps between fixes: solve first with the IMU noise
+        sigmas multiplied by each factor in turn (e.g. ``(100, 10)``), each solution the
+        start of the next, then with the stated noise. Default none: one solve from the
+        fix-interpolated start (which can need many LM iterations at 60 s gaps).
 
     Returns
     -------
@@ -151,8 +207,8 @@ def gtsam_smoother(
         building and solving, s), ``iterations`` (LM iterations), ``error`` (final
         graph error, 0.5 * sum of squared whitened residuals), ``initial_error``,
         ``nodes`` (number of nodes), ``start_attitude`` (the initial attitude of the
-        winning start; with ``heading_starts > 1`` the iterations and errors are that
-        start's, ``seconds`` covers all starts).
+        winning start). ``iterations`` sums the LM iterations of the winning start's
+        solves (all annealing stages); ``seconds`` covers all starts.
 
     Notes
     -----
@@ -184,16 +240,7 @@ def gtsam_smoother(
     sig = np.broadcast_to(np.asarray(fix_sigma, dtype=float), (3,)).copy()
     eval_t = np.atleast_1d(np.asarray(eval_t, dtype=float))
     gr = _grade(grade)
-    if f.shape != (t.size, 3) or w.shape != (t.size, 3):
-        raise ValueError("specific_force and gyro: expected shape (N, 3)")
-    if g.shape != (3,) or abs(g[0]) + abs(g[1]) > 1e-9 * abs(g[2]) or g[2] >= 0:
-        raise ValueError("gravity: GTSAM's MakeSharedU needs (0, 0, -g) (z up)")
-    if fix_p.shape[0] != fix_t.size or fix_t.size < 2:
-        raise ValueError("fix_t / fix_position: need at least 2 fixes, one position per time")
-    tol = 1e-9 * max(1.0, abs(t[0]), abs(t[-1]))
-    for name, tt in (("fix_t", fix_t), ("eval_t", eval_t)):
-        if tt.min() < t[0] - tol or tt.max() > t[-1] + tol:
-            raise ValueError(f"{name}: times outside the IMU record [{t[0]}, {t[-1]}] s")
+    _check(t, f, w, g, fix_t, fix_p, eval_t)
     order = np.argsort(fix_t)
     fix_t, fix_p = fix_t[order], fix_p[order]
 
@@ -204,86 +251,63 @@ def gtsam_smoother(
         k = np.clip(np.searchsorted(nodes, times), 1, nn - 1)
         return np.where(np.abs(nodes[k - 1] - times) < np.abs(nodes[k] - times), k - 1, k)
 
-    # --- GTSAM parameters
-    params = gtsam.PreintegrationCombinedParams.MakeSharedU(float(-g[2]))
-    eye = np.eye(3)
-    params.setAccelerometerCovariance(gr["acc_noise"] ** 2 * eye)
-    params.setGyroscopeCovariance(gr["gyro_noise"] ** 2 * eye)
-    params.setIntegrationCovariance(1e-8 * eye)
-    params.setBiasAccCovariance(max(gr["acc_bias_walk"], 1e-12) ** 2 * eye)
-    params.setBiasOmegaCovariance(max(gr["gyro_bias_walk"], 1e-12) ** 2 * eye)
     zero_bias = gtsam.imuBias.ConstantBias(np.zeros(3), np.zeros(3))
-
-    graph = gtsam.NonlinearFactorGraph()
-    dt, fm, wm, seg = _substeps(t, f, w, nodes)
-    bounds = np.searchsorted(seg, np.arange(nn))  # first step of every node interval
-    bounds = np.append(bounds, seg.size)
-    att = [gtsam.Rot3(initial_attitude.as_matrix())]  # gyro-integrated attitude per node
-    for i in range(nn - 1):
-        pim = gtsam.PreintegratedCombinedMeasurements(params, zero_bias)
-        for s in range(bounds[i], bounds[i + 1]):
-            pim.integrateMeasurement(fm[s], wm[s], dt[s])
-        graph.add(gtsam.CombinedImuFactor(X(i), V(i), X(i + 1), V(i + 1), B(i), B(i + 1), pim))
-        att.append(att[-1].compose(pim.deltaRij()))
-
-    # --- GNSS fixes
+    steps = _substeps(t, f, w, nodes)
     gps_noise = gtsam.noiseModel.Diagonal.Sigmas(sig)
+    fixed = gtsam.NonlinearFactorGraph()  # everything but the IMU factors
     for k, p in zip(node_of(fix_t), fix_p, strict=True):
-        graph.add(gtsam.GPSFactor(X(int(k)), p, gps_noise))
+        fixed.add(gtsam.GPSFactor(X(int(k)), p, gps_noise))
 
-    # --- initial values
+    # initial positions and velocities from the fixes
     pos0 = np.column_stack([np.interp(nodes, fix_t, fix_p[:, k]) for k in range(3)])
     slope = np.diff(fix_p, axis=0) / np.maximum(np.diff(fix_t), 1e-9)[:, None]
-    iv = np.clip(np.searchsorted(fix_t, nodes, side="right") - 1, 0, fix_t.size - 2)
-    vel0 = slope[iv]
+    vel0 = slope[np.clip(np.searchsorted(fix_t, nodes, side="right") - 1, 0, fix_t.size - 2)]
+    for fac in _priors(initial_attitude.as_matrix(), pos0[0], vel0[0], gr, velocity_prior):
+        fixed.add(fac)
 
-    # --- priors at the first node
-    r0 = initial_attitude.as_matrix()
-    cov_nav = np.diag([gr["tilt"] ** 2, gr["tilt"] ** 2, gr["heading"] ** 2])
-    cov_body = r0.T @ cov_nav @ r0
-    # a Pose3 prior (a Rot3 prior cannot sit on a Pose3 key): rotation block as above, the
-    # translation left free (1e4 m): the fixes, each at its own node, anchor the position
-    cov6 = np.zeros((6, 6))
-    cov6[:3, :3] = cov_body
-    cov6[3:, 3:] = 1e8 * eye
-    graph.add(gtsam.PriorFactorPose3(X(0), gtsam.Pose3(gtsam.Rot3(r0), pos0[0]),
-                                     gtsam.noiseModel.Gaussian.Covariance(cov6)))
-    if velocity_prior is None:
-        v_val, v_sig = vel0[0], np.full(3, 10.0)
-    else:
-        v_val = np.asarray(velocity_prior[0], dtype=float).reshape(3)
-        v_sig = np.broadcast_to(np.asarray(velocity_prior[1], dtype=float), (3,)).copy()
-    graph.add(gtsam.PriorFactorVector(V(0), v_val, gtsam.noiseModel.Diagonal.Sigmas(v_sig)))
-    b_sig = np.array([gr["acc_bias"]] * 3 + [gr["gyro_bias"]] * 3)
-    graph.add(gtsam.PriorFactorConstantBias(B(0), zero_bias, gtsam.noiseModel.Diagonal.Sigmas(b_sig)))
+    graphs = []  # (graph) per annealing stage, the stated noise last
+    drot = None
+    for scale in [*anneal, 1.0]:
+        imu, drot = _imu_factors(_params(float(-g[2]), gr, scale), zero_bias, nn, *steps)
+        graph = gtsam.NonlinearFactorGraph(fixed)
+        for fac in imu:
+            graph.add(fac)
+        graphs.append(graph)
+    att = [gtsam.Rot3(initial_attitude.as_matrix())]  # gyro-integrated attitude per node
+    for r in drot:
+        att.append(att[-1].compose(r))
+    att_nodes = Rotation.from_matrix(np.array([r.matrix() for r in att]))
 
-    # --- solve (from one or several initial headings)
     lm = gtsam.LevenbergMarquardtParams()
     lm.setMaxIterations(int(max_iterations))
     lm.setRelativeErrorTol(float(relative_tol))
     lm.setAbsoluteErrorTol(0.0)
-    att_nodes = Rotation.from_matrix(np.array([r.matrix() for r in att]))
+    n_starts = max(1, int(heading_starts))
     best = None
-    for k in range(max(1, int(heading_starts))):
-        turn = Rotation.from_rotvec([0.0, 0.0, 2 * np.pi * k / max(1, int(heading_starts))])
+    for k in range(n_starts):
+        turn = Rotation.from_rotvec([0.0, 0.0, 2 * np.pi * k / n_starts])
         q = (turn * att_nodes).as_quat()  # x, y, z, w; a heading change rotates the whole path
-        initial = gtsam.Values()
+        values = gtsam.Values()
         for i in range(nn):
             rot = gtsam.Rot3.Quaternion(q[i, 3], q[i, 0], q[i, 1], q[i, 2])
-            initial.insert(X(i), gtsam.Pose3(rot, pos0[i]))
-            initial.insert(V(i), vel0[i])
-            initial.insert(B(i), zero_bias)
-        opt = gtsam.LevenbergMarquardtOptimizer(graph, initial, lm)
-        result = opt.optimize()
-        err = float(graph.error(result))
+            values.insert(X(i), gtsam.Pose3(rot, pos0[i]))
+            values.insert(V(i), vel0[i])
+            values.insert(B(i), zero_bias)
+        initial_error = float(graphs[-1].error(values))
+        iterations = 0
+        for graph in graphs:
+            opt = gtsam.LevenbergMarquardtOptimizer(graph, values, lm)
+            values = opt.optimize()
+            iterations += int(opt.iterations())
+        err = float(graphs[-1].error(values))
         if best is None or err < best[0]:
-            best = (err, result, int(opt.iterations()), float(graph.error(initial)), turn * initial_attitude)
+            best = (err, values, iterations, initial_error, turn * initial_attitude)
     final_error, result, iterations, initial_error, start_attitude = best
 
     ke = node_of(eval_t)
     pose = [result.atPose3(X(int(k))) for k in ke]
     bias = [result.atConstantBias(B(int(k))) for k in ke]
-    out = {
+    return {
         "position": np.array([p.translation() for p in pose]).reshape(-1, 3),
         "velocity": np.array([result.atVector(V(int(k))) for k in ke]).reshape(-1, 3),
         "gyro_bias": np.array([b.gyroscope() for b in bias]).reshape(-1, 3),
@@ -294,6 +318,19 @@ def gtsam_smoother(
         "initial_error": initial_error,
         "nodes": int(nn),
         "start_attitude": start_attitude,
+        "seconds": time.perf_counter() - start,
     }
-    out["seconds"] = time.perf_counter() - start
-    return out
+
+
+def _check(t, f, w, g, fix_t, fix_p, eval_t) -> None:
+    """Shapes and ranges of the inputs (raises ValueError)."""
+    if f.shape != (t.size, 3) or w.shape != (t.size, 3):
+        raise ValueError("specific_force and gyro: expected shape (N, 3)")
+    if g.shape != (3,) or abs(g[0]) + abs(g[1]) > 1e-9 * abs(g[2]) or g[2] >= 0:
+        raise ValueError("gravity: GTSAM's MakeSharedU needs (0, 0, -g) (z up)")
+    if fix_p.shape[0] != fix_t.size or fix_t.size < 2:
+        raise ValueError("fix_t / fix_position: need at least 2 fixes, one position per time")
+    tol = 1e-9 * max(1.0, abs(t[0]), abs(t[-1]))
+    for name, tt in (("fix_t", fix_t), ("eval_t", eval_t)):
+        if tt.min() < t[0] - tol or tt.max() > t[-1] + tol:
+            raise ValueError(f"{name}: times outside the IMU record [{t[0]}, {t[-1]}] s")
