@@ -144,7 +144,7 @@ def gtsam_smoother(
     *,
     node_interval: float = 1.0,
     velocity_prior: tuple[Any, Any] | None = None,
-    max_iterations: int = 100,
+    max_iterations: int = 300,
     relative_tol: float = 1e-8,
     heading_starts: int = 1,
     anneal: tuple[float, ...] = (),
