@@ -265,8 +265,8 @@ def test_cli_solves_a_strapdown_recording_with_gyro_bias(tmp_path):
     rec = tmp_path / "walk"
     assert main(["simulate", "walking", "--out", str(rec)]) == 0
     spec = (rec / "spec.toml").read_text()
-    extra = ('\n[[error_model]]\ntype = "gyro_bias"\nsigma = 0.01\n\n[[error_model]]\ntype = "attitude_error"\n'
-             'axes = ["x", "y"]\nsigma = 0.05\n')
+    extra = ('\n[[error_model]]\ntype = "gyro_bias"\nsigma = 0.01\n\n'
+             '[[error_model]]\ntype = "attitude_error"\naxes = ["x", "y"]\nsigma = 0.05\n')
     (tmp_path / "spec.toml").write_text(spec + extra)
     out = tmp_path / "traj.csv"
     assert main(["solve", str(rec / "recording.csv"), "--spec", str(tmp_path / "spec.toml"),
