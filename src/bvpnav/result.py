@@ -331,6 +331,8 @@ class SolveRecords:
     sequential : SequentialReport or None
     demoted : list of Demotion or None
     uncertainty : Uncertainty or None
+    plausibility : dict or None
+        The misfit numbers and limits of :func:`bvpnav.solve.plausibility.assess`.
     """
 
     run: Run | None = None
@@ -339,6 +341,7 @@ class SolveRecords:
     sequential: SequentialReport | None = None
     demoted: list | None = None
     uncertainty: Uncertainty | None = None
+    plausibility: dict | None = None
 
     def stats(self) -> dict[str, Any]:
         """The ``Solution.stats`` dict (plain values: it is written to JSON by batch runs)."""
@@ -355,6 +358,8 @@ class SolveRecords:
             out["demoted"] = [d.as_dict() for d in self.demoted]
         if self.uncertainty is not None:
             out["uncertainty"] = self.uncertainty.as_dict()
+        if self.plausibility is not None:
+            out["plausibility"] = dict(self.plausibility)
         return out
 
 

@@ -42,6 +42,7 @@ from ..result import Solution
 from .chain import solve_fixed
 from .conflicts import with_demotion
 from .options import SolveOptions, prepare
+from .plausibility import attach as attach_plausibility
 from .rule import with_rule
 from .sequential import check_sequential, with_sequential
 from .uncertainty import attach_uncertainty
@@ -60,6 +61,7 @@ def run(form, lam, opts: SolveOptions) -> Solution:
     with once():  # each warning once per call, however many stages and iterations raise it
         sol = stage(form, lam, opts)
     used = sol.__dict__.pop("_formulation", form)  # the formulation the answer solves
+    sol = attach_plausibility(sol, used, form.data)  # misfit and implausible estimates, always
     if opts.uncertainty:
         sol = attach_uncertainty(sol, used, opts.uncertainty)
     return sol
