@@ -135,7 +135,8 @@ def _circle_with_tilt_drift(rate: int = 50, duration: float = 60.0):
     w = 2 * np.pi / duration
     pos = np.column_stack([20 * np.sin(w * t), 20 * (1 - np.cos(w * t)), 0 * t])
     acc = np.column_stack([-20 * w**2 * np.sin(w * t), 20 * w**2 * np.cos(w * t), 0 * t])
-    true = Rotation.from_euler("ZYX", np.column_stack([w * t, 0.03 * np.sin(0.7 * t), 0.03 * np.cos(0.5 * t)]))
+    ypr = np.column_stack([w * t, 0.03 * np.sin(0.7 * t), 0.03 * np.cos(0.5 * t)])
+    true = Rotation.from_euler("ZYX", ypr)
     f = true.inv().apply(acc - np.array([0.0, 0.0, -9.80665]))
     drift = Rotation.from_rotvec(np.column_stack([0.02 * t / duration * np.sin(0.3 * t), 0.02 * t / duration,
                                                   0 * t]))
@@ -147,13 +148,15 @@ def test_gravity_and_bias_that_cannot_be_told_apart():
     """The issue's case: bias_z ~ g next to a gravity_z of the wrong sign, misalignments of
     radians, whatever the singular-value test says."""
     data, t, pos, rate = _circle_with_tilt_drift()
-    prob = bvpnav.NavigationProblem(data, sigma_a=0.05, error_model=Bias() + UnknownGravity() + Misalignment())
+    em = Bias() + UnknownGravity() + Misalignment()
+    prob = bvpnav.NavigationProblem(data, sigma_a=0.05, error_model=em)
     prob.add(Position(t=t[::10 * rate], value=pos[::10 * rate]))
     sol, issued = _solve(prob)
     ep = sol.error_params
     assert ep["bias_z"] > 5.0 and abs(ep["gravity_z"]) < 1.0  # the absurd answer
     (both,) = [w for w in sol.warnings if "gravity and bias cannot be told apart here" in w]
-    assert f"bias_z = {ep['bias_z']:+.3g} m/s^2" in both and f"gravity_z = {ep['gravity_z']:+.3g} m/s^2" in both
+    assert f"bias_z = {ep['bias_z']:+.3g} m/s^2" in both
+    assert f"gravity_z = {ep['gravity_z']:+.3g} m/s^2" in both
     assert "UnknownGravity" in both and both in issued
     (mis,) = [w for w in sol.warnings if "misalignment_" in w and w.startswith("implausible")]
     assert "meaningless" in mis and "AttitudeError()" in mis
@@ -236,7 +239,8 @@ def test_gyro_bias_beyond_the_absolute_limit_names_the_knot():
     vals["gyro_bias_z[2]"] = -0.08
     sol, form = _stub(vals, [GyroBias(interval=33.0)])
     (msg,) = pl.check(sol, form)
-    assert msg.startswith("implausible estimate: gyro_bias_z[2] = -0.08 rad/s (-4.58 deg/s) (the largest of 4 knots)")
+    assert msg.startswith("implausible estimate: gyro_bias_z[2] = -0.08 rad/s (-4.58 deg/s) "
+                          "(the largest of 4 knots)")
     assert "0.05 rad/s" in msg
 
 
@@ -253,7 +257,8 @@ def test_gyro_bias_that_removed_the_turning():
     vals = {"gyro_bias_x": 1e-4, "gyro_bias_y": -1e-4, "gyro_bias_z": 0.0098}
     sol, form = _stub(vals, [GyroBias()], gyro=_turning())
     (msg,) = pl.check(sol, form)
-    assert "gyro bias on axis z +0.0098 rad/s" in msg and "removes 98 % of the axis's mean measured rate" in msg
+    assert "gyro bias on axis z +0.0098 rad/s" in msg
+    assert "removes 98 % of the axis's mean measured rate" in msg
     assert "removed real turning" in msg or "real turning as bias" in msg
     # within three sigma of the user's own prior: what the datasheet allows
     sol, form = _stub(vals, [GyroBias(sigma=5e-3)], gyro=_turning())
@@ -267,7 +272,8 @@ def test_gyro_bias_that_removed_the_turning():
 
 def test_gyro_scale_beyond_its_limit():
     _, _, GyroScaleFactor = _models()
-    sol, form = _stub({"gyro_scale_x": 0.0, "gyro_scale_y": 0.001, "gyro_scale_z": -0.25}, [GyroScaleFactor()])
+    vals = {"gyro_scale_x": 0.0, "gyro_scale_y": 0.001, "gyro_scale_z": -0.25}
+    sol, form = _stub(vals, [GyroScaleFactor()])
     (msg,) = pl.check(sol, form)
     assert msg.startswith("implausible estimate: gyro_scale_z = -0.25 (-25 %) is beyond the limit +-0.1")
 

@@ -14,7 +14,8 @@ A solve is ``demote(attitude(sequential(rule(chain))))``:
 
 then :func:`~bvpnav.solve.plausibility.attach` (misfit against the stated noise and
 implausible error-model estimates, always) and, with ``uncertainty``,
-:func:`~bvpnav.solve.uncertainty.attach_uncertainty` on the answer, with the formulation it solves (the demoted or last linearized one).
+:func:`~bvpnav.solve.uncertainty.attach_uncertainty` on the answer, with the formulation
+it solves (the demoted or last linearized one).
 
 Each stage takes the inner stage and calls it with a formulation, a ``lam`` and the one
 :class:`~bvpnav.solve.options.SolveOptions` checked before any work; no stage calls back

@@ -391,7 +391,7 @@ def _attitude_checks(sol: Solution, groups) -> list[str]:
     for _, names in groups.get("attitude", []):
         tilt = {n: float(v) for n, v in zip(names, _values(sol, names), strict=True)
                 if _axis(n) != "z" and np.isfinite(v)}  # the heading attitude_z is free
-        angle = float(np.hypot(*tilt.values())) if len(tilt) == 2 else max(map(abs, tilt.values()), default=0.0)
+        angle = float(np.sqrt(sum(v * v for v in tilt.values())))
         if angle > TILT_LIMIT:
             txt = ", ".join(f"{n} = {_fmt(v, 'rad')} ({np.degrees(v):+.3g} deg)" for n, v in tilt.items())
             msgs.append(
