@@ -326,11 +326,15 @@ def _acc_checks(sol: Solution, form, groups) -> list[str]:
     msgs: list[str] = []
     g_why, g_comps = _gravity(sol, form, groups)
     gtxt = _gravity_text(form, g_comps)
+    # parameters of a sensor axis the conditioning check already calls degenerate (their
+    # values are meaningless and named there): not judged again
+    cond = (getattr(sol, "stats", None) or {}).get("conditioning") or {}
+    named = {n for dg in cond.get("degenerate_axes", []) for n in dg.get("parameters", [])}
 
     # accelerometer bias (and its confusion with gravity)
     bad_bias = []
     for _, names in groups.get("acc_bias", []):
-        for ax, (n, v) in _worst_by_axis(sol, names).items():
+        for ax, (n, v) in _worst_by_axis(sol, [n for n in names if n not in named]).items():
             if abs(v) > ACC_BIAS_LIMIT:
                 bad_bias.append((ax, n, v, _knots(n, len(names))))
     if bad_bias and g_why:
@@ -361,7 +365,7 @@ def _acc_checks(sol: Solution, form, groups) -> list[str]:
                 "(sigma=0.05) or drop it")
 
     for _, names in groups.get("scale", []):
-        for n, v in _worst_by_axis(sol, names).values():
+        for n, v in _worst_by_axis(sol, [n for n in names if n not in named]).values():
             if abs(v) > SCALE_LIMIT:
                 msgs.append(
                     f"implausible estimate: {n} = {_fmt(v)} ({100 * v:+.3g} %) is beyond the limit "
@@ -373,7 +377,7 @@ def _acc_checks(sol: Solution, form, groups) -> list[str]:
     bad = []
     for _, names in groups.get("misalignment", []):
         bad += [(n, float(v)) for n, v in zip(names, _values(sol, names), strict=True)
-                if np.isfinite(v) and abs(v) > MISALIGNMENT_LIMIT]
+                if np.isfinite(v) and abs(v) > MISALIGNMENT_LIMIT and n not in named]
     if bad:
         txt = ", ".join(f"{n} = {_fmt(v, 'rad')} ({np.degrees(v):+.3g} deg)" for n, v in bad)
         msgs.append(
