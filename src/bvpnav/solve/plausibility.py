@@ -515,8 +515,8 @@ def assess(sol: Solution, form, data=None) -> dict[str, Any]:
 
     with :math:`f` the objective rows minus the unknowns plus the hard rows. A warning
     when :math:`\\rho_a` or :math:`\\rho` exceeds :data:`MISFIT_HIGH` (the residual is
-    more than the noise could need), when :math:`\\hat\\sigma_0 > ` :data:`MISFIT_HIGH`,
-    or when :math:`\\hat\\sigma_0 < ` :data:`MISFIT_LOW` (the sigmas overstated).
+    more than the noise could need), when :math:`\\hat\\sigma_0` is above :data:`MISFIT_HIGH`,
+    or below :data:`MISFIT_LOW` (the sigmas overstated).
     Plausibility: each estimate against the module's limits (accelerometer bias
     :data:`ACC_BIAS_LIMIT` m/s^2, gravity :data:`GRAVITY_MAGNITUDE_LIMIT` m/s^2 and
     :data:`GRAVITY_TILT_LIMIT` rad, scale :data:`SCALE_LIMIT`, misalignment
