@@ -250,6 +250,21 @@ class ImuData:
         :math:`\\phi_k = \\tfrac{h_k}{2}(\\omega_k + \\omega_{k+1}) + \\tfrac{h_k^2}{12}\\,
         \\omega_k \\times \\omega_{k+1}` (see :func:`bvpnav.attitude.integrate_gyro`);
         then :math:`a_i = C_i f_i + g`. The rates are kept in ``data.gyro``.
+
+        Frames. The navigation frame is the one the positions are wanted in: ENU (x east,
+        y north, z up) with the default gravity ``(0, 0, -9.80665)``; for NED (z down)
+        pass ``gravity=(0, 0, +9.80665)`` (or read the file with ``[input] frame = "ned"``,
+        :mod:`bvpnav.strapdown`). The body frame is the sensor triad's x, y, z (for a
+        vehicle usually forward-left-up in ENU, forward-right-down in NED). The
+        accelerometer measures specific force, so at rest it reads :math:`-C^T g`:
+        +9.81 m/s^2 on the axis that points up. The attitude ``C`` maps body to navigation
+        vectors (scipy ``Rotation.apply``), quaternions are scalar-last ``(x, y, z, w)``,
+        and Earth's rotation is neglected (the rates are relative to the navigation frame).
+        Initial attitudes from a stationary interval and from the first fixes:
+        :mod:`bvpnav.align`. When the gyro's bias or the initial attitude is uncertain,
+        estimate them: :class:`~bvpnav.error_models.GyroBias`,
+        :class:`~bvpnav.error_models.AttitudeError` (solved by the damped loop of
+        :mod:`bvpnav.solve.attitude`).
         """
         from .attitude import integrate_gyro  # scipy.spatial: loaded for strapdown data only
 

@@ -78,7 +78,7 @@ _SECTIONS = {
     "input": None,  # the readers' options and the frame options: see _input_keys()
     "problem": {"residual", "sigma_a"},
     "solve": {"solver", "accuracy", "lam", "fallback", "on_conflict", "priority", "demote_sigma",
-              "uncertainty"},
+              "uncertainty", "attitude"},
     "stationary": None,  # detector options and the items' fields: see _STATIONARY_KEYS
     "error_model": None,  # array of tables, checked per model
     "item": None,  # array of tables, checked per item
@@ -95,7 +95,7 @@ _STATIONARY_ITEM_KEYS = {"sigma", "mode", "name"}
 def error_model_registry() -> dict[str, type]:
     """Concrete error-model classes by registered name (snake case of the class name)."""
     out: dict[str, type] = {}
-    abstract = {"ErrorModel", "SensorErrorModel", "CompositeErrorModel"}
+    abstract = {"ErrorModel", "SensorErrorModel", "CompositeErrorModel", "AttitudeErrorModel"}
 
     def walk(cls):
         for sub in cls.__subclasses__():
@@ -341,7 +341,8 @@ def _check_problem_values(prob: dict, where) -> None:
 
 
 def _check_solve_values(solve: dict, where) -> None:
-    """Check ``[solve]``'s solver, accuracy, ``lam``, ``on_conflict`` and ``uncertainty``."""
+    """Check ``[solve]``'s solver, accuracy, ``lam``, ``on_conflict``, ``uncertainty`` and
+    ``attitude``."""
     RULES = rule_names()
 
     if "solver" in solve and not isinstance(solve["solver"], str):
@@ -361,6 +362,17 @@ def _check_solve_values(solve: dict, where) -> None:
                          'choose "raise" or "demote"')
     if "uncertainty" in solve:
         _check_uncertainty(solve["uncertainty"], where)
+    if "attitude" in solve:
+        from .solve.attitude import check_attitude
+
+        opts = solve["attitude"]
+        if not isinstance(opts, dict):
+            raise InputError(f"{where('attitude')}: attitude={opts!r}; give an inline table of the attitude "
+                             'loop\'s options, e.g. attitude = {max_iter = 50, heading = "search"}')
+        try:
+            check_attitude(opts)
+        except InputError as exc:
+            raise InputError(f"{where('attitude')}: {exc}") from None
 
 
 def _check_uncertainty(value, where) -> None:
