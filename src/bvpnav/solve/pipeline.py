@@ -4,12 +4,12 @@ A solve is ``demote(attitude(sequential(rule(chain))))``:
 
 1. :func:`~bvpnav.solve.conflicts.with_demotion` — ``on_conflict="demote"``: conflicting
    hard items are made soft by priority until the rest holds;
-1b. :func:`~bvpnav.solve.attitude.with_attitude` — error models acting on the attitude
+2. :func:`~bvpnav.solve.attitude.with_attitude` — error models acting on the attitude
    (gyro errors, initial attitude) are solved by a damped outer loop that re-integrates it;
-2. :func:`~bvpnav.solve.sequential.with_sequential` — items that must be linearized
+3. :func:`~bvpnav.solve.sequential.with_sequential` — items that must be linearized
    (:class:`~bvpnav.items.Linearizable`) are iterated by sequential convex solves;
-3. :func:`~bvpnav.solve.rule.with_rule` — a rule name in ``lam`` is resolved by a sweep;
-4. :func:`~bvpnav.solve.chain.solve_fixed` — one formulation at one ``lam`` over the
+4. :func:`~bvpnav.solve.rule.with_rule` — a rule name in ``lam`` is resolved by a sweep;
+5. :func:`~bvpnav.solve.chain.solve_fixed` — one formulation at one ``lam`` over the
    back ends, each answer verified by recomputed residuals;
 
 then :func:`~bvpnav.solve.plausibility.attach` (misfit against the stated noise and
