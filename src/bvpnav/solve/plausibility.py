@@ -223,15 +223,17 @@ def _misfit(sol: Solution, form) -> tuple[dict[str, Any], list[str]]:
         msgs.append(
             f"misfit: the weighted residuals are {noise:.2g} x what the stated sigmas predict "
             f"(a-posteriori variance factor {out['variance_factor']:.3g} with {out['dof']} degrees "
-            f"of freedom; {shares}; sigma_a = {sig}): the noise is larger than sigma_a and the "
-            f"items' sigma say, or the model does not fit: {causes}; or items whose sigma is "
-            f"too small{lam}")
+            f"of freedom; {shares or 'no residual'}; sigma_a = {sig}): the noise is larger "
+            f"than sigma_a and the items' sigma say, or the model does not fit: {causes}; or "
+            f"items whose sigma is too small{lam}")
     elif noise is not None and noise < MISFIT_LOW:
+        by = (f"by about a factor {1 / noise:.2g}" if noise > 0
+              else "the residuals are zero (noise-free data?)")
         msgs.append(
             f"misfit: the weighted residuals are only {noise:.2g} x what the stated sigmas "
             f"predict (a-posteriori variance factor {out['variance_factor']:.3g} with "
-            f"{out['dof']} degrees of freedom; {shares}): sigma_a = {sig} (or the items' sigma) "
-            f"is probably overstated, by about a factor {1 / max(noise, 1e-300):.2g}; the stated "
+            f"{out['dof']} degrees of freedom{'; ' + shares if shares else ''}): sigma_a = {sig} (or "
+            f"the items' sigma) is probably overstated, {by}; the stated "
             f"sigmas set the balance between the accelerometer and the items, so state the "
             f"datasheet's noise (bvpnav.sensors.grade(...).sigma_a(rate_hz)){lam}")
     return out, msgs
