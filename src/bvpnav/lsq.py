@@ -289,7 +289,9 @@ class BorderedLU:
             self.keep = None
             self.lu = self._sparse_factor(F)
             return
-        self.keep = np.setdiff1d(np.arange(S.shape[0]), self.dense)
+        mask = np.ones(S.shape[0], dtype=bool)
+        mask[self.dense] = False
+        self.keep = np.flatnonzero(mask)
         Sr, Sd = S[self.keep], S[self.dense]
         self.lu = self._sparse_factor(F[self.keep][:, self.keep])
         self.SBL = Sr[:, self.dense].toarray()

@@ -380,6 +380,8 @@ class SolveRecords:
     sequential : SequentialReport or None
     demoted : list of Demotion or None
     uncertainty : Uncertainty or None
+    plausibility : dict or None
+        The misfit numbers and limits of :func:`bvpnav.solve.plausibility.assess`.
     """
 
     run: Run | None = None
@@ -389,6 +391,7 @@ class SolveRecords:
     demoted: list | None = None
     uncertainty: Uncertainty | None = None
     attitude: AttitudeLoopReport | None = None
+    plausibility: dict | None = None
 
     def stats(self) -> dict[str, Any]:
         """The ``Solution.stats`` dict (plain values: it is written to JSON by batch runs)."""
@@ -407,6 +410,8 @@ class SolveRecords:
             out["demoted"] = [d.as_dict() for d in self.demoted]
         if self.uncertainty is not None:
             out["uncertainty"] = self.uncertainty.as_dict()
+        if self.plausibility is not None:
+            out["plausibility"] = dict(self.plausibility)
         return out
 
 

@@ -95,6 +95,14 @@ def left_jacobian(phi: np.ndarray) -> np.ndarray:
     return _jacobian(phi, 1.0)
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a x b`` along axis 1 of (n, 3, q) arrays (either may broadcast a trailing 1);
+    written out by component: several times faster than ``np.cross(..., axis=1)``."""
+    a0, a1, a2 = a[:, 0], a[:, 1], a[:, 2]
+    b0, b1, b2 = b[:, 0], b[:, 1], b[:, 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=1)
+
+
 # ----------------------------------------------------- linearization point
 @dataclass(frozen=True, eq=False)
 class AttitudePoint:
@@ -196,11 +204,10 @@ def propagate(data, rate_cols: np.ndarray, initial_cols: np.ndarray) -> np.ndarr
         h = data.grid.h[:, None, None]
         phi = step_rotation_vectors(data.t, w)
         dw0, dw1 = rate_cols[:-1], rate_cols[1:]
-        w0 = np.broadcast_to(w[:-1, :, None], dw0.shape)
-        w1 = np.broadcast_to(w[1:, :, None], dw1.shape)
-        dphi = 0.5 * h * (dw0 + dw1) + (h**2 / 12.0) * (np.cross(dw0, w1, axis=1) + np.cross(w0, dw1, axis=1))
+        w0, w1 = w[:-1, :, None], w[1:, :, None]
+        dphi = 0.5 * h * (dw0 + dw1) + (h**2 / 12.0) * (_cross(dw0, w1) + _cross(w0, dw1))
         T = C[1:] @ right_jacobian(phi)
-        psi[1:] += np.cumsum(np.einsum("kij,kjq->kiq", T, dphi), axis=0)
+        psi[1:] += np.cumsum(np.matmul(T, dphi), axis=0)
     return psi
 
 
@@ -213,7 +220,7 @@ def acceleration_columns(data, psi: np.ndarray) -> np.ndarray:
     :math:`\\psi \\times (C f)` to first order.
     """
     fn = data.attitude.apply(data.specific_force)
-    return np.cross(psi, fn[:, :, None], axis=1)
+    return _cross(psi, fn[:, :, None])
 
 
 # ------------------------------------------------------------- the base class

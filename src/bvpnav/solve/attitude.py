@@ -175,6 +175,16 @@ class _Loop:
     def _solve(self, form) -> Solution:
         sol = self.inner(form, self.lam, self.opts)
         self.solves += 1
+        note = str(sol.stats.get("factorization", ""))
+        if sol.stats.get("solver") == "direct" and note.startswith("lu (ldl"):
+            # every solve of the loop has the same sparse block (the attitude changes only the
+            # dense columns and the data): where the regularized LDL^T failed once it fails
+            # again, so the later solves go straight to the LU instead of factorising twice
+            from dataclasses import replace
+
+            chain = [(be, {**o, "method": "lu"}) if be.name == "direct" else (be, o)
+                     for be, o in self.opts.chain]
+            self.opts = replace(self.opts, chain=chain)
         if self.rule is not None and not isinstance(self.lam, float):
             self.curve = sol.curve
             self.lam = float(sol.lam)

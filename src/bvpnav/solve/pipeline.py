@@ -4,16 +4,18 @@ A solve is ``demote(attitude(sequential(rule(chain))))``:
 
 1. :func:`~bvpnav.solve.conflicts.with_demotion` — ``on_conflict="demote"``: conflicting
    hard items are made soft by priority until the rest holds;
-1b. :func:`~bvpnav.solve.attitude.with_attitude` — error models acting on the attitude
+2. :func:`~bvpnav.solve.attitude.with_attitude` — error models acting on the attitude
    (gyro errors, initial attitude) are solved by a damped outer loop that re-integrates it;
-2. :func:`~bvpnav.solve.sequential.with_sequential` — items that must be linearized
+3. :func:`~bvpnav.solve.sequential.with_sequential` — items that must be linearized
    (:class:`~bvpnav.items.Linearizable`) are iterated by sequential convex solves;
-3. :func:`~bvpnav.solve.rule.with_rule` — a rule name in ``lam`` is resolved by a sweep;
-4. :func:`~bvpnav.solve.chain.solve_fixed` — one formulation at one ``lam`` over the
+4. :func:`~bvpnav.solve.rule.with_rule` — a rule name in ``lam`` is resolved by a sweep;
+5. :func:`~bvpnav.solve.chain.solve_fixed` — one formulation at one ``lam`` over the
    back ends, each answer verified by recomputed residuals;
 
-and, with ``uncertainty``, :func:`~bvpnav.solve.uncertainty.attach_uncertainty` on the
-answer, with the formulation it solves (the demoted or last linearized one).
+then :func:`~bvpnav.solve.plausibility.attach` (misfit against the stated noise and
+implausible error-model estimates, always) and, with ``uncertainty``,
+:func:`~bvpnav.solve.uncertainty.attach_uncertainty` on the answer, with the formulation
+it solves (the demoted or last linearized one).
 
 Each stage takes the inner stage and calls it with a formulation, a ``lam`` and the one
 :class:`~bvpnav.solve.options.SolveOptions` checked before any work; no stage calls back
@@ -45,6 +47,7 @@ from .attitude import with_attitude
 from .chain import solve_fixed
 from .conflicts import with_demotion
 from .options import SolveOptions, prepare
+from .plausibility import attach as attach_plausibility
 from .rule import with_rule
 from .sequential import check_sequential, with_sequential
 from .uncertainty import attach_uncertainty
@@ -63,6 +66,7 @@ def run(form, lam, opts: SolveOptions) -> Solution:
     with once():  # each warning once per call, however many stages and iterations raise it
         sol = stage(form, lam, opts)
     used = sol.__dict__.pop("_formulation", form)  # the formulation the answer solves
+    sol = attach_plausibility(sol, used, form.data)  # misfit and implausible estimates, always
     if opts.uncertainty:
         sol = attach_uncertainty(sol, used, opts.uncertainty)
     return sol

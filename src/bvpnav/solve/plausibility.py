@@ -1,0 +1,574 @@
+"""Diagnostics that say the model does not fit: the misfit against the stated noise, and
+estimates no sensor can have.
+
+A solve can succeed, pass verification and have a well-conditioned error model, and
+still be wrong: the error model may be missing what really corrupts the data (a drifting
+bias, an attitude error), so the other parameters absorb it and take absurd values (an
+accelerometer bias of 9.98 m/s^2 next to a vertical gravity of +0.17 m/s^2, a
+misalignment of -2.88 rad). The singular-value test
+(:mod:`bvpnav.solve.conditioning`) cannot see this: the absurd answer may be very well
+determined. Two kinds of check run after every solve, whatever that test says
+(:func:`check`; the pipeline adds each message to ``solution.warnings``, issues it once
+as a :class:`bvpnav.log.BvpnavWarning` and records the numbers in
+``solution.stats["plausibility"]``):
+
+1. **Misfit** (acceleration form with a stated ``sigma_a`` only): the acceleration
+   residual's RMS against the stated noise, per axis and overall, and the a-posteriori
+   variance factor (the weighted residual sum of squares over its degrees of freedom).
+2. **Plausibility** of every error-model estimate in ``solution.error_params``, found
+   through the error model's components (the model class decides the check, the
+   component's own parameter names select the values): accelerometer bias, gravity,
+   scale factors, misalignments, the attitude correction, gyro bias and gyro scale.
+
+Every threshold is a module constant, documented where it is defined.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..formulation import as_formulation
+from ..imu import STANDARD_GRAVITY
+from ..log import warn
+from ..lsq import non_least_squares_term
+from ..result import Solution
+
+__all__ = ["check", "assess", "attach", "MISFIT_HIGH", "MISFIT_LOW", "MISFIT_MIN_DOF", "ACC_BIAS_LIMIT",
+           "GRAVITY_MAGNITUDE_LIMIT", "GRAVITY_TILT_LIMIT", "SCALE_LIMIT", "MISALIGNMENT_LIMIT",
+           "TILT_LIMIT", "GYRO_BIAS_LIMIT", "GYRO_MEAN_FRACTION", "GYRO_TURNING", "GYRO_TURN_RATE",
+           "GYRO_PRIOR_SIGMAS", "GYRO_SCALE_LIMIT"]
+
+# ------------------------------------------------------------------ thresholds
+#: Misfit: warn when the acceleration residual's RMS, ``rms(w / sigma_a)``, on an axis or
+#: overall, or the square root of the variance factor exceeds this. With the stated noise
+#: right and the model complete, the minimizing residual is at most the noise itself (it
+#: is the projection of the noise onto what the items see, or smaller with soft items),
+#: so ``rms(w / sigma_a)^2`` is at most about a chi-square variable over its N degrees of
+#: freedom: above ``3^2 = 9`` with probability below ``chi2.sf(9 N, N)``, 1e-12 already for
+#: N = 10. Likewise ``sigma_0^2 > 9`` with at least :data:`MISFIT_MIN_DOF` degrees of
+#: freedom has probability below 5e-15. A factor 3 is a model that does not fit, not bad
+#: luck; the uncertainty stage's 1 % test (``solve(uncertainty=True)``) is the fine one.
+MISFIT_HIGH = 3.0
+
+#: Misfit: warn when the square root of the variance factor is below this (with at least
+#: :data:`MISFIT_MIN_DOF` degrees of freedom): ``chi2.cdf(0.04 f, f)`` is below 2e-8 for
+#: f = 10, so the stated sigmas are too large (by about ``1 / sqrt(variance factor)``).
+#: The residual's own RMS is *not* used for this side: with sparse information (fixes
+#: every few seconds) the minimizing residual sees only a small part of the noise and
+#: ``rms(w / sigma_a)`` is far below 1 for correctly stated noise.
+MISFIT_LOW = 0.2
+
+#: Fewest degrees of freedom (redundant rows: objective rows minus unknowns plus hard
+#: rows) for a verdict from the variance factor.
+MISFIT_MIN_DOF = 10
+
+#: Accelerometer bias limit, m/s^2: 0.1 g = 0.98 m/s^2 (100 mg). The consumer-MEMS
+#: bias sigma of the sensor grades (:mod:`bvpnav.sensors`) is 0.05 m/s^2 and even an
+#: uncalibrated low-cost part stays within a few tens of mg; a larger estimate is gravity
+#: leaking into the axis (a tilt error ``theta`` puts ``g sin(theta)`` on it: 0.1 g is
+#: 5.7 degrees) or a unit mistake, not a bias.
+ACC_BIAS_LIMIT = 0.1 * STANDARD_GRAVITY
+
+#: Gravity magnitude limit, m/s^2: ``| |g| - |g_nominal| |`` above 0.5. Gravity on the
+#: Earth's surface ranges over 9.78..9.83 m/s^2 and falls by 3e-3 m/s^2 per km of height,
+#: so 0.5 m/s^2 is ten times every real difference from the nominal value.
+GRAVITY_MAGNITUDE_LIMIT = 0.5
+
+#: Gravity direction limit, rad: the estimated gravity vector tilted from the nominal by
+#: more than 0.1 rad (5.7 degrees, a horizontal component of 0.98 m/s^2, the bias limit).
+#: The deflection of the vertical is below 1e-4 rad; horizontal gravity components only
+#: absorb an initial tilt error, which is 0.02 rad for consumer sensors.
+GRAVITY_TILT_LIMIT = 0.1
+
+#: Accelerometer scale-factor limit (dimensionless): ``|s| > 0.2`` (20 %). MEMS scale
+#: errors are below about 3 % (navigation grade 1e-4); beyond 20 % the factor absorbs an
+#: acceleration proportional to the signal (gravity on a tilted axis, a unit mistake).
+SCALE_LIMIT = 0.2
+
+#: Misalignment limit, rad: ``|Theta_ij| > 0.05`` (2.9 degrees). Triads are orthogonal to
+#: a few mrad; a rotation of the whole triad shows as antisymmetric misalignment pairs, so
+#: a larger value is an attitude error.
+MISALIGNMENT_LIMIT = 0.05
+
+#: Attitude tilt-correction limit, rad: the tilt angle ``hypot(attitude_x, attitude_y)`` above 0.2
+#: (11.5 degrees). Initial tilt sigmas are 0.001..0.02 rad (sensor grades), and the
+#: small-angle error of a 0.2 rad correction is already 2 %: a larger one says that the
+#: given attitude is wrong (frames, axes), not slightly off. The heading ``attitude_z`` is
+#: free (unknown heading is the normal case): no limit.
+TILT_LIMIT = 0.2
+
+#: Gyro bias absolute limit, rad/s: ``|b| > 0.05`` (2.9 deg/s), ten times the consumer
+#: gyro bias sigma of the sensor grades (5e-3 rad/s).
+GYRO_BIAS_LIMIT = 0.05
+
+#: Gyro bias against the motion: warn when the (time-averaged) gyro bias removes more than
+#: this fraction of the axis's mean measured rate, ``|b| > 0.5 |mean(omega_hat)|``, while
+#: the axis really turns (see :data:`GYRO_TURNING`, :data:`GYRO_TURN_RATE`): the model may
+#: have explained real turning as bias (heading and the vertical gyro bias slide together
+#: when heading is weakly observed).
+GYRO_MEAN_FRACTION = 0.5
+
+#: "The axis really turns": its RMS measured rate is more than this times its mean ...
+GYRO_TURNING = 3.0
+
+#: ... and above this rate, rad/s (3 deg/s: motion, not gyro noise, which is about 1e-3
+#: rad/s per sample for consumer gyros at 100 Hz).
+GYRO_TURN_RATE = 0.05
+
+#: A gyro bias within this many prior sigmas of its prior (``GyroBias(sigma=...)``) is
+#: what the user's own datasheet allows: no warning against the mean rate then.
+GYRO_PRIOR_SIGMAS = 3.0
+
+#: Gyro scale-factor limit (dimensionless): ``|s| > 0.1``. MEMS gyro scale errors are
+#: below about 1 %.
+GYRO_SCALE_LIMIT = 0.1
+
+_NAME = re.compile(r"^(?P<base>.+)_(?P<axis>[^_\[\]]+)(\[(?P<k>\d+)\])?$")
+
+#: Class names of the error models, by what they estimate (subclasses match through
+#: their MRO; the gyro and attitude models are found by name so this module needs none).
+_KINDS = {"Bias": "acc_bias", "ScaleFactor": "scale", "Misalignment": "misalignment",
+          "UnknownGravity": "gravity", "GyroBias": "gyro_bias", "AttitudeError": "attitude",
+          "GyroScaleFactor": "gyro_scale"}
+
+
+def _kind(component) -> str | None:
+    for cls in type(component).__mro__:
+        if cls.__name__ in _KINDS:
+            return _KINDS[cls.__name__]
+    return None
+
+
+def _axis(name: str) -> str:
+    m = _NAME.match(name)
+    return m.group("axis") if m else name
+
+
+def _fmt(v: float, unit: str = "") -> str:
+    s = f"{v:+.3g}"
+    return f"{s} {unit}" if unit else s
+
+
+# ---------------------------------------------------------------- the misfit
+def _variance_factor(sol: Solution, form) -> tuple[float, int, dict[str, float]] | None:
+    """Weighted residual sum of squares over its degrees of freedom, with each group's
+    share of it; None when the problem is not equality-constrained least squares."""
+    if non_least_squares_term(form) is not None:
+        return None
+    model = form.model
+    x = np.asarray(sol.x, dtype=float)
+    w = sol.residuals.to_numpy(dtype=float)
+    data = float(np.sum((w / form.sigma_a) ** 2))
+    parts = {"acceleration residual": data}
+    rows, hard = w.size, model.fem_rows().m
+    for term in form.terms():
+        role = term.least_squares_role()
+        if role == "D":
+            r = term.residual.value(x) / np.asarray(term.sigma, dtype=float)
+            parts[term.label] = parts.get(term.label, 0.0) + float(term.weight(sol.lam) * (r @ r))
+            rows += term.residual.m
+        elif role == "E":
+            hard += term.residual.m
+    dof = int(rows - model.size + hard)  # redundant hard rows counted as independent
+    rss = float(sum(parts.values()))
+    return (rss / dof if dof > 0 else float("nan")), dof, parts
+
+
+def _misfit(sol: Solution, form) -> tuple[dict[str, Any], list[str]]:
+    axes = list(form.model.axes)
+    sa = np.asarray(form.sigma_a, dtype=float)
+    w = sol.residuals[[f"w_{ax}" for ax in axes]].to_numpy(dtype=float)
+    per = np.sqrt(np.mean((w / sa) ** 2, axis=0))
+    overall = float(np.sqrt(np.mean(per**2)))
+    out: dict[str, Any] = {"residual_ratio": {ax: float(r) for ax, r in zip(axes, per, strict=True)},
+                           "residual_ratio_overall": overall, "variance_factor": None, "dof": None}
+    vf = _variance_factor(sol, form) if sol.lam_rule == "fixed" else None
+    noise = None
+    shares = ""
+    if vf is not None:
+        out["variance_factor"], out["dof"] = float(vf[0]), int(vf[1])
+        if vf[1] >= MISFIT_MIN_DOF and np.isfinite(vf[0]):
+            noise = float(np.sqrt(max(vf[0], 0.0)))
+            total = sum(vf[2].values())
+            if total > 0:
+                top = sorted(vf[2].items(), key=lambda kv: -kv[1])[:3]
+                shares = ", ".join(f"{k} {100 * v / total:.0f} %" for k, v in top)
+    out["noise_ratio"] = noise
+    sig = (f"{sa[0]:g} m/s^2" if np.all(sa == sa[0])
+           else ", ".join(f"{ax} {s:g}" for ax, s in zip(axes, sa, strict=True)) + " m/s^2")
+    lam = f"; lam = {sol.lam:g} weighs each item as if its sigma were sigma/sqrt(lam)" if sol.lam != 1 else ""
+    causes = ("likely causes: an unmodelled drifting bias (try Bias(interval=...) or GyroBias(...)), a "
+              "wrong attitude (try AttitudeError() + GyroBias()), or a sigma_a far too small (from the "
+              "datasheet: bvpnav.sensors.grade(...).sigma_a(rate_hz))")
+    msgs = []
+    bad = [ax for ax, r in zip(axes, per, strict=True) if r > MISFIT_HIGH]
+    vf_txt = "" if noise is None else (f"; the a-posteriori variance factor is {out['variance_factor']:.3g} "
+                                       f"({out['dof']} degrees of freedom; {shares})")
+    if bad or overall > MISFIT_HIGH:
+        shown = bad or axes
+        worst = max(per[axes.index(ax)] for ax in shown)
+        each = ", ".join(f"{ax} {per[axes.index(ax)]:.2g}" for ax in axes)
+        msgs.append(
+            f"misfit: the acceleration residual is {worst:.2g} x the stated sigma_a = {sig} on "
+            f"ax{'is' if len(shown) == 1 else 'es'} {', '.join(shown)} (RMS of w / sigma_a: {each}; "
+            f"overall {overall:.2g}){vf_txt}. Noise of the stated size cannot need a correction "
+            f"more than {MISFIT_HIGH:g} x itself (the minimizing residual is at most the noise), so "
+            f"the model does not fit the data: {causes}; or hard items noisier than exact (give "
+            f"them sigma=){lam}")
+    elif noise is not None and noise > MISFIT_HIGH:
+        msgs.append(
+            f"misfit: the weighted residuals are {noise:.2g} x what the stated sigmas predict "
+            f"(a-posteriori variance factor {out['variance_factor']:.3g} with {out['dof']} degrees "
+            f"of freedom; {shares or 'no residual'}; sigma_a = {sig}): the noise is larger "
+            f"than sigma_a and the items' sigma say, or the model does not fit: {causes}; or "
+            f"items whose sigma is too small{lam}")
+    elif noise is not None and noise < MISFIT_LOW:
+        by = (f"by about a factor {1 / noise:.2g}" if noise > 0
+              else "the residuals are zero (noise-free data?)")
+        msgs.append(
+            f"misfit: the weighted residuals are only {noise:.2g} x what the stated sigmas "
+            f"predict (a-posteriori variance factor {out['variance_factor']:.3g} with "
+            f"{out['dof']} degrees of freedom{'; ' + shares if shares else ''}): sigma_a = {sig} (or "
+            f"the items' sigma) is probably overstated, {by}; the stated "
+            f"sigmas set the balance between the accelerometer and the items, so state the "
+            f"datasheet's noise (bvpnav.sensors.grade(...).sigma_a(rate_hz)){lam}")
+    return out, msgs
+
+
+# -------------------------------------------------------------- plausibility
+def _groups(sol: Solution, form) -> dict[str, list[tuple[Any, list[str]]]]:
+    """Error-model components by kind, each with its parameter names in ``error_params``."""
+    em = form.error_model
+    out: dict[str, list] = {}
+    if em is None or not len(sol.error_params):
+        return out
+    for c in getattr(em, "components", (em,)):
+        kind = _kind(c)
+        if kind is None:
+            continue
+        try:
+            names = [n for n in c.names(form.data) if n in sol.error_params.index]
+        except Exception:  # noqa: BLE001 - a component that cannot name its parameters is skipped
+            continue
+        if names:
+            out.setdefault(kind, []).append((c, names))
+    return out
+
+
+def _values(sol: Solution, names: list[str]) -> np.ndarray:
+    return sol.error_params[names].to_numpy(dtype=float)
+
+
+def _worst_by_axis(sol: Solution, names: list[str]) -> dict[str, tuple[str, float]]:
+    """Per axis the parameter (knot) of largest finite magnitude."""
+    out: dict[str, tuple[str, float]] = {}
+    for n, v in zip(names, _values(sol, names), strict=True):
+        if not np.isfinite(v):
+            continue
+        ax = _axis(n)
+        if ax not in out or abs(v) > abs(out[ax][1]):
+            out[ax] = (n, float(v))
+    return out
+
+
+def _knots(name: str, count: int) -> str:
+    return f" (the largest of {count} knots)" if count > 1 and "[" in name else ""
+
+
+def _gravity(sol: Solution, form, groups) -> tuple[list[str], list[tuple[str, float]]]:
+    """Problems with the gravity estimate, and its components."""
+    from ..error_models._base import _nominal_gravity
+
+    g0 = _nominal_gravity(form.data)
+    n0 = float(np.linalg.norm(g0))
+    if "gravity" not in groups or n0 == 0.0:  # navigation-frame data: a constant offset, no nominal
+        return [], []
+    axes = list(form.data.axes)
+    g = np.array(g0, dtype=float)
+    comps = []
+    for _, names in groups["gravity"]:
+        for n, v in zip(names, _values(sol, names), strict=True):
+            ax = _axis(n)
+            if ax in axes and np.isfinite(v):
+                g[axes.index(ax)] = v
+                comps.append((n, float(v)))
+    if not comps:
+        return [], []
+    mag = float(np.linalg.norm(g))
+    tilt = float(np.arccos(np.clip(g @ g0 / (mag * n0), -1.0, 1.0))) if mag > 0 else float(np.pi)
+    why = []
+    if abs(mag - n0) > GRAVITY_MAGNITUDE_LIMIT:
+        why.append(f"|g| = {mag:.4g} m/s^2 against the nominal {n0:.6g} "
+                   f"(limit +-{GRAVITY_MAGNITUDE_LIMIT:g})")
+    if tilt > GRAVITY_TILT_LIMIT:
+        why.append(f"tilted {tilt:.3g} rad ({np.degrees(tilt):.3g} deg) from the nominal direction "
+                   f"(limit {GRAVITY_TILT_LIMIT:g} rad)")
+    return why, comps
+
+
+def _gravity_text(form, comps: list[tuple[str, float]]) -> str:
+    """The gravity components that differ from the nominal by more than 0.05 m/s^2 (the
+    largest difference when none does)."""
+    from ..error_models._base import _nominal_gravity
+
+    if not comps:
+        return ""
+    g0 = dict(zip(form.data.axes, _nominal_gravity(form.data), strict=True))
+    dev = [(n, v, abs(v - g0.get(_axis(n), 0.0))) for n, v in comps]
+    shown = [c for c in dev if c[2] > 0.05] or [max(dev, key=lambda c: c[2])]
+    return ", ".join(f"{n} = {_fmt(v, 'm/s^2')} (nominal {_fmt(g0.get(_axis(n), 0.0))})" for n, v, _ in shown)
+
+
+def _acc_checks(sol: Solution, form, groups) -> list[str]:
+    """Accelerometer bias, gravity (and their confusion), scale and misalignment."""
+    msgs: list[str] = []
+    g_why, g_comps = _gravity(sol, form, groups)
+    gtxt = _gravity_text(form, g_comps)
+    # parameters of a sensor axis the conditioning check already calls degenerate (their
+    # values are meaningless and named there): not judged again
+    cond = (getattr(sol, "stats", None) or {}).get("conditioning") or {}
+    named = {n for dg in cond.get("degenerate_axes", []) for n in dg.get("parameters", [])}
+
+    # accelerometer bias (and its confusion with gravity)
+    bad_bias = []
+    for _, names in groups.get("acc_bias", []):
+        for ax, (n, v) in _worst_by_axis(sol, [n for n in names if n not in named]).items():
+            if abs(v) > ACC_BIAS_LIMIT:
+                bad_bias.append((ax, n, v, _knots(n, len(names))))
+    if bad_bias and g_why:
+        btxt = ", ".join(f"{n} = {_fmt(v, 'm/s^2')}{k}" for _, n, v, k in bad_bias)
+        msgs.append(
+            f"implausible estimates: gravity and bias cannot be told apart here: {btxt} with {gtxt} "
+            f"({'; '.join(g_why)}; bias limit {ACC_BIAS_LIMIT:.3g} m/s^2 = 0.1 g). While the "
+            "attitude changes little, a body-axis bias and the navigation-frame gravity move the "
+            "acceleration alike, and together they trade gravity for bias; drop UnknownGravity() "
+            "(the nominal gravity is good to 0.05 m/s^2) or give it a prior (UnknownGravity(sigma=0.05)) "
+            "and give Bias a datasheet sigma (bvpnav.sensors), and model the attitude error "
+            "(AttitudeError() + GyroBias()) that the pair was absorbing")
+    else:
+        for _ax, n, v, k in bad_bias:
+            tilt = np.degrees(np.arcsin(min(1.0, abs(v) / STANDARD_GRAVITY)))
+            msgs.append(
+                f"implausible estimate: {n} = {_fmt(v, 'm/s^2')}{k} is {abs(v) / STANDARD_GRAVITY:.2g} g, "
+                f"beyond the limit {ACC_BIAS_LIMIT:.3g} m/s^2 (0.1 g) of any accelerometer bias: it is "
+                f"gravity leaking into the axis (an attitude error of {tilt:.3g} deg would put it there) "
+                "or a unit mistake; check the attitude and the frames (ENU z up by default, NED with "
+                "frame='NED'), model the attitude error (AttitudeError() + GyroBias()), or give Bias a "
+                "datasheet sigma (bvpnav.sensors)")
+        if g_why:
+            msgs.append(
+                f"implausible estimate: gravity {gtxt}: {'; '.join(g_why)}. The gravity estimate has "
+                "absorbed something else: an attitude error (try AttitudeError() + GyroBias()), a "
+                "scale error of the vertical axis, or the units; give UnknownGravity a prior "
+                "(sigma=0.05) or drop it")
+
+    for _, names in groups.get("scale", []):
+        for n, v in _worst_by_axis(sol, [n for n in names if n not in named]).values():
+            if abs(v) > SCALE_LIMIT:
+                msgs.append(
+                    f"implausible estimate: {n} = {_fmt(v)} ({100 * v:+.3g} %) is beyond the limit "
+                    f"+-{SCALE_LIMIT:g} of an accelerometer's scale error: it absorbs an acceleration "
+                    "proportional to the signal (gravity on a tilted axis: model the attitude error "
+                    "with AttitudeError() + GyroBias(); or the data are in other units); give "
+                    "ScaleFactor a prior (sigma=0.01) or drop it")
+
+    bad = []
+    for _, names in groups.get("misalignment", []):
+        bad += [(n, float(v)) for n, v in zip(names, _values(sol, names), strict=True)
+                if np.isfinite(v) and abs(v) > MISALIGNMENT_LIMIT and n not in named]
+    if bad:
+        txt = ", ".join(f"{n} = {_fmt(v, 'rad')} ({np.degrees(v):+.3g} deg)" for n, v in bad)
+        msgs.append(
+            f"implausible estimate{'s' if len(bad) > 1 else ''}: {txt} beyond the limit "
+            f"{MISALIGNMENT_LIMIT:g} rad of a sensor triad's non-orthogonality"
+            + (" (beyond any small angle: meaningless values)" if any(abs(v) > 1 for _, v in bad) else "")
+            + ": misalignment pairs absorb a rotation of the whole triad, i.e. an attitude error; "
+            "model it with AttitudeError() + GyroBias(), or give Misalignment a prior (sigma=0.005)")
+    return msgs
+
+
+def _attitude_checks(sol: Solution, groups) -> list[str]:
+    """The initial tilt correction: the angle of ``(attitude_x, attitude_y)``."""
+    msgs = []
+    for _, names in groups.get("attitude", []):
+        tilt = {n: float(v) for n, v in zip(names, _values(sol, names), strict=True)
+                if _axis(n) != "z" and np.isfinite(v)}  # the heading attitude_z is free
+        angle = float(np.sqrt(sum(v * v for v in tilt.values())))
+        if angle > TILT_LIMIT:
+            txt = ", ".join(f"{n} = {_fmt(v, 'rad')} ({np.degrees(v):+.3g} deg)" for n, v in tilt.items())
+            msgs.append(
+                f"implausible estimate: {txt} correct the initial tilt by {angle:.3g} rad "
+                f"({np.degrees(angle):.3g} deg), beyond the limit {TILT_LIMIT:g} rad: the given initial "
+                "attitude is wrong rather than slightly off (a frame or axis mix-up: ENU/NED, body "
+                "axes); align roll and pitch from a stationary interval, or check the frames")
+    return msgs
+
+
+def _mean_bias(c, sol: Solution, data, ax: str, vals: list[tuple[str, float]]) -> float:
+    """Time average of a gyro bias on one axis, rad/s: from the model's own per-sample bias
+    (``GyroBias.bias``) when it has one, else the mean of its values."""
+    per_sample = getattr(c, "bias", None)
+    if callable(per_sample):
+        try:
+            return float(np.mean(np.asarray(per_sample(sol, data), dtype=float)[:, "xyz".index(ax)]))
+        except Exception:  # noqa: BLE001 - fall back to the values
+            pass
+    return float(np.mean([v for _, v in vals]))
+
+
+def _gyro_checks(sol: Solution, groups, data) -> list[str]:
+    """Gyro bias (absolute and against the mean measured rate) and gyro scale."""
+    msgs: list[str] = []
+    gyro = getattr(data, "gyro", None)
+    dur = float(data.t[-1] - data.t[0]) if data.n > 1 else 0.0
+    for c, names in groups.get("gyro_bias", []):
+        by_axis: dict[str, list[tuple[str, float]]] = {}
+        for n, v in zip(names, _values(sol, names), strict=True):
+            if np.isfinite(v):
+                by_axis.setdefault(_axis(n), []).append((n, float(v)))
+        sig = getattr(c, "sigma", None)
+        prior = getattr(c, "prior", None)
+        for ax, vals in by_axis.items():
+            n, v = max(vals, key=lambda nv: abs(nv[1]))
+            k = _knots(n, len(vals))
+            if abs(v) > GYRO_BIAS_LIMIT:
+                msgs.append(
+                    f"implausible estimate: {n} = {_fmt(v, 'rad/s')} ({np.degrees(v):+.3g} deg/s){k} is "
+                    f"beyond the limit {GYRO_BIAS_LIMIT:g} rad/s of a gyro bias: the attitude "
+                    "parameters absorb something else (a wrong initial attitude or heading, gyro data "
+                    "in deg/s or in other axes); give GyroBias a datasheet sigma (bvpnav.sensors)")
+                continue
+            if gyro is None or ax not in ("x", "y", "z"):
+                continue
+            rate = np.asarray(gyro, dtype=float)[:, "xyz".index(ax)]
+            mean, rms = float(np.mean(rate)), float(np.sqrt(np.mean(rate**2)))
+            b = _mean_bias(c, sol, data, ax, vals)
+            if sig is not None:
+                s = float(np.max(np.asarray(sig, dtype=float)))
+                p0 = 0.0 if prior is None else float(np.mean(np.asarray(prior, dtype=float)))
+                if abs(b - p0) <= GYRO_PRIOR_SIGMAS * s:
+                    continue
+            if (abs(b) > GYRO_MEAN_FRACTION * abs(mean) and rms > GYRO_TURNING * abs(mean)
+                    and rms > GYRO_TURN_RATE):
+                frac = abs(b / mean) if mean != 0 else float("inf")
+                msgs.append(
+                    f"implausible estimate: gyro bias on axis {ax} {_fmt(b, 'rad/s')} (mean of {len(vals)} "
+                    f"value{'s' if len(vals) > 1 else ''}) removes {100 * frac:.3g} % of the axis's mean "
+                    f"measured rate {_fmt(mean, 'rad/s')} (a net {np.degrees(mean * dur):+.4g} deg over "
+                    f"{dur:.4g} s; limit {100 * GYRO_MEAN_FRACTION:g} %) while the axis turns at "
+                    f"{rms:.3g} rad/s RMS: the model may have explained real turning as bias (heading "
+                    "and the gyro bias slide together when the heading is weakly observed); give "
+                    "GyroBias a datasheet sigma (bvpnav.sensors) and check the heading against the "
+                    "fixes")
+
+    for _, names in groups.get("gyro_scale", []):
+        for n, v in _worst_by_axis(sol, names).values():
+            if abs(v) > GYRO_SCALE_LIMIT:
+                msgs.append(
+                    f"implausible estimate: {n} = {_fmt(v)} ({100 * v:+.3g} %) is beyond the limit "
+                    f"+-{GYRO_SCALE_LIMIT:g} of a gyro's scale error: it absorbs a rate proportional to "
+                    "the turning (a wrong heading or initial attitude, gyro data in other units); give "
+                    "GyroScaleFactor a prior or drop it")
+    return msgs
+
+
+def _plausibility(sol: Solution, form, data) -> list[str]:
+    groups = _groups(sol, form)
+    return _acc_checks(sol, form, groups) + _attitude_checks(sol, groups) + _gyro_checks(sol, groups, data)
+
+
+# ---------------------------------------------------------------------- API
+def assess(sol: Solution, form, data=None) -> dict[str, Any]:
+    """The misfit numbers and every plausibility warning of a solution.
+
+    Parameters
+    ----------
+    sol : Solution
+        A solved answer (its ``residuals``, ``error_params``, ``x`` and ``lam``).
+    form : Formulation or NavigationProblem
+        The formulation ``sol`` solves (the demoted or last linearized one).
+    data : ImuData, optional
+        Where the measured gyro rates are read (``data.gyro``, rad/s); default
+        ``form.data``.
+
+    Returns
+    -------
+    dict
+        ``residual_ratio`` (axis -> RMS of ``w / sigma_a``, dimensionless),
+        ``residual_ratio_overall``, ``variance_factor`` and ``dof`` (None for
+        problems that are not least squares or whose ``lam`` a rule chose),
+        ``noise_ratio`` (square root of the variance factor, None below
+        :data:`MISFIT_MIN_DOF` degrees of freedom) -- the misfit entries only when
+        the acceleration form has a stated ``sigma_a`` --, ``thresholds`` and
+        ``warnings`` (list of str).
+
+    Notes
+    -----
+    Misfit, per axis :math:`a` with the stated :math:`\\sigma_a`:
+
+    .. math:: \\rho_a = \\sqrt{\\tfrac{1}{N}\\sum_i (w_{i,a}/\\sigma_a)^2}, \\quad
+              \\rho = \\sqrt{\\tfrac{1}{d}\\sum_a \\rho_a^2}, \\quad
+              \\hat\\sigma_0^2 = \\frac{\\sum_i \\|w_i/\\sigma_a\\|^2
+              + \\sum_{\\text{soft rows}} \\lambda_k (r_k/\\sigma_k)^2}{f},
+
+    with :math:`f` the objective rows minus the unknowns plus the hard rows. A warning
+    when :math:`\\rho_a` or :math:`\\rho` exceeds :data:`MISFIT_HIGH` (the residual is
+    more than the noise could need), when :math:`\\hat\\sigma_0` is above :data:`MISFIT_HIGH`,
+    or below :data:`MISFIT_LOW` (the sigmas overstated).
+    Plausibility: each estimate against the module's limits (accelerometer bias
+    :data:`ACC_BIAS_LIMIT` m/s^2, gravity :data:`GRAVITY_MAGNITUDE_LIMIT` m/s^2 and
+    :data:`GRAVITY_TILT_LIMIT` rad, scale :data:`SCALE_LIMIT`, misalignment
+    :data:`MISALIGNMENT_LIMIT` rad, initial tilt :data:`TILT_LIMIT` rad, gyro bias
+    :data:`GYRO_BIAS_LIMIT` rad/s and against the mean measured rate
+    (:data:`GYRO_MEAN_FRACTION`), gyro scale :data:`GYRO_SCALE_LIMIT`).
+    """
+    try:
+        form = as_formulation(form)
+    except InputError:  # a stand-in with the formulation's attributes (tests)
+        pass
+    data = form.data if data is None else data
+    out: dict[str, Any] = {}
+    msgs: list[str] = []
+    if form.residual == "acceleration" and form.sigma_a_given and len(sol.residuals):
+        nums, m = _misfit(sol, form)
+        out.update(nums)
+        msgs += m
+    msgs += _plausibility(sol, form, data)
+    out["thresholds"] = {k: globals()[k] for k in __all__ if k.isupper()}
+    out["warnings"] = msgs
+    return out
+
+
+def check(sol: Solution, form, data=None) -> list[str]:
+    """The plausibility warnings of a solution (see :func:`assess`).
+
+    Parameters
+    ----------
+    sol : Solution
+    form : Formulation or NavigationProblem
+        The formulation ``sol`` solves.
+    data : ImuData, optional
+        Where the measured gyro rates are read; default ``form.data``.
+
+    Returns
+    -------
+    list of str
+        One message per finding: the quantity, its value with units, the limit and the
+        likely cause.
+    """
+    return assess(sol, form, data)["warnings"]
+
+
+def attach(sol: Solution, form, data=None) -> Solution:
+    """Run :func:`assess` on ``sol``: each message into ``sol.warnings`` and issued once as
+    a :class:`bvpnav.log.BvpnavWarning`, the numbers in ``sol.stats["plausibility"]``."""
+    rep = assess(sol, form, data)
+    for msg in rep["warnings"]:
+        if msg not in sol.warnings:
+            sol.warnings.append(msg)
+        warn(msg)
+    return sol.record(plausibility=rep)
