@@ -36,7 +36,7 @@ from .errors import (
 )
 
 if TYPE_CHECKING:  # the lazy names below, for type checkers and IDEs
-    from . import attitude, baselines, error_models, lam, scenarios, simulate, solve
+    from . import align, attitude, baselines, error_models, lam, scenarios, sensors, simulate, solve
     from .backends import available_solvers
     from .compare import compare_solvers
     from .grid import TimeGrid
@@ -64,6 +64,7 @@ __all__ = [
     "SolverNotFound",
     "TimeGrid",
     "Unbounded",
+    "align",
     "attitude",
     "available_solvers",
     "baselines",
@@ -75,6 +76,7 @@ __all__ = [
     "readers",
     "solve",
     "scenarios",
+    "sensors",
     "simulate",
     "strapdown",
 ]
@@ -108,6 +110,8 @@ _LAZY = {
     "detect": ("detect", None),
     "readers": ("readers", None),
     "strapdown": ("strapdown", None),
+    "sensors": ("sensors", None),
+    "align": ("align", None),
 }
 
 
