@@ -33,29 +33,31 @@ at least 30 s before the end (the walker goes indoors). Compared, against the tr
 
 The table gives the RMS and the final 3-D position error (m) over the whole walk and the
 heading error at the end (deg); then the estimated against the true gyro bias (rad/s),
-with the reported standard deviation for (b) and (b'). Measured (seed 0, 2 cores, two
-runs sharing them, so the times are high)::
+with the reported standard deviation for (b) and (b'). Measured (seed 0, a 2-core
+machine)::
 
     method                                    RMS (m) final (m) heading (deg) time (s)
     ----------------------------------------------------------------------------------
-    (a) bvpnav Bias()                           12.11     18.22        +76.81     14.5
-    (a') Bias(), gyro de-biased on the stand     3.42      0.54         +9.09      8.8
-    (b) (a) + GyroBias + AttitudeError           0.48      0.09         -1.76    646.4
-    (b') (a') + GyroBias + AttitudeError         0.49      0.27         -0.71    236.7
+    (a) bvpnav Bias()                           12.11     18.22        +76.81     10.0
+    (a') Bias(), gyro de-biased on the stand     3.42      0.54         +9.09      6.2
+    (b) (a) + GyroBias + AttitudeError           0.48      0.09         -1.76    621.7
+    (b') (a') + GyroBias + AttitudeError         0.49      0.27         -0.71    121.7
     (c) spline through the fixes                13.43     30.96             -      0.0
-    (d) GTSAM, ZUPT + fixes                      0.50      0.46         +0.03      2.0
+    (d) GTSAM, ZUPT + fixes                      0.50      0.46         +0.03      1.1
 
-(b): 24 loop iterations, heading correction -9.35 +- 0.88 deg (truth -8.00); the z gyro
-bias 5.069e-3 rad/s over the walk against a true 5.040e-3 (std 1.9e-4), GTSAM 5.093e-3.
-``--quick`` (0.6 lap, 51 s, fixes every 15 s, a 5 s stand, no (b')) takes about 30 s:
-(a) 6.27 m final, (b) 0.49 m, GTSAM 0.50 m.
+(b): 24 loop iterations (about 26 s each), heading correction -9.35 +- 0.88 deg (truth
+-8.00); the z gyro bias 5.069e-3 rad/s over the walk against a true 5.040e-3 (std
+1.9e-4), GTSAM 5.093e-3. ``--quick`` (0.6 lap, 51 s, fixes every 15 s, a 5 s stand, no
+(b')) takes about 30 s: final error (a) 6.27 m, (b) 0.49 m, GTSAM 0.50 m.
 
-What was seen on the way (numbers in the issue-16 report): bvpnav's loop needs 100 Hz
-here. At 40 Hz the noise-free walk (exact fixes, the true stances) converges to a
-heading correction of -13.65 degrees (truth -8) and a z gyro bias of 2.54e-3 rad/s
-(truth 5.0e-3) with the objective at 2149 instead of about 0, the discretisation error
-of the swing (6 rad/s, 25 m/s^2 in 0.6 s) read as a gyro bias; at 100 Hz the same case
-gives -9.05 degrees and 4.94e-3.
+What was seen on the way: bvpnav needs 100 Hz here. On the noise-free walk (biases and
+the guess error only, exact fixes every 20 s, the true stances, 1 lap) the loop's
+optimum is not the truth: at 100 Hz the objective is 122.5 at the answer (heading
+correction -9.04 degrees, truth -8; z gyro bias 4.93e-3 rad/s, truth 5e-3; RMS 0.37 m)
+and 676 at the truth (RMS 1.3 cm); at 40 Hz the answer is -13.65 degrees and 2.54e-3
+rad/s with the objective at 2149. The discretisation error of the swing (6 rad/s,
+25 m/s^2 in 0.6 s) is read as a heading and a gyro bias; GTSAM on the same 40 Hz data
+was not thrown off this way.
 
 Run ``python examples/benchmarks/foot_walk.py [--quick] [--seed 0] [--no-gtsam]``.
 """
