@@ -296,8 +296,24 @@ def heading_error(att_end: Rotation, true_end: Rotation) -> float:
 
 
 def fixes(walk: Walk, seed: int, period: float = FIX_PERIOD) -> tuple[np.ndarray, np.ndarray]:
-    """Fix times every ``period`` s after the start, the last at least ``period`` s before
-    the end, and their positions with ``FIX_SIGMA`` noise per axis (m)."""
+    """Position fixes: every ``period`` s after the start, the last at least ``period`` s
+    before the end.
+
+    Parameters
+    ----------
+    walk : Walk
+    seed : int
+        Seed of the fix noise (offset from the walk's).
+    period : float
+        Fix spacing, s.
+
+    Returns
+    -------
+    t : ndarray (M,)
+        Fix times (sample times), s.
+    position : ndarray (M, 3)
+        True positions plus ``FIX_SIGMA`` white noise per axis, m.
+    """
     rng = np.random.default_rng(seed + 1000)
     t_end = walk.t[-1]
     ft = np.arange(period, t_end - period + 1e-9, period)
@@ -307,6 +323,8 @@ def fixes(walk: Walk, seed: int, period: float = FIX_PERIOD) -> tuple[np.ndarray
 
 
 def _problem(data, em, walk, fix_t, fix_p, zupts, sigma_a) -> NavigationProblem:
+    """The bvpnav problem: the start (``START_SIGMA`` m), the fixes (``FIX_SIGMA`` m) and
+    zero velocity (``ZUPT_SIGMA`` m/s) in the stances; ``sigma_a`` in m/s^2."""
     prob = NavigationProblem(data, error_model=em, sigma_a=sigma_a)
     prob.add(Position(t=0.0, value=walk.position[0], sigma=START_SIGMA, name="start"))
     prob.add(Position(t=fix_t, value=fix_p, sigma=FIX_SIGMA, name="fixes"))
@@ -329,6 +347,7 @@ def stance_times(t: np.ndarray, zupts) -> np.ndarray:
 
 
 def _scores(pos: np.ndarray, walk: Walk) -> tuple[float, float]:
+    """RMS and final 3-D position error against the truth, m."""
     err = np.linalg.norm(pos - walk.position, axis=1)
     return float(np.sqrt(np.mean(err**2))), float(err[-1])
 
@@ -403,7 +422,19 @@ def run_bvpnav(walk, fix_t, fix_p, zupts, *, attitude_models: bool, debias: bool
 
 
 def run_spline(walk, fix_t, fix_p) -> dict:
-    """A cubic spline through the start and the fixes, held at the last fix after it."""
+    """A cubic spline through the start and the fixes, held at the last fix after it (row c).
+
+    Parameters
+    ----------
+    walk : Walk
+    fix_t, fix_p : ndarray
+        Fix times (s) and positions (m).
+
+    Returns
+    -------
+    dict
+        ``rms``, ``final`` (m), ``heading`` (NaN: a spline has no attitude), ``seconds``.
+    """
     t0 = time.perf_counter()
     kt = np.concatenate([[walk.t[0]], fix_t])
     kp = np.vstack([walk.position[0], fix_p])
