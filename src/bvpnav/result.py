@@ -180,6 +180,13 @@ class AttitudeLoopReport(_Record):
         ``accepted`` and ``damping``; the last entry has ``converged=True`` when its step
         was below ``tol``.
     converged : bool
+    reason : str
+        Why the loop stopped: ``"step"`` (an undamped step below ``tol``; the answer is
+        that step's solve), ``"objective"`` (an accepted step lowered the objective by less
+        than ``ftol`` relative), ``"no descent"`` (the undamped step raised the objective
+        and so did the damped ones down to ``tol``: a minimum to rounding) or
+        ``"max_iter"`` (not converged). In all but ``"step"`` the answer is the last
+        accepted point itself (zero increments about it).
     tol : float
         rad.
     max_iter : int
@@ -197,6 +204,7 @@ class AttitudeLoopReport(_Record):
     kind: str
     iterations: list
     converged: bool
+    reason: str
     tol: float
     max_iter: int
     objective_initial: float

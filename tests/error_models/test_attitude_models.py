@@ -281,3 +281,32 @@ def test_cli_solves_a_strapdown_recording_with_gyro_bias(tmp_path):
     got, truth = pd.read_csv(out), pd.read_csv(rec / "truth.csv")
     rms = float(np.sqrt(np.mean(sum((got[c] - truth[c]) ** 2 for c in "xyz"))))
     assert rms < 0.05  # without the models: 0.037 m (the heading is not observable here)
+
+
+def test_a_loop_stopped_early_answers_with_its_last_accepted_point(motion):
+    """max_iter reached (or the objective no longer falling): the answer is the accepted
+    point itself: zero increments about it, the trajectory of the attitude fixed there,
+    the loop's last objective, standard deviations of the attitude parameters."""
+    t, w, c0, att, f, pos = motion
+    guess = Rotation.from_rotvec([0.2, -0.2, 0.0]) * Rotation.from_rotvec([0.0, 0.0, np.radians(150.0)]) * c0
+    prob = _problem(t, w + np.array([1e-3, 0.0, -2e-3]), f, guess, pos, GyroBias() + AttitudeError(),
+                    sigma=0.01)
+    from bvpnav.log import BvpnavWarning
+
+    with pytest.warns(BvpnavWarning, match="did not converge in 2 iterations"):
+        sol = prob.solve(solver="direct", uncertainty=True, attitude={"heading": "given", "max_iter": 2})
+    rep = sol.stats["sequential"]
+    assert rep["reason"] == "max_iter" and not rep["converged"]
+    assert set(prob.model.param_names) <= set(sol.error_params_std.index)
+    assert np.all(np.isfinite(sol.error_params_std[list(prob.model.param_names)]))
+    # the reported totals reproduce the trajectory: re-integrated with them and solved with the
+    # attitude fixed (no attitude unknowns), the positions are the answer's
+    totals = {n: float(sol.error_params[n]) for n in prob.model.param_names}
+    fixed = NavigationProblem(reintegrate(prob.data, prob.error_model, totals))
+    fixed.add(*prob.items)
+    again = fixed.solve(solver="direct")
+    np.testing.assert_allclose(again.position(), sol.position(), rtol=0, atol=1e-6)
+    objectives = [it["trial"] for it in rep["iterations"] if it["accepted"]]
+    assert rep["objective"] == min([rep["objective_initial"], *objectives])
+    loose = prob.solve(solver="direct", attitude={"heading": "given", "ftol": 0.5})
+    assert loose.stats["sequential"]["reason"] == "objective"
