@@ -37,7 +37,9 @@ class Bias(SensorErrorModel):
         default all.
     prior, sigma, bounds
         Optional soft prior and hard bounds in m/s^2 (see
-        :class:`~bvpnav.error_models.ErrorModel`); time-varying: on every knot's value.
+        :class:`~bvpnav.error_models.ErrorModel`); time-varying: on every knot's value,
+        except that with ``drift`` the prior is on the first knot only (the random walk
+        carries it on, as for :class:`GyroBias`).
     interval : float, optional
         Time-varying bias: values at knots about ``interval`` s apart
         (:func:`bvpnav.error_models._attitude.knot_times`), linear between them.
@@ -132,11 +134,27 @@ class Bias(SensorErrorModel):
         return Affine.vstack(rows)
 
     def terms(self, model) -> list:
-        out = super().terms(model)
         if self.drift is None:
-            return out
+            return super().terms(model)
+        import dataclasses
+
         from ..model import Affine
         from ..terms import Term
+        from ._base import _per_param
+
+        # the prior on the first knot only (the random walk carries it on; see GyroBias)
+        out = dataclasses.replace(self, sigma=None, prior=None, drift=None).terms(model)
+        if self.sigma is not None:
+            names = self.names(model.data)
+            q = len(names)
+            m = self.knots(model.data).size
+            p0 = np.zeros(q) if self.prior is None else _per_param(self.prior, q, "Bias: prior")
+            first = np.arange(0, q, m)
+            rows = self.physical_rows(model, p0).rows(first)
+            out.append(Term(label=f"prior Bias[{', '.join(names[k] for k in first)}]", item=None,
+                            residual=_relabel(rows, [names[k] for k in first], "prior"), mode="soft",
+                            kind="equality", sigma=_per_param(self.sigma, q, "Bias: sigma")[first],
+                            scaled_by_lam=False, units=self.units))
 
         data = model.data
         k = self.knots(data)
