@@ -174,6 +174,9 @@ class ImuData:
         self.gravity: np.ndarray | None = None
         #: Body rates (N, 3) in rad/s when the attitude came from :meth:`from_gyro`.
         self.gyro: np.ndarray | None = None
+        #: Linearization point of attitude error models (set by :mod:`bvpnav.solve.attitude`;
+        #: see :class:`bvpnav.error_models._attitude.AttitudePoint`); None for data as given.
+        self.attitude_point = None
         if acc is not None and specific_force is not None:
             raise InputError("give either acc (navigation frame) or specific_force, not both")
         if acc is None and specific_force is None:

@@ -208,6 +208,7 @@ class NavigationProblem:
         sequential: dict | None = None,
         rule: dict | None = None,
         uncertainty: bool | str = False,
+        attitude: dict | None = None,
     ) -> Solution:
         """Solve and verify, falling back to other back ends when an answer fails.
 
@@ -270,6 +271,12 @@ class NavigationProblem:
             and the sigmas are the true noise); ``"scaled"``: multiplied by the
             a-posteriori variance factor (for sigmas that are only relative, or a ``lam``
             chosen by a rule). O(N) time and memory.
+        attitude : dict, optional
+            Options of the damped outer loop that error models acting on the attitude
+            (``AttitudeError``, ``GyroBias``, ``GyroScaleFactor``) are solved by: ``tol``
+            (rad), ``max_iter``, ``heading`` (``"auto"``, ``"search"``, ``"given"``),
+            ``candidates``, ``loop``, ``progress``
+            (:func:`bvpnav.solve.attitude.with_attitude`).
 
         Returns
         -------
@@ -291,7 +298,8 @@ class NavigationProblem:
         return pipeline.solve(self.formulation, lam, solver=solver, accuracy=accuracy, verify=verify,
                               options=options, verbose=verbose, fallback=fallback,
                               on_conflict=on_conflict, priority=priority, demote_sigma=demote_sigma,
-                              sequential=sequential, rule=rule, uncertainty=uncertainty)
+                              sequential=sequential, rule=rule, uncertainty=uncertainty,
+                              attitude=attitude)
 
     def verify(self, xval: np.ndarray, lam: float, accuracy: str = "default", duals: dict | None = None,
                factored: tuple | None = None) -> Verification:

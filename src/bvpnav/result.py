@@ -12,7 +12,7 @@ import pandas as pd
 from .errors import InputError
 
 __all__ = ["Solution", "Attempt", "Verification", "SequentialReport", "Demotion", "Timings", "Run",
-           "SolveRecords", "Uncertainty"]
+           "SolveRecords", "Uncertainty", "AttitudeLoopReport"]
 
 
 class _Record(Mapping):
@@ -164,6 +164,55 @@ class SequentialReport(_Record):
     lam: list
     status: dict
     seconds: float
+
+
+@dataclass(eq=False)
+class AttitudeLoopReport(_Record):
+    """What the damped attitude loop did (see :func:`bvpnav.solve.attitude.with_attitude`).
+
+    Attributes
+    ----------
+    kind : str
+        ``"attitude"``.
+    iterations : list of dict
+        Per linearized step: ``objective`` (before), ``trial`` (the objective at the new
+        totals), ``step`` (the largest attitude change it makes over the window, rad),
+        ``accepted`` and ``damping``; the last entry has ``converged=True`` when its step
+        was below ``tol``.
+    converged : bool
+    tol : float
+        rad.
+    max_iter : int
+    objective_initial, objective : float
+        The nonlinear objective at the start (after the heading search) and at the answer.
+    heading_search : list of dict
+        ``heading`` (rad) and ``objective`` of each candidate of the global start.
+    solves : int
+        Convex solves the loop made (evaluations and steps).
+    seconds : float
+    inner : SequentialReport or None
+        The report of the last inner sequential loop (items that need linearization).
+    """
+
+    kind: str
+    iterations: list
+    converged: bool
+    tol: float
+    max_iter: int
+    objective_initial: float
+    objective: float
+    heading_search: list
+    solves: int
+    seconds: float
+    inner: Any = None
+
+    _optional = ("inner",)
+
+    def as_dict(self) -> dict[str, Any]:
+        out = super().as_dict()
+        if self.inner is not None:
+            out["inner"] = self.inner.as_dict()
+        return out
 
 
 @dataclass(eq=False)
@@ -339,6 +388,7 @@ class SolveRecords:
     sequential: SequentialReport | None = None
     demoted: list | None = None
     uncertainty: Uncertainty | None = None
+    attitude: AttitudeLoopReport | None = None
 
     def stats(self) -> dict[str, Any]:
         """The ``Solution.stats`` dict (plain values: it is written to JSON by batch runs)."""
@@ -349,7 +399,9 @@ class SolveRecords:
             if self.verification.conditioning is not None:
                 out["conditioning"] = self.verification.conditioning
         out["attempts"] = [a.as_dict() for a in self.attempts]
-        if self.sequential is not None:
+        if self.attitude is not None:
+            out["sequential"] = self.attitude.as_dict()
+        elif self.sequential is not None:
             out["sequential"] = self.sequential.as_dict()
         if self.demoted is not None:
             out["demoted"] = [d.as_dict() for d in self.demoted]
@@ -399,6 +451,10 @@ class Solution:
     error_params_std : pandas.Series
         Standard deviations of :attr:`error_params` (same units; first order in the
         reported parametrization), with ``solve(uncertainty=...)``; else empty.
+    attitude : scipy.spatial.transform.Rotation or None
+        For strapdown data, the body-to-navigation attitude per sample the answer uses:
+        corrected by the attitude error models' estimates when there are any, else the
+        data's. None for navigation-frame data. See :attr:`attitude_angles`.
     """
 
     trajectory: pd.DataFrame
@@ -414,7 +470,25 @@ class Solution:
     curve: Any = None
     records: SolveRecords = field(default_factory=SolveRecords)
     error_params_std: pd.Series = field(default_factory=lambda: pd.Series(dtype=float, name="std"))
+    attitude: Any = None
     _cov: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def attitude_angles(self) -> pd.DataFrame | None:
+        """Roll, pitch and yaw of :attr:`attitude` per sample, degrees (None without one).
+
+        Notes
+        -----
+        :math:`C = R_z(\\text{yaw})\\, R_y(\\text{pitch})\\, R_x(\\text{roll})` (body to
+        navigation; scipy's ``as_euler("ZYX")``): in the ENU frame with body axes
+        forward-left-up, yaw is the heading counterclockwise from east about up; in NED
+        with forward-right-down, the aerospace angles (yaw clockwise from north).
+        """
+        if self.attitude is None:
+            return None
+        ypr = np.degrees(self.attitude.as_euler("ZYX"))
+        return pd.DataFrame({"roll_deg": ypr[:, 2], "pitch_deg": ypr[:, 1], "yaw_deg": ypr[:, 0]},
+                            index=self.trajectory.index.copy())
 
     def covariance(self, what: str = "error_params"):
         """A covariance computed by ``solve(uncertainty=...)``.

@@ -448,8 +448,10 @@ def _with_acc(data: ImuData, acc: np.ndarray) -> ImuData:
     """``data`` with other navigation-frame accelerations (strapdown: the specific force)."""
     if data.is_strapdown:
         f = data.attitude.inv().apply(acc - data.gravity)
-        return ImuData(data.t, specific_force=f, attitude=data.attitude, gravity=data.gravity,
-                       axes=data.axes)
+        out = ImuData(data.t, specific_force=f, attitude=data.attitude, gravity=data.gravity,
+                      axes=data.axes)
+        out.gyro = data.gyro  # the attitude error models' columns need the rates
+        return out
     return ImuData(data.t, acc, axes=data.axes)
 
 
@@ -460,12 +462,14 @@ def _truth_values(q: int) -> np.ndarray:
 
 
 def _without_priors(em: ErrorModel | CompositeErrorModel) -> ErrorModel | CompositeErrorModel:
-    """``em`` without soft priors and bounds (a prior pulls the estimate off the simulated value)."""
+    """``em`` without soft priors, random-walk priors and bounds (a prior pulls the estimate off the
+    simulated value)."""
     if isinstance(em, CompositeErrorModel):
         return CompositeErrorModel(*[_without_priors(c) for c in em.components])
     if dataclasses.is_dataclass(em):
         names = {f.name for f in dataclasses.fields(em)}
-        kw = {k: None for k in ("prior", "sigma", "bounds") if k in names and getattr(em, k) is not None}
+        kw = {k: None for k in ("prior", "sigma", "bounds", "drift")
+              if k in names and getattr(em, k) is not None}
         if kw:
             return dataclasses.replace(em, **kw)
     return em
@@ -506,7 +510,8 @@ def _check_recovery(em: ErrorModel | CompositeErrorModel, data: ImuData, q: int,
              f"and velocities at 11 instants ({'; '.join(missing)}); pass data= on which they are")
     with _rule(who, rule):
         model = NavModel(meas, em)
-        sol = prob.solve(accuracy="high")
+        # attitude models: one linearized solve (the linear model the simulation used)
+        sol = prob.solve(accuracy="high", attitude={"loop": False})
         expect = em.report(l_true, model)
         zero = em.report(np.zeros(q), model)
     names = list(expect.index)
@@ -589,7 +594,10 @@ def check_error_model(model_or_class: ErrorModel | CompositeErrorModel | type[Er
         who = f"error model {type(em).__name__}"
     with _rule(who, "is an error model"):
         as_error_model(em)
-    data = _default_data() if data is None else data
+    if data is None:
+        comps = getattr(em, "components", (em,))
+        own = [c for c in comps if hasattr(c, "example_data")]
+        data = own[0].example_data() if own else _default_data()
 
     with _rule(who, "names"):
         names = em.names(data)

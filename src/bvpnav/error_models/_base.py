@@ -424,7 +424,7 @@ class SensorCorrection:
                 E[p.i, p.j] = v
             elif p.role == "bias":
                 beta[p.i] = v
-            else:
+            elif p.role == "gravity":
                 dg[p.i] = v
         return cls(E, beta, dg, _nominal_gravity(data))
 
@@ -437,7 +437,8 @@ def _sensor_layout(model) -> dict[tuple[str, int, int], str]:
     for c in comps:
         if isinstance(c, SensorErrorModel):
             for p in c.params(model.data):
-                out[(p.role, p.i, p.j)] = p.name
+                if p.role != "bias_knot":
+                    out[(p.role, p.i, p.j)] = p.name
     return out
 
 
@@ -591,14 +592,16 @@ class CompositeErrorModel(_Combinable):
         offs = np.concatenate([[0], np.cumsum(sizes)])
         sens_p, sens_v = [], []
         for c, o, q in zip(self._components, offs[:-1], sizes, strict=True):
-            if isinstance(c, SensorErrorModel):
+            if isinstance(c, SensorErrorModel) and not getattr(c, "time_varying", False):
                 sens_p.extend(c.params(data))
                 sens_v.extend(l[o:o + q])
         corr = SensorCorrection.from_values(sens_p, np.array(sens_v), data)
         parts = []
         units = {}
         for c, o, q in zip(self._components, offs[:-1], sizes, strict=True):
-            if isinstance(c, SensorErrorModel):
+            if getattr(c, "time_varying", False):
+                s = _series(c.knot_values(l[o:o + q], corr, data), c.names(data), c.units)
+            elif isinstance(c, SensorErrorModel):
                 s = _series(c.physical(corr, data), c.names(data), c.units)
             else:
                 s = c.report(l[o:o + q], model)

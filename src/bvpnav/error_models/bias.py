@@ -1,17 +1,34 @@
-"""Constant accelerometer bias per sensor axis."""
+"""Accelerometer bias per sensor axis: constant, or drifting (a random walk at knots)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
-from ._base import Param, SensorErrorModel, sensor_axes
+import numpy as np
+
+from ..errors import InputError
+from ._attitude import hat_weights, knot_times
+from ._base import Param, SensorErrorModel, _relabel, _sensor_layout, _series, sensor_axes, sensor_frame
 
 __all__ = ["Bias"]
 
 
+def _positive(value, what: str) -> float | None:
+    if value is None:
+        return None
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{what}={value!r}: give a positive number") from None
+    if not (np.isfinite(v) and v > 0):
+        raise InputError(f"{what}={value!r}: must be finite and > 0")
+    return v
+
+
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
 class Bias(SensorErrorModel):
-    """Constant bias of each accelerometer axis, m/s^2.
+    """Bias of each accelerometer axis, m/s^2: constant, or drifting as a random walk.
 
     Parameters
     ----------
@@ -20,19 +37,118 @@ class Bias(SensorErrorModel):
         default all.
     prior, sigma, bounds
         Optional soft prior and hard bounds in m/s^2 (see
-        :class:`~bvpnav.error_models.ErrorModel`).
+        :class:`~bvpnav.error_models.ErrorModel`); time-varying: on every knot's value.
+    interval : float, optional
+        Time-varying bias: values at knots about ``interval`` s apart
+        (:func:`bvpnav.error_models._attitude.knot_times`), linear between them.
+    drift : float, optional
+        Random-walk density of the bias, m/s^2/sqrt(s) (a datasheet's bias random walk,
+        or a factor graph's accelerometer bias random-walk sigma): the prior
+        :math:`(b_{m+1} - b_m) \\sim N(0, \\sigma_d^2\\, \\Delta t_m)`. Needs ``interval``.
 
     Notes
     -----
-    Reported as ``bias_<axis>`` in m/s^2 with the sensor's sign: the sensor reads
-    :math:`\\hat f = D f + b`, so a positive bias means it reads high. Internally the
-    correction is :math:`f = (I + E)\\hat f + \\beta` with :math:`b = -(I + E)^{-1}\\beta`;
-    the column of :math:`\\beta_k` is the sensor axis in the navigation frame,
-    :math:`C_i e_k` (the 2010 paper's :math:`p_{kl1}` vectors, eq. 33, up to ``-M``).
+    Reported as ``bias_<axis>`` (constant) or ``bias_<axis>[m]`` (knot ``m``) in m/s^2
+    with the sensor's sign: the sensor reads :math:`\\hat f = D f + b`, so a positive bias
+    means it reads high. Internally the correction is :math:`f = (I + E)\\hat f + \\beta`
+    with :math:`b = -(I + E)^{-1}\\beta`; the column of :math:`\\beta_k` is the sensor
+    axis in the navigation frame, :math:`C_i e_k` (the 2010 paper's :math:`p_{kl1}`
+    vectors, eq. 33, up to ``-M``), times the knot's hat function :math:`\\varphi_m(t_i)`
+    when time-varying. The knot values are reported exactly as
+    :math:`b_m = -(I + E)^{-1}\\beta_m`; the random-walk prior is on
+    :math:`-(\\beta_{m+1} - \\beta_m)`, which is :math:`b_{m+1} - b_m` without a scale
+    factor and to first order in it with one.
     """
 
+    interval: Any = None
+    drift: Any = None
     units = "m/s^2"
+
+    def validate(self) -> None:
+        object.__setattr__(self, "interval", _positive(self.interval, "Bias: interval (s)"))
+        object.__setattr__(self, "drift", _positive(self.drift, "Bias: drift (m/s^2/sqrt(s))"))
+        if self.drift is not None and self.interval is None:
+            raise InputError("Bias: drift= needs interval= (the knot spacing in s); without it the bias is "
+                             "constant")
+
+    @property
+    def time_varying(self) -> bool:
+        """True with ``interval``: one value per knot."""
+        return self.interval is not None
+
+    def knots(self, data) -> np.ndarray | None:
+        """Knot times in s (None for a constant bias)."""
+        return None if self.interval is None else knot_times(data.t, self.interval)
 
     def params(self, data) -> list[Param]:
         ax = sensor_axes(data)
-        return [Param(f"bias_{ax[i]}", "bias", i) for i in self._select_axes(ax, "sensor")]
+        sel = self._select_axes(ax, "sensor")
+        if self.interval is None:
+            return [Param(f"bias_{ax[i]}", "bias", i) for i in sel]
+        m = self.knots(data).size
+        return [Param(f"bias_{ax[i]}[{k}]", "bias_knot", i, k) for i in sel for k in range(m)]
+
+    # ----------------------------------------------------- time-varying parts
+    def columns(self, data) -> np.ndarray:
+        if self.interval is None:
+            return super().columns(data)
+        C = sensor_frame(data)
+        W = hat_weights(data.t, self.knots(data))
+        return np.stack([C[:, :, p.i] * W[:, p.j, None] for p in self.params(data)], axis=2)
+
+    def knot_values(self, l, corr, data) -> np.ndarray:
+        """Physical knot values ``b_m = -D beta_m`` given the other sensor models' correction."""
+        ps = self.params(data)
+        ns = len(sensor_axes(data))
+        m = self.knots(data).size
+        beta = np.zeros((m, ns))
+        for p, v in zip(ps, np.asarray(l, dtype=float), strict=True):
+            beta[p.j, p.i] = v
+        D = corr.D if corr is not None else np.eye(ns)
+        return np.array([-(D[p.i] @ beta[p.j]) for p in ps])
+
+    def report(self, l, model):
+        if self.interval is None:
+            return super().report(l, model)
+        return _series(self.knot_values(l, None, model.data), self.names(model.data), self.units)
+
+    def physical_rows(self, model, value):
+        if self.interval is None:
+            return super().physical_rows(model, value)
+        from ._base import _per_param
+
+        ps = self.params(model.data)
+        v = _per_param(value, len(ps), "Bias: value")
+        layout = _sensor_layout(model)
+        rows = []
+        for p, vk in zip(ps, v, strict=True):
+            r = -model.params([p.name]) - vk
+            kname = layout.get(("scale", p.i, p.i))
+            if kname is not None:
+                r = r + model.params([kname]) * (-vk)
+            rows.append(r)
+        from ..model import Affine
+
+        return Affine.vstack(rows)
+
+    def terms(self, model) -> list:
+        out = super().terms(model)
+        if self.drift is None:
+            return out
+        from ..model import Affine
+        from ..terms import Term
+
+        data = model.data
+        k = self.knots(data)
+        m = k.size
+        names = self.names(data)
+        rows, labels = [], []
+        for a in range(len(names) // m):
+            P = model.params(names[a * m:(a + 1) * m])
+            rows.append(-(P.rows(np.arange(1, m)) - P.rows(np.arange(m - 1))))
+            labels += [f"{names[a * m + j]}->[{j + 1}]" for j in range(m - 1)]
+        res = _relabel(Affine.vstack(rows), labels, "drift")
+        sigma = np.tile(self.drift * np.sqrt(np.diff(k)), len(names) // m)
+        out.append(Term(label="random walk Bias", item=None, residual=res, mode="soft", kind="equality",
+                        sigma=sigma, scaled_by_lam=False, units=self.units))
+        return out

@@ -85,6 +85,8 @@ def make_solution(form, xval: np.ndarray, lam: float, lam_rule: str, records: So
                    item_residuals=item_res, lam=float(lam), lam_rule=lam_rule, error_params=params,
                    stats={}, x=xval, warnings=_warnings(form, records.run, records.verification),
                    records=records)
+    if form.data.is_strapdown:
+        sol.attitude = form.data.attitude
     sol._formulation = form  # for the uncertainty stage; removed by the pipeline
     return sol.record()
 

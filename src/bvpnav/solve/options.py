@@ -96,6 +96,9 @@ class SolveOptions:
     rule : dict
         Options of the lambda sweep (``lam_range``, ``points``, ``tau``, ``probes``,
         ``seed``, ``progress``, ``engine``).
+    attitude : dict
+        Options of the damped attitude loop (``tol``, ``max_iter``, ``heading``,
+        ``candidates``, ``loop``, ``progress``; :func:`bvpnav.solve.attitude.with_attitude`).
     uncertainty : bool or str
         False, True (the covariance of the weights as stated) or ``"scaled"`` (times the
         a-posteriori variance factor); see :mod:`bvpnav.solve.uncertainty`.
@@ -114,6 +117,7 @@ class SolveOptions:
     sequential: dict = field(default_factory=dict)
     rule: dict = field(default_factory=dict)
     uncertainty: Any = False
+    attitude: dict = field(default_factory=dict)
 
     @property
     def solver(self) -> str:
@@ -166,7 +170,7 @@ def prepare(lam=1.0, solver: str = "clarabel", accuracy: str = "default", verify
             options: dict | None = None, verbose: bool = False, fallback="auto",
             on_conflict: str = "raise", priority=None, demote_sigma=None,
             sequential: dict | None = None, rule: dict | None = None,
-            uncertainty=False) -> tuple[SolveOptions, Any]:
+            uncertainty=False, attitude: dict | None = None) -> tuple[SolveOptions, Any]:
     """Check every option before any work: ``(SolveOptions, lam)`` (``lam`` as a float or
     a rule name, see :func:`check_lam`).
 
@@ -196,6 +200,13 @@ def prepare(lam=1.0, solver: str = "clarabel", accuracy: str = "default", verify
                          "stated noise) or 'scaled' (scaled by the a-posteriori variance factor)")
     if isinstance(lam, str) and rule:
         check_range(rule.get("lam_range", (1e-6, 1e6)), rule.get("points", 25))
+    if attitude is not None:
+        from .attitude import check_attitude
+
+        if not isinstance(attitude, Mapping):
+            raise InputError(f"attitude={attitude!r}: give a dict of options, e.g. "
+                             "attitude={'max_iter': 50}")
+        check_attitude(attitude)
     backend = resolve_solver(solver)
     primary = solver_options(backend, accuracy, options)
     chain = [(backend, primary)] + fallback_chain(backend, accuracy, options, fallback)
@@ -204,5 +215,6 @@ def prepare(lam=1.0, solver: str = "clarabel", accuracy: str = "default", verify
                         chain=chain, on_conflict=on_conflict, priority=priority,
                         demote_sigma=demote_sigma, sequential=dict(sequential or {}),
                         rule=dict(rule or {}),
-                        uncertainty=uncertainty if isinstance(uncertainty, str) else bool(uncertainty))
+                        uncertainty=uncertainty if isinstance(uncertainty, str) else bool(uncertainty),
+                        attitude=dict(attitude or {}))
     return opts, lam

@@ -1,9 +1,11 @@
 """The one place that knows the order of the solve stages.
 
-A solve is ``demote(sequential(rule(chain)))``:
+A solve is ``demote(attitude(sequential(rule(chain))))``:
 
 1. :func:`~bvpnav.solve.conflicts.with_demotion` — ``on_conflict="demote"``: conflicting
    hard items are made soft by priority until the rest holds;
+1b. :func:`~bvpnav.solve.attitude.with_attitude` — error models acting on the attitude
+   (gyro errors, initial attitude) are solved by a damped outer loop that re-integrates it;
 2. :func:`~bvpnav.solve.sequential.with_sequential` — items that must be linearized
    (:class:`~bvpnav.items.Linearizable`) are iterated by sequential convex solves;
 3. :func:`~bvpnav.solve.rule.with_rule` — a rule name in ``lam`` is resolved by a sweep;
@@ -39,6 +41,7 @@ from ..backends import check_memory
 from ..formulation import as_formulation
 from ..log import once
 from ..result import Solution
+from .attitude import with_attitude
 from .chain import solve_fixed
 from .conflicts import with_demotion
 from .options import SolveOptions, prepare
@@ -49,7 +52,7 @@ from .uncertainty import attach_uncertainty
 __all__ = ["run", "solve", "solve_sequential", "STAGES"]
 
 #: The stages from the outside in (each wraps the next); the last is the innermost.
-STAGES = (with_demotion, with_sequential, with_rule)
+STAGES = (with_demotion, with_attitude, with_sequential, with_rule)
 
 
 def run(form, lam, opts: SolveOptions) -> Solution:

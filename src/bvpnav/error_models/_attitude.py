@@ -1,0 +1,394 @@
+"""Attitude error models: the shared linearized attitude-error propagation.
+
+An attitude error model has parameters that change the *attitude* the navigation-frame
+acceleration ``a_i = C_i f_i + g`` is computed with: the error of the initial attitude
+(:class:`~bvpnav.error_models.AttitudeError`) and the gyro's own errors
+(:class:`~bvpnav.error_models.GyroBias`, :class:`~bvpnav.error_models.GyroScaleFactor`).
+The acceleration is not linear in them, so a problem with such a model is solved by the
+damped outer loop of :mod:`bvpnav.solve.attitude`: it re-integrates the attitude with
+the current totals, hands the convex problem the *increments* about them as unknowns,
+and keeps a step only when the nonlinear objective falls.
+
+The linearization point (the totals and the raw measurements) travels with the data as
+an :class:`AttitudePoint` (``data.attitude_point``): the error models stay immutable and
+read it from the data they are given, so every plug-in signature is unchanged.
+
+Conventions: ``C`` maps body to navigation vectors; a perturbation of the attitude is a
+small rotation :math:`\\psi` in the navigation frame, :math:`C' = \\exp([\\psi\\times]) C`.
+The gyro reads :math:`\\hat\\omega = (1 + s)\\,\\omega + b` per body axis.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from dataclasses import replace as _replace
+from typing import ClassVar
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ..errors import InputError
+from ._base import ErrorModel, _per_param, _series
+
+__all__ = ["AttitudeErrorModel", "AttitudePoint", "knot_times", "hat_weights", "right_jacobian",
+           "left_jacobian", "propagate", "attitude_components", "reintegrate", "at_point"]
+
+
+# ------------------------------------------------------------------ knots
+def knot_times(t: np.ndarray, interval: float) -> np.ndarray:
+    """Knots of a time-varying parameter: ``n + 1`` equally spaced times over the window.
+
+    ``n = max(1, round((t_N - t_1) / interval))``, so the spacing is the ``interval`` (s)
+    rounded to fit the window exactly; the first knot is ``t_1``, the last ``t_N``.
+    """
+    t0, t1 = float(t[0]), float(t[-1])
+    n = max(1, int(round((t1 - t0) / float(interval))))
+    return np.linspace(t0, t1, n + 1)
+
+
+def hat_weights(t: np.ndarray, knots: np.ndarray) -> np.ndarray:
+    """Linear (hat) interpolation weights, shape (N, M): ``p(t_i) = sum_m W[i, m] p_m``."""
+    t = np.asarray(t, dtype=float)
+    m = knots.size
+    W = np.zeros((t.size, m))
+    if m == 1:
+        W[:, 0] = 1.0
+        return W
+    k = np.clip(np.searchsorted(knots, t, side="right") - 1, 0, m - 2)
+    u = (t - knots[k]) / (knots[k + 1] - knots[k])
+    rows = np.arange(t.size)
+    W[rows, k] = 1.0 - u
+    W[rows, k + 1] = u
+    return W
+
+
+# ------------------------------------------------------------- SO(3) helpers
+def _skew(v: np.ndarray) -> np.ndarray:
+    """``[v x]`` for an array of vectors (..., 3) -> (..., 3, 3)."""
+    z = np.zeros(v.shape[:-1])
+    x, y, w = v[..., 0], v[..., 1], v[..., 2]
+    return np.stack([np.stack([z, -w, y], -1), np.stack([w, z, -x], -1), np.stack([-y, x, z], -1)], -2)
+
+
+def _jacobian(phi: np.ndarray, sign: float) -> np.ndarray:
+    """SO(3) Jacobian ``I + sign a [phi x] + b [phi x]^2`` (right: sign -1, left: +1)."""
+    phi = np.asarray(phi, dtype=float)
+    th2 = np.sum(phi**2, axis=-1)
+    th = np.sqrt(th2)
+    small = th < 1e-4
+    safe = np.where(small, 1.0, th)
+    # a = (1 - cos th) / th^2, b = (th - sin th) / th^3, with their series below 1e-4 rad
+    a = np.where(small, 0.5 - th2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
+    b = np.where(small, 1.0 / 6.0 - th2 / 120.0, (safe - np.sin(safe)) / safe**3)
+    S = _skew(phi)
+    eye = np.broadcast_to(np.eye(3), S.shape)
+    return eye + sign * a[..., None, None] * S + b[..., None, None] * (S @ S)
+
+
+def right_jacobian(phi: np.ndarray) -> np.ndarray:
+    """Right Jacobian of SO(3): :math:`\\exp(\\phi + d) = \\exp(\\phi)\\exp(J_r(\\phi) d) + O(d^2)`."""
+    return _jacobian(phi, -1.0)
+
+
+def left_jacobian(phi: np.ndarray) -> np.ndarray:
+    """Left Jacobian of SO(3): :math:`\\exp(\\phi + d) = \\exp(J_l(\\phi) d)\\exp(\\phi) + O(d^2)`."""
+    return _jacobian(phi, 1.0)
+
+
+# ----------------------------------------------------- linearization point
+@dataclass(frozen=True, eq=False)
+class AttitudePoint:
+    """Where the attitude is linearized: raw measurements and the current totals.
+
+    Attributes
+    ----------
+    raw_gyro : ndarray (N, 3) or None
+        The gyro rates as measured, rad/s (None for data whose attitude was given).
+    raw_attitude : Rotation
+        The attitude as given or integrated from the raw rates and the given initial
+        attitude (body to navigation), length N.
+    values : dict of str to float
+        Total value of every attitude parameter at this point (their units).
+    rates : ndarray (N, 3) or None
+        The corrected rates :math:`\\omega = (\\hat\\omega - b)/(1 + s)`, rad/s.
+    scale : ndarray (3,)
+        Current gyro scale-factor errors (dimensionless; zero when not modelled).
+    damping : float
+        Levenberg-Marquardt weight of the increments (0: none); see
+        :meth:`AttitudeErrorModel.step_scale`.
+    """
+
+    raw_gyro: np.ndarray | None
+    raw_attitude: Rotation
+    values: dict = field(default_factory=dict)
+    rates: np.ndarray | None = None
+    scale: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    damping: float = 0.0
+
+
+def at_point(data):
+    """The data's :class:`AttitudePoint` (the zero point of the data as given when none)."""
+    p = getattr(data, "attitude_point", None)
+    if p is not None:
+        return p
+    if not getattr(data, "is_strapdown", False):
+        raise InputError("attitude error models need strapdown data (specific_force with an attitude, "
+                         "e.g. bvpnav.ImuData.from_gyro); navigation-frame accelerations have no attitude")
+    gyro = None if data.gyro is None else np.asarray(data.gyro, dtype=float)
+    return AttitudePoint(raw_gyro=gyro, raw_attitude=data.attitude, rates=gyro)
+
+
+def attitude_components(error_model) -> list:
+    """The attitude components of an error model (single or composite), in order."""
+    if error_model is None:
+        return []
+    comps = getattr(error_model, "components", (error_model,))
+    return [c for c in comps if isinstance(c, AttitudeErrorModel)]
+
+
+# ------------------------------------------------------------ propagation
+def propagate(data, rate_cols: np.ndarray, initial_cols: np.ndarray) -> np.ndarray:
+    """Navigation-frame attitude perturbation per unit parameter, shape (N, 3, q), rad.
+
+    Parameters
+    ----------
+    data : ImuData
+        Strapdown data at the linearization point (its attitude and step rotations).
+    rate_cols : ndarray (N, 3, q)
+        Change of the corrected body rate per unit parameter, rad/s per unit.
+    initial_cols : ndarray (3, q)
+        Navigation-frame rotation of the initial attitude per unit parameter, rad per unit.
+
+    Notes
+    -----
+    The attitude is integrated as :math:`C_{k+1} = C_k \\exp([\\phi_k\\times])` with
+    :math:`\\phi_k = \\tfrac{h_k}{2}(\\omega_k + \\omega_{k+1}) + \\tfrac{h_k^2}{12}\\,
+    \\omega_k \\times \\omega_{k+1}` (:func:`bvpnav.attitude.step_rotation_vectors`).
+    Writing a perturbed attitude as :math:`\\exp([\\psi_k\\times]) C_k`, the exact first
+    variation of that recursion is
+
+    .. math:: \\psi_1 = \\psi_0, \\qquad \\psi_{k+1} = \\psi_k + C_{k+1} J_r(\\phi_k)\\, \\delta\\phi_k,
+
+    .. math:: \\delta\\phi_k = \\tfrac{h_k}{2}(\\delta\\omega_k + \\delta\\omega_{k+1})
+              + \\tfrac{h_k^2}{12}(\\delta\\omega_k \\times \\omega_{k+1}
+              + \\omega_k \\times \\delta\\omega_{k+1}),
+
+    with :math:`J_r` the right Jacobian of SO(3). It is the derivative of the discrete
+    integration itself, so the re-integrated attitude differs from the linearized one
+    by :math:`O(\\delta^2)` in the increment :math:`\\delta`, at every step size; the
+    integration's own error against the continuous attitude is :math:`O(h^2)`.
+    Continuous limit: :math:`\\dot\\psi = C\\,\\delta\\omega` (a gyro bias ``b`` gives
+    :math:`\\delta\\omega = -b`, so :math:`\\psi(t) = \\psi_0 - \\int_0^t C b\\,ds`).
+    """
+    from ..attitude import step_rotation_vectors
+
+    C = data.attitude.as_matrix()
+    n, q = C.shape[0], rate_cols.shape[2]
+    psi = np.empty((n, 3, q))
+    psi[:] = initial_cols[None]
+    if n > 1 and q:
+        w = at_point(data).rates
+        if w is None:
+            if np.any(rate_cols):
+                raise InputError("gyro error models need the gyro rates: build the data with "
+                                 "bvpnav.ImuData.from_gyro")
+            return psi
+        h = data.grid.h[:, None, None]
+        phi = step_rotation_vectors(data.t, w)
+        dw0, dw1 = rate_cols[:-1], rate_cols[1:]
+        w0 = np.broadcast_to(w[:-1, :, None], dw0.shape)
+        w1 = np.broadcast_to(w[1:, :, None], dw1.shape)
+        dphi = 0.5 * h * (dw0 + dw1) + (h**2 / 12.0) * (np.cross(dw0, w1, axis=1) + np.cross(w0, dw1, axis=1))
+        T = C[1:] @ right_jacobian(phi)
+        psi[1:] += np.cumsum(np.einsum("kij,kjq->kiq", T, dphi), axis=0)
+    return psi
+
+
+def acceleration_columns(data, psi: np.ndarray) -> np.ndarray:
+    """Navigation-frame acceleration change per unit parameter, (N, 3, q), m/s^2 per unit.
+
+    Notes
+    -----
+    :math:`a = C f + g` with :math:`C \\to \\exp([\\psi\\times]) C` changes by
+    :math:`\\psi \\times (C f)` to first order.
+    """
+    fn = data.attitude.apply(data.specific_force)
+    return np.cross(psi, fn[:, :, None], axis=1)
+
+
+# ------------------------------------------------------------- the base class
+@dataclass(frozen=True, kw_only=True, eq=False, repr=False)
+class AttitudeErrorModel(ErrorModel):
+    """Base of the error models that act through the attitude (see module docstring).
+
+    A subclass implements ``names(data)``, ``rate_columns(data)`` (N, 3, q),
+    ``initial_columns(data)`` (3, q) and ``apply(values, parts)`` (how its totals correct
+    the rates and the initial attitude). The parameters the convex problem sees are the
+    increments about the totals of ``data.attitude_point``; ``report`` returns totals and
+    priors act on totals, so iterating cannot walk away from them.
+    """
+
+    #: Parameter scale for the Levenberg-Marquardt damping, in the model's units.
+    default_step_scale: ClassVar[float] = 1.0
+
+    def rate_columns(self, data) -> np.ndarray:
+        """Change of the corrected body rates per unit parameter, (N, 3, q), rad/s per unit."""
+        q = len(self.names(data))
+        return np.zeros((data.n, 3, q))
+
+    def initial_columns(self, data) -> np.ndarray:
+        """Navigation-frame rotation of the initial attitude per unit parameter, (3, q)."""
+        return np.zeros((3, len(self.names(data))))
+
+    def apply(self, values: np.ndarray, parts: dict, data) -> None:
+        """Fold this model's totals into ``parts`` (keys ``bias`` (N, 3) rad/s, ``scale`` (3,),
+        ``initial`` Rotation) used to re-integrate the attitude."""
+        raise NotImplementedError
+
+    def columns(self, data) -> np.ndarray:
+        psi = propagate(data, self.rate_columns(data), self.initial_columns(data))
+        return acceleration_columns(data, psi)
+
+    def base(self, data) -> np.ndarray:
+        """Totals of this model's parameters at the data's linearization point (0 when none)."""
+        vals = at_point(data).values
+        return np.array([float(vals.get(n, 0.0)) for n in self.names(data)])
+
+    def report(self, l, model):
+        names = self.names(model.data)
+        return _series(self.base(model.data) + np.asarray(l, dtype=float), names, self.units)
+
+    def physical_rows(self, model, value):
+        names = self.names(model.data)
+        v = _per_param(value, len(names), f"{type(self).__name__}: value")
+        return model.params(names) + (self.base(model.data) - v)
+
+    def prior_sigma(self, data) -> np.ndarray:
+        """Prior standard deviation per parameter (inf where there is none)."""
+        q = len(self.names(data))
+        return np.full(q, np.inf) if self.sigma is None else _per_param(self.sigma, q, type(self).__name__)
+
+    def step_scale(self, data) -> np.ndarray:
+        """Scale of each parameter for the damping: its prior sigma, else the default."""
+        s = self.prior_sigma(data)
+        return np.where(np.isfinite(s), s, self.default_step_scale)
+
+    def terms(self, model) -> list:
+        from ..terms import Term
+        from ._base import _relabel
+
+        data = model.data
+        names = self.names(data)
+        tag = type(self).__name__ + "[" + ", ".join(names[:4]) + (", ..." if len(names) > 4 else "") + "]"
+        out = []
+        sig = self.prior_sigma(data)
+        keep = np.flatnonzero(np.isfinite(sig))
+        if keep.size:
+            q = len(names)
+            p0 = np.zeros(q) if self.prior is None else _per_param(self.prior, q, f"{tag}: prior")
+            rows = self.physical_rows(model, p0).rows(keep)
+            out.append(Term(label=f"prior {tag}", item=None,
+                            residual=_relabel(rows, [names[k] for k in keep], "prior"), mode="soft",
+                            kind="equality", sigma=sig[keep], scaled_by_lam=False, units=self.units))
+        if self.bounds is not None:
+            raise InputError(f"{type(self).__name__}: bounds are not supported on attitude parameters; "
+                             "give sigma= (a prior on the total value)")
+        out.extend(self.extra_terms(model))
+        damp = at_point(data).damping
+        if damp > 0:
+            rows = model.params(names)
+            out.append(Term(label=f"damping {tag}", item=None, residual=_relabel(rows, names, "step"),
+                            mode="soft", kind="equality", sigma=self.step_scale(data) / np.sqrt(damp),
+                            scaled_by_lam=False, units=self.units))
+        return out
+
+    def extra_terms(self, model) -> list:
+        """Further prior terms (e.g. a random walk's increments); none by default."""
+        return []
+
+    @staticmethod
+    def example_data():
+        """Strapdown data on which every attitude parameter is determined (contract checks).
+
+        20 s at 10 Hz of a body turning about all three axes (rates up to 0.4 rad/s) with
+        specific force varying on every axis; the attitude integrated from the rates.
+        """
+        from ..imu import ImuData
+
+        t = np.linspace(0.0, 20.0, 201)
+        w = np.column_stack([0.3 * np.sin(0.5 * t), 0.2 * np.cos(0.3 * t), 0.4 * np.sin(0.2 * t) + 0.1])
+        f = np.column_stack([np.sin(t), 0.5 * np.cos(2.0 * t), 9.8 + 0.3 * np.sin(t)])
+        return ImuData.from_gyro(t, f, w, initial_attitude=Rotation.from_euler("ZYX", [0.3, 0.1, -0.2]))
+
+
+def _check_strapdown_gyro(data, who: str) -> None:
+    if not getattr(data, "is_strapdown", False):
+        raise InputError(f"{who}: needs strapdown data (specific force, attitude and gyro rates: "
+                         "bvpnav.ImuData.from_gyro)")
+    if at_point(data).raw_gyro is None:
+        raise InputError(f"{who}: needs the gyro rates; build the data with bvpnav.ImuData.from_gyro "
+                         "(this data's attitude was given, not integrated)")
+
+
+def reintegrate(data, error_model, values: dict, damping: float = 0.0):
+    """The data re-integrated with the attitude totals ``values`` (name -> total).
+
+    Parameters
+    ----------
+    data : ImuData
+        Strapdown data (its ``attitude_point`` if it has one, else itself, is the raw
+        measurement).
+    error_model : ErrorModel
+        The error model whose attitude components interpret ``values``.
+    values : dict of str to float
+        Totals of the attitude parameters (their units).
+    damping : float
+        Damping weight recorded in the point (see :class:`AttitudePoint`).
+
+    Returns
+    -------
+    ImuData
+        With the corrected attitude, ``acc = C f + g`` and ``attitude_point`` set.
+
+    Notes
+    -----
+    The corrected rates are :math:`\\omega = (\\hat\\omega - b(t))/(1 + s)` and the
+    initial attitude :math:`C_1 = R\\,\\hat C_1` with ``R`` from
+    :class:`~bvpnav.error_models.AttitudeError`; then
+    :math:`C_{k+1} = C_k\\exp([\\phi_k\\times])` as in :func:`bvpnav.attitude.integrate_gyro`.
+    For data whose attitude was given (no gyro), only the initial correction applies:
+    :math:`C_k = R\\,\\hat C_k`.
+    """
+    from ..attitude import integrate_gyro
+    from ..imu import ImuData
+
+    point = at_point(data)
+    comps = attitude_components(error_model)
+    parts: dict = {"bias": np.zeros((data.n, 3)), "scale": np.zeros(3), "initial": Rotation.identity()}
+    for c in comps:
+        names = c.names(data)
+        c.apply(np.array([float(values.get(n, 0.0)) for n in names]), parts, data)
+    raw0 = point.raw_attitude[0]
+    start = parts["initial"] * raw0
+    if point.raw_gyro is not None:
+        rates = (point.raw_gyro - parts["bias"]) / (1.0 + parts["scale"])
+        rot = integrate_gyro(data.t, rates, start)
+    else:
+        rates = None
+        rot = parts["initial"] * point.raw_attitude
+    out = ImuData(data.t, specific_force=data.specific_force, attitude=rot, gravity=data.gravity,
+                  axes=data.axes, time_origin=data.time_origin)
+    out.gyro = data.gyro
+    out.attitude_point = AttitudePoint(raw_gyro=point.raw_gyro, raw_attitude=point.raw_attitude,
+                                       values={k: float(v) for k, v in values.items()}, rates=rates,
+                                       scale=np.array(parts["scale"], dtype=float), damping=float(damping))
+    return out
+
+
+def with_damping(data, damping: float):
+    """A shallow copy of ``data`` whose point carries another damping weight."""
+    import copy
+
+    out = copy.copy(data)
+    out.attitude_point = _replace(at_point(data), damping=float(damping))
+    return out
