@@ -171,3 +171,26 @@ def test_bad_arguments_are_named():
         car_drive(duration=30.0)
     with pytest.raises(InputError, match="gnss_sigma"):
         car_drive(duration=60.0, gnss_sigma=(1.0,))
+
+
+# ------------------------------------------------------------------ the benchmark's pieces
+def test_benchmark_split_spline_and_bias_only(small):
+    from _helpers import load_benchmark_module
+
+    bench = load_benchmark_module("car_drive")
+    kept, withheld = bench.split_fixes(small, 30.0)
+    np.testing.assert_array_equal(small.fix_t[kept], [0.0, 30.0, 60.0, 90.0, 120.0])
+    assert withheld.size == 116 and np.intersect1d(kept, withheld).size == 0
+    kept, withheld = bench.split_fixes(car_drive(100.0, 50.0), 30.0)
+    assert kept[-1] == 100  # the last fix is always kept
+    assert bench.rms3(np.zeros((4, 3)), np.full((4, 3), 2.0)) == pytest.approx(np.sqrt(12.0))
+    # bvpnav with Bias() alone on the gyro-integrated attitude: the 5-degree heading and
+    # 0.5-degree tilt errors of the guess cost metres between the fixes (measured 8 m)
+    kept, withheld = bench.split_fixes(small, 10.0)
+    sol, _ = bench.bvpnav_solve(small, kept, bench.Bias(), uncertainty=False)
+    pos = sol.position()
+    t_w = small.fix_t[withheld]
+    err = bench.rms3(bench.at_times(small.t, pos, t_w), small.truth_at(t_w))
+    assert 2.0 < err < 20.0  # m
+    spline = bench.CubicSpline(small.fix_t[kept], small.fix_position[kept])(t_w)
+    assert 1.0 < bench.rms3(spline, small.truth_at(t_w)) < 20.0  # m
