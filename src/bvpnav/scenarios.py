@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .imu import ImuData
+from .imu import STANDARD_GRAVITY, ImuData
 
 __all__ = ["Scenario", "tikhonov2011", "walking", "quintic_trajectory", "cubic_prior", "SCENARIOS"]
 
@@ -265,3 +265,403 @@ def walking(rate: float = 100.0, n_strides: int = 10, *, stride_time: float = 1.
               "stance_intervals": still, "simulation": sim}
     return Scenario(name="walking", data=data, position=position, velocity=velocity, boundary=boundary,
                     params=params)
+
+
+# ----------------------------------------------------------------- car drive (issue 16)
+#: Sensor-grade error numbers (the issue 16 contract's table; :mod:`bvpnav.sensors` will hold the
+#: same numbers). Continuous-time white-noise densities: the per-sample standard deviation is
+#: ``density * sqrt(rate_hz)``. Units: acc_noise m/s^2/sqrt(Hz), acc_bias m/s^2, acc_bias_walk
+#: m/s^2/sqrt(s), gyro_noise rad/s/sqrt(Hz), gyro_bias rad/s, gyro_bias_walk rad/s/sqrt(s),
+#: tilt rad, heading rad (None: unknown).
+SENSOR_GRADES: dict[str, dict[str, float | None]] = {
+    "consumer": {"acc_noise": 2e-3, "acc_bias": 5e-2, "acc_bias_walk": 1e-4, "gyro_noise": 1e-4,
+                 "gyro_bias": 5e-3, "gyro_bias_walk": 2e-5, "tilt": 0.02, "heading": None},
+    "tactical": {"acc_noise": 5e-4, "acc_bias": 5e-3, "acc_bias_walk": 1e-5, "gyro_noise": 2e-5,
+                 "gyro_bias": 5e-5, "gyro_bias_walk": 1e-6, "tilt": 0.005, "heading": None},
+    "navigation": {"acc_noise": 5e-5, "acc_bias": 5e-4, "acc_bias_walk": 1e-6, "gyro_noise": 1e-6,
+                   "gyro_bias": 5e-8, "gyro_bias_walk": 1e-8, "tilt": 0.001, "heading": None},
+}
+__all__ += ["CarDrive", "car_drive", "SENSOR_GRADES"]
+
+# 630 tau^4 (1 - tau)^4 on [0, 1]: a bump of unit area whose value and first three derivatives
+# vanish at both ends; its integral is the smooth step of every channel of the drive.
+_BUMP = np.polynomial.Polynomial([0.0, 0.0, 0.0, 0.0, 630.0, -2520.0, 3780.0, -2520.0, 630.0])
+_STEP = _BUMP.integ()
+_ROLL_PER_LATERAL = 0.01  # rad of roll (outward lean) per m/s^2 of lateral acceleration
+_GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(6)
+
+
+@dataclass(frozen=True)
+class _Channel:
+    """A scalar ``base + sum_i delta_i S((t - t_i) / T_i)`` with the smooth step S (C^4)."""
+
+    events: tuple[tuple[float, float, float], ...]  # (start s, duration s, change)
+    base: float = 0.0
+
+    def __call__(self, t: np.ndarray, nu: int = 0) -> np.ndarray:
+        """Value (nu=0) or nu-th time derivative (nu <= 2) at times ``t`` (s)."""
+        out = np.full(t.shape, self.base if nu == 0 else 0.0)
+        poly = (_STEP, _BUMP, _BUMP.deriv())[nu]
+        for t0, dur, delta in self.events:
+            tau = (t - t0) / dur
+            inside = (tau > 0.0) & (tau < 1.0)
+            out[inside] += delta * poly(tau[inside]) / dur**nu
+            if nu == 0:
+                out[tau >= 1.0] += delta
+        return out
+
+
+@dataclass(frozen=True)
+class _CarPath:
+    """Speed, heading and climb-angle channels of the drive, and what follows from them."""
+
+    speed: _Channel  # m/s along body x
+    yaw: _Channel  # heading, rad from nav x (east) towards y (north)
+    climb: _Channel  # flight-path angle, rad, positive nose up
+
+    def velocity(self, t: np.ndarray) -> np.ndarray:
+        """Navigation-frame velocity (N, 3), m/s."""
+        v, psi, gam = self.speed(t), self.yaw(t), self.climb(t)
+        return v[:, None] * np.column_stack([np.cos(psi) * np.cos(gam), np.sin(psi) * np.cos(gam),
+                                             np.sin(gam)])
+
+    def acceleration(self, t: np.ndarray) -> np.ndarray:
+        """Navigation-frame acceleration (N, 3), m/s^2: the exact derivative of :meth:`velocity`."""
+        v, dv = self.speed(t), self.speed(t, 1)
+        psi, dpsi = self.yaw(t), self.yaw(t, 1)
+        gam, dgam = self.climb(t), self.climb(t, 1)
+        cp, sp, cg, sg = np.cos(psi), np.sin(psi), np.cos(gam), np.sin(gam)
+        u = np.column_stack([cp * cg, sp * cg, sg])
+        du = (dpsi[:, None] * np.column_stack([-sp * cg, cp * cg, np.zeros_like(cg)])
+              + dgam[:, None] * np.column_stack([-cp * sg, -sp * sg, cg]))
+        return dv[:, None] * u + v[:, None] * du
+
+    def euler(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Yaw, pitch, roll (N, 3) in rad (scipy ``"ZYX"``) and their rates (N, 3) in rad/s."""
+        v, dv = self.speed(t), self.speed(t, 1)
+        dpsi, ddpsi = self.yaw(t, 1), self.yaw(t, 2)
+        roll = _ROLL_PER_LATERAL * v * dpsi
+        droll = _ROLL_PER_LATERAL * (dv * dpsi + v * ddpsi)
+        # body x along the velocity: ZYX pitch is minus the climb angle (y left, z up)
+        ang = np.column_stack([self.yaw(t), -self.climb(t), roll])
+        rate = np.column_stack([dpsi, -self.climb(t, 1), droll])
+        return ang, rate
+
+    def body_rate(self, t: np.ndarray) -> np.ndarray:
+        """Body angular rate relative to the navigation frame (N, 3), rad/s, body axes."""
+        ang, rate = self.euler(t)
+        _, th, ph = ang.T
+        dps, dth, dph = rate.T
+        return np.column_stack([
+            dph - dps * np.sin(th),
+            dth * np.cos(ph) + dps * np.cos(th) * np.sin(ph),
+            -dth * np.sin(ph) + dps * np.cos(th) * np.cos(ph),
+        ])
+
+    def displacement(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """``integral_a^b velocity dt`` per pair (N, 3), m (6-point Gauss-Legendre)."""
+        half = 0.5 * (b - a)
+        mid = 0.5 * (b + a)
+        tt = (mid[:, None] + half[:, None] * _GL_NODES[None, :]).ravel()
+        vel = self.velocity(tt).reshape(a.size, _GL_NODES.size, 3)
+        return half[:, None] * np.einsum("j,njk->nk", _GL_WEIGHTS, vel)
+
+
+def _car_schedule(duration: float) -> _CarPath:
+    """The drive's manoeuvres laid end to end, cut to fill ``duration`` s (>= 60).
+
+    A stand of 5 s and an acceleration to 12 m/s, then a cycle of manoeuvres (a left turn,
+    a stop, a hill, a right turn, an S-curve, a speed-up, a downhill curve, a slow-down, a
+    half-circle, a stop) repeated mirrored (the second cycle turns the other way, with lower
+    hills) until the next one would not fit; then a cruise, a stop and a stand of 5 s.
+    """
+    speed: list[tuple[float, float, float]] = []
+    yaw: list[tuple[float, float, float]] = []
+    climb: list[tuple[float, float, float]] = []
+    state = {"t": 5.0, "v": 12.0}
+    speed.append((5.0, 12.0, 12.0))
+    state["t"] = 17.0
+    end_block = 15.0  # final deceleration (10 s) and stand (5 s)
+
+    def cycle(sign: float, hill: float) -> list[tuple[float, list]]:
+        deg = np.pi / 180.0
+        return [
+            (8.0, []),
+            (16.0, [("yaw", 0.0, 16.0, sign * 90 * deg)]),
+            (28.0, [("stop", 10.0, 6.0, 12.0, 12.0)]),
+            (35.0, [("climb", 0.0, 10.0, 0.05 * hill), ("climb", 25.0, 10.0, -0.05 * hill)]),
+            (16.0, [("yaw", 0.0, 16.0, -sign * 90 * deg)]),
+            (20.0, [("yaw", 0.0, 10.0, sign * 30 * deg), ("yaw", 10.0, 10.0, -sign * 30 * deg)]),
+            (10.0, [("speed", 0.0, 10.0, 16.0)]),
+            (35.0, [("climb", 0.0, 10.0, -0.06 * hill), ("climb", 25.0, 10.0, 0.06 * hill),
+                    ("yaw", 2.5, 30.0, sign * 45 * deg)]),
+            (10.0, [("speed", 0.0, 10.0, 10.0)]),
+            (40.0, [("yaw", 0.0, 40.0, -sign * 180 * deg)]),
+            (8.0, [("speed", 0.0, 8.0, 12.0)]),
+            (30.0, [("stop", 10.0, 8.0, 12.0, 12.0)]),
+        ]
+
+    def place(length: float, parts: list) -> None:
+        t0 = state["t"]
+        for kind, *args in parts:
+            if kind == "yaw":
+                yaw.append((t0 + args[0], args[1], args[2]))
+            elif kind == "climb":
+                climb.append((t0 + args[0], args[1], args[2]))
+            elif kind == "speed":
+                speed.append((t0 + args[0], args[1], args[2] - state["v"]))
+                state["v"] = args[2]
+            else:  # stop: decelerate, stand, accelerate
+                dec, hold, acc, v_after = args
+                speed.append((t0, dec, -state["v"]))
+                speed.append((t0 + dec + hold, acc, v_after))
+                state["v"] = v_after
+        state["t"] = t0 + length
+
+    k = 0
+    done = False
+    while not done:
+        for length, parts in cycle(1.0 if k % 2 == 0 else -1.0, 1.0 if k % 2 == 0 else 0.7):
+            if state["t"] + length > duration - end_block:
+                done = True
+                break
+            place(length, parts)
+        k += 1
+    state["t"] = duration - end_block
+    speed.append((state["t"], 10.0, -state["v"]))
+    return _CarPath(_Channel(tuple(speed)), _Channel(tuple(yaw)), _Channel(tuple(climb)))
+
+
+@dataclass(frozen=True, eq=False)
+class CarDrive:
+    """A simulated car drive: strapdown IMU output, GNSS fixes and the truth.
+
+    Frames: navigation frame ENU (x east, y north, z up), gravity ``(0, 0, -9.80665)``
+    m/s^2; body x forward, y left, z up; attitude ``C`` body to navigation
+    (``v_nav = C v_body``); gyro rates are the body's rate relative to the navigation
+    frame in body axes (Earth rotation neglected, as bvpnav assumes). The attributes cannot be
+    reassigned (the arrays stay writeable: scipy's ``Rotation.apply`` refuses read-only input).
+
+    Attributes
+    ----------
+    t : ndarray (N,)
+        Sample times, s (from 0).
+    specific_force : ndarray (N, 3)
+        Measured body-frame specific force, m/s^2 (true + accelerometer bias + white noise).
+    gyro : ndarray (N, 3)
+        Measured body rates, rad/s (true + gyro bias + white noise).
+    gravity : ndarray (3,)
+        Gravity, m/s^2 (navigation frame).
+    position, velocity, acceleration : ndarray (N, 3)
+        True position (m, starting at the origin), velocity (m/s) and acceleration (m/s^2).
+    attitude : scipy.spatial.transform.Rotation
+        True body-to-navigation attitude per sample.
+    specific_force_true, body_rate_true : ndarray (N, 3)
+        Error-free specific force (m/s^2) and body rate (rad/s).
+    accel_bias, gyro_bias : ndarray (N, 3)
+        True sensor biases per sample (turn-on value plus random walk), m/s^2 and rad/s;
+        the sensors read ``u + b + n``.
+    initial_attitude_guess : Rotation
+        The attitude at ``t[0]`` a user would start from: the truth with the stated tilt
+        and heading errors, ``C0_guess = Rz(heading_error) exp([(tx, ty, 0)x]) C0_true``.
+    attitude_correction : ndarray (3,)
+        The correction that turns the guess into the truth in the sense of
+        ``AttitudeError`` (``C0_true = exp([(ax, ay, 0)x]) Rz(az) C0_guess``), rad:
+        ``(-tx, -ty, -heading_error)``.
+    fix_t : ndarray (M,)
+        GNSS fix times, s (``gnss_rate`` Hz, on the sample grid when the rates divide).
+    fix_position : ndarray (M, 3)
+        Noisy GNSS positions, m (navigation frame).
+    fix_sigma : ndarray (3,)
+        Standard deviation of the fix noise per axis, m (horizontal, horizontal, vertical).
+    grade : str
+        Sensor grade name (a key of :data:`SENSOR_GRADES`).
+    params : dict
+        The arguments, the grade's numbers (``"sensor"``) and the per-sample noise standard
+        deviations (``"acc_noise_std"`` m/s^2, ``"gyro_noise_std"`` rad/s).
+    """
+
+    t: np.ndarray
+    specific_force: np.ndarray
+    gyro: np.ndarray
+    gravity: np.ndarray
+    position: np.ndarray
+    velocity: np.ndarray
+    acceleration: np.ndarray
+    attitude: object
+    specific_force_true: np.ndarray
+    body_rate_true: np.ndarray
+    accel_bias: np.ndarray
+    gyro_bias: np.ndarray
+    initial_attitude_guess: object
+    attitude_correction: np.ndarray
+    fix_t: np.ndarray
+    fix_position: np.ndarray
+    fix_sigma: np.ndarray
+    grade: str
+    params: dict = field(default_factory=dict)
+    _path: _CarPath | None = field(default=None, repr=False)
+
+    @property
+    def rate(self) -> float:
+        """Sampling rate, Hz."""
+        return float(self.params["rate"])
+
+    def data(self) -> ImuData:
+        """The measurements as strapdown :class:`~bvpnav.imu.ImuData`.
+
+        The attitude is integrated from the measured (biased) gyro rates, starting from
+        :attr:`initial_attitude_guess`, with :meth:`ImuData.from_gyro`.
+        """
+        return ImuData.from_gyro(self.t, self.specific_force, self.gyro,
+                                 initial_attitude=self.initial_attitude_guess, gravity=self.gravity)
+
+    def truth_at(self, times) -> np.ndarray:
+        """True position (len(times), 3) in m at any times (s) inside ``[t[0], t[-1]]``.
+
+        Exact to rounding: the velocity is integrated from the nearest earlier sample with
+        6-point Gauss-Legendre quadrature.
+        """
+        from .errors import InputError
+
+        tt = np.atleast_1d(np.asarray(times, dtype=float))
+        if tt.ndim != 1 or not np.all(np.isfinite(tt)):
+            raise InputError("times: expected finite times in s (a 1-D array)")
+        if tt.size and (tt.min() < self.t[0] - 1e-9 or tt.max() > self.t[-1] + 1e-9):
+            raise InputError(f"times: outside the drive [{self.t[0]}, {self.t[-1]}] s")
+        k = np.clip(np.searchsorted(self.t, tt, side="right") - 1, 0, self.t.size - 1)
+        return self.position[k] + self._path.displacement(self.t[k], tt)
+
+    def velocity_at(self, times) -> np.ndarray:
+        """True velocity (len(times), 3) in m/s at any times (s)."""
+        return self._path.velocity(np.atleast_1d(np.asarray(times, dtype=float)))
+
+
+def car_drive(duration: float = 600.0, rate: float = 100.0, grade: str = "tactical", *,
+              gnss_rate: float = 1.0, gnss_sigma=(1.0, 2.0), seed: int = 0,
+              heading_error: float = 5.0 * np.pi / 180.0,
+              tilt_error: float | tuple[float, float] = 0.5 * np.pi / 180.0) -> CarDrive:
+    """A car drive of ``duration`` s with a strapdown IMU of a given grade and GNSS fixes.
+
+    The drive (the same for every seed and grade; a shorter ``duration`` is the start of
+    the same drive plus a stop): a 5 s stand, then straights, 90 degree left and right
+    turns (16 s each), an S-curve, a 180 degree curve, stops of 6-8 s, hills of 10-25 m
+    (climb angle up to 0.06 rad, the pitch following the slope), speeds of 10-16 m/s,
+    an outward roll of 0.01 rad per m/s^2 of lateral acceleration, and a final stop and
+    5 s stand. With the default 600 s: 5 stops (ends included), about 6 km.
+
+    Parameters
+    ----------
+    duration : float
+        Length of the drive, s (>= 60; ``duration * rate`` a whole number).
+    rate : float
+        IMU sampling rate, Hz.
+    grade : {"consumer", "tactical", "navigation"}
+        Sensor grade: the noise densities, turn-on bias sigmas and bias random walks of
+        :data:`SENSOR_GRADES`.
+    gnss_rate : float
+        GNSS fix rate, Hz.
+    gnss_sigma : (float, float)
+        Standard deviation of the fix noise, horizontal and vertical, m.
+    seed : int
+        Seed of ``numpy.random.default_rng``: draws, in this order, the accelerometer
+        turn-on bias (3), its random walk (N-1, 3) and noise (N, 3), the same three for
+        the gyro, and the fix noise (M, 3). The same seed gives the same normals at
+        every grade (scaled by the grade's numbers).
+    heading_error : float
+        Error of the initial heading guess about nav z, rad (default 5 degrees).
+    tilt_error : float or (float, float)
+        Error of the initial tilt guess, rad: rotations about nav x and y, or one number
+        for a tilt of that size about the horizontal axis (1, 1, 0)/sqrt(2) (default
+        0.5 degrees).
+
+    Returns
+    -------
+    CarDrive
+
+    Notes
+    -----
+    The path is given by three C^4 channels of time, each a sum of smooth steps
+    :math:`\\Delta\\, S((t - t_i)/T_i)` with :math:`S' = 630\\tau^4(1-\\tau)^4`: the speed
+    :math:`v`, the heading :math:`\\psi` and the climb angle :math:`\\gamma`. The velocity is
+    :math:`v\\,u` with :math:`u = (\\cos\\psi\\cos\\gamma, \\sin\\psi\\cos\\gamma, \\sin\\gamma)`,
+    the acceleration its analytic derivative, the position its integral (Gauss-Legendre,
+    exact to rounding). The attitude is ``Rz(psi) Ry(-gamma) Rx(phi)`` (body x along the
+    velocity) with the roll :math:`\\phi = 0.01\\, v\\dot\\psi`; the body rate follows
+    analytically from the Euler rates (see :class:`bvpnav.simulate.Motion`), the true
+    specific force is :math:`f = C^T(a - g)`. The sensors read
+
+    .. math:: \\hat f = f + b_a(t) + n_a, \\quad \\hat\\omega = \\omega + b_g(t) + n_g,
+
+    with :math:`b(t_0) \\sim N(0, \\sigma_b^2)` per axis, :math:`b_{k+1} = b_k + q\\sqrt{h}\\,\\xi_k`
+    (random walk ``q``) and white noise of standard deviation ``density * sqrt(rate)``.
+    """
+    from scipy.spatial.transform import Rotation  # scipy.spatial: loaded for strapdown data only
+
+    from .errors import InputError
+    from .simulate import sample_times
+
+    if grade not in SENSOR_GRADES:
+        raise InputError(f"grade={grade!r}: choose one of {sorted(SENSOR_GRADES)}")
+    if not (np.isfinite(duration) and duration >= 60.0):
+        raise InputError(f"duration={duration!r}: the drive needs at least 60 s")
+    if not (np.isfinite(gnss_rate) and 0 < gnss_rate <= rate):
+        raise InputError(f"gnss_rate={gnss_rate!r}: must be positive and at most the IMU rate {rate} Hz")
+    sig = np.asarray(gnss_sigma, dtype=float).ravel()
+    if sig.shape != (2,) or not np.all(np.isfinite(sig)) or np.any(sig < 0):
+        raise InputError(f"gnss_sigma={gnss_sigma!r}: give (horizontal, vertical) standard deviations in m")
+    tilt = np.asarray(tilt_error, dtype=float).ravel()
+    if tilt.size == 1:
+        tilt = np.full(2, float(tilt[0]) / np.sqrt(2.0))
+    if tilt.shape != (2,) or not np.all(np.isfinite(tilt)) or not np.isfinite(heading_error):
+        raise InputError("tilt_error: one angle or (about x, about y) in rad; heading_error: rad")
+    t = sample_times(0.0, float(duration), rate)
+    n = t.size
+    path = _car_schedule(float(duration))
+    g = np.array([0.0, 0.0, -STANDARD_GRAVITY])
+
+    vel = path.velocity(t)
+    acc = path.acceleration(t)
+    pos = np.zeros((n, 3))
+    pos[1:] = np.cumsum(path.displacement(t[:-1], t[1:]), axis=0)
+    ang, _ = path.euler(t)
+    att = Rotation.from_euler("ZYX", ang)
+    f_true = att.inv().apply(acc - g)
+    w_true = path.body_rate(t)
+
+    sensor = SENSOR_GRADES[grade]
+    rng = np.random.default_rng(seed)
+    h = np.diff(t)[:, None]
+
+    def drifting(sigma: float, walk: float) -> np.ndarray:
+        b = np.empty((n, 3))
+        b[0] = sigma * rng.standard_normal(3)
+        b[1:] = b[0] + np.cumsum(walk * np.sqrt(h) * rng.standard_normal((n - 1, 3)), axis=0)
+        return b
+
+    acc_std = sensor["acc_noise"] * np.sqrt(rate)
+    gyro_std = sensor["gyro_noise"] * np.sqrt(rate)
+    b_a = drifting(sensor["acc_bias"], sensor["acc_bias_walk"])
+    f_meas = f_true + b_a + acc_std * rng.standard_normal((n, 3))
+    b_g = drifting(sensor["gyro_bias"], sensor["gyro_bias_walk"])
+    w_meas = w_true + b_g + gyro_std * rng.standard_normal((n, 3))
+
+    m = int(np.floor(duration * gnss_rate + 1e-9)) + 1
+    fix_t = np.arange(m) / gnss_rate
+    k = np.clip(np.searchsorted(t, fix_t, side="right") - 1, 0, n - 1)
+    fix_true = pos[k] + path.displacement(t[k], fix_t)
+    fix_sigma = np.array([sig[0], sig[0], sig[1]])
+    fix_pos = fix_true + fix_sigma * rng.standard_normal((m, 3))
+
+    guess = (Rotation.from_rotvec([0.0, 0.0, float(heading_error)])
+             * Rotation.from_rotvec([tilt[0], tilt[1], 0.0]) * att[0])
+    correction = np.array([-tilt[0], -tilt[1], -float(heading_error)])
+    params = {"duration": float(duration), "rate": float(rate), "grade": grade,
+              "gnss_rate": float(gnss_rate), "gnss_sigma": tuple(float(s) for s in sig), "seed": seed,
+              "heading_error": float(heading_error), "tilt_error": tuple(float(x) for x in tilt),
+              "sensor": dict(sensor), "acc_noise_std": float(acc_std), "gyro_noise_std": float(gyro_std)}
+    return CarDrive(t=t, specific_force=f_meas, gyro=w_meas, gravity=g, position=pos, velocity=vel,
+                    acceleration=acc, attitude=att, specific_force_true=f_true, body_rate_true=w_true,
+                    accel_bias=b_a, gyro_bias=b_g, initial_attitude_guess=guess,
+                    attitude_correction=correction, fix_t=fix_t, fix_position=fix_pos,
+                    fix_sigma=fix_sigma, grade=grade, params=params, _path=path)
