@@ -268,19 +268,20 @@ def walking(rate: float = 100.0, n_strides: int = 10, *, stride_time: float = 1.
 
 
 # ----------------------------------------------------------------- car drive (issue 16)
-#: Sensor-grade error numbers (the issue 16 contract's table; :mod:`bvpnav.sensors` will hold the
-#: same numbers). Continuous-time white-noise densities: the per-sample standard deviation is
+def _grade_table() -> dict[str, dict[str, float | None]]:
+    from .sensors import GRADES
+
+    keys = ("acc_noise", "acc_bias", "acc_bias_walk", "gyro_noise", "gyro_bias", "gyro_bias_walk", "tilt",
+            "heading")
+    return {name: {k: getattr(g, k) for k in keys} for name, g in GRADES.items()}
+
+
+#: Sensor-grade error numbers as plain dicts, from :data:`bvpnav.sensors.GRADES` (one table).
+#: Continuous-time white-noise densities: the per-sample standard deviation is
 #: ``density * sqrt(rate_hz)``. Units: acc_noise m/s^2/sqrt(Hz), acc_bias m/s^2, acc_bias_walk
 #: m/s^2/sqrt(s), gyro_noise rad/s/sqrt(Hz), gyro_bias rad/s, gyro_bias_walk rad/s/sqrt(s),
 #: tilt rad, heading rad (None: unknown).
-SENSOR_GRADES: dict[str, dict[str, float | None]] = {
-    "consumer": {"acc_noise": 2e-3, "acc_bias": 5e-2, "acc_bias_walk": 1e-4, "gyro_noise": 1e-4,
-                 "gyro_bias": 5e-3, "gyro_bias_walk": 2e-5, "tilt": 0.02, "heading": None},
-    "tactical": {"acc_noise": 5e-4, "acc_bias": 5e-3, "acc_bias_walk": 1e-5, "gyro_noise": 2e-5,
-                 "gyro_bias": 5e-5, "gyro_bias_walk": 1e-6, "tilt": 0.005, "heading": None},
-    "navigation": {"acc_noise": 5e-5, "acc_bias": 5e-4, "acc_bias_walk": 1e-6, "gyro_noise": 1e-6,
-                   "gyro_bias": 5e-8, "gyro_bias_walk": 1e-8, "tilt": 0.001, "heading": None},
-}
+SENSOR_GRADES: dict[str, dict[str, float | None]] = _grade_table()
 __all__ += ["CarDrive", "car_drive", "SENSOR_GRADES"]
 
 # 630 tau^4 (1 - tau)^4 on [0, 1]: a bump of unit area whose value and first three derivatives
