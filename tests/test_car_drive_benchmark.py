@@ -26,7 +26,7 @@ def quick():
 def test_attitude_models_beat_bias_alone_and_the_spline(quick):
     by_gap, printed = quick
     key = "+GyroBias+AttitudeError"
-    for gap, (best, default, spline) in {10.0: (0.9, 1.6, 7.0), 30.0: (2.6, 5.3, 48.8)}.items():
+    for gap, best in {10.0: 0.9, 30.0: 2.6}.items():  # m; measured 0.657 and 2.128
         rms = by_gap[gap]["rms"]
         assert rms[key] < best, (gap, rms)
         assert rms["Bias() sigma_a=1"] > 2.0 * rms[key], (gap, rms)  # measured 2.4x and 2.5x
