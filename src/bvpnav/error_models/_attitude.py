@@ -62,6 +62,47 @@ def hat_weights(t: np.ndarray, knots: np.ndarray) -> np.ndarray:
     return W
 
 
+# ----------------------------------------------------------- knot options and priors
+def positive_option(value, what: str) -> float | None:
+    """``value`` as a positive finite float (None stays None), or :class:`InputError` naming it."""
+    if value is None:
+        return None
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{what}={value!r}: give a positive number") from None
+    if not (np.isfinite(v) and v > 0):
+        raise InputError(f"{what}={value!r}: must be finite and > 0")
+    return v
+
+
+def random_walk_term(model, names: list, knots: np.ndarray, drift: float, units: str, label: str,
+                     sign: float = 1.0, base: np.ndarray | None = None):
+    """The soft prior of a random walk over knot values, per axis (axis-major ``names``).
+
+    Rows :math:`\\pm(p_{m+1} - p_m)` (plus the totals' own difference ``base``) with sigma
+    :math:`\\sigma_d \\sqrt{t_{m+1} - t_m}`: the increments of a random walk of density
+    ``drift`` (units per sqrt(s)) between the knots.
+    """
+    from ..model import Affine
+    from ..terms import Term
+    from ._base import _relabel
+
+    m = knots.size
+    n_ax = len(names) // m
+    base = np.zeros(len(names)) if base is None else base
+    rows, labels = [], []
+    for a in range(n_ax):
+        P = model.params(names[a * m:(a + 1) * m])
+        b = base[a * m:(a + 1) * m]
+        rows.append((P.rows(np.arange(1, m)) - P.rows(np.arange(m - 1))) * sign + (b[1:] - b[:-1]))
+        labels += [f"{names[a * m + j]}->[{j + 1}]" for j in range(m - 1)]
+    res = _relabel(Affine.vstack(rows), labels, "drift")
+    sigma = np.tile(drift * np.sqrt(np.diff(knots)), n_ax)
+    return Term(label=label, item=None, residual=res, mode="soft", kind="equality", sigma=sigma,
+                scaled_by_lam=False, units=units)
+
+
 # ------------------------------------------------------------- SO(3) helpers
 def _skew(v: np.ndarray) -> np.ndarray:
     """``[v x]`` for an array of vectors (..., 3) -> (..., 3, 3)."""

@@ -8,22 +8,10 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ._attitude import hat_weights, knot_times
+from ._attitude import hat_weights, knot_times, positive_option, random_walk_term
 from ._base import Param, SensorErrorModel, _relabel, _sensor_layout, _series, sensor_axes, sensor_frame
 
 __all__ = ["Bias"]
-
-
-def _positive(value, what: str) -> float | None:
-    if value is None:
-        return None
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{what}={value!r}: give a positive number") from None
-    if not (np.isfinite(v) and v > 0):
-        raise InputError(f"{what}={value!r}: must be finite and > 0")
-    return v
 
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
@@ -67,8 +55,8 @@ class Bias(SensorErrorModel):
     units = "m/s^2"
 
     def validate(self) -> None:
-        object.__setattr__(self, "interval", _positive(self.interval, "Bias: interval (s)"))
-        object.__setattr__(self, "drift", _positive(self.drift, "Bias: drift (m/s^2/sqrt(s))"))
+        object.__setattr__(self, "interval", positive_option(self.interval, "Bias: interval (s)"))
+        object.__setattr__(self, "drift", positive_option(self.drift, "Bias: drift (m/s^2/sqrt(s))"))
         if self.drift is not None and self.interval is None:
             raise InputError("Bias: drift= needs interval= (the knot spacing in s); without it the bias is "
                              "constant")
@@ -138,7 +126,6 @@ class Bias(SensorErrorModel):
             return super().terms(model)
         import dataclasses
 
-        from ..model import Affine
         from ..terms import Term
         from ._base import _per_param
 
@@ -156,17 +143,6 @@ class Bias(SensorErrorModel):
                             kind="equality", sigma=_per_param(self.sigma, q, "Bias: sigma")[first],
                             scaled_by_lam=False, units=self.units))
 
-        data = model.data
-        k = self.knots(data)
-        m = k.size
-        names = self.names(data)
-        rows, labels = [], []
-        for a in range(len(names) // m):
-            P = model.params(names[a * m:(a + 1) * m])
-            rows.append(-(P.rows(np.arange(1, m)) - P.rows(np.arange(m - 1))))
-            labels += [f"{names[a * m + j]}->[{j + 1}]" for j in range(m - 1)]
-        res = _relabel(Affine.vstack(rows), labels, "drift")
-        sigma = np.tile(self.drift * np.sqrt(np.diff(k)), len(names) // m)
-        out.append(Term(label="random walk Bias", item=None, residual=res, mode="soft", kind="equality",
-                        sigma=sigma, scaled_by_lam=False, units=self.units))
+        out.append(random_walk_term(model, self.names(model.data), self.knots(model.data), self.drift,
+                                    self.units, "random walk Bias", sign=-1.0))
         return out

@@ -8,24 +8,19 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ._attitude import AttitudeErrorModel, _check_strapdown_gyro, at_point, hat_weights, knot_times
-from ._base import _relabel
+from ._attitude import (
+    AttitudeErrorModel,
+    _check_strapdown_gyro,
+    at_point,
+    hat_weights,
+    knot_times,
+    positive_option,
+    random_walk_term,
+)
 
 __all__ = ["GyroBias"]
 
 _AXES = ("x", "y", "z")
-
-
-def _positive(value, what: str) -> float | None:
-    if value is None:
-        return None
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{what}={value!r}: give a positive number") from None
-    if not (np.isfinite(v) and v > 0):
-        raise InputError(f"{what}={value!r}: must be finite and > 0")
-    return v
 
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
@@ -75,8 +70,8 @@ class GyroBias(AttitudeErrorModel):
     default_step_scale = 1e-3
 
     def validate(self) -> None:
-        object.__setattr__(self, "interval", _positive(self.interval, "GyroBias: interval (s)"))
-        object.__setattr__(self, "drift", _positive(self.drift, "GyroBias: drift (rad/s/sqrt(s))"))
+        object.__setattr__(self, "interval", positive_option(self.interval, "GyroBias: interval (s)"))
+        object.__setattr__(self, "drift", positive_option(self.drift, "GyroBias: drift (rad/s/sqrt(s))"))
         if self.drift is not None and self.interval is None:
             raise InputError("GyroBias: drift= needs interval= (the knot spacing in s); without it the "
                              "bias is constant")
@@ -163,26 +158,9 @@ class GyroBias(AttitudeErrorModel):
     def extra_terms(self, model) -> list:
         if self.drift is None:
             return []
-        from ..terms import Term
-
         data = model.data
-        k = self.knots(data)
-        m = k.size
-        names = self.names(data)
-        base = self.base(data)
-        rows, labels = [], []
-        for a, i in enumerate(self._sel()):
-            P = model.params(names[a * m:(a + 1) * m])
-            D = P.rows(np.arange(1, m)) - P.rows(np.arange(m - 1))
-            b = base[a * m:(a + 1) * m]
-            rows.append(D + (b[1:] - b[:-1]))
-            labels += [f"{_AXES[i]}[{j}]->[{j + 1}]" for j in range(m - 1)]
-        from ..model import Affine
-
-        res = _relabel(Affine.vstack(rows), labels, "drift")
-        sigma = np.tile(self.drift * np.sqrt(np.diff(k)), len(self._sel()))
-        return [Term(label="random walk GyroBias", item=None, residual=res, mode="soft", kind="equality",
-                     sigma=sigma, scaled_by_lam=False, units=self.units)]
+        return [random_walk_term(model, self.names(data), self.knots(data), self.drift, self.units,
+                                 "random walk GyroBias", base=self.base(data))]
 
     @classmethod
     def example(cls) -> GyroBias:
