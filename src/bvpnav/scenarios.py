@@ -350,14 +350,9 @@ class _CarPath:
 
     def body_rate(self, t: np.ndarray) -> np.ndarray:
         """Body angular rate relative to the navigation frame (N, 3), rad/s, body axes."""
-        ang, rate = self.euler(t)
-        _, th, ph = ang.T
-        dps, dth, dph = rate.T
-        return np.column_stack([
-            dph - dps * np.sin(th),
-            dth * np.cos(ph) + dps * np.cos(th) * np.sin(ph),
-            -dth * np.sin(ph) + dps * np.cos(th) * np.cos(ph),
-        ])
+        from .simulate import zyx_body_rate
+
+        return zyx_body_rate(*self.euler(t))
 
     def displacement(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """``integral_a^b velocity dt`` per pair (N, 3), m (6-point Gauss-Legendre)."""

@@ -39,6 +39,7 @@ __all__ = [
     "Simulation",
     "simulate_imu",
     "sample_times",
+    "zyx_body_rate",
     "strapdown_3d_2010",
     "RateTable",
     "rate_table",
@@ -139,6 +140,28 @@ def sample_times(t0: float, t1: float, rate: float) -> np.ndarray:
     return t0 + np.arange(k + 1) / rate
 
 
+def zyx_body_rate(angles: np.ndarray, rates: np.ndarray) -> np.ndarray:
+    """Body angular rate (N, 3), rad/s, from yaw, pitch, roll (N, 3) in rad (scipy ``"ZYX"``)
+    and their rates (N, 3) in rad/s.
+
+    Notes
+    -----
+    .. math::
+
+        \\omega_b = \\begin{bmatrix} \\dot\\phi - \\dot\\psi\\sin\\theta \\\\
+            \\dot\\theta\\cos\\phi + \\dot\\psi\\cos\\theta\\sin\\phi \\\\
+            -\\dot\\theta\\sin\\phi + \\dot\\psi\\cos\\theta\\cos\\phi \\end{bmatrix}
+
+    with yaw :math:`\\psi`, pitch :math:`\\theta` and roll :math:`\\phi`.
+    """
+    _, th, ph = np.asarray(angles, dtype=float).T
+    dps, dth, dph = np.asarray(rates, dtype=float).T
+    return np.column_stack([
+        dph - dps * np.sin(th),
+        dth * np.cos(ph) + dps * np.cos(th) * np.sin(ph),
+        -dth * np.sin(ph) + dps * np.cos(th) * np.cos(ph),
+    ])
+
 @dataclass(frozen=True, eq=False)
 class Motion:
     """A smooth position and attitude history.
@@ -152,15 +175,7 @@ class Motion:
 
     Notes
     -----
-    The body rate follows from the Euler rates,
-
-    .. math::
-
-        \\omega_b = \\begin{bmatrix} \\dot\\phi - \\dot\\psi\\sin\\theta \\\\
-            \\dot\\theta\\cos\\phi + \\dot\\psi\\cos\\theta\\sin\\phi \\\\
-            -\\dot\\theta\\sin\\phi + \\dot\\psi\\cos\\theta\\cos\\phi \\end{bmatrix}
-
-    with yaw :math:`\\psi`, pitch :math:`\\theta` and roll :math:`\\phi`.
+    The body rate follows from the Euler rates (:func:`zyx_body_rate`).
     """
 
     position: Any
@@ -235,15 +250,7 @@ class Motion:
         t = np.atleast_1d(np.asarray(t, dtype=float))
         if self.euler is None:
             return np.zeros((t.size, 3))
-        ang = np.atleast_2d(self.euler(t))
-        rate = np.atleast_2d(self.euler(t, 1))
-        _, th, ph = ang.T
-        dps, dth, dph = rate.T
-        return np.column_stack([
-            dph - dps * np.sin(th),
-            dth * np.cos(ph) + dps * np.cos(th) * np.sin(ph),
-            -dth * np.sin(ph) + dps * np.cos(th) * np.cos(ph),
-        ])
+        return zyx_body_rate(np.atleast_2d(self.euler(t)), np.atleast_2d(self.euler(t, 1)))
 
 
 # -------------------------------------------------------------------- simulation
