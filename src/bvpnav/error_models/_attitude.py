@@ -180,9 +180,7 @@ def at_point(data):
     p = getattr(data, "attitude_point", None)
     if p is not None:
         return p
-    if not getattr(data, "is_strapdown", False):
-        raise InputError("attitude error models need strapdown data (specific_force with an attitude, "
-                         "e.g. bvpnav.ImuData.from_gyro); navigation-frame accelerations have no attitude")
+    _check_strapdown(data, "attitude error models")
     gyro = None if data.gyro is None else np.asarray(data.gyro, dtype=float)
     return AttitudePoint(raw_gyro=gyro, raw_attitude=data.attitude, rates=gyro)
 
@@ -278,6 +276,13 @@ class AttitudeErrorModel(ErrorModel):
 
     #: Parameter scale for the Levenberg-Marquardt damping, in the model's units.
     default_step_scale: ClassVar[float] = 1.0
+    #: The axes a model's ``axes=`` selects from, and what they are called in messages.
+    AXES: ClassVar[tuple[str, ...]] = ("x", "y", "z")
+    axis_kind: ClassVar[str] = "body"
+
+    def _sel(self) -> tuple[int, ...]:
+        """Indices of the selected axes in :attr:`AXES`."""
+        return self._select_axes(self.AXES, self.axis_kind)
 
     def rate_columns(self, data) -> np.ndarray:
         """Change of the corrected body rates per unit parameter, (N, 3, q), rad/s per unit."""
@@ -316,6 +321,26 @@ class AttitudeErrorModel(ErrorModel):
         q = len(self.names(data))
         return np.full(q, np.inf) if self.sigma is None else _per_param(self.sigma, q, type(self).__name__)
 
+    def prior_values(self, data) -> np.ndarray:
+        """Prior value of each total (the model's units; 0 unless ``prior=`` says)."""
+        q = len(self.names(data))
+        if self.prior is None:
+            return np.zeros(q)
+        return _per_param(self.prior, q, f"{type(self).__name__}: prior")
+
+    def prior_cost(self, data) -> float:
+        """This model's priors at zero increments (the totals of ``data``'s point): its share
+        of the nonlinear objective, :math:`\\sum_k ((x_k - p_k)/\\sigma_k)^2` plus
+        :meth:`extra_prior_cost`."""
+        sig = self.prior_sigma(data)
+        ok = np.isfinite(sig)
+        r = (self.base(data) - self.prior_values(data))[ok] / sig[ok]
+        return float(r @ r) + self.extra_prior_cost(data)
+
+    def extra_prior_cost(self, data) -> float:
+        """The :meth:`extra_terms` at zero increments; none by default."""
+        return 0.0
+
     def step_scale(self, data) -> np.ndarray:
         """Scale of each parameter for the damping: its prior sigma, else the default."""
         s = self.prior_sigma(data)
@@ -332,9 +357,7 @@ class AttitudeErrorModel(ErrorModel):
         sig = self.prior_sigma(data)
         keep = np.flatnonzero(np.isfinite(sig))
         if keep.size:
-            q = len(names)
-            p0 = np.zeros(q) if self.prior is None else _per_param(self.prior, q, f"{tag}: prior")
-            rows = self.physical_rows(model, p0).rows(keep)
+            rows = self.physical_rows(model, self.prior_values(data)).rows(keep)
             out.append(Term(label=f"prior {tag}", item=None,
                             residual=_relabel(rows, [names[k] for k in keep], "prior"), mode="soft",
                             kind="equality", sigma=sig[keep], scaled_by_lam=False, units=self.units))
@@ -369,10 +392,14 @@ class AttitudeErrorModel(ErrorModel):
         return ImuData.from_gyro(t, f, w, initial_attitude=Rotation.from_euler("ZYX", [0.3, 0.1, -0.2]))
 
 
-def _check_strapdown_gyro(data, who: str) -> None:
+def _check_strapdown(data, who: str) -> None:
     if not getattr(data, "is_strapdown", False):
-        raise InputError(f"{who}: needs strapdown data (specific force, attitude and gyro rates: "
-                         "bvpnav.ImuData.from_gyro)")
+        raise InputError(f"{who}: needs strapdown data (specific force with an attitude, e.g. "
+                         "bvpnav.ImuData.from_gyro); navigation-frame accelerations have no attitude")
+
+
+def _check_strapdown_gyro(data, who: str) -> None:
+    _check_strapdown(data, who)
     if at_point(data).raw_gyro is None:
         raise InputError(f"{who}: needs the gyro rates; build the data with bvpnav.ImuData.from_gyro "
                          "(this data's attitude was given, not integrated)")
@@ -434,7 +461,8 @@ def reintegrate(data, error_model, values: dict, damping: float = 0.0):
 
 
 def with_damping(data, damping: float):
-    """A shallow copy of ``data`` whose point carries another damping weight."""
+    """A shallow copy of ``data`` whose point carries another damping weight (the same
+    re-integrated attitude, accelerations and rates)."""
     import copy
 
     out = copy.copy(data)

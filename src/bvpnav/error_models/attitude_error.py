@@ -8,12 +8,9 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..errors import InputError
-from ._attitude import AttitudeErrorModel, left_jacobian
+from ._attitude import AttitudeErrorModel, _check_strapdown, left_jacobian
 
 __all__ = ["AttitudeError"]
-
-_AXES = ("x", "y", "z")
-
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
 class AttitudeError(AttitudeErrorModel):
@@ -52,6 +49,7 @@ class AttitudeError(AttitudeErrorModel):
 
     units = "rad"
     default_step_scale = 0.05
+    axis_kind = "attitude"
 
     def __post_init__(self):
         # sigma may hold None/inf ("no prior on this axis"), which the base check refuses
@@ -72,11 +70,8 @@ class AttitudeError(AttitudeErrorModel):
                                  "for no prior on an axis)")
             object.__setattr__(self, "sigma", vals)
 
-    def _sel(self) -> tuple[int, ...]:
-        return self._select_axes(_AXES, "attitude")
-
     def names(self, data) -> list[str]:
-        return [f"attitude_{_AXES[i]}" for i in self._sel()]
+        return [f"attitude_{self.AXES[i]}" for i in self._sel()]
 
     def _totals(self, data) -> np.ndarray:
         full = np.zeros(3)
@@ -88,20 +83,8 @@ class AttitudeError(AttitudeErrorModel):
         """The correction :math:`\\exp([(\\theta_x, \\theta_y, 0)\\times]) R_z(\\psi)` (rad)."""
         return Rotation.from_rotvec([theta_x, theta_y, 0.0]) * Rotation.from_rotvec([0.0, 0.0, heading])
 
-    @staticmethod
-    def decompose(rotation: Rotation) -> np.ndarray:
-        """``(theta_x, theta_y, heading)`` of a correction ``R`` (inverse of :meth:`rotation`), rad."""
-        ez = np.array([0.0, 0.0, 1.0])
-        up = rotation.apply(ez)
-        axis = np.cross(ez, up)
-        s = np.linalg.norm(axis)
-        ang = np.arctan2(s, up[2])
-        tilt = np.zeros(3) if s < 1e-300 else axis / s * ang
-        rest = Rotation.from_rotvec(tilt).inv() * rotation
-        return np.array([tilt[0], tilt[1], rest.as_rotvec()[2]])
-
     def initial_columns(self, data) -> np.ndarray:
-        _check_ok(data)
+        _check_strapdown(data, "AttitudeError")
         tx, ty, _ = self._totals(data)
         theta = np.array([tx, ty, 0.0])
         full = np.column_stack([left_jacobian(theta)[:, 0], left_jacobian(theta)[:, 1],
@@ -129,10 +112,4 @@ class AttitudeError(AttitudeErrorModel):
     @classmethod
     def example(cls) -> AttitudeError:
         return cls(sigma=(0.1, 0.1, None))
-
-
-def _check_ok(data) -> None:
-    if not getattr(data, "is_strapdown", False):
-        raise InputError("AttitudeError: needs strapdown data (specific force and an attitude); "
-                         "navigation-frame accelerations have no attitude to correct")
 

@@ -20,9 +20,6 @@ from ._attitude import (
 
 __all__ = ["GyroBias"]
 
-_AXES = ("x", "y", "z")
-
-
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
 class GyroBias(AttitudeErrorModel):
     """Bias of each gyro axis, rad/s: constant, or drifting as a random walk.
@@ -78,9 +75,6 @@ class GyroBias(AttitudeErrorModel):
         if self.bounds is not None:
             raise InputError("GyroBias: bounds are not supported; give sigma= (a prior on the total)")
 
-    def _sel(self) -> tuple[int, ...]:
-        return self._select_axes(_AXES, "body")
-
     def knots(self, data) -> np.ndarray | None:
         """Knot times in s (None for a constant bias)."""
         return None if self.interval is None else knot_times(data.t, self.interval)
@@ -92,8 +86,8 @@ class GyroBias(AttitudeErrorModel):
     def names(self, data) -> list[str]:
         k = self.knots(data)
         if k is None:
-            return [f"gyro_bias_{_AXES[i]}" for i in self._sel()]
-        return [f"gyro_bias_{_AXES[i]}[{m}]" for i in self._sel() for m in range(k.size)]
+            return [f"gyro_bias_{self.AXES[i]}" for i in self._sel()]
+        return [f"gyro_bias_{self.AXES[i]}[{m}]" for i in self._sel() for m in range(k.size)]
 
     def rate_columns(self, data) -> np.ndarray:
         _check_strapdown_gyro(data, "GyroBias")
@@ -154,6 +148,14 @@ class GyroBias(AttitudeErrorModel):
         parts = {"bias": np.zeros((data.n, 3))}
         self.apply(v, parts, data)
         return parts["bias"]
+
+    def extra_prior_cost(self, data) -> float:
+        if self.drift is None:
+            return 0.0
+        k = self.knots(data)
+        b = self.base(data).reshape(-1, k.size)  # axis-major
+        r = np.diff(b, axis=1) / (self.drift * np.sqrt(np.diff(k)))
+        return float(np.sum(r**2))
 
     def extra_terms(self, model) -> list:
         if self.drift is None:

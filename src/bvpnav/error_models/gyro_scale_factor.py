@@ -11,9 +11,6 @@ from ._attitude import AttitudeErrorModel, _check_strapdown_gyro, at_point
 
 __all__ = ["GyroScaleFactor"]
 
-_AXES = ("x", "y", "z")
-
-
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
 class GyroScaleFactor(AttitudeErrorModel):
     """Scale-factor error of each gyro axis, dimensionless (0.01 = reads 1 % high).
@@ -42,11 +39,8 @@ class GyroScaleFactor(AttitudeErrorModel):
         if self.bounds is not None:
             raise InputError("GyroScaleFactor: bounds are not supported; give sigma= (a prior on the total)")
 
-    def _sel(self) -> tuple[int, ...]:
-        return self._select_axes(_AXES, "body")
-
     def names(self, data) -> list[str]:
-        return [f"gyro_scale_{_AXES[i]}" for i in self._sel()]
+        return [f"gyro_scale_{self.AXES[i]}" for i in self._sel()]
 
     def rate_columns(self, data) -> np.ndarray:
         _check_strapdown_gyro(data, "GyroScaleFactor")

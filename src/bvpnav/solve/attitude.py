@@ -54,6 +54,7 @@ from ..error_models._attitude import (
     attitude_components,
     propagate,
     reintegrate,
+    with_damping,
 )
 from ..errors import InputError
 from ..formulation import Formulation
@@ -70,7 +71,6 @@ Stage = Callable[..., Solution]
 #: Options of the attitude loop and their defaults (``solve(attitude={...})``).
 ATTITUDE_DEFAULTS: dict = {"tol": 1e-7, "ftol": 1e-12, "max_iter": 30, "heading": "auto",
                            "candidates": 12, "loop": True, "progress": None}
-ATTITUDE_KEYS = tuple(ATTITUDE_DEFAULTS)
 
 #: Largest damping weight tried before the loop stops at a point no step improves.
 MAX_DAMPING = 1e12
@@ -142,28 +142,6 @@ def objective_value(form, x: np.ndarray, lam: float) -> float:
     return j
 
 
-def _prior_cost(comps, data) -> float:
-    """The attitude priors at zero increments: their share of the nonlinear objective."""
-    j = 0.0
-    for c in comps:
-        names = c.names(data)
-        base = c.base(data)
-        sig = c.prior_sigma(data)
-        p0 = np.zeros(len(names)) if c.prior is None else np.broadcast_to(
-            np.asarray(c.prior, dtype=float).ravel() if np.size(c.prior) in (1, len(names)) else c.prior,
-            (len(names),))
-        ok = np.isfinite(sig)
-        j += float(np.sum(((base[ok] - p0[ok]) / sig[ok]) ** 2))
-        drift = getattr(c, "drift", None)
-        if drift is not None:
-            k = c.knots(data)
-            m = k.size
-            for a in range(len(names) // m):
-                b = base[a * m:(a + 1) * m]
-                j += float(np.sum((np.diff(b) / (drift * np.sqrt(np.diff(k)))) ** 2))
-    return j
-
-
 # ------------------------------------------------------------- the loop
 class _Loop:
     def __init__(self, form, inner: Stage, opts, lam, o: dict):
@@ -176,10 +154,20 @@ class _Loop:
         self.names = [n for c in self.comps for n in c.names(self.raw)]
         self.lam = lam
         self.rule = lam if isinstance(lam, str) else None
-        self.evaluations = 0
         self.solves = 0
         self.checked: dict = {}
         self.curve = None
+        self._data: dict = {}
+
+    def data_at(self, values: dict):
+        """The data re-integrated at the totals ``values`` (undamped), kept for the few most
+        recent points: an evaluation at a point and the step from it share one integration."""
+        key = tuple(float(values[n]) for n in self.names)
+        if key not in self._data:
+            if len(self._data) >= 4:
+                self._data.pop(next(iter(self._data)))
+            self._data[key] = reintegrate(self.raw, self.form.error_model, values)
+        return self._data[key]
 
     def _form(self, data, error_model) -> Formulation:
         f = self.form
@@ -210,16 +198,17 @@ class _Loop:
 
     def evaluate(self, values: dict) -> tuple[float, Solution]:
         """``J(values)``: the convex problem with the attitude fixed at these totals."""
-        data = reintegrate(self.raw, self.form.error_model, values)
+        data = self.data_at(values)
         sol = self._solve(self._form(data, self.rest_model))
-        self.evaluations += 1
         used = sol.__dict__.get("_formulation")
-        j = objective_value(used, sol.x, float(sol.lam)) + _prior_cost(self.comps, data)
+        j = objective_value(used, sol.x, float(sol.lam)) + sum(c.prior_cost(data) for c in self.comps)
         return j, sol
 
     def step(self, values: dict, damping: float) -> tuple[dict, float, Solution]:
         """One damped linearized solve at ``values``: new totals, attitude change (rad), solution."""
-        data = reintegrate(self.raw, self.form.error_model, values, damping=damping)
+        data = self.data_at(values)
+        if damping:
+            data = with_damping(data, damping)
         form = self._form(data, self.form.error_model)
         sol = self._solve(form)
         model = form.model
@@ -237,28 +226,30 @@ class _Loop:
         change = float(np.max(np.linalg.norm(psi[:, :, 0], axis=1)))
         return new, change, sol
 
-    def heading_start(self, values: dict) -> tuple[dict, list]:
+    def heading_start(self, values: dict) -> tuple[dict, list, tuple | None]:
+        """The start: ``values`` with the best candidate heading, the candidates' objectives,
+        and ``(J, solution)`` of the best (None without a search)."""
         from ..error_models.attitude_error import AttitudeError
 
         att = next((c for c in self.comps if isinstance(c, AttitudeError)), None)
         o = self.o
         if att is None or "attitude_z" not in att.names(self.raw):
-            return values, []
+            return values, [], None
         free = not np.isfinite(att.prior_sigma(self.raw)[att.names(self.raw).index("attitude_z")])
         if o["heading"] == "given" or (o["heading"] == "auto" and not free):
-            return values, []
+            return values, [], None
         n = int(o["candidates"])
         found = []
         best = None
         for k in range(n):
             yaw = float(np.angle(np.exp(1j * 2.0 * np.pi * k / n)))
             trial = {**values, "attitude_z": yaw}
-            j, _ = self.evaluate(trial)
+            j, sol = self.evaluate(trial)
             found.append({"heading": yaw, "objective": j})
             log.info("attitude loop: heading %.1f deg -> objective %.6g", np.degrees(yaw), j)
             if best is None or j < best[0]:
-                best = (j, trial)
-        return best[1], found
+                best = (j, trial, sol)
+        return best[1], found, (best[0], best[2])
 
 
 def _at_point(loop: _Loop, values: dict, at_values: Solution) -> Solution:
@@ -273,8 +264,7 @@ def _at_point(loop: _Loop, values: dict, at_values: Solution) -> Solution:
     """
     from .assemble import make_solution
 
-    data = reintegrate(loop.raw, loop.form.error_model, values)
-    form = loop._form(data, loop.form.error_model)
+    form = loop._form(loop.data_at(values), loop.form.error_model)
     used = at_values.__dict__.get("_formulation")
     small, full = used.model, form.model
     x = np.zeros(full.size)
@@ -335,7 +325,7 @@ def _iterate(loop: _Loop, values: dict, j: float, at_values: Solution, o: dict):
             if accepted:
                 small = j - j_new <= o["ftol"] * max(abs(j), 1e-300)
                 values, j, at_values = new, j_new, at_new
-                if "attitude_z" in values:  # R_z is periodic: keep the heading in (-pi, pi]
+                if abs(values.get("attitude_z", 0.0)) > np.pi:  # R_z is periodic: keep it in (-pi, pi]
                     values["attitude_z"] = float(np.angle(np.exp(1j * values["attitude_z"])))
                 if damping == 0.0:
                     last_full = change
@@ -399,8 +389,8 @@ def with_attitude(inner: Stage) -> Stage:
             sol.attitude = reintegrate(form.data, form.error_model, {
                 n: float(sol.error_params[n]) for n in loop.names}).attitude
             return sol
-        values, search = loop.heading_start(values)
-        j, at_values = loop.evaluate(values)
+        values, search, best = loop.heading_start(values)
+        j, at_values = best if best is not None else loop.evaluate(values)
         j0 = j
         values, j, at_values, sol, iters, reason = _iterate(loop, values, j, at_values, o)
         converged = reason is not None
