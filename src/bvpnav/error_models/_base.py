@@ -520,7 +520,7 @@ class SensorErrorModel(ErrorModel):
                 rows.append(P * (-(1.0 + vk)) - vk)
             elif p.role == "misalignment":
                 rows.append(-P - vk)
-            elif p.role == "bias":
+            elif p.role in ("bias", "bias_knot"):  # a knot's bias: the same row on its value
                 r = -P - vk
                 kname = layout.get(("scale", p.i, p.i))
                 if kname is not None:

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..errors import InputError
 from ._attitude import hat_weights, knot_times, positive_option, random_walk_term
-from ._base import Param, SensorErrorModel, _relabel, _sensor_layout, _series, sensor_axes, sensor_frame
+from ._base import Param, SensorErrorModel, _relabel, _series, sensor_axes, sensor_frame
 
 __all__ = ["Bias"]
 
@@ -101,25 +101,6 @@ class Bias(SensorErrorModel):
         if self.interval is None:
             return super().report(l, model)
         return _series(self.knot_values(l, None, model.data), self.names(model.data), self.units)
-
-    def physical_rows(self, model, value):
-        if self.interval is None:
-            return super().physical_rows(model, value)
-        from ._base import _per_param
-
-        ps = self.params(model.data)
-        v = _per_param(value, len(ps), "Bias: value")
-        layout = _sensor_layout(model)
-        rows = []
-        for p, vk in zip(ps, v, strict=True):
-            r = -model.params([p.name]) - vk
-            kname = layout.get(("scale", p.i, p.i))
-            if kname is not None:
-                r = r + model.params([kname]) * (-vk)
-            rows.append(r)
-        from ..model import Affine
-
-        return Affine.vstack(rows)
 
     def terms(self, model) -> list:
         if self.drift is None:
