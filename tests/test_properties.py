@@ -482,6 +482,10 @@ def test_direct_ldl_path_does_not_accept_a_wrong_factorization():
     prob.add(Position(t=1.01953125, value=2.133869734010358),
              Velocity(t=0.84375, value=0.0953454624233592))
     ref = prob.solve(**DIRECT_LU)
-    sol = prob.solve(solver="direct", fallback=None)
+    sol = prob.solve(solver="direct", fallback=None, options={"method": "ldl"})
     np.testing.assert_allclose(sol.x, ref.x, rtol=0, atol=1e-9 * np.max(np.abs(ref.x)))
     assert sol.stats["factorization"].startswith("lu (ldl backward error")
+    # the default (banded, pivoted within the band) needs no fallback here
+    banded = prob.solve(solver="direct", fallback=None)
+    assert banded.stats["factorization"].startswith("banded")
+    np.testing.assert_allclose(banded.x, ref.x, rtol=0, atol=1e-9 * np.max(np.abs(ref.x)))

@@ -33,6 +33,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from .banded import BandedKKT, Factorization, NotBanded
 from .formulation import as_formulation
 from .model import Affine
 
@@ -63,6 +64,18 @@ class LeastSquaresForm:
     E: Affine
     eq_blocks: list
     lam_rows: np.ndarray | None = None
+    lam: float | None = None
+
+    def at_lam(self, lam: float) -> LeastSquaresForm:
+        r"""The same form at another lambda: the rows of :attr:`lam_rows` rescaled by
+        :math:`\sqrt{\lambda / \lambda_0}` (no item is compiled again)."""
+        if self.lam is None or self.lam_rows is None:
+            raise ValueError("at_lam needs a form made by least_squares_form")
+        k = np.where(self.lam_rows, np.sqrt(lam / self.lam), 1.0)
+        A = self.D.A
+        scaled = sp.csr_matrix((A.data * np.repeat(k, np.diff(A.indptr)), A.indices, A.indptr), shape=A.shape)
+        return LeastSquaresForm(Affine(scaled, self.D.c * k, self.D.labels), self.E, self.eq_blocks,
+                                self.lam_rows, float(lam))
 
     def augmented_upper(self, delta: float) -> sp.csc_matrix:
         """Upper triangle of the augmented matrix regularized by ``+delta`` on the unknowns
@@ -145,7 +158,7 @@ def least_squares_form(form, lam: float, surrogate: bool = False) -> LeastSquare
         elif role == "D":
             obj.append(term.residual * (np.sqrt(term.weight(lam)) / term.sigma))
             scaled.append(np.full(term.residual.m, bool(term.scaled_by_lam)))
-    return LeastSquaresForm(Affine.vstack(obj), Affine.vstack(eq), blocks, np.concatenate(scaled))
+    return LeastSquaresForm(Affine.vstack(obj), Affine.vstack(eq), blocks, np.concatenate(scaled), float(lam))
 
 
 def forward_error(form, xval: np.ndarray, lam: float, duals: dict | None,
@@ -220,7 +233,7 @@ class _LDL:
                                 for k in range(rhs.shape[1])])
 
 
-class BorderedLU:
+class BorderedLU(Factorization):
     r"""A factorization of ``S`` that eliminates a few dense unknowns through their Schur complement.
 
     Error-model parameters touch every FEM row, so their columns are dense; a sparse LU
@@ -313,27 +326,6 @@ class BorderedLU:
         z[self.dense] = zL
         return z
 
-    def refined(self, rhs: np.ndarray, steps: int, tol: float = 0.0, window: slice | None = None,
-                stall: float | None = None):
-        """Solve with up to ``steps`` iterative-refinement steps in double precision.
-
-        Returns ``(z, steps_taken, last_relative_correction)``; the correction is measured
-        on ``window`` (default: all of ``z``) and refinement stops below ``tol``, or, with
-        ``stall``, as soon as a correction is not at least ``stall`` times smaller than the
-        one before (the rounding floor has been reached).
-        """
-        window = window if window is not None else slice(None)
-        z = self.solve(rhs)
-        corr, k = np.inf, 0
-        for _ in range(steps):
-            k += 1
-            dz = self.solve(rhs - self.S @ z)
-            z += dz
-            prev, corr = corr, float(np.max(np.abs(dz[window])) / max(np.max(np.abs(z[window])), 1e-300))
-            if corr < tol or (stall is not None and corr > stall * prev):
-                break
-        return z, k, (0.0 if k == 0 else corr)
-
 
 def solve_bordered(S: sp.spmatrix, rhs: np.ndarray, dense: np.ndarray,
                    shift_rows: np.ndarray | None = None) -> np.ndarray:
@@ -341,22 +333,68 @@ def solve_bordered(S: sp.spmatrix, rhs: np.ndarray, dense: np.ndarray,
     return BorderedLU(S, dense, shift_rows).solve(rhs)
 
 
-def factor_form(form: LeastSquaresForm, problem, method: str = "lu", delta: float = 1e-12) -> BorderedLU:
-    """:class:`BorderedLU` of a form's augmented matrix, error-model columns eliminated last.
+def column_nodes(model, interleave: bool = False) -> np.ndarray:
+    """Time node of every unknown of ``model`` (-1: the error-model parameters, which go to
+    the border of a banded factorization).
+
+    Positions and acceleration residuals of sample ``j`` sit at node ``j``, ``v0`` at the
+    first node and ``v1`` at the last. Axes are laid end to end (axis ``a`` at nodes
+    ``a N .. a N + N - 1``) unless ``interleave``: then every axis of sample ``j`` sits at
+    node ``j`` (for rows that couple axes).
+    """
+    N = model.N
+    colnode = np.full(model.size, -1, dtype=np.int64)
+    for a in range(model.d):
+        off = 0 if interleave else a * N
+        colnode[model.r_index(a)] = off + np.arange(N)
+        colnode[model.w_index(a)] = off + np.arange(N)
+        v0, v1 = model.v_end_index(a)
+        colnode[v0], colnode[v1] = off, off + N - 1
+    return colnode
+
+
+def banded_factor(form: LeastSquaresForm, problem, plan=None) -> BandedKKT:
+    """:class:`bvpnav.banded.BandedKKT` of a form (axes end to end, else interleaved when
+    rows couple axes); ``plan`` from an earlier factor of the same pattern is reused.
+
+    Raises
+    ------
+    bvpnav.banded.NotBanded
+        When rows couple distant instants beyond the banded path's limits (the caller falls
+        back to a sparse factorization).
+    """
+    model = as_formulation(problem).model
+    D, E = form.D.A, form.E.A
+    if plan is not None:
+        return BandedKKT(D, E, params=model.l_index, plan=plan)
+    try:
+        return BandedKKT(D, E, column_nodes(model), params=model.l_index)
+    except NotBanded:
+        if model.d == 1:
+            raise
+    return BandedKKT(D, E, column_nodes(model, interleave=True), params=model.l_index)
+
+
+def factor_form(form: LeastSquaresForm, problem, method: str = "lu", delta: float = 1e-12):
+    """A factorization of a form's augmented matrix, error-model columns eliminated last.
 
     ``method="lu"``: SuperLU (COLAMD ordering, partial pivoting); redundant hard rows are
     handled by a tiny shift of the multiplier block. ``method="ldl"``: QDLDL on the
     quasi-definite matrix regularized by ``+delta`` on the unknowns and ``-delta`` on the
     multipliers (the augmented matrix already has ``-I`` on the residual rows); several
     times faster, but its answers need refinement against the exact matrix.
+    ``method="banded"``: :func:`banded_factor` (raises
+    :class:`~bvpnav.banded.NotBanded` for rows that are not local).
     """
+    if method == "banded":
+        return banded_factor(form, problem)
     m, n = form.D.A.shape
     p = form.E.m
     dense = m + as_formulation(problem).model.l_index
     if method == "ldl":
         return BorderedLU(form.augmented(), dense, upper=form.augmented_upper(delta))
     if method != "lu":
-        raise ValueError(f"method={method!r}; choose 'lu' or 'ldl'")
+        raise ValueError(f"method={method!r}; choose 'lu', 'ldl' or 'banded'")
     return BorderedLU(form.augmented(), dense, np.arange(m + n, m + n + p))
 
 
@@ -415,36 +453,39 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
     if form is None:
         raise ValueError("not an equality-constrained least-squares problem")
     if method == "auto":
-        method = "lu" if problem.residual == "load" else "ldl"
+        method = "lu" if problem.residual == "load" else "banded"
     m, n = form.D.A.shape
     window = slice(m, m + n)
     rhs = form.rhs()
-    note = method
-    fac = None
-    if method == "ldl":
+    notes = []
+    fac = z = None
+    k, corr = 0, np.inf
+    if method == "banded":
+        try:
+            fac = banded_factor(form, problem)
+            z, k, corr = _accepted(fac, rhs, window, ldl_steps, ldl_tol, ldl_accept, notes, "banded")
+            if z is None:
+                fac, method = None, "lu"
+        except NotBanded as exc:
+            notes.append(f"not banded: {exc}")
+            method = "ldl"
+        except (RuntimeError, np.linalg.LinAlgError, ValueError) as exc:
+            notes.append(f"banded failed: {exc}")
+            method = "lu"
+    if fac is None and method == "ldl":
         try:
             fac = factor_form(form, problem, "ldl")
-            z, k, corr = fac.refined(rhs, ldl_steps, ldl_tol, window=window, stall=0.5)
-            # a small correction alone can mislead (a wild first solve makes every later
-            # correction small relative to z): also require the normwise backward error
-            # |rhs - S z| / (|S| |z| + |rhs|) (infinity norms) to be near rounding
-            eta = np.inf
-            if np.all(np.isfinite(z)):
-                S = fac.S
-                den = spla.norm(S, np.inf) * np.max(np.abs(z)) + np.max(np.abs(rhs))
-                eta = float(np.max(np.abs(rhs - S @ z)) / max(den, 1e-300))
-            if not (np.isfinite(corr) and corr <= ldl_accept):
-                note = f"lu (ldl refinement stalled at correction {corr:.1e})"
-                fac = None
-            elif not eta <= LDL_BACKWARD:
-                note = f"lu (ldl backward error {eta:.1e} after refinement)"
+            z, k, corr = _accepted(fac, rhs, window, ldl_steps, ldl_tol, ldl_accept, notes, "ldl")
+            if z is None:
                 fac = None
         except (RuntimeError, np.linalg.LinAlgError, ValueError) as exc:
-            note = f"lu (ldl failed: {exc})"
+            notes.append(f"ldl failed: {exc}")
             fac = None
     if fac is None:
         fac = factor_form(form, problem, "lu")
         z, k, corr = fac.refined(rhs, refine + (3 if fac.shift else 0), tol, window=window)
+    name = fac.plan.describe() if isinstance(fac, BandedKKT) else fac.method
+    note = name + (f" ({'; '.join(notes)})" if notes else "")
     x = z[m:m + n]
     mu = z[m + n:]
     duals = {}
@@ -453,3 +494,26 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
         duals[label] = y if label == "fem" else [y]
     return x, {"duals": duals, "refinements": k, "correction": corr, "factorization": note,
                "factor": fac, "form": form}
+
+
+def _accepted(fac, rhs, window, steps, tol, accept, notes, name):
+    """Refine a factorization that is not exact for ``S`` (regularized, or folded) and accept
+    its answer only with a small correction and a normwise backward error near rounding;
+    ``(None, k, corr)`` with the reason in ``notes`` otherwise."""
+    z, k, corr = fac.refined(rhs, steps, tol, window=window, stall=0.5)
+    # a small correction alone can mislead (a wild first solve makes every later
+    # correction small relative to z): also require the normwise backward error
+    # |rhs - S z| / (|S| |z| + |rhs|) (infinity norms) to be near rounding
+    eta = np.inf
+    if np.all(np.isfinite(z)):
+        S = fac.S
+        norm = S.norm_inf() if hasattr(S, "norm_inf") else spla.norm(S, np.inf)
+        den = norm * np.max(np.abs(z)) + np.max(np.abs(rhs))
+        eta = float(np.max(np.abs(rhs - S @ z)) / max(den, 1e-300))
+    if not (np.isfinite(corr) and corr <= accept):
+        notes.append(f"{name} refinement stalled at correction {corr:.1e}")
+        return None, k, corr
+    if not eta <= LDL_BACKWARD:
+        notes.append(f"{name} backward error {eta:.1e} after refinement")
+        return None, k, corr
+    return z, k, corr

@@ -47,7 +47,7 @@ def _is_real(v) -> bool:
 
 #: Values of the direct back ends' options: (check, what a valid value is).
 VALUES: dict[str, tuple[Callable[[Any], bool], str]] = {
-    "method": (lambda v: v in ("auto", "lu", "ldl"), "one of ['auto', 'lu', 'ldl']"),
+    "method": (lambda v: v in ("auto", "banded", "lu", "ldl"), "one of ['auto', 'banded', 'lu', 'ldl']"),
     "refine": (lambda v: _is_int(v) and 0 <= v <= 100, "an integer from 0 to 100"),
     "max_iter": (lambda v: _is_int(v) and 1 <= v <= 10_000, "an integer from 1 to 10000"),
     "ldl_accept": (lambda v: _is_real(v) and 0 < v < 1, "a number between 0 and 1"),

@@ -34,13 +34,14 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from ..banded import NotBanded
 from ..cvx import compiled
 from ..errors import InputError
 from ..formulation import LAM_RANGE, as_formulation
 from ..log import once, progress_enabled, sweeping
 from ..log import progress as progress_bar
 from ..log import warn as _warn
-from ..lsq import factor_form, least_squares_form, non_least_squares_term
+from ..lsq import banded_factor, factor_form, least_squares_form, non_least_squares_term
 from ..plot import lcurve
 from . import get_rule, rule_names
 
@@ -144,6 +145,27 @@ class DirectSweep:
         self.cache: dict[float, dict] = {}
         self._rhs_jac = None
         self._probe_rhs = None
+        self._ls = least_squares_form(self.form, 1.0)   # every lambda rescales its soft rows
+        self._plan = None
+        self.factorization = "lu"
+        if self.form.residual == "acceleration":  # the load form (condition ~N^4) keeps the pivoted LU
+            try:
+                self._plan = banded_factor(self._ls, self.form).plan
+                self.factorization = self._plan.describe()
+            except NotBanded as exc:
+                self.factorization = f"lu (not banded: {exc})"
+            except (RuntimeError, np.linalg.LinAlgError) as exc:
+                self.factorization = f"lu (banded failed: {exc})"
+
+    def _factor(self, form):
+        """The banded factor with the plan made once (the pattern is the same at every
+        lambda), or the pivoted sparse LU when the problem is not banded."""
+        if self._plan is not None:
+            try:
+                return banded_factor(form, self.form, plan=self._plan)
+            except (RuntimeError, np.linalg.LinAlgError):
+                pass
+        return factor_form(form, self.form)
 
     def point(self, lam: float, need_trace: bool | None = None, probes: int | None = None,
               seed: int | None = None) -> dict:
@@ -156,10 +178,10 @@ class DirectSweep:
         pt = self.cache.get(key)
         if pt is not None and (not need_trace or "trace" in pt):
             return pt
-        form = least_squares_form(self.form, lam)
+        form = self._ls.at_lam(lam)
         m, n = form.D.A.shape
         try:
-            fac = factor_form(form, self.form)
+            fac = self._factor(form)
         except (RuntimeError, np.linalg.LinAlgError) as exc:
             raise InputError(f"lambda={lam:g}: the KKT matrix is singular ({exc}); some unknown is "
                              "not determined by the information") from exc
