@@ -99,11 +99,19 @@ def ruiz_scale(K: sp.csr_matrix, sweeps: int = 4) -> tuple[np.ndarray, np.ndarra
     return s, rows
 
 
+def _selection(n: int, cols: np.ndarray, scale: np.ndarray | None = None) -> sp.csc_matrix:
+    """The (n, len(cols)) matrix whose product picks (and scales) the columns ``cols``
+    (made directly in CSC form: one entry per column)."""
+    k = cols.size
+    return sp.csc_matrix((np.ones(k) if scale is None else scale, np.asarray(cols, dtype=np.int64),
+                          np.arange(k + 1)), shape=(n, k))
+
+
 def column_squares(A: sp.csr_matrix, cols: np.ndarray) -> np.ndarray:
     """Sum of squares of the entries of each of ``A``'s columns ``cols``."""
     if cols.size == 0:
         return np.zeros(0)
-    return np.asarray(A[:, cols].power(2).sum(axis=0)).ravel()
+    return np.bincount(A.indices, weights=A.data ** 2, minlength=A.shape[1])[cols]
 
 
 class AugmentedOperator:
@@ -179,34 +187,6 @@ def canonical(A: sp.spmatrix) -> sp.csr_matrix:
         A.sum_duplicates()
         A.eliminate_zeros()
     return A
-
-
-def _pairs(group: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """All ordered pairs ``(a, b)`` of positions with the same value of ``group`` (a sorted
-    array), ``(a, a)`` included: the entries of a sum of outer products, one per group."""
-    if group.size == 0:
-        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
-    starts = np.flatnonzero(np.r_[True, group[1:] != group[:-1]])
-    counts = np.diff(np.r_[starts, group.size])
-    c = np.repeat(counts, counts)                 # group size of every position
-    st = np.repeat(starts, counts)                # group start of every position
-    a = np.repeat(np.arange(group.size), c)
-    first = np.repeat(np.cumsum(c) - c, c)        # where each position's run of pairs starts
-    b = np.repeat(st, c) + (np.arange(a.size) - first)
-    return a, b
-
-
-@dataclass(eq=False)
-class _Group:
-    """One kind of contribution to the reduced matrix: where each value goes."""
-
-    band: np.ndarray        # which values go to the banded part
-    band_dest: np.ndarray   # their flat index in the (nb, ldab) row-major band array
-    B: np.ndarray           # which values couple the band to the border
-    B_row: np.ndarray
-    B_col: np.ndarray
-    C: np.ndarray           # which values lie in the border block
-    C_dest: np.ndarray
 
 
 @dataclass(eq=False)
@@ -319,83 +299,68 @@ class BandPlan:
         return plan
 
     def _analyse(self, D, E, Drow, Dcol, max_band) -> None:
-        """Index arrays of every contribution (the symbolic factorization's input)."""
-        n, nu = self.n, int(np.count_nonzero(~self.fold))
-        off = n + nu
-        keep = np.ones(n, dtype=bool)
-        keep[self.elim] = False
-        zslot = np.full(n, -1, dtype=np.int64)
-        zslot[self.elim] = np.arange(self.elim.size)
-        # H = D_f^T D_f over kept columns: pairs of entries in the same folded row
-        fe = np.flatnonzero(self.fold[Drow] & keep[Dcol])
-        a, b = _pairs(Drow[fe])
-        self._H = (fe[a], fe[b])
-        Hi, Hj = Dcol[fe[a]], Dcol[fe[b]]
-        # h: the eliminated unknowns' diagonal
-        ze = np.flatnonzero(self.fold[Drow] & ~keep[Dcol])
-        self._h = (ze, zslot[Dcol[ze]])
-        # E over kept columns (and its transpose)
-        Erow = np.repeat(np.arange(self.p), np.diff(E.indptr))
-        Ecol = E.indices.astype(np.int64)
-        ke = np.flatnonzero(keep[Ecol])
-        self._E = ke
-        # Q = E_z h^-1 E_z^T: pairs of entries in the same eliminated column
-        qe = np.flatnonzero(~keep[Ecol])
-        qe = qe[np.argsort(Ecol[qe], kind="stable")]
-        a, b = _pairs(Ecol[qe])
-        self._Q = (qe[a], qe[b], zslot[Ecol[qe[a]]])
-        Qi, Qj = off + Erow[qe[a]], off + Erow[qe[b]]
-        # unfolded rows: their residual against their columns, and -1 on the diagonal
-        ue = np.flatnonzero(~self.fold[Drow])
-        urow = np.full(self.m, -1, dtype=np.int64)
-        urow[~self.fold] = np.arange(nu)
-        self._U = ue
-        Ui = n + urow[Drow[ue]]
-        groups = {"H": (Hi, Hj),
-                  "E": (np.r_[off + Erow[ke], Ecol[ke]], np.r_[Ecol[ke], off + Erow[ke]]),
-                  "Q": (Qi, Qj),
-                  "U": (np.r_[Ui, Dcol[ue], n + np.arange(nu)], np.r_[Dcol[ue], Ui, n + np.arange(nu)])}
-        kl = 0
-        for i, j in groups.values():
-            pi, pj = self.pos[i], self.pos[j]
-            band = (pi >= 0) & (pj >= 0)
-            kl = max(kl, int(np.abs(pi[band] - pj[band]).max(initial=0)))
+        """Selection matrices of the band and the border, and the bandwidth, from one
+        assembly (kept for the first factor)."""
+        R = self.pos.size
+        nb = self.pos_order.size
+        self.P_band = _selection(R, self.pos_order).T.tocsr()        # (nb, R)
+        self.P_border = _selection(R, self.border_order).T.tocsr()   # (k, R)
+        K, h = self.reduced(D, E)
+        Kb = (self.P_band @ K @ self.P_band.T).tocsr()
+        rows = np.repeat(np.arange(nb), np.diff(Kb.indptr))
+        kl = int(np.abs(Kb.indices - rows).max(initial=0))
+        del rows
         if kl > max_band:
             raise NotBanded(f"bandwidth {kl} after ordering by time node, more than {max_band}: some "
                             "rows couple distant instants")
         self.kl = kl
         self.ldab = 3 * kl + 1
-        self.groups = {name: self._group(i, j) for name, (i, j) in groups.items()}
+        self._first = (K, Kb, h)
 
-    def _group(self, i: np.ndarray, j: np.ndarray) -> _Group:
-        pi, pj = self.pos[i], self.pos[j]
-        bi, bj = self.bpos[i], self.bpos[j]
-        band = np.flatnonzero((pi >= 0) & (pj >= 0))
-        kl = self.kl
-        # LAPACK's band storage: A[i, j] at ab[2 kl + i - j, j]; here row-major (nb, ldab)
-        dest = pj[band] * self.ldab + (2 * kl + pi[band] - pj[band])
-        B = np.flatnonzero((pi >= 0) & (bj >= 0))
-        C = np.flatnonzero((bi >= 0) & (bj >= 0))
-        return _Group(band, dest, B, pi[B], bj[B], C, bi[C] * self.border + bj[C])
+    def reduced(self, D: sp.csr_matrix, E: sp.csr_matrix):
+        """The reduced matrix after the diagonal eliminations (CSR, reduced indices) and the
+        eliminated unknowns' diagonal ``h``.
+
+        Notes
+        -----
+        Blocks: :math:`D_f^T D_f` on the kept unknowns, ``E`` on the kept unknowns (and
+        its transpose), :math:`-E_z h^{-1} E_z^T` on the multipliers, and the unfolded rows
+        :math:`[D_u, -I]`; every block by sparse products in scipy's compiled code.
+        """
+        n, R = self.n, self.pos.size
+        unf = self.unfolded
+        nu = unf.size
+        el = self.elim
+        Df = D[self.fold] if nu else D
+        h = column_squares(Df, el)
+        # the eliminated unknowns' rows and columns stay in K: the band's selection drops them
+        H = Df.T @ Df
+        Ek = E
+        p = self.p
+        Q = sp.csr_matrix((p, p))
+        if el.size:
+            Z = E @ _selection(n, el, 1.0 / np.sqrt(h))
+            Q = -(Z @ Z.T)
+        if nu:
+            Du = D[unf]
+            blocks = [[H, Du.T, Ek.T], [Du, -sp.identity(nu), None], [Ek, None, Q]]
+        else:
+            blocks = [[H, Ek.T], [Ek, Q]]
+        K = sp.bmat(blocks, format="csr")
+        if K.shape != (R, R):  # pragma: no cover - internal consistency
+            raise NotBanded(f"internal error: reduced matrix of shape {K.shape}, expected {(R, R)}")
+        return K, h
 
     def same_pattern(self, D: sp.csr_matrix, E: sp.csr_matrix) -> bool:
         """Whether ``D`` and ``E`` have the shapes and entry counts this plan was made for."""
         return (D.shape == (self.m, self.n) and E.shape == (self.p, self.n)
                 and D.nnz == self.nnz_D and E.nnz == self.nnz_E)
 
-    def values(self, Dd: np.ndarray, Ed: np.ndarray) -> tuple[dict, np.ndarray]:
-        """The value of every contribution for these entries of ``D`` and ``E`` (group name ->
-        values), and the eliminated unknowns' diagonal ``h``."""
-        ze, zs = self._h
-        h = np.bincount(zs, weights=Dd[ze] ** 2, minlength=self.elim.size)
-        a, b = self._H
-        qa, qb, qz = self._Q
-        ke, ue = self._E, self._U
-        nu = int(np.count_nonzero(~self.fold))
-        vals = {"H": Dd[a] * Dd[b], "E": np.r_[Ed[ke], Ed[ke]],
-                "Q": -Ed[qa] * Ed[qb] / h[qz] if qa.size else np.zeros(0),
-                "U": np.r_[Dd[ue], Dd[ue], -np.ones(nu)]}
-        return vals, h
+
+def _within_band(A: sp.csr_matrix, kl: int) -> bool:
+    """Whether every stored entry of ``A`` lies within ``kl`` of the diagonal."""
+    rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
+    return bool(np.abs(A.indices - rows).max(initial=0) <= kl)
 
 
 class BandedKKT(Factorization):
@@ -447,14 +412,27 @@ class BandedKKT(Factorization):
         self._Df = D[pl.fold] if self._unf.size else D
         el = pl.elim
         if el.size:
-            self._Ez = E.tocsc()[:, el]
-        vals, self._h = pl.values(D.data, E.data)
+            self._Ez = (E @ _selection(pl.n, el)).tocsr()
+        first = getattr(pl, "_first", None)
+        pl._first = None   # the first factor takes the plan's own assembly
+        if first is not None:
+            K, Kb, self._h = first
+        else:
+            K, self._h = pl.reduced(D, E)
+            Kb = pl.P_band @ K @ pl.P_band.T
         nb, k, kl, ldab = pl.size, pl.border, pl.kl, pl.ldab
         self.k = k
-        gs = [(pl.groups[name], v) for name, v in vals.items()]
-        ab = np.bincount(np.concatenate([g.band_dest for g, _ in gs]),
-                         weights=np.concatenate([v[g.band] for g, v in gs]),
-                         minlength=nb * ldab).reshape(nb, ldab)
+        # LAPACK's band storage, row-major here: ab[j, 2 kl + i - j] = A[i, j]
+        ab = np.zeros((nb, ldab))
+        for off in range(-kl, kl + 1):       # diagonal off: A[i, i + off]
+            dg = Kb.diagonal(off)
+            if off >= 0:
+                ab[off:, 2 * kl - off] = dg
+            else:
+                ab[:nb + off, 2 * kl - off] = dg
+        if first is None and not _within_band(Kb, kl):
+            raise NotBanded("the sparsity pattern changed since the plan was made")
+        del Kb
         # symmetric scaling by the square roots of the column maxima (row j of ab is column j)
         colmax = np.abs(ab).max(axis=1) if nb else np.zeros(0)
         sU = 1.0 / np.sqrt(np.where(colmax > 0, colmax, 1.0))
@@ -466,14 +444,11 @@ class BandedKKT(Factorization):
         self._lu, self._piv = lu, piv
         self._sU = sU
         if k:
-            C = np.bincount(np.concatenate([g.C_dest for g, _ in gs]),
-                            weights=np.concatenate([v[g.C] for g, v in gs]), minlength=k * k).reshape(k, k)
+            C = (pl.P_border @ K @ pl.P_border.T).toarray()
             dmax = np.abs(np.diag(C))
             sW = 1.0 / np.sqrt(np.where(dmax > 0, dmax, 1.0))
-            Bi = np.concatenate([g.B_row for g, _ in gs])
-            Bj = np.concatenate([g.B_col for g, _ in gs])
-            Bv = np.concatenate([v[g.B] for g, v in gs]) * sU[Bi] * sW[Bj]
-            self.B = sp.csc_matrix((Bv, (Bi, Bj)), shape=(nb, k))
+            Bs = (pl.P_band @ K @ pl.P_border.T).tocsc()
+            self.B = (sp.diags(sU) @ Bs @ sp.diags(sW)).tocsc()
             self._sW = sW
             self.X = self._band_solve(self.B.toarray())
             self.schur_border = C * sW[:, None] * sW[None, :] - self.B.T @ self.X

@@ -24,7 +24,51 @@ from .errors import InputError
 from .grid import as_times
 from .imu import ImuData
 
-__all__ = ["Affine", "Cone", "NavModel"]
+__all__ = ["Affine", "Cone", "NavModel", "RowLabels"]
+
+
+class RowLabels(Sequence):
+    """Row labels made on demand (``"fem_x[12]"``): N strings are not built per solve.
+
+    Parameters
+    ----------
+    parts : sequence
+        Each either ``(prefix, count)`` (``count`` labels ``f"{prefix}[{i}]"``) or a
+        sequence of label strings.
+    """
+
+    def __init__(self, parts: Sequence):
+        self.parts = [(str(q[0]), int(q[1])) if _is_indexed(q) else tuple(q) for q in parts]
+        self._ends = np.cumsum([q[1] if _is_indexed(q) else len(q) for q in self.parts])
+
+    def __len__(self) -> int:
+        return int(self._ends[-1]) if len(self._ends) else 0
+
+    def __iter__(self):
+        for q in self.parts:
+            if _is_indexed(q):
+                yield from (f"{q[0]}[{i}]" for i in range(q[1]))
+            else:
+                yield from q
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return [self[k] for k in range(*i.indices(len(self)))]
+        i = int(i)
+        if i < 0:
+            i += len(self)
+        if not 0 <= i < len(self):
+            raise IndexError(i)
+        k = int(np.searchsorted(self._ends, i, side="right"))
+        q = self.parts[k]
+        j = i - (int(self._ends[k - 1]) if k else 0)
+        return f"{q[0]}[{j}]" if _is_indexed(q) else q[j]
+
+
+def _is_indexed(q) -> bool:
+    """``(prefix, count)`` rather than a sequence of labels."""
+    return (isinstance(q, tuple) and len(q) == 2 and isinstance(q[0], str)
+            and isinstance(q[1], int | np.integer) and not isinstance(q[1], bool))
 
 
 @dataclass(frozen=True, eq=False)
@@ -35,13 +79,14 @@ class Affine:
     ----------
     A : scipy.sparse.csr_matrix, shape (m, n)
     c : ndarray, shape (m,)
-    labels : tuple of str, optional
-        One label per row (e.g. ``"x(t=2.5)"``) for reports.
+    labels : sequence of str, optional
+        One label per row (e.g. ``"x(t=2.5)"``) for reports (a tuple, or
+        :class:`RowLabels` made on demand).
     """
 
     A: sp.csr_matrix
     c: np.ndarray
-    labels: tuple[str, ...] | None = None
+    labels: Sequence[str] | None = None
 
     def __post_init__(self):
         A = sp.csr_matrix(self.A)
@@ -94,7 +139,11 @@ class Affine:
         parts = list(parts)
         labels = None
         if all(p.labels is not None for p in parts):
-            labels = tuple(lab for p in parts for lab in p.labels)
+            if any(isinstance(p.labels, RowLabels) for p in parts):
+                labels = RowLabels([q for p in parts for q in (
+                    p.labels.parts if isinstance(p.labels, RowLabels) else [p.labels])])
+            else:
+                labels = tuple(lab for p in parts for lab in p.labels)
         return Affine(sp.vstack([p.A for p in parts], format="csr"),
                       np.concatenate([p.c for p in parts]), labels)
 
@@ -267,8 +316,7 @@ class NavModel:
             if self.q:
                 blocks["l"] = self.M @ self.G[:, a, :]
             A = self._place(blocks, a)
-            out.append(Affine(A, self.M @ self.data.acc[:, a],
-                              tuple(f"fem_{self.axes[a]}[{i}]" for i in range(self.N))))
+            out.append(Affine(A, self.M @ self.data.acc[:, a], RowLabels([(f"fem_{self.axes[a]}", self.N)])))
         return Affine.vstack(out)
 
     def residual_rows(self, axes=None) -> Affine:
