@@ -249,7 +249,8 @@ class BandPlan:
 
     @classmethod
     def build(cls, D: sp.csr_matrix, E: sp.csr_matrix, colnode: np.ndarray,
-              max_band: int = MAX_BAND, max_border: int = MAX_BORDER, span: int = FOLD_SPAN) -> BandPlan:
+              max_band: int = MAX_BAND, max_border: int = MAX_BORDER, span: int = FOLD_SPAN,
+              lam_rows: np.ndarray | None = None) -> BandPlan:
         """Order the reduced system by node; raise :class:`NotBanded` when it is not local.
 
         Parameters
@@ -259,6 +260,9 @@ class BandPlan:
             duplicates).
         colnode : ndarray of int (n,)
             Node of each unknown, -1 for unknowns that go to the border.
+        lam_rows : ndarray of bool (m,), optional
+            Lambda-weighted objective rows: an unknown they touch is not eliminated, so the
+            banded part stays affine in lambda (:meth:`objective_part`).
         """
         m, n = D.shape
         p = E.shape[0]
@@ -270,6 +274,8 @@ class BandPlan:
         nnz_row = np.diff(D.indptr)[Drow]
         # an unknown is eliminated when each of its objective entries is alone in a folded row
         alone = fold[Drow] & (nnz_row == 1)
+        if lam_rows is not None:
+            alone &= ~np.asarray(lam_rows, dtype=bool)[Drow]
         single = np.bincount(Dcol, weights=alone, minlength=n) == np.bincount(Dcol, minlength=n)
         single &= np.bincount(Dcol, minlength=n) > 0
         single &= colnode >= 0
@@ -315,7 +321,58 @@ class BandPlan:
                             "rows couple distant instants")
         self.kl = kl
         self.ldab = 3 * kl + 1
-        self._first = (K, Kb, h)
+        self._first = self._parts(K, Kb, h)
+
+    def _band(self, Kb: sp.csr_matrix) -> np.ndarray:
+        """LAPACK's band storage of the banded part, ``ab[2 kl + i - j, j] = A[i, j]`` (C order
+        here: each band row contiguous; transposed to Fortran order for ``dgbtrf``)."""
+        nb, kl = self.pos_order.size, self.kl
+        ab = np.zeros((self.ldab, nb))
+        for off in range(-kl, kl + 1):       # diagonal off: A[i, i + off]
+            dg = Kb.diagonal(off)
+            if off >= 0:
+                ab[2 * kl - off, off:] = dg
+            else:
+                ab[2 * kl - off, :nb + off] = dg
+        return ab
+
+    def _parts(self, K, Kb, h) -> tuple:
+        """``(ab, B, C, h)``: the band, its coupling to the border, the border block."""
+        k = self.border_order.size
+        B = (self.P_band @ K @ self.P_border.T).tocsc() if k else None
+        C = (self.P_border @ K @ self.P_border.T).toarray() if k else np.zeros((0, 0))
+        return self._band(Kb), B, C, h
+
+    def assemble(self, D: sp.csr_matrix, E: sp.csr_matrix) -> tuple:
+        """The reduced matrix's parts for these values (see :meth:`reduced`); the first call
+        returns the assembly the plan was made from."""
+        first, self._first = getattr(self, "_first", None), None
+        if first is not None:
+            return first
+        K, h = self.reduced(D, E)
+        Kb = (self.P_band @ K @ self.P_band.T).tocsr()
+        if not _within_band(Kb, self.kl):
+            raise NotBanded("the sparsity pattern changed since the plan was made")
+        return self._parts(K, Kb, h)
+
+    def eliminated_columns(self, E: sp.csr_matrix) -> sp.csr_matrix:
+        """``E`` restricted to the eliminated unknowns (kept for the last ``E`` seen: every
+        lambda of a sweep has the same equality rows)."""
+        cached = getattr(self, "_Ez", None)
+        if cached is None or cached[0] is not E.data:   # the same arrays under a new wrapper
+            cached = (E.data, (E @ _selection(self.n, self.elim)).tocsr())
+            self._Ez = cached
+        return cached[1]
+
+    def objective_part(self, D1: sp.csr_matrix) -> tuple:
+        """The parts of :math:`D_1^T D_1` alone (rows that are all folded and touch no
+        eliminated unknown): what a lambda-weighted block adds, per unit of lambda."""
+        R = self.pos.size
+        H = D1.T @ D1
+        Hp = sp.block_diag([H, sp.csr_matrix((R - self.n, R - self.n))], format="csr")
+        Kb = (self.P_band @ Hp @ self.P_band.T).tocsr()
+        ab, B, C, _ = self._parts(Hp, Kb, None)
+        return ab, B, C
 
     def reduced(self, D: sp.csr_matrix, E: sp.csr_matrix):
         """The reduced matrix after the diagonal eliminations (CSR, reduced indices) and the
@@ -377,6 +434,11 @@ class BandedKKT(Factorization):
     plan : BandPlan, optional
         A plan of a problem with the same sparsity pattern, reused (only the values are
         scattered and factorised again).
+    parts : tuple, optional
+        The assembled ``(ab, B, C, h)`` of :meth:`BandPlan.assemble` (the lambda sweep
+        combines them), instead of assembling from ``D`` and ``E``.
+    lam_rows : ndarray of bool, optional
+        Passed to :meth:`BandPlan.build`.
 
     Raises
     ------
@@ -399,10 +461,11 @@ class BandedKKT(Factorization):
     shift = 0.0
 
     def __init__(self, D: sp.csr_matrix, E: sp.csr_matrix, colnode: np.ndarray | None = None,
-                 params: np.ndarray | None = None, plan: BandPlan | None = None):
+                 params: np.ndarray | None = None, plan: BandPlan | None = None, parts: tuple | None = None,
+                 lam_rows: np.ndarray | None = None):
         D, E = canonical(D), canonical(E)
         if plan is None:
-            plan = BandPlan.build(D, E, colnode)
+            plan = BandPlan.build(D, E, colnode, lam_rows=lam_rows)
         elif not plan.same_pattern(D, E):
             raise NotBanded("the sparsity pattern changed since the plan was made")
         self.plan = pl = plan
@@ -412,42 +475,31 @@ class BandedKKT(Factorization):
         self._Df = D[pl.fold] if self._unf.size else D
         el = pl.elim
         if el.size:
-            self._Ez = (E @ _selection(pl.n, el)).tocsr()
-        first = getattr(pl, "_first", None)
-        pl._first = None   # the first factor takes the plan's own assembly
-        if first is not None:
-            K, Kb, self._h = first
-        else:
-            K, self._h = pl.reduced(D, E)
-            Kb = pl.P_band @ K @ pl.P_band.T
+            self._Ez = pl.eliminated_columns(E)
+        if parts is None:
+            parts = pl.assemble(D, E)
+        ab, Bs, C, self._h = parts   # ab is this factor's own (dgbtrf overwrites it)
         nb, k, kl, ldab = pl.size, pl.border, pl.kl, pl.ldab
         self.k = k
-        # LAPACK's band storage, row-major here: ab[j, 2 kl + i - j] = A[i, j]
-        ab = np.zeros((nb, ldab))
-        for off in range(-kl, kl + 1):       # diagonal off: A[i, i + off]
-            dg = Kb.diagonal(off)
-            if off >= 0:
-                ab[off:, 2 * kl - off] = dg
-            else:
-                ab[:nb + off, 2 * kl - off] = dg
-        if first is None and not _within_band(Kb, kl):
-            raise NotBanded("the sparsity pattern changed since the plan was made")
-        del Kb
-        # symmetric scaling by the square roots of the column maxima (row j of ab is column j)
-        colmax = np.abs(ab).max(axis=1) if nb else np.zeros(0)
+        # symmetric scaling by the square roots of the column maxima (the matrix is symmetric)
+        colmax = np.abs(ab[kl:]).max(axis=0) if nb else np.zeros(0)
         sU = 1.0 / np.sqrt(np.where(colmax > 0, colmax, 1.0))
         pad = np.concatenate([np.zeros(2 * kl), sU, np.zeros(kl)])
-        ab *= sU[:, None] * np.lib.stride_tricks.sliding_window_view(pad, ldab)[:nb]
-        lu, piv, info = lapack.dgbtrf(ab.T, kl, kl, overwrite_ab=1)
+        for r in range(kl, ldab):       # band row r holds A[j + r - 2 kl, j]
+            ab[r] *= pad[r:r + nb]
+        # one pass: the column scaling and the transposition to LAPACK's column-major layout
+        abF = np.empty((nb, ldab))
+        np.multiply(ab.T, sU[:, None], out=abF)
+        del ab
+        ab = abF.T
+        lu, piv, info = lapack.dgbtrf(ab, kl, kl, overwrite_ab=1)
         if info != 0:
             raise np.linalg.LinAlgError(f"the banded part is singular (zero pivot at {info})")
         self._lu, self._piv = lu, piv
         self._sU = sU
         if k:
-            C = (pl.P_border @ K @ pl.P_border.T).toarray()
             dmax = np.abs(np.diag(C))
             sW = 1.0 / np.sqrt(np.where(dmax > 0, dmax, 1.0))
-            Bs = (pl.P_band @ K @ pl.P_border.T).tocsc()
             self.B = (sp.diags(sU) @ Bs @ sp.diags(sW)).tocsc()
             self._sW = sW
             self.X = self._band_solve(self.B.toarray())
@@ -504,6 +556,24 @@ class BandedKKT(Factorization):
         else:
             z[:m] = self._Df @ x - b1f
         return z
+
+    def logdet(self) -> float:
+        r""":math:`\log|\det S|` up to a constant that depends on the pattern only (the
+        folded rows' ``-I`` and signs): the eliminated pivots ``h``, the banded LU's
+        diagonal and the border's Schur complement, each unscaled.
+
+        Notes
+        -----
+        With the symmetric scaling ``s``, :math:`\log|\det A| = \sum_j \log|U_{jj}| -
+        2 \sum_j \log s_j`; eliminating ``w`` by its pivot ``h`` and the border by its Schur
+        complement ``W`` multiply the determinant by :math:`\prod h` and :math:`\det W`.
+        """
+        kl = self.plan.kl
+        out = float(np.sum(np.log(self._h))) if self._h.size else 0.0
+        out += float(np.sum(np.log(np.abs(self._lu[2 * kl])))) - 2.0 * float(np.sum(np.log(self._sU)))
+        if self.k:
+            out += float(np.linalg.slogdet(self.schur_border)[1]) - 2.0 * float(np.sum(np.log(self._sW)))
+        return out
 
     # ---------------------------------------------------------- conditioning
     @property

@@ -353,7 +353,7 @@ def column_nodes(model, interleave: bool = False) -> np.ndarray:
     return colnode
 
 
-def banded_factor(form: LeastSquaresForm, problem, plan=None) -> BandedKKT:
+def banded_factor(form: LeastSquaresForm, problem, plan=None, parts=None) -> BandedKKT:
     """:class:`bvpnav.banded.BandedKKT` of a form (axes end to end, else interleaved when
     rows couple axes); ``plan`` from an earlier factor of the same pattern is reused.
 
@@ -366,13 +366,13 @@ def banded_factor(form: LeastSquaresForm, problem, plan=None) -> BandedKKT:
     model = as_formulation(problem).model
     D, E = form.D.A, form.E.A
     if plan is not None:
-        return BandedKKT(D, E, params=model.l_index, plan=plan)
+        return BandedKKT(D, E, params=model.l_index, plan=plan, parts=parts)
     try:
-        return BandedKKT(D, E, column_nodes(model), params=model.l_index)
+        return BandedKKT(D, E, column_nodes(model), params=model.l_index, lam_rows=form.lam_rows)
     except NotBanded:
         if model.d == 1:
             raise
-    return BandedKKT(D, E, column_nodes(model, interleave=True), params=model.l_index)
+    return BandedKKT(D, E, column_nodes(model, interleave=True), params=model.l_index, lam_rows=form.lam_rows)
 
 
 def factor_form(form: LeastSquaresForm, problem, method: str = "lu", delta: float = 1e-12):

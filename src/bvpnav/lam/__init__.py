@@ -21,8 +21,12 @@ import numpy as np
 from ..errors import InputError
 from ..plugins import discover
 
-__all__ = ["LambdaRule", "register_rule", "unregister_rule", "get_rule", "rule_names", "NEEDS",
-           "edge_warning"]
+#: Brent's tolerance on log(lambda) when a rule refines its choice (1 % in lambda: the
+#: rules' functions are flat at their optimum, and each evaluation is a factorization).
+REFINE_XATOL = 1e-2
+
+__all__ = ["REFINE_XATOL", "LambdaRule", "register_rule", "unregister_rule", "get_rule", "rule_names",
+           "NEEDS", "edge_warning"]
 
 #: What a rule may need from the sweep.
 NEEDS = ("least_squares", "trace", "noise", "acceleration")

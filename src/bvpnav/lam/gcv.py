@@ -7,7 +7,7 @@ import math
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from . import LambdaRule, bracket, edge_warning, register_rule
+from . import REFINE_XATOL, LambdaRule, bracket, edge_warning, register_rule
 
 __all__ = ["GCV", "gcv"]
 
@@ -42,7 +42,7 @@ class GCV(LambdaRule):
         edge_warning(curve, self.name, k, 0, scores, best="min")
         a, b = bracket(s, k)
         res = minimize_scalar(lambda u: gcv(sweep.point(math.exp(u))), bounds=(a, b), method="bounded",
-                              options={"xatol": 1e-3})
+                              options={"xatol": REFINE_XATOL})
         return float(math.exp(res.x))
 
 

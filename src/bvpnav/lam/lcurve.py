@@ -8,7 +8,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.optimize import minimize_scalar
 
-from . import WIDEN, LambdaRule, bracket, edge_warning, register_rule
+from . import REFINE_XATOL, WIDEN, LambdaRule, bracket, edge_warning, register_rule
 
 __all__ = ["LCurve", "curvature", "spline_curvature"]
 
@@ -77,7 +77,7 @@ class LCurve(LambdaRule):
         a, b = bracket(s, k)
         if sweep.engine == "direct":
             res = minimize_scalar(lambda u: -curvature(sweep.point(math.exp(u))), bounds=(a, b),
-                                  method="bounded", options={"xatol": 1e-3})
+                                  method="bounded", options={"xatol": REFINE_XATOL})
             return float(math.exp(res.x))
         fine = np.linspace(a, b, 9)[1:-1]
         for u in fine[np.abs(fine - s[k]) > 1e-6]:

@@ -7,7 +7,7 @@ import math
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from . import WIDEN, LambdaRule, bracket, register_rule
+from . import REFINE_XATOL, WIDEN, LambdaRule, bracket, register_rule
 
 __all__ = ["Quasi"]
 
@@ -45,7 +45,7 @@ class Quasi(LambdaRule):
             return float(curve.lam[k])
         a, b = bracket(s, k)
         res = minimize_scalar(lambda u: sweep.point(math.exp(u))["quasi"], bounds=(a, b),
-                              method="bounded", options={"xatol": 1e-3})
+                              method="bounded", options={"xatol": REFINE_XATOL})
         return float(math.exp(res.x))
 
 

@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..banded import NotBanded
+from ..banded import BandedKKT, NotBanded, canonical
 from ..cvx import compiled
 from ..errors import InputError
 from ..formulation import LAM_RANGE, as_formulation
@@ -45,7 +45,14 @@ from ..lsq import banded_factor, factor_form, least_squares_form, non_least_squa
 from ..plot import lcurve
 from . import get_rule, rule_names
 
-__all__ = ["LambdaCurve", "DirectSweep", "CvxpySweep", "sweep_curve", "check_range"]
+__all__ = ["LambdaCurve", "DirectSweep", "CvxpySweep", "sweep_curve", "check_range", "DIRECT_POINTS",
+           "CVXPY_POINTS"]
+
+#: Default coarse sweep of the direct engine (exact curve at each point, refined by Brent).
+DIRECT_POINTS = 13
+
+#: Default coarse sweep of the cvxpy engine (spline through the samples).
+CVXPY_POINTS = 25
 
 log = logging.getLogger(__name__)
 
@@ -145,8 +152,11 @@ class DirectSweep:
         self.cache: dict[float, dict] = {}
         self._rhs_jac = None
         self._probe_rhs = None
+        self._logdet_ok = None
+        self.trace_method = None
         self._ls = least_squares_form(self.form, 1.0)   # every lambda rescales its soft rows
         self._plan = None
+        self._parts = None
         self.factorization = "lu"
         if self.form.residual == "acceleration":  # the load form (condition ~N^4) keeps the pivoted LU
             try:
@@ -157,12 +167,34 @@ class DirectSweep:
             except (RuntimeError, np.linalg.LinAlgError) as exc:
                 self.factorization = f"lu (banded failed: {exc})"
 
-    def _factor(self, form):
+    def _affine_parts(self):
+        """The banded parts at lambda = 1 and per unit of lambda: the band is affine in lambda
+        when every lambda-weighted row is folded (unknowns they touch are never eliminated),
+        so a new lambda costs one combination and one ``dgbtrf``, no assembly."""
+        if self._parts is None:
+            pl, ls = self._plan, self._ls
+            D, E = canonical(ls.D.A), canonical(ls.E.A)
+            lam_rows = np.asarray(ls.lam_rows, dtype=bool)
+            if np.any(lam_rows & ~pl.fold):
+                self._parts = False   # a far-reaching lambda row: assemble at every lambda
+            else:
+                self._parts = (pl.assemble(D, E), pl.objective_part(D[lam_rows]))
+        return self._parts
+
+    def _factor(self, form, lam: float | None = None):
         """The banded factor with the plan made once (the pattern is the same at every
         lambda), or the pivoted sparse LU when the problem is not banded."""
         if self._plan is not None:
             try:
-                return banded_factor(form, self.form, plan=self._plan)
+                parts = None
+                affine = self._affine_parts() if lam is not None else False
+                if affine:
+                    (ab, B, C, h), (ab1, B1, C1) = affine
+                    g = lam - 1.0
+                    band = ab1 * g
+                    band += ab
+                    parts = (band, None if B is None else B + g * B1, C + g * C1, h)
+                return banded_factor(form, self.form, plan=self._plan, parts=parts)
             except (RuntimeError, np.linalg.LinAlgError):
                 pass
         return factor_form(form, self.form)
@@ -181,11 +213,18 @@ class DirectSweep:
         form = self._ls.at_lam(lam)
         m, n = form.D.A.shape
         try:
-            fac = self._factor(form)
+            fac = self._factor(form, lam)
         except (RuntimeError, np.linalg.LinAlgError) as exc:
             raise InputError(f"lambda={lam:g}: the KKT matrix is singular ({exc}); some unknown is "
                              "not determined by the information") from exc
-        z, _, _ = fac.refined(form.rhs(), 2, 1e-14, window=slice(m, m + n))
+        # the banded LU (pivoted, exact but for folding the local rows) answers a curve point
+        # to about 1e-12 without refinement (the chosen lambda's own solve is refined and
+        # verified); the sparse LU of the load form is refined twice
+        banded = isinstance(fac, BandedKKT)
+        if banded:
+            z = fac.solve(form.rhs())
+        else:
+            z, _, _ = fac.refined(form.rhs(), 2, 1e-14, window=slice(m, m + n))
         x = z[m:m + n]
         scaled = [t.residual.value(x) / t.sigma for t in self.lam_terms]  # S (A x + c)
         rho2 = float(np.sum(self.data.value(x) ** 2))
@@ -196,7 +235,7 @@ class DirectSweep:
         for t, r in zip(self.lam_terms, scaled, strict=True):
             g -= t.residual.A.T @ (r / t.sigma)
         rhs = np.concatenate([np.zeros(m), g, np.zeros(form.E.m)])
-        dz, _, _ = fac.refined(rhs, 1, window=slice(m, m + n))
+        dz = fac.solve(rhs) if banded else fac.refined(rhs, 1, window=slice(m, m + n))[0]
         dx = dz[m:m + n]
         deta2 = sum(2.0 * float(np.sum(r * ((t.residual.A @ dx) / t.sigma)))
                     for t, r in zip(self.lam_terms, scaled, strict=True))
@@ -223,9 +262,13 @@ class DirectSweep:
 
     def _trace(self, form, fac, lam, probes, seed) -> float:
         N, d = self.model.N, self.model.d
+        if isinstance(fac, BandedKKT) and N * d > self.exact_trace_limit and self._logdet_applies():
+            self.trace_method = "log-determinant"
+            return self._trace_logdet(form, fac, lam)
         m, n = form.D.A.shape
         widx = np.concatenate([self.model.w_index(a) for a in range(d)])  # axis-major like Z.T
         exact = N * d <= self.exact_trace_limit
+        self.trace_method = "exact columns" if exact else f"Hutchinson ({probes} probes)"
         if exact:
             Zs = [np.eye(N * d)[:, k].reshape(d, N).T for k in range(N * d)]
         else:
@@ -239,6 +282,78 @@ class DirectSweep:
         dW = fac.solve(R)[m:m + n][widx]
         vals = np.array([float(Z.T.ravel() @ dW[:, k]) for k, Z in enumerate(Zs)])
         return float(vals.sum()) if exact else float(vals.mean())
+
+    def _logdet_applies(self) -> bool:
+        """Whether the measured accelerations enter only as ``a_hat + w`` outside the data
+        rows (the acceleration form with items of the corrected acceleration, positions and
+        velocities): then the trace follows from the log-determinant (see
+        :meth:`_trace_logdet`). Checked once with a random change of the data: every row's
+        response must equal its ``w`` columns' (none for the data rows)."""
+        if self._logdet_ok is None:
+            ls, model = self._ls, self.model
+            if self.form.residual != "acceleration":
+                self._logdet_ok = False
+                return False
+            Z = np.random.default_rng(12345).standard_normal((model.N, model.d))
+            R = self._rhs_jacobian_apply(Z)
+            n = model.size
+            zw = np.zeros(n)
+            for a in range(model.d):
+                zw[model.w_index(a)] = Z[:, a]
+            m0 = model.N * model.d
+            want_D = -(ls.D.A @ zw)
+            want_D[:m0] = 0.0
+            want = np.concatenate([want_D, np.zeros(n), -(ls.E.A @ zw)])
+            scale = max(float(np.max(np.abs(want))), float(np.max(np.abs(R))), 1e-300)
+            self._logdet_ok = bool(np.max(np.abs(R - want)) <= 1e-9 * scale)
+        return self._logdet_ok
+
+    def _trace_logdet(self, form, fac, lam) -> float:
+        r""":math:`\mathrm{tr}(\partial w / \partial \hat a)` from the log-determinant.
+
+        Notes
+        -----
+        With ``u = a_hat + w`` as unknowns, the data rows are :math:`(u - \hat a)/\sigma_a`
+        and nothing else depends on the data, so the influence matrix of the ``N d`` data
+        rows is :math:`A = I + \partial w / \partial \hat a` and, with the hard rows' null
+        space ``Z`` (dimension :math:`k_Z = n - p`), the fixed soft rows and priors
+        :math:`D_p` and the lambda-weighted rows :math:`D_1`,
+
+        .. math::
+
+            \mathrm{tr} A = k_Z - \mathrm{tr}(D_p \Sigma D_p^T)
+              - \lambda \frac{d}{d\lambda} \log\det(Z^T H Z),
+            \qquad \Sigma = Z (Z^T H Z)^{-1} Z^T,
+
+        since :math:`Z^T H Z = Z^T (D_0^T D_0 + D_p^T D_p + \lambda D_1^T D_1) Z`. The
+        derivative is a central difference of :meth:`bvpnav.banded.BandedKKT.logdet` at
+        :math:`\lambda e^{\pm\delta}` (two more factorizations, :math:`\delta = 10^{-3}`:
+        truncation error about :math:`\delta^2/6` relative), :math:`\Sigma` on the few
+        prior rows by solves with this factorization. Exact up to that difference (a test
+        compares it with the trace by exact columns).
+        """
+        model = self.model
+        m0 = model.N * model.d
+        ls = form
+        m, n = ls.D.A.shape
+        fixed = np.flatnonzero(~ls.lam_rows)
+        fixed = fixed[fixed >= m0]
+        dlt = 1e-3
+        up = self._factor(self._ls.at_lam(lam * math.exp(dlt)), lam * math.exp(dlt)).logdet()
+        down = self._factor(self._ls.at_lam(lam * math.exp(-dlt)), lam * math.exp(-dlt)).logdet()
+        dlog = (up - down) / (2.0 * dlt)   # lambda d/dlambda log det
+        prior = 0.0
+        if fixed.size:
+            Dp = ls.D.A[fixed]
+            R = np.zeros((fac.S.shape[0], fixed.size))
+            R[m:m + n] = Dp.T.toarray()
+            X = fac.solve(R)[m:m + n]
+            # (S^-1)_xx = -Sigma in the augmented system's sign convention: its x block is the
+            # inverse of [D^T D, E^T; E, 0] restricted, with -I on the residuals
+            prior = float(np.sum(Dp.toarray().T * X))
+        kz = n - ls.E.m
+        tr_a = kz - abs(prior) - dlog
+        return float(tr_a - m0)
 
 
 class CvxpySweep:
@@ -340,7 +455,7 @@ def _sweep(eng, lams, progress):
         return [eng.point(lam) for lam in bar]
 
 
-def sweep_curve(form, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6), points: int = 25,
+def sweep_curve(form, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6), points: int | None = None,
                 tau: float = 1.5, probes: int = 24, seed: int = 0, progress=None, engine: str = "auto",
                 solve_at: Callable | None = None, check_memory: Callable | None = None) -> LambdaCurve:
     """Sweep lambda over a formulation and apply the selection rules.
@@ -355,8 +470,11 @@ def sweep_curve(form, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6), p
         The rule whose choice is reported as :attr:`LambdaCurve.lam_chosen`.
     lam_range : (float, float)
         Search interval for lambda (dimensionless), log-spaced.
-    points : int
-        Coarse sweep size; every rule is then refined inside its best bracket.
+    points : int, optional
+        Coarse sweep size; every rule is then refined inside its best bracket (Brent's
+        method to 1 % in lambda). Default: 13 (one per decade of the default range) with
+        the ``direct`` engine, whose curve is exact at every point, and 25 with the
+        ``cvxpy`` engine, whose curvature is a spline through the samples.
     tau : float
         Discrepancy safety factor.
     probes, seed : int
@@ -398,10 +516,12 @@ def _sweep_curve(form, rules, rule, lam_range, points, tau, probes, seed, progre
     if not form.has_soft_terms:
         raise InputError("choosing lambda needs at least one soft (or robust) item weighted by lambda; "
                          "every item is hard, so lambda has no effect: pass a number (e.g. lam=1)")
-    lo, hi = _check_range(lam_range, points)
     ls = non_least_squares_term(form) is None
     if engine == "auto":
         engine = "direct" if ls else "cvxpy"
+    if points is None:
+        points = DIRECT_POINTS if engine == "direct" else CVXPY_POINTS
+    lo, hi = _check_range(lam_range, points)
     if engine == "direct" and not ls:
         raise InputError("engine='direct' needs a least-squares problem (no band, robust or "
                          "inequality items); use engine='cvxpy'")
