@@ -398,8 +398,9 @@ def factor_form(form: LeastSquaresForm, problem, method: str = "lu", delta: floa
     return BorderedLU(form.augmented(), dense, np.arange(m + n, m + n + p))
 
 
-#: Relative correction below which refinement of a banded answer stops.
-BANDED_TOL = 1e-10
+#: Relative correction below which refinement of a banded answer stops (one step usually
+#: gets there; a second where the first solve was off by more, e.g. hard far rows).
+BANDED_TOL = 1e-12
 
 #: Largest normwise backward error at which a refined LDL^T answer is accepted.
 LDL_BACKWARD = 1e-12
@@ -467,7 +468,7 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
         try:
             fac = banded_factor(form, problem)
             # a pivoted LU (exact but for folding the local rows): one refinement step whose
-            # correction says the first solve's error usually settles it
+            # correction measures the first solve's error usually settles it
             z, k, corr = _accepted(fac, rhs, window, ldl_steps, BANDED_TOL, ldl_accept, notes, "banded")
             if z is None:
                 fac, method = None, "lu"
