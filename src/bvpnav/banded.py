@@ -69,14 +69,17 @@ def row_span(A: sp.csr_matrix, colnode: np.ndarray) -> tuple[np.ndarray, np.ndar
     row with none)."""
     A = sp.csr_matrix(A)
     m = A.shape[0]
-    nn = colnode[A.indices]
-    rows = np.repeat(np.arange(m), np.diff(A.indptr))
     big = np.iinfo(np.int64).max
     lo = np.full(m, big, dtype=np.int64)
     hi = np.full(m, -1, dtype=np.int64)
-    loc = nn >= 0
-    np.minimum.at(lo, rows[loc], nn[loc])
-    np.maximum.at(hi, rows[loc], nn[loc])
+    counts = np.diff(A.indptr)
+    rows = np.flatnonzero(counts)
+    if rows.size:
+        nn = colnode[A.indices]
+        starts = A.indptr[:-1][rows]
+        hi[rows] = np.maximum.reduceat(nn, starts)
+        np.putmask(nn, nn < 0, big)
+        lo[rows] = np.minimum.reduceat(nn, starts)
     return lo, hi
 
 
@@ -105,6 +108,16 @@ def _selection(n: int, cols: np.ndarray, scale: np.ndarray | None = None) -> sp.
     k = cols.size
     return sp.csc_matrix((np.ones(k) if scale is None else scale, np.asarray(cols, dtype=np.int64),
                           np.arange(k + 1)), shape=(n, k))
+
+
+def _drop_columns(A: sp.csr_matrix, cols: np.ndarray) -> sp.csr_matrix:
+    """``A`` (CSR) without the entries of columns ``cols`` (same shape)."""
+    keep = np.ones(A.shape[1], dtype=bool)
+    keep[cols] = False
+    mask = keep[A.indices]
+    row = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(row[mask], minlength=A.shape[0]))])
+    return sp.csr_matrix((A.data[mask], A.indices[mask], indptr), shape=A.shape)
 
 
 def column_squares(A: sp.csr_matrix, cols: np.ndarray) -> np.ndarray:
@@ -301,10 +314,11 @@ class BandPlan:
         plan = cls(fold=fold, elim=elim, pos=pos, bpos=bpos, kl=0, n=n, m=m, p=p,
                    nnz_D=D.nnz, nnz_E=E.nnz)
         plan.pos_order, plan.border_order = order, border
-        plan._analyse(D, E, Drow, Dcol, max_band)
+        del Drow, Dcol, nnz_row, alone, lo, hi, elo, ehi, node, reach, local, order, border
+        plan._analyse(D, E, max_band)
         return plan
 
-    def _analyse(self, D, E, Drow, Dcol, max_band) -> None:
+    def _analyse(self, D, E, max_band) -> None:
         """Selection matrices of the band and the border, and the bandwidth, from one
         assembly (kept for the first factor)."""
         R = self.pos.size
@@ -313,6 +327,9 @@ class BandPlan:
         self.P_border = _selection(R, self.border_order).T.tocsr()   # (k, R)
         K, h = self.reduced(D, E)
         Kb = (self.P_band @ K @ self.P_band.T).tocsr()
+        if not self.border_order.size:
+            del K
+            K = None
         rows = np.repeat(np.arange(nb), np.diff(Kb.indptr))
         kl = int(np.abs(Kb.indices - rows).max(initial=0))
         del rows
@@ -337,7 +354,8 @@ class BandPlan:
         return ab
 
     def _parts(self, K, Kb, h) -> tuple:
-        """``(ab, B, C, h)``: the band, its coupling to the border, the border block."""
+        """``(ab, B, C, h)``: the band, its coupling to the border, the border block (``K``
+        may be None when there is no border)."""
         k = self.border_order.size
         B = (self.P_band @ K @ self.P_border.T).tocsc() if k else None
         C = (self.P_border @ K @ self.P_border.T).toarray() if k else np.zeros((0, 0))
@@ -353,6 +371,9 @@ class BandPlan:
         Kb = (self.P_band @ K @ self.P_band.T).tocsr()
         if not _within_band(Kb, self.kl):
             raise NotBanded("the sparsity pattern changed since the plan was made")
+        if not self.border_order.size:
+            del K   # only the border needs it: free it before the band is allocated
+            return self._band(Kb), None, np.zeros((0, 0)), h
         return self._parts(K, Kb, h)
 
     def eliminated_columns(self, E: sp.csr_matrix) -> sp.csr_matrix:
@@ -392,18 +413,22 @@ class BandPlan:
         h = column_squares(Df, el)
         # the eliminated unknowns' rows and columns stay in K: the band's selection drops them
         H = Df.T @ Df
-        Ek = E
+        Ek = _drop_columns(E, self.elim) if el.size else E   # half of E: its w columns go
         p = self.p
         Q = sp.csr_matrix((p, p))
         if el.size:
             Z = E @ _selection(n, el, 1.0 / np.sqrt(h))
             Q = -(Z @ Z.T)
+        # CSR blocks stacked along both axes by scipy's compressed-stack paths (no COO copy)
         if nu:
             Du = D[unf]
-            blocks = [[H, Du.T, Ek.T], [Du, -sp.identity(nu), None], [Ek, None, Q]]
+            rows = [[H, Du.T.tocsr(), Ek.T.tocsr()],
+                    [Du, -sp.identity(nu, format="csr"), sp.csr_matrix((nu, p))],
+                    [Ek, sp.csr_matrix((p, nu)), Q.tocsr()]]
         else:
-            blocks = [[H, Ek.T], [Ek, Q]]
-        K = sp.bmat(blocks, format="csr")
+            rows = [[H.tocsr(), Ek.T.tocsr()], [Ek.tocsr(), Q.tocsr()]]
+        K = sp.vstack([sp.hstack(r, format="csr") for r in rows], format="csr")
+        del rows
         if K.shape != (R, R):  # pragma: no cover - internal consistency
             raise NotBanded(f"internal error: reduced matrix of shape {K.shape}, expected {(R, R)}")
         return K, h
@@ -479,6 +504,7 @@ class BandedKKT(Factorization):
         if parts is None:
             parts = pl.assemble(D, E)
         ab, Bs, C, self._h = parts   # ab is this factor's own (dgbtrf overwrites it)
+        del parts
         nb, k, kl, ldab = pl.size, pl.border, pl.kl, pl.ldab
         self.k = k
         # symmetric scaling by the square roots of the column maxima (the matrix is symmetric)
