@@ -224,11 +224,12 @@ VARIANTS = ("reference", "direct", "direct backend", "csne", "clarabel", "clarab
 
 def wanted(name: str, axes: int, n: int, skip: set[str]) -> bool:
     """Whether variant ``name`` runs for this case (``--skip`` and the built-in limits)."""
-    key = name.split()[0] + ("3" if axes > 1 else "")
-    full = name.replace(" ", "-") + ("3" if axes > 1 else "")
-    tags = {key, full, f"{key}@{n:.0e}", f"{full}@{n:.0e}", f"{key}@{n}", f"{full}@{n}"}
-    if tags & skip:
-        return False
+    suffix = "3" if axes > 1 else ""
+    names = {name.split()[0] + suffix, name.replace(" ", "-") + suffix}
+    for tag in skip:
+        what, _, size = tag.partition("@")
+        if what in names and (not size or int(float(size)) == n):
+            return False
     if name == "osqp":
         return n <= OSQP_MAX and axes == 1
     return True
