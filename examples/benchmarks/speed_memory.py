@@ -52,7 +52,8 @@ Flags: ``--quick`` (N = 2e3 and 1e4, seconds), ``--sizes`` (1-axis N, default 1e
 ``--sizes3`` (3-axis N, default the same), ``--repeat`` (3), ``--skip`` (comma-separated
 variants to leave out, e.g. ``csne3@1e6,clarabel3@1e6``; ``name@N`` or ``name`` for all N;
 ``name3`` for the 3-axis case), ``--lam-n`` (1e5), ``--lam-huge``, ``--no-lam``,
-``--memory``, ``--memory-n``, ``--no-peers``, ``--huge``, ``--huge-cap``, ``--osqp-max``
+``--memory``, ``--memory-n``, ``--no-peers``, ``--huge``, ``--huge-cap``, ``--osqp-max``,
+``--profile N`` (only a cProfile of one ``direct`` solve at N; ``--profile-axes``)
 (1e4; 2e3 with ``--quick``).
 
 Run ``python examples/benchmarks/speed_memory.py [--quick] [--memory] [--huge]``.
@@ -461,6 +462,26 @@ def _pykalman(spec: Spec) -> np.ndarray:
     return means[:, 0]
 
 
+# ------------------------------------------------------------------ profile
+def profile(n: int, axes: int, top: int = 30) -> None:
+    """cProfile of one ``prob.solve(solver="direct")`` (the problem built beforehand)."""
+    import cProfile
+    import pstats
+
+    _quiet(lambda: make_problem(make_spec(2000, axes, error_model=axes > 1)).solve(solver="direct"))
+    spec = make_spec(n, axes, error_model=axes > 1)
+    prob = make_problem(spec)
+    pr = cProfile.Profile()
+    t0 = time.perf_counter()
+    pr.enable()
+    _quiet(lambda: prob.solve(solver="direct"))
+    pr.disable()
+    print(f"\ncProfile of direct, N = {n}, {axes} axis/axes: {time.perf_counter() - t0:.2f} s "
+          f"(the reference: {_timed(lambda: reference_solve(spec)):.2f} s)")
+    pstats.Stats(pr).sort_stats("cumulative").print_stats(top)
+    pstats.Stats(pr).sort_stats("tottime").print_stats(top // 2)
+
+
 # ------------------------------------------------------------------ main
 def main(argv: list[str] | None = None) -> None:
     """Command line (see the module docstring)."""
@@ -479,6 +500,9 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--huge", action="store_true", help="direct at 1e7 x 1 axis in a capped child")
     ap.add_argument("--huge-cap", type=float, default=16.0, help="GB of address space for --huge")
     ap.add_argument("--osqp-max", type=float, default=1e4, help="largest N for OSQP (1 axis, one run)")
+    ap.add_argument("--profile", type=float, default=None, metavar="N",
+                    help="only: cProfile of one direct solve at N (1 axis; --profile-axes 3)")
+    ap.add_argument("--profile-axes", type=int, default=1)
     ap.add_argument("--case", nargs="+", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.case:  # a memory child: N AXES WHAT [CAP_GB]
@@ -489,6 +513,10 @@ def main(argv: list[str] | None = None) -> None:
             resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
         with one_thread():
             print(json.dumps(child(int(float(args.case[0])), int(args.case[1]), args.case[2])))
+        return
+    if args.profile:
+        with one_thread():
+            profile(int(args.profile), args.profile_axes)
         return
     if args.quick:
         sizes, sizes3, lam_n, mem_n = [2000, 10000], [2000, 10000], 10000, 20000
