@@ -376,7 +376,9 @@ def peers_table(ns: list[int]) -> None:
         df = rts_smoother(spec.t, spec.acc[:, 0], meas, sigma_a=spec.sigma_a, bias0_std=0.0)
         dt = time.perf_counter() - t0
         _peer_row("rts_smoother", n, dt, t_ref, df["position"].to_numpy(), ref, "bvpnav.baselines")
-        for name, have, f in (("filterpy", have_fp, _filterpy), ("pykalman", have_pk, _pykalman)):
+        peers = (("filterpy", have_fp, _filterpy, "its KalmanFilter forward, the RTS pass by hand (input u)"),
+                 ("pykalman", have_pk, _pykalman, "KalmanFilter.smooth; missing component: variance 1e12"))
+        for name, have, f, note in peers:
             if not have:
                 print(f"{name:<14}{n:>9}  not installed (pip install bvpnav[peers])")
                 continue
@@ -386,7 +388,7 @@ def peers_table(ns: list[int]) -> None:
             t0 = time.perf_counter()
             r = f(spec)
             dt = time.perf_counter() - t0
-            _peer_row(name, n, dt, t_ref, r, ref, "")
+            _peer_row(name, n, dt, t_ref, r, ref, note)
 
 
 def _peer_row(name: str, n: int, dt: float, t_ref: float, r: np.ndarray, ref: np.ndarray, note: str) -> None:
