@@ -61,7 +61,74 @@ Run ``python examples/benchmarks/speed_memory.py [--quick] [--memory] [--huge]``
 
 Measured on main before the structured path
 --------------------------------------------
-(see the end of this docstring; filled in from a run of this script)
+2026-12-02, main at ce989e5 (this branch adds only the benchmark), a 2-core VM shared with
+three other jobs (load average about 2.5-3.5: absolute times are noisy, the interleaved
+ratios are what count), BLAS on one thread. 1e4/1e5 rows and the lambda and peers tables
+from ``--sizes 1e4,1e5``; 1e6 rows from ``--sizes 1e6 --skip csne3@1e6,clarabel3@1e6``
+(csne did not finish in 330 s there in issue 18; Clarabel would need ~15 GB); memory from
+``--memory``. ``vs ref``: max|r - r_ref| / max|r_ref|::
+
+    case               N  variant              time s   x ref runs     vs ref  verified note
+    1 ax           10000  reference             0.014     1.0    3    0.0e+00  -
+    1 ax           10000  direct                0.081     5.5    3    2.1e-12  True     ldl, 3 refinements
+    1 ax           10000  direct backend        0.047     3.2    3    2.1e-12  -
+    1 ax           10000  csne                  0.228    16.1    3    1.6e-12  True     inaccurate, 20 it.
+    1 ax           10000  clarabel              0.274    19.8    3    7.2e-11  True     compile 0.06 s
+    1 ax           10000  clarabel re-solve     0.139    10.1    3    3.7e-11  True     lam=2, optimal
+    1 ax           10000  osqp                104.220  7358.9    1    1.4e-04  False    user_limit
+    1 ax          100000  reference             0.125     1.0    3    0.0e+00  -
+    1 ax          100000  direct                0.794     6.4    3    2.8e-12  True     ldl, 3 refinements
+    1 ax          100000  direct backend        0.578     4.6    3    2.8e-12  -
+    1 ax          100000  csne                  2.190    17.1    3    2.1e-12  True     inaccurate, 20 it.
+    1 ax          100000  clarabel              3.741    30.5    3    2.6e-11  True     compile 0.61 s
+    1 ax          100000  clarabel re-solve     1.239     9.9    3    1.4e-11  True     lam=2, optimal
+    1 ax         1000000  reference             1.207     1.0    3    0.0e+00  -
+    1 ax         1000000  direct                5.729     4.9    3    2.9e-12  True     ldl, 3 refinements
+    1 ax         1000000  direct backend        4.561     3.8    3    2.9e-12  -
+    1 ax         1000000  csne                 12.049    10.0    1    3.2e-12  True     inaccurate, 20 it.
+    1 ax         1000000  clarabel             22.151    18.4    1    2.6e-11  True     compile 8.53 s
+    1 ax         1000000  clarabel re-solve     9.788     8.1    1    2.0e-11  True     lam=2, optimal
+    3 ax +SF+B     10000  reference             0.033     1.0    3    0.0e+00  -
+    3 ax +SF+B     10000  direct                0.302     9.2    3    2.6e-12  True     ldl, 3 refinements
+    3 ax +SF+B     10000  direct backend        0.216     6.5    3    2.6e-12  -
+    3 ax +SF+B     10000  csne                  0.804    23.9    3    3.3e-12  True     inaccurate, 20 it.
+    3 ax +SF+B     10000  clarabel              0.853    25.4    3    6.3e-11  True     compile 0.14 s
+    3 ax +SF+B     10000  clarabel re-solve     0.368    12.4    3    4.2e-11  True     lam=2, optimal
+    3 ax +SF+B    100000  reference             0.323     1.0    3    0.0e+00  -
+    3 ax +SF+B    100000  direct                3.989    10.5    3    2.2e-12  True     ldl, 3 refinements
+    3 ax +SF+B    100000  direct backend        2.833     8.8    3    2.2e-12  -
+    3 ax +SF+B    100000  csne                  6.892    21.8    3    2.1e-12  True     inaccurate, 20 it.
+    3 ax +SF+B    100000  clarabel              7.468    37.8    3    2.1e-11  True     compile 1.18 s
+    3 ax +SF+B    100000  clarabel re-solve     4.049    20.4    3    1.7e-11  True     lam=2, optimal
+    3 ax +SF+B   1000000  reference             3.730     1.0    3    0.0e+00  -
+    3 ax +SF+B   1000000  direct               32.195     9.1    3    3.2e-12  True     ldl, 3 refinements
+    3 ax +SF+B   1000000  direct backend       26.346     8.0    3    3.2e-12  -
+
+    lambda rules, N = 100000, 1 axis: single direct solve 0.66 s (the reference 0.081 s)
+    rule        lambda  evaluations  total s  x single   x ref
+    lcurve    0.005153           33    22.96      35.0     284
+    gcv         0.6387           34    55.21      84.1     682
+    quasi        5.164           32    26.64      40.6     329
+
+    peak resident memory, N = 1000000, 1 axis (one child process each; VmHWM)
+    variant      peak MB  above base MB  B/sample  x ref  time s  note
+    baseline         195                                          imports + data + problem with its items
+    reference        745            550       577    1.0    1.24
+    direct          2170           1975      2071    3.6    6.07  optimal, verified=True
+    csne            2795           2600      2726    4.7   16.19  inaccurate, verified=True
+    clarabel        5531           5336      5595    9.7   22.96  optimal, verified=True
+
+    peers (1 axis, orientation only)   N   time s   x ref    vs ref
+    rts_smoother                   10000     0.72      78   5.5e-05
+    filterpy                       10000     0.47      51   5.5e-05
+    pykalman                       10000     1.33     143   5.5e-05
+    rts_smoother                  100000     5.27      41   5.3e-06
+    filterpy                      100000     2.28      18   5.3e-06
+    pykalman                      100000     5.34      42   5.3e-06
+
+Not measured here: the lambda rules at 1e6 (``--lam-huge``; about 33 evaluations x 5-6 s
+each per rule) and ``--huge`` (1e7 x 1 axis): see the report of this run in the commit
+log; at the measured 2.07 kB/sample ``direct`` needs about 21 GB above the baseline at 1e7.
 """
 
 from __future__ import annotations
