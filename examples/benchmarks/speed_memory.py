@@ -53,7 +53,7 @@ Flags: ``--quick`` (N = 2e3 and 1e4, seconds), ``--sizes`` (1-axis N, default 1e
 ``--sizes3`` (3-axis N, default the same), ``--repeat`` (3), ``--skip`` (comma-separated
 variants to leave out, e.g. ``csne3@1e6,clarabel3@1e6``; ``name@N`` or ``name`` for all N;
 ``name3`` for the 3-axis case), ``--lam-n`` (1e5), ``--lam-huge``, ``--no-lam``,
-``--memory``, ``--memory-n``, ``--no-peers``, ``--huge``, ``--huge-cap``, ``--osqp-max``,
+``--memory``, ``--memory-n``, ``--no-peers``, ``--huge``, ``--huge-cap``, ``--huge-n``, ``--osqp-max``,
 ``--profile N`` (only a cProfile of one ``direct`` solve at N; ``--profile-axes``)
 (1e4; 2e3 with ``--quick``).
 
@@ -576,6 +576,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--no-peers", action="store_true")
     ap.add_argument("--huge", action="store_true", help="direct at 1e7 x 1 axis in a capped child")
     ap.add_argument("--huge-cap", type=float, default=16.0, help="GB of address space for --huge")
+    ap.add_argument("--huge-n", type=float, default=1e7, help="N for --huge (default 1e7)")
     ap.add_argument("--osqp-max", type=float, default=1e4, help="largest N for OSQP (1 axis, one run)")
     ap.add_argument("--profile", type=float, default=None, metavar="N",
                     help="only: cProfile of one direct solve at N (1 axis; --profile-axes 3)")
@@ -624,7 +625,7 @@ def main(argv: list[str] | None = None) -> None:
     if args.memory:
         memory_table(mem_n)
     if args.huge:
-        huge(10_000_000, args.huge_cap)
+        huge(int(args.huge_n), args.huge_cap)
 
 
 if __name__ == "__main__":
