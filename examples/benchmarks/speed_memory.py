@@ -126,9 +126,13 @@ from ``--sizes 1e4,1e5``; 1e6 rows from ``--sizes 1e6 --skip csne3@1e6,clarabel3
     filterpy                      100000     2.28      18   5.3e-06
     pykalman                      100000     5.34      42   5.3e-06
 
-Not measured here: the lambda rules at 1e6 (``--lam-huge``; about 33 evaluations x 5-6 s
-each per rule) and ``--huge`` (1e7 x 1 axis): see the report of this run in the commit
-log; at the measured 2.07 kB/sample ``direct`` needs about 21 GB above the baseline at 1e7.
+``--huge`` (the machine's other jobs left 7-10 GB available, so the runs were capped):
+``--huge-n 2e6 --huge-cap 5.5``: baseline 256 MB, ``direct`` peak 4119 MB (2025 B/sample
+above the baseline, linear with the 1e6 row), verified, 33 s; ``--huge-cap 6`` at 1e7:
+bvpnav itself refuses (``InputError``: needs about 19.5 GB by its 1950 B/sample estimate,
+6.6 GB available); by the measured slope 1e7 needs about 20.3 GB above a 0.7 GB baseline,
+at the edge of a 24 GB machine. Not measured: the lambda rules at 1e6 (``--lam-huge``;
+about 33 evaluations of 5-6 s per rule).
 """
 
 from __future__ import annotations
