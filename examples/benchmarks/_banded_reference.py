@@ -25,9 +25,11 @@ Per axis the unknowns ``(r_j, mu_j)`` are interleaved (``r_j`` at ``2j``, ``mu_j
 ``K`` (tridiagonal) sits at offsets -3..+3, ``M^2`` (pentadiagonal) at 0, +-2, +-4, position
 rows interpolated between two nodes at 0, +-2; so the matrix is banded with ``kl = ku = 4``.
 Everything else (``v0, v1`` per axis, one multiplier per hard row, the q parameters) is a
-*border*: one ``dgbtrf`` per axis, one ``dgbtrs`` with ``1 + (border columns touching that
-axis)`` right-hand sides, a small dense Schur complement for the border, then
-``z_band = y - X z_border``. Cost and memory are O(N).
+*border*: one ``dgbtrf`` (the banded block is the same for every axis here: one grid, one
+``sigma_a``, the fixes at the same times on every axis), then per axis one ``dgbtrs`` with
+``1 + (border columns touching that axis)`` right-hand sides (``[b_a | C_a]``), the Schur
+complement ``S_bb - sum_a C_a^T A^{-1} C_a`` of the border (dense, ``2d + d k_hard + q``
+square) and ``z_band = y - X z_border``. Cost and memory are O(N).
 """
 
 from __future__ import annotations
