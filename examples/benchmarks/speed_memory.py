@@ -110,6 +110,13 @@ from ``--sizes 1e4,1e5``; 1e6 rows from ``--sizes 1e6 --skip csne3@1e6,clarabel3
     gcv         0.6387           34    55.21      84.1     682
     quasi        5.164           32    26.64      40.6     329
 
+    lambda rules, N = 1000000, 1 axis (--lam-n 1e6): single direct solve 12.55 s (the
+    first 1e6 solve of that process; 5.7 s in the speed table), the reference 1.156 s
+    rule        lambda  evaluations  total s  x single   x ref
+    lcurve     0.01145           33   292.74      23.3     253
+    gcv         0.7651           34   505.78      40.3     438
+    quasi        3.234           33   366.78      29.2     317
+
     peak resident memory, N = 1000000, 1 axis (one child process each; VmHWM)
     variant      peak MB  above base MB  B/sample  x ref  time s  note
     baseline         195                                          imports + data + problem with its items
@@ -131,8 +138,7 @@ from ``--sizes 1e4,1e5``; 1e6 rows from ``--sizes 1e6 --skip csne3@1e6,clarabel3
 above the baseline, linear with the 1e6 row), verified, 33 s; ``--huge-cap 6`` at 1e7:
 bvpnav itself refuses (``InputError``: needs about 19.5 GB by its 1950 B/sample estimate,
 6.6 GB available); by the measured slope 1e7 needs about 20.3 GB above a 0.7 GB baseline,
-at the edge of a 24 GB machine. Not measured: the lambda rules at 1e6 (``--lam-huge``;
-about 33 evaluations of 5-6 s per rule).
+at the edge of a 24 GB machine.
 """
 
 from __future__ import annotations
