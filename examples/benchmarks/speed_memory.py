@@ -1,0 +1,642 @@
+"""Benchmark: bvpnav's back ends beside an O(N) banded reference, in the same process (issue 18).
+
+The reference (:mod:`_banded_reference`, ~60 lines of numpy + LAPACK ``dgbtrf``/``dgbtrs``)
+solves exactly the KKT system bvpnav solves, with the acceleration residual eliminated
+(``w = -sigma_a^2 M mu``), the unknowns interleaved as ``(r_j, mu_j)`` (banded, kl = ku = 4)
+and the end velocities, the hard rows' multipliers and the error-model parameters
+bordered (one banded factor, ``1 + border`` right-hand sides, a small Schur complement).
+
+Problems (100 Hz, ``t = 0.01 k`` s, a smooth acceleration ``A sin(w t + phi)`` plus a
+constant 2 m/s drift in position, accelerometer noise 0.05 m/s^2 with ``sigma_a = 0.05``):
+
+- soft position fixes (GNSS-like) every 1 s at half-sample times (``0.505 + k`` s, so they
+  interpolate between two nodes), 1 m noise, ``sigma = 1`` m, weighted by lambda;
+- both end positions hard (surveyed start and end);
+- soft velocities at the two ends (0.05 m/s noise, ``sigma = 0.05`` m/s, weighted by
+  lambda). Interior velocity fixes are left out on purpose: a velocity at an interior
+  node depends on ``w``, which the reference eliminates;
+- (a) one axis; (b) three axes with ``ScaleFactor() + Bias()`` (scale errors 1 %, -2 %,
+  0.5 %; biases 0.05, -0.03, 0.02 m/s^2): six parameters in the border.
+
+Rows (``speed`` table): for each case and N, every variant is timed in the same process,
+the variants interleaved, ``--repeat`` times (median of the per-repetition ratios to the
+reference; at N >= 1e6 only the reference, ``direct`` and its back end are repeated, the
+others run once and are divided by the median reference time): ``direct`` as a user calls it
+(``prob.solve(solver="direct")`` on a freshly built problem), ``direct back end`` (the
+back end's ``run`` alone, items compiled beforehand: no verification, no ``Solution``),
+``csne``, ``clarabel`` (first solve; cvxpy's compile time reported separately) and its
+DPP re-solve at ``lam = 2`` (the cached problem), ``osqp`` at N = 1e4 only (one run,
+unverified). Every answer: the max-norm difference of the trajectory from the reference
+relative to its max-norm, and bvpnav's own ``stats["verified"]``.
+
+``lambda`` table: ``prob.solve(solver="direct", lam=rule)`` for ``lcurve``, ``gcv``,
+``quasi`` at N = 1e5 (1 axis; ``--lam-huge`` adds 1e6) as multiples of a single direct
+solve timed beside it, the number of evaluations and the lambda chosen.
+
+``memory`` table (``--memory``): one child process per row (``_memory.py``, VmHWM) at
+``--memory-n`` (1e6): a baseline child (imports, data, the problem with its items, no
+solve), then the reference, ``direct``, ``csne`` and ``clarabel`` (1 axis); MB and bytes
+per sample above the baseline.
+
+``peers`` table: ``bvpnav.baselines.rts_smoother`` and, where installed, filterpy's and
+pykalman's Kalman filter + RTS smoother on the same 1-axis measurements (a different
+model: per-sample white acceleration noise; for orientation only, times and the
+difference from the reference).
+
+``--huge``: 1e7 samples x 1 axis with ``direct`` in a child process capped at
+``--huge-cap`` GB of address space (RLIMIT_AS), peak memory reported (or why it failed).
+
+BLAS runs on one thread (threadpoolctl when installed; the ``*_NUM_THREADS`` variables are
+set before numpy is imported either way). Timings belong here, never in tests.
+
+Flags: ``--quick`` (N = 2e3 and 1e4, seconds), ``--sizes`` (1-axis N, default 1e4,1e5,1e6),
+``--sizes3`` (3-axis N, default the same), ``--repeat`` (3), ``--skip`` (comma-separated
+variants to leave out, e.g. ``csne3@1e6,clarabel3@1e6``; ``name@N`` or ``name`` for all N;
+``name3`` for the 3-axis case), ``--lam-n`` (1e5), ``--lam-huge``, ``--no-lam``,
+``--memory``, ``--memory-n``, ``--no-peers``, ``--huge``, ``--huge-cap``, ``--huge-n``, ``--osqp-max``,
+``--profile N`` (only a cProfile of one ``direct`` solve at N; ``--profile-axes``)
+(1e4; 2e3 with ``--quick``).
+
+Run ``python examples/benchmarks/speed_memory.py [--quick] [--memory] [--huge]``.
+
+Measured on main before the structured path
+--------------------------------------------
+2026-12-02, main at ce989e5 (this branch adds only the benchmark), a 2-core VM shared with
+three other jobs (load average about 2.5-3.5: absolute times are noisy, the interleaved
+ratios are what count), BLAS on one thread. 1e4/1e5 rows and the lambda and peers tables
+from ``--sizes 1e4,1e5``; 1e6 rows from ``--sizes 1e6 --skip csne3@1e6,clarabel3@1e6``
+(csne did not finish in 330 s there in issue 18; Clarabel would need ~15 GB); memory from
+``--memory``. ``vs ref``: max|r - r_ref| / max|r_ref|::
+
+    case               N  variant              time s   x ref runs     vs ref  verified note
+    1 ax           10000  reference             0.014     1.0    3    0.0e+00  -
+    1 ax           10000  direct                0.081     5.5    3    2.1e-12  True     ldl, 3 refinements
+    1 ax           10000  direct backend        0.047     3.2    3    2.1e-12  -
+    1 ax           10000  csne                  0.228    16.1    3    1.6e-12  True     inaccurate, 20 it.
+    1 ax           10000  clarabel              0.274    19.8    3    7.2e-11  True     compile 0.06 s
+    1 ax           10000  clarabel re-solve     0.139    10.1    3    3.7e-11  True     lam=2, optimal
+    1 ax           10000  osqp                104.220  7358.9    1    1.4e-04  False    user_limit
+    1 ax          100000  reference             0.125     1.0    3    0.0e+00  -
+    1 ax          100000  direct                0.794     6.4    3    2.8e-12  True     ldl, 3 refinements
+    1 ax          100000  direct backend        0.578     4.6    3    2.8e-12  -
+    1 ax          100000  csne                  2.190    17.1    3    2.1e-12  True     inaccurate, 20 it.
+    1 ax          100000  clarabel              3.741    30.5    3    2.6e-11  True     compile 0.61 s
+    1 ax          100000  clarabel re-solve     1.239     9.9    3    1.4e-11  True     lam=2, optimal
+    1 ax         1000000  reference             1.207     1.0    3    0.0e+00  -
+    1 ax         1000000  direct                5.729     4.9    3    2.9e-12  True     ldl, 3 refinements
+    1 ax         1000000  direct backend        4.561     3.8    3    2.9e-12  -
+    1 ax         1000000  csne                 12.049    10.0    1    3.2e-12  True     inaccurate, 20 it.
+    1 ax         1000000  clarabel             22.151    18.4    1    2.6e-11  True     compile 8.53 s
+    1 ax         1000000  clarabel re-solve     9.788     8.1    1    2.0e-11  True     lam=2, optimal
+    3 ax +SF+B     10000  reference             0.033     1.0    3    0.0e+00  -
+    3 ax +SF+B     10000  direct                0.302     9.2    3    2.6e-12  True     ldl, 3 refinements
+    3 ax +SF+B     10000  direct backend        0.216     6.5    3    2.6e-12  -
+    3 ax +SF+B     10000  csne                  0.804    23.9    3    3.3e-12  True     inaccurate, 20 it.
+    3 ax +SF+B     10000  clarabel              0.853    25.4    3    6.3e-11  True     compile 0.14 s
+    3 ax +SF+B     10000  clarabel re-solve     0.368    12.4    3    4.2e-11  True     lam=2, optimal
+    3 ax +SF+B    100000  reference             0.323     1.0    3    0.0e+00  -
+    3 ax +SF+B    100000  direct                3.989    10.5    3    2.2e-12  True     ldl, 3 refinements
+    3 ax +SF+B    100000  direct backend        2.833     8.8    3    2.2e-12  -
+    3 ax +SF+B    100000  csne                  6.892    21.8    3    2.1e-12  True     inaccurate, 20 it.
+    3 ax +SF+B    100000  clarabel              7.468    37.8    3    2.1e-11  True     compile 1.18 s
+    3 ax +SF+B    100000  clarabel re-solve     4.049    20.4    3    1.7e-11  True     lam=2, optimal
+    3 ax +SF+B   1000000  reference             3.730     1.0    3    0.0e+00  -
+    3 ax +SF+B   1000000  direct               32.195     9.1    3    3.2e-12  True     ldl, 3 refinements
+    3 ax +SF+B   1000000  direct backend       26.346     8.0    3    3.2e-12  -
+
+    lambda rules, N = 100000, 1 axis: single direct solve 0.66 s (the reference 0.081 s)
+    rule        lambda  evaluations  total s  x single   x ref
+    lcurve    0.005153           33    22.96      35.0     284
+    gcv         0.6387           34    55.21      84.1     682
+    quasi        5.164           32    26.64      40.6     329
+
+    lambda rules, N = 1000000, 1 axis (--lam-n 1e6): single direct solve 12.55 s (the
+    first 1e6 solve of that process; 5.7 s in the speed table), the reference 1.156 s
+    rule        lambda  evaluations  total s  x single   x ref
+    lcurve     0.01145           33   292.74      23.3     253
+    gcv         0.7651           34   505.78      40.3     438
+    quasi        3.234           33   366.78      29.2     317
+
+    peak resident memory, N = 1000000, 1 axis (one child process each; VmHWM)
+    variant      peak MB  above base MB  B/sample  x ref  time s  note
+    baseline         195                                          imports + data + problem with its items
+    reference        745            550       577    1.0    1.24
+    direct          2170           1975      2071    3.6    6.07  optimal, verified=True
+    csne            2795           2600      2726    4.7   16.19  inaccurate, verified=True
+    clarabel        5531           5336      5595    9.7   22.96  optimal, verified=True
+
+    peers (1 axis, orientation only)   N   time s   x ref    vs ref
+    rts_smoother                   10000     0.72      78   5.5e-05
+    filterpy                       10000     0.47      51   5.5e-05
+    pykalman                       10000     1.33     143   5.5e-05
+    rts_smoother                  100000     5.27      41   5.3e-06
+    filterpy                      100000     2.28      18   5.3e-06
+    pykalman                      100000     5.34      42   5.3e-06
+
+``--huge`` (the machine's other jobs left 7-10 GB available, so the runs were capped):
+``--huge-n 2e6 --huge-cap 5.5``: baseline 256 MB, ``direct`` peak 4119 MB (2025 B/sample
+above the baseline, linear with the 1e6 row), verified, 33 s; ``--huge-cap 6`` at 1e7:
+bvpnav itself refuses (``InputError``: needs about 19.5 GB by its 1950 B/sample estimate,
+6.6 GB available); by the measured slope 1e7 needs about 20.3 GB above a 0.7 GB baseline,
+at the edge of a 24 GB machine.
+"""
+
+from __future__ import annotations
+
+import os
+
+if __name__ == "__main__":  # a script (or a memory child): one BLAS thread from the start
+    for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS"):
+        os.environ.setdefault(_var, "1")
+
+import argparse  # noqa: E402
+import importlib.util  # noqa: E402
+import json  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+import warnings  # noqa: E402
+from collections.abc import Callable  # noqa: E402
+from contextlib import nullcontext  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from _banded_reference import Spec, reference_solve  # noqa: E402
+from _memory import own_peak_mb, run_case  # noqa: E402
+
+import bvpnav  # noqa: E402
+from bvpnav.backends import resolve_solver, solver_options  # noqa: E402
+from bvpnav.constraints import Position, Velocity  # noqa: E402
+from bvpnav.error_models import Bias, ScaleFactor  # noqa: E402
+
+#: Largest N at which OSQP runs (--osqp-max; at 1e4 it stops at its iteration limit after ~65 s).
+OSQP_MAX = 10_000
+SCALE = np.array([0.01, -0.02, 0.005])
+BIAS = np.array([0.05, -0.03, 0.02])
+
+
+def one_thread():
+    """A context limiting BLAS/OpenMP pools to one thread (threadpoolctl), else a no-op."""
+    if importlib.util.find_spec("threadpoolctl") is None:
+        return nullcontext()
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=1)
+
+
+# ------------------------------------------------------------------ problems
+def make_spec(n: int, axes: int = 1, error_model: bool = False, seed: int = 0) -> Spec:
+    """The benchmark problem in plain arrays (see the module docstring).
+
+    Parameters
+    ----------
+    n : int
+        Samples (100 Hz).
+    axes : int
+        1 to 3.
+    error_model : bool
+        Scale factor and bias errors in the measurements and ``ScaleFactor() + Bias()``.
+    seed : int
+    """
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) * 0.01
+    amp, om, ph = np.array([0.5, 0.3, 0.2])[:axes], np.array([0.3, 0.5, 0.7])[:axes], np.arange(axes)
+    acc = amp * np.sin(om * t[:, None] + ph)
+    truth = -amp / om**2 * np.sin(om * t[:, None] + ph) + 2.0 * t[:, None]
+    if error_model:
+        acc = (1.0 + SCALE[:axes]) * acc + BIAS[:axes]
+    acc += 0.05 * rng.normal(size=(n, axes))
+    T = float(t[-1])
+    pos_t = np.arange(0.505, T, 1.0)
+    j = np.searchsorted(t, pos_t) - 1
+    th = ((pos_t - t[j]) / (t[j + 1] - t[j]))[:, None]
+    pos_val = (1 - th) * truth[j] + th * truth[j + 1] + rng.normal(size=(pos_t.size, axes))
+    ends = np.array([0.0, T])
+    vel_val = -amp / om * np.cos(om * ends[:, None] + ph) + 2.0 + 0.05 * rng.normal(size=(2, axes))
+    return Spec(t, acc, 0.05, pos_t, pos_val, 1.0, ends, truth[[0, -1]], vel_val, 0.05, error_model, truth)
+
+
+def make_problem(spec: Spec) -> bvpnav.NavigationProblem:
+    """The same problem as a :class:`bvpnav.NavigationProblem` (items not compiled)."""
+    one = spec.d == 1
+
+    def v(x: np.ndarray) -> np.ndarray:
+        return x[:, 0] if one else x
+
+    data = bvpnav.ImuData(spec.t, v(spec.acc))
+    em = ScaleFactor() + Bias() if spec.error_model else None
+    prob = bvpnav.NavigationProblem(data, sigma_a=spec.sigma_a, error_model=em)
+    prob.add(Position(t=spec.hard_t, value=v(spec.hard_val), name="ends"))
+    prob.add(Position(t=spec.pos_t, value=v(spec.pos_val), sigma=spec.pos_sigma, name="gnss"))
+    prob.add(Velocity(t=spec.hard_t, value=v(spec.vel_val), sigma=spec.vel_sigma, name="end velocities"))
+    return prob
+
+
+def trajectory(prob: bvpnav.NavigationProblem, x: np.ndarray) -> np.ndarray:
+    """Nodal positions (N, d) from bvpnav's stacked unknowns."""
+    m = prob.formulation.model
+    return np.column_stack([x[m.r_index(a)] for a in range(m.d)])
+
+
+def rel_diff(r: np.ndarray, ref: np.ndarray) -> float:
+    """``max|r - ref| / max|ref|``."""
+    return float(np.max(np.abs(r - ref)) / np.max(np.abs(ref)))
+
+
+# ------------------------------------------------------------------ variants
+def _quiet(f: Callable):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return f()
+
+
+def run_variant(name: str, spec: Spec, state: dict) -> dict:
+    """One timed run of a variant; returns ``time``, ``r`` and notes.
+
+    ``state`` carries the clarabel problem from its first solve to the re-solve.
+    """
+    if name == "reference":
+        t0 = time.perf_counter()
+        r = reference_solve(spec, 1.0)
+        return {"time": time.perf_counter() - t0, "r": r, "verified": None}
+    if name == "direct backend":
+        prob = make_problem(spec)
+        t0 = time.perf_counter()
+        prob.terms()
+        tc = time.perf_counter() - t0
+        be = resolve_solver("direct")
+        t0 = time.perf_counter()
+        raw = be.run(prob.formulation, 1.0, solver_options(be, "default"))
+        return {"time": time.perf_counter() - t0, "r": trajectory(prob, raw.x), "verified": None,
+                "note": f"items compiled before: {tc:.2f} s"}
+    if name == "clarabel re-solve":
+        prob = state.pop("clarabel")
+        t0 = time.perf_counter()
+        sol = _quiet(lambda: prob.solve(solver="clarabel", lam=2.0, fallback=None, verify=True))
+        dt = time.perf_counter() - t0
+        ref2 = state.setdefault("ref_lam2", reference_solve(spec, 2.0))
+        return {"time": dt, "r": trajectory(prob, sol.x), "verified": sol.stats["verified"],
+                "ref": ref2, "note": f"lam=2, {sol.stats['status']}"}
+    prob = make_problem(spec)
+    solver = name.split()[0]
+    verify = solver != "osqp"
+    t0 = time.perf_counter()
+    try:
+        sol = _quiet(lambda: prob.solve(solver=solver, fallback=None, verify=verify))
+    except bvpnav.BvpnavError as exc:
+        return {"time": time.perf_counter() - t0, "r": None, "verified": False,
+                "note": f"{type(exc).__name__}: {str(exc)[:60]}"}
+    dt = time.perf_counter() - t0
+    note = f"{sol.stats['status']}"
+    if solver == "clarabel":
+        state["clarabel"] = prob
+        note += f", compile {sol.stats.get('compile_time', float('nan')):.2f} s"
+    if solver == "direct":
+        note += f", {sol.stats['factorization']}, {sol.stats['refinements']} refinements"
+    if solver == "csne":
+        note += f", {sol.stats['iterations']} iterations"
+    ver = sol.stats["verified"] if verify else sol.stats.get("verified")
+    return {"time": dt, "r": trajectory(prob, sol.x), "verified": ver, "note": note}
+
+
+#: Variants repeated at N >= 1e6 too (the others run once there, see ``speed_case``).
+CHEAP = ("reference", "direct", "direct backend")
+VARIANTS = ("reference", "direct", "direct backend", "csne", "clarabel", "clarabel re-solve", "osqp")
+
+
+def wanted(name: str, axes: int, n: int, skip: set[str]) -> bool:
+    """Whether variant ``name`` runs for this case (``--skip`` and the built-in limits)."""
+    suffix = "3" if axes > 1 else ""
+    names = {name.split()[0] + suffix, name.replace(" ", "-") + suffix}
+    for tag in skip:
+        what, _, size = tag.partition("@")
+        if what in names and (not size or int(float(size)) == n):
+            return False
+    if name == "osqp":
+        return n <= OSQP_MAX and axes == 1
+    return True
+
+
+def speed_case(n: int, axes: int, repeat: int, skip: set[str]) -> list[dict]:
+    """Interleaved timings of every variant for one case; median of the per-repetition ratios."""
+    spec = make_spec(n, axes, error_model=axes > 1)
+    names = [v for v in VARIANTS if wanted(v, axes, n, skip)]
+    if "clarabel" not in names and "clarabel re-solve" in names:
+        names.remove("clarabel re-solve")
+    runs: dict[str, list[dict]] = {v: [] for v in names}
+    for k in range(repeat):
+        state: dict = {}
+        for v in names:
+            if k > 0 and (v == "osqp" or (n >= 1_000_000 and v not in CHEAP)):
+                continue
+            rec = run_variant(v, spec, state)
+            rec["rep"] = k
+            runs[v].append(rec)
+    ref = runs["reference"][-1]["r"]
+    t_ref = [rr["time"] for rr in runs["reference"]]
+    rows = []
+    for v in names:
+        rs = runs[v]
+        # per-repetition ratios; a variant run once against the median of the reference's runs
+        ratios = ([rr["time"] / t_ref[rr["rep"]] for rr in rs] if len(rs) > 1 or repeat == 1
+                  else [rs[0]["time"] / float(np.median(t_ref))])
+        last = rs[-1]
+        err = rel_diff(last["r"], last.get("ref", ref)) if last["r"] is not None else float("nan")
+        rows.append({"case": f"{axes} ax" + (" +SF+B" if axes > 1 else ""), "n": n, "variant": v,
+                     "time": float(np.median([rr["time"] for rr in rs])), "ratio": float(np.median(ratios)),
+                     "runs": len(rs), "agree": err, "verified": last["verified"],
+                     "note": last.get("note", "")})
+        del rs
+    return rows
+
+
+def print_speed(rows: list[dict]) -> None:
+    """The speed table."""
+    for r in rows:
+        ver = "-" if r["verified"] is None else str(bool(r["verified"]))
+        print(f"{r['case']:<11}{r['n']:>9}  {r['variant']:<18}{r['time']:>9.3f}{r['ratio']:>8.1f}"
+              f"{r['runs']:>5}{r['agree']:>11.1e}  {ver:<9}{r['note']}", flush=True)
+
+
+SPEED_HEAD = (f"{'case':<11}{'N':>9}  {'variant':<18}{'time s':>9}{'x ref':>8}{'runs':>5}{'vs ref':>11}  "
+              f"{'verified':<9}note")
+
+
+# ------------------------------------------------------------------ lambda rules
+def lambda_table(n: int) -> None:
+    """The lambda rules as multiples of a single direct solve (1 axis)."""
+    spec = make_spec(n, 1)
+    prob = make_problem(spec)
+    t0 = time.perf_counter()
+    _quiet(lambda: prob.solve(solver="direct"))
+    single = time.perf_counter() - t0
+    t_ref = min(_timed(lambda: reference_solve(spec)) for _ in range(2))
+    print(f"\nlambda rules, N = {n}, 1 axis: single direct solve {single:.2f} s (the reference "
+          f"{t_ref:.3f} s)")
+    print(f"{'rule':<8}{'lambda':>10}{'evaluations':>13}{'total s':>9}{'x single':>10}{'x ref':>8}  warnings")
+    for rule in ("lcurve", "gcv", "quasi"):
+        prob = make_problem(spec)
+        t0 = time.perf_counter()
+        sol = _quiet(lambda rule=rule, prob=prob: prob.solve(solver="direct", lam=rule))
+        dt = time.perf_counter() - t0
+        curve = sol.curve
+        warn = "; ".join(w[:70] for w in getattr(curve, "warnings", [])) or "-"
+        print(f"{rule:<8}{sol.lam:>10.4g}{curve.evaluations:>13d}{dt:>9.2f}{dt / single:>10.1f}"
+              f"{dt / t_ref:>8.0f}  {warn}", flush=True)
+
+
+def _timed(f: Callable) -> float:
+    t0 = time.perf_counter()
+    f()
+    return time.perf_counter() - t0
+
+
+# ------------------------------------------------------------------ memory
+def child(n: int, axes: int, what: str) -> dict:
+    """One memory case (run in a child process): build, solve once, report the peak."""
+    spec = make_spec(n, axes, error_model=axes > 1)
+    prob = make_problem(spec)
+    t0 = time.perf_counter()
+    out: dict = {"n": n, "what": what}
+    if what == "reference":
+        reference_solve(spec)
+    elif what != "baseline":
+        sol = _quiet(lambda: prob.solve(solver=what, fallback=None, verify=False))
+        out.update(status=sol.stats["status"], verified=bool(sol.stats["verified"]))
+    out.update(time=time.perf_counter() - t0, peak_mb=own_peak_mb())
+    return out
+
+
+def memory_table(n: int) -> None:
+    """Peak memory per variant at ``n`` (1 axis), each in its own process."""
+    print(f"\npeak resident memory, N = {n}, 1 axis (one child process each; VmHWM)")
+    print(f"{'variant':<11}{'peak MB':>9}{'above base MB':>15}{'B/sample':>10}{'x ref':>7}"
+          f"{'time s':>8}  note")
+    base = run_case(__file__, [str(n), "1", "baseline"])
+    rows = [(w, run_case(__file__, [str(n), "1", w])) for w in ("reference", "direct", "csne", "clarabel")]
+    print(f"{'baseline':<11}{base['peak_mb']:>9.0f}{'':>15}{'':>10}{'':>7}{base.get('time', 0):>8.2f}  "
+          "imports + data + problem with its items", flush=True)
+    ref_above = rows[0][1]["peak_mb"] - base["peak_mb"]
+    for w, r in rows:
+        above = r["peak_mb"] - base["peak_mb"]
+        note = r.get("error") or (f"{r['status']}, verified={r['verified']}" if "status" in r else "")
+        print(f"{w:<11}{r['peak_mb']:>9.0f}{above:>15.0f}{above * 2**20 / n:>10.0f}{above / ref_above:>7.1f}"
+              f"{r.get('time', float('nan')):>8.2f}  {note}", flush=True)
+
+
+def huge(n: int, cap_gb: float) -> None:
+    """``direct`` at ``n`` x 1 axis in a child capped at ``cap_gb`` GB of address space."""
+    print(f"\n--huge: direct at N = {n:.0e} x 1 axis, child capped at {cap_gb:g} GB (RLIMIT_AS)")
+    base = run_case(__file__, [str(n), "1", "baseline", str(cap_gb)])
+    r = run_case(__file__, [str(n), "1", "direct", str(cap_gb)])
+    print(f"baseline {base['peak_mb']:.0f} MB; direct: peak {r['peak_mb']:.0f} MB, "
+          f"{r.get('error') or (str(r.get('status')) + ', verified=' + str(r.get('verified')))}"
+          f", {r.get('time', float('nan')):.1f} s", flush=True)
+
+
+# ------------------------------------------------------------------ peers
+def peers_table(ns: list[int]) -> None:
+    """Kalman/RTS smoothers on the 1-axis measurements (different model; orientation only)."""
+    from bvpnav.baselines import rts_smoother
+
+    print("\npeers (1 axis; Kalman filter + RTS smoother, state position/velocity; per-sample white "
+          "acceleration noise: a different model, for orientation)")
+    print(f"{'peer':<14}{'N':>9}{'time s':>9}{'x ref':>8}{'vs ref':>10}  note")
+    have_fp = importlib.util.find_spec("filterpy") is not None
+    have_pk = importlib.util.find_spec("pykalman") is not None
+    for n in ns:
+        spec = make_spec(n, 1)
+        t_ref = min(_timed(lambda spec=spec: reference_solve(spec)) for _ in range(2))
+        ref = reference_solve(spec)
+        meas = _measurements(spec)
+        t0 = time.perf_counter()
+        df = rts_smoother(spec.t, spec.acc[:, 0], meas, sigma_a=spec.sigma_a, bias0_std=0.0)
+        dt = time.perf_counter() - t0
+        _peer_row("rts_smoother", n, dt, t_ref, df["position"].to_numpy(), ref, "bvpnav.baselines")
+        peers = (("filterpy", have_fp, _filterpy, "its KalmanFilter forward, the RTS pass by hand (input u)"),
+                 ("pykalman", have_pk, _pykalman, "KalmanFilter.smooth; missing component: variance 1e12"))
+        for name, have, f, note in peers:
+            if not have:
+                print(f"{name:<14}{n:>9}  not installed (pip install bvpnav[peers])")
+                continue
+            if name == "pykalman" and n > 100_000:
+                print(f"{name:<14}{n:>9}  skipped above N = 1e5")
+                continue
+            t0 = time.perf_counter()
+            r = f(spec)
+            dt = time.perf_counter() - t0
+            _peer_row(name, n, dt, t_ref, r, ref, note)
+
+
+def _peer_row(name: str, n: int, dt: float, t_ref: float, r: np.ndarray, ref: np.ndarray, note: str) -> None:
+    print(f"{name:<14}{n:>9}{dt:>9.2f}{dt / t_ref:>8.0f}{rel_diff(r, ref[:, 0]):>10.1e}  {note}", flush=True)
+
+
+def _measurements(spec: Spec) -> list:
+    """Per-sample measurements for the smoothers: positions moved to the nearest sample."""
+    k = np.clip(np.round(spec.pos_t / 0.01).astype(int), 0, spec.n - 1)
+    out = [(spec.t[i], "position", float(v), spec.pos_sigma)
+           for i, v in zip(k, spec.pos_val[:, 0], strict=True)]
+    for i, j in enumerate((0, spec.n - 1)):
+        out.append((spec.t[j], "position", float(spec.hard_val[i, 0]), 1e-6))
+        out.append((spec.t[j], "velocity", float(spec.vel_val[i, 0]), spec.vel_sigma))
+    return out
+
+
+def _kalman_arrays(spec: Spec):
+    """Transition, process noise and the per-sample measurements (NaN where none) for the peers."""
+    h = 0.01
+    F = np.array([[1.0, h], [0.0, 1.0]])
+    g = np.array([0.5 * h * h, h])
+    Q = spec.sigma_a**2 * np.outer(g, g) + 1e-12 * np.eye(2)
+    z = np.full((spec.n, 2), np.nan)
+    R = np.full((spec.n, 2), np.inf)
+    for tm, kind, val, std in _measurements(spec):
+        j = int(round(tm / h))
+        c = 0 if kind == "position" else 1
+        z[j, c], R[j, c] = val, std**2
+    u = np.empty(spec.n)
+    u[:-1] = 0.5 * (spec.acc[:-1, 0] + spec.acc[1:, 0])
+    u[-1] = spec.acc[-1, 0]
+    return F, g, Q, z, R, u
+
+
+def _filterpy(spec: Spec) -> np.ndarray:
+    from filterpy.kalman import KalmanFilter
+
+    F, g, Q, z, R, u = _kalman_arrays(spec)
+    kf = KalmanFilter(dim_x=2, dim_z=1, dim_u=1)
+    kf.F, kf.B, kf.Q = F, g[:, None], Q
+    kf.P = np.diag([1e6, 1e6])
+    n = spec.n
+    xs, Ps, Fs, Qs = np.empty((n, 2)), np.empty((n, 2, 2)), np.empty((n, 2, 2)), np.empty((n, 2, 2))
+    for k in range(n):
+        if k:
+            kf.predict(u=np.array([[u[k - 1]]]))
+        for c in (0, 1):
+            if np.isfinite(z[k, c]):
+                H = np.zeros((1, 2))
+                H[0, c] = 1.0
+                kf.update(np.array([z[k, c]]), R=np.array([[R[k, c]]]), H=H)
+        xs[k], Ps[k], Fs[k], Qs[k] = kf.x.ravel(), kf.P, F, Q
+    # the smoother ignores the control input: add it back through the predicted means
+    xs_s = xs.copy()
+    P_s = Ps.copy()
+    for k in range(n - 2, -1, -1):
+        Pp = F @ Ps[k] @ F.T + Q
+        C = np.linalg.solve(Pp, F @ Ps[k]).T
+        xs_s[k] = xs[k] + C @ (xs_s[k + 1] - (F @ xs[k] + g * u[k]))
+        P_s[k] = Ps[k] + C @ (P_s[k + 1] - Pp) @ C.T
+    return xs_s[:, 0]
+
+
+def _pykalman(spec: Spec) -> np.ndarray:
+    from pykalman import KalmanFilter
+
+    F, g, Q, z, R, u = _kalman_arrays(spec)
+    # pykalman skips an observation with any masked component: a missing component of a
+    # partly observed sample gets the value 0 with variance 1e12 instead (time-varying R)
+    none = ~np.isfinite(z).any(axis=1)
+    zz = np.where(np.isfinite(z), z, 0.0)
+    Rk = np.where(np.isfinite(R), R, 1e12)
+    obs = np.ma.array(zz, mask=np.repeat(none[:, None], 2, axis=1))
+    kf = KalmanFilter(transition_matrices=F, observation_matrices=np.eye(2),
+                      transition_covariance=Q, observation_covariance=np.stack([np.diag(r) for r in Rk]),
+                      transition_offsets=(g[None, :] * u[:-1, None]),
+                      initial_state_mean=np.zeros(2), initial_state_covariance=np.diag([1e6, 1e6]),
+                      n_dim_state=2, n_dim_obs=2)
+    means, _ = kf.smooth(obs)
+    return means[:, 0]
+
+
+# ------------------------------------------------------------------ profile
+def profile(n: int, axes: int, top: int = 30) -> None:
+    """cProfile of one ``prob.solve(solver="direct")`` (the problem built beforehand)."""
+    import cProfile
+    import pstats
+
+    _quiet(lambda: make_problem(make_spec(2000, axes, error_model=axes > 1)).solve(solver="direct"))
+    spec = make_spec(n, axes, error_model=axes > 1)
+    prob = make_problem(spec)
+    pr = cProfile.Profile()
+    t0 = time.perf_counter()
+    pr.enable()
+    _quiet(lambda: prob.solve(solver="direct"))
+    pr.disable()
+    print(f"\ncProfile of direct, N = {n}, {axes} axis/axes: {time.perf_counter() - t0:.2f} s "
+          f"(the reference: {_timed(lambda: reference_solve(spec)):.2f} s)")
+    pstats.Stats(pr).sort_stats("cumulative").print_stats(top)
+    pstats.Stats(pr).sort_stats("tottime").print_stats(top // 2)
+
+
+# ------------------------------------------------------------------ main
+def main(argv: list[str] | None = None) -> None:
+    """Command line (see the module docstring)."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="N = 2e3, 1e4 (seconds)")
+    ap.add_argument("--sizes", default="1e4,1e5,1e6", help="1-axis sizes")
+    ap.add_argument("--sizes3", default=None, help="3-axis sizes (default: --sizes)")
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--skip", default="", help="variants to leave out, e.g. csne3@1e6,clarabel3@1e6")
+    ap.add_argument("--lam-n", type=float, default=1e5)
+    ap.add_argument("--lam-huge", action="store_true", help="also the lambda rules at N = 1e6")
+    ap.add_argument("--no-lam", action="store_true")
+    ap.add_argument("--memory", action="store_true", help="peak memory per variant, child processes")
+    ap.add_argument("--memory-n", type=float, default=1e6)
+    ap.add_argument("--no-peers", action="store_true")
+    ap.add_argument("--huge", action="store_true", help="direct at 1e7 x 1 axis in a capped child")
+    ap.add_argument("--huge-cap", type=float, default=16.0, help="GB of address space for --huge")
+    ap.add_argument("--huge-n", type=float, default=1e7, help="N for --huge (default 1e7)")
+    ap.add_argument("--osqp-max", type=float, default=1e4, help="largest N for OSQP (1 axis, one run)")
+    ap.add_argument("--profile", type=float, default=None, metavar="N",
+                    help="only: cProfile of one direct solve at N (1 axis; --profile-axes 3)")
+    ap.add_argument("--profile-axes", type=int, default=1)
+    ap.add_argument("--case", nargs="+", help=argparse.SUPPRESS)
+    args = ap.parse_args(argv)
+    if args.case:  # a memory child: N AXES WHAT [CAP_GB]
+        if len(args.case) > 3:
+            import resource
+
+            cap = int(float(args.case[3]) * 2**30)
+            resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
+        with one_thread():
+            print(json.dumps(child(int(float(args.case[0])), int(args.case[1]), args.case[2])))
+        return
+    if args.profile:
+        with one_thread():
+            profile(int(args.profile), args.profile_axes)
+        return
+    if args.quick:
+        sizes, sizes3, lam_n, mem_n = [2000, 10000], [2000, 10000], 10000, 20000
+    else:
+        sizes = [int(float(s)) for s in args.sizes.split(",") if s]
+        sizes3 = [int(float(s)) for s in (args.sizes if args.sizes3 is None else args.sizes3).split(",") if s]
+        lam_n, mem_n = int(args.lam_n), int(args.memory_n)
+    global OSQP_MAX
+    OSQP_MAX = 2000 if args.quick else int(args.osqp_max)
+    skip = {s.strip() for s in args.skip.split(",") if s.strip()}
+    with one_thread():
+        reference_solve(make_spec(2000, 3, True))  # warm up imports and first calls
+        _quiet(lambda: make_problem(make_spec(2000, 1)).solve(solver="direct"))
+        print("speed: ratios to the reference measured in the same process, interleaved, median of "
+              f"{args.repeat} (at N >= 1e6 only the reference, direct and its back end are repeated; "
+              "a variant run once is divided by the median of the reference's runs); "
+              "vs ref = max|r - r_ref| / max|r_ref|")
+        print(SPEED_HEAD)
+        for axes, ns in ((1, sizes), (3, sizes3)):
+            for n in ns:
+                print_speed(speed_case(n, axes, args.repeat, skip))
+        if not args.no_lam:
+            lambda_table(lam_n)
+            if args.lam_huge:
+                lambda_table(1_000_000)
+        if not args.no_peers:
+            peers_table([n for n in sizes if n <= 100_000])
+    if args.memory:
+        memory_table(mem_n)
+    if args.huge:
+        huge(int(args.huge_n), args.huge_cap)
+
+
+if __name__ == "__main__":
+    main()
