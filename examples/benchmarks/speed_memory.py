@@ -366,10 +366,14 @@ SPEED_HEAD = (f"{'case':<11}{'N':>9}  {'variant':<18}{'time s':>9}{'x ref':>8}{'
 def lambda_table(n: int) -> None:
     """The lambda rules as multiples of a single direct solve (1 axis)."""
     spec = make_spec(n, 1)
-    prob = make_problem(spec)
-    t0 = time.perf_counter()
-    _quiet(lambda: prob.solve(solver="direct"))
-    single = time.perf_counter() - t0
+    _quiet(lambda: make_problem(spec).solve(solver="direct"))   # warm-up (first-call imports)
+    singles = []
+    for _ in range(3):
+        prob = make_problem(spec)
+        t0 = time.perf_counter()
+        _quiet(lambda prob=prob: prob.solve(solver="direct"))
+        singles.append(time.perf_counter() - t0)
+    single = float(np.median(singles))
     t_ref = min(_timed(lambda: reference_solve(spec)) for _ in range(2))
     print(f"\nlambda rules, N = {n}, 1 axis: single direct solve {single:.2f} s (the reference "
           f"{t_ref:.3f} s)")
