@@ -398,9 +398,10 @@ def factor_form(form: LeastSquaresForm, problem, method: str = "lu", delta: floa
     return BorderedLU(form.augmented(), dense, np.arange(m + n, m + n + p))
 
 
-#: Relative correction below which refinement of a banded answer stops (one step usually
-#: gets there; a second where the first solve was off by more, e.g. hard far rows).
-BANDED_TOL = 1e-12
+#: Relative correction below which refinement of a banded answer stops: the correction
+#: measures the error of the answer before the step, which the step itself removes (one
+#: step usually; a second where the first solve was off by more).
+BANDED_TOL = 1e-10
 
 #: Largest normwise backward error at which a refined LDL^T answer is accepted.
 LDL_BACKWARD = 1e-12

@@ -2,12 +2,14 @@
 
 Registered in the back-end table on import (the folder is discovered):
 
-- ``direct``: one sparse factorization of the augmented system (see :mod:`bvpnav.lsq`)
-  with the error-model parameters eliminated through their Schur complement, then
-  iterative refinement; the residuals are never squared, so the load form stays
-  accurate. Option ``method``: ``"ldl"`` (QDLDL on the statically regularized
-  quasi-definite matrix; the default for the acceleration form, several times faster),
-  ``"lu"`` (SuperLU with pivoting; the default for the load form) or ``"auto"``.
+- ``direct``: one factorization of the KKT system (see :mod:`bvpnav.lsq`) with the
+  error-model parameters eliminated through their Schur complement, then iterative
+  refinement against the exact augmented system. Option ``method``: ``"banded"``
+  (:mod:`bvpnav.banded`: unknowns ordered by time node, LAPACK's banded LU, far rows and
+  parameters bordered; the default for the acceleration form), ``"ldl"`` (QDLDL on the
+  statically regularized quasi-definite matrix; the fallback when rows are not local),
+  ``"lu"`` (SuperLU with pivoting; the default for the load form, whose residuals must
+  not be squared) or ``"auto"``.
 - ``csne``: the 2011 paper's corrected semi-normal equations: the normal matrix
   :math:`\\tilde A = \\sum D_k^T D_k` (banded for banded items) is factorised once and the
   least-squares residual is corrected by iterative refinement

@@ -89,6 +89,11 @@ class LambdaCurve:
         Wall time of the sweep, s.
     lam_range : tuple
         The search interval as given.
+    trace_method : str or None
+        How GCV's trace was computed (``"exact columns"``, ``"log-determinant"`` or
+        ``"Hutchinson (k probes)"``), None when no rule needed it.
+    factorization : str or None
+        The direct sweep's factorization (e.g. ``"banded (kl=4, ...)"``).
     """
 
     lam: np.ndarray
@@ -102,6 +107,8 @@ class LambdaCurve:
     evaluations: int = 0
     seconds: float = 0.0
     lam_range: tuple = (1e-6, 1e6)
+    trace_method: str | None = None
+    factorization: str | None = None
 
     def __repr__(self) -> str:
         """One line: how many lambdas over which range, each rule's choice, the rule used,
@@ -552,6 +559,8 @@ def _sweep_curve(form, rules, rule, lam_range, points, tau, probes, seed, progre
             curve.scores[name] = r.scores(eng, pts, s)
             curve.chosen[name] = float(r.refine(eng, pts, s, curve.scores[name], curve))
     curve.evaluations = len(eng.cache)
+    curve.trace_method = getattr(eng, "trace_method", None)
+    curve.factorization = getattr(eng, "factorization", None)
     curve.seconds = time.perf_counter() - t0
     curve.warnings[:] = list(dict.fromkeys(curve.warnings))  # each once
     log.info("lambda sweep: engine %s, %d points over lam_range=(%g, %g), %d evaluations, %.3g s; %s",
