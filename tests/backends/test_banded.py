@@ -118,8 +118,8 @@ def test_gcv_trace_from_the_log_determinant_equals_the_trace_by_exact_columns(la
     log-determinant formula, with the error-model priors' term, gives the same trace."""
     prob = problem(Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05), n=60, error_model=Bias() if bias else None)
     form = prob.formulation
-    exact = DirectSweep(form, exact_trace_limit=10**6)
-    logdet = DirectSweep(form, exact_trace_limit=0)
+    exact = DirectSweep(form, trace="exact")
+    logdet = DirectSweep(form, trace="logdet")
     a = exact.point(lam, need_trace=True)["trace"]
     b = logdet.point(lam, need_trace=True)["trace"]
     assert exact.trace_method == "exact columns" and logdet.trace_method == "log-determinant"

@@ -44,8 +44,8 @@ def test_gcv_and_discrepancy_find_the_ml_weight_with_known_noise(seed):
 def test_hutchinson_trace_agrees_with_exact_trace():
     prob, _ = known_noise(0, n=251)
     exact = _DirectSweep(prob).point(1.0, need_trace=True)["trace"]  # N <= 300: exact columns
-    est = [_DirectSweep(prob, exact_trace_limit=0).point(1.0, need_trace=True, probes=100,
-                                                          seed=s)["trace"] for s in range(4)]
+    est = [_DirectSweep(prob, trace="hutchinson").point(1.0, need_trace=True, probes=100,
+                                                         seed=s)["trace"] for s in range(4)]
     # Rademacher probes: standard error sqrt(2 ||B||_F^2 / P) <= sqrt(2 |tr B| / P) per estimate
     se = np.sqrt(2 * abs(exact) / 100 / 4)
     assert abs(np.mean(est) - exact) < 4 * se

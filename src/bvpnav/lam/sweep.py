@@ -142,12 +142,18 @@ class LambdaCurve:
 
 # ----------------------------------------------------------------- sweeps
 class DirectSweep:
-    """Exact per-lambda evaluation for least-squares problems."""
+    """Exact per-lambda evaluation for least-squares problems.
+
+    ``trace`` picks how GCV's trace is computed: ``"auto"`` (exact columns up to
+    ``exact_trace_limit`` samples x axes, else the log-determinant where it applies, else
+    Hutchinson), or ``"exact"``, ``"logdet"``, ``"hutchinson"`` to force one (the
+    log-determinant falls back to Hutchinson where it does not apply).
+    """
 
     engine = "direct"
 
     def __init__(self, form, exact_trace_limit: int = 300, need_trace: bool = False, probes: int = 24,
-                 seed: int = 0, tau: float = 1.5):
+                 seed: int = 0, tau: float = 1.5, trace: str = "auto"):
         self.form = as_formulation(form)
         self.exact_trace_limit = exact_trace_limit
         self.need_trace, self.probes, self.seed, self.tau = need_trace, probes, seed, tau
@@ -161,6 +167,9 @@ class DirectSweep:
         self._probe_rhs = None
         self._logdet_ok = None
         self.trace_method = None
+        if trace not in ("auto", "exact", "logdet", "hutchinson"):
+            raise InputError(f"trace={trace!r}: choose 'auto', 'exact', 'logdet' or 'hutchinson'")
+        self.trace = trace
         self._ls = least_squares_form(self.form, 1.0)   # every lambda rescales its soft rows
         self._plan = None
         self._parts = None
@@ -269,12 +278,13 @@ class DirectSweep:
 
     def _trace(self, form, fac, lam, probes, seed) -> float:
         N, d = self.model.N, self.model.d
-        if isinstance(fac, BandedKKT) and N * d > self.exact_trace_limit and self._logdet_applies():
+        exact = self.trace == "exact" or (self.trace == "auto" and N * d <= self.exact_trace_limit)
+        if (self.trace in ("auto", "logdet") and not exact and isinstance(fac, BandedKKT)
+                and self._logdet_applies()):
             self.trace_method = "log-determinant"
             return self._trace_logdet(form, fac, lam)
         m, n = form.D.A.shape
         widx = np.concatenate([self.model.w_index(a) for a in range(d)])  # axis-major like Z.T
-        exact = N * d <= self.exact_trace_limit
         self.trace_method = "exact columns" if exact else f"Hutchinson ({probes} probes)"
         if exact:
             Zs = [np.eye(N * d)[:, k].reshape(d, N).T for k in range(N * d)]
