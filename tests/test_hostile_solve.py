@@ -314,7 +314,7 @@ def test_memory_estimate_refuses_before_work_and_names_what_fits(inp, monkeypatc
     prob = inp.problem()
     need = S.memory_estimate(S.resolve_solver("clarabel"), prob)
     assert need == pytest.approx(N * 5750.0)  # measured bytes per sample (README)
-    # room for direct (1,950 B per sample) but not for Clarabel (5,750 B)
+    # room for direct (1,400 B per sample) but not for Clarabel (5,750 B)
     monkeypatch.setattr(S, "available_memory", lambda: int(N * 4000 / S.MEMORY_SHARE))
     monkeypatch.setattr(_chain, "attempt", _raise(AssertionError("solved anyway")))
     exc = raises_named(InputError, prob.solve,
