@@ -173,6 +173,22 @@ def test_error_model_options():
     assert np.asarray(known.components[2].sigma, dtype=float)[2] == pytest.approx(math.radians(2.0))
     unknown = from_datasheet(heading="2 deg", base="consumer").error_model(heading_sigma=math.inf)
     assert np.isinf(np.asarray(unknown.components[2].sigma, dtype=float)[2])
-    for bad in ({"interval": 0.0}, {"interval": None}, {"heading_sigma": -1.0}, {"time_varying": "yes"}):
+    for bad in ({"interval": 0.0}, {"interval": None}, {"heading_sigma": -1.0}, {"time_varying": "yes"},
+                {"walk": 1}):
         with pytest.raises(InputError):
             g.error_model(**bad)
+
+
+def test_error_model_with_the_angle_random_walk():
+    """walk=True adds AttitudeWalk with the grade's gyro noise as the ARW and the spacing of
+    walk_interval: sqrt(3) * 5e-4 / (9.80665 * 2e-5) = 4.4155 s for the tactical grade."""
+    from bvpnav.error_models import AttitudeWalk
+
+    em = grade("tactical").error_model(walk=True)
+    walk = em.components[-1]
+    assert isinstance(walk, AttitudeWalk) and walk.arw == 2e-5
+    assert walk.interval == pytest.approx(4.4155, abs=1e-4)
+    names = em.names(_strapdown())  # 30 s: 7 walk intervals, knots 1..7 per axis
+    walk_z = [n for n in names if n.startswith("attitude_walk_z")]
+    assert walk_z == [f"attitude_walk_z[{m}]" for m in range(1, 8)]
+    assert not any(isinstance(c, AttitudeWalk) for c in grade("tactical").error_model().components)

@@ -11,9 +11,12 @@ error (m) against the TRUE position at the withheld fix instants:
 (b) ``Bias()``: bvpnav with a constant accelerometer bias, the attitude integrated from
     the gyro from the guess (what bvpnav could do before issue 16), with the grade's
     ``sigma_a`` and (``Bias() sigma_a=1``) with bvpnav's default ``sigma_a``;
-(c) ``+GyroBias+AttitudeError``: bvpnav with ``Bias(sigma, interval, drift) +
-    GyroBias(interval, drift, sigma) + AttitudeError(sigma=(tilt, tilt, None))``, the
-    grade's numbers as priors, solved by the damped outer loop;
+(c) ``+GyroBias+AttitudeError+Walk``: bvpnav with ``Bias(sigma, interval, drift) +
+    GyroBias(interval, drift, sigma) + AttitudeError(sigma=(tilt, tilt, None)) +
+    AttitudeWalk(arw=gyro_noise, interval=walk_interval(acc_noise, gyro_noise))``, the
+    grade's numbers as priors, solved by the damped outer loop (``--no-walk``: without
+    ``AttitudeWalk``, the gyro's angle random walk unmodelled, column
+    ``+GyroBias+AttitudeError``);
 (d) ``GTSAM``: GTSAM's batch smoother (IMU preintegration, bias random walk, GPS
     factors, Levenberg-Marquardt) from ``_gtsam_peer.py`` beside this script
     (``pip install bvpnav[peers]``); skipped with a note when unavailable.
@@ -22,7 +25,7 @@ Then, per outage length, the gyro bias of (c) per knot against the truth average
 the knot's support (hat weights), with its standard deviation from
 ``solve(uncertainty=True)``, and whether it is within 3 standard deviations or 20 %.
 
-Run: ``python examples/benchmarks/car_drive.py [--grade tactical consumer] [--quick]``.
+Run: ``python examples/benchmarks/car_drive.py [--grade tactical consumer] [--quick] [--no-walk]``.
 """
 
 from __future__ import annotations
@@ -37,13 +40,15 @@ from scipy.interpolate import CubicSpline
 
 from bvpnav import NavigationProblem
 from bvpnav.constraints import Position
-from bvpnav.error_models import AttitudeError, Bias, GyroBias
+from bvpnav.error_models import AttitudeError, AttitudeWalk, Bias, GyroBias, walk_interval
 from bvpnav.error_models._attitude import hat_weights
 from bvpnav.scenarios import SENSOR_GRADES, CarDrive, car_drive
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # _gtsam_peer.py lives beside this script
 
-METHODS = ("spline", "Bias() sigma_a=1", "Bias()", "+GyroBias+AttitudeError", "GTSAM")
+#: Method (c) with and without the angle random walk (``--no-walk``).
+WALK, NO_WALK = "+GyroBias+AttitudeError+Walk", "+GyroBias+AttitudeError"
+METHODS = ("spline", "Bias() sigma_a=1", "Bias()", NO_WALK, WALK, "GTSAM")
 
 
 def load_peer():
@@ -74,11 +79,16 @@ def at_times(t: np.ndarray, nodal: np.ndarray, times: np.ndarray) -> np.ndarray:
     return np.column_stack([np.interp(times, t, nodal[:, k]) for k in range(nodal.shape[1])])
 
 
-def attitude_model(grade: dict, interval: float):
-    """The error model of method (c), the grade's numbers as priors."""
-    return (Bias(sigma=grade["acc_bias"], interval=interval, drift=grade["acc_bias_walk"])
-            + GyroBias(interval=interval, drift=grade["gyro_bias_walk"], sigma=grade["gyro_bias"])
-            + AttitudeError(sigma=(grade["tilt"], grade["tilt"], None)))
+def attitude_model(grade: dict, interval: float, walk: bool = True):
+    """The error model of method (c), the grade's numbers as priors; ``walk``: with the
+    gyro's angle random walk (``AttitudeWalk``, knots every ``walk_interval`` s)."""
+    em = (Bias(sigma=grade["acc_bias"], interval=interval, drift=grade["acc_bias_walk"])
+          + GyroBias(interval=interval, drift=grade["gyro_bias_walk"], sigma=grade["gyro_bias"])
+          + AttitudeError(sigma=(grade["tilt"], grade["tilt"], None)))
+    if walk:
+        em = em + AttitudeWalk(arw=grade["gyro_noise"],
+                               interval=walk_interval(grade["acc_noise"], grade["gyro_noise"]))
+    return em
 
 
 def bvpnav_solve(drive: CarDrive, kept: np.ndarray, error_model, uncertainty: bool, heading: str = "given",
@@ -122,7 +132,8 @@ def gyro_bias_rows(drive: CarDrive, sol, interval: float) -> list[dict]:
     return rows
 
 
-def run_gap(drive: CarDrive, gap: float, peer, interval: float, heading: str = "given") -> dict:
+def run_gap(drive: CarDrive, gap: float, peer, interval: float, heading: str = "given",
+            walk: bool = True) -> dict:
     """All methods at one outage length; RMS (m) and wall time (s) per method."""
     kept, withheld = split_fixes(drive, gap)
     t_w = drive.fix_t[withheld]
@@ -138,9 +149,10 @@ def run_gap(drive: CarDrive, gap: float, peer, interval: float, heading: str = "
     sol, sec = bvpnav_solve(drive, kept, Bias(), uncertainty=False)
     out["rms"]["Bias()"], out["seconds"]["Bias()"] = rms3(at_times(drive.t, sol.position(), t_w), truth), sec
 
-    sol, sec = bvpnav_solve(drive, kept, attitude_model(drive.params["sensor"], interval), uncertainty=True,
-                            heading=heading)
-    key = "+GyroBias+AttitudeError"
+    sol, sec = bvpnav_solve(drive, kept, attitude_model(drive.params["sensor"], interval, walk),
+                            uncertainty=True, heading=heading)
+    key = WALK if walk else NO_WALK
+    out["key"] = key
     out["rms"][key], out["seconds"][key] = rms3(at_times(drive.t, sol.position(), t_w), truth), sec
     out["gyro_bias"] = gyro_bias_rows(drive, sol, interval)
     out["attitude"] = {a: float(sol.error_params[f"attitude_{a}"]) for a in "xyz"}
@@ -167,14 +179,14 @@ def print_table(grade: str, drive: CarDrive, results: list[dict], note: str | No
     print(f"\n== {grade}: {drive.params['duration']:g} s at {drive.rate:g} Hz, fixes "
           f"{drive.params['gnss_rate']:g} Hz sigma {drive.fix_sigma.tolist()} m, seed {drive.params['seed']}")
     print("withheld-fix RMS, m (3-D, against the truth); wall time in s in brackets")
-    print(f"{'gap s':>6} {'kept':>5} {'held':>5} " + " ".join(f"{c:>26}" for c in cols))
+    print(f"{'gap s':>6} {'kept':>5} {'held':>5} " + " ".join(f"{c:>29}" for c in cols))
     for r in results:
         cells = [f"{r['rms'][c]:10.3f} ({r['seconds'][c]:7.1f} s)" for c in cols]
-        print(f"{r['gap']:6g} {r['kept']:5d} {r['withheld']:5d} " + " ".join(f"{c:>26}" for c in cells))
+        print(f"{r['gap']:6g} {r['kept']:5d} {r['withheld']:5d} " + " ".join(f"{c:>29}" for c in cells))
     if note:
         print(note)
-    key = "+GyroBias+AttitudeError"
     for r in results:
+        key = r["key"]
         ratio = r["rms"]["Bias()"] / r["rms"][key]
         vs = (f"; GTSAM/bvpnav {r['rms']['GTSAM'] / r['rms'][key]:.2f}" if "GTSAM" in r["rms"] else "")
         brms = "  ".join(f"{k} {v:.2e}" for k, v in r["bias_rms"].items())
@@ -192,7 +204,7 @@ def print_bias(results: list[dict]) -> None:
     for r in results:
         rows = r["gyro_bias"]
         n_ok = sum(row["ok"] for row in rows)
-        print(f"\ngyro bias of +GyroBias+AttitudeError, gap {r['gap']:g} s: {n_ok}/{len(rows)} within "
+        print(f"\ngyro bias of {r['key']}, gap {r['gap']:g} s: {n_ok}/{len(rows)} within "
               "3 std or 20 % of the truth (rad/s; truth = hat-weighted mean over the knot's support)")
         print(f"{'knot':>4} {'t s':>6} " + " ".join(f"{'est ' + a:>10} {'std':>8} {'true':>10} ok"
                                                    for a in "xyz"))
@@ -216,6 +228,8 @@ def main(argv: list[str] | None = None) -> list[dict]:
     ap.add_argument("--heading", default="given", choices=["given", "auto"],
                     help="start of the attitude loop of (c): the guess (like GTSAM) or the search")
     ap.add_argument("--no-gtsam", action="store_true", help="skip the GTSAM column")
+    ap.add_argument("--no-walk", action="store_true",
+                    help="method (c) without AttitudeWalk (the gyro's angle random walk unmodelled)")
     ap.add_argument("--quick", action="store_true", help="120 s at 50 Hz, gaps 10 30 (a smoke test)")
     args = ap.parse_args(argv)
     if args.quick:
@@ -224,7 +238,8 @@ def main(argv: list[str] | None = None) -> list[dict]:
     everything = []
     for grade in args.grade:
         drive = car_drive(args.duration, args.rate, grade, seed=args.seed)
-        results = [run_gap(drive, gap, peer, args.interval, args.heading) for gap in args.gaps]
+        results = [run_gap(drive, gap, peer, args.interval, args.heading, not args.no_walk)
+                   for gap in args.gaps]
         print_table(grade, drive, results, note)
         print_bias(results)
         everything.append({"grade": grade, "results": results})

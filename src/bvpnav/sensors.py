@@ -136,7 +136,9 @@ class SensorGrade:
         Accelerometer bias random walk, m/s^2/sqrt(s): the bias changes by
         ``acc_bias_walk * sqrt(dt)`` (one sigma) over ``dt`` seconds.
     gyro_noise : float
-        Gyro white-noise density (angle random walk), rad/s/sqrt(Hz).
+        Gyro white-noise density (angle random walk), rad/s/sqrt(Hz) = rad/sqrt(s): the
+        attitude it integrates to is modelled by
+        :class:`~bvpnav.error_models.AttitudeWalk` (``error_model(walk=True)``).
     gyro_bias : float
         Gyro bias standard deviation, rad/s.
     gyro_bias_walk : float
@@ -239,7 +241,7 @@ class SensorGrade:
         return self.gyro_noise * math.sqrt(_rate(rate_hz))
 
     def error_model(self, interval: float | None = 30.0, heading_sigma: float | None = None,
-                    time_varying: bool = True):
+                    time_varying: bool = True, walk: bool = False):
         """The error model with this grade's priors: accelerometer and gyro biases and the initial attitude.
 
         Parameters
@@ -255,16 +257,33 @@ class SensorGrade:
             True (default): biases as random walks with knots every ``interval`` s and
             increments of sigma ``*_bias_walk * sqrt(interval)``; false: constant biases
             with the prior ``acc_bias`` / ``gyro_bias``.
+        walk : bool
+            True: also the attitude error the gyro's white noise integrates to,
+            ``AttitudeWalk(arw=gyro_noise, interval=walk_interval(acc_noise, gyro_noise))``
+            (knots every 4.4 s for the tactical grade). Default False: it adds three
+            unknowns per knot (measured on the 10-minute car drive of
+            ``examples/benchmarks/car_drive.py``: 408 more, 537 in all; 19 minutes and
+            12.5 GB against about 3 minutes without) for 1.3 % in position there.
 
         Returns
         -------
         bvpnav.error_models.CompositeErrorModel
             ``Bias(sigma=acc_bias, interval=..., drift=acc_bias_walk)
             + GyroBias(sigma=gyro_bias, interval=..., drift=gyro_bias_walk)
-            + AttitudeError(sigma=(tilt, tilt, heading_sigma))``.
+            + AttitudeError(sigma=(tilt, tilt, heading_sigma))``, and with ``walk``
+            ``+ AttitudeWalk(arw=gyro_noise, interval=walk_interval(acc_noise, gyro_noise))``.
         """
-        from .error_models import AttitudeError, Bias, GyroBias  # error models load numpy/pandas
+        from .error_models import (  # error models load numpy/pandas
+            AttitudeError,
+            AttitudeWalk,
+            Bias,
+            GyroBias,
+            walk_interval,
+        )
 
+        if not isinstance(walk, bool):
+            raise InputError(f"walk={walk!r}: give True (model the gyro's angle random walk, AttitudeWalk) "
+                             "or False")
         if not isinstance(time_varying, bool):
             raise InputError(f"time_varying={time_varying!r}: give True (random-walk biases) or False "
                              "(constant biases)")
@@ -283,9 +302,13 @@ class SensorGrade:
             heading_sigma = _positive(heading_sigma, "heading_sigma")
         else:
             heading_sigma = None
-        return (Bias(sigma=self.acc_bias, **tv_acc)
-                + GyroBias(sigma=self.gyro_bias, **tv_gyro)
-                + AttitudeError(sigma=(self.tilt, self.tilt, heading_sigma)))
+        em = (Bias(sigma=self.acc_bias, **tv_acc)
+              + GyroBias(sigma=self.gyro_bias, **tv_gyro)
+              + AttitudeError(sigma=(self.tilt, self.tilt, heading_sigma)))
+        if walk:
+            spacing = walk_interval(self.acc_noise, self.gyro_noise)
+            em = em + AttitudeWalk(arw=self.gyro_noise, interval=spacing)
+        return em
 
     def table(self) -> dict[str, str]:
         """The figures with their SI units, for printing (``{"acc_noise": "0.0005 m/s^2/sqrt(Hz)", ...}``)."""

@@ -462,13 +462,13 @@ def _truth_values(q: int) -> np.ndarray:
 
 
 def _without_priors(em: ErrorModel | CompositeErrorModel) -> ErrorModel | CompositeErrorModel:
-    """``em`` without soft priors, random-walk priors and bounds (a prior pulls the estimate off the
-    simulated value)."""
+    """``em`` without soft priors, random-walk priors (``drift``, ``arw``) and bounds (a prior
+    pulls the estimate off the simulated value)."""
     if isinstance(em, CompositeErrorModel):
         return CompositeErrorModel(*[_without_priors(c) for c in em.components])
     if dataclasses.is_dataclass(em):
         names = {f.name for f in dataclasses.fields(em)}
-        kw = {k: None for k in ("prior", "sigma", "bounds", "drift")
+        kw = {k: None for k in ("prior", "sigma", "bounds", "drift", "arw")
               if k in names and getattr(em, k) is not None}
         if kw:
             return dataclasses.replace(em, **kw)

@@ -77,24 +77,29 @@ def positive_option(value, what: str) -> float | None:
 
 
 def random_walk_term(model, names: list, knots: np.ndarray, drift: float, units: str, label: str,
-                     sign: float = 1.0, base: np.ndarray | None = None):
+                     sign: float = 1.0, base: np.ndarray | None = None, anchored: bool = False):
     """The soft prior of a random walk over knot values, per axis (axis-major ``names``).
 
     Rows :math:`\\pm(p_{m+1} - p_m)` (plus the totals' own difference ``base``) with sigma
     :math:`\\sigma_d \\sqrt{t_{m+1} - t_m}`: the increments of a random walk of density
-    ``drift`` (units per sqrt(s)) between the knots.
+    ``drift`` (units per sqrt(s)) between the knots. ``anchored``: the walk is zero at
+    the first knot, which is not a parameter (``names`` hold knots 1, 2, ... per axis), and
+    the first row is :math:`p_1 - 0`.
     """
     from ..model import Affine
     from ..terms import Term
     from ._base import _relabel
 
-    m = knots.size
+    m = knots.size - 1 if anchored else knots.size
     n_ax = len(names) // m
     base = np.zeros(len(names)) if base is None else base
     rows, labels = [], []
     for a in range(n_ax):
         P = model.params(names[a * m:(a + 1) * m])
         b = base[a * m:(a + 1) * m]
+        if anchored:
+            rows.append(P.rows(np.arange(1)) * sign + b[:1])
+            labels.append(f"0->{names[a * m]}")
         rows.append((P.rows(np.arange(1, m)) - P.rows(np.arange(m - 1))) * sign + (b[1:] - b[:-1]))
         labels += [f"{names[a * m + j]}->[{j + 1}]" for j in range(m - 1)]
     res = _relabel(Affine.vstack(rows), labels, "drift")
@@ -165,6 +170,10 @@ class AttitudePoint:
     damping : float
         Levenberg-Marquardt weight of the increments (0: none); see
         :meth:`AttitudeErrorModel.step_scale`.
+    walk : ndarray (N, 3) or None
+        Navigation-frame rotation vectors :math:`\\psi_w(t_i)`, rad, applied after the
+        integration (:class:`~bvpnav.error_models.AttitudeWalk`):
+        ``attitude = exp([psi_w x]) C_integrated``; None when zero.
     """
 
     raw_gyro: np.ndarray | None
@@ -173,6 +182,7 @@ class AttitudePoint:
     rates: np.ndarray | None = None
     scale: np.ndarray = field(default_factory=lambda: np.zeros(3))
     damping: float = 0.0
+    walk: np.ndarray | None = None
 
 
 def at_point(data):
@@ -226,28 +236,39 @@ def propagate(data, rate_cols: np.ndarray, initial_cols: np.ndarray) -> np.ndarr
     integration's own error against the continuous attitude is :math:`O(h^2)`.
     Continuous limit: :math:`\\dot\\psi = C\\,\\delta\\omega` (a gyro bias ``b`` gives
     :math:`\\delta\\omega = -b`, so :math:`\\psi(t) = \\psi_0 - \\int_0^t C b\\,ds`).
+
+    With an attitude walk at the point (:class:`~bvpnav.error_models.AttitudeWalk`,
+    attitude :math:`\\exp([\\psi_{w,k}\\times]) C_k`), the recursion runs on the integrated
+    :math:`C_k` and its result is rotated into the walked frame:
+    :math:`\\exp([\\psi_{w}\\times])\\exp([\\psi\\times]) C = \\exp([R_w\\psi\\times])
+    \\exp([\\psi_{w}\\times]) C` with :math:`R_w = \\exp([\\psi_w\\times])`, exactly.
     """
     from ..attitude import step_rotation_vectors
 
+    point = at_point(data)
     C = data.attitude.as_matrix()
+    Rw = None
+    if point.walk is not None:
+        Rw = Rotation.from_rotvec(point.walk).as_matrix()
+        C = np.swapaxes(Rw, 1, 2) @ C  # the integrated attitude, before the walk
     n, q = C.shape[0], rate_cols.shape[2]
     psi = np.empty((n, 3, q))
     psi[:] = initial_cols[None]
     if n > 1 and q:
-        w = at_point(data).rates
+        w = point.rates
         if w is None:
             if np.any(rate_cols):
                 raise InputError("gyro error models need the gyro rates: build the data with "
                                  "bvpnav.ImuData.from_gyro")
-            return psi
-        h = data.grid.h[:, None, None]
-        phi = step_rotation_vectors(data.t, w)
-        dw0, dw1 = rate_cols[:-1], rate_cols[1:]
-        w0, w1 = w[:-1, :, None], w[1:, :, None]
-        dphi = 0.5 * h * (dw0 + dw1) + (h**2 / 12.0) * (_cross(dw0, w1) + _cross(w0, dw1))
-        T = C[1:] @ right_jacobian(phi)
-        psi[1:] += np.cumsum(np.matmul(T, dphi), axis=0)
-    return psi
+        else:
+            h = data.grid.h[:, None, None]
+            phi = step_rotation_vectors(data.t, w)
+            dw0, dw1 = rate_cols[:-1], rate_cols[1:]
+            w0, w1 = w[:-1, :, None], w[1:, :, None]
+            dphi = 0.5 * h * (dw0 + dw1) + (h**2 / 12.0) * (_cross(dw0, w1) + _cross(w0, dw1))
+            T = C[1:] @ right_jacobian(phi)
+            psi[1:] += np.cumsum(np.matmul(T, dphi), axis=0)
+    return psi if Rw is None else np.matmul(Rw, psi)
 
 
 def acceleration_columns(data, psi: np.ndarray) -> np.ndarray:
@@ -295,12 +316,22 @@ class AttitudeErrorModel(ErrorModel):
 
     def apply(self, values: np.ndarray, parts: dict, data) -> None:
         """Fold this model's totals into ``parts`` (keys ``bias`` (N, 3) rad/s, ``scale`` (3,),
-        ``initial`` Rotation) used to re-integrate the attitude."""
+        ``initial`` Rotation, ``walk`` (N, 3) navigation-frame rotation vectors, rad, applied
+        after the integration) used to re-integrate the attitude."""
         raise NotImplementedError
 
     def columns(self, data) -> np.ndarray:
         psi = propagate(data, self.rate_columns(data), self.initial_columns(data))
         return acceleration_columns(data, psi)
+
+    def rate_change(self, data, d: np.ndarray) -> np.ndarray:
+        """Change of the corrected body rates for the increments ``d``, (N, 3), rad/s."""
+        return self.rate_columns(data) @ d
+
+    def direct_change(self, data, d: np.ndarray) -> np.ndarray:
+        """Navigation-frame attitude change for the increments ``d`` that does not go through
+        the integration (:class:`~bvpnav.error_models.AttitudeWalk`), (N, 3), rad; zero here."""
+        return np.zeros((data.n, 3))
 
     def base(self, data) -> np.ndarray:
         """Totals of this model's parameters at the data's linearization point (0 when none)."""
@@ -430,7 +461,9 @@ def reintegrate(data, error_model, values: dict, damping: float = 0.0):
     The corrected rates are :math:`\\omega = (\\hat\\omega - b(t))/(1 + s)` and the
     initial attitude :math:`C_1 = R\\,\\hat C_1` with ``R`` from
     :class:`~bvpnav.error_models.AttitudeError`; then
-    :math:`C_{k+1} = C_k\\exp([\\phi_k\\times])` as in :func:`bvpnav.attitude.integrate_gyro`.
+    :math:`C_{k+1} = C_k\\exp([\\phi_k\\times])` as in :func:`bvpnav.attitude.integrate_gyro`;
+    last, an attitude walk (:class:`~bvpnav.error_models.AttitudeWalk`) rotates each
+    :math:`C_k` by :math:`\\exp([\\psi_w(t_k)\\times])`.
     For data whose attitude was given (no gyro), only the initial correction applies:
     :math:`C_k = R\\,\\hat C_k`.
     """
@@ -439,7 +472,8 @@ def reintegrate(data, error_model, values: dict, damping: float = 0.0):
 
     point = at_point(data)
     comps = attitude_components(error_model)
-    parts: dict = {"bias": np.zeros((data.n, 3)), "scale": np.zeros(3), "initial": Rotation.identity()}
+    parts: dict = {"bias": np.zeros((data.n, 3)), "scale": np.zeros(3), "initial": Rotation.identity(),
+                   "walk": np.zeros((data.n, 3))}
     for c in comps:
         names = c.names(data)
         c.apply(np.array([float(values.get(n, 0.0)) for n in names]), parts, data)
@@ -451,12 +485,16 @@ def reintegrate(data, error_model, values: dict, damping: float = 0.0):
     else:
         rates = None
         rot = parts["initial"] * point.raw_attitude
+    walk = parts["walk"] if np.any(parts["walk"]) else None
+    if walk is not None:
+        rot = Rotation.from_rotvec(walk) * rot
     out = ImuData(data.t, specific_force=data.specific_force, attitude=rot, gravity=data.gravity,
                   axes=data.axes, time_origin=data.time_origin)
     out.gyro = data.gyro
     out.attitude_point = AttitudePoint(raw_gyro=point.raw_gyro, raw_attitude=point.raw_attitude,
                                        values={k: float(v) for k, v in values.items()}, rates=rates,
-                                       scale=np.array(parts["scale"], dtype=float), damping=float(damping))
+                                       scale=np.array(parts["scale"], dtype=float), damping=float(damping),
+                                       walk=walk)
     return out
 
 

@@ -218,12 +218,14 @@ class _Loop:
         new = {n: values.get(n, 0.0) + delta.get(n, 0.0) for n in self.names}
         rate = np.zeros((data.n, 3))
         init = np.zeros(3)
+        direct = np.zeros((data.n, 3))
         for c in self.comps:
             d = np.array([delta[n] for n in c.names(data)])
-            rate = rate + c.rate_columns(data) @ d
+            rate = rate + c.rate_change(data, d)
             init = init + c.initial_columns(data) @ d
-        psi = propagate(data, rate[:, :, None], init[:, None])
-        change = float(np.max(np.linalg.norm(psi[:, :, 0], axis=1)))
+            direct = direct + c.direct_change(data, d)
+        psi = propagate(data, rate[:, :, None], init[:, None])[:, :, 0] + direct
+        change = float(np.max(np.linalg.norm(psi, axis=1)))
         return new, change, sol
 
     def heading_start(self, values: dict) -> tuple[dict, list, tuple | None]:
