@@ -45,8 +45,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.linalg import lapack
 
-__all__ = ["BandedKKT", "BandPlan", "NotBanded", "Factorization", "AugmentedOperator", "ruiz_scale",
-           "row_span", "MAX_BAND", "MAX_BORDER", "FOLD_SPAN"]
+__all__ = ["BandedKKT", "BandPlan", "NotBanded", "Factorization", "AugmentedOperator", "row_span",
+           "MAX_BAND", "MAX_BORDER", "FOLD_SPAN"]
 
 #: Largest lower (and upper) bandwidth of the local part accepted for a banded factor;
 #: the work is N b^2, so beyond this a sparse LDL^T with a fill-reducing ordering wins.
@@ -81,25 +81,6 @@ def row_span(A: sp.csr_matrix, colnode: np.ndarray) -> tuple[np.ndarray, np.ndar
         np.putmask(nn, nn < 0, big)
         lo[rows] = np.minimum.reduceat(nn, starts)
     return lo, hi
-
-
-def ruiz_scale(K: sp.csr_matrix, sweeps: int = 4) -> tuple[np.ndarray, np.ndarray]:
-    """Symmetric Ruiz scaling ``s`` so that ``diag(s) K diag(s)`` has rows of max-norm near 1;
-    also the row index of every stored entry (``K`` is CSR)."""
-    T = K.shape[0]
-    rows = np.repeat(np.arange(T), np.diff(K.indptr))
-    cols, vals = K.indices, np.abs(K.data)
-    s = np.ones(T)
-    nonempty = np.diff(K.indptr) > 0
-    starts = K.indptr[:-1][nonempty]
-    for _ in range(sweeps):
-        r = np.zeros(T)
-        if vals.size:
-            r[nonempty] = np.maximum.reduceat(vals * s[rows] * s[cols], starts)
-        r = np.sqrt(r)
-        r[r == 0] = 1.0
-        s /= r
-    return s, rows
 
 
 def _selection(n: int, cols: np.ndarray, scale: np.ndarray | None = None) -> sp.csc_matrix:

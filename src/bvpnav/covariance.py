@@ -42,6 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from .banded import row_span
 from .errors import InputError, SolveError
 from .formulation import as_formulation
 from .lsq import LeastSquaresForm, least_squares_form
@@ -185,22 +186,6 @@ class _Layout:
         return self.node[idx] * self.b + self.slot[idx]
 
 
-def _row_nodes(A: sp.csr_matrix, colnode: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Lowest and highest label (node, or axis) of each row's columns with a label >= 0
-    (``lo > hi`` for rows with none)."""
-    A = sp.csr_matrix(A)
-    m = A.shape[0]
-    nn = colnode[A.indices]
-    rows = np.repeat(np.arange(m), np.diff(A.indptr))
-    big = np.iinfo(np.int64).max
-    lo = np.full(m, big, dtype=np.int64)
-    hi = np.full(m, -1, dtype=np.int64)
-    loc = nn >= 0
-    np.minimum.at(lo, rows[loc], nn[loc])
-    np.maximum.at(hi, rows[loc], nn[loc])
-    return lo, hi
-
-
 def _equilibrate(K: sp.csr_matrix, sweeps: int = 4) -> tuple[np.ndarray, np.ndarray]:
     """Symmetric Ruiz scaling ``s`` so that ``diag(s) K diag(s)`` has rows of max-norm near 1;
     also the row index of every stored entry (``K`` is CSR)."""
@@ -241,19 +226,19 @@ class _Posterior:
             colaxis[model.r_index(a)[1:]] = a
             colaxis[model.w_index(a)] = a
         coupled = d > 1 and any(bool(np.any((hi >= 0) & (hi != lo)))  # a row on two axes
-                                for lo, hi in (_row_nodes(D, colaxis), _row_nodes(E, colaxis)))
+                                for lo, hi in (row_span(D, colaxis), row_span(E, colaxis)))
         self.chain = None if coupled or d == 1 else N   # nodes per independent chain
         colnode = np.full(n, -1, dtype=np.int64)
         for a in range(d):
             off = 0 if coupled else a * N
             colnode[model.r_index(a)[1:]] = off + np.arange(1, N)
             colnode[model.w_index(a)] = off + np.arange(N)
-        lo, hi = _row_nodes(D, colnode)
+        lo, hi = row_span(D, colnode)
         span = hi - lo
         fold = (span <= 1) | (hi < 0)          # into D^T D: couples two neighbouring nodes at most
         rho = np.flatnonzero(~fold)
         Df, Dr = D[np.flatnonzero(fold)], D[rho]
-        elo, ehi = _row_nodes(E, colnode)
+        elo, ehi = row_span(E, colnode)
         # a row on one or two nodes sits at the first (a velocity row at node j restricted
         # to node j is parallel to the FEM row there), a row on three at the middle one
         espan = ehi - elo
