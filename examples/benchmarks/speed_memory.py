@@ -59,6 +59,49 @@ variants to leave out, e.g. ``csne3@1e6,clarabel3@1e6``; ``name@N`` or ``name`` 
 
 Run ``python examples/benchmarks/speed_memory.py [--quick] [--memory] [--huge]``.
 
+Measured after the structured path (banded direct path, issue 18)
+------------------------------------------------------------------
+2026-12-02, the machine quieter (load average about 1): ``--sizes 1e4,1e5,1e6 --sizes3
+1e4,1e5 --lam-n 1e5 --skip osqp,csne3@1e5``. Clarabel here is main's formulation (before
+its own changes). Memory, each in its own process at N = 1e6, 1 axis: the reference
+719 MB, ``direct`` 1394 MB (1.94x; was 2170 MB)::
+
+    case               N  variant              time s   x ref runs     vs ref  verified note
+    1 ax           10000  reference             0.005     1.0    3    0.0e+00  -
+    1 ax           10000  direct                0.032     6.1    3    2.8e-12  True     banded(5,5) 20004 unk,
+    1 ax           10000  direct backend        0.019     3.6    3    2.8e-12  -        compile 0.00 s
+    1 ax           10000  csne                  0.110    21.2    3    1.6e-12  True     inaccurate, 20 it
+    1 ax           10000  clarabel              0.136    25.1    3    7.2e-11  True     optimal, compile 0.03
+    1 ax           10000  clarabel re-solve     0.072    13.8    3    3.7e-11  True     lam=2, optimal
+    1 ax          100000  reference             0.067     1.0    3    0.0e+00  -
+    1 ax          100000  direct                0.269     4.0    3    2.0e-12  True     banded(5,5) 200004 unk
+    1 ax          100000  direct backend        0.200     3.0    3    2.0e-12  -        compile 0.02 s
+    1 ax          100000  csne                  1.076    16.0    3    2.1e-12  True     inaccurate, 20 it
+    1 ax          100000  clarabel              1.483    22.0    3    2.6e-11  True     optimal, compile 0.30
+    1 ax          100000  clarabel re-solve     0.644     9.5    3    1.4e-11  True     lam=2, optimal
+    1 ax         1000000  reference             0.866     1.0    3    0.0e+00  -
+    1 ax         1000000  direct                3.430     3.8    3    3.8e-12  True     banded(5,5) 2000004 un
+    1 ax         1000000  direct backend        2.339     2.7    3    3.8e-12  -        compile 0.22 s
+    1 ax         1000000  csne                 12.563    14.5    1    3.2e-12  True     inaccurate, 20 it
+    1 ax         1000000  clarabel             22.135    25.6    1    2.6e-11  True     optimal, compile 8.74
+    1 ax         1000000  clarabel re-solve     7.895     9.1    1    2.0e-11  True     lam=2, optimal
+    3 ax +SF+B     10000  reference             0.018     1.0    3    0.0e+00  -
+    3 ax +SF+B     10000  direct                0.129     6.9    3    2.4e-12  True     banded(5,5) 60012 unk,
+    3 ax +SF+B     10000  direct backend        0.082     4.5    3    2.4e-12  -        compile 0.01 s
+    3 ax +SF+B     10000  csne                  0.400    22.2    3    3.3e-12  True     inaccurate, 20 it
+    3 ax +SF+B     10000  clarabel              0.428    23.5    3    6.3e-11  True     optimal, compile 0.10
+    3 ax +SF+B     10000  clarabel re-solve     0.240    13.3    3    4.2e-11  True     lam=2, optimal
+    3 ax +SF+B    100000  reference             0.241     1.0    3    0.0e+00  -
+    3 ax +SF+B    100000  direct                1.339     5.6    3    2.0e-12  True     banded(5,5) 600012 unk
+    3 ax +SF+B    100000  direct backend        0.935     3.9    3    2.0e-12  -        compile 0.04 s
+    3 ax +SF+B    100000  clarabel              5.963    24.7    3    2.1e-11  True     optimal, compile 1.25
+    3 ax +SF+B    100000  clarabel re-solve     2.774    11.5    3    1.7e-11  True     lam=2, optimal
+    lambda rules, N = 100000, 1 axis: single direct solve 0.28 s (the reference 0.065 s)
+    rule        lambda  evaluations  total s  x single   x ref  warnings
+    lcurve    0.005152           21     2.32       8.2      35  -
+    gcv          0.548           20     4.15      14.8      64  -
+    quasi        5.168           20     2.12       7.5      32  -
+
 Measured on main before the structured path
 --------------------------------------------
 2026-12-02, main at ce989e5 (this branch adds only the benchmark), a 2-core VM shared with
