@@ -334,12 +334,12 @@ def test_memory_refusal_on_ten_million_samples_without_allocating(monkeypatch):
     monkeypatch.setattr(bvpnav.formulation.Formulation, "check_observability",
                         _raise(AssertionError("work before the memory check")))
     raises_named(InputError, prob.solve, r"N = 10000000 samples", r"about 57\.5 GB",
-                 r"limit 28\.8 GB", r"solver='direct' \(about 19\.5 GB\)",
+                 r"limit 28\.8 GB", r"solver='direct' \(about 14 GB\)",
                  r"shorter window of at most 5008695 samples \(about 5009 s\)")
-    monkeypatch.setattr(S, "available_memory", lambda: 16 * GB)
+    monkeypatch.setattr(S, "available_memory", lambda: 12 * GB)
     exc = raises_named(InputError, lambda: prob.solve(solver="direct"),
-                       r"'direct' needs about 19\.5 GB", r"limit 14\.4 GB",
-                       r"at most 7384615 samples")
+                       r"'direct' needs about 14 GB", r"limit 10\.8 GB",
+                       r"at most 7714285 samples")
     assert "solver='csne'" not in str(exc)  # csne (27.7 GB) does not fit either
     assert t.tobytes() == t_copy.tobytes()
 
