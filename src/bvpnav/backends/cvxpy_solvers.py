@@ -71,6 +71,31 @@ PRESETS: dict[str, dict[str, dict[str, Any]]] = {
 CVXPY_MEMORY = {"acceleration": 5750.0, "load": 5750.0}
 
 
+def adapt_options(cvxpy_name: str, cvx, options: dict) -> dict:
+    """Options the problem's shape adds to the preset's and the user's (recorded in
+    ``sol.stats["adapted_options"]``); a key the user (or the preset) gave is left alone.
+
+    Clarabel on an equality-constrained least-squares problem (``cvx.equality_qp``: hard
+    and soft equalities only) runs with ``equilibrate_enable=False``. Its only cone is
+    then the zero cone, so its initial point, one solve of the KKT system, is already the
+    answer; with the Ruiz equilibration (bounded to 1e-4..1e4 per row and column) the FEM
+    rows (stiffness entries 1/h beside mass entries h) stay badly scaled, that point
+    missed the tolerances and 3-6 interior-point iterations followed, ending at a forward
+    error of 2e-9..2e-7 (and ``optimal_inaccurate`` at N = 1e6 with h = 1e-5 s). Without
+    equilibration: 0-2 iterations, forward error about 1e-10 (measured, N = 1e5..1e6,
+    clarabel 0.11.1). With equilibration switched back on by the user, the DPP re-solve
+    does not reuse Clarabel's solver in place (``warm_start=False``): its in-place update
+    of the quadratic-form data term came back inaccurate (see :func:`bvpnav.cvx.data_term`).
+    """
+    if cvxpy_name != "CLARABEL" or not getattr(cvx, "equality_qp", False):
+        return {}
+    if "equilibrate_enable" not in options:
+        return {"equilibrate_enable": False}
+    if options["equilibrate_enable"] and "warm_start" not in options:
+        return {"warm_start": False}
+    return {}
+
+
 def _cvxpy_keywords() -> set[str]:
     """cvxpy's own keywords of ``Problem.solve`` (accepted with every cvxpy solver)."""
     import cvxpy as cp
@@ -187,11 +212,12 @@ class CvxpyBackend(Backend):
         cvx.lam.value = lam
         alias = ALIASES.get(self.name, {})
         options = {alias.get(k, k): v for k, v in options.items()}
+        adapted = adapt_options(self.cvxpy_name, cvx, options)
         t0 = time.perf_counter()
         try:
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
-                prob.solve(solver=self.cvxpy_name, verbose=verbose, **options)
+                prob.solve(solver=self.cvxpy_name, verbose=verbose, **options, **adapted)
         except cp.error.SolverError as exc:
             raise SolveError(
                 f"{self.name} failed: {exc}",
@@ -208,6 +234,7 @@ class CvxpyBackend(Backend):
             "cvxpy_time": time.perf_counter() - t0,
             "objective": prob.value,
             "solver_warnings": [str(w.message) for w in caught],
+            "adapted_options": adapted,
         }
         self._raise_for(status, form, cvx)
         return RawSolve(np.array(cvx.x.value, dtype=float), info, cvx.duals())
