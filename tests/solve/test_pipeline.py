@@ -156,7 +156,9 @@ def test_the_run_and_its_timings_are_typed_and_flattened_into_the_stats():
     cv = ls_problem().solve(solver="clarabel").records.run
     # the options the problem's shape added (an equality-constrained least-squares problem)
     assert cv.timings.cvxpy_time >= cv.timings.solve_time > 0
-    assert cv.details == {"adapted_options": {"equilibrate_enable": False}}
+    from bvpnav.backends.cvxpy_solvers import EQUALITY_QP_CLARABEL
+
+    assert cv.details == {"adapted_options": EQUALITY_QP_CLARABEL}
 
 
 # ------------------------------------------- found by the independent review of the redesign

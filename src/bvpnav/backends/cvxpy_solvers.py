@@ -76,6 +76,12 @@ PRESETS: dict[str, dict[str, dict[str, Any]]] = {
 CVXPY_MEMORY = {"acceleration": 4815.0, "load": 5750.0}
 
 
+#: Clarabel's settings for equality-constrained least squares (see :func:`adapt_options`).
+EQUALITY_QP_CLARABEL = {"equilibrate_enable": False, "iterative_refinement_reltol": 1e-15,
+                        "iterative_refinement_abstol": 1e-15, "iterative_refinement_stop_ratio": 1.1,
+                        "iterative_refinement_max_iter": 50}
+
+
 def adapt_options(cvxpy_name: str, cvx, options: dict) -> dict:
     """Options the problem's shape adds to the preset's and the user's (recorded in
     ``sol.stats["adapted_options"]``); a key the user (or the preset) gave is left alone.
@@ -87,18 +93,22 @@ def adapt_options(cvxpy_name: str, cvx, options: dict) -> dict:
     rows (stiffness entries 1/h beside mass entries h) stay badly scaled, that point
     missed the tolerances and 3-6 interior-point iterations followed, ending at a forward
     error of 2e-9..2e-7 (and ``optimal_inaccurate`` at N = 1e6 with h = 1e-5 s). Without
-    equilibration: 0-2 iterations, forward error about 1e-10 (measured, N = 1e5..1e6,
-    clarabel 0.11.1). With equilibration switched back on by the user, the DPP re-solve
-    does not reuse Clarabel's solver in place (``warm_start=False``): its in-place update
-    of the quadratic-form data term came back inaccurate (see :func:`bvpnav.cvx.data_term`).
+    equilibration: 0-3 iterations, forward error 1e-10..1e-8 (measured, N = 1e5..1e6,
+    clarabel 0.11.1). Unequilibrated, a nearly degenerate error-model block (a sensor axis
+    without specific force, scaled condition 2e9) leaves pivots that Clarabel's dynamic
+    regularization bumps, and its refinement, stopped once a step gains less than 5x,
+    ended at a forward error of 4e-5; refinement to 1e-15 while a step gains 10 % (up to
+    50 steps) reaches 1.3e-9 there (and the degenerate combination 1 + k_y 2e-8). With equilibration
+    switched back on by the user, the DPP re-solve does not reuse Clarabel's solver in
+    place (``warm_start=False``): its in-place update of the quadratic-form data term came
+    back inaccurate (see :func:`bvpnav.cvx.data_term`).
     """
     if cvxpy_name != "CLARABEL" or not getattr(cvx, "equality_qp", False):
         return {}
-    if "equilibrate_enable" not in options:
-        return {"equilibrate_enable": False}
-    if options["equilibrate_enable"] and "warm_start" not in options:
-        return {"warm_start": False}
-    return {}
+    if options.get("equilibrate_enable", False):
+        return {} if "warm_start" in options else {"warm_start": False}
+    out = {k: v for k, v in EQUALITY_QP_CLARABEL.items() if k not in options}
+    return out
 
 
 def _cvxpy_keywords() -> set[str]:
