@@ -313,13 +313,13 @@ GB = 10**9
 def test_memory_estimate_refuses_before_work_and_names_what_fits(inp, monkeypatch):
     prob = inp.problem()
     need = S.memory_estimate(S.resolve_solver("clarabel"), prob)
-    assert need == pytest.approx(N * 5750.0)  # measured bytes per sample (README)
-    # room for direct (1,400 B per sample) but not for Clarabel (5,750 B)
+    assert need == pytest.approx(N * 4815.0)  # measured bytes per sample (CVXPY_MEMORY)
+    # room for direct (1,400 B per sample) but not for Clarabel (4,815 B)
     monkeypatch.setattr(S, "available_memory", lambda: int(N * 4000 / S.MEMORY_SHARE))
     monkeypatch.setattr(_chain, "attempt", _raise(AssertionError("solved anyway")))
     exc = raises_named(InputError, prob.solve,
-                       r"solver 'clarabel' needs about 0\.000581 GB for N = 101 samples x 1 axes",
-                       r"limit 0\.000404 GB", r"solver='direct' \(about", r"at most 70 samples")
+                       r"solver 'clarabel' needs about 0\.000486 GB for N = 101 samples x 1 axes",
+                       r"limit 0\.000404 GB", r"solver='direct' \(about", r"at most 83 samples")
     assert type(exc) is InputError
 
 
@@ -333,9 +333,9 @@ def test_memory_refusal_on_ten_million_samples_without_allocating(monkeypatch):
     monkeypatch.setattr(S, "available_memory", lambda: 32 * GB)
     monkeypatch.setattr(bvpnav.formulation.Formulation, "check_observability",
                         _raise(AssertionError("work before the memory check")))
-    raises_named(InputError, prob.solve, r"N = 10000000 samples", r"about 57\.5 GB",
+    raises_named(InputError, prob.solve, r"N = 10000000 samples", r"about 48\.1 GB",
                  r"limit 28\.8 GB", r"solver='direct' \(about 14 GB\)",
-                 r"shorter window of at most 5008695 samples \(about 5009 s\)")
+                 r"shorter window of at most 5981308 samples \(about 5981 s\)")
     monkeypatch.setattr(S, "available_memory", lambda: 12 * GB)
     exc = raises_named(InputError, lambda: prob.solve(solver="direct"),
                        r"'direct' needs about 14 GB", r"limit 10\.8 GB",

@@ -79,14 +79,19 @@ print(table[cols].to_string(index=False, float_format="{:.3g}".format))
 # as of the solver (see `examples/benchmarks/`).
 #
 # **The number this tutorial teaches:** the load form is more than 100 times worse
-# conditioned, and it shows: Clarabel's answer is accurate to better than 1e-9 on the
-# acceleration form and fails verification (forward error above 1e-6) on the load form.
+# conditioned, and it shows in every solver's forward error: Clarabel's answer is
+# accurate to better than 1e-9 on the acceleration form and less accurate on the load
+# form (here 3e-11 against 1e-11 at N = 2,001 and 7e-10 against 6e-11 at N = 8,001, both
+# verified; at N = 20,000 samples of the 2011 paper's Table 2 problem the load form's is
+# 6e-5, refused), and OSQP stops at its iteration limit far from the answer on the load form.
 
 # %%
 assert cond["load"] > 100 * cond["acceleration"], cond
 clar = table[table.solver == "clarabel"].set_index("form")
 assert clar.loc["acceleration", "verified"] and clar.loc["acceleration", "forward_error"] < 1e-9
-assert not clar.loc["load", "verified"] and clar.loc["load", "forward_error"] > 1e-6
+assert clar.loc["load", "forward_error"] > clar.loc["acceleration", "forward_error"]
+osqp = table[table.solver == "osqp"].set_index("form")
+assert not osqp.loc["load", "verified"]
 acc = table[(table.form == "acceleration") & table.verified]
 assert {"direct", "csne", "clarabel"} <= set(acc.solver)
 assert np.ptp(acc.rms_error) < 1e-5

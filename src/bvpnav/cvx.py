@@ -55,6 +55,11 @@ class CvxProblem(Mapping):
         Item label -> its constraints (empty for penalty terms).
     penalties : list of (Term, cvxpy.Expression)
         Each penalty term with its penalty before ``lam``.
+    equality_qp : bool
+        Whether every term is a hard or soft equality (an equality-constrained least
+        squares problem: no inequalities, bands, robust items or cones). Then the data
+        term is a quadratic form of ``x`` itself (see :func:`data_term`) and the Clarabel
+        back end solves without equilibration (see :mod:`bvpnav.backends.cvxpy_solvers`).
     """
 
     problem: cp.Problem
@@ -64,6 +69,7 @@ class CvxProblem(Mapping):
     fem_rows: Affine
     cons: dict = field(default_factory=dict)
     penalties: list = field(default_factory=list)
+    equality_qp: bool = False
 
     def __getitem__(self, key: str) -> Any:
         """Dictionary-style access (``build()["problem"]``), as in earlier releases."""
@@ -88,6 +94,25 @@ class CvxProblem(Mapping):
         return out
 
 
+def data_term(rows: Affine, x: cp.Variable, quadratic_form: bool) -> cp.Expression:
+    """The data term ``||A x + c||^2``.
+
+    With ``quadratic_form`` and ``c = 0`` (the acceleration form: ``A`` picks and scales
+    the residuals ``w``) it is ``quad_form(x, A^T A)`` of the variable itself, which cvxpy
+    hands to the solver as the quadratic objective ``P`` directly; ``sum_squares`` of the
+    expression ``A x`` instead makes cvxpy add one auxiliary variable and one equality row
+    per residual (N per axis: the solver's KKT system was 5N instead of 3N rows per axis).
+    Only for equality-constrained problems: with Clarabel's equilibration on (problems
+    with inequalities), a DPP re-solve of this form through Clarabel's in-place update came
+    back ``optimal_inaccurate`` (measured, N = 1e5, clarabel 0.11.1).
+    """
+    import cvxpy as cp
+
+    if quadratic_form and not rows.c.any():
+        return cp.quad_form(x, (rows.A.T @ rows.A).tocsr(), assume_PSD=True)
+    return cp.sum_squares(lower(rows, x))
+
+
 def build(form) -> CvxProblem:
     """Lower a formulation to one DPP cvxpy problem (see the module docstring).
 
@@ -104,7 +129,8 @@ def build(form) -> CvxProblem:
     lam = cp.Parameter(nonneg=True, value=INITIAL_LAM, name="lam")
     fem_rows = model.fem_rows()
     fem_con = lower(fem_rows, x) == 0
-    objective = cp.sum_squares(lower(form.data_rows(), x))
+    equality_qp = all(t.least_squares_role() in ("E", "D") for t in form.terms())
+    objective = data_term(form.data_rows(), x, equality_qp)
     cons: dict[str, list] = {}
     penalties = []
     for term in form.terms():
@@ -125,7 +151,7 @@ def build(form) -> CvxProblem:
         bad = [t.label for t, p in penalties if not (lam * p).is_dpp()]
         raise ConvexityError(f"the problem is not DPP in lam; culprit item(s): {bad or 'unknown'}")
     return CvxProblem(problem=prob, lam=lam, x=x, fem=fem_con, fem_rows=fem_rows, cons=cons,
-                      penalties=penalties)
+                      penalties=penalties, equality_qp=equality_qp)
 
 
 def compiled(form) -> CvxProblem:

@@ -154,7 +154,11 @@ def test_the_run_and_its_timings_are_typed_and_flattened_into_the_stats():
         assert sol.stats[key] == getattr(run.timings, key)
     assert sol.stats["factorization"] == run.details["factorization"]  # back-end specific
     cv = ls_problem().solve(solver="clarabel").records.run
-    assert cv.timings.cvxpy_time >= cv.timings.solve_time > 0 and cv.details == {}
+    # the options the problem's shape added (an equality-constrained least-squares problem)
+    assert cv.timings.cvxpy_time >= cv.timings.solve_time > 0
+    from bvpnav.backends.cvxpy_solvers import EQUALITY_QP_CLARABEL
+
+    assert cv.details == {"adapted_options": EQUALITY_QP_CLARABEL}
 
 
 # ------------------------------------------- found by the independent review of the redesign

@@ -14,7 +14,10 @@ Presets
 ``low``, ``default`` and ``high`` map to each solver's own options (below) and to the
 relative tolerance of bvpnav's verification (:data:`bvpnav.backends.VERIFY_RTOL`).
 Clarabel's static regularization is switched off in every preset: with it on, the FEM
-problems at N >= 1e5 fail to converge (measured; see docs/guide/solvers.md).
+problems at N >= 1e5 fail to converge (measured; see docs/guide/solvers.md). On an
+equality-constrained least-squares problem (hard and soft equalities only) Clarabel also
+runs without equilibration (:func:`adapt_options`, recorded in
+``sol.stats["adapted_options"]``): 0-3 iterations instead of 3-50, verified at N = 1e6.
 """
 
 from __future__ import annotations
@@ -66,9 +69,46 @@ PRESETS: dict[str, dict[str, dict[str, Any]]] = {
 
 #: Peak resident bytes per sample and axis, measured at N = 1,000,000 (one axis, Table 2
 #: shape, each run in its own process, data and problem included; docs/results.md and the
-#: README's memory line): Clarabel 5.75 GB (acceleration form; the load form was not run). Other cvxpy
-#: solvers (not measured) are taken as Clarabel: cvxpy's compiled problem dominates.
-CVXPY_MEMORY = {"acceleration": 5750.0, "load": 5750.0}
+#: README's memory line): Clarabel 4.81 GB in the acceleration form since its data term is
+#: a quadratic form of x (5.75 GB before, with an auxiliary copy of w). The load form was
+#: not run: its entry keeps the earlier 5.75 GB as a bound. Other cvxpy solvers (not
+#: measured) are taken as Clarabel: cvxpy's compiled problem dominates.
+CVXPY_MEMORY = {"acceleration": 4815.0, "load": 5750.0}
+
+
+#: Clarabel's settings for equality-constrained least squares (see :func:`adapt_options`).
+EQUALITY_QP_CLARABEL = {"equilibrate_enable": False, "iterative_refinement_reltol": 1e-15,
+                        "iterative_refinement_abstol": 1e-15, "iterative_refinement_stop_ratio": 1.1,
+                        "iterative_refinement_max_iter": 50}
+
+
+def adapt_options(cvxpy_name: str, cvx, options: dict) -> dict:
+    """Options the problem's shape adds to the preset's and the user's (recorded in
+    ``sol.stats["adapted_options"]``); a key the user (or the preset) gave is left alone.
+
+    Clarabel on an equality-constrained least-squares problem (``cvx.equality_qp``: hard
+    and soft equalities only) runs with ``equilibrate_enable=False``. Its only cone is
+    then the zero cone, so its initial point, one solve of the KKT system, is already the
+    answer; with the Ruiz equilibration (bounded to 1e-4..1e4 per row and column) the FEM
+    rows (stiffness entries 1/h beside mass entries h) stay badly scaled, that point
+    missed the tolerances and 3-6 interior-point iterations followed, ending at a forward
+    error of 2e-9..2e-7 (and ``optimal_inaccurate`` at N = 1e6 with h = 1e-5 s). Without
+    equilibration: 0-3 iterations, forward error 1e-10..1e-8 (measured, N = 1e5..1e6,
+    clarabel 0.11.1). Unequilibrated, a nearly degenerate error-model block (a sensor axis
+    without specific force, scaled condition 2e9) leaves pivots that Clarabel's dynamic
+    regularization bumps, and its refinement, stopped once a step gains less than 5x,
+    ended at a forward error of 4e-5; refinement to 1e-15 while a step gains 10 % (up to
+    50 steps) reaches 1.3e-9 there (and the degenerate combination 1 + k_y 2e-8). With equilibration
+    switched back on by the user, the DPP re-solve does not reuse Clarabel's solver in
+    place (``warm_start=False``): its in-place update of the quadratic-form data term came
+    back inaccurate (see :func:`bvpnav.cvx.data_term`).
+    """
+    if cvxpy_name != "CLARABEL" or not getattr(cvx, "equality_qp", False):
+        return {}
+    if options.get("equilibrate_enable", False):
+        return {} if "warm_start" in options else {"warm_start": False}
+    out = {k: v for k, v in EQUALITY_QP_CLARABEL.items() if k not in options}
+    return out
 
 
 def _cvxpy_keywords() -> set[str]:
@@ -187,11 +227,12 @@ class CvxpyBackend(Backend):
         cvx.lam.value = lam
         alias = ALIASES.get(self.name, {})
         options = {alias.get(k, k): v for k, v in options.items()}
+        adapted = adapt_options(self.cvxpy_name, cvx, options)
         t0 = time.perf_counter()
         try:
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
-                prob.solve(solver=self.cvxpy_name, verbose=verbose, **options)
+                prob.solve(solver=self.cvxpy_name, verbose=verbose, **options, **adapted)
         except cp.error.SolverError as exc:
             raise SolveError(
                 f"{self.name} failed: {exc}",
@@ -208,6 +249,7 @@ class CvxpyBackend(Backend):
             "cvxpy_time": time.perf_counter() - t0,
             "objective": prob.value,
             "solver_warnings": [str(w.message) for w in caught],
+            "adapted_options": adapted,
         }
         self._raise_for(status, form, cvx)
         return RawSolve(np.array(cvx.x.value, dtype=float), info, cvx.duals())
