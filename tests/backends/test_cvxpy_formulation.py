@@ -8,8 +8,15 @@ import numpy as np
 import pytest
 
 import bvpnav
-from bvpnav.constraints import (AverageVelocity, Linear, Position, PositionBound, Symmetry, Velocity,
-                                ZeroVelocity)
+from bvpnav.constraints import (
+    AverageVelocity,
+    Linear,
+    Position,
+    PositionBound,
+    Symmetry,
+    Velocity,
+    ZeroVelocity,
+)
 from bvpnav.error_models import Bias, ScaleFactor
 
 pytest.importorskip("cvxpy")
