@@ -14,7 +14,7 @@ import numpy as np
 
 from ..backends import VERIFY_RTOL
 from ..formulation import as_formulation
-from ..lsq import FORWARD_RTOL, factor_form, forward_error, least_squares_form
+from ..lsq import FORWARD_RTOL, check_factor, forward_error, least_squares_form
 from ..result import Verification
 from .conditioning import assess_conditioning
 
@@ -56,7 +56,7 @@ def _forward(form, xval, lam, duals, factored) -> tuple[float | None, tuple | No
         ls = least_squares_form(form, lam)
         if ls is not None:
             try:
-                factored = (ls, factor_form(ls, form, "lu"))
+                factored = (ls, check_factor(ls, form))
             except (RuntimeError, np.linalg.LinAlgError):  # forward_error's verdict too
                 return float("inf"), None
     return forward_error(form, xval, lam, duals, factored), factored
