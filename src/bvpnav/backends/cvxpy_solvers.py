@@ -233,7 +233,7 @@ class CvxpyBackend(Backend):
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
                 prob.solve(solver=self.cvxpy_name, verbose=verbose, **options, **adapted)
-            if adapted and prob.status != cp.OPTIMAL:
+            if adapted.get("equilibrate_enable") is False and prob.status != cp.OPTIMAL:
                 # without its equilibration Clarabel can call consistent but redundant hard
                 # rows (a hard zero-velocity interval beside a hard position) infeasible: its
                 # own scaling is the safer default then
@@ -241,7 +241,7 @@ class CvxpyBackend(Backend):
                 adapted = {"equilibrate_enable": True, "warm_start": False,
                            "retried": f"equilibration on after status {first}"}
                 prob.solve(solver=self.cvxpy_name, verbose=verbose, **options,
-                           **{k: v for k, v in adapted.items() if k != "retried"})
+                           **{k: v for k, v in adapted.items() if k != "retried" and k not in options})
         except cp.error.SolverError as exc:
             raise SolveError(
                 f"{self.name} failed: {exc}",
