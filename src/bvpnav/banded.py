@@ -46,7 +46,7 @@ import scipy.sparse as sp
 from scipy.linalg import lapack
 
 __all__ = ["BandedKKT", "BandPlan", "NotBanded", "Factorization", "AugmentedOperator", "row_span",
-           "MAX_BAND", "MAX_BORDER", "FOLD_SPAN"]
+           "bandwidth", "MAX_BAND", "MAX_BORDER", "FOLD_SPAN"]
 
 #: Largest lower (and upper) bandwidth of the local part accepted for a banded factor;
 #: the work is N b^2, so beyond this a sparse LDL^T with a fill-reducing ordering wins.
@@ -270,8 +270,8 @@ class BandPlan:
         alone = fold[Drow] & (nnz_row == 1)
         if lam_rows is not None:
             alone &= ~np.asarray(lam_rows, dtype=bool)[Drow]
-        single = np.bincount(Dcol, weights=alone, minlength=n) == np.bincount(Dcol, minlength=n)
-        single &= np.bincount(Dcol, minlength=n) > 0
+        entries = np.bincount(Dcol, minlength=n)
+        single = (np.bincount(Dcol, weights=alone, minlength=n) == entries) & (entries > 0)
         single &= colnode >= 0
         elim = np.flatnonzero(single)
         elo, ehi = row_span(E, colnode)
@@ -295,7 +295,7 @@ class BandPlan:
         plan = cls(fold=fold, elim=elim, pos=pos, bpos=bpos, kl=0, n=n, m=m, p=p,
                    nnz_D=D.nnz, nnz_E=E.nnz)
         plan.pos_order, plan.border_order = order, border
-        del Drow, Dcol, nnz_row, alone, lo, hi, elo, ehi, node, reach, local, order, border
+        del Drow, Dcol, nnz_row, alone, entries, lo, hi, elo, ehi, node, reach, local, order, border
         plan._analyse(D, E, max_band)
         return plan
 
@@ -303,23 +303,25 @@ class BandPlan:
         """Selection matrices of the band and the border, and the bandwidth, from one
         assembly (kept for the first factor)."""
         R = self.pos.size
-        nb = self.pos_order.size
         self.P_band = _selection(R, self.pos_order).T.tocsr()        # (nb, R)
         self.P_border = _selection(R, self.border_order).T.tocsr()   # (k, R)
-        K, h = self.reduced(D, E)
-        Kb = (self.P_band @ K @ self.P_band.T).tocsr()
-        if not self.border_order.size:
-            del K
-            K = None
-        rows = np.repeat(np.arange(nb), np.diff(Kb.indptr))
-        kl = int(np.abs(Kb.indices - rows).max(initial=0))
-        del rows
+        K, Kb, h = self._assembled(D, E)
+        kl = bandwidth(Kb)
         if kl > max_band:
             raise NotBanded(f"bandwidth {kl} after ordering by time node, more than {max_band}: some "
                             "rows couple distant instants")
         self.kl = kl
         self.ldab = 3 * kl + 1
-        self._first = self._parts(K, Kb, h)
+        self._first = (D.data, E.data, self._parts(K, Kb, h))
+
+    def _assembled(self, D, E) -> tuple:
+        """``(K, Kb, h)``: the reduced matrix (None when there is no border, which alone needs
+        it: freed before the band is allocated), its banded part, the eliminated pivots."""
+        K, h = self.reduced(D, E)
+        Kb = (self.P_band @ K @ self.P_band.T).tocsr()
+        if not self.border_order.size:
+            K = None
+        return K, Kb, h
 
     def _band(self, Kb: sp.csr_matrix) -> np.ndarray:
         """LAPACK's band storage of the banded part, ``ab[2 kl + i - j, j] = A[i, j]`` (C order
@@ -344,17 +346,13 @@ class BandPlan:
 
     def assemble(self, D: sp.csr_matrix, E: sp.csr_matrix) -> tuple:
         """The reduced matrix's parts for these values (see :meth:`reduced`); the first call
-        returns the assembly the plan was made from."""
+        with the very arrays the plan was made from returns that assembly."""
         first, self._first = getattr(self, "_first", None), None
-        if first is not None:
-            return first
-        K, h = self.reduced(D, E)
-        Kb = (self.P_band @ K @ self.P_band.T).tocsr()
-        if not _within_band(Kb, self.kl):
+        if first is not None and first[0] is D.data and first[1] is E.data:
+            return first[2]
+        K, Kb, h = self._assembled(D, E)
+        if bandwidth(Kb) > self.kl:
             raise NotBanded("the sparsity pattern changed since the plan was made")
-        if not self.border_order.size:
-            del K   # only the border needs it: free it before the band is allocated
-            return self._band(Kb), None, np.zeros((0, 0)), h
         return self._parts(K, Kb, h)
 
     def eliminated_columns(self, E: sp.csr_matrix) -> sp.csr_matrix:
@@ -386,7 +384,7 @@ class BandPlan:
         its transpose), :math:`-E_z h^{-1} E_z^T` on the multipliers, and the unfolded rows
         :math:`[D_u, -I]`; every block by sparse products in scipy's compiled code.
         """
-        n, R = self.n, self.pos.size
+        R = self.pos.size
         unf = self.unfolded
         nu = unf.size
         el = self.elim
@@ -398,7 +396,7 @@ class BandPlan:
         p = self.p
         Q = sp.csr_matrix((p, p))
         if el.size:
-            Z = E @ _selection(n, el, 1.0 / np.sqrt(h))
+            Z = self.eliminated_columns(E) @ sp.diags(1.0 / np.sqrt(h))
             Q = -(Z @ Z.T)
         # CSR blocks stacked along both axes by scipy's compressed-stack paths (no COO copy)
         if nu:
@@ -420,10 +418,10 @@ class BandPlan:
                 and D.nnz == self.nnz_D and E.nnz == self.nnz_E)
 
 
-def _within_band(A: sp.csr_matrix, kl: int) -> bool:
-    """Whether every stored entry of ``A`` lies within ``kl`` of the diagonal."""
+def bandwidth(A: sp.csr_matrix) -> int:
+    """Largest distance of a stored entry of ``A`` (CSR) from the diagonal."""
     rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
-    return bool(np.abs(A.indices - rows).max(initial=0) <= kl)
+    return int(np.abs(A.indices - rows).max(initial=0))
 
 
 class BandedKKT(Factorization):

@@ -33,12 +33,12 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .banded import BandedKKT, Factorization, NotBanded
+from .banded import BandedKKT, BandPlan, Factorization, NotBanded, canonical
 from .formulation import as_formulation
 from .model import Affine
 
 __all__ = ["LeastSquaresForm", "least_squares_form", "non_least_squares_term", "forward_error",
-           "check_factor", "BorderedLU", "solve_bordered", "factor_form", "solve_least_squares",
+           "check_factor", "BorderedLU", "banded_plan", "factor_form", "solve_least_squares",
            "FORWARD_RTOL"]
 
 #: Largest relative forward error accepted per accuracy preset.
@@ -324,12 +324,6 @@ class BorderedLU(Factorization):
         return z
 
 
-def solve_bordered(S: sp.spmatrix, rhs: np.ndarray, dense: np.ndarray,
-                   shift_rows: np.ndarray | None = None) -> np.ndarray:
-    """Solve ``S z = rhs`` once with :class:`BorderedLU` (see there)."""
-    return BorderedLU(S, dense, shift_rows).solve(rhs)
-
-
 def check_factor(form: LeastSquaresForm, problem):
     """The factorization verification judges an answer with (any back end's): the banded
     one on the acceleration form (O(N), several times cheaper than a sparse LU), the
@@ -362,9 +356,9 @@ def column_nodes(model, interleave: bool = False) -> np.ndarray:
     return colnode
 
 
-def banded_factor(form: LeastSquaresForm, problem, plan=None, parts=None) -> BandedKKT:
-    """:class:`bvpnav.banded.BandedKKT` of a form (axes end to end, else interleaved when
-    rows couple axes); ``plan`` from an earlier factor of the same pattern is reused.
+def banded_plan(form: LeastSquaresForm, problem) -> BandPlan:
+    """The symbolic analysis of a form's banded factorization (axes end to end, else
+    interleaved when rows couple axes), with its first assembly kept for the first factor.
 
     Raises
     ------
@@ -373,15 +367,27 @@ def banded_factor(form: LeastSquaresForm, problem, plan=None, parts=None) -> Ban
         back to a sparse factorization).
     """
     model = as_formulation(problem).model
-    D, E = form.D.A, form.E.A
-    if plan is not None:
-        return BandedKKT(D, E, params=model.l_index, plan=plan, parts=parts)
+    D, E = canonical(form.D.A), canonical(form.E.A)
     try:
-        return BandedKKT(D, E, column_nodes(model), params=model.l_index, lam_rows=form.lam_rows)
+        return BandPlan.build(D, E, column_nodes(model), lam_rows=form.lam_rows)
     except NotBanded:
         if model.d == 1:
             raise
-    return BandedKKT(D, E, column_nodes(model, interleave=True), params=model.l_index, lam_rows=form.lam_rows)
+    return BandPlan.build(D, E, column_nodes(model, interleave=True), lam_rows=form.lam_rows)
+
+
+def banded_factor(form: LeastSquaresForm, problem, plan=None, parts=None) -> BandedKKT:
+    """:class:`bvpnav.banded.BandedKKT` of a form; ``plan`` (:func:`banded_plan`) from an
+    earlier factor of the same pattern is reused, and ``parts`` assembled values with it.
+
+    Raises
+    ------
+    bvpnav.banded.NotBanded
+        As :func:`banded_plan`.
+    """
+    model = as_formulation(problem).model
+    plan = banded_plan(form, problem) if plan is None else plan
+    return BandedKKT(form.D.A, form.E.A, params=model.l_index, plan=plan, parts=parts)
 
 
 def factor_form(form: LeastSquaresForm, problem, method: str = "lu", delta: float = 1e-12):

@@ -15,7 +15,7 @@ import pytest
 
 import bvpnav
 from bvpnav.banded import MAX_BORDER, BandedKKT, BandPlan, NotBanded
-from bvpnav.constraints import Position, Symmetry, Velocity
+from bvpnav.constraints import AverageVelocity, Position, Symmetry, Velocity
 from bvpnav.error_models import Bias
 from bvpnav.items import registry
 from bvpnav.lam.sweep import DirectSweep
@@ -125,3 +125,16 @@ def test_gcv_trace_from_the_log_determinant_equals_the_trace_by_exact_columns(la
     assert exact.trace_method == "exact columns" and logdet.trace_method == "log-determinant"
     assert abs(a - b) <= 1e-7 + 1e-6 * abs(a), (a, b)
     assert -3 * 60 < a < 0   # a trace of d w / d a_hat: between -N d and 0
+
+
+@pytest.mark.parametrize("lam", [1e-2, 3.0])
+def test_a_far_reaching_lambda_row_assembles_at_every_lambda(lam):
+    """A soft average velocity over most of the window sits in the border with a sqrt(lam)
+    weight: the band is not affine in lambda there, so the sweep assembles each lambda (the
+    plan's own assembly at lambda = 1 must not be taken for another lambda)."""
+    prob = problem(AverageVelocity(t0=[0.5], t1=[9.5], value=[0.1], sigma=0.05), n=601)
+    sweep = DirectSweep(prob.formulation)
+    x = sweep.point(lam)["x"]
+    assert sweep._parts is False
+    ref = prob.solve(solver="direct", lam=lam, options={"method": "lu"}, fallback=None)
+    np.testing.assert_allclose(x, ref.x, rtol=0, atol=1e-10 * np.max(np.abs(ref.x)))

@@ -41,7 +41,7 @@ from ..formulation import LAM_RANGE, as_formulation
 from ..log import once, progress_enabled, sweeping
 from ..log import progress as progress_bar
 from ..log import warn as _warn
-from ..lsq import banded_factor, factor_form, least_squares_form, non_least_squares_term
+from ..lsq import banded_factor, banded_plan, factor_form, least_squares_form, non_least_squares_term
 from ..plot import lcurve
 from . import get_rule, rule_names
 
@@ -176,7 +176,7 @@ class DirectSweep:
         self.factorization = "lu"
         if self.form.residual == "acceleration":  # the load form (condition ~N^4) keeps the pivoted LU
             try:
-                self._plan = banded_factor(self._ls, self.form).plan
+                self._plan = banded_plan(self._ls, self.form)
                 self.factorization = self._plan.describe()
             except NotBanded as exc:
                 self.factorization = f"lu (not banded: {exc})"
