@@ -108,6 +108,18 @@ def random_walk_term(model, names: list, knots: np.ndarray, drift: float, units:
                 scaled_by_lam=False, units=units)
 
 
+def random_walk_cost(base: np.ndarray, knots: np.ndarray, drift: float, anchored: bool = False) -> float:
+    """The sum of squares of :func:`random_walk_term`'s rows at the totals ``base``
+    (axis-major knot values; without the first knot when ``anchored``): the prior's share
+    of the damped loop's objective."""
+    m = knots.size - 1 if anchored else knots.size
+    b = np.asarray(base, dtype=float).reshape(-1, m)
+    if anchored:
+        b = np.concatenate([np.zeros((b.shape[0], 1)), b], axis=1)
+    r = np.diff(b, axis=1) / (drift * np.sqrt(np.diff(knots)))
+    return float(np.sum(r**2))
+
+
 # ------------------------------------------------------------- SO(3) helpers
 def _skew(v: np.ndarray) -> np.ndarray:
     """``[v x]`` for an array of vectors (..., 3) -> (..., 3, 3)."""

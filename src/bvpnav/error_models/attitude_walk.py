@@ -18,6 +18,7 @@ from ._attitude import (
     knot_times,
     left_jacobian,
     positive_option,
+    random_walk_cost,
     random_walk_term,
 )
 
@@ -207,11 +208,7 @@ class AttitudeWalk(AttitudeErrorModel):
     def extra_prior_cost(self, data) -> float:
         if self.arw is None:
             return 0.0
-        k = self.knots(data)
-        b = self.base(data).reshape(len(self._sel()), -1)  # axis-major
-        b = np.concatenate([np.zeros((b.shape[0], 1)), b], axis=1)
-        r = np.diff(b, axis=1) / (self.arw * np.sqrt(np.diff(k)))
-        return float(np.sum(r**2))
+        return random_walk_cost(self.base(data), self.knots(data), self.arw, anchored=True)
 
     def extra_terms(self, model) -> list:
         if self.arw is None:

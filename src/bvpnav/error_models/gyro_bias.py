@@ -15,6 +15,7 @@ from ._attitude import (
     hat_weights,
     knot_times,
     positive_option,
+    random_walk_cost,
     random_walk_term,
 )
 
@@ -152,10 +153,7 @@ class GyroBias(AttitudeErrorModel):
     def extra_prior_cost(self, data) -> float:
         if self.drift is None:
             return 0.0
-        k = self.knots(data)
-        b = self.base(data).reshape(-1, k.size)  # axis-major
-        r = np.diff(b, axis=1) / (self.drift * np.sqrt(np.diff(k)))
-        return float(np.sum(r**2))
+        return random_walk_cost(self.base(data), self.knots(data), self.drift)
 
     def extra_terms(self, model) -> list:
         if self.drift is None:
