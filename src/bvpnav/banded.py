@@ -46,7 +46,7 @@ import scipy.sparse as sp
 from scipy.linalg import lapack
 
 __all__ = ["BandedKKT", "BandPlan", "NotBanded", "Factorization", "AugmentedOperator", "row_span",
-           "bandwidth", "MAX_BAND", "MAX_BORDER", "FOLD_SPAN"]
+           "MAX_BAND", "MAX_BORDER", "FOLD_SPAN"]
 
 #: Largest lower (and upper) bandwidth of the local part accepted for a banded factor;
 #: the work is N b^2, so beyond this a sparse LDL^T with a fill-reducing ordering wins.
@@ -64,10 +64,16 @@ class NotBanded(ValueError):
     """The problem's rows are not local enough for the banded factorization (says why)."""
 
 
+def as_csr(A) -> sp.csr_matrix:
+    """``A`` in CSR form, itself when it already is (``scipy.sparse.csr_matrix(A)`` copies
+    even a CSR matrix)."""
+    return A if sp.issparse(A) and A.format == "csr" else sp.csr_matrix(A)
+
+
 def row_span(A: sp.csr_matrix, colnode: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Lowest and highest node of each row's columns with a node >= 0 (``hi = -1`` for a
     row with none)."""
-    A = sp.csr_matrix(A)
+    A = as_csr(A)
     m = A.shape[0]
     big = np.iinfo(np.int64).max
     lo = np.full(m, big, dtype=np.int64)
@@ -91,16 +97,6 @@ def _selection(n: int, cols: np.ndarray, scale: np.ndarray | None = None) -> sp.
                           np.arange(k + 1)), shape=(n, k))
 
 
-def _drop_columns(A: sp.csr_matrix, cols: np.ndarray) -> sp.csr_matrix:
-    """``A`` (CSR) without the entries of columns ``cols`` (same shape)."""
-    keep = np.ones(A.shape[1], dtype=bool)
-    keep[cols] = False
-    mask = keep[A.indices]
-    row = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
-    indptr = np.concatenate([[0], np.cumsum(np.bincount(row[mask], minlength=A.shape[0]))])
-    return sp.csr_matrix((A.data[mask], A.indices[mask], indptr), shape=A.shape)
-
-
 def column_squares(A: sp.csr_matrix, cols: np.ndarray) -> np.ndarray:
     """Sum of squares of the entries of each of ``A``'s columns ``cols``."""
     if cols.size == 0:
@@ -118,7 +114,7 @@ class AugmentedOperator:
     """
 
     def __init__(self, D: sp.csr_matrix, E: sp.csr_matrix):
-        self.D, self.E = sp.csr_matrix(D), sp.csr_matrix(E)
+        self.D, self.E = as_csr(D), as_csr(E)
         self.m, self.n = self.D.shape
         self.p = self.E.shape[0]
         self.shape = (self.m + self.n + self.p,) * 2
@@ -175,7 +171,7 @@ class Factorization:
 def canonical(A: sp.spmatrix) -> sp.csr_matrix:
     """``A`` as CSR without duplicates or explicit zeros (a copy when it had any: an explicit
     zero must not tie a row to a node)."""
-    A = sp.csr_matrix(A)
+    A = as_csr(A)
     if not A.has_canonical_format or (A.data.size and not np.all(A.data)):
         A = A.copy()
         A.sum_duplicates()
@@ -292,68 +288,116 @@ class BandPlan:
                             f"that reach far in time), more than {max_border}")
         bpos = np.full(node.size, -1, dtype=np.int64)
         bpos[border] = np.arange(border.size)
+        bpos = bpos.astype(np.int32) if node.size < 2**31 else bpos
         plan = cls(fold=fold, elim=elim, pos=pos, bpos=bpos, kl=0, n=n, m=m, p=p,
                    nnz_D=D.nnz, nnz_E=E.nnz)
         plan.pos_order, plan.border_order = order, border
+        plan._pos32 = pos.astype(np.int32) if pos.size < 2**31 else pos   # half the memory in placing
         del Drow, Dcol, nnz_row, alone, entries, lo, hi, elo, ehi, node, reach, local, order, border
         plan._analyse(D, E, max_band)
         return plan
 
     def _analyse(self, D, E, max_band) -> None:
-        """Selection matrices of the band and the border, and the bandwidth, from one
-        assembly (kept for the first factor)."""
-        R = self.pos.size
-        self.P_band = _selection(R, self.pos_order).T.tocsr()        # (nb, R)
-        self.P_border = _selection(R, self.border_order).T.tocsr()   # (k, R)
-        K, Kb, h = self._assembled(D, E)
-        kl = bandwidth(Kb)
+        """The bandwidth of the banded part, from one assembly (kept for the first factor)."""
+        entries = self._entries(D, E)
+        kl = 0
+        for pi, pj, _, _ in entries[0]:
+            if pi.size:
+                kl = max(kl, int(np.abs(pi - pj).max()))
         if kl > max_band:
             raise NotBanded(f"bandwidth {kl} after ordering by time node, more than {max_band}: some "
                             "rows couple distant instants")
         self.kl = kl
         self.ldab = 3 * kl + 1
-        self._first = (D.data, E.data, self._parts(K, Kb, h))
+        self._first = (D.data, E.data, self._scatter(entries))
 
-    def _assembled(self, D, E) -> tuple:
-        """``(K, Kb, h)``: the reduced matrix (None when there is no border, which alone needs
-        it: freed before the band is allocated), its banded part, the eliminated pivots."""
-        K, h = self.reduced(D, E)
-        Kb = (self.P_band @ K @ self.P_band.T).tocsr()
+    def _entries(self, D: sp.csr_matrix, E: sp.csr_matrix) -> tuple:
+        """The reduced matrix's entries, placed: ``(band, border_coupling, border, h)``.
+
+        ``band`` is a list of ``(i, j, values, mirror)`` with positions in the banded part
+        (``mirror``: the block's transpose is there too, at ``(j, i)``); the border
+        coupling ``(i, k, values)`` holds the entries in band row ``i`` and border column
+        ``k``, the border ``(k, l, values)`` those among border unknowns; ``h`` is the
+        eliminated unknowns' diagonal. Entries of eliminated unknowns are dropped.
+
+        Notes
+        -----
+        Blocks of the (symmetric) reduced matrix: :math:`D_f^T D_f` on ``x``; the unfolded
+        rows :math:`[D_u, -I]` and their transpose; ``E`` and its transpose;
+        :math:`-E_z h^{-1} E_z^T` on the multipliers.
+        """
+        n = self.n
+        unf = self.unfolded
+        nu = unf.size
+        el = self.elim
+        Df = D[self.fold] if nu else D
+        h = column_squares(Df, el)
+        out = ([], [], [])
+
+        def add_sparse(A: sp.spmatrix, r0: int, c0: int, mirror: bool, sign: float = 1.0) -> None:
+            A = A.tocoo()
+            self._place(A.row + r0, A.col + c0, A.data if sign == 1.0 else sign * A.data, mirror, out)
+
+        add_sparse(Df.T @ Df, 0, 0, False)
+        if nu:
+            add_sparse(D[unf], n, 0, True)
+            self._place(n + np.arange(nu), n + np.arange(nu), -np.ones(nu), False, out)
+        add_sparse(E, n + nu, 0, True)
+        if el.size:
+            Z = self.eliminated_columns(E) @ sp.diags(1.0 / np.sqrt(h))
+            add_sparse(Z @ Z.T, n + nu, n + nu, False, -1.0)
+        return (*out, h)
+
+    def _place(self, r: np.ndarray, c: np.ndarray, v: np.ndarray, mirror: bool, out: tuple) -> None:
+        """Append one block's entries (reduced indices ``r``, ``c``; ``mirror``: its
+        transpose too) to ``out = (band, border_coupling, border)`` (see :meth:`_entries`)."""
+        band, cpl, brd = out
+        pi, pj = self._pos32[r], self._pos32[c]
+        keep = (pi >= 0) & (pj >= 0)
+        band.append((pi[keep], pj[keep], v[keep], mirror))
         if not self.border_order.size:
-            K = None
-        return K, Kb, h
+            return
+        bi, bj = self.bpos[r], self.bpos[c]
+        for a, b, pa, pb in ((pi, bj, bi, bj), (pj, bi, bj, bi))[:1 + mirror]:
+            sel = (a >= 0) & (b >= 0)
+            cpl.append((a[sel], b[sel], v[sel]))
+            sel = (pa >= 0) & (pb >= 0)
+            brd.append((pa[sel], pb[sel], v[sel]))
 
-    def _band(self, Kb: sp.csr_matrix) -> np.ndarray:
-        """LAPACK's band storage of the banded part, ``ab[2 kl + i - j, j] = A[i, j]`` (C order
-        here: each band row contiguous; transposed to Fortran order for ``dgbtrf``)."""
-        nb, kl = self.pos_order.size, self.kl
-        ab = np.zeros((self.ldab, nb))
-        for off in range(-kl, kl + 1):       # diagonal off: A[i, i + off]
-            dg = Kb.diagonal(off)
-            if off >= 0:
-                ab[2 * kl - off, off:] = dg
-            else:
-                ab[2 * kl - off, :nb + off] = dg
-        return ab
+    def _scatter(self, entries: tuple) -> tuple:
+        """``(ab, B, C, h)`` from :meth:`_entries`: the banded part in LAPACK's band layout
+        (``ab[j, 2 kl + i - j] = A[i, j]``, C order (nb, 3 kl + 1), that is ``dgbtrf``'s
+        column-major ``(ldab, nb)`` transposed), its coupling to the border (CSC, nb x k)
+        and the border block (dense); each entry placed by index arithmetic (no permuted
+        copy of the matrix)."""
+        band, cpl, brd, h = entries
+        nb, k, kl, ldab = self.pos_order.size, self.border_order.size, self.kl, self.ldab
+        ab = np.zeros((nb, ldab))
+        flat = ab.reshape(-1)
+        for pi, pj, v, mirror in band:
+            off = pi - pj
+            if off.size and np.abs(off).max() > kl:
+                raise NotBanded("the sparsity pattern changed since the plan was made")
+            flat[pj.astype(np.int64) * ldab + (2 * kl + off)] = v
+            if mirror:
+                flat[pi.astype(np.int64) * ldab + (2 * kl - off)] = v
+        B, C = None, np.zeros((k, k))
+        if k:
+            def cat(parts: list, t: int) -> np.ndarray:
+                return np.concatenate([p[t] for p in parts]) if parts else np.zeros(0, int)
 
-    def _parts(self, K, Kb, h) -> tuple:
-        """``(ab, B, C, h)``: the band, its coupling to the border, the border block (``K``
-        may be None when there is no border)."""
-        k = self.border_order.size
-        B = (self.P_band @ K @ self.P_border.T).tocsc() if k else None
-        C = (self.P_border @ K @ self.P_border.T).toarray() if k else np.zeros((0, 0))
-        return self._band(Kb), B, C, h
+            B = sp.csc_matrix((cat(cpl, 2), (cat(cpl, 0), cat(cpl, 1))), shape=(nb, k))
+            np.add.at(C, (cat(brd, 0), cat(brd, 1)), cat(brd, 2))
+        return ab, B, C, h
 
     def assemble(self, D: sp.csr_matrix, E: sp.csr_matrix) -> tuple:
-        """The reduced matrix's parts for these values (see :meth:`reduced`); the first call
-        with the very arrays the plan was made from returns that assembly."""
+        """The reduced matrix's parts ``(ab, B, C, h)`` (see :meth:`_scatter`) for these
+        values; the first call with the very arrays the plan was made from returns that
+        assembly."""
         first, self._first = getattr(self, "_first", None), None
         if first is not None and first[0] is D.data and first[1] is E.data:
             return first[2]
-        K, Kb, h = self._assembled(D, E)
-        if bandwidth(Kb) > self.kl:
-            raise NotBanded("the sparsity pattern changed since the plan was made")
-        return self._parts(K, Kb, h)
+        return self._scatter(self._entries(D, E))
 
     def eliminated_columns(self, E: sp.csr_matrix) -> sp.csr_matrix:
         """``E`` restricted to the eliminated unknowns (kept for the last ``E`` seen: every
@@ -367,61 +411,16 @@ class BandPlan:
     def objective_part(self, D1: sp.csr_matrix) -> tuple:
         """The parts of :math:`D_1^T D_1` alone (rows that are all folded and touch no
         eliminated unknown): what a lambda-weighted block adds, per unit of lambda."""
-        R = self.pos.size
-        H = D1.T @ D1
-        Hp = sp.block_diag([H, sp.csr_matrix((R - self.n, R - self.n))], format="csr")
-        Kb = (self.P_band @ Hp @ self.P_band.T).tocsr()
-        ab, B, C, _ = self._parts(Hp, Kb, None)
+        H = (D1.T @ D1).tocoo()
+        out = ([], [], [])
+        self._place(H.row, H.col, H.data, False, out)
+        ab, B, C, _ = self._scatter((*out, None))
         return ab, B, C
-
-    def reduced(self, D: sp.csr_matrix, E: sp.csr_matrix):
-        """The reduced matrix after the diagonal eliminations (CSR, reduced indices) and the
-        eliminated unknowns' diagonal ``h``.
-
-        Notes
-        -----
-        Blocks: :math:`D_f^T D_f` on the kept unknowns, ``E`` on the kept unknowns (and
-        its transpose), :math:`-E_z h^{-1} E_z^T` on the multipliers, and the unfolded rows
-        :math:`[D_u, -I]`; every block by sparse products in scipy's compiled code.
-        """
-        R = self.pos.size
-        unf = self.unfolded
-        nu = unf.size
-        el = self.elim
-        Df = D[self.fold] if nu else D
-        h = column_squares(Df, el)
-        # the eliminated unknowns' rows and columns stay in K: the band's selection drops them
-        H = Df.T @ Df
-        Ek = _drop_columns(E, self.elim) if el.size else E   # half of E: its w columns go
-        p = self.p
-        Q = sp.csr_matrix((p, p))
-        if el.size:
-            Z = self.eliminated_columns(E) @ sp.diags(1.0 / np.sqrt(h))
-            Q = -(Z @ Z.T)
-        # CSR blocks stacked along both axes by scipy's compressed-stack paths (no COO copy)
-        if nu:
-            Du = D[unf]
-            rows = [[H, Du.T.tocsr(), Ek.T.tocsr()],
-                    [Du, -sp.identity(nu, format="csr"), sp.csr_matrix((nu, p))],
-                    [Ek, sp.csr_matrix((p, nu)), Q.tocsr()]]
-        else:
-            rows = [[H.tocsr(), Ek.T.tocsr()], [Ek.tocsr(), Q.tocsr()]]
-        K = sp.vstack([sp.hstack(r, format="csr") for r in rows], format="csr")
-        del rows
-        if K.shape != (R, R):  # pragma: no cover - internal consistency
-            raise NotBanded(f"internal error: reduced matrix of shape {K.shape}, expected {(R, R)}")
-        return K, h
 
     def same_pattern(self, D: sp.csr_matrix, E: sp.csr_matrix) -> bool:
         """Whether ``D`` and ``E`` have the shapes and entry counts this plan was made for."""
         return (D.shape == (self.m, self.n) and E.shape == (self.p, self.n)
                 and D.nnz == self.nnz_D and E.nnz == self.nnz_E)
-
-
-def bandwidth(A: sp.csr_matrix) -> int:
-    """Largest distance of a stored entry of ``A`` (CSR) from the diagonal."""
-    rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
-    return int(np.abs(A.indices - rows).max(initial=0))
 
 
 class BandedKKT(Factorization):
@@ -484,19 +483,18 @@ class BandedKKT(Factorization):
             parts = pl.assemble(D, E)
         ab, Bs, C, self._h = parts   # ab is this factor's own (dgbtrf overwrites it)
         del parts
-        nb, k, kl, ldab = pl.size, pl.border, pl.kl, pl.ldab
+        nb, k, kl = pl.size, pl.border, pl.kl
         self.k = k
-        # symmetric scaling by the square roots of the column maxima (the matrix is symmetric)
-        colmax = np.abs(ab[kl:]).max(axis=0) if nb else np.zeros(0)
+        # symmetric scaling by the square roots of the column maxima (the matrix is symmetric);
+        # ab is (nb, ldab) C order, LAPACK's column-major band, entries in ab[:, kl:]
+        colmax = np.abs(ab[:, kl:]).max(axis=1) if nb else np.zeros(0)
         sU = 1.0 / np.sqrt(np.where(colmax > 0, colmax, 1.0))
-        pad = np.concatenate([np.zeros(2 * kl), sU, np.zeros(kl)])
-        for r in range(kl, ldab):       # band row r holds A[j + r - 2 kl, j]
-            ab[r] *= pad[r:r + nb]
-        # one pass: the column scaling and the transposition to LAPACK's column-major layout
-        abF = np.empty((nb, ldab))
-        np.multiply(ab.T, sU[:, None], out=abF)
-        del ab
-        ab = abF.T
+        pad = np.concatenate([np.zeros(kl), sU, np.zeros(kl)])
+        # entry (j, kl + s) is A[j + s - kl, j]: scaled by sU[j] and sU[j + s - kl] = pad[j + s]
+        rows = np.lib.stride_tricks.sliding_window_view(pad, 2 * kl + 1)[:nb]
+        ab[:, kl:] *= rows
+        ab[:, kl:] *= sU[:, None]
+        ab = ab.T
         lu, piv, info = lapack.dgbtrf(ab, kl, kl, overwrite_ab=1)
         if info != 0:
             raise np.linalg.LinAlgError(f"the banded part is singular (zero pivot at {info})")

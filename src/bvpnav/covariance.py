@@ -42,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from .banded import row_span
+from .banded import canonical, row_span
 from .errors import InputError, SolveError
 from .formulation import as_formulation
 from .lsq import LeastSquaresForm, least_squares_form
@@ -218,9 +218,8 @@ class _Posterior:
     def __init__(self, ls: LeastSquaresForm, model, hard_to_border: bool = False):
         N, d = model.N, model.d
         n = model.size
-        D, E = ls.D.A.tocsr(), ls.E.A.tocsr()
-        D.eliminate_zeros()  # an explicit zero must not tie a row to a node
-        E.eliminate_zeros()
+        # an explicit zero must not tie a row to a node (a cleaned copy, never the form's own)
+        D, E = canonical(ls.D.A), canonical(ls.E.A)
         colaxis = np.full(n, -1, dtype=np.int64)
         for a in range(d):
             colaxis[model.r_index(a)[1:]] = a

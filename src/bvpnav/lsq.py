@@ -159,7 +159,11 @@ def least_squares_form(form, lam: float, surrogate: bool = False) -> LeastSquare
         elif role == "D":
             obj.append(term.residual * (np.sqrt(term.weight(lam)) / term.sigma))
             scaled.append(np.full(term.residual.m, bool(term.scaled_by_lam)))
-    return LeastSquaresForm(Affine.vstack(obj), Affine.vstack(eq), blocks, np.concatenate(scaled), float(lam))
+    # canonical once (sorted, no duplicates or explicit zeros): every factorization and every
+    # lambda of a sweep then shares these arrays instead of cleaning a copy of its own
+    D, E = Affine.vstack(obj), Affine.vstack(eq)
+    D, E = (Affine(canonical(a.A), a.c, a.labels) for a in (D, E))
+    return LeastSquaresForm(D, E, blocks, np.concatenate(scaled), float(lam))
 
 
 def forward_error(form, xval: np.ndarray, lam: float, duals: dict | None,

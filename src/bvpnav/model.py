@@ -89,7 +89,9 @@ class Affine:
     labels: Sequence[str] | None = None
 
     def __post_init__(self):
-        A = sp.csr_matrix(self.A)
+        A = self.A
+        if not (sp.issparse(A) and A.format == "csr"):
+            A = sp.csr_matrix(A)   # scipy copies even a CSR matrix: only other formats go through it
         c = np.broadcast_to(np.asarray(self.c, dtype=float), (A.shape[0],)).copy()
         object.__setattr__(self, "A", A)
         object.__setattr__(self, "c", c)
