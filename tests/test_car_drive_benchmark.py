@@ -43,3 +43,23 @@ def test_gyro_bias_knots_within_three_std_or_20_percent(quick):
         rows = r["gyro_bias"]
         assert sum(row["ok"] for row in rows) == len(rows) == 15
         assert all(0.0 < row["std"] < 1e-4 for row in rows)  # rad/s: the grade's bias is 5e-5
+
+
+def test_mean_over_drives_and_the_count_of_wins():
+    """--seeds: each method's RMS averaged over the drives per gap, and on how many drives it
+    beat method (c) (ties count as not beating it)."""
+    bench = load_benchmark_module("car_drive")
+    key = "+GyroBias+AttitudeError+Walk"
+
+    def res(c, gtsam, bias):
+        return [{"gap": 10.0, "key": key, "rms": {key: c, "GTSAM": gtsam, "Bias() sigma_a=1": bias,
+                                                  "Bias()": 2 * bias, "spline": 5.0}}]
+
+    per_seed = [res(0.8, 0.9, 2.0), res(0.7, 0.6, 4.0), res(0.6, 0.6, 3.0)]
+    (row,) = bench.mean_rms(per_seed)
+    assert row["rms"][key] == pytest.approx(0.7) and row["rms"]["GTSAM"] == pytest.approx(0.7)
+    assert row["rms"]["Bias() sigma_a=1"] == pytest.approx(3.0)
+    assert row["beats"] == {key: 0, "GTSAM": 1, "Bias() sigma_a=1": 0, "Bias()": 0, "spline": 0}
+    with contextlib.redirect_stdout(io.StringIO()) as out:
+        bench.print_mean("tactical", [0, 1, 2], per_seed)
+    assert "GTSAM/bvpnav 1.0000" in out.getvalue() and "4.3x" in out.getvalue()  # 3.0 / 0.7

@@ -180,15 +180,59 @@ def test_error_model_options():
 
 
 def test_error_model_with_the_angle_random_walk():
-    """walk=True adds AttitudeWalk with the grade's gyro noise as the ARW and the spacing of
-    walk_interval: sqrt(3) * 5e-4 / (9.80665 * 2e-5) = 4.4155 s for the tactical grade."""
+    """walk=True adds AttitudeWalk with the grade's ARW plus what the 30 s gyro-bias knots
+    leave out, sqrt(2e-5^2 + 1e-6^2 * 30^2 / 12) = 2.17945e-5 rad/sqrt(s), and the spacing
+    of walk_interval: sqrt(3) * 5e-4 / (9.80665 * 2.17945e-5) = 4.0519 s (tactical grade);
+    with constant biases the ARW is the gyro noise alone (4.4155 s)."""
     from bvpnav.error_models import AttitudeWalk
 
     em = grade("tactical").error_model(walk=True)
     walk = em.components[-1]
-    assert isinstance(walk, AttitudeWalk) and walk.arw == 2e-5
-    assert walk.interval == pytest.approx(4.4155, abs=1e-4)
-    names = em.names(_strapdown())  # 30 s: 7 walk intervals, knots 1..7 per axis
+    assert isinstance(walk, AttitudeWalk)
+    assert walk.arw == pytest.approx(2.17945e-5, rel=1e-5)
+    assert walk.interval == pytest.approx(4.0519, abs=1e-4)
+    const = grade("tactical").error_model(walk=True, time_varying=False).components[-1]
+    assert const.arw == 2e-5 and const.interval == pytest.approx(4.4155, abs=1e-4)
+    names = em.names(_strapdown())  # 30 s: round(30 / 4.05) = 7 walk intervals, knots 1..7 per axis
     walk_z = [n for n in names if n.startswith("attitude_walk_z")]
     assert walk_z == [f"attitude_walk_z[{m}]" for m in range(1, 8)]
     assert not any(isinstance(c, AttitudeWalk) for c in grade("tactical").error_model().components)
+
+
+def test_bridge_terms_of_sigma_a_and_arw():
+    """sigma_a(rate, interval) and arw(interval) add q^2 D^2 / 12 of the bias walks to the
+    white-noise densities: tactical, 100 Hz, 30 s knots: sqrt((5e-4^2 + 1e-5^2 * 75) * 100)
+    = 5.07445e-3 m/s^2 against 5e-3 without."""
+    from bvpnav.error_models import bridge_intensity
+
+    g = grade("tactical")
+    assert g.sigma_a(100.0) == pytest.approx(5e-3, rel=1e-12)
+    assert g.sigma_a(100.0, interval=30.0) == pytest.approx(5.074446e-3, rel=1e-6)
+    assert g.arw() == 2e-5
+    assert g.arw(30.0) ** 2 == pytest.approx(4e-10 + 7.5e-11, rel=1e-12)
+    assert bridge_intensity(1e-6, 30.0) == pytest.approx(7.5e-11, rel=1e-12)
+    for bad in ({"drift": 0.0, "interval": 30.0}, {"drift": 1e-6, "interval": -1.0},
+                {"drift": None, "interval": 30.0}):
+        with pytest.raises(InputError):
+            bridge_intensity(**bad)
+    with pytest.raises(InputError):
+        g.sigma_a(100.0, interval=0.0)
+
+
+def test_bridge_intensity_is_the_variance_of_the_left_out_integral():
+    """Monte Carlo: a random walk of density q sampled at knots D apart and interpolated
+    linearly leaves out a bridge whose integral over one interval has variance q^2 D^3 / 12
+    (bridge_intensity * D); 4000 paths, the estimate within 4 standard errors."""
+    from bvpnav.error_models import bridge_intensity
+
+    rng = np.random.default_rng(5)
+    q, D, steps, paths = 2.0, 3.0, 600, 4000
+    dt = D / steps
+    walk = np.concatenate([np.zeros((paths, 1)),
+                           np.cumsum(q * np.sqrt(dt) * rng.standard_normal((paths, steps)), axis=1)], axis=1)
+    s = np.linspace(0.0, D, steps + 1)
+    bridge = walk - np.outer(walk[:, -1], s / D)     # what the linear interpolation leaves out
+    integral = np.sum(0.5 * (bridge[:, 1:] + bridge[:, :-1]), axis=1) * dt
+    expected = bridge_intensity(q, D) * D
+    se = expected * np.sqrt(2.0 / paths)
+    assert abs(np.var(integral) - expected) < 4 * se
