@@ -48,9 +48,10 @@ from scipy.interpolate import CubicSpline
 
 from bvpnav import NavigationProblem
 from bvpnav.constraints import Position
-from bvpnav.error_models import AttitudeError, AttitudeWalk, Bias, GyroBias, bridge_intensity, walk_interval
+from bvpnav.error_models import Bias
 from bvpnav.error_models._attitude import hat_weights
 from bvpnav.scenarios import SENSOR_GRADES, CarDrive, car_drive
+from bvpnav.sensors import grade as sensor_grade
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # _gtsam_peer.py lives beside this script
 
@@ -87,26 +88,12 @@ def at_times(t: np.ndarray, nodal: np.ndarray, times: np.ndarray) -> np.ndarray:
     return np.column_stack([np.interp(times, t, nodal[:, k]) for k in range(nodal.shape[1])])
 
 
-def attitude_model(grade: dict, interval: float, walk: bool = True):
-    """The error model of method (c), the grade's numbers as priors; ``walk``: with the
-    gyro's angle random walk (``AttitudeWalk``, knots every ``walk_interval`` s), its
-    density the gyro noise plus what the gyro-bias knots leave out (``bridge_intensity``)."""
-    em = (Bias(sigma=grade["acc_bias"], interval=interval, drift=grade["acc_bias_walk"])
-          + GyroBias(interval=interval, drift=grade["gyro_bias_walk"], sigma=grade["gyro_bias"])
-          + AttitudeError(sigma=(grade["tilt"], grade["tilt"], None)))
-    if walk:
-        arw = np.sqrt(grade["gyro_noise"] ** 2 + bridge_intensity(grade["gyro_bias_walk"], interval))
-        em = em + AttitudeWalk(arw=arw, interval=walk_interval(grade["acc_noise"], arw))
-    return em
-
-
-def grade_sigma(grade: dict, rate: float, interval: float | None = None) -> float:
-    """The grade's per-sample accelerometer sigma, m/s^2; with ``interval`` (random-walk
-    ``Bias`` knots, s) plus what the knots leave out of the bias walk (``bridge_intensity``)."""
-    density2 = grade["acc_noise"] ** 2
-    if interval is not None:
-        density2 += bridge_intensity(grade["acc_bias_walk"], interval)
-    return float(np.sqrt(density2 * rate))
+def attitude_model(grade: str, interval: float, walk: bool = True):
+    """The error model of method (c): the preset grade's
+    :meth:`~bvpnav.sensors.SensorGrade.error_model` (its numbers as priors, biases with knots
+    every ``interval`` s); ``walk``: with the gyro's angle random walk (``AttitudeWalk``, its
+    density the gyro noise plus what the gyro-bias knots leave out, :meth:`SensorGrade.arw`)."""
+    return sensor_grade(grade).error_model(interval, walk=walk)
 
 
 def bvpnav_solve(drive: CarDrive, kept: np.ndarray, error_model, uncertainty: bool, heading: str = "given",
@@ -114,14 +101,13 @@ def bvpnav_solve(drive: CarDrive, kept: np.ndarray, error_model, uncertainty: bo
     """bvpnav with the kept fixes as soft positions; returns the solution and its wall time (s).
 
     ``sigma_a`` is the grade's per-sample accelerometer noise (``grade_sigma_a``; with the
-    bias knots' ``interval`` for a random-walk ``Bias``, see :func:`grade_sigma`) or left
-    unstated (bvpnav's default 1 m/s^2, what a new user gets).
+    bias knots' ``interval`` for a random-walk ``Bias``, :meth:`SensorGrade.sigma_a`) or
+    left unstated (bvpnav's default 1 m/s^2, what a new user gets).
     ``heading`` is the attitude loop's global start ("given": from the guess, as the GTSAM
     peer starts; "auto": the coarse heading search, 12 more solves).
     """
-    grade = drive.params["sensor"]
     # per-sample noise of the accelerometers
-    sigma_a = grade_sigma(grade, drive.rate, interval) if grade_sigma_a else None
+    sigma_a = sensor_grade(drive.params["grade"]).sigma_a(drive.rate, interval) if grade_sigma_a else None
     prob = NavigationProblem(drive.data(), error_model=error_model, sigma_a=sigma_a)
     prob.add(Position(t=drive.fix_t[kept], value=drive.fix_position[kept],
                       sigma=np.tile(drive.fix_sigma, (kept.size, 1))))
@@ -168,7 +154,7 @@ def run_gap(drive: CarDrive, gap: float, peer, interval: float, heading: str = "
     sol, sec = bvpnav_solve(drive, kept, Bias(), uncertainty=False)
     out["rms"]["Bias()"], out["seconds"]["Bias()"] = rms3(at_times(drive.t, sol.position(), t_w), truth), sec
 
-    sol, sec = bvpnav_solve(drive, kept, attitude_model(drive.params["sensor"], interval, walk),
+    sol, sec = bvpnav_solve(drive, kept, attitude_model(drive.params["grade"], interval, walk),
                             uncertainty=True, heading=heading, interval=interval)
     key = WALK if walk else NO_WALK
     out["key"] = key

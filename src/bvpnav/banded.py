@@ -280,19 +280,19 @@ class BandPlan:
         reach[n + unf.size:] = np.where(enode >= 0, ehi, -1)
         local = np.flatnonzero(node >= 0)
         order = local[np.lexsort((reach[local], node[local]))]
-        pos = np.full(node.size, -1, dtype=np.int64)
+        # int32 positions where they fit: half the memory when every entry is placed
+        small = np.int32 if node.size < 2**31 else np.int64
+        pos = np.full(node.size, -1, dtype=small)
         pos[order] = np.arange(order.size)
         border = np.flatnonzero(node == -1)
         if border.size > max_border:
             raise NotBanded(f"{border.size} unknowns in the border (error-model parameters and rows "
                             f"that reach far in time), more than {max_border}")
-        bpos = np.full(node.size, -1, dtype=np.int64)
+        bpos = np.full(node.size, -1, dtype=small)
         bpos[border] = np.arange(border.size)
-        bpos = bpos.astype(np.int32) if node.size < 2**31 else bpos
         plan = cls(fold=fold, elim=elim, pos=pos, bpos=bpos, kl=0, n=n, m=m, p=p,
                    nnz_D=D.nnz, nnz_E=E.nnz)
         plan.pos_order, plan.border_order = order, border
-        plan._pos32 = pos.astype(np.int32) if pos.size < 2**31 else pos   # half the memory in placing
         del Drow, Dcol, nnz_row, alone, entries, lo, hi, elo, ehi, node, reach, local, order, border
         plan._analyse(D, E, max_band)
         return plan
@@ -352,7 +352,7 @@ class BandPlan:
         """Append one block's entries (reduced indices ``r``, ``c``; ``mirror``: its
         transpose too) to ``out = (band, border_coupling, border)`` (see :meth:`_entries`)."""
         band, cpl, brd = out
-        pi, pj = self._pos32[r], self._pos32[c]
+        pi, pj = self.pos[r], self.pos[c]
         keep = (pi >= 0) & (pj >= 0)
         band.append((pi[keep], pj[keep], v[keep], mirror))
         if not self.border_order.size:

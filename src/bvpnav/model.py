@@ -20,6 +20,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import fem
+from .banded import as_csr
 from .errors import InputError
 from .grid import as_times
 from .imu import ImuData
@@ -89,9 +90,7 @@ class Affine:
     labels: Sequence[str] | None = None
 
     def __post_init__(self):
-        A = self.A
-        if not (sp.issparse(A) and A.format == "csr"):
-            A = sp.csr_matrix(A)   # scipy copies even a CSR matrix: only other formats go through it
+        A = as_csr(self.A)
         c = np.broadcast_to(np.asarray(self.c, dtype=float), (A.shape[0],)).copy()
         object.__setattr__(self, "A", A)
         object.__setattr__(self, "c", c)

@@ -121,6 +121,16 @@ def _rate(rate_hz: Any) -> float:
     return r
 
 
+def _with_bridge(density: float, drift: float, interval: float | None) -> float:
+    """A white-noise density with what bias knots ``interval`` s apart leave out of a bias
+    random walk of density ``drift`` added in quadrature (none when ``interval`` is None)."""
+    if interval is None:
+        return density
+    from .error_models import bridge_intensity  # error models load numpy/pandas
+
+    return math.sqrt(density**2 + bridge_intensity(drift, _positive(interval, "interval")))
+
+
 @dataclass(frozen=True)
 class SensorGrade:
     """Noise and bias figures of an IMU, in SI units.
@@ -229,12 +239,7 @@ class SensorGrade:
         Vibration, not the sensor, usually dominates on a vehicle; ``sigma_a`` is then
         better set from the residual's RMS of a first solve.
         """
-        density2 = self.acc_noise**2
-        if interval is not None:
-            from .error_models import bridge_intensity  # error models load numpy/pandas
-
-            density2 += bridge_intensity(self.acc_bias_walk, _positive(interval, "interval"))
-        return math.sqrt(density2 * _rate(rate_hz))
+        return _with_bridge(self.acc_noise, self.acc_bias_walk, interval) * math.sqrt(_rate(rate_hz))
 
     def arw(self, interval: float | None = None) -> float:
         """Angle random walk for :class:`~bvpnav.error_models.AttitudeWalk`, rad/sqrt(s).
@@ -259,12 +264,7 @@ class SensorGrade:
         (``examples/benchmarks/car_drive.py``) this and the accelerometer's counterpart
         (:meth:`sigma_a` with ``interval``) took the 10 s gap from 0.8173 to 0.8164 m.
         """
-        density2 = self.gyro_noise**2
-        if interval is not None:
-            from .error_models import bridge_intensity  # error models load numpy/pandas
-
-            density2 += bridge_intensity(self.gyro_bias_walk, _positive(interval, "interval"))
-        return math.sqrt(density2)
+        return _with_bridge(self.gyro_noise, self.gyro_bias_walk, interval)
 
     def gyro_sigma(self, rate_hz: float) -> float:
         """Per-sample gyro noise standard deviation, rad/s: ``gyro_noise * sqrt(rate_hz)``.
