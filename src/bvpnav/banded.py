@@ -179,6 +179,97 @@ def canonical(A: sp.spmatrix) -> sp.csr_matrix:
     return A
 
 
+def _row_maxima(ab: np.ndarray) -> np.ndarray:
+    """``max_j |ab[i, j]|`` per row, by ``reduceat`` over the flat array (numpy's reduction
+    over short rows is twice as slow)."""
+    nb, ldab = ab.shape
+    if not nb:
+        return np.zeros(0)
+    return np.maximum.reduceat(np.abs(ab.reshape(-1)), np.arange(0, nb * ldab, ldab))
+
+
+def _scale_rows(ab: np.ndarray, sU: np.ndarray, kl: int, rows: np.ndarray | None = None) -> None:
+    """Multiply band entries by ``sU`` of their row and column of the matrix, in place
+    (``rows``: only these rows of ``ab``, given as ``ab[rows]``)."""
+    nb = sU.size
+    pad = np.concatenate([np.zeros(kl), sU, np.zeros(kl)])
+    # entry (j, kl + s) is A[j + s - kl, j]: scaled by sU[j] and sU[j + s - kl] = pad[j + s]
+    win = np.lib.stride_tricks.sliding_window_view(pad, 2 * kl + 1)[:nb]
+    own = sU
+    if rows is not None:
+        win, own = win[rows], sU[rows]
+    factor = win * own[:, None]
+    ab[:, kl:] *= factor
+
+
+def scale_band(ab: np.ndarray, kl: int) -> np.ndarray:
+    """Scale a symmetric banded matrix in LAPACK's layout (C order (nb, 3 kl + 1), see
+    :meth:`BandPlan._scatter`) in place by the square roots of its column maxima; returns
+    the scale ``sU`` (the scaled matrix is ``diag(sU) A diag(sU)``).
+
+    Notes
+    -----
+    Column maxima, not 2-norms: the 2-norms, cheaper, cost an order of magnitude of
+    accuracy on hard zero-velocity rows. Entries before ``ab[:, kl]`` are the LU's fill
+    space (zero), so the maxima are those of whole rows.
+    """
+    colmax = _row_maxima(ab)
+    sU = 1.0 / np.sqrt(np.where(colmax > 0, colmax, 1.0))
+    _scale_rows(ab, sU, kl)
+    return sU
+
+
+class AffineBand:
+    r"""The banded parts along a lambda sweep, scaled, for one copy per lambda.
+
+    With every lambda-weighted row folded into the band (none eliminated, none in the
+    border but through ``B1``, ``C1``), the reduced matrix is affine in lambda:
+    :math:`A(\lambda) = A_0 + (\lambda - 1) A_1`, and :math:`A_1` touches the few band
+    rows of the unknowns those rows weigh (positions at the fixes). The scaling of
+    :func:`scale_band` changes only in those rows' columns, and the scaled entries only
+    within ``kl`` rows of them: each lambda copies the scaled :math:`A_0` once and
+    recomputes those rows, instead of combining, taking maxima and scaling the whole band.
+
+    Parameters
+    ----------
+    parts0 : tuple
+        ``(ab, B, C, h)`` at lambda = 1 (:meth:`BandPlan.assemble`).
+    parts1 : tuple
+        ``(ab1, B1, C1)`` per unit of lambda (:meth:`BandPlan.objective_part`).
+    kl : int
+    """
+
+    def __init__(self, parts0: tuple, parts1: tuple, kl: int):
+        ab0, self.B, self.C, self.h = parts0
+        ab1, self.B1, self.C1 = parts1
+        nb = ab0.shape[0]
+        self.kl = kl
+        flat = ab1.reshape(-1)
+        touched = np.unique(np.flatnonzero(flat) // ab1.shape[1])
+        near = (touched[:, None] + np.arange(-kl, kl + 1)).ravel()
+        self.rows = np.unique(near[(near >= 0) & (near < nb)])       # entries that change
+        self.own = np.searchsorted(self.rows, touched)                # maxima that change
+        self.touched = touched
+        self.ab0 = ab0[self.rows]
+        self.ab1 = ab1[self.rows]
+        self.colmax0 = _row_maxima(ab0)
+        self.scaled0 = ab0.copy()
+        _scale_rows(self.scaled0, 1.0 / np.sqrt(np.where(self.colmax0 > 0, self.colmax0, 1.0)), kl)
+
+    def at(self, lam: float) -> tuple:
+        """``(ab, B, C, h, sU)`` at ``lam``: ``ab`` scaled by ``sU`` (:func:`scale_band`)."""
+        g = lam - 1.0
+        vals = self.ab0 + g * self.ab1
+        colmax = self.colmax0.copy()
+        colmax[self.touched] = _row_maxima(vals[self.own])
+        sU = 1.0 / np.sqrt(np.where(colmax > 0, colmax, 1.0))
+        _scale_rows(vals, sU, self.kl, self.rows)
+        ab = self.scaled0.copy()
+        ab[self.rows] = vals
+        B = None if self.B is None else self.B + g * self.B1
+        return ab, B, self.C + g * self.C1, self.h, sU
+
+
 @dataclass(eq=False)
 class BandPlan:
     """The symbolic analysis of the reduced system (see the module Notes): where every
@@ -479,21 +570,27 @@ class BandedKKT(Factorization):
         el = pl.elim
         if el.size:
             self._Ez = pl.eliminated_columns(E)
-        if parts is None:
-            parts = pl.assemble(D, E)
-        ab, Bs, C, self._h = parts   # ab is this factor's own (dgbtrf overwrites it)
+        self._factor_parts(pl.assemble(D, E) if parts is None else parts)
+
+    @classmethod
+    def numeric(cls, plan: BandPlan, parts: tuple) -> BandedKKT:
+        """The factorization of assembled ``parts`` (:meth:`BandPlan.assemble`) alone, for
+        :meth:`logdet`: no operator, so no solves of the full system (the lambda sweep's
+        log-determinant at neighbouring lambdas)."""
+        self = cls.__new__(cls)
+        self.plan, self.params = plan, np.zeros(0, dtype=int)
+        self._factor_parts(parts)
+        return self
+
+    def _factor_parts(self, parts: tuple) -> None:
+        """Scale and factor the banded part, then the border's Schur complement. ``parts``
+        is ``(ab, B, C, h)`` or, already scaled (:class:`AffineBand`), ``(ab, B, C, h, sU)``."""
+        pl = self.plan
+        ab, Bs, C, self._h, *scaled = parts   # ab is this factor's own (dgbtrf overwrites it)
         del parts
-        nb, k, kl = pl.size, pl.border, pl.kl
+        k, kl = pl.border, pl.kl
         self.k = k
-        # symmetric scaling by the square roots of the column maxima (the matrix is symmetric);
-        # ab is (nb, ldab) C order, LAPACK's column-major band, entries in ab[:, kl:]
-        colmax = np.abs(ab[:, kl:]).max(axis=1) if nb else np.zeros(0)
-        sU = 1.0 / np.sqrt(np.where(colmax > 0, colmax, 1.0))
-        pad = np.concatenate([np.zeros(kl), sU, np.zeros(kl)])
-        # entry (j, kl + s) is A[j + s - kl, j]: scaled by sU[j] and sU[j + s - kl] = pad[j + s]
-        rows = np.lib.stride_tricks.sliding_window_view(pad, 2 * kl + 1)[:nb]
-        ab[:, kl:] *= rows
-        ab[:, kl:] *= sU[:, None]
+        sU = scaled[0] if scaled else scale_band(ab, kl)
         ab = ab.T
         lu, piv, info = lapack.dgbtrf(ab, kl, kl, overwrite_ab=1)
         if info != 0:

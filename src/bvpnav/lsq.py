@@ -364,20 +364,32 @@ def banded_plan(form: LeastSquaresForm, problem) -> BandPlan:
     """The symbolic analysis of a form's banded factorization (axes end to end, else
     interleaved when rows couple axes), with its first assembly kept for the first factor.
 
+    The plan is kept in the formulation's cache with the pattern it was made for, and
+    handed out again for a form of the same pattern (the lambda sweep's points and the
+    solve at the chosen lambda share one analysis).
+
     Raises
     ------
     bvpnav.banded.NotBanded
         When rows couple distant instants beyond the banded path's limits (the caller falls
         back to a sparse factorization).
     """
-    model = as_formulation(problem).model
+    formulation = as_formulation(problem)
+    model = formulation.model
     D, E = canonical(form.D.A), canonical(form.E.A)
+    pattern = (D.indptr, D.indices, E.indptr, E.indices, np.asarray(form.lam_rows, dtype=bool))
+    cached = formulation.cache.get("band_plan")
+    if cached is not None and all(a is b or np.array_equal(a, b) for a, b in zip(cached[1], pattern,
+                                                                               strict=True)):
+        return cached[0]   # the same pattern (another lambda, or the sweep's chosen one)
     try:
-        return BandPlan.build(D, E, column_nodes(model), lam_rows=form.lam_rows)
+        plan = BandPlan.build(D, E, column_nodes(model), lam_rows=form.lam_rows)
     except NotBanded:
         if model.d == 1:
             raise
-    return BandPlan.build(D, E, column_nodes(model, interleave=True), lam_rows=form.lam_rows)
+        plan = BandPlan.build(D, E, column_nodes(model, interleave=True), lam_rows=form.lam_rows)
+    formulation.cache["band_plan"] = (plan, pattern)
+    return plan
 
 
 def banded_factor(form: LeastSquaresForm, problem, plan=None, parts=None) -> BandedKKT:

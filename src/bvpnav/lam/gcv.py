@@ -5,9 +5,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
-from . import REFINE_XATOL, LambdaRule, bracket, edge_warning, register_rule
+from . import LambdaRule, edge_warning, refine_extremum, register_rule
 
 __all__ = ["GCV", "gcv"]
 
@@ -40,10 +39,8 @@ class GCV(LambdaRule):
     def refine(self, sweep, pts, s, scores, curve):
         k = int(np.argmin(scores))
         edge_warning(curve, self.name, k, 0, scores, best="min")
-        a, b = bracket(s, k)
-        res = minimize_scalar(lambda u: gcv(sweep.point(math.exp(u))), bounds=(a, b), method="bounded",
-                              options={"xatol": REFINE_XATOL})
-        return float(math.exp(res.x))
+        return float(math.exp(refine_extremum(lambda u: gcv(sweep.point(math.exp(u))), s, scores, k,
+                                              best="min")))
 
 
 register_rule(GCV())

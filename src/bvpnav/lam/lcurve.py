@@ -6,9 +6,8 @@ import math
 
 import numpy as np
 from scipy.interpolate import CubicSpline
-from scipy.optimize import minimize_scalar
 
-from . import REFINE_XATOL, WIDEN, LambdaRule, bracket, edge_warning, register_rule
+from . import WIDEN, LambdaRule, bracket, edge_warning, refine_extremum, register_rule
 
 __all__ = ["LCurve", "curvature", "spline_curvature"]
 
@@ -74,11 +73,10 @@ class LCurve(LambdaRule):
             curve.warnings.append("lcurve: the curve has no convex corner in lam_range=("
                                   f"{curve.lam_range[0]:g}, {curve.lam_range[1]:g}); {WIDEN}, or "
                                   "choose another rule (e.g. lam='quasi')")
-        a, b = bracket(s, k)
         if sweep.engine == "direct":
-            res = minimize_scalar(lambda u: -curvature(sweep.point(math.exp(u))), bounds=(a, b),
-                                  method="bounded", options={"xatol": REFINE_XATOL})
-            return float(math.exp(res.x))
+            return float(math.exp(refine_extremum(lambda u: curvature(sweep.point(math.exp(u))), s,
+                                                  scores, k, best="max")))
+        a, b = bracket(s, k)
         fine = np.linspace(a, b, 9)[1:-1]
         for u in fine[np.abs(fine - s[k]) > 1e-6]:
             sweep.point(math.exp(u))

@@ -5,9 +5,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
-from . import REFINE_XATOL, WIDEN, LambdaRule, bracket, register_rule
+from . import WIDEN, LambdaRule, refine_extremum, register_rule
 
 __all__ = ["Quasi"]
 
@@ -43,10 +42,8 @@ class Quasi(LambdaRule):
         k = min(loc, key=lambda j: q[j])
         if sweep.engine != "direct":
             return float(curve.lam[k])
-        a, b = bracket(s, k)
-        res = minimize_scalar(lambda u: sweep.point(math.exp(u))["quasi"], bounds=(a, b),
-                              method="bounded", options={"xatol": REFINE_XATOL})
-        return float(math.exp(res.x))
+        return float(math.exp(refine_extremum(lambda u: sweep.point(math.exp(u))["quasi"], s, q, k,
+                                              best="min")))
 
 
 register_rule(Quasi())

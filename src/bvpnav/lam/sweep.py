@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..banded import BandedKKT, NotBanded, canonical
+from ..banded import AffineBand, BandedKKT, NotBanded, canonical
 from ..cvx import compiled
 from ..errors import InputError
 from ..formulation import LAM_RANGE, as_formulation
@@ -184,9 +184,10 @@ class DirectSweep:
                 self.factorization = f"lu (banded failed: {exc})"
 
     def _affine_parts(self):
-        """The banded parts at lambda = 1 and per unit of lambda: the band is affine in lambda
-        when every lambda-weighted row is folded (unknowns they touch are never eliminated),
-        so a new lambda costs one combination and one ``dgbtrf``, no assembly."""
+        """The band along lambda (:class:`bvpnav.banded.AffineBand`): affine in lambda
+        when every lambda-weighted row is folded (unknowns they touch are never
+        eliminated), so a new lambda costs one copy of the scaled band, a few rows and one
+        ``dgbtrf``, no assembly; False when a lambda row is not folded."""
         if self._parts is None:
             pl, ls = self._plan, self._ls
             D, E = canonical(ls.D.A), canonical(ls.E.A)
@@ -194,26 +195,32 @@ class DirectSweep:
             if np.any(lam_rows & ~pl.fold):
                 self._parts = False   # a far-reaching lambda row: assemble at every lambda
             else:
-                self._parts = (pl.assemble(D, E), pl.objective_part(D[lam_rows]))
+                self._parts = AffineBand(pl.assemble(D, E), pl.objective_part(D[lam_rows]), pl.kl)
         return self._parts
+
+    def _combined(self, lam: float) -> tuple | None:
+        """The scaled banded parts at ``lam`` (:meth:`bvpnav.banded.AffineBand.at`), or None."""
+        affine = self._affine_parts()
+        return affine.at(lam) if affine else None
 
     def _factor(self, form, lam: float | None = None):
         """The banded factor with the plan made once (the pattern is the same at every
         lambda), or the pivoted sparse LU when the problem is not banded."""
         if self._plan is not None:
             try:
-                parts = None
-                affine = self._affine_parts() if lam is not None else False
-                if affine:
-                    (ab, B, C, h), (ab1, B1, C1) = affine
-                    g = lam - 1.0
-                    band = ab1 * g
-                    band += ab
-                    parts = (band, None if B is None else B + g * B1, C + g * C1, h)
+                parts = None if lam is None else self._combined(lam)
                 return banded_factor(form, self.form, plan=self._plan, parts=parts)
             except (RuntimeError, np.linalg.LinAlgError):
                 pass
         return factor_form(form, self.form)
+
+    def _logdet(self, lam: float) -> float:
+        """:meth:`bvpnav.banded.BandedKKT.logdet` at ``lam``: from the combined parts by
+        the numeric factorization alone where the band is affine in lambda."""
+        parts = self._combined(lam)
+        if parts is not None:
+            return BandedKKT.numeric(self._plan, parts).logdet()
+        return self._factor(self._ls.at_lam(lam), lam).logdet()
 
     def point(self, lam: float, need_trace: bool | None = None, probes: int | None = None,
               seed: int | None = None) -> dict:
@@ -356,8 +363,7 @@ class DirectSweep:
         fixed = np.flatnonzero(~ls.lam_rows)
         fixed = fixed[fixed >= m0]
         dlt = 1e-3
-        up = self._factor(self._ls.at_lam(lam * math.exp(dlt)), lam * math.exp(dlt)).logdet()
-        down = self._factor(self._ls.at_lam(lam * math.exp(-dlt)), lam * math.exp(-dlt)).logdet()
+        up, down = self._logdet(lam * math.exp(dlt)), self._logdet(lam * math.exp(-dlt))
         dlog = (up - down) / (2.0 * dlt)   # lambda d/dlambda log det
         prior = 0.0
         if fixed.size:
