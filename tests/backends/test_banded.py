@@ -138,3 +138,33 @@ def test_a_far_reaching_lambda_row_assembles_at_every_lambda(lam):
     assert sweep._parts is False
     ref = prob.solve(solver="direct", lam=lam, options={"method": "lu"}, fallback=None)
     np.testing.assert_allclose(x, ref.x, rtol=0, atol=1e-10 * np.max(np.abs(ref.x)))
+
+
+@pytest.mark.parametrize("lam", [1e-4, 0.3, 1.0, 7e3])
+def test_affine_band_at_a_lambda_is_the_scaled_assembly_there(lam):
+    """AffineBand recomputes only the rows a lambda-weighted row touches (and their
+    neighbours' scaling): the scaled band and scale equal assembling and scaling afresh, to
+    the rounding of the combination A(1) + (lam - 1) A_1 (an entry made of lambda rows
+    alone carries an absolute error of about eps times its size at lambda = 1, a relative
+    one of eps / lam: hence the tolerance's 1 / lam below 1)."""
+    from bvpnav.banded import AffineBand, canonical, scale_band
+    from bvpnav.lsq import banded_plan, least_squares_form
+
+    prob = problem(Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05), n=601, error_model=Bias())
+    form = prob.formulation
+    ls = least_squares_form(form, 1.0)
+    plan = banded_plan(ls, form)
+    D, E = canonical(ls.D.A), canonical(ls.E.A)
+    lam_rows = np.asarray(ls.lam_rows, dtype=bool)
+    affine = AffineBand(plan.assemble(D, E), plan.objective_part(D[lam_rows]), plan.kl)
+    assert 0 < affine.rows.size < plan.size   # a few rows, not the whole band
+    ab, B, C, h, sU = affine.at(lam)
+    at = least_squares_form(form, lam)
+    ref_ab, ref_B, ref_C, ref_h = plan.assemble(canonical(at.D.A), canonical(at.E.A))
+    ref_sU = scale_band(ref_ab, plan.kl)
+    tol = 1e-14 * max(1.0, 1.0 / lam)
+    np.testing.assert_allclose(sU, ref_sU, rtol=tol)
+    np.testing.assert_allclose(ab, ref_ab, rtol=0, atol=tol * np.max(np.abs(ref_ab)))
+    np.testing.assert_allclose(C, ref_C, rtol=1e-12, atol=1e-12 * np.max(np.abs(ref_C)))
+    np.testing.assert_allclose(B.toarray(), ref_B.toarray(), rtol=1e-12, atol=1e-12 * abs(ref_B).max())
+    np.testing.assert_array_equal(h, ref_h)

@@ -21,7 +21,7 @@ import numpy as np
 from ..errors import InputError
 from ..plugins import discover
 
-#: Brent's tolerance on log(lambda) when a rule refines its choice (1 % in lambda: the
+#: Tolerance on log(lambda) when a rule refines its choice (1 % in lambda: the
 #: rules' functions are flat at their optimum, and each evaluation is a factorization).
 REFINE_XATOL = 1e-2
 
@@ -51,6 +51,10 @@ class LambdaRule:
 
     name: str = ""
     needs: frozenset = frozenset()
+    #: Whether its scores use the points' ``deta2`` or ``quasi`` (:math:`dx/d\lambda`, one
+    #: more solve per lambda on the direct sweep); rules that read only ``rho2``, ``eta2``
+    #: and ``trace`` set it False.
+    uses_derivative: bool = True
 
     def scores(self, sweep, pts: list[dict], s: np.ndarray) -> np.ndarray:
         """The rule's score at each sampled point (``s = log lambda``).

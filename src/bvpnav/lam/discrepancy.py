@@ -24,6 +24,7 @@ class Discrepancy(LambdaRule):
     """
 
     name = "discrepancy"
+    uses_derivative = False
     needs = frozenset({"least_squares", "trace", "noise"})
 
     def scores(self, sweep, pts, s):

@@ -31,6 +31,7 @@ class GCV(LambdaRule):
     """
 
     name = "gcv"
+    uses_derivative = False
     needs = frozenset({"least_squares", "trace"})
 
     def scores(self, sweep, pts, s):

@@ -54,7 +54,7 @@ class LCurve(LambdaRule):
     -----
     The two outermost sweep points on each side are never chosen (a "corner" there is the
     range ending, reported in the curve's warnings). Exact curvature (:func:`curvature`)
-    with the direct sweep, refined by Brent's method; a spline through the samples
+    with the direct sweep, refined by :func:`bvpnav.lam.refine_extremum`; a spline through the samples
     (:func:`spline_curvature`) with the cvxpy sweep, refined by sampling more densely.
     """
 

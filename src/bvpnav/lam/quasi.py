@@ -17,7 +17,8 @@ class Quasi(LambdaRule):
     Notes
     -----
     The function tends to 0 at both ends of any range, so the smallest *interior* local
-    minimum is taken. Exact derivatives with the direct sweep (refined by Brent's method);
+    minimum is taken. Exact derivatives with the direct sweep (refined by
+    :func:`bvpnav.lam.refine_extremum`);
     finite differences in :math:`\\log\\lambda` between samples with the cvxpy sweep.
     """
 

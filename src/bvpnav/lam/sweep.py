@@ -48,7 +48,7 @@ from . import get_rule, rule_names
 __all__ = ["LambdaCurve", "DirectSweep", "CvxpySweep", "sweep_curve", "check_range", "DIRECT_POINTS",
            "CVXPY_POINTS"]
 
-#: Default coarse sweep of the direct engine (exact curve at each point, refined by Brent).
+#: Default coarse sweep of the direct engine (exact curve at each point, then refined).
 DIRECT_POINTS = 13
 
 #: Default coarse sweep of the cvxpy engine (spline through the samples).
@@ -153,10 +153,11 @@ class DirectSweep:
     engine = "direct"
 
     def __init__(self, form, exact_trace_limit: int = 300, need_trace: bool = False, probes: int = 24,
-                 seed: int = 0, tau: float = 1.5, trace: str = "auto"):
+                 seed: int = 0, tau: float = 1.5, trace: str = "auto", need_derivative: bool = True):
         self.form = as_formulation(form)
         self.exact_trace_limit = exact_trace_limit
         self.need_trace, self.probes, self.seed, self.tau = need_trace, probes, seed, tau
+        self.need_derivative = need_derivative
         self.model = self.form.model
         self.terms = self.form.terms()
         self.lam_terms = [t for t in self.terms if t.mode == "soft" and t.scaled_by_lam]
@@ -224,14 +225,16 @@ class DirectSweep:
 
     def point(self, lam: float, need_trace: bool | None = None, probes: int | None = None,
               seed: int | None = None) -> dict:
-        """The curve at one lambda (cached): ``rho2``, ``eta2``, ``deta2``, ``x``, ``quasi``
-        and, when asked, ``trace``."""
+        """The curve at one lambda (cached): ``rho2``, ``eta2``, ``x``, with
+        ``need_derivative`` (the default) ``deta2`` and ``quasi``, and, when asked,
+        ``trace``."""
         need_trace = self.need_trace if need_trace is None else need_trace
         probes = self.probes if probes is None else probes
         seed = self.seed if seed is None else seed
         key = float(lam)
         pt = self.cache.get(key)
-        if pt is not None and (not need_trace or "trace" in pt):
+        if (pt is not None and (not need_trace or "trace" in pt)
+                and (not self.need_derivative or "deta2" in pt)):
             return pt
         form = self._ls.at_lam(lam)
         m, n = form.D.A.shape
@@ -253,6 +256,17 @@ class DirectSweep:
         rho2 = float(np.sum(self.data.value(x) ** 2))
         rho2 += sum(float(np.sum((t.residual.value(x) / t.sigma) ** 2)) for t in self.fixed_terms)
         eta2 = sum(float(np.sum(r**2)) for r in scaled)
+        pt = {"lam": key, "rho2": rho2, "eta2": eta2, "x": x}
+        if self.need_derivative:
+            pt.update(self._derivative(form, fac, banded, x, scaled, lam))
+        if need_trace:
+            pt["trace"] = self._trace(form, fac, lam, probes, seed)
+        self.cache[key] = pt
+        return pt
+
+    def _derivative(self, form, fac, banded: bool, x: np.ndarray, scaled: list, lam: float) -> dict:
+        """``deta2`` and ``quasi`` from :math:`dx/d\\lambda`, one more solve with the factor."""
+        m, n = form.D.A.shape
         # dx/dlam from the same factorization: H x' + E^T mu' = -sum A^T S^2 (A x + c)
         g = np.zeros(n)
         for t, r in zip(self.lam_terms, scaled, strict=True):
@@ -263,12 +277,7 @@ class DirectSweep:
         deta2 = sum(2.0 * float(np.sum(r * ((t.residual.A @ dx) / t.sigma)))
                     for t, r in zip(self.lam_terms, scaled, strict=True))
         pos = np.concatenate([self.model.r_index(a) for a in range(self.model.d)])
-        pt = {"lam": key, "rho2": rho2, "eta2": eta2, "deta2": deta2, "x": x,
-              "quasi": float(np.linalg.norm(lam * dx[pos]) / math.sqrt(pos.size))}
-        if need_trace:
-            pt["trace"] = self._trace(form, fac, lam, probes, seed)
-        self.cache[key] = pt
-        return pt
+        return {"deta2": deta2, "quasi": float(np.linalg.norm(lam * dx[pos]) / math.sqrt(pos.size))}
 
     # --- GCV's trace: d w / d a_hat
     def _rhs_jacobian_apply(self, Z: np.ndarray) -> np.ndarray:
@@ -439,7 +448,7 @@ def _check_range(lam_range, points) -> tuple[float, float]:
         raise InputError(f"points={points!r}: the sweep needs an integer of at least 7 points")
     if points > 1000:
         raise InputError(f"points={points}: at most 1000 sweep points (each is one solve); the "
-                         "corner is refined by Brent's method anyway, 25 is the default")
+                         "corner is refined between the samples anyway, 25 is the default")
     return lo, hi
 
 
@@ -494,8 +503,8 @@ def sweep_curve(form, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6), p
     lam_range : (float, float)
         Search interval for lambda (dimensionless), log-spaced.
     points : int, optional
-        Coarse sweep size; every rule is then refined inside its best bracket (Brent's
-        method to 1 % in lambda). Default: 13 (one per decade of the default range) with
+        Coarse sweep size; every rule is then refined inside its best bracket (to 1 % in
+        lambda, :func:`bvpnav.lam.refine_extremum`). Default: 13 (one per decade of the default range) with
         the ``direct`` engine, whose curve is exact at every point, and 25 with the
         ``cvxpy`` engine, whose curvature is a spline through the samples.
     tau : float
@@ -557,7 +566,8 @@ def _sweep_curve(form, rules, rule, lam_range, points, tau, probes, seed, progre
     progress = progress_enabled(progress)
     need_trace = any("trace" in get_rule(r).needs for r in names)
     if engine == "direct":
-        eng = DirectSweep(form, need_trace=need_trace, probes=probes, seed=seed, tau=tau)
+        eng = DirectSweep(form, need_trace=need_trace, probes=probes, seed=seed, tau=tau,
+                          need_derivative=any(get_rule(r).uses_derivative for r in names))
     else:
         if solve_at is None:
             raise InputError("the cvxpy sweep needs a solve stage (solve_at); use "
