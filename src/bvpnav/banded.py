@@ -181,11 +181,15 @@ def canonical(A: sp.spmatrix) -> sp.csr_matrix:
 
 def _row_maxima(ab: np.ndarray) -> np.ndarray:
     """``max_j |ab[i, j]|`` per row, by ``reduceat`` over the flat array (numpy's reduction
-    over short rows is twice as slow)."""
+    over short rows is twice as slow), as the larger of the row's maximum and minus its
+    minimum (no absolute-value copy of the band)."""
     nb, ldab = ab.shape
     if not nb:
         return np.zeros(0)
-    return np.maximum.reduceat(np.abs(ab.reshape(-1)), np.arange(0, nb * ldab, ldab))
+    flat, starts = ab.reshape(-1), np.arange(0, nb * ldab, ldab)
+    out = np.maximum.reduceat(flat, starts)
+    np.maximum(out, -np.minimum.reduceat(flat, starts), out=out)
+    return out
 
 
 def _scale_rows(ab: np.ndarray, sU: np.ndarray, kl: int, rows: np.ndarray | None = None) -> None:
@@ -429,6 +433,14 @@ class BandPlan:
             A = A.tocoo()
             self._place(A.row + r0, A.col + c0, A.data if sign == 1.0 else sign * A.data, mirror, out)
 
+        # a row on an eliminated unknown is alone there (its only entry): it adds h alone,
+        # so the product runs over the other rows (the items' rows, not the N data rows)
+        if el.size and Df.shape[0]:
+            counts = np.diff(Df.indptr)
+            eliminated = np.zeros(n, dtype=bool)
+            eliminated[el] = True
+            first = Df.indices[np.minimum(Df.indptr[:-1], max(Df.nnz - 1, 0))]
+            Df = Df[~((counts == 1) & eliminated[first])]
         add_sparse(Df.T @ Df, 0, 0, False)
         if nu:
             add_sparse(D[unf], n, 0, True)
