@@ -524,6 +524,16 @@ class _NeedyRule(_OutsideRule):
     needs = frozenset({"clairvoyance"})
 
 
+class _DerivativeReader(_OutsideRule):
+    """Says it does not read dx/dlam (so the sweep skips that solve) but reads deta2."""
+
+    name = "derivative-reader"
+    uses_derivative = False
+
+    def scores(self, sweep, pts, s):
+        return np.array([p["deta2"] for p in pts])
+
+
 @pytest.mark.parametrize("plugin, rule", [
     (_Sloppy(), "run"), (_BadPreset(), "presets"), (_Upper(), "name"), (_Vague(), "accepts"),
 ], ids=lambda p: getattr(p, "name", str(p)))
@@ -535,6 +545,7 @@ def test_broken_back_end_fails_naming_the_rule(plugin, rule):
 @pytest.mark.parametrize("plugin, rule", [
     (_OutsideRule(), "refine (direct sweep)"), (_ShortRule(), "scores (direct sweep)"),
     (_RandomRule(), "deterministic (direct sweep)"), (_NeedyRule(), "needs"),
+    (_DerivativeReader(), "scores (direct sweep)"),
 ], ids=lambda p: getattr(p, "name", str(p)))
 def test_broken_rule_fails_naming_the_rule(plugin, rule):
     pattern = rf"^lambda rule {plugin.name!r}: rule '{re.escape(rule)}' broken: "

@@ -772,7 +772,10 @@ def check_rule(rule) -> None:
     lams = np.geomspace(1e-3, 1e3, 13)
     s = np.log(lams)
     opts, _ = prepare(1.0, fallback=None)
-    sweeps = [("direct", lambda: DirectSweep(ls, need_trace="trace" in rule.needs))]
+    # as sweep_curve builds it for this rule alone: without dx/dlam when the rule says it
+    # does not read deta2 or quasi (so a rule that reads them anyway fails here, not later)
+    sweeps = [("direct", lambda: DirectSweep(ls, need_trace="trace" in rule.needs,
+                                             need_derivative=getattr(rule, "uses_derivative", True)))]
     if "least_squares" not in rule.needs:
         sweeps.append(("cvxpy", lambda: CvxpySweep(robust, lambda lam: solve_fixed(robust, lam, opts))))
     for engine, make in sweeps:

@@ -186,14 +186,7 @@ def refine_extremum(f, s: np.ndarray, scores: np.ndarray, k: int, best: str = "m
 
     (:math:`g` the score, negated for a minimum), inside :math:`[u_0, u_2]` since
     :math:`g_1 \\ge g_0, g_2`; it converges superlinearly (order about 1.32) at a smooth
-    extremum. The search returns the new vertex when it lies within ``xatol`` of
-    :math:`u_1` and the parabola before :math:`u_1` was evaluated predicted its value to
-    within :math:`(g_1 - \\min(g_0, g_2))\\,(\\mathrm{xatol} / (u_2 - u_0))^2`: the model
-    then errs across the bracket by no more than a parabola of that depth changes over
-    ``xatol``. (A value is second-order insensitive to the location, hence the square;
-    a looser test, linear in ``xatol``, accepted a vertex 0.17 off on a narrow Lorentzian
-    peak sampled every 1.5 decades.)
-    Otherwise, as in Brent's method, a vertex within ``xatol`` of :math:`u_1` is moved to
+    extremum. As in Brent's method, a vertex within ``xatol`` of :math:`u_1` is moved to
     :math:`u_1 \\pm` ``xatol`` on its side so that the bracket closes, a vertex within
     ``xatol / 2`` of a bracket end (the parabola is no model there) is replaced by the
     golden-section point of the larger side, and the search stops when
@@ -204,7 +197,6 @@ def refine_extremum(f, s: np.ndarray, scores: np.ndarray, k: int, best: str = "m
     n = len(s)
     pts = {float(s[j]): sign * float(scores[j]) for j in (k - 1, k, k + 1) if 0 <= j < n}
     golden = 0.5 * (3.0 - 5.0**0.5)
-    predicted: dict[float, float] = {}   # a new point's value as the parabola before it predicted it
     for _ in range(maxiter):
         xs = sorted(pts)
         i = max(range(len(xs)), key=lambda j: pts[xs[j]])
@@ -220,25 +212,13 @@ def refine_extremum(f, s: np.ndarray, scores: np.ndarray, k: int, best: str = "m
         if h <= 4.0 * xatol:
             return v if np.isfinite(v) else u1
         near = bool(np.isfinite(v) and abs(v - u1) < xatol)
-        if near and u1 in predicted:
-            depth = g1 - min(g0, g2)
-            if abs(predicted[u1] - g1) <= depth * (xatol / h) ** 2:
-                return v   # the parabola is a model of f here, and its vertex is at u1
         if near:   # the parabola says u1, but is not trusted yet: close the bracket beside it
             v = u1 + xatol if (v > u1 if v != u1 else u2 - u1 > u1 - u0) else u1 - xatol
         if not (np.isfinite(v) and u0 + 0.5 * xatol < v < u2 - 0.5 * xatol):
             v = u1 + golden * (u2 - u1) if u2 - u1 > u1 - u0 else u1 - golden * (u1 - u0)
-        predicted[v] = _parabola((u0, u1, u2), (g0, g1, g2), v)
         pts[v] = sign * float(f(v))
     xs = sorted(pts)
     return max(xs, key=lambda u: pts[u])
-
-
-def _parabola(us, gs, v: float) -> float:
-    """The parabola through three points ``(us, gs)`` at ``v`` (Lagrange form)."""
-    (a, b, c), (ga, gb, gc) = us, gs
-    return (ga * (v - b) * (v - c) / ((a - b) * (a - c)) + gb * (v - a) * (v - c) / ((b - a) * (b - c))
-            + gc * (v - a) * (v - b) / ((c - a) * (c - b)))
 
 
 def bracket(s: np.ndarray, k: int) -> tuple[float, float]:

@@ -218,10 +218,14 @@ class DirectSweep:
     def _logdet(self, lam: float) -> float:
         """:meth:`bvpnav.banded.BandedKKT.logdet` at ``lam``: from the combined parts by
         the numeric factorization alone where the band is affine in lambda."""
-        parts = self._combined(lam)
-        if parts is not None:
-            return BandedKKT.numeric(self._plan, parts).logdet()
-        return self._factor(self._ls.at_lam(lam), lam).logdet()
+        try:
+            parts = self._combined(lam)
+            if parts is not None:
+                return BandedKKT.numeric(self._plan, parts).logdet()
+            return self._factor(self._ls.at_lam(lam), lam).logdet()
+        except (RuntimeError, np.linalg.LinAlgError) as exc:
+            raise InputError(f"lambda={lam:g}: the KKT matrix is singular ({exc}); some unknown is "
+                             "not determined by the information") from exc
 
     def point(self, lam: float, need_trace: bool | None = None, probes: int | None = None,
               seed: int | None = None) -> dict:
