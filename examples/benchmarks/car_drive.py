@@ -34,6 +34,18 @@ realization's noise, the mean over several is the benchmark's figure.
 
 Run: ``python examples/benchmarks/car_drive.py [--grade tactical consumer] [--quick] [--no-walk]
 [--seeds 0 1 2]``.
+
+Measured (2026-12-03, ``--seeds 0 1 2 3 4``, about 12 minutes per drive on the 2-core
+machine), withheld-fix RMS averaged over the five drives, m; in brackets the drives on
+which the method beat (c)::
+
+    gap s   spline        Bias() sigma_a=1  Bias()          +GyroBias+AttitudeError+Walk  GTSAM
+    10      5.3148 (0/5)  1.8201 (0/5)      193.3985 (0/5)  0.7856                        0.7858 (1/5)
+    30     39.3794 (0/5)  3.9144 (0/5)      318.8087 (0/5)  1.2647                        1.2654 (1/5)
+    60     85.6562 (0/5)  8.4018 (0/5)      404.5066 (0/5)  1.6159                        1.6168 (2/5)
+
+GTSAM/bvpnav per drive between 0.9997 and 1.0026; every gyro-bias knot within 3 std or
+20 % of the truth (63/63 per gap and drive).
 """
 
 from __future__ import annotations
