@@ -394,16 +394,24 @@ def banded_plan(form: LeastSquaresForm, problem) -> BandPlan:
 
 def banded_factor(form: LeastSquaresForm, problem, plan=None, parts=None) -> BandedKKT:
     """:class:`bvpnav.banded.BandedKKT` of a form; ``plan`` (:func:`banded_plan`) from an
-    earlier factor of the same pattern is reused, and ``parts`` assembled values with it.
+    earlier factor of the same pattern is reused, and ``parts`` assembled values with it
+    (by default the lambda sweep's :class:`~bvpnav.banded.AffineBand` at the form's lambda
+    when the formulation has one, else an assembly).
 
     Raises
     ------
     bvpnav.banded.NotBanded
         As :func:`banded_plan`.
     """
-    model = as_formulation(problem).model
+    formulation = as_formulation(problem)
     plan = banded_plan(form, problem) if plan is None else plan
-    return BandedKKT(form.D.A, form.E.A, params=model.l_index, plan=plan, parts=parts)
+    if parts is None and form.lam is not None:
+        # after a lambda sweep of this formulation, its scaled band at any lambda is one copy
+        # (bvpnav.banded.AffineBand): the solve at the chosen lambda assembles nothing
+        cached = formulation.cache.get("band_affine")
+        if cached is not None and cached[0] is plan:
+            parts = cached[1].at(form.lam)
+    return BandedKKT(form.D.A, form.E.A, params=formulation.model.l_index, plan=plan, parts=parts)
 
 
 def factor_form(form: LeastSquaresForm, problem, method: str = "lu", delta: float = 1e-12):

@@ -182,3 +182,15 @@ def test_a_sweep_without_derivative_rules_skips_the_derivative_solve():
     eng.need_derivative = True
     q = eng.point(0.7)
     assert "deta2" in q and q["rho2"] == pytest.approx(p["rho2"], rel=1e-12)
+
+
+def test_the_chosen_lambda_solved_from_the_sweeps_band_equals_a_fresh_solve():
+    """The solve at the chosen lambda takes its band from the sweep (AffineBand, no
+    assembly): verified, equal to a fresh problem solved at that lambda, and the band is not
+    kept alive with the formulation afterwards."""
+    prob, _ = known_noise(0, n=2001)
+    sol = prob.solve(solver="direct", lam="lcurve")
+    assert "band_affine" not in prob.formulation.cache and sol.stats["verified"]
+    fresh, _ = known_noise(0, n=2001)
+    ref = fresh.solve(solver="direct", lam=sol.lam)
+    np.testing.assert_allclose(sol.x, ref.x, rtol=0, atol=1e-10 * np.max(np.abs(ref.x)))

@@ -174,6 +174,7 @@ class DirectSweep:
         self._ls = least_squares_form(self.form, 1.0)   # every lambda rescales its soft rows
         self._plan = None
         self._parts = None
+        self._buffers: list = [None, None]
         self.factorization = "lu"
         if self.form.residual == "acceleration":  # the load form (condition ~N^4) keeps the pivoted LU
             try:
@@ -197,12 +198,24 @@ class DirectSweep:
                 self._parts = False   # a far-reaching lambda row: assemble at every lambda
             else:
                 self._parts = AffineBand(pl.assemble(D, E), pl.objective_part(D[lam_rows]), pl.kl)
+                # the solve at the chosen lambda takes its band from here too (lsq.banded_factor)
+                self.form.cache["band_affine"] = (pl, self._parts)
         return self._parts
 
-    def _combined(self, lam: float) -> tuple | None:
-        """The scaled banded parts at ``lam`` (:meth:`bvpnav.banded.AffineBand.at`), or None."""
+    def _combined(self, lam: float, buffer: int = 0) -> tuple | None:
+        """The scaled banded parts at ``lam`` (:meth:`bvpnav.banded.AffineBand.at`), or None.
+
+        The band is written into one of two arrays the sweep owns (``buffer`` 0: the
+        factor of the current point, dead when the next point starts; 1: the log-
+        determinant's neighbours, dead once their determinant is read), so that ``dgbtrf``
+        works in place of an array already mapped instead of a fresh one per lambda."""
         affine = self._affine_parts()
-        return affine.at(lam) if affine else None
+        if not affine:
+            return None
+        bufs = self._buffers
+        if bufs[buffer] is None:
+            bufs[buffer] = np.empty_like(affine.scaled0)
+        return affine.at(lam, out=bufs[buffer])
 
     def _factor(self, form, lam: float | None = None):
         """The banded factor with the plan made once (the pattern is the same at every
@@ -219,7 +232,7 @@ class DirectSweep:
         """:meth:`bvpnav.banded.BandedKKT.logdet` at ``lam``: from the combined parts by
         the numeric factorization alone where the band is affine in lambda."""
         try:
-            parts = self._combined(lam)
+            parts = self._combined(lam, buffer=1)
             if parts is not None:
                 return BandedKKT.numeric(self._plan, parts).logdet()
             return self._factor(self._ls.at_lam(lam), lam).logdet()

@@ -40,10 +40,15 @@ def with_rule(inner: Stage) -> Stage:
     def stage(form, lam, opts: SolveOptions) -> Solution:
         if not isinstance(lam, str):
             return inner(form, lam, opts)
-        curve = _curve(form, lam, opts, inner)
-        log.info("rule %s chose lam=%.6g (engine %s, %d evaluations, %.3g s); solving at it", lam,
-                 curve.lam_chosen, curve.engine, curve.evaluations, curve.seconds)
-        sol = inner(form, curve.lam_chosen, opts)
+        try:
+            curve = _curve(form, lam, opts, inner)
+            log.info("rule %s chose lam=%.6g (engine %s, %d evaluations, %.3g s); solving at it", lam,
+                     curve.lam_chosen, curve.engine, curve.evaluations, curve.seconds)
+            sol = inner(form, curve.lam_chosen, opts)
+        finally:
+            # the sweep's band along lambda served the solve at the chosen lambda; a band of
+            # the whole problem is not kept alive with the formulation after it
+            as_formulation(form).cache.pop("band_affine", None)
         sol.lam_rule = lam
         sol.curve = curve
         # already issued by the sweep (once); recorded here for the CLI and the JSON summary
@@ -118,9 +123,12 @@ def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6
                          "takes 'verify', 'fallback' and 'verbose' (and solver, accuracy, options)")
     extra.update(solver=solver, accuracy=accuracy, options=options)  # the explicit ones win
     opts, _ = prepare(1.0, **extra)
-    return _curve(form, rule, opts, solve_fixed, rules=rule_names() if rules is None else rules,
-                  lam_range=lam_range, points=points,
-                  tau=tau, probes=probes, seed=seed, progress=progress, engine=engine)
+    try:
+        return _curve(form, rule, opts, solve_fixed, rules=rule_names() if rules is None else rules,
+                      lam_range=lam_range, points=points,
+                      tau=tau, probes=probes, seed=seed, progress=progress, engine=engine)
+    finally:
+        form.cache.pop("band_affine", None)   # not kept alive with the formulation (see with_rule)
 
 
 def choose_lambda(problem, rule: str = "lcurve", **kwargs) -> float:
