@@ -412,7 +412,8 @@ class BandPlan:
         kl = 0
         for pi, pj, _, _ in entries[0]:
             if pi.size:
-                kl = max(kl, int(np.abs(pi - pj).max()))
+                off = pi - pj
+                kl = max(kl, int(off.max()), -int(off.min()))
         if kl > max_band:
             raise NotBanded(f"bandwidth {kl} after ordering by time node, more than {max_band}: some "
                             "rows couple distant instants")
@@ -493,11 +494,20 @@ class BandPlan:
         flat = ab.reshape(-1)
         for pi, pj, v, mirror in band:
             off = pi - pj
-            if off.size and np.abs(off).max() > kl:
+            if off.size and (off.max() > kl or off.min() < -kl):
                 raise NotBanded("the sparsity pattern changed since the plan was made")
-            flat[pj.astype(np.int64) * ldab + (2 * kl + off)] = v
+            # flat index j ldab + 2 kl + (i - j), built in place in one int64 array
+            idx = pj.astype(np.int64)
+            idx *= ldab
+            idx += off
+            idx += 2 * kl
+            flat[idx] = v
             if mirror:
-                flat[pi.astype(np.int64) * ldab + (2 * kl - off)] = v
+                np.multiply(pi, ldab, out=idx, dtype=np.int64)
+                idx -= off
+                idx += 2 * kl
+                flat[idx] = v
+            del idx, off
         B, C = None, np.zeros((k, k))
         if k:
             def cat(parts: list, t: int) -> np.ndarray:
