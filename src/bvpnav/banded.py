@@ -650,8 +650,8 @@ class BandedKKT(Factorization):
                 raise np.linalg.LinAlgError("singular Schur complement of the border")
 
     # ------------------------------------------------------------------ solves
-    def _band_solve(self, R: np.ndarray) -> np.ndarray:
-        x, info = lapack.dgbtrs(self._lu, self.plan.kl, self.plan.kl, R, self._piv)
+    def _band_solve(self, R: np.ndarray, overwrite: bool = False) -> np.ndarray:
+        x, info = lapack.dgbtrs(self._lu, self.plan.kl, self.plan.kl, R, self._piv, overwrite_b=overwrite)
         if info != 0:  # pragma: no cover - argument error
             raise np.linalg.LinAlgError(f"dgbtrs failed (info {info})")
         return x
@@ -661,8 +661,12 @@ class BandedKKT(Factorization):
         pl = self.plan
         shape = r.shape
         r2 = r.reshape(shape[0], -1)
-        y = self._band_solve(r2[pl.pos_order] * self._sU[:, None])
-        out = np.zeros_like(r2)
+        R = r2[pl.pos_order]
+        R *= self._sU[:, None]
+        y = self._band_solve(R, overwrite=True)   # R is this solve's own gathered copy
+        # every reduced unknown is banded, in the border or eliminated; solve() fills the
+        # eliminated ones, so nothing needs zeroing here
+        out = np.empty_like(r2)
         if self.k:
             rW = r2[pl.border_order] * self._sW[:, None]
             zW = np.linalg.solve(self.schur_border, rW - self.B.T @ y)

@@ -184,6 +184,7 @@ def test_a_sweep_without_derivative_rules_skips_the_derivative_solve():
     assert "deta2" in q and q["rho2"] == pytest.approx(p["rho2"], rel=1e-12)
 
 
+@pytest.mark.filterwarnings("ignore::bvpnav.log.BvpnavWarning")  # the L-curve's lambda misfits sigma_a
 def test_the_chosen_lambda_solved_from_the_sweeps_band_equals_a_fresh_solve():
     """The solve at the chosen lambda takes its band from the sweep (AffineBand, no
     assembly): verified, equal to a fresh problem solved at that lambda, and the band is not
