@@ -314,7 +314,7 @@ def test_memory_estimate_refuses_before_work_and_names_what_fits(inp, monkeypatc
     prob = inp.problem()
     need = S.memory_estimate(S.resolve_solver("clarabel"), prob)
     assert need == pytest.approx(N * 4815.0)  # measured bytes per sample (CVXPY_MEMORY)
-    # room for direct (1,400 B per sample) but not for Clarabel (4,815 B)
+    # room for direct (1,300 B per sample) but not for Clarabel (4,815 B)
     monkeypatch.setattr(S, "available_memory", lambda: int(N * 4000 / S.MEMORY_SHARE))
     monkeypatch.setattr(_chain, "attempt", _raise(AssertionError("solved anyway")))
     exc = raises_named(InputError, prob.solve,
@@ -334,12 +334,12 @@ def test_memory_refusal_on_ten_million_samples_without_allocating(monkeypatch):
     monkeypatch.setattr(bvpnav.formulation.Formulation, "check_observability",
                         _raise(AssertionError("work before the memory check")))
     raises_named(InputError, prob.solve, r"N = 10000000 samples", r"about 48\.1 GB",
-                 r"limit 28\.8 GB", r"solver='direct' \(about 14 GB\)",
+                 r"limit 28\.8 GB", r"solver='direct' \(about 13 GB\)",
                  r"shorter window of at most 5981308 samples \(about 5981 s\)")
     monkeypatch.setattr(S, "available_memory", lambda: 12 * GB)
     exc = raises_named(InputError, lambda: prob.solve(solver="direct"),
-                       r"'direct' needs about 14 GB", r"limit 10\.8 GB",
-                       r"at most 7714285 samples")
+                       r"'direct' needs about 13 GB", r"limit 10\.8 GB",
+                       r"at most 8307692 samples")
     assert "solver='csne'" not in str(exc)  # csne (27.7 GB) does not fit either
     assert t.tobytes() == t_copy.tobytes()
 

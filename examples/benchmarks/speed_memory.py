@@ -59,6 +59,47 @@ variants to leave out, e.g. ``csne3@1e6,clarabel3@1e6``; ``name@N`` or ``name`` 
 
 Run ``python examples/benchmarks/speed_memory.py [--quick] [--memory] [--huge]``.
 
+Measured after the lambda-sweep work (issue 18, third session)
+---------------------------------------------------------------
+2026-12-03, the machine quiet, clarabel 0.11.1, cvxpy 1.9.3, scipy 1.17.1: ``--sizes
+1e4,1e5,1e6 --sizes3 1e4,1e5 --skip osqp,csne3@1e5 --memory --huge --huge-cap 22``; the
+lambda table re-run after the last sweep changes (``--sizes 1e5 --sizes3 1e4 --no-peers``).
+The band of the acceleration form now has kl = 4 (the reference's), one fifth less work and
+memory than kl = 5::
+
+    case               N  variant              time s   x ref runs     vs ref  verified
+    1 ax           10000  direct                0.025     5.4    3    2.0e-12  True
+    1 ax           10000  clarabel              0.070    15.3    3    2.9e-12  True   compile 0.02 s
+    1 ax           10000  clarabel re-solve     0.035     7.5    3    4.8e-12  True
+    1 ax          100000  direct                0.208     4.0    3    1.6e-12  True
+    1 ax          100000  direct backend        0.142     2.7    3    1.6e-12  -
+    1 ax          100000  clarabel              0.619    11.9    3    2.2e-12  True   compile 0.19 s
+    1 ax          100000  clarabel re-solve     0.313     6.3    3    1.9e-12  True   (6.0 on the re-run)
+    1 ax         1000000  direct                2.325     3.2    3    2.9e-12  True
+    1 ax         1000000  direct backend        1.578     2.2    3    2.9e-12  -
+    1 ax         1000000  csne                 10.765    15.0    1    3.2e-12  True
+    1 ax         1000000  clarabel             12.466    17.3    1    4.2e-12  True   compile 4.36 s
+    1 ax         1000000  clarabel re-solve     3.813     5.3    1    2.9e-12  True
+    3 ax +SF+B    100000  direct                1.053     5.4    3    2.0e-12  True
+    3 ax +SF+B    100000  direct backend        0.683     3.5    3    2.0e-12  -
+    3 ax +SF+B    100000  clarabel              2.857    14.5    3    2.5e-12  True   compile 0.84 s
+    3 ax +SF+B    100000  clarabel re-solve     1.452     7.4    3    2.2e-12  True
+
+    lambda rules, N = 100000, 1 axis: single direct solve 0.23 s (the reference 0.055 s)
+    rule        lambda  evaluations  total s  x single   x ref
+    lcurve    0.005153           19     1.08       4.7      20
+    gcv         0.5475           17     1.43       6.3      26
+    quasi        5.164           19     1.06       4.7      19
+
+    peak resident memory, N = 1000000, 1 axis
+    variant      peak MB  above base MB  B/sample  x ref
+    reference        748            557       584    1.0
+    direct          1254           1063      1115    1.9
+    csne            2149           1958      2053    3.5
+    clarabel        3257           3066      3215    5.5
+
+    --huge: direct at N = 1e7 x 1 axis: peak 10066 MB, optimal, verified, 56.6 s
+
 Measured after the structured path (banded direct path, issue 18)
 ------------------------------------------------------------------
 2026-12-02, the machine quieter (load average about 1): ``--sizes 1e4,1e5,1e6 --sizes3
