@@ -190,13 +190,16 @@ def refine_extremum(f, s: np.ndarray, scores: np.ndarray, k: int, best: str = "m
     :math:`u_1 \\pm` ``xatol`` on its side so that the bracket closes, a vertex within
     ``xatol / 2`` of a bracket end (the parabola is no model there) is replaced by the
     golden-section point of the larger side, and the search stops when
-    :math:`u_2 - u_0 \\le 4` ``xatol``. When the best point is an end of the bracket the
+    :math:`u_2 - u_0 \\le 4` ``xatol``; when two steps have not shrunk the bracket to 0.7 of
+    its width (parabolas creeping towards the extremum from one side, past a far bracket
+    end), the next step is golden-section. When the best point is an end of the bracket the
     extremum lies at (or beyond) it: the end is returned, as a bounded search would.
     """
     sign = 1.0 if best == "max" else -1.0
     n = len(s)
     pts = {float(s[j]): sign * float(scores[j]) for j in (k - 1, k, k + 1) if 0 <= j < n}
     golden = 0.5 * (3.0 - 5.0**0.5)
+    widths: list[float] = []
     for _ in range(maxiter):
         xs = sorted(pts)
         i = max(range(len(xs)), key=lambda j: pts[xs[j]])
@@ -211,6 +214,14 @@ def refine_extremum(f, s: np.ndarray, scores: np.ndarray, k: int, best: str = "m
         h = u2 - u0
         if h <= 4.0 * xatol:
             return v if np.isfinite(v) else u1
+        widths.append(h)
+        # creeping: parabolas through a far bracket end step towards the extremum from one
+        # side; when two steps have not shrunk the bracket to 0.7 of its width, a
+        # golden-section step goes into the larger side instead
+        creeping = len(widths) > 2 and h > 0.7 * widths[-3]
+        if creeping:
+            widths.clear()
+            v = float("nan")
         near = bool(np.isfinite(v) and abs(v - u1) < xatol)
         if near:   # the parabola says u1, but is not trusted yet: close the bracket beside it
             v = u1 + xatol if (v > u1 if v != u1 else u2 - u1 > u1 - u0) else u1 - xatol
