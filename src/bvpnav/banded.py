@@ -206,6 +206,11 @@ def _scale_rows(ab: np.ndarray, sU: np.ndarray, kl: int, rows: np.ndarray | None
     ab[:, kl:] *= factor
 
 
+def _scales(colmax: np.ndarray) -> np.ndarray:
+    """The symmetric scale ``1 / sqrt(column maximum)`` (1 for an empty column)."""
+    return 1.0 / np.sqrt(np.where(colmax > 0, colmax, 1.0))
+
+
 def scale_band(ab: np.ndarray, kl: int) -> np.ndarray:
     """Scale a symmetric banded matrix in LAPACK's layout (C order (nb, 3 kl + 1), see
     :meth:`BandPlan._scatter`) in place by the square roots of its column maxima; returns
@@ -217,8 +222,7 @@ def scale_band(ab: np.ndarray, kl: int) -> np.ndarray:
     accuracy on hard zero-velocity rows. Entries before ``ab[:, kl]`` are the LU's fill
     space (zero), so the maxima are those of whole rows.
     """
-    colmax = _row_maxima(ab)
-    sU = 1.0 / np.sqrt(np.where(colmax > 0, colmax, 1.0))
+    sU = _scales(_row_maxima(ab))
     _scale_rows(ab, sU, kl)
     return sU
 
@@ -256,10 +260,8 @@ class AffineBand:
         self.touched = touched
         self.ab0 = ab0[self.rows]
         self.ab1 = ab1[self.rows]
-        colmax0 = _row_maxima(ab0)
-        self.sU0 = 1.0 / np.sqrt(np.where(colmax0 > 0, colmax0, 1.0))
         self.scaled0 = ab0.copy()
-        _scale_rows(self.scaled0, self.sU0, kl)
+        self.sU0 = scale_band(self.scaled0, kl)
 
     def at(self, lam: float, out: np.ndarray | None = None) -> tuple:
         """``(ab, B, C, h, sU)`` at ``lam``: ``ab`` scaled by ``sU`` (:func:`scale_band`),
@@ -267,9 +269,8 @@ class AffineBand:
         needed: no new allocation, no page faults) when given."""
         g = lam - 1.0
         vals = self.ab0 + g * self.ab1
-        colmax = _row_maxima(vals[self.own])
         sU = self.sU0.copy()
-        sU[self.touched] = 1.0 / np.sqrt(np.where(colmax > 0, colmax, 1.0))
+        sU[self.touched] = _scales(_row_maxima(vals[self.own]))
         _scale_rows(vals, sU, self.kl, self.rows)
         if out is None:
             ab = self.scaled0.copy()
@@ -450,7 +451,7 @@ class BandPlan:
 
         # a row on an eliminated unknown is alone there (its only entry): it adds h alone,
         # so the product runs over the other rows (the items' rows, not the N data rows)
-        if el.size and Df.shape[0]:
+        if el.size and Df.nnz:
             counts = np.diff(Df.indptr)
             eliminated = np.zeros(n, dtype=bool)
             eliminated[el] = True

@@ -360,6 +360,12 @@ def column_nodes(model, interleave: bool = False) -> np.ndarray:
     return colnode
 
 
+#: The formulation-cache key of a lambda sweep's :class:`~bvpnav.banded.AffineBand`
+#: (``(plan, band)``): the sweep stores it, :func:`banded_factor` reads it, and the rule
+#: stage drops it once the chosen lambda is solved.
+BAND_AFFINE = "band_affine"
+
+
 def banded_plan(form: LeastSquaresForm, problem) -> BandPlan:
     """The symbolic analysis of a form's banded factorization (axes end to end, else
     interleaved when rows couple axes), with its first assembly kept for the first factor.
@@ -408,7 +414,7 @@ def banded_factor(form: LeastSquaresForm, problem, plan=None, parts=None) -> Ban
     if parts is None and form.lam is not None:
         # after a lambda sweep of this formulation, its scaled band at any lambda is one copy
         # (bvpnav.banded.AffineBand): the solve at the chosen lambda assembles nothing
-        cached = formulation.cache.get("band_affine")
+        cached = formulation.cache.get(BAND_AFFINE)
         if cached is not None and cached[0] is plan:
             parts = cached[1].at(form.lam)
     return BandedKKT(form.D.A, form.E.A, params=formulation.model.l_index, plan=plan, parts=parts)

@@ -41,7 +41,14 @@ from ..formulation import LAM_RANGE, as_formulation
 from ..log import once, progress_enabled, sweeping
 from ..log import progress as progress_bar
 from ..log import warn as _warn
-from ..lsq import banded_factor, banded_plan, factor_form, least_squares_form, non_least_squares_term
+from ..lsq import (
+    BAND_AFFINE,
+    banded_factor,
+    banded_plan,
+    factor_form,
+    least_squares_form,
+    non_least_squares_term,
+)
 from ..plot import lcurve
 from . import get_rule, rule_names
 
@@ -199,7 +206,7 @@ class DirectSweep:
             else:
                 self._parts = AffineBand(pl.assemble(D, E), pl.objective_part(D[lam_rows]), pl.kl)
                 # the solve at the chosen lambda takes its band from here too (lsq.banded_factor)
-                self.form.cache["band_affine"] = (pl, self._parts)
+                self.form.cache[BAND_AFFINE] = (pl, self._parts)
         return self._parts
 
     def _combined(self, lam: float, buffer: int = 0) -> tuple | None:

@@ -16,6 +16,7 @@ from ..errors import InputError
 from ..formulation import as_formulation
 from ..lam import rule_names
 from ..lam.sweep import LambdaCurve, sweep_curve
+from ..lsq import BAND_AFFINE
 from ..result import Solution
 from .chain import solve_fixed
 from .options import SolveOptions, prepare
@@ -48,7 +49,7 @@ def with_rule(inner: Stage) -> Stage:
         finally:
             # the sweep's band along lambda served the solve at the chosen lambda; a band of
             # the whole problem is not kept alive with the formulation after it
-            as_formulation(form).cache.pop("band_affine", None)
+            as_formulation(form).cache.pop(BAND_AFFINE, None)
         sol.lam_rule = lam
         sol.curve = curve
         # already issued by the sweep (once); recorded here for the CLI and the JSON summary
@@ -128,7 +129,7 @@ def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6
                       lam_range=lam_range, points=points,
                       tau=tau, probes=probes, seed=seed, progress=progress, engine=engine)
     finally:
-        form.cache.pop("band_affine", None)   # not kept alive with the formulation (see with_rule)
+        form.cache.pop(BAND_AFFINE, None)   # not kept alive with the formulation (see with_rule)
 
 
 def choose_lambda(problem, rule: str = "lcurve", **kwargs) -> float:
