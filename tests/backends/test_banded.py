@@ -168,3 +168,25 @@ def test_affine_band_at_a_lambda_is_the_scaled_assembly_there(lam):
     np.testing.assert_allclose(C, ref_C, rtol=1e-12, atol=1e-12 * np.max(np.abs(ref_C)))
     np.testing.assert_allclose(B.toarray(), ref_B.toarray(), rtol=1e-12, atol=1e-12 * abs(ref_B).max())
     np.testing.assert_array_equal(h, ref_h)
+
+
+def test_gcv_trace_falls_back_to_probes_when_a_neighbour_factor_is_not_banded(monkeypatch):
+    """The log-determinant needs banded factors at lambda e^(+-delta); where the banded
+    factor fails there and the sparse LU takes over (it has no log-determinant), the trace
+    comes from Hutchinson's probes instead, named in ``trace_method``, and agrees with the
+    exact trace within the probes' standard error."""
+    from bvpnav.lsq import factor_form
+
+    prob = problem(Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05), n=60)
+    form = prob.formulation
+    exact = DirectSweep(form, trace="exact").point(1.0, need_trace=True)["trace"]
+    sweep = DirectSweep(form, trace="logdet", probes=200)
+    real = sweep._factor
+    monkeypatch.setattr(sweep, "_combined", lambda lam, buffer=0: None)
+    monkeypatch.setattr(sweep, "_factor", lambda f, lam=None: real(f, lam) if lam == 1.0
+                        else factor_form(f, form))
+    est = sweep.point(1.0, need_trace=True)["trace"]
+    assert sweep.trace_method.startswith("Hutchinson (200 probes); no log-determinant: the banded "
+                                         "factor failed at lambda=1.001"), sweep.trace_method
+    se = np.sqrt(2 * abs(exact) / 200)   # Rademacher probes: sd <= sqrt(2 |tr B| / P)
+    assert abs(est - exact) < 4 * se, (est, exact, se)

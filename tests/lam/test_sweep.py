@@ -195,3 +195,23 @@ def test_the_chosen_lambda_solved_from_the_sweeps_band_equals_a_fresh_solve():
     fresh, _ = known_noise(0, n=2001)
     ref = fresh.solve(solver="direct", lam=sol.lam)
     np.testing.assert_allclose(sol.x, ref.x, rtol=0, atol=1e-10 * np.max(np.abs(ref.x)))
+
+
+def test_refine_extremum_keeps_to_its_bounds():
+    """A rule that never chooses its outermost samples (the L-curve's two on each side)
+    gives bounds: a better neighbour beyond a bound, or a parabola whose vertex lies
+    beyond it, returns the bound (the best allowed point), never the excluded sample."""
+    from bvpnav.lam import refine_extremum
+
+    s = np.log(np.geomspace(1e-3, 1e3, 9))
+    inc = s.copy()   # increasing: the best allowed sample 6 has a better excluded neighbour 7
+    assert refine_extremum(lambda v: v, s, inc, 6, best="max", bounds=(s[2], s[6])) == s[6]
+    # a peak just beyond the upper bound: the parabola's vertex lies in the excluded range
+    peak = s[6] + 0.3 * (s[7] - s[6])
+    g = -(s - peak) ** 2
+    assert refine_extremum(lambda v: -(v - peak) ** 2, s, g, 6, best="max", bounds=(s[2], s[6])) == s[6]
+    # inside the bounds nothing changes: the peak itself, to the tolerance
+    peak = s[5] + 0.3 * (s[6] - s[5])
+    g = -(s - peak) ** 2
+    u = refine_extremum(lambda v: -(v - peak) ** 2, s, g, 5, best="max", bounds=(s[2], s[6]))
+    assert abs(u - peak) < 1e-3

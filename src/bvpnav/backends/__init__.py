@@ -122,6 +122,11 @@ class Backend:
 _BACKENDS: dict[str, Backend] = {}
 _FACTORIES: list = []
 
+#: Back ends a factory has offered in this process, by name: a later lookup of the same
+#: name does not ask the factories again (cvxpy's ``installed_solvers()`` tries to import
+#: some forty solver packages, about 3 ms, and every solve resolves its fallback chain).
+_FOUND: dict = {}
+
 
 def register_backend(backend: Backend) -> Backend:
     """Add (or replace) a back end in the table under its lowercase name."""
@@ -154,6 +159,7 @@ def registry() -> dict[str, Backend]:
     for factory in _FACTORIES:
         for be in factory():
             out.setdefault(be.name, be)
+    _FOUND.update(out)
     out.update(_BACKENDS)
     return out
 
@@ -171,6 +177,8 @@ def resolve_solver(name: str) -> Backend:
     _discover()
     if key in _BACKENDS:  # registered back ends win over the factories' (see registry()),
         return _BACKENDS[key]  # so 'direct' is found without asking cvxpy what is installed
+    if key in _FOUND:
+        return _FOUND[key]
     table = registry()
     if key in table:
         return table[key]

@@ -149,7 +149,8 @@ def edge_warning(curve, name: str, k: int, guard: int, scores=None, best: str = 
 
 
 def refine_extremum(f, s: np.ndarray, scores: np.ndarray, k: int, best: str = "max",
-                    xatol: float = REFINE_XATOL, maxiter: int = 30) -> float:
+                    xatol: float = REFINE_XATOL, maxiter: int = 30,
+                    bounds: tuple[float, float] | None = None) -> float:
     """The extremum of a smooth function of ``u = log lambda`` near sample ``k``.
 
     Successive parabolic interpolation seeded with the sweep's own samples ``k - 1, k,
@@ -170,6 +171,10 @@ def refine_extremum(f, s: np.ndarray, scores: np.ndarray, k: int, best: str = "m
         Tolerance on ``log lambda``.
     maxiter : int
         At most this many new evaluations.
+    bounds : (float, float), optional
+        The ``log lambda`` interval the answer may take (a rule that never chooses its
+        outermost samples): samples outside it still shape the parabolas, but an extremum
+        beyond a bound is returned as that bound.
 
     Returns
     -------
@@ -193,8 +198,15 @@ def refine_extremum(f, s: np.ndarray, scores: np.ndarray, k: int, best: str = "m
     :math:`u_2 - u_0 \\le 4` ``xatol``; when two steps have not shrunk the bracket to 0.7 of
     its width (parabolas creeping towards the extremum from one side, past a far bracket
     end), the next step is golden-section. When the best point is an end of the bracket the
-    extremum lies at (or beyond) it: the end is returned, as a bounded search would.
+    extremum lies at (or beyond) it: the end is returned, as a bounded search would. With
+    ``bounds``, a best point or vertex beyond a bound (the model's extremum lies in the
+    excluded range, and the best allowed point is the bound itself) returns the bound.
     """
+    lo, hi = (-np.inf, np.inf) if bounds is None else (float(bounds[0]), float(bounds[1]))
+
+    def inside(u: float) -> float:
+        return min(max(u, lo), hi)
+
     sign = 1.0 if best == "max" else -1.0
     n = len(s)
     pts = {float(s[j]): sign * float(scores[j]) for j in (k - 1, k, k + 1) if 0 <= j < n}
@@ -204,14 +216,16 @@ def refine_extremum(f, s: np.ndarray, scores: np.ndarray, k: int, best: str = "m
         xs = sorted(pts)
         i = max(range(len(xs)), key=lambda j: pts[xs[j]])
         u1 = xs[i]
-        if i == 0 or i == len(xs) - 1:
-            return u1   # the best is a bracket end
+        if i == 0 or i == len(xs) - 1 or not lo <= u1 <= hi:
+            return inside(u1)   # the best is a bracket end, or beyond a bound
         u0, u2 = xs[i - 1], xs[i + 1]
         g0, g1, g2 = pts[u0], pts[u1], pts[u2]
         p = (u1 - u0) ** 2 * (g1 - g2) - (u1 - u2) ** 2 * (g1 - g0)
         q = (u1 - u0) * (g1 - g2) - (u1 - u2) * (g1 - g0)
         v = u1 - 0.5 * p / q if q > 0 else float("nan")
         h = u2 - u0
+        if np.isfinite(v) and not lo <= v <= hi:
+            return inside(v)   # the vertex lies beyond a bound: the bound is the best allowed
         if h <= 4.0 * xatol:
             return v if np.isfinite(v) else u1
         widths.append(h)
@@ -229,7 +243,7 @@ def refine_extremum(f, s: np.ndarray, scores: np.ndarray, k: int, best: str = "m
             v = u1 + golden * (u2 - u1) if u2 - u1 > u1 - u0 else u1 - golden * (u1 - u0)
         pts[v] = sign * float(f(v))
     xs = sorted(pts)
-    return max(xs, key=lambda u: pts[u])
+    return inside(max(xs, key=lambda u: pts[u]))
 
 
 def bracket(s: np.ndarray, k: int) -> tuple[float, float]:

@@ -75,7 +75,7 @@ class LCurve(LambdaRule):
                                   "choose another rule (e.g. lam='quasi')")
         if sweep.engine == "direct":
             return float(math.exp(refine_extremum(lambda u: curvature(sweep.point(math.exp(u))), s,
-                                                  scores, k, best="max")))
+                                                  scores, k, best="max", bounds=(s[2], s[-3]))))
         a, b = bracket(s, k)
         fine = np.linspace(a, b, 9)[1:-1]
         for u in fine[np.abs(fine - s[k]) > 1e-6]:

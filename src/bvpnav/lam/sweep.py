@@ -148,6 +148,11 @@ class LambdaCurve:
 
 
 # ----------------------------------------------------------------- sweeps
+class _NoLogdet(Exception):
+    """A neighbouring lambda's factor has no log-determinant (the banded factor failed and
+    the sparse LU took over): GCV's trace falls back to the probes."""
+
+
 class DirectSweep:
     """Exact per-lambda evaluation for least-squares problems.
 
@@ -242,10 +247,13 @@ class DirectSweep:
             parts = self._combined(lam, buffer=1)
             if parts is not None:
                 return BandedKKT.numeric(self._plan, parts).logdet()
-            return self._factor(self._ls.at_lam(lam), lam).logdet()
+            fac = self._factor(self._ls.at_lam(lam), lam)
         except (RuntimeError, np.linalg.LinAlgError) as exc:
             raise InputError(f"lambda={lam:g}: the KKT matrix is singular ({exc}); some unknown is "
                              "not determined by the information") from exc
+        if not isinstance(fac, BandedKKT):   # the banded factor failed there: the sparse LU has none
+            raise _NoLogdet(f"the banded factor failed at lambda={lam:g}")
+        return fac.logdet()
 
     def point(self, lam: float, need_trace: bool | None = None, probes: int | None = None,
               seed: int | None = None) -> dict:
@@ -319,13 +327,18 @@ class DirectSweep:
     def _trace(self, form, fac, lam, probes, seed) -> float:
         N, d = self.model.N, self.model.d
         exact = self.trace == "exact" or (self.trace == "auto" and N * d <= self.exact_trace_limit)
+        why = ""
         if (self.trace in ("auto", "logdet") and not exact and isinstance(fac, BandedKKT)
                 and self._logdet_applies()):
-            self.trace_method = "log-determinant"
-            return self._trace_logdet(form, fac, lam)
+            try:
+                value = self._trace_logdet(form, fac, lam)
+                self.trace_method = "log-determinant"
+                return value
+            except _NoLogdet as exc:   # the probes below need no determinant
+                why = f"; no log-determinant: {exc}"
         m, n = form.D.A.shape
         widx = np.concatenate([self.model.w_index(a) for a in range(d)])  # axis-major like Z.T
-        self.trace_method = "exact columns" if exact else f"Hutchinson ({probes} probes)"
+        self.trace_method = ("exact columns" if exact else f"Hutchinson ({probes} probes)") + why
         if exact:
             Zs = [np.eye(N * d)[:, k].reshape(d, N).T for k in range(N * d)]
         else:
