@@ -121,3 +121,30 @@ def test_momentum_balance_of_fem_rows():
     sol = prob.solve()
     integral = np.trapezoid(acc + sol.residuals["w_x"].to_numpy(), t)
     assert sol.velocity("x")[-1] - sol.velocity("x")[0] == pytest.approx(integral, abs=1e-9)
+
+
+@pytest.mark.parametrize("kind", ["uniform", "nonuniform"])
+def test_node_velocity_values_equal_the_rows_of_node_velocity(kind):
+    """The solution's velocity column and the stationarity floor evaluate the nodal
+    velocity without assembling its rows; the result is the rows' value (scale factor and
+    bias columns included), and the operators hold the formula
+    v_j = (r_j - r_{j-1})/h_{j-1} + h_{j-1} (a_{j-1} + 2 a_j)/6 at interior nodes."""
+    from bvpnav.error_models import Bias, ScaleFactor
+    from bvpnav.model import NavModel
+
+    t = grids()[kind]
+    rng = np.random.default_rng(3)
+    data = bvpnav.ImuData(t, rng.normal(size=(t.size, 3)))
+    model = NavModel(data, ScaleFactor() + Bias())
+    x = rng.normal(size=model.size)
+    for a in range(3):
+        want = model.node_velocity(a).value(x)
+        got = model.node_velocity_values(a, x)
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * np.max(np.abs(want)))
+    Vr, Va, Vb = fem.node_velocity_operators(TimeGrid(t))
+    r, acc, h = rng.normal(size=t.size), rng.normal(size=t.size), np.diff(t)
+    j = np.arange(1, t.size - 1)
+    v = Vr @ r + Va @ acc
+    np.testing.assert_allclose(v[j], (r[j] - r[j - 1]) / h[j - 1] + h[j - 1] * (acc[j - 1] + 2 * acc[j]) / 6,
+                               rtol=1e-13, atol=1e-13)
+    assert v[0] == 0 and v[-1] == 0 and (Vb @ [2.0, 5.0])[[0, -1]].tolist() == [2.0, 5.0]

@@ -243,11 +243,18 @@ class Formulation:
                     units=it.units)
 
     def data_rows(self) -> Affine:
-        """Rows whose sum of squares is the data term ``J_0`` (see class Notes)."""
-        m = self.model
-        if self.residual == "acceleration":
-            return m.residual_rows() / np.repeat(self.sigma_a, m.N)
-        return m.load_residual_rows()
+        """Rows whose sum of squares is the data term ``J_0`` (see class Notes); made once
+        and kept in :attr:`cache` (the least-squares form, the cvxpy problem and the
+        verification all read them)."""
+        rows = self.cache.get("data_rows")
+        if rows is None:
+            m = self.model
+            if self.residual == "acceleration":
+                rows = m.residual_rows() / np.repeat(self.sigma_a, m.N)
+            else:
+                rows = m.load_residual_rows()
+            self.cache["data_rows"] = rows
+        return rows
 
     @property
     def has_soft_terms(self) -> bool:

@@ -239,7 +239,14 @@ class NavModel:
         self.size = d * self.block + self.q
         self.K = fem.stiffness(self.grid)
         self.M = fem.mass(self.grid)
-        self._node_vel = fem.node_velocity_operators(self.grid)
+        self._node_vel_ops = None
+
+    @property
+    def _node_vel(self) -> tuple:
+        """:func:`bvpnav.fem.node_velocity_operators` of the grid, made on first use."""
+        if self._node_vel_ops is None:
+            self._node_vel_ops = fem.node_velocity_operators(self.grid)
+        return self._node_vel_ops
 
     # --------------------------------------------------------------- layout
     def _offset(self, axis: int) -> int:
@@ -392,6 +399,20 @@ class NavModel:
         if self.q:
             blocks["l"] = Va @ self.G[:, axis, :]
         return Affine(self._place(blocks, axis), Va @ self.data.acc[:, axis])
+
+    def node_velocity_values(self, axis: int, xval: np.ndarray) -> np.ndarray:
+        r""":meth:`node_velocity` of one axis evaluated at the stacked solution ``xval``
+        (m/s), without assembling its rows.
+
+        Notes
+        -----
+        :math:`v = V_r r + V_a (\hat a + G l + w) + V_b (v_0, v_1)`.
+        """
+        Vr, Va, Vb = self._node_vel
+        acc = self.data.acc[:, axis] + xval[self.w_index(axis)]
+        if self.q:
+            acc = acc + self.G[:, axis, :] @ xval[self.l_index]
+        return Vr @ xval[self.r_index(axis)] + Va @ acc + Vb @ xval[list(self.v_end_index(axis))]
 
     def node_position(self, axis: int) -> Affine:
         """Position at every node of one axis (m)."""

@@ -72,8 +72,8 @@ def make_solution(form, xval: np.ndarray, lam: float, lam_rule: str, records: So
     form = as_formulation(form)
     model = form.model
     idx = pd.Index(model.grid.t, name="t")
-    cols = {ax: model.node_position(a).value(xval) for a, ax in enumerate(model.axes)}
-    cols.update({"v" + ax: model.node_velocity(a).value(xval) for a, ax in enumerate(model.axes)})
+    cols = {ax: xval[model.r_index(a)] for a, ax in enumerate(model.axes)}
+    cols.update({"v" + ax: model.node_velocity_values(a, xval) for a, ax in enumerate(model.axes)})
     parts = model.split(xval)
     resid = pd.DataFrame({f"w_{ax}": parts["w"][:, a] for a, ax in enumerate(model.axes)}, index=idx)
     items_df, item_res = _items_table(form, xval, duals)

@@ -127,8 +127,8 @@ def _gradient_floor(form, xval: np.ndarray, lam: float, data) -> float:
     probe = np.zeros(model.size)
     T = model.grid.duration
     for a in range(model.d):
-        r_a = model.node_position(a).value(xval)
-        v_a = model.node_velocity(a).value(xval)
+        r_a = xval[model.r_index(a)]
+        v_a = model.node_velocity_values(a, xval)
         a_scale = max(float(np.max(np.abs(r_a))) / T**2, float(np.max(np.abs(v_a))) / T)
         probe[model.w_index(a)] = np.maximum(np.abs(model.data.acc[:, a]), a_scale)
     floor = float(np.max(np.abs(2.0 * (data.A.T @ data.value(probe)))))
@@ -162,7 +162,9 @@ def stationarity(form, xval: np.ndarray, lam: float, duals: dict) -> float | Non
         if g is None:
             return None
         grads.append(g)
-    total = np.sum(grads, axis=0)
+    total = grads[0].copy()
+    for g in grads[1:]:
+        total += g
     floor = _gradient_floor(form, xval, lam, data)
     scale = max(max(float(np.max(np.abs(g))) for g in grads), floor, 1e-300)
     return float(np.max(np.abs(total)) / scale)
