@@ -14,6 +14,7 @@ from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
+import scipy.sparse as sp
 
 from .errors import BvpnavError, ConvexityError, InputError
 from .imu import ImuData
@@ -282,41 +283,45 @@ class Formulation:
             per error-model parameter (the trajectory change it causes, starting at rest).
         names : list of str
         """
+        Z, names = self._null_columns()
+        return Z.toarray(), names
+
+    def _null_columns(self) -> tuple[sp.csc_matrix, list[str]]:
+        """:meth:`null_directions` as a sparse matrix (made from each direction's nonzero
+        entries: a dense (n, 2 d + q) array was 58 MB and 0.1 s at N = 1e5 on three axes
+        with six parameters, for a product with a few item rows)."""
         m = self.model
         t = m.grid.t
-        cols, names = [], []
+        rows, vals, names = [], [], []
         for a, ax in enumerate(m.axes):
-            z = np.zeros(m.size)
-            z[m.r_index(a)] = 1.0
-            cols.append(z)
-            names.append(f"axis {ax}: position offset")
-            z = np.zeros(m.size)
-            z[m.r_index(a)] = t - t[0]
-            z[list(m.v_end_index(a))] = 1.0
-            cols.append(z)
-            names.append(f"axis {ax}: velocity offset")
+            v0, v1 = m.v_end_index(a)
+            rows += [m.r_index(a), np.concatenate([m.r_index(a), [v0, v1]])]
+            vals += [np.ones(m.N), np.concatenate([t - t[0], [1.0, 1.0]])]
+            names += [f"axis {ax}: position offset", f"axis {ax}: velocity offset"]
         h = m.grid.h
         for k, pname in enumerate(m.param_names):
-            z = np.zeros(m.size)
-            z[m.l_index[k]] = 1.0
+            r, v = [], []
             for a in range(m.d):
                 mg = m.M @ m.G[:, a, k]
+                if not mg.any():   # the parameter does not act on this axis
+                    continue
                 s = np.cumsum(mg)[:-1]  # element slopes with v0 = 0
-                z[m.r_index(a)] = np.concatenate([[0.0], np.cumsum(s * h)])
-                i0, i1 = m.v_end_index(a)
-                z[i0] = 0.0
-                z[i1] = s[-1] + mg[-1]
-            cols.append(z)
+                r += [m.r_index(a), [m.v_end_index(a)[1]]]
+                v += [np.concatenate([[0.0], np.cumsum(s * h)]), [s[-1] + mg[-1]]]
+            rows.append(np.concatenate(r + [[m.l_index[k]]]).astype(np.int64))
+            vals.append(np.concatenate(v + [[1.0]]))
             names.append(f"parameter {pname}")
-        return np.column_stack(cols), names
+        indptr = np.concatenate([[0], np.cumsum([r.size for r in rows])])
+        Z = sp.csc_matrix((np.concatenate(vals), np.concatenate(rows), indptr), shape=(m.size, len(names)))
+        return Z, names
 
     def unobservable(self) -> list[str]:
         """Names of unknown directions that no item pins down (empty when all are)."""
         terms = [t for t in self.terms() if t.kind == "equality"]
-        Z, names = self.null_directions()
+        Z, names = self._null_columns()
         if not terms:
             return names
-        DZ = Affine.vstack([t.residual for t in terms]).A @ Z
+        DZ = (Affine.vstack([t.residual for t in terms]).A @ Z).toarray()
         norms = np.linalg.norm(DZ, axis=0)
         scale = norms.max() if norms.size and norms.max() > 0 else 1.0
         out = [names[k] for k in np.flatnonzero(norms <= 1e-12 * scale)]

@@ -389,7 +389,7 @@ def banded_plan(form: LeastSquaresForm, problem) -> BandPlan:
                                                                                strict=True)):
         return cached[0]   # the same pattern (another lambda, or the sweep's chosen one)
     try:
-        plan = BandPlan.build(D, E, column_nodes(model), lam_rows=form.lam_rows)
+        plan = BandPlan.build(D, E, column_nodes(model), lam_rows=form.lam_rows, segments=model.d)
     except NotBanded:
         if model.d == 1:
             raise

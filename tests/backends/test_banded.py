@@ -190,3 +190,31 @@ def test_gcv_trace_falls_back_to_probes_when_a_neighbour_factor_is_not_banded(mo
                                          "factor failed at lambda=1.001"), sweep.trace_method
     se = np.sqrt(2 * abs(exact) / 200)   # Rademacher probes: sd <= sqrt(2 |tr B| / P)
     assert abs(est - exact) < 4 * se, (est, exact, se)
+
+
+@pytest.mark.parametrize("item, runs", [
+    (Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05), 3),                  # the same on every axis
+    (Position(t=[3.0], value=[0.5], axes=("x",), sigma=0.05), 1),        # a local row on x only
+], ids=["equal-axes", "one-axis-item"])
+@pytest.mark.parametrize("bias", [False, True], ids=["no-params", "bias"])
+def test_equal_axes_factor_one_band_and_solve_the_others_as_right_hand_sides(item, runs, bias):
+    """Three axes laid end to end whose band rows are equal (one grid, one sigma_a, the
+    same local items) factor one axis' band; a local item on one axis makes them differ
+    and the whole band is factored. Either way the answer is the pivoted LU's to 1e-10,
+    and the log-determinant is the whole band's."""
+    prob = problem(item, error_model=Bias() if bias else None)
+    form = prob.formulation
+    ls = least_squares_form(form, 1.0)
+    fac = BandedKKT(ls.D.A, ls.E.A, column_nodes(form.model), params=form.model.l_index,
+                    plan=BandPlan.build(ls.D.A, ls.E.A, column_nodes(form.model), segments=3))
+    whole = BandedKKT(ls.D.A, ls.E.A, column_nodes(form.model), params=form.model.l_index)
+    assert fac.plan.segments == 3 and fac._runs == runs and whole._runs == 1
+    assert fac._lu.shape[1] == fac.plan.size // runs
+    rhs = ls.rhs()
+    ref = prob.solve(solver="direct", options={"method": "lu"}, fallback=None).x
+    m, n = ls.D.A.shape
+    x = fac.refined(rhs, 2)[0][m:m + n]
+    np.testing.assert_allclose(x, ref, rtol=0, atol=1e-10 * np.max(np.abs(ref)))
+    assert abs(fac.logdet() - whole.logdet()) <= 1e-9 * abs(whole.logdet())
+    if bias:   # the border's Schur complement (the parameters' information) is the same too
+        np.testing.assert_allclose(fac.schur, whole.schur, rtol=1e-9)
