@@ -45,8 +45,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.linalg import lapack
 
-__all__ = ["BandedKKT", "BandPlan", "NotBanded", "Factorization", "AugmentedOperator", "row_span",
-           "MAX_BAND", "MAX_BORDER", "FOLD_SPAN"]
+__all__ = ["BandedKKT", "BandPlan", "DiagonalRows", "NotBanded", "Factorization", "AugmentedOperator",
+           "row_span", "MAX_BAND", "MAX_BORDER", "FOLD_SPAN"]
 
 #: Largest lower (and upper) bandwidth of the local part accepted for a banded factor;
 #: the work is N b^2, so beyond this a sparse LDL^T with a fill-reducing ordering wins.
@@ -294,6 +294,47 @@ class AffineBand:
 
 
 @dataclass(eq=False)
+class DiagonalRows:
+    """The first :attr:`rows` rows of ``E`` by their diagonals (the FEM rows, see
+    :func:`bvpnav.lsq.fem_rows_by_diagonals`): the plan places them by formula, a few
+    arrays of length N, instead of entry by entry.
+
+    Attributes
+    ----------
+    rows : int
+        ``E``'s rows ``0 .. rows - 1`` are described here, every entry of them.
+    tridiagonal : list of (int, int, ndarray, ndarray, ndarray)
+        ``(r0, c0, lower, diag, upper)``: the square block ``E[r0 + i, c0 + j]`` with
+        ``diag[i]`` at ``j = i``, ``lower[i - 1]`` at ``j = i - 1`` and ``upper[i]`` at
+        ``j = i + 1``. Blocks have disjoint rows and disjoint columns.
+    dense : list of (int, int, ndarray)
+        ``(r0, col, values)``: a column, ``E[r0 + i, col] = values[i]``.
+    extra : scipy.sparse.csr_matrix
+        The other entries of those rows, shape ``(rows, n)``.
+    """
+
+    rows: int
+    tridiagonal: list
+    dense: list
+    extra: sp.csr_matrix
+
+    def matches(self, E: sp.csr_matrix) -> bool:
+        """Whether ``E`` (canonical: no explicit zeros) holds as many entries in those rows
+        as the description has nonzero values (a description of other rows does not)."""
+        if E.shape[0] < self.rows or self.extra.shape != (self.rows, E.shape[1]):
+            return False
+        nz = self.extra.nnz + sum(int(np.count_nonzero(v)) for b in self.tridiagonal for v in b[2:])
+        nz += sum(int(np.count_nonzero(v)) for _, _, v in self.dense)
+        return int(E.indptr[self.rows]) == nz
+
+    def columns(self) -> np.ndarray:
+        """Every column the description's rows touch (sorted, unique)."""
+        cols = [np.arange(c0, c0 + d.size) for _, c0, _, d, _ in self.tridiagonal]
+        cols += [np.array([c]) for _, c, _ in self.dense] + [self.extra.indices]
+        return np.unique(np.concatenate(cols)) if cols else np.zeros(0, dtype=np.int64)
+
+
+@dataclass(eq=False)
 class BandPlan:
     """The symbolic analysis of the reduced system (see the module Notes): where every
     entry of the objective and equality rows goes. It depends on the sparsity pattern only
@@ -373,7 +414,8 @@ class BandPlan:
     @classmethod
     def build(cls, D: sp.csr_matrix, E: sp.csr_matrix, colnode: np.ndarray,
               max_band: int = MAX_BAND, max_border: int = MAX_BORDER, span: int = FOLD_SPAN,
-              lam_rows: np.ndarray | None = None, segments: int = 1) -> BandPlan:
+              lam_rows: np.ndarray | None = None, segments: int = 1,
+              diagonal: DiagonalRows | None = None) -> BandPlan:
         """Order the reduced system by node; raise :class:`NotBanded` when it is not local.
 
         Parameters
@@ -389,6 +431,8 @@ class BandPlan:
         segments : int
             The nodes are this many equal runs laid end to end (axes no row couples), see
             :attr:`segments`.
+        diagonal : DiagonalRows, optional
+            ``E``'s first rows by diagonals, for the first assembly (:meth:`assemble`).
         """
         m, n = D.shape
         p = E.shape[0]
@@ -438,12 +482,12 @@ class BandPlan:
         plan.pos_order, plan.border_order = order, border
         plan.segments = plan._segment(node, segments)
         del Drow, Dcol, nnz_row, alone, entries, lo, hi, elo, ehi, node, reach, local, order, border
-        plan._analyse(D, E, max_band)
+        plan._analyse(D, E, max_band, diagonal)
         return plan
 
-    def _analyse(self, D, E, max_band) -> None:
+    def _analyse(self, D, E, max_band, diagonal: DiagonalRows | None = None) -> None:
         """The bandwidth of the banded part, from one assembly (kept for the first factor)."""
-        entries = self._entries(D, E)
+        entries = self._entries(D, E, diagonal)
         kl = 0
         for pi, pj, _, _ in entries[0]:
             if pi.size:
@@ -456,7 +500,7 @@ class BandPlan:
         self.ldab = 3 * kl + 1
         self._first = (D.data, E.data, self._scatter(entries))
 
-    def _entries(self, D: sp.csr_matrix, E: sp.csr_matrix) -> tuple:
+    def _entries(self, D: sp.csr_matrix, E: sp.csr_matrix, diagonal: DiagonalRows | None = None) -> tuple:
         """The reduced matrix's entries, placed: ``(band, border_coupling, border, h)``.
 
         ``band`` is a list of ``(i, j, values, mirror)`` with positions in the banded part
@@ -469,7 +513,10 @@ class BandPlan:
         -----
         Blocks of the (symmetric) reduced matrix: :math:`D_f^T D_f` on ``x``; the unfolded
         rows :math:`[D_u, -I]` and their transpose; ``E`` and its transpose;
-        :math:`-E_z h^{-1} E_z^T` on the multipliers.
+        :math:`-E_z h^{-1} E_z^T` on the multipliers. With ``diagonal`` (a
+        :class:`DiagonalRows` that matches ``E``) its rows are placed by diagonals, and so
+        is :math:`-E_z h^{-1} E_z^T` when no other row touches an eliminated unknown
+        (:meth:`_diagonal_pairs`).
         """
         n = self.n
         unf = self.unfolded
@@ -495,7 +542,29 @@ class BandPlan:
         if nu:
             add_sparse(D[unf], n, 0, True)
             self._place(n + np.arange(nu), n + np.arange(nu), -np.ones(nu), False, out)
-        add_sparse(E, n + nu, 0, True)
+        r0 = n + nu
+        if diagonal is not None and diagonal.matches(E):
+            k = diagonal.rows
+            for b0, c0, lo, dg, up in diagonal.tridiagonal:
+                i = np.arange(dg.size)
+                self._place(r0 + b0 + i, c0 + i, dg, True, out)
+                self._place(r0 + b0 + i[1:], c0 + i[:-1], lo, True, out)
+                self._place(r0 + b0 + i[:-1], c0 + i[1:], up, True, out)
+            for b0, col, v in diagonal.dense:
+                self._place(r0 + b0 + np.arange(v.size), np.full(v.size, col), v, True, out)
+            add_sparse(diagonal.extra, r0, 0, True)
+            rest = E[k:]
+            add_sparse(rest, r0 + k, 0, True)
+            if el.size:
+                eliminated = np.zeros(n, dtype=bool)
+                eliminated[el] = True
+                if not (eliminated[rest.indices].any() or eliminated[diagonal.extra.indices].any()):
+                    hinv = np.zeros(n)
+                    hinv[el] = 1.0 / h
+                    self._diagonal_pairs(diagonal, hinv, r0, out)
+                    return (*out, h)
+        else:
+            add_sparse(E, r0, 0, True)
         if el.size:
             # (E_z scaled by 1/h) times the kept transpose of E_z: no diagonal product and no
             # second transpose (a third less time than (E_z h^-1/2)(E_z h^-1/2)^T)
@@ -503,6 +572,36 @@ class BandPlan:
             Zh = sp.csr_matrix((Ez.data / h[Ez.indices], Ez.indices, Ez.indptr), shape=Ez.shape)
             add_sparse(Zh @ EzT, n + nu, n + nu, False, -1.0)
         return (*out, h)
+
+    def _diagonal_pairs(self, diagonal: DiagonalRows, hinv: np.ndarray, r0: int, out: tuple) -> None:
+        r"""Place :math:`-E_z h^{-1} E_z^T` for the tridiagonal blocks of ``diagonal``
+        (``hinv``: :math:`1/h` on the eliminated unknowns, 0 elsewhere), the only rows on
+        eliminated unknowns.
+
+        Notes
+        -----
+        With the block's entries :math:`e_{i, i+s} = V_s[i]` (:math:`s = -1, 0, 1`), rows
+        ``i`` and ``i + t`` share column ``c = i + s = i + t + s'``, so
+
+        .. math:: (E_z h^{-1} E_z^T)_{i, i+t} = \sum_{s - s' = t} V_s[i]\, V_{s'}[i + t]\,
+                  h^{-1}_{c_0 + i + s}, \qquad t = 0, 1, 2
+
+        (pentadiagonal, symmetric; blocks have disjoint columns, so they do not mix).
+        """
+        for b0, c0, lo, dg, up in diagonal.tridiagonal:
+            N = dg.size
+            V = {-1: np.concatenate([[0.0], lo]), 0: dg, 1: np.concatenate([up, [0.0]])}
+            g = np.concatenate([[0.0], hinv[c0:c0 + N], [0.0]])   # g[1 + j] = 1/h at column c0 + j
+            i = np.arange(N)
+            for t in (0, 1, 2):
+                m = N - t
+                acc = np.zeros(m)
+                for s in (-1, 0, 1):
+                    sp_ = s - t
+                    if sp_ < -1:
+                        continue
+                    acc += V[s][:m] * V[sp_][t:] * g[1 + s:1 + s + m]
+                self._place(r0 + b0 + i[:m], r0 + b0 + i[t:], -acc, t > 0, out)
 
     def _place(self, r: np.ndarray, c: np.ndarray, v: np.ndarray, mirror: bool, out: tuple) -> None:
         """Append one block's entries (reduced indices ``r``, ``c``; ``mirror``: its
@@ -555,14 +654,14 @@ class BandPlan:
             np.add.at(C, (cat(brd, 0), cat(brd, 1)), cat(brd, 2))
         return ab, B, C, h
 
-    def assemble(self, D: sp.csr_matrix, E: sp.csr_matrix) -> tuple:
+    def assemble(self, D: sp.csr_matrix, E: sp.csr_matrix, diagonal: DiagonalRows | None = None) -> tuple:
         """The reduced matrix's parts ``(ab, B, C, h)`` (see :meth:`_scatter`) for these
-        values; the first call with the very arrays the plan was made from returns that
-        assembly."""
+        values (``diagonal``: ``E``'s first rows by diagonals, :class:`DiagonalRows`); the
+        first call with the very arrays the plan was made from returns that assembly."""
         first, self._first = getattr(self, "_first", None), None
         if first is not None and first[0] is D.data and first[1] is E.data:
             return first[2]
-        return self._scatter(self._entries(D, E))
+        return self._scatter(self._entries(D, E, diagonal))
 
     def eliminated_columns(self, E: sp.csr_matrix) -> sp.csr_matrix:
         """``E`` restricted to the eliminated unknowns (kept for the last ``E`` seen: every
@@ -613,6 +712,8 @@ class BandedKKT(Factorization):
         combines them), instead of assembling from ``D`` and ``E``.
     lam_rows : ndarray of bool, optional
         Passed to :meth:`BandPlan.build`.
+    diagonal : DiagonalRows, optional
+        ``E``'s first rows by diagonals (placed by formula, see :class:`DiagonalRows`).
 
     Raises
     ------
@@ -636,10 +737,10 @@ class BandedKKT(Factorization):
 
     def __init__(self, D: sp.csr_matrix, E: sp.csr_matrix, colnode: np.ndarray | None = None,
                  params: np.ndarray | None = None, plan: BandPlan | None = None, parts: tuple | None = None,
-                 lam_rows: np.ndarray | None = None):
+                 lam_rows: np.ndarray | None = None, diagonal: DiagonalRows | None = None):
         D, E = canonical(D), canonical(E)
         if plan is None:
-            plan = BandPlan.build(D, E, colnode, lam_rows=lam_rows)
+            plan = BandPlan.build(D, E, colnode, lam_rows=lam_rows, diagonal=diagonal)
         elif not plan.same_pattern(D, E):
             raise NotBanded("the sparsity pattern changed since the plan was made")
         self.plan = pl = plan
@@ -650,7 +751,7 @@ class BandedKKT(Factorization):
         el = pl.elim
         if el.size:
             self._Ez, self._EzT = pl._eliminated(E)
-        self._factor_parts(pl.assemble(D, E) if parts is None else parts)
+        self._factor_parts(pl.assemble(D, E, diagonal) if parts is None else parts)
 
     @classmethod
     def numeric(cls, plan: BandPlan, parts: tuple) -> BandedKKT:

@@ -33,7 +33,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .banded import BandedKKT, BandPlan, Factorization, NotBanded, canonical
+from .banded import BandedKKT, BandPlan, DiagonalRows, Factorization, NotBanded, canonical
 from .formulation import as_formulation
 from .model import Affine
 
@@ -360,6 +360,30 @@ def column_nodes(model, interleave: bool = False) -> np.ndarray:
     return colnode
 
 
+def fem_rows_by_diagonals(model) -> DiagonalRows:
+    """The FEM rows (the first ``N d`` rows of a form's ``E``) as
+    :class:`~bvpnav.banded.DiagonalRows`: per axis the tridiagonal ``K`` on the positions
+    and ``M`` on the acceleration residuals, the dense ``M G`` columns of the error-model
+    parameters, and the end velocities' two entries."""
+    N, d = model.N, model.d
+    tri, dense, rows, cols, vals = [], [], [], [], []
+    for a in range(d):
+        blocks = model.fem_blocks(a)
+        for key, c0 in (("r", model.r_index(a)[0]), ("w", model.w_index(a)[0])):
+            A = blocks[key]
+            tri.append((a * N, int(c0), A.diagonal(-1), A.diagonal(0), A.diagonal(1)))
+        vb = blocks["vb"].tocoo()
+        rows.append(a * N + vb.row)
+        cols.append(np.asarray(model.v_end_index(a))[vb.col])
+        vals.append(vb.data)
+        if "l" in blocks:
+            dense += [(a * N, int(model.l_index[k]), blocks["l"][:, k]) for k in range(model.q)
+                      if blocks["l"][:, k].any()]
+    extra = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                          shape=(N * d, model.size))
+    return DiagonalRows(N * d, tri, dense, extra)
+
+
 #: The formulation-cache key of a lambda sweep's :class:`~bvpnav.banded.AffineBand`
 #: (``(plan, band)``): the sweep stores it, :func:`banded_factor` reads it, and the rule
 #: stage drops it once the chosen lambda is solved.
@@ -388,12 +412,15 @@ def banded_plan(form: LeastSquaresForm, problem) -> BandPlan:
     if cached is not None and all(a is b or np.array_equal(a, b) for a, b in zip(cached[1], pattern,
                                                                                strict=True)):
         return cached[0]   # the same pattern (another lambda, or the sweep's chosen one)
+    diagonal = fem_rows_by_diagonals(model)
     try:
-        plan = BandPlan.build(D, E, column_nodes(model), lam_rows=form.lam_rows, segments=model.d)
+        plan = BandPlan.build(D, E, column_nodes(model), lam_rows=form.lam_rows, segments=model.d,
+                              diagonal=diagonal)
     except NotBanded:
         if model.d == 1:
             raise
-        plan = BandPlan.build(D, E, column_nodes(model, interleave=True), lam_rows=form.lam_rows)
+        plan = BandPlan.build(D, E, column_nodes(model, interleave=True), lam_rows=form.lam_rows,
+                              diagonal=diagonal)
     formulation.cache["band_plan"] = (plan, pattern)
     return plan
 
@@ -417,7 +444,8 @@ def banded_factor(form: LeastSquaresForm, problem, plan=None, parts=None) -> Ban
         cached = formulation.cache.get(BAND_AFFINE)
         if cached is not None and cached[0] is plan:
             parts = cached[1].at(form.lam)
-    return BandedKKT(form.D.A, form.E.A, params=formulation.model.l_index, plan=plan, parts=parts)
+    return BandedKKT(form.D.A, form.E.A, params=formulation.model.l_index, plan=plan, parts=parts,
+                     diagonal=None if parts is not None else fem_rows_by_diagonals(formulation.model))
 
 
 def factor_form(form: LeastSquaresForm, problem, method: str = "lu", delta: float = 1e-12):

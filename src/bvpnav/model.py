@@ -316,14 +316,19 @@ class NavModel:
         other._fem_cache = None
         return other
 
+    def fem_blocks(self, axis: int) -> dict:
+        """The blocks of one axis' FEM rows by the unknowns they multiply: ``r`` (K, 1/s),
+        ``w`` (M, s), ``vb`` (the end velocities' columns) and, with error-model
+        parameters, ``l`` (``M G``, dense (N, q), s); :meth:`fem_rows` places them."""
+        blocks = {"r": self.K, "w": self.M, "vb": fem.boundary_columns(self.grid)}
+        if self.q:
+            blocks["l"] = self.M @ self.G[:, axis, :]
+        return blocks
+
     def _fem_rows(self) -> Affine:
-        B = fem.boundary_columns(self.grid)
         out = []
         for a in range(self.d):
-            blocks = {"r": self.K, "w": self.M, "vb": B}
-            if self.q:
-                blocks["l"] = self.M @ self.G[:, a, :]
-            A = self._place(blocks, a)
+            A = self._place(self.fem_blocks(a), a)
             out.append(Affine(A, self.M @ self.data.acc[:, a], RowLabels([(f"fem_{self.axes[a]}", self.N)])))
         return Affine.vstack(out)
 

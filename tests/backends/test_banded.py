@@ -218,3 +218,41 @@ def test_equal_axes_factor_one_band_and_solve_the_others_as_right_hand_sides(ite
     assert abs(fac.logdet() - whole.logdet()) <= 1e-9 * abs(whole.logdet())
     if bias:   # the border's Schur complement (the parameters' information) is the same too
         np.testing.assert_allclose(fac.schur, whole.schur, rtol=1e-9)
+
+
+@pytest.mark.parametrize("case", ["1-axis", "3-axes-bias", "hard-zero-velocity", "scale-factor"])
+def test_fem_rows_placed_by_diagonals_equal_the_entry_by_entry_assembly(case):
+    """The FEM rows described by their diagonals (lsq.fem_rows_by_diagonals) assemble the
+    same band, border coupling and border as the entry-by-entry path, to rounding in the
+    summed -E_z h^-1 E_z^T; hard zero-velocity rows on the acceleration residuals make
+    that block come from the generic product, and a description that does not match E
+    (an entry missing) is not used."""
+    from bvpnav.constraints import ZeroVelocity
+    from bvpnav.error_models import ScaleFactor
+    from bvpnav.lsq import fem_rows_by_diagonals
+    if case == "1-axis":
+        prob = problem(n=301)
+        t, acc = prob.data.t, prob.data.acc[:, 0]
+        prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=acc), sigma_a=0.05)
+        prob.add(Position(t=[0.0, 10.0], value=[0.0, 1.0]),
+                 Position(t=[2.5, 6.1], value=[0.3, 0.7], sigma=0.1))
+    else:
+        em = {"3-axes-bias": Bias(), "scale-factor": ScaleFactor() + Bias()}.get(case)
+        prob = problem(ZeroVelocity(t0=4.0, t1=5.0) if case == "hard-zero-velocity" else None, n=301,
+                       error_model=em)
+    form = prob.formulation
+    ls = least_squares_form(form, 1.0)
+    D, E = ls.D.A, ls.E.A
+    plan = BandPlan.build(D, E, column_nodes(form.model), lam_rows=ls.lam_rows)
+    diagonal = fem_rows_by_diagonals(form.model)
+    assert diagonal.matches(E)
+    ab, B, C, h = plan._scatter(plan._entries(D, E, diagonal))
+    ab0, B0, C0, h0 = plan._scatter(plan._entries(D, E))
+    np.testing.assert_allclose(ab, ab0, rtol=0, atol=1e-14 * np.max(np.abs(ab0)))
+    np.testing.assert_array_equal(h, h0)
+    np.testing.assert_array_equal(C, C0)
+    if B0 is not None:
+        np.testing.assert_array_equal(B.toarray(), B0.toarray())
+    if diagonal.dense:   # one parameter column left out: the description no longer matches E
+        broken = dataclasses.replace(diagonal, dense=diagonal.dense[1:])
+        assert not broken.matches(E)

@@ -46,6 +46,7 @@ from ..lsq import (
     banded_factor,
     banded_plan,
     factor_form,
+    fem_rows_by_diagonals,
     least_squares_form,
     non_least_squares_term,
 )
@@ -209,7 +210,8 @@ class DirectSweep:
             if np.any(lam_rows & ~pl.fold):
                 self._parts = False   # a far-reaching lambda row: assemble at every lambda
             else:
-                self._parts = AffineBand(pl.assemble(D, E), pl.objective_part(D[lam_rows]), pl.kl)
+                self._parts = AffineBand(pl.assemble(D, E, fem_rows_by_diagonals(self.model)),
+                                         pl.objective_part(D[lam_rows]), pl.kl)
                 # the solve at the chosen lambda takes its band from here too (lsq.banded_factor)
                 self.form.cache[BAND_AFFINE] = (pl, self._parts)
         return self._parts
