@@ -206,6 +206,34 @@ def _scale_rows(ab: np.ndarray, sU: np.ndarray, kl: int, rows: np.ndarray | None
     ab[:, kl:] *= factor
 
 
+def _entry_pieces(E: sp.csr_matrix, diagonal: DiagonalRows | None = None) -> list:
+    """``E``'s entries as pieces ``(rows, cols)``: the whole of a CSR matrix, or, with a
+    matching :class:`DiagonalRows`, one piece per diagonal and dense column (arrays of
+    length N, no per-entry expansion of the FEM rows) and the other rows'."""
+    def csr(A: sp.csr_matrix, r0: int = 0) -> tuple:
+        return r0 + np.repeat(np.arange(A.shape[0]), np.diff(A.indptr)), A.indices
+
+    if diagonal is None or not diagonal.matches(E):
+        return [csr(E)]
+    pieces = [csr(diagonal.extra), csr(E[diagonal.rows:], diagonal.rows)]
+    for b0, c0, _, dg, _ in diagonal.tridiagonal:
+        i = np.arange(dg.size)
+        pieces += [(b0 + i, c0 + i), (b0 + i[1:], c0 + i[:-1]), (b0 + i[:-1], c0 + i[1:])]
+    pieces += [(b0 + np.arange(v.size), np.full(v.size, col)) for b0, col, v in diagonal.dense]
+    return pieces
+
+
+def _spans(pieces: list, colnode: np.ndarray, m: int) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`row_span` of a matrix of ``m`` rows given as :func:`_entry_pieces`."""
+    lo = np.full(m, np.iinfo(np.int64).max, dtype=np.int64)
+    hi = np.full(m, -1, dtype=np.int64)
+    for rows, cols in pieces:
+        nn = colnode[cols]
+        np.minimum.at(lo, rows[nn >= 0], nn[nn >= 0])
+        np.maximum.at(hi, rows, nn)
+    return lo, hi
+
+
 def _equal_runs(ab: np.ndarray, runs: int) -> bool:
     """Whether the band (LAPACK layout, see :meth:`BandPlan._scatter`) is ``runs`` equal
     consecutive blocks; then no entry couples two of them (the first block has none above
@@ -450,7 +478,8 @@ class BandPlan:
         single = (np.bincount(Dcol, weights=alone, minlength=n) == entries) & (entries > 0)
         single &= colnode >= 0
         elim = np.flatnonzero(single)
-        elo, ehi = row_span(E, colnode)
+        pieces = _entry_pieces(E, diagonal)
+        elo, ehi = _spans(pieces, colnode, p)
         enode = np.where((ehi >= 0) & (ehi - elo <= span), (elo + ehi) // 2, -1)
         node = np.concatenate([colnode, np.full(unf.size, -1, dtype=np.int64), enode])
         node[elim] = -2
@@ -460,11 +489,11 @@ class BandPlan:
         # whose multiplier sits at a later node holds it (r_j, not the end velocity v0)
         reach = node.copy()
         reach[n + unf.size:] = np.where(enode >= 0, ehi, -1)
-        ahead = np.repeat(enode, np.diff(E.indptr)) > colnode[E.indices]
         onward = np.zeros(n, dtype=np.int64)
-        onward[E.indices[ahead]] = 1
+        for rows, cols in pieces:
+            onward[cols[enode[rows] > colnode[cols]]] = 1
         reach[:n] += np.where(node[:n] >= 0, onward, 0)
-        del ahead, onward
+        del onward, pieces
         local = np.flatnonzero(node >= 0)
         order = local[np.lexsort((reach[local], node[local]))]
         # int32 positions where they fit: half the memory when every entry is placed

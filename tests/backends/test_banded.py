@@ -222,8 +222,9 @@ def test_equal_axes_factor_one_band_and_solve_the_others_as_right_hand_sides(ite
 
 @pytest.mark.parametrize("case", ["1-axis", "3-axes-bias", "hard-zero-velocity", "scale-factor"])
 def test_fem_rows_placed_by_diagonals_equal_the_entry_by_entry_assembly(case):
-    """The FEM rows described by their diagonals (lsq.fem_rows_by_diagonals) assemble the
-    same band, border coupling and border as the entry-by-entry path, to rounding in the
+    """The FEM rows described by their diagonals (lsq.fem_rows_by_diagonals) give the same
+    plan, and assemble the same band, border coupling and border as the entry-by-entry
+    path, to rounding in the
     summed -E_z h^-1 E_z^T; hard zero-velocity rows on the acceleration residuals make
     that block come from the generic product, and a description that does not match E
     (an entry missing) is not used."""
@@ -246,6 +247,11 @@ def test_fem_rows_placed_by_diagonals_equal_the_entry_by_entry_assembly(case):
     plan = BandPlan.build(D, E, column_nodes(form.model), lam_rows=ls.lam_rows)
     diagonal = fem_rows_by_diagonals(form.model)
     assert diagonal.matches(E)
+    # the symbolic analysis from the diagonals (spans, reach) orders every unknown the same
+    by_diagonals = BandPlan.build(D, E, column_nodes(form.model), lam_rows=ls.lam_rows, diagonal=diagonal)
+    for name in ("pos", "bpos", "elim", "fold"):
+        np.testing.assert_array_equal(getattr(by_diagonals, name), getattr(plan, name))
+    assert by_diagonals.kl == plan.kl
     ab, B, C, h = plan._scatter(plan._entries(D, E, diagonal))
     ab0, B0, C0, h0 = plan._scatter(plan._entries(D, E))
     np.testing.assert_allclose(ab, ab0, rtol=0, atol=1e-14 * np.max(np.abs(ab0)))
