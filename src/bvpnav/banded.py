@@ -280,14 +280,15 @@ class AffineBand:
     Parameters
     ----------
     parts0 : tuple
-        ``(ab, B, C, h)`` at lambda = 1 (:meth:`BandPlan.assemble`).
+        ``(ab, B, C, h)`` at lambda = 1, or ``(ab, B, C, h, sU)`` with ``ab`` scaled by
+        ``sU`` (:meth:`BandPlan.assemble`).
     parts1 : tuple
         ``(ab1, B1, C1)`` per unit of lambda (:meth:`BandPlan.objective_part`).
     kl : int
     """
 
     def __init__(self, parts0: tuple, parts1: tuple, kl: int):
-        ab0, self.B, self.C, self.h = parts0
+        ab0, self.B, self.C, self.h, *scale = parts0
         ab1, self.B1, self.C1 = parts1
         nb = ab0.shape[0]
         self.kl = kl
@@ -297,10 +298,15 @@ class AffineBand:
         self.rows = np.unique(near[(near >= 0) & (near < nb)])       # entries that change
         self.own = np.searchsorted(self.rows, touched)                # maxima that change
         self.touched = touched
-        self.ab0 = ab0[self.rows]
         self.ab1 = ab1[self.rows]
-        self.scaled0 = ab0.copy()
-        self.sU0 = scale_band(self.scaled0, kl)
+        if scale:   # the assembly came scaled: the rows that change, back to lambda's units
+            self.scaled0, self.sU0 = ab0, scale[0]
+            self.ab0 = ab0[self.rows]
+            _scale_rows(self.ab0, 1.0 / self.sU0, kl, self.rows)
+        else:
+            self.ab0 = ab0[self.rows]
+            self.scaled0 = ab0.copy()
+            self.sU0 = scale_band(self.scaled0, kl)
 
     def at(self, lam: float, out: np.ndarray | None = None) -> tuple:
         """``(ab, B, C, h, sU)`` at ``lam``: ``ab`` scaled by ``sU`` (:func:`scale_band`),
@@ -527,7 +533,7 @@ class BandPlan:
                             "rows couple distant instants")
         self.kl = kl
         self.ldab = 3 * kl + 1
-        self._first = (D.data, E.data, self._scatter(entries))
+        self._first = (D.data, E.data, self._scatter(entries, scaled=True))
 
     def _entries(self, D: sp.csr_matrix, E: sp.csr_matrix, diagonal: DiagonalRows | None = None) -> tuple:
         """The reduced matrix's entries, placed: ``(band, border_coupling, border, h)``.
@@ -648,14 +654,33 @@ class BandPlan:
             sel = (pa >= 0) & (pb >= 0)
             brd.append((pa[sel], pb[sel], v[sel]))
 
-    def _scatter(self, entries: tuple) -> tuple:
+    def _scatter(self, entries: tuple, scaled: bool = False) -> tuple:
         """``(ab, B, C, h)`` from :meth:`_entries`: the banded part in LAPACK's band layout
         (``ab[j, 2 kl + i - j] = A[i, j]``, C order (nb, 3 kl + 1), that is ``dgbtrf``'s
         column-major ``(ldab, nb)`` transposed), its coupling to the border (CSC, nb x k)
         and the border block (dense); each entry placed by index arithmetic (no permuted
-        copy of the matrix)."""
+        copy of the matrix). ``scaled``: ``(ab, B, C, h, sU)`` with ``ab`` scaled as
+        :func:`scale_band` would, the column maxima taken from the entries before they are
+        placed (no passes over the band for its maxima and its scaling).
+
+        Notes
+        -----
+        Every place of the band is taken by at most one entry (the blocks of
+        :meth:`_entries` are disjoint and each holds summed values), so the maximum of
+        column ``j`` is the largest ``|v|`` placed in it.
+        """
         band, cpl, brd, h = entries
         nb, k, kl, ldab = self.pos_order.size, self.border_order.size, self.kl, self.ldab
+        sU = None
+        if scaled:
+            colmax = np.zeros(nb)
+            for pi, pj, v, mirror in band:
+                a = np.abs(v)
+                np.maximum.at(colmax, pj, a)
+                if mirror:
+                    np.maximum.at(colmax, pi, a)
+            sU = _scales(colmax)
+            band = [(pi, pj, v * sU[pi] * sU[pj], mirror) for pi, pj, v, mirror in band]
         ab = np.zeros((nb, ldab))
         flat = ab.reshape(-1)
         for pi, pj, v, mirror in band:
@@ -681,16 +706,17 @@ class BandPlan:
 
             B = sp.csc_matrix((cat(cpl, 2), (cat(cpl, 0), cat(cpl, 1))), shape=(nb, k))
             np.add.at(C, (cat(brd, 0), cat(brd, 1)), cat(brd, 2))
-        return ab, B, C, h
+        return (ab, B, C, h) if sU is None else (ab, B, C, h, sU)
 
     def assemble(self, D: sp.csr_matrix, E: sp.csr_matrix, diagonal: DiagonalRows | None = None) -> tuple:
-        """The reduced matrix's parts ``(ab, B, C, h)`` (see :meth:`_scatter`) for these
-        values (``diagonal``: ``E``'s first rows by diagonals, :class:`DiagonalRows`); the
-        first call with the very arrays the plan was made from returns that assembly."""
+        """The reduced matrix's parts ``(ab, B, C, h, sU)``, the band scaled (see
+        :meth:`_scatter`), for these values (``diagonal``: ``E``'s first rows by diagonals,
+        :class:`DiagonalRows`); the first call with the very arrays the plan was made from
+        returns that assembly."""
         first, self._first = getattr(self, "_first", None), None
         if first is not None and first[0] is D.data and first[1] is E.data:
             return first[2]
-        return self._scatter(self._entries(D, E, diagonal))
+        return self._scatter(self._entries(D, E, diagonal), scaled=True)
 
     def eliminated_columns(self, E: sp.csr_matrix) -> sp.csr_matrix:
         """``E`` restricted to the eliminated unknowns (kept for the last ``E`` seen: every

@@ -360,11 +360,17 @@ def column_nodes(model, interleave: bool = False) -> np.ndarray:
     return colnode
 
 
-def fem_rows_by_diagonals(model) -> DiagonalRows:
-    """The FEM rows (the first ``N d`` rows of a form's ``E``) as
+def fem_rows_by_diagonals(problem) -> DiagonalRows:
+    """The FEM rows (the first ``N d`` rows of a form's ``E``) of a formulation's model as
     :class:`~bvpnav.banded.DiagonalRows`: per axis the tridiagonal ``K`` on the positions
     and ``M`` on the acceleration residuals, the dense ``M G`` columns of the error-model
-    parameters, and the end velocities' two entries."""
+    parameters, and the end velocities' two entries. Kept in the formulation's cache with
+    the model it describes."""
+    formulation = as_formulation(problem)
+    model = formulation.model
+    cached = formulation.cache.get("fem_diagonals")
+    if cached is not None and cached[0] is model:
+        return cached[1]
     N, d = model.N, model.d
     tri, dense, rows, cols, vals = [], [], [], [], []
     for a in range(d):
@@ -381,7 +387,9 @@ def fem_rows_by_diagonals(model) -> DiagonalRows:
                       if blocks["l"][:, k].any()]
     extra = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                           shape=(N * d, model.size))
-    return DiagonalRows(N * d, tri, dense, extra)
+    out = DiagonalRows(N * d, tri, dense, extra)
+    formulation.cache["fem_diagonals"] = (model, out)
+    return out
 
 
 #: The formulation-cache key of a lambda sweep's :class:`~bvpnav.banded.AffineBand`
@@ -412,7 +420,7 @@ def banded_plan(form: LeastSquaresForm, problem) -> BandPlan:
     if cached is not None and all(a is b or np.array_equal(a, b) for a, b in zip(cached[1], pattern,
                                                                                strict=True)):
         return cached[0]   # the same pattern (another lambda, or the sweep's chosen one)
-    diagonal = fem_rows_by_diagonals(model)
+    diagonal = fem_rows_by_diagonals(formulation)
     try:
         plan = BandPlan.build(D, E, column_nodes(model), lam_rows=form.lam_rows, segments=model.d,
                               diagonal=diagonal)
@@ -445,7 +453,7 @@ def banded_factor(form: LeastSquaresForm, problem, plan=None, parts=None) -> Ban
         if cached is not None and cached[0] is plan:
             parts = cached[1].at(form.lam)
     return BandedKKT(form.D.A, form.E.A, params=formulation.model.l_index, plan=plan, parts=parts,
-                     diagonal=None if parts is not None else fem_rows_by_diagonals(formulation.model))
+                     diagonal=None if parts is not None else fem_rows_by_diagonals(formulation))
 
 
 def factor_form(form: LeastSquaresForm, problem, method: str = "lu", delta: float = 1e-12):

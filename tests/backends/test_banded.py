@@ -147,7 +147,7 @@ def test_affine_band_at_a_lambda_is_the_scaled_assembly_there(lam):
     the rounding of the combination A(1) + (lam - 1) A_1 (an entry made of lambda rows
     alone carries an absolute error of about eps times its size at lambda = 1, a relative
     one of eps / lam: hence the tolerance's 1 / lam below 1)."""
-    from bvpnav.banded import AffineBand, canonical, scale_band
+    from bvpnav.banded import AffineBand, canonical
     from bvpnav.lsq import banded_plan, least_squares_form
 
     prob = problem(Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05), n=601, error_model=Bias())
@@ -160,8 +160,7 @@ def test_affine_band_at_a_lambda_is_the_scaled_assembly_there(lam):
     assert 0 < affine.rows.size < plan.size   # a few rows, not the whole band
     ab, B, C, h, sU = affine.at(lam)
     at = least_squares_form(form, lam)
-    ref_ab, ref_B, ref_C, ref_h = plan.assemble(canonical(at.D.A), canonical(at.E.A))
-    ref_sU = scale_band(ref_ab, plan.kl)
+    ref_ab, ref_B, ref_C, ref_h, ref_sU = plan.assemble(canonical(at.D.A), canonical(at.E.A))
     tol = 1e-14 * max(1.0, 1.0 / lam)
     np.testing.assert_allclose(sU, ref_sU, rtol=tol)
     np.testing.assert_allclose(ab, ref_ab, rtol=0, atol=tol * np.max(np.abs(ref_ab)))
@@ -245,7 +244,7 @@ def test_fem_rows_placed_by_diagonals_equal_the_entry_by_entry_assembly(case):
     ls = least_squares_form(form, 1.0)
     D, E = ls.D.A, ls.E.A
     plan = BandPlan.build(D, E, column_nodes(form.model), lam_rows=ls.lam_rows)
-    diagonal = fem_rows_by_diagonals(form.model)
+    diagonal = fem_rows_by_diagonals(form)
     assert diagonal.matches(E)
     # the symbolic analysis from the diagonals (spans, reach) orders every unknown the same
     by_diagonals = BandPlan.build(D, E, column_nodes(form.model), lam_rows=ls.lam_rows, diagonal=diagonal)
@@ -262,3 +261,29 @@ def test_fem_rows_placed_by_diagonals_equal_the_entry_by_entry_assembly(case):
     if diagonal.dense:   # one parameter column left out: the description no longer matches E
         broken = dataclasses.replace(diagonal, dense=diagonal.dense[1:])
         assert not broken.matches(E)
+
+
+@pytest.mark.parametrize("case", ["points", "bias", "zero-velocity", "average-velocity"])
+def test_the_band_scaled_as_it_is_placed_equals_scaling_the_placed_band(case):
+    """The assembly scales the band from its entries' column maxima as it places them;
+    that is scale_band on the placed band (column maxima of the whole band), entry for
+    entry, with the border parts untouched."""
+    from bvpnav.banded import scale_band
+    from bvpnav.constraints import ZeroVelocity
+
+    item = {"points": None, "bias": None, "zero-velocity": ZeroVelocity(t0=4.0, t1=5.0),
+            "average-velocity": AverageVelocity(t0=[0.5], t1=[9.5], value=[0.1], sigma=0.05)}[case]
+    prob = problem(item, n=301, error_model=Bias() if case == "bias" else None)
+    form = prob.formulation
+    ls = least_squares_form(form, 1.0)
+    D, E = ls.D.A, ls.E.A
+    plan = BandPlan.build(D, E, column_nodes(form.model), lam_rows=ls.lam_rows)
+    entries = plan._entries(D, E)
+    ab, B, C, h, sU = plan._scatter(entries, scaled=True)
+    ref, B0, C0, h0 = plan._scatter(entries)
+    ref_sU = scale_band(ref, plan.kl)
+    np.testing.assert_allclose(sU, ref_sU, rtol=1e-15)
+    np.testing.assert_allclose(ab, ref, rtol=0, atol=1e-15 * np.max(np.abs(ref)))
+    np.testing.assert_array_equal(C, C0)
+    if B0 is not None:
+        np.testing.assert_array_equal(B.toarray(), B0.toarray())

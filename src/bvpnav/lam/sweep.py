@@ -210,7 +210,7 @@ class DirectSweep:
             if np.any(lam_rows & ~pl.fold):
                 self._parts = False   # a far-reaching lambda row: assemble at every lambda
             else:
-                self._parts = AffineBand(pl.assemble(D, E, fem_rows_by_diagonals(self.model)),
+                self._parts = AffineBand(pl.assemble(D, E, fem_rows_by_diagonals(self.form)),
                                          pl.objective_part(D[lam_rows]), pl.kl)
                 # the solve at the chosen lambda takes its band from here too (lsq.banded_factor)
                 self.form.cache[BAND_AFFINE] = (pl, self._parts)
