@@ -104,6 +104,15 @@ def column_squares(A: sp.csr_matrix, cols: np.ndarray) -> np.ndarray:
     return np.bincount(A.indices, weights=A.data ** 2, minlength=A.shape[1])[cols]
 
 
+def _row_sums(A: sp.csr_matrix, values: np.ndarray) -> np.ndarray:
+    """Sum of ``values`` (one per stored entry of ``A``) over each row (0 for an empty one)."""
+    out = np.zeros(A.shape[0])
+    filled = np.diff(A.indptr) > 0
+    if values.size:   # an empty row's start is the next one's: reduceat over the filled rows
+        out[filled] = np.add.reduceat(values, A.indptr[:-1][filled])
+    return out
+
+
 class AugmentedOperator:
     """The augmented matrix ``S`` of :mod:`bvpnav.lsq` as an operator (never assembled).
 
@@ -125,10 +134,13 @@ class AugmentedOperator:
         return np.concatenate([self.D @ x - rho, self.D.T @ rho + self.E.T @ mu, self.E @ x])
 
     def norm_inf(self) -> float:
-        """The infinity norm (largest absolute row sum) of ``S``."""
-        aD, aE = abs(self.D), abs(self.E)
-        one = np.ones
-        parts = [aD @ one(self.n) + 1.0, aD.T @ one(self.m) + aE.T @ one(self.p), aE @ one(self.n)]
+        """The infinity norm (largest absolute row sum) of ``S``: the row sums of ``|D|``
+        (plus the 1 of ``-I``) and ``|E|``, and the column sums of ``|D|`` and ``|E|``,
+        from the entries (no absolute-value copies of the matrices)."""
+        aD, aE = np.abs(self.D.data), np.abs(self.E.data)
+        cols = (np.bincount(self.D.indices, weights=aD, minlength=self.n)
+                + np.bincount(self.E.indices, weights=aE, minlength=self.n))
+        parts = [_row_sums(self.D, aD) + 1.0, cols, _row_sums(self.E, aE)]
         return float(max((float(np.max(v)) for v in parts if v.size), default=0.0))
 
 
@@ -204,6 +216,15 @@ def _scale_rows(ab: np.ndarray, sU: np.ndarray, kl: int, rows: np.ndarray | None
         win, own = win[rows], sU[rows]
     factor = win * own[:, None]
     ab[:, kl:] *= factor
+
+
+def _row_groups(diagonal: DiagonalRows) -> list:
+    """The tridiagonal blocks of ``diagonal`` grouped by their first row:
+    ``[(r0, [(c0, lower, diag, upper), ...]), ...]`` (the FEM rows of one axis: K and M)."""
+    groups: dict[int, list] = {}
+    for r0, c0, lo, dg, up in diagonal.tridiagonal:
+        groups.setdefault(r0, []).append((c0, lo, dg, up))
+    return list(groups.items())
 
 
 def _entry_pieces(E: sp.csr_matrix, diagonal: DiagonalRows | None = None) -> list:
@@ -340,7 +361,8 @@ class DiagonalRows:
     tridiagonal : list of (int, int, ndarray, ndarray, ndarray)
         ``(r0, c0, lower, diag, upper)``: the square block ``E[r0 + i, c0 + j]`` with
         ``diag[i]`` at ``j = i``, ``lower[i - 1]`` at ``j = i - 1`` and ``upper[i]`` at
-        ``j = i + 1``. Blocks have disjoint rows and disjoint columns.
+        ``j = i + 1``. Blocks have disjoint columns; blocks that share rows start at the
+        same row and have the same size (an axis' K and M).
     dense : list of (int, int, ndarray)
         ``(r0, col, values)``: a column, ``E[r0 + i, col] = values[i]``.
     extra : scipy.sparse.csr_matrix
@@ -621,22 +643,24 @@ class BandPlan:
         .. math:: (E_z h^{-1} E_z^T)_{i, i+t} = \sum_{s - s' = t} V_s[i]\, V_{s'}[i + t]\,
                   h^{-1}_{c_0 + i + s}, \qquad t = 0, 1, 2
 
-        (pentadiagonal, symmetric; blocks have disjoint columns, so they do not mix).
+        (pentadiagonal, symmetric), summed over the blocks that share the rows.
         """
-        for b0, c0, lo, dg, up in diagonal.tridiagonal:
-            N = dg.size
-            V = {-1: np.concatenate([[0.0], lo]), 0: dg, 1: np.concatenate([up, [0.0]])}
-            g = np.concatenate([[0.0], hinv[c0:c0 + N], [0.0]])   # g[1 + j] = 1/h at column c0 + j
+        for b0, group in _row_groups(diagonal):
+            N = group[0][2].size
+            acc = {t: np.zeros(N - t) for t in (0, 1, 2)}
+            for c0, lo, dg, up in group:
+                g = np.concatenate([[0.0], hinv[c0:c0 + N], [0.0]])   # g[1 + j]: 1/h at column c0 + j
+                if not g.any():
+                    continue   # no eliminated unknown among this block's columns
+                V = {-1: np.concatenate([[0.0], lo]), 0: dg, 1: np.concatenate([up, [0.0]])}
+                for t in (0, 1, 2):
+                    m = N - t
+                    for s in (-1, 0, 1):
+                        if s - t >= -1:
+                            acc[t] += V[s][:m] * V[s - t][t:] * g[1 + s:1 + s + m]
             i = np.arange(N)
             for t in (0, 1, 2):
-                m = N - t
-                acc = np.zeros(m)
-                for s in (-1, 0, 1):
-                    sp_ = s - t
-                    if sp_ < -1:
-                        continue
-                    acc += V[s][:m] * V[sp_][t:] * g[1 + s:1 + s + m]
-                self._place(r0 + b0 + i[:m], r0 + b0 + i[t:], -acc, t > 0, out)
+                self._place(r0 + b0 + i[:N - t], r0 + b0 + i[t:], -acc[t], t > 0, out)
 
     def _place(self, r: np.ndarray, c: np.ndarray, v: np.ndarray, mirror: bool, out: tuple) -> None:
         """Append one block's entries (reduced indices ``r``, ``c``; ``mirror``: its

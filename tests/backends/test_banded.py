@@ -287,3 +287,21 @@ def test_the_band_scaled_as_it_is_placed_equals_scaling_the_placed_band(case):
     np.testing.assert_array_equal(C, C0)
     if B0 is not None:
         np.testing.assert_array_equal(B.toarray(), B0.toarray())
+
+
+def test_augmented_operator_infinity_norm_equals_the_dense_matrix_norm():
+    """norm_inf sums |entries| per row and column from the stored values; random shapes with
+    empty rows and columns give the dense augmented matrix's largest absolute row sum."""
+    import scipy.sparse as sp
+
+    from bvpnav.banded import AugmentedOperator
+
+    rng = np.random.default_rng(0)
+    for trial in range(20):
+        m, n, p = (int(v) for v in rng.integers(1, 30, 3))
+        D = sp.random(m, n, density=0.2, random_state=trial, format="csr")
+        E = sp.random(p, n, density=0.15, random_state=trial + 100, format="csr")
+        D.data -= 0.5
+        E.data -= 0.5
+        S = sp.bmat([[-sp.identity(m), D, None], [D.T, None, E.T], [None, E, None]]).toarray()
+        assert AugmentedOperator(D, E).norm_inf() == pytest.approx(np.abs(S).sum(axis=1).max(), rel=1e-14)
