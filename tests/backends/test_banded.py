@@ -305,3 +305,26 @@ def test_augmented_operator_infinity_norm_equals_the_dense_matrix_norm():
         E.data -= 0.5
         S = sp.bmat([[-sp.identity(m), D, None], [D.T, None, E.T], [None, E, None]]).toarray()
         assert AugmentedOperator(D, E).norm_inf() == pytest.approx(np.abs(S).sum(axis=1).max(), rel=1e-14)
+
+
+@pytest.mark.parametrize("slice_rows", [7, 64, 1000])
+def test_the_band_written_a_slice_at_a_time_equals_writing_each_block_whole(slice_rows, monkeypatch):
+    """Long sorted writes go into the band a slice of rows at a time (all blocks' parts in
+    one slice together); with slices of a few rows (many cuts, blocks ending mid-slice) the
+    band is the same as writing every block at once."""
+    import bvpnav.banded as banded
+    from bvpnav.constraints import ZeroVelocity
+    from bvpnav.lsq import fem_rows_by_diagonals
+
+    prob = problem(ZeroVelocity(t0=4.0, t1=5.0), n=801, error_model=Bias())
+    form = prob.formulation
+    ls = least_squares_form(form, 1.0)
+    D, E = ls.D.A, ls.E.A
+    plan = BandPlan.build(D, E, column_nodes(form.model), lam_rows=ls.lam_rows)
+    entries = plan._entries(D, E, fem_rows_by_diagonals(form))
+    monkeypatch.setattr(banded, "SCATTER_SLICE", 10**9)   # every block written whole
+    whole = plan._scatter(entries, scaled=True)
+    monkeypatch.setattr(banded, "SCATTER_SLICE", slice_rows)
+    sliced = plan._scatter(entries, scaled=True)
+    np.testing.assert_array_equal(sliced[0], whole[0])
+    np.testing.assert_array_equal(sliced[4], whole[4])
