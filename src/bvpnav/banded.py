@@ -700,7 +700,8 @@ class BandPlan:
         and the border block (dense); each entry placed by index arithmetic (no permuted
         copy of the matrix). ``scaled``: ``(ab, B, C, h, sU)`` with ``ab`` scaled as
         :func:`scale_band` would, the column maxima taken from the entries before they are
-        placed (no passes over the band for its maxima and its scaling).
+        placed (no passes over the band for its maxima and its scaling); the band entries'
+        values are scaled in place (``entries`` serve one call).
 
         Notes
         -----
@@ -719,7 +720,9 @@ class BandPlan:
                 if mirror:
                     np.maximum.at(colmax, pi, a)
             sU = _scales(colmax)
-            band = [(pi, pj, v * sU[pi] * sU[pj], mirror) for pi, pj, v, mirror in band]
+            for pi, pj, v, _ in band:   # the entries' own arrays (made by _place): no copies
+                v *= sU[pi]
+                v *= sU[pj]
         ab = np.zeros((nb, ldab))
         flat = ab.reshape(-1)
         runs = []   # long writes in band-row order, done a band slice at a time below

@@ -278,9 +278,8 @@ def test_the_band_scaled_as_it_is_placed_equals_scaling_the_placed_band(case):
     ls = least_squares_form(form, 1.0)
     D, E = ls.D.A, ls.E.A
     plan = BandPlan.build(D, E, column_nodes(form.model), lam_rows=ls.lam_rows)
-    entries = plan._entries(D, E)
-    ab, B, C, h, sU = plan._scatter(entries, scaled=True)
-    ref, B0, C0, h0 = plan._scatter(entries)
+    ab, B, C, h, sU = plan._scatter(plan._entries(D, E), scaled=True)
+    ref, B0, C0, h0 = plan._scatter(plan._entries(D, E))
     ref_sU = scale_band(ref, plan.kl)
     np.testing.assert_allclose(sU, ref_sU, rtol=1e-15)
     np.testing.assert_allclose(ab, ref, rtol=0, atol=1e-15 * np.max(np.abs(ref)))
@@ -321,10 +320,10 @@ def test_the_band_written_a_slice_at_a_time_equals_writing_each_block_whole(slic
     ls = least_squares_form(form, 1.0)
     D, E = ls.D.A, ls.E.A
     plan = BandPlan.build(D, E, column_nodes(form.model), lam_rows=ls.lam_rows)
-    entries = plan._entries(D, E, fem_rows_by_diagonals(form))
+    diagonal = fem_rows_by_diagonals(form)
     monkeypatch.setattr(banded, "SCATTER_SLICE", 10**9)   # every block written whole
-    whole = plan._scatter(entries, scaled=True)
+    whole = plan._scatter(plan._entries(D, E, diagonal), scaled=True)
     monkeypatch.setattr(banded, "SCATTER_SLICE", slice_rows)
-    sliced = plan._scatter(entries, scaled=True)
+    sliced = plan._scatter(plan._entries(D, E, diagonal), scaled=True)
     np.testing.assert_array_equal(sliced[0], whole[0])
     np.testing.assert_array_equal(sliced[4], whole[4])
