@@ -911,6 +911,8 @@ class BandedKKT(Factorization):
             if info != 0:  # pragma: no cover - argument error
                 raise np.linalg.LinAlgError(f"dgbtrs failed (info {info})")
             return x
+        if R.ndim == 1:
+            return self._band_solve(R[:, None])[:, 0]
         nb, c = R.shape
         L = nb // runs
         blocks = [(a, j) for a in range(runs) for j in range(c) if R[a * L:(a + 1) * L, j].any()]
@@ -930,21 +932,24 @@ class BandedKKT(Factorization):
     def _reduced_solve(self, r: np.ndarray) -> np.ndarray:
         """Solve the reduced (unscaled, after eliminations) system for ``r`` (R,) or (R, c)."""
         pl = self.plan
-        shape = r.shape
-        r2 = r.reshape(shape[0], -1)
-        R = r2[pl.pos_order]
-        R *= self._sU[:, None]
+        # one right-hand side stays one-dimensional (gathers and scatters of a vector are
+        # about twice as fast as of an (R, 1) array's rows)
+        sU = self._sU if r.ndim == 1 else self._sU[:, None]
+        R = r[pl.pos_order]
+        R *= sU
         y = self._band_solve(R, overwrite=True)   # R is this solve's own gathered copy
         # every reduced unknown is banded, in the border or eliminated; solve() fills the
         # eliminated ones, so nothing needs zeroing here
-        out = np.empty_like(r2)
+        out = np.empty_like(r)
         if self.k:
-            rW = r2[pl.border_order] * self._sW[:, None]
+            sW = self._sW if r.ndim == 1 else self._sW[:, None]
+            rW = r[pl.border_order] * sW
             zW = np.linalg.solve(self.schur_border, rW - self.B.T @ y)
             y = y - self.X @ zW
-            out[pl.border_order] = zW * self._sW[:, None]
-        out[pl.pos_order] = y * self._sU[:, None]
-        return out.reshape(shape)
+            out[pl.border_order] = zW * sW
+        y *= sU
+        out[pl.pos_order] = y
+        return out
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         """Solve ``S z = rhs`` for one (T,) or several (T, c) right-hand sides."""
