@@ -953,13 +953,20 @@ class BandedKKT(Factorization):
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         """Solve ``S z = rhs`` for one (T,) or several (T, c) right-hand sides."""
-        rhs = np.asarray(rhs, dtype=float)
+        return self._solve(np.asarray(rhs, dtype=float))
+
+    def solve_x(self, rhs: np.ndarray) -> np.ndarray:
+        """The ``x`` part of :meth:`solve` alone (the residuals are not formed), for a
+        lambda sweep's points."""
+        return self._solve(np.asarray(rhs, dtype=float), x_only=True)
+
+    def _solve(self, rhs: np.ndarray, x_only: bool = False) -> np.ndarray:
         pl = self.plan
         m, n, el = pl.m, pl.n, pl.elim
         nu = self._unf.size
         b1, bx, bmu = rhs[:m], rhs[m:m + n], rhs[m + n:]
         b1f = b1[pl.fold] if nu else b1
-        r = np.concatenate([bx + self._Df.T @ b1f, b1[self._unf], bmu])
+        r = np.concatenate([bx + self._Df.T @ b1f if b1f.any() else bx, b1[self._unf], bmu])
         if el.size:
             hcol = self._h.reshape((-1,) + (1,) * (r.ndim - 1))
             gz = r[el] / hcol
@@ -969,6 +976,8 @@ class BandedKKT(Factorization):
         if el.size:
             zr[el] = gz - (self._EzT @ mu) / hcol
         x = zr[:n]
+        if x_only:
+            return x
         z = np.empty_like(rhs)
         z[m:m + n] = x
         z[m + n:] = mu

@@ -282,10 +282,9 @@ class DirectSweep:
         # verified); the sparse LU of the load form is refined twice
         banded = isinstance(fac, BandedKKT)
         if banded:
-            z = fac.solve(form.rhs())
+            x = fac.solve_x(form.rhs())
         else:
-            z, _, _ = fac.refined(form.rhs(), 2, 1e-14, window=slice(m, m + n))
-        x = z[m:m + n]
+            x = fac.refined(form.rhs(), 2, 1e-14, window=slice(m, m + n))[0][m:m + n]
         scaled = [t.residual.value(x) / t.sigma for t in self.lam_terms]  # S (A x + c)
         rho2 = float(np.sum(self.data.value(x) ** 2))
         rho2 += sum(float(np.sum((t.residual.value(x) / t.sigma) ** 2)) for t in self.fixed_terms)
@@ -306,8 +305,7 @@ class DirectSweep:
         for t, r in zip(self.lam_terms, scaled, strict=True):
             g -= t.residual.A.T @ (r / t.sigma)
         rhs = np.concatenate([np.zeros(m), g, np.zeros(form.E.m)])
-        dz = fac.solve(rhs) if banded else fac.refined(rhs, 1, window=slice(m, m + n))[0]
-        dx = dz[m:m + n]
+        dx = fac.solve_x(rhs) if banded else fac.refined(rhs, 1, window=slice(m, m + n))[0][m:m + n]
         deta2 = sum(2.0 * float(np.sum(r * ((t.residual.A @ dx) / t.sigma)))
                     for t, r in zip(self.lam_terms, scaled, strict=True))
         pos = np.concatenate([self.model.r_index(a) for a in range(self.model.d)])
