@@ -30,8 +30,9 @@ unverified). Every answer: the max-norm difference of the trajectory from the re
 relative to its max-norm, and bvpnav's own ``stats["verified"]``.
 
 ``lambda`` table: ``prob.solve(solver="direct", lam=rule)`` for ``lcurve``, ``gcv``,
-``quasi`` at N = 1e5 (1 axis; ``--lam-huge`` adds 1e6) as multiples of a single direct
-solve timed beside it, the number of evaluations and the lambda chosen.
+``quasi`` at N = 1e5 (1 axis; ``--lam-huge`` adds 1e6), the median of three runs, as
+multiples of a single direct solve (the median of three) timed beside it, the number of
+evaluations and the lambda chosen.
 
 ``memory`` table (``--memory``): one child process per row (``_memory.py``, VmHWM) at
 ``--memory-n`` (1e6): a baseline child (imports, data, the problem with its items, no
@@ -463,10 +464,13 @@ def lambda_table(n: int) -> None:
           f"{t_ref:.3f} s)")
     print(f"{'rule':<8}{'lambda':>10}{'evaluations':>13}{'total s':>9}{'x single':>10}{'x ref':>8}  warnings")
     for rule in ("lcurve", "gcv", "quasi"):
-        prob = make_problem(spec)
-        t0 = time.perf_counter()
-        sol = _quiet(lambda rule=rule, prob=prob: prob.solve(solver="direct", lam=rule))
-        dt = time.perf_counter() - t0
+        times = []
+        for _ in range(3):   # the median of three (a rule's first run pays its own warm-up)
+            prob = make_problem(spec)
+            t0 = time.perf_counter()
+            sol = _quiet(lambda rule=rule, prob=prob: prob.solve(solver="direct", lam=rule))
+            times.append(time.perf_counter() - t0)
+        dt = float(np.median(times))
         curve = sol.curve
         warn = "; ".join(w[:70] for w in getattr(curve, "warnings", [])) or "-"
         print(f"{rule:<8}{sol.lam:>10.4g}{curve.evaluations:>13d}{dt:>9.2f}{dt / single:>10.1f}"

@@ -414,10 +414,14 @@ class NavModel:
         :math:`v = V_r r + V_a (\hat a + G l + w) + V_b (v_0, v_1)`.
         """
         Vr, Va, Vb = self._node_vel
-        acc = self.data.acc[:, axis] + xval[self.w_index(axis)]
+        o, N = self._offset(axis), self.N
+        acc = self.data.acc[:, axis] + xval[o + N:o + 2 * N]   # slices of x: views, not copies
         if self.q:
-            acc = acc + self.G[:, axis, :] @ xval[self.l_index]
-        return Vr @ xval[self.r_index(axis)] + Va @ acc + Vb @ xval[list(self.v_end_index(axis))]
+            acc += self.G[:, axis, :] @ xval[self.l_index]
+        v = Vr @ xval[o:o + N]
+        v += Va @ acc
+        v += Vb @ xval[o + 2 * N:o + 2 * N + 2]
+        return v
 
     def node_position(self, axis: int) -> Affine:
         """Position at every node of one axis (m)."""
