@@ -60,6 +60,49 @@ variants to leave out, e.g. ``csne3@1e6,clarabel3@1e6``; ``name@N`` or ``name`` 
 
 Run ``python examples/benchmarks/speed_memory.py [--quick] [--memory] [--huge]``.
 
+Measured after the assembly by diagonals (issue 18, fourth session)
+-------------------------------------------------------------------
+2026-12-03, the machine quiet, same versions and flags as below (the lambda table now the
+median of three runs per rule). The FEM rows are placed by their diagonals, the band is
+scaled as it is placed, axes with equal bands factor one, the sweep's points solve for
+``x`` alone::
+
+    case               N  variant              time s   x ref runs     vs ref  verified
+    1 ax           10000  direct                0.021     4.7    3    1.3e-12  True
+    1 ax           10000  clarabel              0.069    14.6    3    2.9e-12  True   compile 0.02 s
+    1 ax           10000  clarabel re-solve     0.029     6.2    3    4.8e-12  True
+    1 ax          100000  direct                0.166     3.3    3    1.4e-12  True
+    1 ax          100000  direct backend        0.119     2.3    3    1.4e-12  -
+    1 ax          100000  clarabel              0.567    11.2    3    2.2e-12  True   compile 0.19 s
+    1 ax          100000  clarabel re-solve     0.269     5.1    3    1.9e-12  True
+    1 ax         1000000  direct                2.041     2.6    3    3.3e-12  True
+    1 ax         1000000  direct backend        1.507     2.0    3    3.3e-12  -
+    1 ax         1000000  csne                  9.550    12.4    1    3.2e-12  True
+    1 ax         1000000  clarabel             11.075    14.4    1    4.2e-12  True   compile 4.38 s
+    1 ax         1000000  clarabel re-solve     3.359     4.4    1    2.9e-12  True
+    3 ax +SF+B    100000  direct                0.764     3.9    3    2.5e-12  True
+    3 ax +SF+B    100000  direct backend        0.565     2.8    3    2.5e-12  -
+    3 ax +SF+B    100000  clarabel              2.827    14.2    3    2.5e-12  True   compile 0.91 s
+    3 ax +SF+B    100000  clarabel re-solve     1.193     6.0    3    2.2e-12  True
+
+    lambda rules, N = 100000, 1 axis: single direct solve 0.19 s (the reference 0.051 s)
+    rule        lambda  evaluations  total s  x single   x ref
+    lcurve    0.005152           19     0.94       5.0      18   (4.8 on another run)
+    gcv         0.5475           17     1.33       7.1      26
+    quasi        5.164           19     0.93       4.9      18
+
+    peak resident memory, N = 1000000, 1 axis
+    variant      peak MB  above base MB  B/sample  x ref
+    reference        745            557       584    1.0
+    direct          1196           1008      1057    1.8   (1.61x the reference's peak)
+    csne            2094           1906      1999    3.4
+    clarabel        3147           2959      3102    5.3
+
+    --huge: direct at N = 1e7 x 1 axis: peak 10159 MB, optimal, verified, 58.3 s
+
+The lambda rules cost about as much as before in seconds (lcurve 0.94 s, was 1.08 s) while
+the single solve they are measured against got faster (0.19 s, was 0.23 s).
+
 Measured after the lambda-sweep work (issue 18, third session)
 ---------------------------------------------------------------
 2026-12-03, the machine quiet, clarabel 0.11.1, cvxpy 1.9.3, scipy 1.17.1: ``--sizes
