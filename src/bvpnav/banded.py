@@ -630,7 +630,9 @@ class BandPlan:
             if el.size:
                 eliminated = np.zeros(n, dtype=bool)
                 eliminated[el] = True
-                if not (eliminated[rest.indices].any() or eliminated[diagonal.extra.indices].any()):
+                dense = np.array([col for _, col, _ in diagonal.dense], dtype=np.int64)
+                if not (eliminated[rest.indices].any() or eliminated[diagonal.extra.indices].any()
+                        or eliminated[dense].any()):
                     hinv = np.zeros(n)
                     hinv[el] = 1.0 / h
                     self._diagonal_pairs(diagonal, hinv, r0, out)
