@@ -37,6 +37,7 @@ __all__ = [
     "boundary_columns",
     "node_velocity_operators",
     "velocity_operators",
+    "tridiagonal",
 ]
 
 
