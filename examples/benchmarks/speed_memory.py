@@ -103,89 +103,14 @@ scaled as it is placed, axes with equal bands factor one, the sweep's points sol
 The lambda rules cost about as much as before in seconds (lcurve 0.94 s, was 1.08 s) while
 the single solve they are measured against got faster (0.19 s, was 0.23 s).
 
-Measured after the lambda-sweep work (issue 18, third session)
----------------------------------------------------------------
-2026-12-03, the machine quiet, clarabel 0.11.1, cvxpy 1.9.3, scipy 1.17.1: ``--sizes
-1e4,1e5,1e6 --sizes3 1e4,1e5 --skip osqp,csne3@1e5 --memory --huge --huge-cap 22``; the
-lambda table re-run after the last sweep changes (``--sizes 1e5 --sizes3 1e4 --no-peers``).
-The band of the acceleration form now has kl = 4 (the reference's), one fifth less work and
-memory than kl = 5::
-
-    case               N  variant              time s   x ref runs     vs ref  verified
-    1 ax           10000  direct                0.025     5.4    3    2.0e-12  True
-    1 ax           10000  clarabel              0.070    15.3    3    2.9e-12  True   compile 0.02 s
-    1 ax           10000  clarabel re-solve     0.035     7.5    3    4.8e-12  True
-    1 ax          100000  direct                0.208     4.0    3    1.6e-12  True
-    1 ax          100000  direct backend        0.142     2.7    3    1.6e-12  -
-    1 ax          100000  clarabel              0.619    11.9    3    2.2e-12  True   compile 0.19 s
-    1 ax          100000  clarabel re-solve     0.313     6.3    3    1.9e-12  True   (6.0 on the re-run)
-    1 ax         1000000  direct                2.325     3.2    3    2.9e-12  True
-    1 ax         1000000  direct backend        1.578     2.2    3    2.9e-12  -
-    1 ax         1000000  csne                 10.765    15.0    1    3.2e-12  True
-    1 ax         1000000  clarabel             12.466    17.3    1    4.2e-12  True   compile 4.36 s
-    1 ax         1000000  clarabel re-solve     3.813     5.3    1    2.9e-12  True
-    3 ax +SF+B    100000  direct                1.053     5.4    3    2.0e-12  True
-    3 ax +SF+B    100000  direct backend        0.683     3.5    3    2.0e-12  -
-    3 ax +SF+B    100000  clarabel              2.857    14.5    3    2.5e-12  True   compile 0.84 s
-    3 ax +SF+B    100000  clarabel re-solve     1.452     7.4    3    2.2e-12  True
-
-    lambda rules, N = 100000, 1 axis: single direct solve 0.23 s (the reference 0.055 s)
-    rule        lambda  evaluations  total s  x single   x ref
-    lcurve    0.005153           19     1.08       4.7      20
-    gcv         0.5475           17     1.43       6.3      26
-    quasi        5.164           19     1.06       4.7      19
-
-    peak resident memory, N = 1000000, 1 axis
-    variant      peak MB  above base MB  B/sample  x ref
-    reference        748            557       584    1.0
-    direct          1254           1063      1115    1.9
-    csne            2149           1958      2053    3.5
-    clarabel        3257           3066      3215    5.5
-
-    --huge: direct at N = 1e7 x 1 axis: peak 10066 MB, optimal, verified, 56.6 s
-
-Measured after the structured path (banded direct path, issue 18)
-------------------------------------------------------------------
-2026-12-02, the machine quieter (load average about 1): ``--sizes 1e4,1e5,1e6 --sizes3
-1e4,1e5 --lam-n 1e5 --skip osqp,csne3@1e5``. Clarabel here is main's formulation (before
-its own changes). Memory, each in its own process at N = 1e6, 1 axis: the reference
-719 MB, ``direct`` 1394 MB (1.94x; was 2170 MB)::
-
-    case               N  variant              time s   x ref runs     vs ref  verified note
-    1 ax           10000  reference             0.005     1.0    3    0.0e+00  -
-    1 ax           10000  direct                0.032     6.1    3    2.8e-12  True     banded(5,5) 20004 unk,
-    1 ax           10000  direct backend        0.019     3.6    3    2.8e-12  -        compile 0.00 s
-    1 ax           10000  csne                  0.110    21.2    3    1.6e-12  True     inaccurate, 20 it
-    1 ax           10000  clarabel              0.136    25.1    3    7.2e-11  True     optimal, compile 0.03
-    1 ax           10000  clarabel re-solve     0.072    13.8    3    3.7e-11  True     lam=2, optimal
-    1 ax          100000  reference             0.067     1.0    3    0.0e+00  -
-    1 ax          100000  direct                0.269     4.0    3    2.0e-12  True     banded(5,5) 200004 unk
-    1 ax          100000  direct backend        0.200     3.0    3    2.0e-12  -        compile 0.02 s
-    1 ax          100000  csne                  1.076    16.0    3    2.1e-12  True     inaccurate, 20 it
-    1 ax          100000  clarabel              1.483    22.0    3    2.6e-11  True     optimal, compile 0.30
-    1 ax          100000  clarabel re-solve     0.644     9.5    3    1.4e-11  True     lam=2, optimal
-    1 ax         1000000  reference             0.866     1.0    3    0.0e+00  -
-    1 ax         1000000  direct                3.430     3.8    3    3.8e-12  True     banded(5,5) 2000004 un
-    1 ax         1000000  direct backend        2.339     2.7    3    3.8e-12  -        compile 0.22 s
-    1 ax         1000000  csne                 12.563    14.5    1    3.2e-12  True     inaccurate, 20 it
-    1 ax         1000000  clarabel             22.135    25.6    1    2.6e-11  True     optimal, compile 8.74
-    1 ax         1000000  clarabel re-solve     7.895     9.1    1    2.0e-11  True     lam=2, optimal
-    3 ax +SF+B     10000  reference             0.018     1.0    3    0.0e+00  -
-    3 ax +SF+B     10000  direct                0.129     6.9    3    2.4e-12  True     banded(5,5) 60012 unk,
-    3 ax +SF+B     10000  direct backend        0.082     4.5    3    2.4e-12  -        compile 0.01 s
-    3 ax +SF+B     10000  csne                  0.400    22.2    3    3.3e-12  True     inaccurate, 20 it
-    3 ax +SF+B     10000  clarabel              0.428    23.5    3    6.3e-11  True     optimal, compile 0.10
-    3 ax +SF+B     10000  clarabel re-solve     0.240    13.3    3    4.2e-11  True     lam=2, optimal
-    3 ax +SF+B    100000  reference             0.241     1.0    3    0.0e+00  -
-    3 ax +SF+B    100000  direct                1.339     5.6    3    2.0e-12  True     banded(5,5) 600012 unk
-    3 ax +SF+B    100000  direct backend        0.935     3.9    3    2.0e-12  -        compile 0.04 s
-    3 ax +SF+B    100000  clarabel              5.963    24.7    3    2.1e-11  True     optimal, compile 1.25
-    3 ax +SF+B    100000  clarabel re-solve     2.774    11.5    3    1.7e-11  True     lam=2, optimal
-    lambda rules, N = 100000, 1 axis: single direct solve 0.28 s (the reference 0.065 s)
-    rule        lambda  evaluations  total s  x single   x ref  warnings
-    lcurve    0.005152           21     2.32       8.2      35  -
-    gcv          0.548           20     4.15      14.8      64  -
-    quasi        5.168           20     2.12       7.5      32  -
+Between the two (issue 18, 2026-12-02 and 03; the tables are in the git history of this
+file): the banded direct path took ``direct`` from 6.4x/4.9x the reference (N = 1e5/1e6)
+to 4.0x/3.8x and three axes from 10.5x to 5.6x, and its peak at 1e6 from 2.17 to 1.39 GB;
+the lambda sweep on the band affine in lambda took lcurve/gcv/quasi from 35/84/41 single
+solves to 8.2/14.8/7.5, then the seeded parabolic refinement to 4.7/6.3/4.7 (with a
+single solve of 0.23 s); kl = 4 and the band plan's caches took ``direct`` to 4.0x/3.2x
+and 1.25 GB; clarabel 0.11.1 with cvxpy 1.9.3 took Clarabel's first solve to 12x/17x and
+its re-solve to 6.0x/5.3x.
 
 Measured on main before the structured path
 --------------------------------------------
