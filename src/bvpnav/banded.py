@@ -39,6 +39,7 @@ factorization.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -316,15 +317,15 @@ class AffineBand:
     Parameters
     ----------
     parts0 : tuple
-        ``(ab, B, C, h)`` at lambda = 1, or ``(ab, B, C, h, sU)`` with ``ab`` scaled by
-        ``sU`` (:meth:`BandPlan.assemble`).
+        ``(ab, B, C, h, sU)`` at lambda = 1, ``ab`` scaled by ``sU``
+        (:meth:`BandPlan.assemble`).
     parts1 : tuple
         ``(ab1, B1, C1)`` per unit of lambda (:meth:`BandPlan.objective_part`).
     kl : int
     """
 
     def __init__(self, parts0: tuple, parts1: tuple, kl: int):
-        ab0, self.B, self.C, self.h, *scale = parts0
+        ab0, self.B, self.C, self.h, self.sU0 = parts0
         ab1, self.B1, self.C1 = parts1
         nb = ab0.shape[0]
         self.kl = kl
@@ -335,14 +336,9 @@ class AffineBand:
         self.own = np.searchsorted(self.rows, touched)                # maxima that change
         self.touched = touched
         self.ab1 = ab1[self.rows]
-        if scale:   # the assembly came scaled: the rows that change, back to lambda's units
-            self.scaled0, self.sU0 = ab0, scale[0]
-            self.ab0 = ab0[self.rows]
-            _scale_rows(self.ab0, 1.0 / self.sU0, kl, self.rows)
-        else:
-            self.ab0 = ab0[self.rows]
-            self.scaled0 = ab0.copy()
-            self.sU0 = scale_band(self.scaled0, kl)
+        self.scaled0 = ab0
+        self.ab0 = ab0[self.rows]   # the rows that change, back to lambda's units
+        _scale_rows(self.ab0, 1.0 / self.sU0, kl, self.rows)
 
     def at(self, lam: float, out: np.ndarray | None = None) -> tuple:
         """``(ab, B, C, h, sU)`` at ``lam``: ``ab`` scaled by ``sU`` (:func:`scale_band`),
@@ -389,20 +385,18 @@ class DiagonalRows:
     dense: list
     extra: sp.csr_matrix
 
+    @functools.cached_property
+    def nonzeros(self) -> int:
+        """The description's nonzero values (counted once: every assembly checks them)."""
+        nz = self.extra.nnz + sum(int(np.count_nonzero(v)) for b in self.tridiagonal for v in b[2:])
+        return nz + sum(int(np.count_nonzero(v)) for _, _, v in self.dense)
+
     def matches(self, E: sp.csr_matrix) -> bool:
         """Whether ``E`` (canonical: no explicit zeros) holds as many entries in those rows
         as the description has nonzero values (a description of other rows does not)."""
         if E.shape[0] < self.rows or self.extra.shape != (self.rows, E.shape[1]):
             return False
-        nz = self.extra.nnz + sum(int(np.count_nonzero(v)) for b in self.tridiagonal for v in b[2:])
-        nz += sum(int(np.count_nonzero(v)) for _, _, v in self.dense)
-        return int(E.indptr[self.rows]) == nz
-
-    def columns(self) -> np.ndarray:
-        """Every column the description's rows touch (sorted, unique)."""
-        cols = [np.arange(c0, c0 + d.size) for _, c0, _, d, _ in self.tridiagonal]
-        cols += [np.array([c]) for _, c, _ in self.dense] + [self.extra.indices]
-        return np.unique(np.concatenate(cols)) if cols else np.zeros(0, dtype=np.int64)
+        return int(E.indptr[self.rows]) == self.nonzeros
 
 
 @dataclass(eq=False)
@@ -602,12 +596,12 @@ class BandPlan:
             A = A.tocoo()
             self._place(A.row + r0, A.col + c0, A.data if sign == 1.0 else sign * A.data, mirror, out)
 
+        eliminated = np.zeros(n, dtype=bool)
+        eliminated[el] = True
         # a row on an eliminated unknown is alone there (its only entry): it adds h alone,
         # so the product runs over the other rows (the items' rows, not the N data rows)
         if el.size and Df.nnz:
             counts = np.diff(Df.indptr)
-            eliminated = np.zeros(n, dtype=bool)
-            eliminated[el] = True
             first = Df.indices[np.minimum(Df.indptr[:-1], max(Df.nnz - 1, 0))]
             Df = Df[~((counts == 1) & eliminated[first])]
         add_sparse(Df.T @ Df, 0, 0, False)
@@ -628,8 +622,6 @@ class BandPlan:
             rest = E[k:]
             add_sparse(rest, r0 + k, 0, True)
             if el.size:
-                eliminated = np.zeros(n, dtype=bool)
-                eliminated[el] = True
                 dense = np.array([col for _, col, _ in diagonal.dense], dtype=np.int64)
                 if not (eliminated[rest.indices].any() or eliminated[diagonal.extra.indices].any()
                         or eliminated[dense].any()):
@@ -813,8 +805,9 @@ class BandedKKT(Factorization):
         A plan of a problem with the same sparsity pattern, reused (only the values are
         scattered and factorised again).
     parts : tuple, optional
-        The assembled ``(ab, B, C, h)`` of :meth:`BandPlan.assemble` (the lambda sweep
-        combines them), instead of assembling from ``D`` and ``E``.
+        The assembled ``(ab, B, C, h, sU)`` of :meth:`BandPlan.assemble` or
+        :meth:`AffineBand.at` (the band scaled by ``sU``), instead of assembling from ``D``
+        and ``E``.
     lam_rows : ndarray of bool, optional
         Passed to :meth:`BandPlan.build`.
     diagonal : DiagonalRows, optional
@@ -869,10 +862,11 @@ class BandedKKT(Factorization):
         return self
 
     def _factor_parts(self, parts: tuple) -> None:
-        """Scale and factor the banded part, then the border's Schur complement. ``parts``
-        is ``(ab, B, C, h)`` or, already scaled (:class:`AffineBand`), ``(ab, B, C, h, sU)``."""
+        """Factor the banded part, then the border's Schur complement. ``parts`` is
+        ``(ab, B, C, h, sU)`` with the band scaled by ``sU`` (:meth:`BandPlan.assemble`,
+        :meth:`AffineBand.at`)."""
         pl = self.plan
-        ab, Bs, C, self._h, *scaled = parts   # ab is this factor's own (dgbtrf overwrites it)
+        ab, Bs, C, self._h, sU = parts   # ab is this factor's own (dgbtrf overwrites it)
         del parts
         k, kl = pl.border, pl.kl
         self.k = k
@@ -880,10 +874,6 @@ class BandedKKT(Factorization):
         # run is factored, the others are its extra right-hand sides
         self._runs = runs = pl.segments if pl.segments > 1 and _equal_runs(ab, pl.segments) else 1
         one = ab[:ab.shape[0] // runs]
-        if scaled:
-            sU = scaled[0]
-        else:
-            sU = np.tile(scale_band(one, kl), runs)
         lu, piv, info = lapack.dgbtrf(one.T, kl, kl, overwrite_ab=1)
         del ab, one
         if info != 0:

@@ -382,8 +382,8 @@ def fem_rows_by_diagonals(problem) -> DiagonalRows:
         rows.append(a * N + vb.row)
         cols.append(np.asarray(model.v_end_index(a))[vb.col])
         vals.append(vb.data)
-        if "l" in blocks:
-            dense += [(a * N, int(model.l_index[k]), blocks["l"][:, k]) for k in range(model.q)
+        if "l" in blocks:   # the columns copied: a view would keep all q columns of M G alive
+            dense += [(a * N, int(model.l_index[k]), blocks["l"][:, k].copy()) for k in range(model.q)
                       if blocks["l"][:, k].any()]
     extra = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                           shape=(N * d, model.size))

@@ -13,6 +13,7 @@ matrices, so the same rows feed cvxpy, the direct back ends, ``describe()`` and
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -239,14 +240,11 @@ class NavModel:
         self.size = d * self.block + self.q
         self.K = fem.stiffness(self.grid)
         self.M = fem.mass(self.grid)
-        self._node_vel_ops = None
 
-    @property
+    @functools.cached_property
     def _node_vel(self) -> tuple:
         """:func:`bvpnav.fem.node_velocity_operators` of the grid, made on first use."""
-        if self._node_vel_ops is None:
-            self._node_vel_ops = fem.node_velocity_operators(self.grid)
-        return self._node_vel_ops
+        return fem.node_velocity_operators(self.grid)
 
     # --------------------------------------------------------------- layout
     def _offset(self, axis: int) -> int:
