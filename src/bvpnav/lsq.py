@@ -28,6 +28,7 @@ ill-conditioned roughly like :math:`N^4`).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
@@ -39,7 +40,7 @@ from .model import Affine
 
 __all__ = ["LeastSquaresForm", "least_squares_form", "non_least_squares_term", "forward_error",
            "check_factor", "BorderedLU", "banded_plan", "banded_factor", "fem_rows_by_diagonals",
-           "factor_form", "solve_least_squares", "FORWARD_RTOL"]
+           "factor_form", "solve_least_squares", "FORWARD_RTOL", "Factored"]
 
 #: Largest relative forward error accepted per accuracy preset.
 FORWARD_RTOL = {"low": 1e-4, "default": 1e-6, "high": 1e-8}
@@ -215,6 +216,36 @@ def forward_error(form, xval: np.ndarray, lam: float, duals: dict | None,
     except (RuntimeError, np.linalg.LinAlgError):  # singular: the information does not determine x
         return float("inf")
     return float(np.max(np.abs(dx)) / max(np.max(np.abs(xval)), 1e-300))
+
+
+class Factored(NamedTuple):
+    """A factorization of the augmented system at one ``lam``, handed by a direct back end
+    to verification (a ``(form, factor)`` pair to code that unpacks two).
+
+    Attributes
+    ----------
+    form : LeastSquaresForm
+    factor : Factorization
+    refined : (ndarray, float) or None
+        The answer ``x`` the back end refined with this factor and the relative size
+        :math:`\\|\\delta x\\|_\\infty / \\|x\\|_\\infty` of its one refinement step (None
+        when it took none or several).
+
+    Notes
+    -----
+    The step's correction is the one-step forward-error estimate (:func:`forward_error`)
+    of the first solve; the answer includes the correction, so while refinement
+    contracts (:math:`\\|I - \\tilde S^{-1} S\\| < 1`) it estimates the answer's own error
+    from above, down to the rounding floor. Verification uses it when it already meets
+    the preset's bound and takes a fresh step on the answer otherwise (the bound can
+    only be met, never missed, for want of that step). After several steps there is no
+    such record: at the rounding floor the corrections are noise of the floor's size,
+    and the one that stopped the loop was chosen for being small.
+    """
+
+    form: LeastSquaresForm
+    factor: Factorization
+    refined: tuple | None = None
 
 
 class _LDL:
@@ -581,7 +612,7 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
         y = 2.0 * mu[sl]
         duals[label] = y if label == "fem" else [y]
     return x, {"duals": duals, "refinements": k, "correction": corr, "factorization": note,
-               "factor": fac, "form": form}
+               "factor": fac, "form": form, "refined": (x, corr) if k == 1 else None}
 
 
 def _accepted(fac, rhs, window, steps, tol, accept, notes, name):

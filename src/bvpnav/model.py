@@ -409,16 +409,26 @@ class NavModel:
 
         Notes
         -----
-        :math:`v = V_r r + V_a (\hat a + G l + w) + V_b (v_0, v_1)`.
+        :math:`v = V_r r + V_a (\hat a + G l + w) + V_b (v_0, v_1)`
+        (:func:`bvpnav.fem.node_velocity_operators`), evaluated by slices: at an interior
+        node :math:`v_j = (r_j - r_{j-1}) / h_{j-1} + h_{j-1} (a_{j-1} + 2 a_j) / 6`, and
+        :math:`v_0`, :math:`v_1` at the ends.
         """
-        Vr, Va, Vb = self._node_vel
         o, N = self._offset(axis), self.N
         acc = self.data.acc[:, axis] + xval[o + N:o + 2 * N]   # slices of x: views, not copies
         if self.q:
             acc += self.G[:, axis, :] @ xval[self.l_index]
-        v = Vr @ xval[o:o + N]
-        v += Va @ acc
-        v += Vb @ xval[o + 2 * N:o + 2 * N + 2]
+        r, hl = xval[o:o + N], self.grid.h[:N - 2]
+        v = np.empty(N)
+        v[0], v[-1] = xval[o + 2 * N], xval[o + 2 * N + 1]
+        inner = v[1:-1]
+        np.subtract(r[1:-1], r[:-2], out=inner)
+        inner /= hl
+        a2 = acc[1:-1] * 2.0
+        a2 += acc[:-2]
+        a2 *= hl
+        a2 /= 6.0
+        inner += a2
         return v
 
     def node_position(self, axis: int) -> Affine:

@@ -93,7 +93,9 @@ class Verification(_Record):
     stationarity : float or None
         Relative norm of the Lagrangian gradient (None: non-smooth or no duals).
     forward_error : float or None
-        Estimated relative forward error (least-squares problems).
+        Estimated relative forward error (least-squares problems): one refinement step on
+        the augmented system, or, for the direct back ends, the size of their own last
+        refinement step when it meets the preset (an upper estimate of the answer's).
     rtol : float
         The tolerance of the accuracy preset.
     nonfinite : list of str

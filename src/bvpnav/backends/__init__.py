@@ -68,8 +68,9 @@ class RawSolve:
     duals : dict, optional
         ``{"fem": y, label: [y per constraint]}`` in cvxpy's sign convention.
     factored : tuple, optional
-        ``(LeastSquaresForm, BorderedLU)`` of the formulation at this ``lam``, reused by
-        verification (direct back ends).
+        ``(LeastSquaresForm, factorization)`` of the formulation at this ``lam``, reused by
+        verification (direct back ends: a :class:`bvpnav.lsq.Factored`, which also holds
+        the last refinement step's correction of ``x``).
     """
 
     x: np.ndarray

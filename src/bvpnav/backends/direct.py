@@ -31,7 +31,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import InputError, SolveError
-from ..lsq import BorderedLU, least_squares_form, non_least_squares_term, solve_least_squares
+from ..lsq import BorderedLU, Factored, least_squares_form, non_least_squares_term, solve_least_squares
 from . import Backend, RawSolve, register_backend
 from .cvxpy_solvers import use_conic
 
@@ -110,7 +110,7 @@ class DirectBackend(_LeastSquaresBackend):
                                         "reason": str(exc)}]) from exc
         duals = info.pop("duals")
         # verification reuses the factorization (one LU per solve, not two)
-        factored = (info.pop("form"), info.pop("factor"))
+        factored = Factored(info.pop("form"), info.pop("factor"), info.pop("refined"))
         info.update(status="optimal", iterations=info["refinements"], solve_time=time.perf_counter() - t0,
                     setup_time=0.0, compile_time=0.0, objective=None)
         return RawSolve(x, info, duals, factored)

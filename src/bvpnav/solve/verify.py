@@ -3,7 +3,8 @@
 :func:`verify` recomputes, from the stacked solution alone, the FEM residual, the
 violation of every hard, band and inequality item, the stationarity of the Lagrangian
 (when the duals are known and the objective is smooth), a forward-error estimate (least
-squares problems: one refinement step on the augmented system) and the conditioning of
+squares problems: one refinement step on the augmented system, or the direct back end's
+own last step when it already meets the preset) and the conditioning of
 the error-model parameters, and says whether the answer passes the accuracy preset's
 tolerances.
 """
@@ -50,8 +51,13 @@ def _nonfinite(form, xval: np.ndarray) -> list[str]:
     return out
 
 
-def _forward(form, xval, lam, duals, factored) -> tuple[float | None, tuple | None]:
-    """The forward-error estimate, factoring once (shared with the conditioning)."""
+def _forward(form, xval, lam, duals, factored, bound: float) -> tuple[float | None, tuple | None]:
+    """The forward-error estimate, factoring once (shared with the conditioning); the back
+    end's last refinement step on this very ``xval`` when its correction meets ``bound``
+    (:class:`bvpnav.lsq.Factored`: an upper estimate; one more step otherwise)."""
+    last = getattr(factored, "refined", None)
+    if last is not None and last[0] is xval and np.isfinite(last[1]) and last[1] <= bound:
+        return float(last[1]), factored
     if factored is None and form.model.q:
         ls = least_squares_form(form, lam)
         if ls is not None:
@@ -77,8 +83,10 @@ def verify(form, xval: np.ndarray, lam: float, accuracy: str = "default", duals:
         :data:`bvpnav.lsq.FORWARD_RTOL`).
     duals : dict, optional
         cvxpy-convention duals (for stationarity and the forward error).
-    factored : (LeastSquaresForm, BorderedLU), optional
-        The direct back end's factorization at this ``lam``, reused.
+    factored : (LeastSquaresForm, factorization), optional
+        The direct back end's factorization at this ``lam``, reused (with
+        :class:`bvpnav.lsq.Factored`'s record of the last refinement step, its correction
+        is the forward-error estimate when it meets the preset's bound).
 
     Returns
     -------
@@ -100,7 +108,7 @@ def verify(form, xval: np.ndarray, lam: float, accuracy: str = "default", duals:
     worst, worst_item = _worst_violation(form, xval)
     stat = None if duals is None else stationarity(form, xval, lam, duals)
     nonfinite = _nonfinite(form, xval)
-    fwd, factored = _forward(form, xval, lam, duals, factored)
+    fwd, factored = _forward(form, xval, lam, duals, factored, FORWARD_RTOL[accuracy])
     conditioning = None
     if model.q and not np.any(~np.isfinite(xval)):
         conditioning = assess_conditioning(form, xval, lam, factored)
