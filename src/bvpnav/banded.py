@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
@@ -219,9 +220,11 @@ def _scale_rows(ab: np.ndarray, sU: np.ndarray, kl: int, rows: np.ndarray | None
     ab[:, kl:] *= factor
 
 
-#: Band rows written at a time by :meth:`BandPlan._scatter` (6.8 MB of a band with
-#: kl = 4: the slice stays in cache while every diagonal's entries in it are written).
-SCATTER_SLICE = 1 << 16
+#: Band rows written at a time by :meth:`BandPlan._scatter` (0.85 MB of a band with
+#: kl = 4: the slice stays in a 1-4 MB L2 cache while every diagonal's entries in it are
+#: written; measured at 2e6 band rows, eleven strided diagonals: 56 ms by slices of 8192
+#: rows, 98 ms by 65536, 213 ms whole).
+SCATTER_SLICE = 1 << 13
 
 
 def _put(flat: np.ndarray, j: np.ndarray, i: np.ndarray, v: np.ndarray, ldab: int, kl: int) -> None:
@@ -232,6 +235,92 @@ def _put(flat: np.ndarray, j: np.ndarray, i: np.ndarray, v: np.ndarray, ldab: in
     idx += i
     idx += 2 * kl
     flat[idx] = v
+
+
+class _Stride(NamedTuple):
+    """Band entries at evenly spaced positions: ``A[j0 + off + step t, j0 + step t] = v[t]``
+    (and the transpose with ``mirror``), written as strided slices of the band instead of
+    by index arrays (:meth:`BandPlan._place_diagonal`)."""
+
+    j0: int
+    off: int
+    step: int
+    v: np.ndarray
+    mirror: bool
+
+    def span(self, which: int, e0: int, e1: int) -> tuple[slice, slice]:
+        """The band rows (``which`` 0: the columns ``j``, 1: the mirrored rows ``j + off``)
+        in ``[e0, e1)`` as a slice of the band, and the matching slice of ``v``."""
+        a, s, L = self.j0 + (self.off if which else 0), self.step, self.v.size
+        t0 = min(max(-(-(e0 - a) // s), 0), L)
+        t1 = min(max(-(-(e1 - a) // s), t0), L)
+        return slice(a + s * t0, a + s * (t1 - 1) + 1 if t1 > t0 else a + s * t0, s), slice(t0, t1)
+
+    def write(self, ab: np.ndarray, kl: int, e0: int, e1: int) -> None:
+        """Write the entries in band rows ``[e0, e1)`` into ``ab`` (LAPACK's layout, C order
+        (nb, 3 kl + 1): ``ab[j, 2 kl + i - j] = A[i, j]``)."""
+        for which in (0, 1)[:1 + self.mirror]:
+            rows, ts = self.span(which, e0, e1)
+            ab[rows, 2 * kl + (-self.off if which else self.off)] = self.v[ts]
+
+
+def _scale_entries(strided: list, band: list, nb: int) -> np.ndarray:
+    """The symmetric scale ``sU`` of :func:`scale_band` from the entries' column maxima,
+    taken before they are placed (no passes over the band), and the entries' values
+    scaled by it in place (their own arrays: copies made for them by
+    :meth:`BandPlan._entries`)."""
+    colmax = np.zeros(nb)
+    for e in strided:   # positions distinct within one: a strided maximum
+        a = np.abs(e.v)
+        for which in (0, 1)[:1 + e.mirror]:
+            cm = colmax[e.span(which, 0, nb)[0]]
+            np.maximum(cm, a, out=cm)
+    for pi, pj, v, mirror in band:
+        a = np.abs(v)
+        np.maximum.at(colmax, pj, a)
+        if mirror:
+            np.maximum.at(colmax, pi, a)
+    sU = _scales(colmax)
+    for e in strided:
+        v = e.v
+        v *= sU[e.span(1, 0, nb)[0]]   # the row's scale, then the column's, as below
+        v *= sU[e.span(0, 0, nb)[0]]
+    for pi, pj, v, _ in band:
+        v *= sU[pi]
+        v *= sU[pj]
+    return sU
+
+
+#: Shortest run of evenly spaced band positions placed as a :class:`_Stride` (shorter ones,
+#: where extra unknowns sit at a node, go entry by entry).
+MIN_STRIDE_RUN = 64
+
+
+def _affine_runs(p: np.ndarray, absent: np.ndarray | None = None) -> list:
+    """Runs ``(u0, u1, p0, s)`` covering ``u = 0 .. p.size - 1`` with ``p[u] = p0 + s (u - u0)``:
+    ``s > 0`` and ``p0 >= 0`` for positions in the band, ``s = 0`` for a run of unknowns in
+    neither the band nor the border (``absent``: per ``u``, not in the border), ``s = None``
+    for anything else (short runs, decreasing or mixed positions)."""
+    L = p.size
+    if L < MIN_STRIDE_RUN:
+        return [(0, L, None, None)] if L else []
+    d = np.diff(p)
+    starts = np.flatnonzero(d[1:] != d[:-1]) + 1
+    if starts.size > L // MIN_STRIDE_RUN:
+        return [(0, L, None, None)]
+    bounds = [0, *starts.tolist(), L]
+    out: list = []
+    for u0, u1 in zip(bounds[:-1], bounds[1:], strict=True):
+        s, p0 = int(d[min(u0, L - 2)]), int(p[u0])
+        ok = u1 - u0 >= MIN_STRIDE_RUN and ((s > 0 and p0 >= 0) or (
+            s == 0 and p0 < 0 and absent is not None and bool(absent[u0:u1].all())))
+        if not ok:
+            s = p0 = None
+        if out and s is None and out[-1][3] is None:
+            out[-1] = (out[-1][0], u1, None, None)
+        else:
+            out.append((u0, u1, p0, s))
+    return out
 
 
 def _row_groups(diagonal: DiagonalRows) -> list:
@@ -555,7 +644,11 @@ class BandPlan:
         """The bandwidth of the banded part, from one assembly (kept for the first factor)."""
         entries = self._entries(D, E, diagonal)
         kl = 0
-        for pi, pj, _, _ in entries[0]:
+        for e in entries[0]:
+            if isinstance(e, _Stride):
+                kl = max(kl, abs(e.off))
+                continue
+            pi, pj = e[0], e[1]
             if pi.size:
                 off = pi - pj
                 kl = max(kl, int(off.max()), -int(off.min()))
@@ -611,11 +704,12 @@ class BandPlan:
         r0 = n + nu
         if diagonal is not None and diagonal.matches(E):
             k = diagonal.rows
+            runs: dict = {}
             for b0, c0, lo, dg, up in diagonal.tridiagonal:
-                i = np.arange(dg.size)
-                self._place(r0 + b0 + i, c0 + i, dg, True, out)
-                self._place(r0 + b0 + i[1:], c0 + i[:-1], lo, True, out)
-                self._place(r0 + b0 + i[:-1], c0 + i[1:], up, True, out)
+                rr, cc = (r0 + b0, dg.size), (c0, dg.size)
+                self._place_diagonal(rr, cc, 0, 0, dg, True, out, runs)
+                self._place_diagonal(rr, cc, 1, 0, lo, True, out, runs)
+                self._place_diagonal(rr, cc, 0, 1, up, True, out, runs)
             for b0, col, v in diagonal.dense:
                 self._place(r0 + b0 + np.arange(v.size), np.full(v.size, col), v, True, out)
             add_sparse(diagonal.extra, r0, 0, True)
@@ -627,7 +721,7 @@ class BandPlan:
                         or eliminated[dense].any()):
                     hinv = np.zeros(n)
                     hinv[el] = 1.0 / h
-                    self._diagonal_pairs(diagonal, hinv, r0, out)
+                    self._diagonal_pairs(diagonal, hinv, r0, out, runs)
                     return (*out, h)
         else:
             add_sparse(E, r0, 0, True)
@@ -639,7 +733,8 @@ class BandPlan:
             add_sparse(Zh @ EzT, n + nu, n + nu, False, -1.0)
         return (*out, h)
 
-    def _diagonal_pairs(self, diagonal: DiagonalRows, hinv: np.ndarray, r0: int, out: tuple) -> None:
+    def _diagonal_pairs(self, diagonal: DiagonalRows, hinv: np.ndarray, r0: int, out: tuple,
+                        runs: dict | None = None) -> None:
         r"""Place :math:`-E_z h^{-1} E_z^T` for the tridiagonal blocks of ``diagonal``
         (``hinv``: :math:`1/h` on the eliminated unknowns, 0 elsewhere), the only rows on
         eliminated unknowns.
@@ -667,9 +762,9 @@ class BandPlan:
                     for s in (-1, 0, 1):
                         if s - t >= -1:
                             acc[t] += V[s][:m] * V[s - t][t:] * g[1 + s:1 + s + m]
-            i = np.arange(N)
+            rr = (r0 + b0, N)
             for t in (0, 1, 2):
-                self._place(r0 + b0 + i[:N - t], r0 + b0 + i[t:], -acc[t], t > 0, out)
+                self._place_diagonal(rr, rr, 0, t, -acc[t], t > 0, out, {} if runs is None else runs)
 
     def _place(self, r: np.ndarray, c: np.ndarray, v: np.ndarray, mirror: bool, out: tuple) -> None:
         """Append one block's entries (reduced indices ``r``, ``c``; ``mirror``: its
@@ -686,6 +781,43 @@ class BandPlan:
             cpl.append((a[sel], b[sel], v[sel]))
             sel = (pa >= 0) & (pb >= 0)
             brd.append((pa[sel], pb[sel], v[sel]))
+
+    def _place_diagonal(self, rows: tuple, cols: tuple, dr: int, dc: int, v: np.ndarray, mirror: bool,
+                        out: tuple, runs: dict) -> None:
+        """:meth:`_place` for one diagonal of a block: entry ``t`` at reduced row
+        ``rows[0] + dr + t`` and column ``cols[0] + dc + t`` (``rows``, ``cols``: the block's
+        ``(first, size)``). Where both map to evenly spaced band positions with one step (one
+        axis' nodes), the entries are one :class:`_Stride` each run (no index arrays, a
+        strided write); unknowns in neither band nor border drop their entries; the rest
+        goes through :meth:`_place`. ``runs`` caches :func:`_affine_runs` per block."""
+        L = v.size
+        pieces = []
+        for (a, size), d in ((rows, dr), (cols, dc)):
+            key = (a, size)
+            if key not in runs:
+                runs[key] = _affine_runs(self.pos[a:a + size], self.bpos[a:a + size] < 0)
+            # the runs in piece coordinates t = u - d, clipped to [0, L)
+            pieces.append([(max(u0 - d, 0), min(u1 - d, L), p0, s, u0 - d) for u0, u1, p0, s in runs[key]
+                           if min(u1 - d, L) > max(u0 - d, 0)])
+        R, C = pieces
+        i = j = 0
+        while i < len(R) and j < len(C):
+            (ra, rb, rp, rs, rt), (ca, cb, cp, cs, ct) = R[i], C[j]
+            t0, t1 = max(ra, ca), min(rb, cb)
+            if t1 > t0:
+                if rs == 0 or cs == 0:
+                    pass   # eliminated (or otherwise placed) unknowns: no band or border entry
+                elif rs is not None and rs == cs:
+                    pi0, pj0 = rp + rs * (t0 - rt), cp + cs * (t0 - ct)
+                    # a copy: the values are scaled in place later
+                    out[0].append(_Stride(pj0, pi0 - pj0, rs, v[t0:t1].copy(), mirror))
+                else:
+                    t = np.arange(t0, t1)
+                    self._place(rows[0] + dr + t, cols[0] + dc + t, v[t0:t1], mirror, out)
+            if rb <= cb:
+                i += 1
+            if cb <= rb:
+                j += 1
 
     def _scatter(self, entries: tuple, scaled: bool = False) -> tuple:
         """``(ab, B, C, h)`` from :meth:`_entries`: the banded part in LAPACK's band layout
@@ -704,22 +836,37 @@ class BandPlan:
         column ``j`` is the largest ``|v|`` placed in it.
         """
         band, cpl, brd, h = entries
-        nb, k, kl, ldab = self.pos_order.size, self.border_order.size, self.kl, self.ldab
-        sU = None
-        if scaled:
-            colmax = np.zeros(nb)
-            for pi, pj, v, mirror in band:
-                a = np.abs(v)
-                np.maximum.at(colmax, pj, a)
-                if mirror:
-                    np.maximum.at(colmax, pi, a)
-            sU = _scales(colmax)
-            for pi, pj, v, _ in band:   # the entries' own arrays (made by _place): no copies
-                v *= sU[pi]
-                v *= sU[pj]
+        nb, k, kl = self.pos_order.size, self.border_order.size, self.kl
+        strided = [e for e in band if isinstance(e, _Stride)]
+        band = [e for e in band if not isinstance(e, _Stride)]
+        for e in strided:
+            if abs(e.off) > kl:
+                raise NotBanded("the sparsity pattern changed since the plan was made")
+        sU = _scale_entries(strided, band, nb) if scaled else None
+        ab = self._write_band(strided, band)
+        B, C = None, np.zeros((k, k))
+        if k:
+            def cat(parts: list, t: int) -> np.ndarray:
+                return np.concatenate([p[t] for p in parts]) if parts else np.zeros(0, int)
+
+            B = sp.csc_matrix((cat(cpl, 2), (cat(cpl, 0), cat(cpl, 1))), shape=(nb, k))
+            np.add.at(C, (cat(brd, 0), cat(brd, 1)), cat(brd, 2))
+        return (ab, B, C, h) if sU is None else (ab, B, C, h, sU)
+
+    def _write_band(self, strided: list, band: list) -> np.ndarray:
+        """The band ``ab[j, 2 kl + i - j] = A[i, j]`` from :class:`_Stride` and index
+        entries (see :meth:`_scatter`); long writes go a slice of band rows at a time,
+        every one's part in it together: one diagonal at a time would stream the whole band
+        once per diagonal (208 MB at N = 1e6, 3 kl + 1 = 13 values per row)."""
+        nb, kl, ldab = self.pos_order.size, self.kl, self.ldab
         ab = np.zeros((nb, ldab))
         flat = ab.reshape(-1)
-        runs = []   # long writes in band-row order, done a band slice at a time below
+        runs = []   # long writes: strided entries, and index entries sorted by band row
+        for e in strided:
+            if e.v.size <= SCATTER_SLICE:
+                e.write(ab, kl, 0, nb)
+            else:
+                runs.append(e)
         for pi, pj, v, mirror in band:
             off = pi - pj
             if off.size and (off.max() > kl or off.min() < -kl):
@@ -730,25 +877,17 @@ class BandPlan:
                     runs.append((j, i, v))
                 else:
                     _put(flat, j, i, v, ldab, kl)
-        # the band ab[j, 2 kl + i - j] = A[i, j] is written a slice of rows at a time, every
-        # sorted write's part in it together: one diagonal at a time would stream the whole
-        # band once per diagonal (208 MB at N = 1e6, 3 kl + 1 = 13 values per row)
         if runs:
             edges = np.arange(0, nb + SCATTER_SLICE, SCATTER_SLICE)
-            cuts = [np.searchsorted(j, edges) for j, _, _ in runs]
+            cuts = [None if isinstance(r, _Stride) else np.searchsorted(r[0], edges) for r in runs]
             for c in range(edges.size - 1):
-                for (j, i, v), cut in zip(runs, cuts, strict=True):
-                    a, b = cut[c], cut[c + 1]
-                    if b > a:
-                        _put(flat, j[a:b], i[a:b], v[a:b], ldab, kl)
-        B, C = None, np.zeros((k, k))
-        if k:
-            def cat(parts: list, t: int) -> np.ndarray:
-                return np.concatenate([p[t] for p in parts]) if parts else np.zeros(0, int)
-
-            B = sp.csc_matrix((cat(cpl, 2), (cat(cpl, 0), cat(cpl, 1))), shape=(nb, k))
-            np.add.at(C, (cat(brd, 0), cat(brd, 1)), cat(brd, 2))
-        return (ab, B, C, h) if sU is None else (ab, B, C, h, sU)
+                for r, cut in zip(runs, cuts, strict=True):
+                    if cut is None:
+                        r.write(ab, kl, edges[c], edges[c + 1])
+                    elif cut[c + 1] > cut[c]:
+                        a, b = cut[c], cut[c + 1]
+                        _put(flat, r[0][a:b], r[1][a:b], r[2][a:b], ldab, kl)
+        return ab
 
     def assemble(self, D: sp.csr_matrix, E: sp.csr_matrix, diagonal: DiagonalRows | None = None) -> tuple:
         """The reduced matrix's parts ``(ab, B, C, h, sU)``, the band scaled (see
