@@ -161,9 +161,10 @@ def least_squares_form(form, lam: float, surrogate: bool = False) -> LeastSquare
             obj.append(term.residual * (np.sqrt(term.weight(lam)) / term.sigma))
             scaled.append(np.full(term.residual.m, bool(term.scaled_by_lam)))
     # canonical once (sorted, no duplicates or explicit zeros): every factorization and every
-    # lambda of a sweep then shares these arrays instead of cleaning a copy of its own
-    D, E = Affine.vstack(obj), Affine.vstack(eq)
-    D, E = (Affine(canonical(a.A), a.c, a.labels) for a in (D, E))
+    # lambda of a sweep then shares these arrays instead of cleaning a copy of its own. Each
+    # part is cleaned before stacking: a hard item's explicit zero would otherwise copy the
+    # whole FEM block (60 ms at N = 1e6), and stacked canonical parts are canonical
+    D, E = (Affine.vstack([Affine(canonical(a.A), a.c, a.labels) for a in parts]) for parts in (obj, eq))
     return LeastSquaresForm(D, E, blocks, np.concatenate(scaled), float(lam))
 
 
