@@ -324,28 +324,57 @@ def _row_groups(diagonal: DiagonalRows) -> list:
     return list(groups.items())
 
 
+class _Run(NamedTuple):
+    """Entries of ``E`` at rows ``r0 + t`` and columns ``c0 + step t``, ``t = 0 .. size - 1``
+    (``step`` 1: a diagonal, 0: a dense column): a piece of :func:`_entry_pieces` that
+    needs no index arrays."""
+
+    r0: int
+    c0: int
+    size: int
+    step: int
+
+    def rows(self) -> slice:
+        return slice(self.r0, self.r0 + self.size)
+
+    def cols(self, values: np.ndarray) -> np.ndarray:
+        """``values`` at the piece's columns (a slice, or one value repeated)."""
+        if self.step:
+            return values[self.c0:self.c0 + self.size]
+        return np.full(self.size, values[self.c0])
+
+
 def _entry_pieces(E: sp.csr_matrix, diagonal: DiagonalRows | None = None) -> list:
-    """``E``'s entries as pieces ``(rows, cols)``: the whole of a CSR matrix, or, with a
-    matching :class:`DiagonalRows`, one piece per diagonal and dense column (arrays of
-    length N, no per-entry expansion of the FEM rows) and the other rows'."""
+    """``E``'s entries as pieces: ``(rows, cols)`` index arrays for a CSR matrix's entries,
+    or, with a matching :class:`DiagonalRows`, a :class:`_Run` per diagonal and dense
+    column (no per-entry expansion of the FEM rows) and arrays for the other rows'."""
     def csr(A: sp.csr_matrix, r0: int = 0) -> tuple:
         return r0 + np.repeat(np.arange(A.shape[0]), np.diff(A.indptr)), A.indices
 
     if diagonal is None or not diagonal.matches(E):
         return [csr(E)]
-    pieces = [csr(diagonal.extra), csr(E[diagonal.rows:], diagonal.rows)]
+    pieces: list = [csr(diagonal.extra), csr(E[diagonal.rows:], diagonal.rows)]
     for b0, c0, _, dg, _ in diagonal.tridiagonal:
-        i = np.arange(dg.size)
-        pieces += [(b0 + i, c0 + i), (b0 + i[1:], c0 + i[:-1]), (b0 + i[:-1], c0 + i[1:])]
-    pieces += [(b0 + np.arange(v.size), np.full(v.size, col)) for b0, col, v in diagonal.dense]
+        L = dg.size
+        pieces += [_Run(b0, c0, L, 1), _Run(b0 + 1, c0, L - 1, 1), _Run(b0, c0 + 1, L - 1, 1)]
+    pieces += [_Run(b0, col, v.size, 0) for b0, col, v in diagonal.dense]
     return pieces
 
 
 def _spans(pieces: list, colnode: np.ndarray, m: int) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`row_span` of a matrix of ``m`` rows given as :func:`_entry_pieces`."""
-    lo = np.full(m, np.iinfo(np.int64).max, dtype=np.int64)
+    """:func:`row_span` of a matrix of ``m`` rows given as :func:`_entry_pieces` (a
+    :class:`_Run` has one entry per row: elementwise minima and maxima on a slice)."""
+    big = np.iinfo(np.int64).max
+    lo = np.full(m, big, dtype=np.int64)
     hi = np.full(m, -1, dtype=np.int64)
-    for rows, cols in pieces:
+    for piece in pieces:
+        if isinstance(piece, _Run):
+            nn = piece.cols(colnode)
+            rows = piece.rows()
+            np.maximum(hi[rows], nn, out=hi[rows])
+            np.minimum(lo[rows], np.where(nn >= 0, nn, big), out=lo[rows])
+            continue
+        rows, cols = piece
         nn = colnode[cols]
         np.minimum.at(lo, rows[nn >= 0], nn[nn >= 0])
         np.maximum.at(hi, rows, nn)
@@ -608,7 +637,15 @@ class BandPlan:
         reach = node.copy()
         reach[n + unf.size:] = np.where(enode >= 0, ehi, -1)
         onward = np.zeros(n, dtype=np.int64)
-        for rows, cols in pieces:
+        for piece in pieces:
+            if isinstance(piece, _Run):
+                ahead = enode[piece.rows()] > piece.cols(colnode)
+                if piece.step:
+                    onward[piece.c0:piece.c0 + piece.size][ahead] = 1
+                elif ahead.any():
+                    onward[piece.c0] = 1
+                continue
+            rows, cols = piece
             onward[cols[enode[rows] > colnode[cols]]] = 1
         reach[:n] += np.where(node[:n] >= 0, onward, 0)
         del onward, pieces
