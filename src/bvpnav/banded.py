@@ -1089,8 +1089,9 @@ class BandedKKT(Factorization):
             out[a * L:(a + 1) * L, j] = x[:, col]
         return out
 
-    def _reduced_solve(self, r: np.ndarray) -> np.ndarray:
-        """Solve the reduced (unscaled, after eliminations) system for ``r`` (R,) or (R, c)."""
+    def _reduced_solve(self, r: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """Solve the reduced (unscaled, after eliminations) system for ``r`` (R,) or (R, c),
+        into ``out`` when given (an array like ``r``)."""
         pl = self.plan
         # one right-hand side stays one-dimensional (gathers and scatters of a vector are
         # about twice as fast as of an (R, 1) array's rows)
@@ -1100,7 +1101,7 @@ class BandedKKT(Factorization):
         y = self._band_solve(R, overwrite=True)   # R is this solve's own gathered copy
         # every reduced unknown is banded, in the border or eliminated; solve() fills the
         # eliminated ones, so nothing needs zeroing here
-        out = np.empty_like(r)
+        out = np.empty_like(r) if out is None else out
         if self.k:
             sW = self._sW if r.ndim == 1 else self._sW[:, None]
             rW = r[pl.border_order] * sW
@@ -1131,16 +1132,19 @@ class BandedKKT(Factorization):
             hcol = self._h.reshape((-1,) + (1,) * (r.ndim - 1))
             gz = r[el] / hcol
             r[n + nu:] -= self._Ez @ gz
-        zr = self._reduced_solve(r)
+        # without unfolded rows the reduced unknowns (x, mu) are z's own tail: solved in place
+        z = None if x_only or nu else np.empty_like(rhs)
+        zr = self._reduced_solve(r, out=None if z is None else z[m:])
         mu = zr[n + nu:]
         if el.size:
             zr[el] = gz - (self._EzT @ mu) / hcol
         x = zr[:n]
         if x_only:
             return x
-        z = np.empty_like(rhs)
-        z[m:m + n] = x
-        z[m + n:] = mu
+        if z is None:
+            z = np.empty_like(rhs)
+            z[m:m + n] = x
+            z[m + n:] = mu
         if nu:
             z[:m][pl.fold] = self._Df @ x - b1f
             z[:m][self._unf] = zr[n:n + nu]

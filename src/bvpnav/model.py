@@ -320,7 +320,13 @@ class NavModel:
         parameters, ``l`` (``M G``, dense (N, q), s); :meth:`fem_rows` places them."""
         blocks = {"r": self.K, "w": self.M, "vb": fem.boundary_columns(self.grid)}
         if self.q:
-            blocks["l"] = self.M @ self.G[:, axis, :]
+            # M G depends on the grid and the error model only (not on the accelerations, so
+            # with_acc's copies share it): made once per axis, read by fem_rows and by
+            # bvpnav.lsq.fem_rows_by_diagonals
+            cache = self.__dict__.setdefault("_mg_cache", {})
+            if axis not in cache:
+                cache[axis] = self.M @ self.G[:, axis, :]
+            blocks["l"] = cache[axis]
         return blocks
 
     def _fem_rows(self) -> Affine:
