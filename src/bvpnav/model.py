@@ -158,7 +158,10 @@ class Affine:
 
     def row_scale(self, x: np.ndarray) -> np.ndarray:
         """``|A| |x| + |c|`` per row: the size of the terms that cancel in each row."""
-        return abs(self.A) @ np.abs(x) + np.abs(self.c)
+        A = self.A if sp.issparse(self.A) and self.A.format == "csr" else sp.csr_matrix(self.A)
+        # |A| on A's own index arrays (abs() of a sparse matrix copies them too)
+        absA = sp.csr_matrix((np.abs(A.data), A.indices, A.indptr), shape=A.shape)
+        return absA @ np.abs(x) + np.abs(self.c)
 
 
 @dataclass(frozen=True, eq=False)
