@@ -60,57 +60,68 @@ variants to leave out, e.g. ``csne3@1e6,clarabel3@1e6``; ``name@N`` or ``name`` 
 
 Run ``python examples/benchmarks/speed_memory.py [--quick] [--memory] [--huge]``.
 
-Measured after the assembly by diagonals (issue 18, fourth session)
--------------------------------------------------------------------
-2026-12-03, the machine quiet, same versions and flags as below (the lambda table now the
-median of three runs per rule). The FEM rows are placed by their diagonals, the band is
-scaled as it is placed, axes with equal bands factor one, the sweep's points solve for
-``x`` alone::
+Measured after the strided band writes (issue 18, fifth session)
+----------------------------------------------------------------
+2026-12-03, main at 0fd4261, the machine quiet, the same versions and flags as below. The
+FEM diagonals are written into the band as strided slices, the verification takes the
+back end's one refinement step as its forward-error estimate, the FEM rows and items are
+stacked without copying the FEM block::
 
     case               N  variant              time s   x ref runs     vs ref  verified
-    1 ax           10000  direct                0.021     4.7    3    1.3e-12  True
-    1 ax           10000  clarabel              0.069    14.6    3    2.9e-12  True   compile 0.02 s
-    1 ax           10000  clarabel re-solve     0.029     6.2    3    4.8e-12  True
-    1 ax          100000  direct                0.166     3.3    3    1.4e-12  True
-    1 ax          100000  direct backend        0.119     2.3    3    1.4e-12  -
-    1 ax          100000  clarabel              0.567    11.2    3    2.2e-12  True   compile 0.19 s
-    1 ax          100000  clarabel re-solve     0.269     5.1    3    1.9e-12  True
-    1 ax         1000000  direct                2.041     2.6    3    3.3e-12  True
-    1 ax         1000000  direct backend        1.507     2.0    3    3.3e-12  -
-    1 ax         1000000  csne                  9.550    12.4    1    3.2e-12  True
-    1 ax         1000000  clarabel             11.075    14.4    1    4.2e-12  True   compile 4.38 s
-    1 ax         1000000  clarabel re-solve     3.359     4.4    1    2.9e-12  True
-    3 ax +SF+B    100000  direct                0.764     3.9    3    2.5e-12  True
-    3 ax +SF+B    100000  direct backend        0.565     2.8    3    2.5e-12  -
-    3 ax +SF+B    100000  clarabel              2.827    14.2    3    2.5e-12  True   compile 0.91 s
-    3 ax +SF+B    100000  clarabel re-solve     1.193     6.0    3    2.2e-12  True
+    1 ax           10000  direct                0.029     4.8    3    1.3e-12  True
+    1 ax           10000  clarabel              0.085    14.0    3    2.9e-12  True   compile 0.03 s
+    1 ax           10000  clarabel re-solve     0.039     6.3    3    4.8e-12  True
+    1 ax          100000  direct                0.166     2.5    3    1.4e-12  True
+    1 ax          100000  direct backend        0.121     1.8    3    1.4e-12  -
+    1 ax          100000  csne                  0.904    13.3    3    2.1e-12  True
+    1 ax          100000  clarabel              0.705    10.2    3    2.2e-12  True   compile 0.25 s
+    1 ax          100000  clarabel re-solve     0.323     4.7    3    1.9e-12  True
+    1 ax         1000000  direct                1.730     2.0    3    3.3e-12  True
+    1 ax         1000000  direct backend        1.331     1.5    3    3.3e-12  -
+    1 ax         1000000  csne                 13.698    16.0    1    3.2e-12  True
+    1 ax         1000000  clarabel             15.657    18.3    1    4.2e-12  True   compile 6.33 s
+    1 ax         1000000  clarabel re-solve     3.933     4.6    1    2.9e-12  True
+    3 ax +SF+B     10000  direct                0.096     4.4    3    4.1e-12  True
+    3 ax +SF+B    100000  direct                0.720     3.0    3    2.5e-12  True
+    3 ax +SF+B    100000  direct backend        0.537     2.3    3    2.5e-12  -
+    3 ax +SF+B    100000  clarabel              3.282    13.8    3    2.5e-12  True   compile 1.12 s
+    3 ax +SF+B    100000  clarabel re-solve     1.299     5.4    3    2.2e-12  True
 
-    lambda rules, N = 100000, 1 axis: single direct solve 0.19 s (the reference 0.051 s)
+    lambda rules, N = 100000, 1 axis: single direct solve 0.16 s (the reference 0.064 s)
     rule        lambda  evaluations  total s  x single   x ref
-    lcurve    0.005152           19     0.94       5.0      18   (4.8 on another run)
-    gcv         0.5475           17     1.33       7.1      26
-    quasi        5.164           19     0.93       4.9      18
+    lcurve    0.005152           19     1.18       7.4      19
+    gcv         0.5475           17     1.59       9.9      25
+    quasi        5.164           19     1.17       7.3      18
 
     peak resident memory, N = 1000000, 1 axis
     variant      peak MB  above base MB  B/sample  x ref
-    reference        745            557       584    1.0
-    direct          1196           1008      1057    1.8   (1.61x the reference's peak)
-    csne            2094           1906      1999    3.4
-    clarabel        3147           2959      3102    5.3
+    reference        744            549       576    1.0
+    direct          1114            919       964    1.7   (1.50x the reference's peak)
+    csne            2107           1913      2006    3.5
+    clarabel        3055           2860      2999    5.2
 
-    --huge: direct at N = 1e7 x 1 axis: peak 10159 MB, optimal, verified, 58.3 s
+    --huge: direct at N = 1e7 x 1 axis: peak 9423 MB, optimal, verified, 63.2 s
 
-The lambda rules cost about as much as before in seconds (lcurve 0.94 s, was 1.08 s) while
-the single solve they are measured against got faster (0.19 s, was 0.23 s).
+Absolute times on this VM drift by 20-40 % between hours (the reference took 0.051 s at
+1e5 in the fourth session's run, 0.064-0.078 s in this one; first touches of fresh memory
+cost up to 2 ms/MB), so only ratios from one run compare. The lambda rules cost as many
+seconds as in the fourth session's code on the same hour (lcurve 1.27 s at c79fb1f, 1.33 s
+at d0c8335, 1.18 s here): their multiples grew because the single solve they are divided
+by got faster. Clarabel's first solve at 1e6 is cvxpy's compile (6.3 s here, 4.4 s in the
+fourth session) plus the solve; it is the noisiest row.
 
-Between the two (issue 18, 2026-12-02 and 03; the tables are in the git history of this
-file): the banded direct path took ``direct`` from 6.4x/4.9x the reference (N = 1e5/1e6)
-to 4.0x/3.8x and three axes from 10.5x to 5.6x, and its peak at 1e6 from 2.17 to 1.39 GB;
-the lambda sweep on the band affine in lambda took lcurve/gcv/quasi from 35/84/41 single
-solves to 8.2/14.8/7.5, then the seeded parabolic refinement to 4.7/6.3/4.7 (with a
-single solve of 0.23 s); kl = 4 and the band plan's caches took ``direct`` to 4.0x/3.2x
-and 1.25 GB; clarabel 0.11.1 with cvxpy 1.9.3 took Clarabel's first solve to 12x/17x and
-its re-solve to 6.0x/5.3x.
+Between the fourth session's run and this one: ``direct`` 3.3x/2.6x -> 2.5x/2.0x (N =
+1e5/1e6), three axes 3.9x -> 3.0x, the back end alone 2.3x/2.0x -> 1.8x/1.5x, its peak at
+1e6 1.20 -> 1.11 GB. In the fourth session (assembly by diagonals, 2026-12-03): ``direct``
+3.3x/2.6x, three axes 3.9x, lcurve/gcv/quasi 5.0/7.1/4.9 single solves of 0.19 s,
+Clarabel 11x/14x first solve and 5.1x/4.4x re-solve, peak 1.20 GB at 1e6, 10.2 GB at 1e7.
+Earlier (issue 18, 2026-12-02 and 03; the tables are in the git history of this file): the
+banded direct path took ``direct`` from 6.4x/4.9x the reference to 4.0x/3.8x and three
+axes from 10.5x to 5.6x, and its peak at 1e6 from 2.17 to 1.39 GB; the lambda sweep on the
+band affine in lambda took lcurve/gcv/quasi from 35/84/41 single solves to 8.2/14.8/7.5,
+then the seeded parabolic refinement to 4.7/6.3/4.7 (with a single solve of 0.23 s); kl = 4
+and the band plan's caches took ``direct`` to 4.0x/3.2x and 1.25 GB; clarabel 0.11.1 with
+cvxpy 1.9.3 took Clarabel's first solve to 12x/17x and its re-solve to 6.0x/5.3x.
 
 Measured on main before the structured path
 --------------------------------------------
