@@ -302,7 +302,7 @@ class Formulation:
         for k, pname in enumerate(m.param_names):
             r, v = [], []
             for a in range(m.d):
-                mg = m.M @ m.G[:, a, k]
+                mg = m.fem_blocks(a)["l"][:, k]   # M G, made once per axis with the model
                 if not mg.any():   # the parameter does not act on this axis
                     continue
                 s = np.cumsum(mg)[:-1]  # element slopes with v0 = 0

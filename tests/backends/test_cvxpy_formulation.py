@@ -131,3 +131,25 @@ def test_clarabel_retries_with_its_equilibration_when_the_adapted_settings_fail(
     assert retried is None or retried.startswith("equilibration on after status ")
     true = np.column_stack([np.where(t > 2.0, 0.01 * (t - 2.0) ** 3 * (k + 1), 0.0) for k in range(3)])
     assert np.max(np.abs(sol.position() - true)) < 1e-7
+
+
+def test_the_canonicalization_back_end_is_scipy_unless_the_options_name_one():
+    """cvxpy compiles with :data:`~bvpnav.backends.cvxpy_solvers.CANON_BACKEND` (its SCIPY
+    back end, measured faster at N = 1e6); a ``canon_backend`` in the options is passed
+    through. Both build the same solver data and reach the same verified answer."""
+    from bvpnav.backends.cvxpy_solvers import CANON_BACKEND
+    from bvpnav.cvx import compiled
+
+    item = EQUALITY_ITEMS["soft velocity"]
+    ours = _agree(_problem(extra=(item,)))
+    assert ours.stats["canon_backend"] == CANON_BACKEND == "SCIPY"
+    theirs = _agree(_problem(extra=(item,)), options={"canon_backend": "CPP"})
+    assert theirs.stats["canon_backend"] == "CPP"
+    cvx = compiled(_problem(extra=(item,)).formulation)
+    a, _, _ = cvx.problem.get_problem_data("CLARABEL", canon_backend="SCIPY")
+    b, _, _ = cvx.problem.get_problem_data("CLARABEL", canon_backend="CPP")
+    for key in ("P", "A"):
+        assert a[key].shape == b[key].shape
+        assert abs(a[key] - b[key]).max() <= 1e-15 * abs(b[key]).max(), key
+    for key in ("c", "b"):
+        np.testing.assert_array_equal(a[key], b[key])

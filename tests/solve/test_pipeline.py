@@ -156,9 +156,9 @@ def test_the_run_and_its_timings_are_typed_and_flattened_into_the_stats():
     cv = ls_problem().solve(solver="clarabel").records.run
     # the options the problem's shape added (an equality-constrained least-squares problem)
     assert cv.timings.cvxpy_time >= cv.timings.solve_time > 0
-    from bvpnav.backends.cvxpy_solvers import EQUALITY_QP_CLARABEL
+    from bvpnav.backends.cvxpy_solvers import CANON_BACKEND, EQUALITY_QP_CLARABEL
 
-    assert cv.details == {"adapted_options": EQUALITY_QP_CLARABEL}
+    assert cv.details == {"adapted_options": EQUALITY_QP_CLARABEL, "canon_backend": CANON_BACKEND}
 
 
 # ------------------------------------------- found by the independent review of the redesign
