@@ -1055,10 +1055,53 @@ class BandedKKT(Factorization):
             B.data *= sU[B.indices] * np.repeat(sW, np.diff(B.indptr))
             self.B = B
             self._sW = sW
-            self.X = self._band_solve(self.B.toarray())
-            self.schur_border = C * sW[:, None] * sW[None, :] - self.B.T @ self.X
+            self._xruns = self._border_solve(B)
+            BtX = np.zeros((k, k))
+            L = B.shape[0] // runs
+            Br = B.tocsr() if runs > 1 else None
+            for a, cols, Xa in self._xruns:
+                BtX[:, cols] += (B if Br is None else Br[a * L:(a + 1) * L]).T @ Xa
+            self.schur_border = C * sW[:, None] * sW[None, :] - BtX
             if not np.all(np.isfinite(self.schur_border)) or np.linalg.cond(self.schur_border) > 1e15:
                 raise np.linalg.LinAlgError("singular Schur complement of the border")
+
+    def _border_solve(self, B: sp.csc_matrix) -> list:
+        """``X = A^{-1} B`` for the border's columns ``B`` (nb, k), by runs:
+        ``[(a, cols, X_a)]``, ``X_a`` (L, len(cols)) the rows of run ``a`` (the others are
+        zero: with equal runs (:attr:`BandPlan.segments`) the banded part is block diagonal).
+
+        Notes
+        -----
+        With one run this is the dense ``A^{-1} B``. With several, a border column (an
+        error-model parameter of one axis) is nonzero in one run, and so is its solution:
+        only those blocks are formed and kept, from ``B``'s own entries (no dense ``(nb,
+        k)`` copy of ``B`` or of ``X``: 288 MB each for three axes with six parameters at
+        N = 1e6, every one of them fresh memory the process must fault in).
+        """
+        runs, k = self._runs, B.shape[1]
+        if runs == 1:
+            return [(0, np.arange(k), self._band_solve(B.toarray()))]
+        L = B.shape[0] // runs
+        blocks = []   # (run, column, rows within the run, values)
+        for j in range(k):
+            rows, vals = B.indices[B.indptr[j]:B.indptr[j + 1]], B.data[B.indptr[j]:B.indptr[j + 1]]
+            run = rows // L
+            for a in np.unique(run[vals != 0]):
+                sel = run == a
+                blocks.append((int(a), j, rows[sel] - a * L, vals[sel]))
+        if not blocks:
+            return []
+        Rs = np.zeros((L, len(blocks)), order="F")
+        for c, (_, _, r, v) in enumerate(blocks):
+            Rs[r, c] = v
+        x, info = lapack.dgbtrs(self._lu, self.plan.kl, self.plan.kl, Rs, self._piv, overwrite_b=1)
+        if info != 0:  # pragma: no cover - argument error
+            raise np.linalg.LinAlgError(f"dgbtrs failed (info {info})")
+        out = []
+        for a in sorted({b[0] for b in blocks}):
+            idx = [c for c, b in enumerate(blocks) if b[0] == a]
+            out.append((a, np.array([blocks[c][1] for c in idx]), x[:, idx]))
+        return out
 
     # ------------------------------------------------------------------ solves
     def _band_solve(self, R: np.ndarray, overwrite: bool = False) -> np.ndarray:
@@ -1106,7 +1149,9 @@ class BandedKKT(Factorization):
             sW = self._sW if r.ndim == 1 else self._sW[:, None]
             rW = r[pl.border_order] * sW
             zW = np.linalg.solve(self.schur_border, rW - self.B.T @ y)
-            y = y - self.X @ zW
+            L = y.shape[0] // self._runs
+            for a, cols, Xa in self._xruns:   # y -= A^{-1} B zW, run by run
+                y[a * L:(a + 1) * L] -= Xa @ zW[cols]
             out[pl.border_order] = zW * sW
         y *= sU
         out[pl.pos_order] = y

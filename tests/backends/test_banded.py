@@ -221,6 +221,9 @@ def test_equal_axes_factor_one_band_and_solve_the_others_as_right_hand_sides(ite
     assert abs(fac.logdet() - whole.logdet()) <= 1e-9 * abs(whole.logdet())
     if bias:   # the border's Schur complement (the parameters' information) is the same too
         np.testing.assert_allclose(fac.schur, whole.schur, rtol=1e-9)
+        # A^{-1} B is kept by runs: a parameter of one axis has a column on that axis alone
+        kept = sum(Xa.size for _, _, Xa in fac._xruns)
+        assert kept == fac.plan.size // runs * (form.model.q if runs > 1 else fac.k)
 
 
 @pytest.mark.parametrize("case", ["1-axis", "3-axes-bias", "hard-zero-velocity", "scale-factor"])
