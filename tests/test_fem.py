@@ -148,3 +148,23 @@ def test_node_velocity_values_equal_the_rows_of_node_velocity(kind):
     np.testing.assert_allclose(v[j], (r[j] - r[j - 1]) / h[j - 1] + h[j - 1] * (acc[j - 1] + 2 * acc[j]) / 6,
                                rtol=1e-13, atol=1e-13)
     assert v[0] == 0 and v[-1] == 0 and (Vb @ [2.0, 5.0])[[0, -1]].tolist() == [2.0, 5.0]
+
+
+@pytest.mark.parametrize("kind", ["uniform", "nonuniform"])
+def test_velocity_rows_at_nodes_are_the_node_operators_rows(kind):
+    """velocity_operators builds only the rows it needs: at node times (the ends, interior
+    nodes, a node twice) its rows equal those of node_velocity_operators exactly, and
+    between nodes Vr and Vb are those of the element's left node."""
+    t = grids()[kind]
+    grid = TimeGrid(t)
+    NVr, NVa, NVb = fem.node_velocity_operators(grid)
+    j = np.array([0, t.size - 1, 1, 5, 5, t.size - 2, 17])
+    Vr, Va, Vb = fem.velocity_operators(grid, t[j])
+    for got, full in ((Vr, NVr), (Va, NVa), (Vb, NVb)):
+        assert got.shape == (j.size, full.shape[1])
+        np.testing.assert_array_equal(got.toarray(), full[j].toarray())
+    mid = 0.5 * (t[j[2:]] + t[j[2:] + 1])   # inside the element right of each interior node
+    Vr, Va, Vb = fem.velocity_operators(grid, mid)
+    np.testing.assert_array_equal(Vr.toarray(), NVr[j[2:]].toarray())
+    np.testing.assert_array_equal(Vb.toarray(), NVb[j[2:]].toarray())
+    assert np.all(Va.getnnz(axis=1) == 3)   # v_j's two entries and the element's second node

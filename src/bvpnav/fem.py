@@ -166,11 +166,8 @@ def velocity_operators(
     at_end = times >= grid.t1
     j = np.where(at_end, grid.n - 1, j)
     s = np.where(at_end, 0.0, s)
-    NVr, NVa, NVb = node_velocity_operators(grid)
     m = times.size
-    sel = sp.csr_matrix((np.ones(m), (np.arange(m), j)), shape=(m, grid.n))
-    Vr = sel @ NVr
-    Vb = sel @ NVb
+    Vr, NVa, Vb = _node_velocity_rows(grid, j)
     inner = s > 0
     k = np.flatnonzero(inner)
     jj = j[k]
@@ -182,5 +179,21 @@ def velocity_operators(
         (np.concatenate([c1, c2]), (np.concatenate([k, k]), np.concatenate([jj, jj + 1]))),
         shape=(m, grid.n),
     )
-    Va = sel @ NVa + extra
+    Va = NVa + extra
     return Vr.tocsr(), Va.tocsr(), Vb.tocsr()
+
+
+def _node_velocity_rows(grid: TimeGrid, j: np.ndarray) -> tuple[sp.csr_matrix, sp.csr_matrix, sp.csr_matrix]:
+    """Rows ``j`` of :func:`node_velocity_operators` (``len(j)`` rows), made from those
+    nodes' elements alone: a few velocities cost O(len(j)), not O(N)."""
+    n, m = grid.n, j.size
+    k = np.flatnonzero((j > 0) & (j < n - 1))   # interior nodes: the element on their left
+    jj = j[k]
+    h = grid.h[jj - 1]
+    rows = np.repeat(k, 2)
+    cols = np.column_stack([jj - 1, jj]).ravel()
+    Vr = sp.csr_matrix((np.column_stack([-1.0 / h, 1.0 / h]).ravel(), (rows, cols)), shape=(m, n))
+    Va = sp.csr_matrix((np.column_stack([h / 6.0, h / 3.0]).ravel(), (rows, cols)), shape=(m, n))
+    e = np.flatnonzero((j == 0) | (j == n - 1))   # the ends: v0 and v1 themselves
+    Vb = sp.csr_matrix((np.ones(e.size), (e, np.where(j[e] == 0, 0, 1))), shape=(m, 2))
+    return Vr, Va, Vb
