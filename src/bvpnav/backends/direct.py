@@ -85,7 +85,7 @@ class DirectBackend(_LeastSquaresBackend):
     """``direct``: one factorization of the KKT system, then refinement.
 
     Peak memory measured at N = 1,000,000 (one axis, own process, data and problem
-    included): 1.11 GB on the acceleration form (the banded path; the reference banded
+    included): 1.12 GB on the acceleration form (the banded path; the reference banded
     solve of ``examples/benchmarks/speed_memory.py`` peaks at 0.74 GB in the same setting;
     at N = 10,000,000: 9.4 GB) and 2.96 GB on the load form (the pivoted LU).
     """
