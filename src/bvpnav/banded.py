@@ -1052,6 +1052,7 @@ class BandedKKT(Factorization):
             dmax = np.abs(np.diag(C))
             sW = 1.0 / np.sqrt(np.where(dmax > 0, dmax, 1.0))
             B = Bs.tocsc(copy=True)   # diag(sU) Bs diag(sW), entry by entry
+            B.sum_duplicates()        # _border_solve places B's entries one by one
             B.data *= sU[B.indices] * np.repeat(sW, np.diff(B.indptr))
             self.B = B
             self._sW = sW
