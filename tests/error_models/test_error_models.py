@@ -214,6 +214,22 @@ def test_unobservable_combination_named():
         prob.solve()
 
 
+def test_null_directions_at_some_unknowns_are_the_whole_matrix_rows():
+    """The observability check fills the null directions only at the unknowns its items
+    touch: those rows equal the whole matrix's, every other row is empty."""
+    t = np.linspace(0, 10, 201)
+    acc = np.column_stack([np.sin(t), np.cos(t)])
+    prob = bvpnav.NavigationProblem(bvpnav.ImuData(t, acc), error_model=ScaleFactor() + Bias())
+    form = prob.formulation
+    whole, names = form._null_columns()
+    at = np.array([0, 7, 150, form.model.v_end_index(1)[1], *form.model.l_index[:2]])
+    part, names_at = form._null_columns(at=at)
+    assert names_at == names and part.shape == whole.shape
+    np.testing.assert_array_equal(part.toarray()[at], whole.toarray()[at])
+    rest = np.setdiff1d(np.arange(whole.shape[0]), at)
+    assert not part.toarray()[rest].any() and whole.toarray()[rest].any()
+
+
 def test_bias_with_end_positions_only_unobservable():
     """Bias with end positions only: offset, velocity offset and bias meet two rows."""
     t = np.linspace(0, 10, 201)
