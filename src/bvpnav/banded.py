@@ -229,6 +229,40 @@ def _put(flat: np.ndarray, j: np.ndarray, i: np.ndarray, v: np.ndarray, ldab: in
     flat[idx] = v
 
 
+def _equal_cells(cols: list, rows: list, vals: list, L: int, seg: int) -> bool:
+    """Whether the band cells (column, row, value arrays) of every run of ``L`` band rows
+    are those of the first run, moved by the run's length, none reaching another run."""
+    if not cols:
+        return True
+    c = np.concatenate(cols).astype(np.int64)
+    r = np.concatenate(rows).astype(np.int64)
+    v = np.concatenate(vals)
+    a = c // L
+    if np.any(r // L != a):
+        return False
+    c -= a * L
+    r -= a * L
+    order = np.lexsort((r, c, a))
+    a, c, r, v = a[order], c[order], r[order], v[order]
+    counts = np.bincount(a, minlength=seg)
+    if np.any(counts != counts[0]):
+        return False
+    k = int(counts[0])
+    return all(np.array_equal(x[b * k:(b + 1) * k], x[:k]) for b in range(1, seg) for x in (c, r, v))
+
+
+def _cells_below(band: list, L: int) -> list:
+    """The index entries ``(i, j, v, mirror)`` of band columns ``j < L`` (each orientation
+    of a mirrored entry on its own, as written)."""
+    out = []
+    for pi, pj, v, mirror in band:
+        for j, i in ((pj, pi), (pi, pj))[:1 + mirror]:
+            sel = j < L
+            if sel.any():
+                out.append((i[sel], j[sel], v[sel], False))
+    return out
+
+
 class _Stride(NamedTuple):
     """Band entries at evenly spaced positions: ``A[j0 + off + step t, j0 + step t] = v[t]``
     (and the transpose with ``mirror``), written as strided slices of the band instead of
@@ -435,9 +469,14 @@ class AffineBand:
     """
 
     def __init__(self, parts0: tuple, parts1: tuple, kl: int):
-        ab0, self.B, self.C, self.h, self.sU0 = parts0
+        ab0, self.B, self.C, self.h, sU0 = parts0
         ab1, self.B1, self.C1 = parts1
+        whole = sU0.size
+        if ab0.shape[0] != ab1.shape[0]:   # one part's runs are equal, the other's not
+            ab0, ab1 = (np.tile(x, (whole // x.shape[0], 1)) for x in (ab0, ab1))
         nb = ab0.shape[0]
+        self.runs = whole // nb   # > 1: one run's band (equal axes), its scales those of each
+        self.sU0 = sU0[:nb]
         self.kl = kl
         flat = ab1.reshape(-1)
         touched = np.unique(np.flatnonzero(flat) // ab1.shape[1])
@@ -466,6 +505,8 @@ class AffineBand:
             np.copyto(ab, self.scaled0)
         ab[self.rows] = vals
         B = None if self.B is None else self.B + g * self.B1
+        if self.runs > 1:
+            sU = np.tile(sU, self.runs)
         return ab, B, self.C + g * self.C1, self.h, sU
 
 
@@ -872,7 +913,12 @@ class BandPlan:
             if abs(e.off) > kl:
                 raise NotBanded("the sparsity pattern changed since the plan was made")
         sU = _scale_entries(strided, band, nb) if scaled else None
-        ab = self._write_band(strided, band)
+        runs = self._equal_run_entries(strided, band)
+        if runs > 1:   # equal axes: one run's band (the others are its copies, never formed)
+            L = nb // runs
+            ab = self._write_band(strided, _cells_below(band, L), L)
+        else:
+            ab = self._write_band(strided, band)
         B, C = None, np.zeros((k, k))
         if k:
             def cat(parts: list, t: int) -> np.ndarray:
@@ -882,12 +928,65 @@ class BandPlan:
             np.add.at(C, (cat(brd, 0), cat(brd, 1)), cat(brd, 2))
         return (ab, B, C, h) if sU is None else (ab, B, C, h, sU)
 
-    def _write_band(self, strided: list, band: list) -> np.ndarray:
+    def _equal_run_entries(self, strided: list, band: list) -> int:
+        """:attr:`segments` when the entries of every run of the band are those of the first,
+        moved by the run's length (positions and values exactly, none reaching another run),
+        else 1.
+
+        Notes
+        -----
+        A :class:`_Stride` with a counterpart in every run (the same first column within
+        the run, offset, step and length) is compared by its values; the other entries as
+        cells (column, row, value) sorted within each run, a stride without counterparts
+        expanded to its cells (a stretch one axis holds strided and another entry by entry,
+        short where it happens). Equal entries give equal runs, so the band of one run is
+        all a factorization needs (:class:`BandedKKT` solves the others as right-hand
+        sides).
+        """
+        seg, nb = self.segments, self.pos_order.size
+        if seg <= 1 or nb % seg:
+            return 1
+        L = nb // seg
+        by_run: list = [{} for _ in range(seg)]
+        loose = []   # strides without a counterpart in every run: compared as cells
+        for e in strided:
+            a = e.j0 // L
+            last = e.j0 + e.step * (e.v.size - 1)
+            if min(e.j0, e.j0 + e.off) < a * L or max(last, last + e.off) >= (a + 1) * L:
+                return 1
+            key = (e.j0 - a * L, e.off, e.step, e.v.size, e.mirror)
+            if key in by_run[a]:
+                loose.append(e)
+            else:
+                by_run[a][key] = e
+        common = set(by_run[0]).intersection(*by_run[1:])
+        for key in common:
+            if not all(np.array_equal(by_run[a][key].v, by_run[0][key].v) for a in range(1, seg)):
+                return 1
+        loose += [e for d in by_run for key, e in d.items() if key not in common]
+        cols, rows, vals = [], [], []
+        for pi, pj, v, mirror in band:
+            for j, i in ((pj, pi), (pi, pj))[:1 + mirror]:
+                cols.append(j)
+                rows.append(i)
+                vals.append(v)
+        for e in loose:
+            j = e.j0 + e.step * np.arange(e.v.size, dtype=np.int64)
+            for jj, ii in ((j, j + e.off), (j + e.off, j))[:1 + e.mirror]:
+                cols.append(jj)
+                rows.append(ii)
+                vals.append(e.v)
+        return seg if _equal_cells(cols, rows, vals, L, seg) else 1
+
+    def _write_band(self, strided: list, band: list, nb: int | None = None) -> np.ndarray:
         """The band ``ab[j, 2 kl + i - j] = A[i, j]`` from :class:`_Stride` and index
         entries (see :meth:`_scatter`); long writes go a slice of band rows at a time,
         every one's part in it together: one diagonal at a time would stream the whole band
-        once per diagonal (208 MB at N = 1e6, 3 kl + 1 = 13 values per row)."""
-        nb, kl, ldab = self.pos_order.size, self.kl, self.ldab
+        once per diagonal (208 MB at N = 1e6, 3 kl + 1 = 13 values per row). With ``nb``,
+        the first ``nb`` band rows alone (strided entries are clipped to them; the index
+        entries must lie there)."""
+        kl, ldab = self.kl, self.ldab
+        nb = self.pos_order.size if nb is None else nb
         ab = np.zeros((nb, ldab))
         flat = ab.reshape(-1)
         runs = []   # long writes: strided entries, and index entries sorted by band row
@@ -907,7 +1006,7 @@ class BandPlan:
                 else:
                     _put(flat, j, i, v, ldab, kl)
         if runs:
-            edges = np.arange(0, nb + SCATTER_SLICE, SCATTER_SLICE)
+            edges = np.minimum(np.arange(0, nb + SCATTER_SLICE, SCATTER_SLICE), nb)
             cuts = [None if isinstance(r, _Stride) else np.searchsorted(r[0], edges) for r in runs]
             for c in range(edges.size - 1):
                 for r, cut in zip(runs, cuts, strict=True):
@@ -1040,8 +1139,12 @@ class BandedKKT(Factorization):
         self.k = k
         # axes with equal band rows (one grid, one sigma_a, the same items on each): one
         # run is factored, the others are its extra right-hand sides
-        self._runs = runs = pl.segments if pl.segments > 1 and _equal_runs(ab, pl.segments) else 1
-        one = ab[:ab.shape[0] // runs]
+        nb = pl.pos_order.size
+        if ab.shape[0] < nb:   # one run's band (BandPlan._scatter found the runs equal)
+            self._runs = runs = nb // ab.shape[0]
+        else:
+            self._runs = runs = pl.segments if pl.segments > 1 and _equal_runs(ab, pl.segments) else 1
+        one = ab[:nb // runs]
         lu, piv, info = lapack.dgbtrf(one.T, kl, kl, overwrite_ab=1)
         del ab, one
         if info != 0:

@@ -226,6 +226,37 @@ def test_equal_axes_factor_one_band_and_solve_the_others_as_right_hand_sides(ite
         assert kept == fac.plan.size // runs * (form.model.q if runs > 1 else fac.k)
 
 
+@pytest.mark.parametrize("by_diagonals", [True, False], ids=["strided", "entry-by-entry"])
+@pytest.mark.parametrize("item, equal", [
+    (Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05), True),             # the same on every axis
+    (Position(t=[3.0], value=[0.5], axes=("x",), sigma=0.05), False),   # a local row on x only
+], ids=["equal-axes", "one-axis-item"])
+def test_equal_axes_are_assembled_as_one_run_of_the_whole_band(item, equal, by_diagonals):
+    """When every axis' entries are the first axis' moved by a run (compared as they are
+    held: strided diagonals and sorted cells), the assembly writes the first run alone; the
+    whole band, written entry by entry, is that run repeated. Otherwise the whole band."""
+    from bvpnav.banded import _Stride, canonical
+    from bvpnav.lsq import fem_rows_by_diagonals
+
+    prob = problem(item, error_model=Bias())
+    form = prob.formulation
+    ls = least_squares_form(form, 1.0)
+    D, E = canonical(ls.D.A), canonical(ls.E.A)
+    diagonal = fem_rows_by_diagonals(form) if by_diagonals else None
+    plan = BandPlan.build(D, E, column_nodes(form.model), segments=3, diagonal=diagonal)
+    ab = plan._scatter(plan._entries(D, E, diagonal))[0]
+    entries = plan._entries(D, E, diagonal)[0]
+    assert any(isinstance(e, _Stride) for e in entries) == by_diagonals
+    whole = plan._write_band([e for e in entries if isinstance(e, _Stride)],
+                             [e for e in entries if not isinstance(e, _Stride)])
+    assert whole.shape[0] == plan.size
+    if equal:
+        assert ab.shape[0] == plan.size // 3
+        np.testing.assert_array_equal(np.tile(ab, (3, 1)), whole)
+    else:
+        np.testing.assert_array_equal(ab, whole)
+
+
 @pytest.mark.parametrize("case", ["1-axis", "3-axes-bias", "hard-zero-velocity", "scale-factor"])
 def test_fem_rows_placed_by_diagonals_equal_the_entry_by_entry_assembly(case):
     """The FEM rows described by their diagonals (lsq.fem_rows_by_diagonals) give the same
