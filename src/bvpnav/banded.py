@@ -1190,7 +1190,7 @@ class BandedKKT(Factorization):
         for j in range(k):
             rows, vals = B.indices[B.indptr[j]:B.indptr[j + 1]], B.data[B.indptr[j]:B.indptr[j + 1]]
             run = rows // L
-            for a in np.unique(run[vals != 0]):
+            for a in np.flatnonzero(np.bincount(run[vals != 0], minlength=runs)):   # O(nnz), no sort
                 sel = run == a
                 blocks.append((int(a), j, rows[sel] - a * L, vals[sel]))
         if not blocks:
@@ -1218,10 +1218,18 @@ class BandedKKT(Factorization):
             if info != 0:  # pragma: no cover - argument error
                 raise np.linalg.LinAlgError(f"dgbtrs failed (info {info})")
             return x
-        if R.ndim == 1:
-            return self._band_solve(R[:, None])[:, 0]
-        nb, c = R.shape
+        nb = R.shape[0]
         L = nb // runs
+        if R.ndim == 1:
+            if all(R[a * L:(a + 1) * L].any() for a in range(runs)):
+                # the runs as the columns of one (L, runs) Fortran array: R's own memory
+                x, info = lapack.dgbtrs(self._lu, kl, kl, R.reshape(runs, L).T, self._piv,
+                                        overwrite_b=overwrite)
+                if info != 0:  # pragma: no cover - argument error
+                    raise np.linalg.LinAlgError(f"dgbtrs failed (info {info})")
+                return x.T.reshape(nb)
+            return self._band_solve(R[:, None])[:, 0]
+        c = R.shape[1]
         blocks = [(a, j) for a in range(runs) for j in range(c) if R[a * L:(a + 1) * L, j].any()]
         out = np.zeros_like(R)
         if not blocks:
