@@ -60,61 +60,65 @@ variants to leave out, e.g. ``csne3@1e6,clarabel3@1e6``; ``name@N`` or ``name`` 
 
 Run ``python examples/benchmarks/speed_memory.py [--quick] [--memory] [--huge]``.
 
-Measured after cvxpy's SCIPY canonicalization (issue 18, sixth session)
------------------------------------------------------------------------
-2026-12-04, main at c30ecc8, the machine quiet, the same versions and flags as below
+Measured after equal axes became one band (issue 18, sixth session)
+-------------------------------------------------------------------
+2026-12-04, main at c32adf9, the machine quiet, the same versions and flags as below
 (``--skip csne3@1e6,clarabel3@1e6 --memory --huge``). cvxpy compiles with its SCIPY
-back end (``bvpnav.backends.cvxpy_solvers.CANON_BACKEND``), the border's ``A^-1 B`` is kept
-by axis, velocities at given times are built from their own nodes::
+back end (``bvpnav.backends.cvxpy_solvers.CANON_BACKEND``); axes whose band entries are
+equal are assembled as one run and the border's ``A^-1 B`` is kept by axis; velocities at
+given times are built from their own nodes::
 
     case               N  variant              time s   x ref runs     vs ref  verified
-    1 ax           10000  direct                0.017     3.7    3    1.3e-12  True
-    1 ax           10000  clarabel              0.052    11.7    3    2.9e-12  True   compile 0.02 s
-    1 ax           10000  clarabel re-solve     0.023     5.1    3    4.8e-12  True
-    1 ax           10000  osqp                 29.751  6660.5    1    1.4e-04  False  user_limit
-    1 ax          100000  direct                0.101     2.3    3    1.4e-12  True
-    1 ax          100000  direct backend        0.074     1.6    3    1.4e-12  -
-    1 ax          100000  csne                  0.603    13.2    3    2.1e-12  True
-    1 ax          100000  clarabel              0.432     9.4    3    2.2e-12  True   compile 0.12 s
-    1 ax          100000  clarabel re-solve     0.223     4.8    3    1.9e-12  True
-    1 ax         1000000  direct                1.147     1.7    3    3.3e-12  True
-    1 ax         1000000  direct backend        0.936     1.4    3    3.3e-12  -
-    1 ax         1000000  csne                  8.489    12.9    1    3.2e-12  True
-    1 ax         1000000  clarabel              8.848    13.5    1    4.2e-12  True   compile 2.89 s
-    1 ax         1000000  clarabel re-solve     2.856     4.3    1    2.9e-12  True
-    3 ax +SF+B     10000  direct                0.054     3.9    3    2.5e-12  True
-    3 ax +SF+B    100000  direct                0.428     2.7    3    2.5e-12  True
-    3 ax +SF+B    100000  direct backend        0.323     2.0    3    2.5e-12  -
-    3 ax +SF+B    100000  csne                  2.483    15.6    3    2.1e-12  True
-    3 ax +SF+B    100000  clarabel              1.776    11.4    3    2.5e-12  True   compile 0.54 s
-    3 ax +SF+B    100000  clarabel re-solve     0.872     5.6    3    2.2e-12  True
-    3 ax +SF+B   1000000  direct                7.598     3.6    3    3.3e-12  True
-    3 ax +SF+B   1000000  direct backend        6.287     3.0    3    3.3e-12  -
+    1 ax           10000  direct                0.017     3.8    3    1.3e-12  True
+    1 ax           10000  clarabel              0.056    12.2    3    2.9e-12  True   compile 0.02 s
+    1 ax           10000  clarabel re-solve     0.025     5.8    3    4.8e-12  True
+    1 ax           10000  osqp                 29.885  6551.0    1    1.4e-04  False  user_limit
+    1 ax          100000  direct                0.107     2.3    3    1.4e-12  True
+    1 ax          100000  direct backend        0.085     1.8    3    1.4e-12  -
+    1 ax          100000  csne                  0.632    12.9    3    2.1e-12  True
+    1 ax          100000  clarabel              0.458     9.7    3    2.2e-12  True   compile 0.14 s
+    1 ax          100000  clarabel re-solve     0.228     4.8    3    1.9e-12  True
+    1 ax         1000000  direct                1.185     1.7    3    3.3e-12  True
+    1 ax         1000000  direct backend        0.945     1.3    3    3.3e-12  -
+    1 ax         1000000  csne                  8.543    12.0    1    3.2e-12  True
+    1 ax         1000000  clarabel              8.453    11.9    1    4.2e-12  True   compile 2.65 s
+    1 ax         1000000  clarabel re-solve     3.526     5.0    1    2.9e-12  True
+    3 ax +SF+B     10000  direct                0.053     3.7    3    2.5e-12  True
+    3 ax +SF+B    100000  direct                0.411     2.5    3    2.5e-12  True
+    3 ax +SF+B    100000  direct backend        0.315     1.9    3    2.5e-12  -
+    3 ax +SF+B    100000  csne                  2.580    15.7    3    2.1e-12  True
+    3 ax +SF+B    100000  clarabel              1.972    11.9    3    2.5e-12  True   compile 0.56 s
+    3 ax +SF+B    100000  clarabel re-solve     0.889     5.5    3    2.2e-12  True
+    3 ax +SF+B   1000000  direct                7.432     2.7    3    3.3e-12  True
+    3 ax +SF+B   1000000  direct backend        6.506     2.4    3    3.3e-12  -
 
-    lambda rules, N = 100000, 1 axis: single direct solve 0.09 s (the reference 0.039 s)
+    lambda rules, N = 100000, 1 axis: single direct solve 0.10 s (the reference 0.039 s)
     rule        lambda  evaluations  total s  x single   x ref
-    lcurve    0.005152           19     0.67       7.1      17
-    gcv         0.5475           17     0.98      10.3      25
-    quasi        5.164           19     0.66       7.0      17
+    lcurve    0.005152           19     0.72       7.2      18
+    gcv         0.5475           17     1.00      10.0      25
+    quasi        5.164           19     0.68       6.8      17
 
     peak resident memory, N = 1000000, 1 axis
     variant      peak MB  above base MB  B/sample  x ref
-    reference        747            558       585    1.0
-    direct          1115            926       971    1.7   (1.49x the reference's peak)
-    csne            2109           1920      2013    3.4
-    clarabel        3057           2868      3007    5.1
+    reference        745            556       583    1.0
+    direct          1115            926       971    1.7   (1.50x the reference's peak)
+    csne            2109           1920      2013    3.5
+    clarabel        3057           2868      3007    5.2
 
-    --huge: direct at N = 1e7 x 1 axis: peak 9425 MB, optimal, verified, 38.0 s
+    --huge: direct at N = 1e7 x 1 axis: peak 9434 MB, optimal, verified, 37.5 s
 
-Clarabel's first solve at 1e6 went from 16.6-18.3x to 13.5x (cvxpy's compile 2.9 s, was
+Clarabel's first solve at 1e6 went from 16.6-18.3x to 11.9x (cvxpy's compile 2.65 s, was
 4.0-6.3 s with its default CPP back end). Three axes at 1e6 (a row this table did not
-have before): 3.6x, of which about a third is this VM's cost of faulting in fresh memory
-(6.5 GB of anonymous mappings in one solve, strace; with glibc keeping freed memory,
-``GLIBC_TUNABLES=glibc.malloc.mmap_threshold=4294967295:glibc.malloc.trim_threshold=4294967295``,
-the same solve took 5.1-5.2 s against 7.9-8.4 s, the reference 2.1-2.5 s either way).
-Before the border change it was 4.0x (the dense ``A^-1 B`` and its copy of ``B`` were
-2 x 288 MB). A single solve got faster again, so the lambda rules' multiples did not
-move (lcurve 0.67 s here, 0.70 s at a4ad84a).
+have before): 2.7x here with the reference at 2.61 s, 3.2x in a run of these rows alone
+at the same commit with the reference at 2.19 s (direct 6.99 s); 4.0x before this
+session's changes (a4ad84a: the dense ``A^-1 B``, its copy of ``B`` and two more axes'
+band, 2 x 288 + 397 MB, were all fresh memory). This VM's cost of faulting in fresh
+memory moves both: one such solve maps 6.5 GB of anonymous memory in turn (strace), and
+with glibc keeping freed memory
+(``GLIBC_TUNABLES=glibc.malloc.mmap_threshold=4294967295:glibc.malloc.trim_threshold=4294967295``)
+it took 5.1-5.2 s against 7.9-8.4 s (before the one-band change), the reference 2.1-2.5 s
+either way. A single solve got faster again, so the lambda rules' multiples did not move
+(lcurve 0.72 s here, 0.70 s at a4ad84a).
 
 Measured after the strided band writes (issue 18, fifth session)
 ----------------------------------------------------------------
