@@ -231,10 +231,13 @@ def test_equal_axes_factor_one_band_and_solve_the_others_as_right_hand_sides(ite
     (Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05), True),             # the same on every axis
     (Position(t=[3.0], value=[0.5], axes=("x",), sigma=0.05), False),   # a local row on x only
 ], ids=["equal-axes", "one-axis-item"])
-def test_equal_axes_are_assembled_as_one_run_of_the_whole_band(item, equal, by_diagonals):
+def test_equal_axes_are_assembled_as_one_run_of_the_whole_band(item, equal, by_diagonals, monkeypatch):
     """When every axis' entries are the first axis' moved by a run (compared as they are
     held: strided diagonals and sorted cells), the assembly writes the first run alone; the
-    whole band, written entry by entry, is that run repeated. Otherwise the whole band."""
+    whole band, written entry by entry, is that run repeated. Otherwise the whole band; and
+    with too many cells to sort (a large problem's FEM rows entry by entry) the whole band
+    too, whose equal runs the factorization then finds itself."""
+    from bvpnav import banded
     from bvpnav.banded import _Stride, canonical
     from bvpnav.lsq import fem_rows_by_diagonals
 
@@ -255,6 +258,13 @@ def test_equal_axes_are_assembled_as_one_run_of_the_whole_band(item, equal, by_d
         np.testing.assert_array_equal(np.tile(ab, (3, 1)), whole)
     else:
         np.testing.assert_array_equal(ab, whole)
+    monkeypatch.setattr(banded, "MIN_SORTED_CELLS", 0)
+    monkeypatch.setattr(banded, "MANY_CELLS", 10**9)   # no cell may be sorted
+    parts = plan._scatter(plan._entries(D, E, diagonal), scaled=True)
+    assert any(not isinstance(e, _Stride) and e[0].size for e in entries)   # cells to sort
+    assert parts[0].shape[0] == plan.size
+    fac = BandedKKT(ls.D.A, ls.E.A, params=form.model.l_index, plan=plan, parts=parts)
+    assert fac._runs == (3 if equal else 1)
 
 
 @pytest.mark.parametrize("case", ["1-axis", "3-axes-bias", "hard-zero-velocity", "scale-factor"])
