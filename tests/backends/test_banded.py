@@ -117,18 +117,68 @@ def test_the_sweep_reuses_one_plan_and_matches_a_fresh_solve(lam):
 
 @pytest.mark.parametrize("bias", [False, True], ids=["no-params", "bias"])
 @pytest.mark.parametrize("lam", [1e-2, 1.0, 1e2])
-def test_gcv_trace_from_the_log_determinant_equals_the_trace_by_exact_columns(lam, bias):
+@pytest.mark.parametrize("item, complex_step, tol", [
+    # folded lambda rows: the band is affine in lambda, one complex factor at lambda + ih
+    # (exact to rounding: measured 2e-12 .. 1.7e-9 relative, the exact columns' own rounding)
+    (Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05), True, 1e-8),
+    # a far-reaching lambda row in the border: a central difference of two more real
+    # factors (truncation delta^2 / 6 = 1.7e-7 relative; measured 6e-9 .. 2.6e-7)
+    (AverageVelocity(t0=[0.5], t1=[9.5], value=[0.1], sigma=0.05), False, 1e-6),
+], ids=["complex-step", "central-difference"])
+def test_gcv_trace_from_the_log_determinant_equals_the_trace_by_exact_columns(lam, bias, item, complex_step,
+                                                                             tol):
     """On a small problem (the exact trace takes one solve per measured sample) the
-    log-determinant formula, with the error-model priors' term, gives the same trace."""
-    prob = problem(Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05), n=60, error_model=Bias() if bias else None)
+    log-determinant formula, with the error-model priors' term, gives the same trace, by the
+    complex step where the band is affine in lambda and by a central difference where not."""
+    prob = problem(item, n=60, error_model=Bias() if bias else None)
     form = prob.formulation
     exact = DirectSweep(form, trace="exact")
     logdet = DirectSweep(form, trace="logdet")
-    a = exact.point(lam, need_trace=True)["trace"]
-    b = logdet.point(lam, need_trace=True)["trace"]
+    pa = exact.point(lam, need_trace=True)
+    pb = logdet.point(lam, need_trace=True)
+    a, b = pa["trace"], pb["trace"]
     assert exact.trace_method == "exact columns" and logdet.trace_method == "log-determinant"
-    assert abs(a - b) <= 1e-7 + 1e-6 * abs(a), (a, b)
+    assert (logdet._cbuf is not None) is complex_step   # which derivative was taken
+    assert abs(a - b) <= tol * abs(a), (a, b, abs(a - b) / abs(a))
     assert -3 * 60 < a < 0   # a trace of d w / d a_hat: between -N d and 0
+    # the complex point's real part is the point, its imaginary part dx/dlambda: the curve's
+    # derivative quantities agree with the real factor's second solve
+    np.testing.assert_allclose(pb["x"], pa["x"], rtol=0, atol=1e-11 * np.max(np.abs(pa["x"])))
+    assert abs(pb["deta2"] - pa["deta2"]) <= 1e-10 * abs(pa["deta2"])
+    assert abs(pb["quasi"] - pa["quasi"]) <= 1e-6 * pa["quasi"]
+
+
+@pytest.mark.parametrize("lam", [1e-3, 2.0])
+def test_affine_band_at_a_complex_lambda_is_the_real_band_plus_the_step(lam):
+    """The complex parts at lambda + ih are the real parts at lambda, scaled with the real
+    lambda's scales, plus ih times the lambda part so scaled (the band is affine in lambda)."""
+    from bvpnav.banded import AffineBand, _scale_rows, canonical
+    from bvpnav.lsq import banded_plan, least_squares_form
+
+    prob = problem(Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05), n=301, error_model=Bias())
+    form = prob.formulation
+    ls = least_squares_form(form, 1.0)
+    plan = banded_plan(ls, form)
+    D, E = canonical(ls.D.A), canonical(ls.E.A)
+    lam_rows = np.asarray(ls.lam_rows, dtype=bool)
+    affine = AffineBand(plan.assemble(D, E), plan.objective_part(D[lam_rows]), plan.kl)
+    h = 1e-3 * lam   # large enough to see the imaginary part next to the real one
+    ab, B, C, hh, sU = affine.at(lam)
+    abc, Bc, Cc, hc, sUc = affine.at_complex(lam, h)
+    np.testing.assert_array_equal(abc.real, ab)
+    np.testing.assert_array_equal(sUc, sU)
+    np.testing.assert_array_equal(hc, hh)
+    # the step by a difference of the real parts at lambda + h, scaled as at lambda
+    ab2, *_ = affine.at(lam + h)
+    want = ab2.copy()
+    one = ab.shape[0]   # equal axes: the band is one run's, its scales the first run's
+    _scale_rows(want, 1.0 / affine.at(lam + h)[4][:one], plan.kl)
+    _scale_rows(want, sU[:one], plan.kl)
+    np.testing.assert_allclose(abc.real + abc.imag, want, rtol=0, atol=1e-12 * np.max(np.abs(want)))
+    np.testing.assert_allclose(Cc.imag, (affine.at(lam + h)[2] - C).real, rtol=1e-9,
+                               atol=1e-12 * np.max(np.abs(C)))
+    np.testing.assert_allclose(Bc.toarray().imag, (affine.at(lam + h)[1] - B).toarray(), rtol=1e-9,
+                               atol=1e-12 * abs(B).max())
 
 
 @pytest.mark.parametrize("lam", [1e-2, 3.0])
@@ -186,6 +236,7 @@ def test_gcv_trace_falls_back_to_probes_when_a_neighbour_factor_is_not_banded(mo
     sweep = DirectSweep(form, trace="logdet", probes=200)
     real = sweep._factor
     monkeypatch.setattr(sweep, "_combined", lambda lam, buffer=0: None)
+    monkeypatch.setattr(sweep, "_complex_parts", lambda lam, h: None)   # the real path
     monkeypatch.setattr(sweep, "_factor", lambda f, lam=None: real(f, lam) if lam == 1.0
                         else factor_form(f, form))
     est = sweep.point(1.0, need_trace=True)["trace"]

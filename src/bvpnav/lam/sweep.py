@@ -62,6 +62,10 @@ DIRECT_POINTS = 13
 #: Default coarse sweep of the cvxpy engine (spline through the samples).
 CVXPY_POINTS = 25
 
+#: The imaginary step of a complex-step point, relative to lambda (no difference is
+#: taken, so it can be far below the square root of the machine epsilon).
+COMPLEX_STEP = 1e-20
+
 log = logging.getLogger(__name__)
 
 
@@ -188,6 +192,8 @@ class DirectSweep:
         self._plan = None
         self._parts = None
         self._buffers: list = [None, None]
+        self._cbuf = None
+        self._drhs = None
         self.factorization = "lu"
         if self.form.residual == "acceleration":  # the load form (condition ~N^4) keeps the pivoted LU
             try:
@@ -272,40 +278,113 @@ class DirectSweep:
             return pt
         form = self._ls.at_lam(lam)
         m, n = form.D.A.shape
-        try:
-            fac = self._factor(form, lam)
-        except (RuntimeError, np.linalg.LinAlgError) as exc:
-            raise InputError(f"lambda={lam:g}: the KKT matrix is singular ({exc}); some unknown is "
-                             "not determined by the information") from exc
-        # the banded LU (pivoted, exact but for folding the local rows) answers a curve point
-        # to about 1e-12 without refinement (the chosen lambda's own solve is refined and
-        # verified); the sparse LU of the load form is refined twice
-        banded = isinstance(fac, BandedKKT)
-        if banded:
-            x = fac.solve_x(form.rhs())
+        # GCV's trace by the log-determinant: one complex factorization at lambda + ih gives
+        # the point, dx/dlambda and the determinant's derivative (see _complex_point)
+        step = self._complex_point(form, lam) if need_trace and self._complex_applies() else None
+        h = None
+        if step is not None:
+            fac, x, dx, h = step
+            banded = True
         else:
-            x = fac.refined(form.rhs(), 2, 1e-14, window=slice(m, m + n))[0][m:m + n]
+            try:
+                fac = self._factor(form, lam)
+            except (RuntimeError, np.linalg.LinAlgError) as exc:
+                raise InputError(f"lambda={lam:g}: the KKT matrix is singular ({exc}); some unknown "
+                                 "is not determined by the information") from exc
+            # the banded LU (pivoted, exact but for folding the local rows) answers a curve
+            # point to about 1e-12 without refinement (the chosen lambda's own solve is refined
+            # and verified); the sparse LU of the load form is refined twice
+            banded = isinstance(fac, BandedKKT)
+            if banded:
+                x = fac.solve_x(form.rhs())
+            else:
+                x = fac.refined(form.rhs(), 2, 1e-14, window=slice(m, m + n))[0][m:m + n]
+            dx = None
         scaled = [t.residual.value(x) / t.sigma for t in self.lam_terms]  # S (A x + c)
         rho2 = float(np.sum(self.data.value(x) ** 2))
         rho2 += sum(float(np.sum((t.residual.value(x) / t.sigma) ** 2)) for t in self.fixed_terms)
         eta2 = sum(float(np.sum(r**2)) for r in scaled)
         pt = {"lam": key, "rho2": rho2, "eta2": eta2, "x": x}
         if self.need_derivative:
-            pt.update(self._derivative(form, fac, banded, x, scaled, lam))
+            pt.update(self._derivative(form, fac, banded, x, scaled, lam, dx))
         if need_trace:
-            pt["trace"] = self._trace(form, fac, lam, probes, seed)
+            pt["trace"] = self._trace(form, fac, lam, probes, seed, h)
         self.cache[key] = pt
         return pt
 
-    def _derivative(self, form, fac, banded: bool, x: np.ndarray, scaled: list, lam: float) -> dict:
-        """``deta2`` and ``quasi`` from :math:`dx/d\\lambda`, one more solve with the factor."""
+    def _complex_applies(self) -> bool:
+        """Whether a point with GCV's trace is one complex factorization: the trace by the
+        log-determinant (``trace`` "auto" beyond the exact limit, or "logdet"), a band
+        affine in lambda, and the measured accelerations entering as ``a_hat + w``."""
+        N, d = self.model.N, self.model.d
+        if self.trace not in ("auto", "logdet") or (self.trace == "auto" and N * d <= self.exact_trace_limit):
+            return False
+        return self._plan is not None and self._logdet_applies()
+
+    def _complex_parts(self, lam: float, h: float) -> tuple | None:
+        """:meth:`bvpnav.banded.AffineBand.at_complex` into a complex array the sweep owns
+        (dead once the point's quantities are read), or None without an affine band."""
+        affine = self._affine_parts()
+        if not affine:
+            return None
+        if self._cbuf is None:
+            self._cbuf = np.empty(affine.scaled0.shape, dtype=complex)
+        return affine.at_complex(lam, h, out=self._cbuf)
+
+    def _dlam_rhs(self) -> np.ndarray:
+        """:math:`d b / d\\lambda` of the folded system's unknowns block:
+        :math:`-\\sum_t A_t^T c_t / \\sigma_t^2` over the lambda-weighted terms (with
+        ``A_t x + c_t`` the term's residual); lambda-independent, made once."""
+        if self._drhs is None:
+            n = self.model.size
+            zero = np.zeros(n)
+            g = np.zeros(n)
+            for t in self.lam_terms:
+                g -= t.residual.A.T @ (t.residual.value(zero) / t.sigma**2)
+            self._drhs = g
+        return self._drhs
+
+    def _complex_point(self, form, lam: float):
+        r"""``(factor, x, dx/dlambda, h)`` at ``lam`` from one complex factorization, or None
+        (no affine band, or its factor failed: the real path takes over).
+
+        Notes
+        -----
+        The folded system is affine in lambda, :math:`K(\lambda) x = b(\lambda)`; solved at
+        :math:`\lambda + ih` (:data:`COMPLEX_STEP` relative) it gives
+        :math:`x(\lambda + ih) = x + ih\,x' + O(h^2)`: the real part is the point, the
+        imaginary part over ``h`` its derivative (no cancellation, exact to rounding), and
+        the same factor's pivots give :math:`d\log\det K/d\lambda`
+        (:meth:`bvpnav.banded.BandedKKT.logdet_step`). One ``zgbtrf`` (about 1.7 times a
+        ``dgbtrf``) and one ``zgbtrs`` replace two real factorizations at
+        :math:`\lambda e^{\pm\delta}` and the derivative's second solve.
+        """
+        h = COMPLEX_STEP * lam
+        parts = self._complex_parts(lam, h)
+        if parts is None:
+            return None
         m, n = form.D.A.shape
-        # dx/dlam from the same factorization: H x' + E^T mu' = -sum A^T S^2 (A x + c)
-        g = np.zeros(n)
-        for t, r in zip(self.lam_terms, scaled, strict=True):
-            g -= t.residual.A.T @ (r / t.sigma)
-        rhs = np.concatenate([np.zeros(m), g, np.zeros(form.E.m)])
-        dx = fac.solve_x(rhs) if banded else fac.refined(rhs, 1, window=slice(m, m + n))[0][m:m + n]
+        try:
+            fac = banded_factor(form, self.form, plan=self._plan, parts=parts)
+        except (RuntimeError, np.linalg.LinAlgError):
+            return None
+        rhs = form.rhs().astype(complex)
+        rhs[m:m + n] += 1j * h * self._dlam_rhs()
+        xc = fac.solve_x(rhs)
+        return fac, xc.real.copy(), xc.imag / h, h
+
+    def _derivative(self, form, fac, banded: bool, x: np.ndarray, scaled: list, lam: float,
+                    dx: np.ndarray | None = None) -> dict:
+        """``deta2`` and ``quasi`` from :math:`dx/d\\lambda` (given, or one more solve with
+        the factor)."""
+        m, n = form.D.A.shape
+        if dx is None:
+            # dx/dlam from the same factorization: H x' + E^T mu' = -sum A^T S^2 (A x + c)
+            g = np.zeros(n)
+            for t, r in zip(self.lam_terms, scaled, strict=True):
+                g -= t.residual.A.T @ (r / t.sigma)
+            rhs = np.concatenate([np.zeros(m), g, np.zeros(form.E.m)])
+            dx = fac.solve_x(rhs) if banded else fac.refined(rhs, 1, window=slice(m, m + n))[0][m:m + n]
         deta2 = sum(2.0 * float(np.sum(r * ((t.residual.A @ dx) / t.sigma)))
                     for t, r in zip(self.lam_terms, scaled, strict=True))
         pos = np.concatenate([self.model.r_index(a) for a in range(self.model.d)])
@@ -324,14 +403,14 @@ class DirectSweep:
             self._rhs_jac = rhs_for(np.zeros_like(self.form.data.acc))
         return rhs_for(Z) - self._rhs_jac
 
-    def _trace(self, form, fac, lam, probes, seed) -> float:
+    def _trace(self, form, fac, lam, probes, seed, h=None) -> float:
         N, d = self.model.N, self.model.d
         exact = self.trace == "exact" or (self.trace == "auto" and N * d <= self.exact_trace_limit)
         why = ""
         if (self.trace in ("auto", "logdet") and not exact and isinstance(fac, BandedKKT)
                 and self._logdet_applies()):
             try:
-                value = self._trace_logdet(form, fac, lam)
+                value = self._trace_logdet(form, fac, lam, h)
                 self.trace_method = "log-determinant"
                 return value
             except _NoLogdet as exc:   # the probes below need no determinant
@@ -378,7 +457,7 @@ class DirectSweep:
             self._logdet_ok = bool(np.max(np.abs(R - want)) <= 1e-9 * scale)
         return self._logdet_ok
 
-    def _trace_logdet(self, form, fac, lam) -> float:
+    def _trace_logdet(self, form, fac, lam, h=None) -> float:
         r""":math:`\mathrm{tr}(\partial w / \partial \hat a)` from the log-determinant.
 
         Notes
@@ -395,12 +474,14 @@ class DirectSweep:
               - \lambda \frac{d}{d\lambda} \log\det(Z^T H Z),
             \qquad \Sigma = Z (Z^T H Z)^{-1} Z^T,
 
-        since :math:`Z^T H Z = Z^T (D_0^T D_0 + D_p^T D_p + \lambda D_1^T D_1) Z`. The
-        derivative is a central difference of :meth:`bvpnav.banded.BandedKKT.logdet` at
-        :math:`\lambda e^{\pm\delta}` (two more factorizations, :math:`\delta = 10^{-3}`:
-        truncation error about :math:`\delta^2/6` relative), :math:`\Sigma` on the few
-        prior rows by solves with this factorization. Exact up to that difference (a test
-        compares it with the trace by exact columns).
+        since :math:`Z^T H Z = Z^T (D_0^T D_0 + D_p^T D_p + \lambda D_1^T D_1) Z`. With
+        a factor at :math:`\lambda + ih` (``h`` given, :meth:`_complex_point`) the
+        derivative is the complex step :meth:`bvpnav.banded.BandedKKT.logdet_step`, exact to
+        rounding; otherwise (a band not affine in lambda) a central difference of
+        :meth:`bvpnav.banded.BandedKKT.logdet` at :math:`\lambda e^{\pm\delta}` (two more
+        factorizations, :math:`\delta = 10^{-3}`: truncation error about
+        :math:`\delta^2/6` relative). :math:`\Sigma` on the few prior rows by solves with
+        this factorization. Tests compare both with the trace by exact columns.
         """
         model = self.model
         m0 = model.N * model.d
@@ -408,15 +489,18 @@ class DirectSweep:
         m, n = ls.D.A.shape
         fixed = np.flatnonzero(~ls.lam_rows)
         fixed = fixed[fixed >= m0]
-        dlt = 1e-3
-        up, down = self._logdet(lam * math.exp(dlt)), self._logdet(lam * math.exp(-dlt))
-        dlog = (up - down) / (2.0 * dlt)   # lambda d/dlambda log det
+        if h is not None:   # a complex factor at lambda + ih (_complex_point)
+            dlog = lam * fac.logdet_step(h)
+        else:
+            dlt = 1e-3
+            up, down = self._logdet(lam * math.exp(dlt)), self._logdet(lam * math.exp(-dlt))
+            dlog = (up - down) / (2.0 * dlt)   # lambda d/dlambda log det
         prior = 0.0
         if fixed.size:
             Dp = ls.D.A[fixed]
             R = np.zeros((fac.S.shape[0], fixed.size))
             R[m:m + n] = Dp.T.toarray()
-            X = fac.solve(R)[m:m + n]
+            X = fac.solve(R)[m:m + n].real
             # (S^-1)_xx = -Sigma in the augmented system's sign convention: its x block is the
             # inverse of [D^T D, E^T; E, 0] restricted, with -I on the residuals
             prior = float(np.sum(Dp.toarray().T * X))
