@@ -432,6 +432,32 @@ def _spans(pieces: list, colnode: np.ndarray, m: int) -> tuple[np.ndarray, np.nd
     return lo, hi
 
 
+def _coupling_by_columns(cpl: list, nb: int, k: int) -> sp.csc_matrix | None:
+    """The border coupling (nb, k) as CSC straight from its blocks ``(rows, cols, values)``
+    when each block lies in one border column with increasing rows and no column has two
+    blocks (the error-model parameters' dense FEM columns): the blocks laid end to end by
+    column, no sort and no duplicates to sum (0.35 s for three axes with six parameters at
+    N = 1e6 through COO); None otherwise."""
+    by_col: dict[int, tuple] = {}
+    for rows, cols, vals in cpl:
+        if not rows.size:
+            continue
+        c = int(cols[0])
+        if c in by_col or np.any(cols != c) or (rows.size > 1 and np.any(rows[1:] <= rows[:-1])):
+            return None
+        by_col[c] = (rows, vals)
+    counts = np.zeros(k + 1, dtype=np.int64)
+    for c, (rows, _) in by_col.items():
+        counts[c + 1] = rows.size
+    order = sorted(by_col)
+    parts = [by_col[c] for c in order]
+    indices = np.concatenate([r for r, _ in parts]) if parts else np.zeros(0, dtype=np.int32)
+    data = np.concatenate([v for _, v in parts]) if parts else np.zeros(0)
+    B = sp.csc_matrix((data, indices, np.cumsum(counts)), shape=(nb, k))
+    B.has_canonical_format = True   # sorted rows in each column, each column from one block
+    return B
+
+
 def _equal_runs(ab: np.ndarray, runs: int) -> bool:
     """Whether the band (LAPACK layout, see :meth:`BandPlan._scatter`) is ``runs`` equal
     consecutive blocks; then no entry couples two of them (the first block has none above
@@ -977,7 +1003,9 @@ class BandPlan:
             def cat(parts: list, t: int) -> np.ndarray:
                 return np.concatenate([p[t] for p in parts]) if parts else np.zeros(0, int)
 
-            B = sp.csc_matrix((cat(cpl, 2), (cat(cpl, 0), cat(cpl, 1))), shape=(nb, k))
+            B = _coupling_by_columns(cpl, nb, k)
+            if B is None:   # entries of several blocks in one column: summed by the conversion
+                B = sp.csc_matrix((cat(cpl, 2), (cat(cpl, 0), cat(cpl, 1))), shape=(nb, k))
             np.add.at(C, (cat(brd, 0), cat(brd, 1)), cat(brd, 2))
         return (ab, B, C, h) if sU is None else (ab, B, C, h, sU)
 
@@ -1256,16 +1284,21 @@ class BandedKKT(Factorization):
                 blocks.append((int(a), j, rows[sel] - a * L, vals[sel]))
         if not blocks:
             return []
+        # by run (stable: by column within a run): each run's solutions are adjacent columns,
+        # kept as views of the one solve (no copies: 210 ms of fresh memory for three axes
+        # with six parameters at N = 1e6)
+        blocks.sort(key=lambda blk: blk[0])
         Rs = np.zeros((L, len(blocks)), dtype=self._lu.dtype, order="F")
         for c, (_, _, r, v) in enumerate(blocks):
             Rs[r, c] = v
         x, info = self._gbtrs(self._lu, self.plan.kl, self.plan.kl, Rs, self._piv, overwrite_b=1)
         if info != 0:  # pragma: no cover - argument error
             raise np.linalg.LinAlgError(f"dgbtrs failed (info {info})")
-        out = []
-        for a in sorted({b[0] for b in blocks}):
-            idx = [c for c, b in enumerate(blocks) if b[0] == a]
-            out.append((a, np.array([blocks[c][1] for c in idx]), x[:, idx]))
+        out, start = [], 0
+        for a in sorted({blk[0] for blk in blocks}):
+            stop = start + sum(1 for blk in blocks if blk[0] == a)
+            out.append((a, np.array([blk[1] for blk in blocks[start:stop]]), x[:, start:stop]))
+            start = stop
         return out
 
     # ------------------------------------------------------------------ solves

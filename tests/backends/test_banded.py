@@ -12,11 +12,12 @@ import dataclasses
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 
 import bvpnav
 from bvpnav.banded import MAX_BORDER, BandedKKT, BandPlan, NotBanded
 from bvpnav.constraints import AverageVelocity, Position, Symmetry, Velocity
-from bvpnav.error_models import Bias
+from bvpnav.error_models import Bias, ScaleFactor
 from bvpnav.items import registry
 from bvpnav.lam.sweep import DirectSweep
 from bvpnav.lsq import column_nodes, least_squares_form
@@ -327,7 +328,6 @@ def test_fem_rows_placed_by_diagonals_equal_the_entry_by_entry_assembly(case):
     that block come from the generic product, and a description that does not match E
     (an entry missing) is not used."""
     from bvpnav.constraints import ZeroVelocity
-    from bvpnav.error_models import ScaleFactor
     from bvpnav.lsq import fem_rows_by_diagonals
     if case == "1-axis":
         prob = problem(n=301)
@@ -486,3 +486,37 @@ def test_the_strided_band_writes_equal_the_entry_by_entry_writes(item, monkeypat
         else:
             dense = [x.toarray() if hasattr(x, "toarray") else x for x in (a, b)]
             np.testing.assert_array_equal(*dense)
+
+
+@pytest.mark.parametrize("error_model", [Bias(), ScaleFactor() + Bias()], ids=["B", "SF+B"])
+def test_border_coupling_by_columns_equals_the_summed_coo_assembly(error_model):
+    """The error-model parameters' coupling is laid out column by column from its blocks
+    (each a dense FEM column of one parameter); it equals the COO assembly, which sums
+    duplicates, and a column reached by two blocks, or rows out of order, take that
+    assembly instead (None)."""
+    from bvpnav.banded import _coupling_by_columns
+    from bvpnav.lsq import banded_plan, fem_rows_by_diagonals, least_squares_form
+
+    prob = problem(n=201, error_model=error_model)
+    form = prob.formulation
+    ls = least_squares_form(form, 1.0)
+    plan = banded_plan(ls, form)
+    entries = plan._entries(ls.D.A, ls.E.A, fem_rows_by_diagonals(form))
+    cpl = entries[1]
+    nb, k = plan.pos_order.size, plan.border_order.size
+    fast = _coupling_by_columns(cpl, nb, k)
+    assert fast is not None and k == form.model.q
+    rows, cols, vals = (np.concatenate([c[t] for c in cpl]) for t in range(3))
+    coo = sp.csc_matrix((vals, (rows, cols)), shape=(nb, k))
+    assert fast.nnz == coo.nnz > 0
+    np.testing.assert_array_equal(fast.toarray(), coo.toarray())
+    fast.sum_duplicates()   # canonical as declared: nothing to sum or sort
+    assert fast.nnz == coo.nnz
+    # a second block in a column: the conversion must sum them
+    r0, c0, v0 = next(c for c in cpl if c[0].size)
+    assert _coupling_by_columns([*cpl, (r0[:3], c0[:3], v0[:3])], nb, k) is None
+    # rows out of order in a block
+    assert _coupling_by_columns([(r0[::-1], c0, v0)], nb, k) is None
+    # a block over two columns
+    two = np.where(np.arange(r0.size) % 2 == 0, c0, (c0 + 1) % k)
+    assert _coupling_by_columns([(r0, two, v0)], nb, k) is None
