@@ -168,3 +168,32 @@ def test_velocity_rows_at_nodes_are_the_node_operators_rows(kind):
     np.testing.assert_array_equal(Vr.toarray(), NVr[j[2:]].toarray())
     np.testing.assert_array_equal(Vb.toarray(), NVb[j[2:]].toarray())
     assert np.all(Va.getnnz(axis=1) == 3)   # v_j's two entries and the element's second node
+
+
+@pytest.mark.parametrize("axes, error_model", [(1, None), (3, None), (3, "SF+B")])
+def test_fem_rows_are_each_axis_blocks_placed_in_its_columns(axes, error_model):
+    """The FEM rows, written entry by entry into one CSR matrix, equal each axis' blocks
+    (K on r, M on w, the end velocities' columns, M G on the error-model parameters)
+    placed at their columns and stacked, exactly, in canonical form."""
+    from bvpnav.error_models import Bias, ScaleFactor
+    from bvpnav.model import rows_side_by_side
+
+    rng = np.random.default_rng(4)
+    t = np.sort(np.r_[0.0, 5.0, rng.uniform(0.0, 5.0, 148)])
+    acc = rng.standard_normal((t.size, axes))
+    em = ScaleFactor() + Bias() if error_model else None
+    prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=acc if axes > 1 else acc[:, 0]), error_model=em)
+    model = prob.formulation.model
+    fem_rows = model.fem_rows()
+    want = sp.vstack([model._place(model.fem_blocks(a), a) for a in range(axes)], format="csr")
+    A = fem_rows.A
+    assert A.shape == want.shape == (axes * t.size, model.size)
+    assert A.has_canonical_format and A.nnz == want.nnz
+    np.testing.assert_array_equal(A.indptr, want.indptr)
+    np.testing.assert_array_equal(A.indices, want.indices)
+    np.testing.assert_array_equal(A.data, want.data)
+    np.testing.assert_array_equal(fem_rows.c, np.concatenate([model.M @ acc.reshape(t.size, -1)[:, a]
+                                                              for a in range(axes)]))
+    # dense blocks, and groups of other sizes
+    B = rows_side_by_side([[(np.eye(2), 1)], [(sp.csr_matrix([[0.0, 3.0]]), 0), (np.array([[5.0]]), 3)]], 4)
+    np.testing.assert_array_equal(B.toarray(), [[0, 1, 0, 0], [0, 0, 1, 0], [0, 3, 0, 5]])

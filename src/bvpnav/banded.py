@@ -742,7 +742,13 @@ class BandPlan:
         pieces = _entry_pieces(E, diagonal)
         elo, ehi = _spans(pieces, colnode, p)
         enode = np.where((ehi >= 0) & (ehi - elo <= span), (elo + ehi) // 2, -1)
-        node = np.concatenate([colnode, np.full(unf.size, -1, dtype=np.int64), enode])
+        # int32 nodes where they fit (half the fresh memory of these unknown-long arrays:
+        # nine million entries for three axes at N = 1e6)
+        small = np.int32 if n + unf.size + p < 2**31 else np.int64
+        node = np.empty(n + unf.size + p, dtype=small)
+        node[:n] = colnode
+        node[n:n + unf.size] = -1
+        node[n + unf.size:] = enode
         node[elim] = -2
         # within a node, unknowns that reach the next node last (a FEM multiplier reaches one
         # node on; one axis then has bandwidth 4 even where a node holds extra unknowns): a
@@ -750,7 +756,7 @@ class BandPlan:
         # whose multiplier sits at a later node holds it (r_j, not the end velocity v0)
         reach = node.copy()
         reach[n + unf.size:] = np.where(enode >= 0, ehi, -1)
-        onward = np.zeros(n, dtype=np.int64)
+        onward = np.zeros(n, dtype=small)
         for piece in pieces:
             if isinstance(piece, _Run):
                 ahead = enode[piece.rows()] > piece.cols(colnode)
@@ -769,10 +775,12 @@ class BandPlan:
         nl = node[local]
         ahead = reach[local] - nl
         ahead -= ahead.min(initial=0)
-        order = local[np.argsort(nl * (int(ahead.max(initial=0)) + 1) + ahead, kind="stable")]
+        width = int(ahead.max(initial=0)) + 1
+        if (int(nl.max(initial=-1)) + 1) * width >= 2**31:   # the key needs 64 bits
+            nl, ahead = nl.astype(np.int64), ahead.astype(np.int64)
+        order = local[np.argsort(nl * width + ahead, kind="stable")]
         del nl, ahead
         # int32 positions where they fit: half the memory when every entry is placed
-        small = np.int32 if node.size < 2**31 else np.int64
         pos = np.full(node.size, -1, dtype=small)
         pos[order] = np.arange(order.size)
         border = np.flatnonzero(node == -1)
