@@ -501,7 +501,8 @@ def lambda_table(n: int) -> None:
     t_ref = min(_timed(lambda: reference_solve(spec)) for _ in range(2))
     print(f"\nlambda rules, N = {n}, 1 axis: single direct solve {single:.2f} s (the reference "
           f"{t_ref:.3f} s)")
-    print(f"{'rule':<8}{'lambda':>10}{'evaluations':>13}{'total s':>9}{'x single':>10}{'x ref':>8}  warnings")
+    print(f"{'rule':<8}{'lambda':>10}{'evaluations':>13}{'ms/eval':>9}{'total s':>9}{'x single':>10}"
+          f"{'x ref':>8}  warnings")
     for rule in ("lcurve", "gcv", "quasi"):
         times = []
         for _ in range(3):   # the median of three (a rule's first run pays its own warm-up)
@@ -512,7 +513,8 @@ def lambda_table(n: int) -> None:
         dt = float(np.median(times))
         curve = sol.curve
         warn = "; ".join(w[:70] for w in getattr(curve, "warnings", [])) or "-"
-        print(f"{rule:<8}{sol.lam:>10.4g}{curve.evaluations:>13d}{dt:>9.2f}{dt / single:>10.1f}"
+        per = 1e3 * curve.seconds / max(curve.evaluations, 1)   # the sweep's time per lambda
+        print(f"{rule:<8}{sol.lam:>10.4g}{curve.evaluations:>13d}{per:>9.1f}{dt:>9.2f}{dt / single:>10.1f}"
               f"{dt / t_ref:>8.0f}  {warn}", flush=True)
 
 
