@@ -149,20 +149,27 @@ def test_gcv_trace_from_the_log_determinant_equals_the_trace_by_exact_columns(la
     assert abs(pb["quasi"] - pa["quasi"]) <= 1e-6 * pa["quasi"]
 
 
-@pytest.mark.parametrize("lam", [1e-3, 2.0])
-def test_affine_band_at_a_complex_lambda_is_the_real_band_plus_the_step(lam):
-    """The complex parts at lambda + ih are the real parts at lambda, scaled with the real
-    lambda's scales, plus ih times the lambda part so scaled (the band is affine in lambda)."""
-    from bvpnav.banded import AffineBand, _scale_rows, canonical
+def _affine_band(n: int):
+    """``(formulation, plan, AffineBand)`` of three axes with a soft velocity item and a
+    bias: the band along lambda as the sweep makes it."""
+    from bvpnav.banded import AffineBand, canonical
     from bvpnav.lsq import banded_plan, least_squares_form
 
-    prob = problem(Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05), n=301, error_model=Bias())
-    form = prob.formulation
+    form = problem(Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05), n=n, error_model=Bias()).formulation
     ls = least_squares_form(form, 1.0)
     plan = banded_plan(ls, form)
     D, E = canonical(ls.D.A), canonical(ls.E.A)
     lam_rows = np.asarray(ls.lam_rows, dtype=bool)
-    affine = AffineBand(plan.assemble(D, E), plan.objective_part(D[lam_rows]), plan.kl)
+    return form, plan, AffineBand(plan.assemble(D, E), plan.objective_part(D[lam_rows]), plan.kl)
+
+
+@pytest.mark.parametrize("lam", [1e-3, 2.0])
+def test_affine_band_at_a_complex_lambda_is_the_real_band_plus_the_step(lam):
+    """The complex parts at lambda + ih are the real parts at lambda, scaled with the real
+    lambda's scales, plus ih times the lambda part so scaled (the band is affine in lambda)."""
+    from bvpnav.banded import _scale_rows
+
+    form, plan, affine = _affine_band(n=301)
     h = 1e-3 * lam   # large enough to see the imaginary part next to the real one
     ab, B, C, hh, sU = affine.at(lam)
     abc, Bc, Cc, hc, sUc = affine.at_complex(lam, h)
@@ -202,16 +209,10 @@ def test_affine_band_at_a_lambda_is_the_scaled_assembly_there(lam):
     the rounding of the combination A(1) + (lam - 1) A_1 (an entry made of lambda rows
     alone carries an absolute error of about eps times its size at lambda = 1, a relative
     one of eps / lam: hence the tolerance's 1 / lam below 1)."""
-    from bvpnav.banded import AffineBand, canonical
-    from bvpnav.lsq import banded_plan, least_squares_form
+    from bvpnav.banded import canonical
+    from bvpnav.lsq import least_squares_form
 
-    prob = problem(Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05), n=601, error_model=Bias())
-    form = prob.formulation
-    ls = least_squares_form(form, 1.0)
-    plan = banded_plan(ls, form)
-    D, E = canonical(ls.D.A), canonical(ls.E.A)
-    lam_rows = np.asarray(ls.lam_rows, dtype=bool)
-    affine = AffineBand(plan.assemble(D, E), plan.objective_part(D[lam_rows]), plan.kl)
+    form, plan, affine = _affine_band(n=601)
     assert 0 < affine.rows.size < plan.size   # a few rows, not the whole band
     ab, B, C, h, sU = affine.at(lam)
     at = least_squares_form(form, lam)
