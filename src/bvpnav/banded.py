@@ -203,6 +203,8 @@ def _mul(A: sp.spmatrix, v: np.ndarray) -> np.ndarray:
     imaginary parts (scipy would make a complex copy of ``A`` at every product)."""
     if v.dtype.kind != "c":
         return A @ v
+    if not v.size:
+        return np.zeros((A.shape[0],) + v.shape[1:], dtype=complex)
     # the real and imaginary parts as two interleaved real columns: one pass over A
     v = np.ascontiguousarray(v)
     pairs = v.view(float).reshape(v.shape[0], -1)

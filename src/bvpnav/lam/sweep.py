@@ -193,7 +193,9 @@ class DirectSweep:
         self._parts = None
         self._buffers: list = [None, None]
         self._cbuf = None
-        self._drhs = None
+        #: How the last log-determinant derivative was taken ("complex step" or
+        #: "central difference"), None before GCV's first trace by the log-determinant.
+        self.logdet_derivative = None
         self.factorization = "lu"
         if self.form.residual == "acceleration":  # the load form (condition ~N^4) keeps the pivoted LU
             try:
@@ -283,7 +285,7 @@ class DirectSweep:
         step = self._complex_point(form, lam) if need_trace and self._complex_applies() else None
         h = None
         if step is not None:
-            fac, x, dx, h = step
+            fac, x, h = step
             banded = True
         else:
             try:
@@ -299,14 +301,13 @@ class DirectSweep:
                 x = fac.solve_x(form.rhs())
             else:
                 x = fac.refined(form.rhs(), 2, 1e-14, window=slice(m, m + n))[0][m:m + n]
-            dx = None
         scaled = [t.residual.value(x) / t.sigma for t in self.lam_terms]  # S (A x + c)
         rho2 = float(np.sum(self.data.value(x) ** 2))
         rho2 += sum(float(np.sum((t.residual.value(x) / t.sigma) ** 2)) for t in self.fixed_terms)
         eta2 = sum(float(np.sum(r**2)) for r in scaled)
         pt = {"lam": key, "rho2": rho2, "eta2": eta2, "x": x}
         if self.need_derivative:
-            pt.update(self._derivative(form, fac, banded, x, scaled, lam, dx))
+            pt.update(self._derivative(form, fac, banded, x, scaled, lam))
         if need_trace:
             pt["trace"] = self._trace(form, fac, lam, probes, seed, h)
         self.cache[key] = pt
@@ -331,60 +332,49 @@ class DirectSweep:
             self._cbuf = np.empty(affine.scaled0.shape, dtype=complex)
         return affine.at_complex(lam, h, out=self._cbuf)
 
-    def _dlam_rhs(self) -> np.ndarray:
-        """:math:`d b / d\\lambda` of the folded system's unknowns block:
-        :math:`-\\sum_t A_t^T c_t / \\sigma_t^2` over the lambda-weighted terms (with
-        ``A_t x + c_t`` the term's residual); lambda-independent, made once."""
-        if self._drhs is None:
-            n = self.model.size
-            zero = np.zeros(n)
-            g = np.zeros(n)
-            for t in self.lam_terms:
-                g -= t.residual.A.T @ (t.residual.value(zero) / t.sigma**2)
-            self._drhs = g
-        return self._drhs
-
     def _complex_point(self, form, lam: float):
-        r"""``(factor, x, dx/dlambda, h)`` at ``lam`` from one complex factorization, or None
-        (no affine band, or its factor failed: the real path takes over).
+        r"""``(factor, x, h)`` at ``lam`` from one complex factorization, or None (no affine
+        band, or its factor failed: the real path takes over).
 
         Notes
         -----
-        The folded system is affine in lambda, :math:`K(\lambda) x = b(\lambda)`; solved at
-        :math:`\lambda + ih` (:data:`COMPLEX_STEP` relative) it gives
-        :math:`x(\lambda + ih) = x + ih\,x' + O(h^2)`: the real part is the point, the
-        imaginary part over ``h`` its derivative (no cancellation, exact to rounding), and
-        the same factor's pivots give :math:`d\log\det K/d\lambda`
-        (:meth:`bvpnav.banded.BandedKKT.logdet_step`). One ``zgbtrf`` (about 1.7 times a
-        ``dgbtrf``) and one ``zgbtrs`` replace two real factorizations at
-        :math:`\lambda e^{\pm\delta}` and the derivative's second solve.
+        The folded system is affine in lambda, :math:`K(\lambda)`; factored at
+        :math:`\lambda + ih` (:data:`COMPLEX_STEP` relative) its pivots give
+        :math:`d\log|\det K|/d\lambda` (:meth:`bvpnav.banded.BandedKKT.logdet_step`,
+        exact to rounding), and since :math:`K(\lambda + ih)^{-1} = K^{-1} - ih\,K^{-1}
+        K' K^{-1} + O(h^2)` the real part of a solve with the real right-hand side is the
+        point. One ``zgbtrf`` (about 1.7 times a ``dgbtrf``) and one ``zgbtrs`` replace the
+        real factor and two more real factorizations at :math:`\lambda e^{\pm\delta}`;
+        rules that use :math:`dx/d\lambda` take one more ``zgbtrs``
+        (:meth:`_derivative`).
         """
         h = COMPLEX_STEP * lam
         parts = self._complex_parts(lam, h)
         if parts is None:
             return None
-        m, n = form.D.A.shape
         try:
             fac = banded_factor(form, self.form, plan=self._plan, parts=parts)
         except (RuntimeError, np.linalg.LinAlgError):
             return None
-        rhs = form.rhs().astype(complex)
-        rhs[m:m + n] += 1j * h * self._dlam_rhs()
-        xc = fac.solve_x(rhs)
-        return fac, xc.real.copy(), xc.imag / h, h
+        # a real right-hand side: the real part of the solve is x to O(h^2) (dx/dlambda is
+        # then solved for with this factor, from the residuals, in _derivative: the
+        # imaginary part of a solve with the right-hand side's derivative would carry
+        # dx = K^-1 (b' - K' x) with b' and K' x cancelling inside the factorization,
+        # accurate only to |x| eps / lambda; 14 % off at lambda = 1e6 on 2,000 samples)
+        return fac, fac.solve_x(form.rhs()).real.copy(), h
 
-    def _derivative(self, form, fac, banded: bool, x: np.ndarray, scaled: list, lam: float,
-                    dx: np.ndarray | None = None) -> dict:
-        """``deta2`` and ``quasi`` from :math:`dx/d\\lambda` (given, or one more solve with
-        the factor)."""
+    def _derivative(self, form, fac, banded: bool, x: np.ndarray, scaled: list, lam: float) -> dict:
+        """``deta2`` and ``quasi`` from :math:`dx/d\\lambda`, one more solve with the factor
+        (a complex-step factor's real part, see :meth:`_complex_point`)."""
         m, n = form.D.A.shape
-        if dx is None:
-            # dx/dlam from the same factorization: H x' + E^T mu' = -sum A^T S^2 (A x + c)
-            g = np.zeros(n)
-            for t, r in zip(self.lam_terms, scaled, strict=True):
-                g -= t.residual.A.T @ (r / t.sigma)
-            rhs = np.concatenate([np.zeros(m), g, np.zeros(form.E.m)])
-            dx = fac.solve_x(rhs) if banded else fac.refined(rhs, 1, window=slice(m, m + n))[0][m:m + n]
+        # dx/dlam from the same factorization: H x' + E^T mu' = -sum A^T S^2 (A x + c)
+        g = np.zeros(n)
+        for t, r in zip(self.lam_terms, scaled, strict=True):
+            g -= t.residual.A.T @ (r / t.sigma)
+        rhs = np.concatenate([np.zeros(m), g, np.zeros(form.E.m)])
+        dx = fac.solve_x(rhs) if banded else fac.refined(rhs, 1, window=slice(m, m + n))[0][m:m + n]
+        if dx.dtype.kind == "c":
+            dx = dx.real.copy()
         deta2 = sum(2.0 * float(np.sum(r * ((t.residual.A @ dx) / t.sigma)))
                     for t, r in zip(self.lam_terms, scaled, strict=True))
         pos = np.concatenate([self.model.r_index(a) for a in range(self.model.d)])
@@ -491,10 +481,12 @@ class DirectSweep:
         fixed = fixed[fixed >= m0]
         if h is not None:   # a complex factor at lambda + ih (_complex_point)
             dlog = lam * fac.logdet_step(h)
+            self.logdet_derivative = "complex step"
         else:
             dlt = 1e-3
             up, down = self._logdet(lam * math.exp(dlt)), self._logdet(lam * math.exp(-dlt))
             dlog = (up - down) / (2.0 * dlt)   # lambda d/dlambda log det
+            self.logdet_derivative = "central difference"
         prior = 0.0
         if fixed.size:
             Dp = ls.D.A[fixed]
