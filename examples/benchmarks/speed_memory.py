@@ -65,9 +65,9 @@ Measured after GCV's complex step (issue 18, seventh session)
 2026-12-04, main at e723e10, the same flags (``--skip csne3@1e6,clarabel3@1e6 --memory
 --huge``); this VM ran about 15 % slower than in the session below (the reference at
 1e5: 0.051 s against 0.047 s), so compare the ratios. GCV's points are one complex
-factorization at lambda + ih each (the real factor, the derivative's solve and two real
-factors at lambda e^(+-1e-3) before); the border coupling is laid out by columns, the
-FEM rows written in one CSR matrix::
+factorization at lambda + ih each (the real factor and two real factors at lambda
+e^(+-1e-3) before); the border coupling is laid out by columns, the FEM rows written in
+one CSR matrix::
 
     case               N  variant              time s   x ref runs     vs ref  verified
     1 ax           10000  direct                0.018     3.9    3    1.3e-12  True
