@@ -174,7 +174,8 @@ def test_velocity_rows_at_nodes_are_the_node_operators_rows(kind):
 def test_fem_rows_are_each_axis_blocks_placed_in_its_columns(axes, error_model):
     """The FEM rows, written entry by entry into one CSR matrix, equal each axis' blocks
     (K on r, M on w, the end velocities' columns, M G on the error-model parameters)
-    placed at their columns and stacked, exactly, in canonical form."""
+    moved to their columns by a COO assembly and stacked, exactly, in canonical form;
+    ``_place`` (one axis) gives that axis' rows."""
     from bvpnav.error_models import Bias, ScaleFactor
     from bvpnav.model import rows_side_by_side
 
@@ -185,13 +186,27 @@ def test_fem_rows_are_each_axis_blocks_placed_in_its_columns(axes, error_model):
     prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=acc if axes > 1 else acc[:, 0]), error_model=em)
     model = prob.formulation.model
     fem_rows = model.fem_rows()
-    want = sp.vstack([model._place(model.fem_blocks(a), a) for a in range(axes)], format="csr")
+    # the reference: each block's entries moved to its columns by COO, summed, stacked
+    parts = []
+    for a in range(axes):
+        blocks, o = model.fem_blocks(a), a * model.block
+        starts = {"r": o, "w": o + t.size, "vb": o + 2 * t.size, "l": axes * model.block}
+        coo = [(sp.coo_matrix(blocks[key]), starts[key]) for key in starts if key in blocks]
+        parts.append(sp.csr_matrix((np.concatenate([c.data for c, _ in coo]),
+                                    (np.concatenate([c.row for c, _ in coo]),
+                                     np.concatenate([c.col + col for c, col in coo]))),
+                                   shape=(t.size, model.size)))
+    want = sp.vstack(parts, format="csr")
+    want.sort_indices()
     A = fem_rows.A
     assert A.shape == want.shape == (axes * t.size, model.size)
     assert A.has_canonical_format and A.nnz == want.nnz
     np.testing.assert_array_equal(A.indptr, want.indptr)
     np.testing.assert_array_equal(A.indices, want.indices)
     np.testing.assert_array_equal(A.data, want.data)
+    for a in range(axes):
+        one = model._place(model.fem_blocks(a), a)
+        np.testing.assert_array_equal(one.toarray(), want[a * t.size:(a + 1) * t.size].toarray())
     np.testing.assert_array_equal(fem_rows.c, np.concatenate([model.M @ acc.reshape(t.size, -1)[:, a]
                                                               for a in range(axes)]))
     # dense blocks, and groups of other sizes
