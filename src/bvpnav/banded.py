@@ -538,18 +538,7 @@ class AffineBand:
         """``(ab, B, C, h, sU)`` at ``lam``: ``ab`` scaled by ``sU`` (:func:`scale_band`),
         written into ``out`` (an array of the band's shape whose factor is no longer
         needed: no new allocation, no page faults) when given."""
-        g = lam - 1.0
-        vals, sU = self._rows_at(lam)
-        if out is None:
-            ab = self.scaled0.copy()
-        else:
-            ab = out
-            np.copyto(ab, self.scaled0)
-        ab[self.rows] = vals
-        B = None if self.B is None else self.B + g * self.B1
-        if self.runs > 1:
-            sU = np.tile(sU, self.runs)
-        return ab, B, self.C + g * self.C1, self.h, sU
+        return self._parts(lam, 0.0, out)
 
     def at_complex(self, lam: float, h: float, out: np.ndarray | None = None) -> tuple:
         r"""The parts at the complex lambda :math:`\lambda + ih`, scaled by the real
@@ -562,19 +551,25 @@ class AffineBand:
         The parts are affine in lambda, so :math:`A(\lambda + ih) = A(\lambda) + ih A_1`
         exactly; only the rows of :attr:`rows` have an imaginary part.
         """
+        return self._parts(lam, h, out)
+
+    def _parts(self, lam: float, h: float, out: np.ndarray | None) -> tuple:
+        """:meth:`at` (``h`` = 0) or :meth:`at_complex`."""
         g = lam - 1.0
         vals, sU = self._rows_at(lam)
-        step = self.ab1 * h
-        _scale_rows(step, sU, self.kl, self.rows)
+        if h:
+            step = self.ab1 * h
+            _scale_rows(step, sU, self.kl, self.rows)
+            vals = vals + 1j * step
+            g = g + 1j * h
         if out is None:
-            out = np.empty(self.scaled0.shape, dtype=complex)
+            out = np.empty(self.scaled0.shape, dtype=vals.dtype)
         np.copyto(out, self.scaled0)
-        out[self.rows] = vals + 1j * step
-        gc = g + 1j * h
-        B = None if self.B is None else self.B + gc * self.B1
+        out[self.rows] = vals
+        B = None if self.B is None else self.B + g * self.B1
         if self.runs > 1:
             sU = np.tile(sU, self.runs)
-        return out, B, self.C + gc * self.C1, self.h, sU
+        return out, B, self.C + g * self.C1, self.h, sU
 
     def _rows_at(self, lam: float) -> tuple[np.ndarray, np.ndarray]:
         """The changing rows at ``lam``, scaled, and the scales of one run."""
