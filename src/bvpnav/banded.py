@@ -40,6 +40,7 @@ factorization.
 from __future__ import annotations
 
 import functools
+import itertools
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -1296,37 +1297,38 @@ class BandedKKT(Factorization):
         Rs = np.zeros((L, len(blocks)), dtype=self._lu.dtype, order="F")
         for c, (_, _, r, v) in enumerate(blocks):
             Rs[r, c] = v
-        x, info = self._gbtrs(self._lu, self.plan.kl, self.plan.kl, Rs, self._piv, overwrite_b=1)
-        if info != 0:  # pragma: no cover - argument error
-            raise np.linalg.LinAlgError(f"dgbtrs failed (info {info})")
+        x = self._trs(Rs, overwrite=True)
         out, start = [], 0
-        for a in sorted({blk[0] for blk in blocks}):
-            stop = start + sum(1 for blk in blocks if blk[0] == a)
-            out.append((a, np.array([blk[1] for blk in blocks[start:stop]]), x[:, start:stop]))
-            start = stop
+        for a, group in itertools.groupby(blocks, key=lambda blk: blk[0]):
+            cols = np.array([blk[1] for blk in group])
+            out.append((a, cols, x[:, start:start + cols.size]))
+            start += cols.size
         return out
 
     # ------------------------------------------------------------------ solves
+    def _trs(self, R: np.ndarray, overwrite: bool = False) -> np.ndarray:
+        """``A^{-1} R`` for one run's banded factor (``dgbtrs``, or ``zgbtrs`` for complex
+        parts), ``R`` (L,) or (L, c); in place of a Fortran-ordered ``R`` with
+        ``overwrite``."""
+        kl = self.plan.kl
+        x, info = self._gbtrs(self._lu, kl, kl, R, self._piv, overwrite_b=overwrite)
+        if info != 0:  # pragma: no cover - argument error
+            raise np.linalg.LinAlgError(f"gbtrs failed (info {info})")
+        return x
+
     def _band_solve(self, R: np.ndarray, overwrite: bool = False) -> np.ndarray:
         """``A^{-1} R`` for the scaled banded part ``A`` and ``R`` (nb, c); with equal runs
         (:attr:`BandPlan.segments`) each run's rows are right-hand sides of the one factor,
         those that are zero (a parameter of another axis) skipped."""
-        kl, runs = self.plan.kl, self._runs
+        runs = self._runs
         if runs == 1:
-            x, info = self._gbtrs(self._lu, kl, kl, R, self._piv, overwrite_b=overwrite)
-            if info != 0:  # pragma: no cover - argument error
-                raise np.linalg.LinAlgError(f"dgbtrs failed (info {info})")
-            return x
+            return self._trs(R, overwrite)
         nb = R.shape[0]
         L = nb // runs
         if R.ndim == 1:
             if all(R[a * L:(a + 1) * L].any() for a in range(runs)):
                 # the runs as the columns of one (L, runs) Fortran array: R's own memory
-                x, info = self._gbtrs(self._lu, kl, kl, R.reshape(runs, L).T, self._piv,
-                                        overwrite_b=overwrite)
-                if info != 0:  # pragma: no cover - argument error
-                    raise np.linalg.LinAlgError(f"dgbtrs failed (info {info})")
-                return x.T.reshape(nb)
+                return self._trs(R.reshape(runs, L).T, overwrite).T.reshape(nb)
             return self._band_solve(R[:, None])[:, 0]
         c = R.shape[1]
         blocks = [(a, j) for a in range(runs) for j in range(c) if R[a * L:(a + 1) * L, j].any()]
@@ -1336,9 +1338,7 @@ class BandedKKT(Factorization):
         Rs = np.empty((L, len(blocks)), dtype=R.dtype, order="F")
         for col, (a, j) in enumerate(blocks):
             Rs[:, col] = R[a * L:(a + 1) * L, j]
-        x, info = self._gbtrs(self._lu, kl, kl, Rs, self._piv, overwrite_b=1)
-        if info != 0:  # pragma: no cover - argument error
-            raise np.linalg.LinAlgError(f"dgbtrs failed (info {info})")
+        x = self._trs(Rs, overwrite=True)
         for col, (a, j) in enumerate(blocks):
             out[a * L:(a + 1) * L, j] = x[:, col]
         return out
