@@ -265,15 +265,23 @@ def _equal_cells(cols: list, rows: list, vals: list, L: int, seg: int) -> bool:
     return all(np.array_equal(x[b * k:(b + 1) * k], x[:k]) for b in range(1, seg) for x in (c, r, v))
 
 
+def _oriented(band: list):
+    """The index entries ``(i, j, v, mirror)`` as written: ``(i, j, v)``, then ``(j, i, v)``
+    for a mirrored one."""
+    for pi, pj, v, mirror in band:
+        yield pi, pj, v
+        if mirror:
+            yield pj, pi, v
+
+
 def _cells_below(band: list, L: int) -> list:
     """The index entries ``(i, j, v, mirror)`` of band columns ``j < L`` (each orientation
     of a mirrored entry on its own, as written)."""
     out = []
-    for pi, pj, v, mirror in band:
-        for j, i in ((pj, pi), (pi, pj))[:1 + mirror]:
-            sel = j < L
-            if sel.any():
-                out.append((i[sel], j[sel], v[sel], False))
+    for i, j, v in _oriented(band):
+        sel = j < L
+        if sel.any():
+            out.append((i[sel], j[sel], v[sel], False))
     return out
 
 
@@ -1055,18 +1063,15 @@ class BandPlan:
             if not all(np.array_equal(by_run[a][key].v, by_run[0][key].v) for a in range(1, seg)):
                 return 1
         loose += [e for d in by_run for key, e in d.items() if key not in common]
-        cols, rows, vals = [], [], []
-        for pi, pj, v, mirror in band:
-            for j, i in ((pj, pi), (pi, pj))[:1 + mirror]:
-                cols.append(j)
-                rows.append(i)
-                vals.append(v)
-        for e in loose:
+        cells = list(band)
+        for e in loose:   # as index entries: A[j + off, j] = v at j = j0 + step t
             j = e.j0 + e.step * np.arange(e.v.size, dtype=np.int64)
-            for jj, ii in ((j, j + e.off), (j + e.off, j))[:1 + e.mirror]:
-                cols.append(jj)
-                rows.append(ii)
-                vals.append(e.v)
+            cells.append((j + e.off, j, e.v, e.mirror))
+        rows, cols, vals = [], [], []
+        for i, j, v in _oriented(cells):
+            rows.append(i)
+            cols.append(j)
+            vals.append(v)
         if sum(c.size for c in cols) > max(L // MANY_CELLS, MIN_SORTED_CELLS):
             return 1   # sorting them would cost more than writing the whole band and comparing
         return seg if _equal_cells(cols, rows, vals, L, seg) else 1
