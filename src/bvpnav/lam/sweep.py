@@ -191,8 +191,7 @@ class DirectSweep:
         self._ls = least_squares_form(self.form, 1.0)   # every lambda rescales its soft rows
         self._plan = None
         self._parts = None
-        self._buffers: list = [None, None]
-        self._cbuf = None
+        self._buffers: list = [None, None, None]
         #: How the last log-determinant derivative was taken ("complex step" or
         #: "central difference"), None before GCV's first trace by the log-determinant.
         self.logdet_derivative = None
@@ -224,20 +223,23 @@ class DirectSweep:
                 self.form.cache[BAND_AFFINE] = (pl, self._parts)
         return self._parts
 
-    def _combined(self, lam: float, buffer: int = 0) -> tuple | None:
-        """The scaled banded parts at ``lam`` (:meth:`bvpnav.banded.AffineBand.at`), or None.
+    def _combined(self, lam: float, buffer: int = 0, h: float = 0.0) -> tuple | None:
+        """The scaled banded parts at ``lam`` (:meth:`bvpnav.banded.AffineBand.at`), or at
+        ``lam + ih`` with ``h`` (:meth:`~bvpnav.banded.AffineBand.at_complex`), or None.
 
-        The band is written into one of two arrays the sweep owns (``buffer`` 0: the
+        The band is written into one of three arrays the sweep owns (``buffer`` 0: the
         factor of the current point, dead when the next point starts; 1: the log-
-        determinant's neighbours, dead once their determinant is read), so that ``dgbtrf``
-        works in place of an array already mapped instead of a fresh one per lambda."""
+        determinant's neighbours, dead once their determinant is read; the complex one for
+        ``h``, dead once the point's quantities are read), so that ``dgbtrf`` works in
+        place of an array already mapped instead of a fresh one per lambda."""
         affine = self._affine_parts()
         if not affine:
             return None
         bufs = self._buffers
+        buffer = 2 if h else buffer
         if bufs[buffer] is None:
-            bufs[buffer] = np.empty_like(affine.scaled0)
-        return affine.at(lam, out=bufs[buffer])
+            bufs[buffer] = np.empty(affine.scaled0.shape, dtype=complex if h else float)
+        return affine.at_complex(lam, h, out=bufs[buffer]) if h else affine.at(lam, out=bufs[buffer])
 
     def _factor(self, form, lam: float | None = None):
         """The banded factor with the plan made once (the pattern is the same at every
@@ -322,16 +324,6 @@ class DirectSweep:
             return False
         return self._plan is not None and self._logdet_applies()
 
-    def _complex_parts(self, lam: float, h: float) -> tuple | None:
-        """:meth:`bvpnav.banded.AffineBand.at_complex` into a complex array the sweep owns
-        (dead once the point's quantities are read), or None without an affine band."""
-        affine = self._affine_parts()
-        if not affine:
-            return None
-        if self._cbuf is None:
-            self._cbuf = np.empty(affine.scaled0.shape, dtype=complex)
-        return affine.at_complex(lam, h, out=self._cbuf)
-
     def _complex_point(self, form, lam: float):
         r"""``(factor, x, h)`` at ``lam`` from one complex factorization, or None (no affine
         band, or its factor failed: the real path takes over).
@@ -349,7 +341,7 @@ class DirectSweep:
         (:meth:`_derivative`).
         """
         h = COMPLEX_STEP * lam
-        parts = self._complex_parts(lam, h)
+        parts = self._combined(lam, h=h)
         if parts is None:
             return None
         try:
