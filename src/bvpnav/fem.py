@@ -134,15 +134,7 @@ def node_velocity_operators(grid: TimeGrid) -> tuple[sp.csr_matrix, sp.csr_matri
     return the unknowns ``v_0`` and ``v_1`` themselves, so a velocity condition at
     an end is exact.
     """
-    n = grid.n
-    hl = grid.h[:max(n - 2, 0)]   # interior node j = 1 .. N-2 uses the element j-1 on its left
-    # made directly in CSR form: two entries (columns j-1, j) per interior row, none at the ends
-    cols = (np.arange(hl.size)[:, None] + np.arange(2)).ravel()
-    indptr = np.concatenate([[0], 2 * np.arange(n - 1), [2 * hl.size]])
-    Vr = sp.csr_matrix((np.column_stack([-1.0 / hl, 1.0 / hl]).ravel(), cols, indptr), shape=(n, n))
-    Va = sp.csr_matrix((np.column_stack([hl / 6.0, hl / 3.0]).ravel(), cols, indptr), shape=(n, n))
-    Vb = sp.csr_matrix(([1.0, 1.0], ([0, n - 1], [0, 1])), shape=(n, 2))
-    return Vr, Va, Vb
+    return _node_velocity_rows(grid, np.arange(grid.n))
 
 
 def velocity_operators(
@@ -184,16 +176,18 @@ def velocity_operators(
 
 
 def _node_velocity_rows(grid: TimeGrid, j: np.ndarray) -> tuple[sp.csr_matrix, sp.csr_matrix, sp.csr_matrix]:
-    """Rows ``j`` of :func:`node_velocity_operators` (``len(j)`` rows), made from those
-    nodes' elements alone: a few velocities cost O(len(j)), not O(N)."""
+    """Rows ``j`` of :func:`node_velocity_operators` (``len(j)`` rows, any nodes in any
+    order), made from those nodes' elements alone: a few velocities cost O(len(j)), not
+    O(N). Made directly in CSR form: two entries (columns j-1, j) per interior node's row
+    (the element on its left), none at the ends, whose rows of ``Vb`` pick ``v0``, ``v1``."""
     n, m = grid.n, j.size
-    k = np.flatnonzero((j > 0) & (j < n - 1))   # interior nodes: the element on their left
-    jj = j[k]
+    interior = (j > 0) & (j < n - 1)
+    jj = j[interior]
     h = grid.h[jj - 1]
-    rows = np.repeat(k, 2)
     cols = np.column_stack([jj - 1, jj]).ravel()
-    Vr = sp.csr_matrix((np.column_stack([-1.0 / h, 1.0 / h]).ravel(), (rows, cols)), shape=(m, n))
-    Va = sp.csr_matrix((np.column_stack([h / 6.0, h / 3.0]).ravel(), (rows, cols)), shape=(m, n))
-    e = np.flatnonzero((j == 0) | (j == n - 1))   # the ends: v0 and v1 themselves
+    indptr = np.concatenate([[0], np.cumsum(2 * interior)])
+    Vr = sp.csr_matrix((np.column_stack([-1.0 / h, 1.0 / h]).ravel(), cols, indptr), shape=(m, n))
+    Va = sp.csr_matrix((np.column_stack([h / 6.0, h / 3.0]).ravel(), cols, indptr), shape=(m, n))
+    e = np.flatnonzero(~interior)   # the ends: v0 and v1 themselves
     Vb = sp.csr_matrix((np.ones(e.size), (e, np.where(j[e] == 0, 0, 1))), shape=(m, 2))
     return Vr, Va, Vb
