@@ -15,7 +15,7 @@ import pytest
 import bvpnav
 import bvpnav.log as blog
 from bvpnav.constraints import Position, TrackLine
-from bvpnav.lam.sweep import DIRECT_POINTS
+from bvpnav.lam.sweep import SLOPE_POINTS
 from bvpnav.scenarios import tikhonov2011
 from bvpnav.solve import lambda_curve
 
@@ -112,7 +112,7 @@ def test_a_rule_choosing_lambda_is_logged_with_engine_evaluations_and_seconds(ca
     caplog.set_level(logging.INFO, logger="bvpnav")
     sol = table1_load().solve(lam="lcurve", solver="direct")
     (sweep,) = messages(caplog, "bvpnav.lam.sweep")
-    assert sweep.startswith(f"lambda sweep: engine direct, {DIRECT_POINTS} points over "
+    assert sweep.startswith(f"lambda sweep: engine direct, {SLOPE_POINTS} points over "
                             "lam_range=(1e-06, 1e+06), ")
     assert f"lcurve lam={sol.lam:.6g} (used)" in sweep and " evaluations, " in sweep
     (rule,) = messages(caplog, "bvpnav.solve.rule")

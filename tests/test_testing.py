@@ -534,6 +534,19 @@ class _DerivativeReader(_OutsideRule):
         return np.array([p["deta2"] for p in pts])
 
 
+class _BlindSlopes(_OutsideRule):
+    """Reads slopes (d2eta2) but lets the sweep skip the derivative solve that gives them."""
+
+    name = "blind-slopes"
+    slopes = True
+    uses_derivative = False
+
+
+class _MaybeSlopes(_OutsideRule):
+    name = "maybe-slopes"
+    slopes = "yes"
+
+
 @pytest.mark.parametrize("plugin, rule", [
     (_Sloppy(), "run"), (_BadPreset(), "presets"), (_Upper(), "name"), (_Vague(), "accepts"),
 ], ids=lambda p: getattr(p, "name", str(p)))
@@ -545,7 +558,7 @@ def test_broken_back_end_fails_naming_the_rule(plugin, rule):
 @pytest.mark.parametrize("plugin, rule", [
     (_OutsideRule(), "refine (direct sweep)"), (_ShortRule(), "scores (direct sweep)"),
     (_RandomRule(), "deterministic (direct sweep)"), (_NeedyRule(), "needs"),
-    (_DerivativeReader(), "scores (direct sweep)"),
+    (_DerivativeReader(), "scores (direct sweep)"), (_BlindSlopes(), "slopes"), (_MaybeSlopes(), "slopes"),
 ], ids=lambda p: getattr(p, "name", str(p)))
 def test_broken_rule_fails_naming_the_rule(plugin, rule):
     pattern = rf"^lambda rule {plugin.name!r}: rule '{re.escape(rule)}' broken: "

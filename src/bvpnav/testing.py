@@ -755,8 +755,10 @@ def check_rule(rule) -> None:
     ------
     AssertionError
         Naming the rule and the broken rule of the contract: a non-empty ``name``;
-        ``needs`` a subset of :data:`bvpnav.lam.NEEDS`; on a small least-squares problem
-        (direct sweep) ``scores`` one number per sampled lambda and ``refine`` a lambda
+        ``needs`` a subset of :data:`bvpnav.lam.NEEDS`; ``slopes`` a bool, and True only
+        with ``uses_derivative``; on a small least-squares problem (direct sweep, sampled
+        every two decades for a rule that reads slopes) ``scores`` one number per sampled
+        lambda and ``refine`` a lambda
         inside the sweep's range, the same on a second run; and, unless the rule needs
         least squares, the same on the cvxpy sweep of a problem with a robust item.
     """
@@ -768,9 +770,15 @@ def check_rule(rule) -> None:
              f"needs must be a (frozen)set, a subset of {list(NEEDS)}, got {needs!r}")
     _require("trace" not in needs or "least_squares" in needs, who, "needs",
              "a rule that needs 'trace' needs 'least_squares' too (only the direct sweep has it)")
+    slopes = getattr(rule, "slopes", False)
+    _require(isinstance(slopes, bool), who, "slopes", f"slopes must be True or False, got {slopes!r}")
+    _require(not slopes or getattr(rule, "uses_derivative", True), who, "slopes",
+             "a rule that reads slopes (d2eta2) needs the derivative solve: uses_derivative = True")
     ls, robust = _ls_formulation(sigma_a=0.05)
-    lams = np.geomspace(1e-3, 1e3, 13)
-    s = np.log(lams)
+    # as sweep_curve samples for this rule alone: every two decades on the direct sweep
+    # when it reads slopes
+    grids = {"direct": np.geomspace(1e-6, 1e6, 7) if slopes else np.geomspace(1e-3, 1e3, 13),
+             "cvxpy": np.geomspace(1e-3, 1e3, 13)}
     opts, _ = prepare(1.0, fallback=None)
     # as sweep_curve builds it for this rule alone: without dx/dlam when the rule says it
     # does not read deta2 or quasi (so a rule that reads them anyway fails here, not later)
@@ -779,13 +787,15 @@ def check_rule(rule) -> None:
     if "least_squares" not in rule.needs:
         sweeps.append(("cvxpy", lambda: CvxpySweep(robust, lambda lam: solve_fixed(robust, lam, opts))))
     for engine, make in sweeps:
+        lams = grids[engine]
+        s = np.log(lams)
         chosen = []
         for _ in range(2):
             sweep = make()
             pts = [sweep.point(lam) for lam in lams]
             curve = LambdaCurve(lam=lams, residual_norm=np.sqrt([p["rho2"] for p in pts]),
                                 info_norm=np.sqrt([p["eta2"] for p in pts]), rule=name,
-                                engine=engine, lam_range=(1e-3, 1e3))
+                                engine=engine, lam_range=(lams[0], lams[-1]))
             with _rule(who, f"scores ({engine} sweep)"):
                 sc = np.asarray(rule.scores(sweep, pts, s), dtype=float)
                 _require(sc.shape == lams.shape, who, f"scores ({engine} sweep)",
@@ -793,7 +803,8 @@ def check_rule(rule) -> None:
             with _rule(who, f"refine ({engine} sweep)"):
                 lam = float(rule.refine(sweep, pts, s, sc, curve))
                 _require(np.isfinite(lam) and lams[0] <= lam <= lams[-1], who, f"refine ({engine} sweep)",
-                         f"the chosen lambda {lam!r} is not inside the sweep's range 1e-3..1e3")
+                         f"the chosen lambda {lam!r} is not inside the sweep's range "
+                         f"{lams[0]:g}..{lams[-1]:g}")
             chosen.append(lam)
         _require(chosen[0] == chosen[1], who, f"deterministic ({engine} sweep)",
                  f"two runs chose {chosen[0]!r} and {chosen[1]!r}")

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import numpy as np
-from _helpers import table1
+import pytest
+from _helpers import known_noise, table1
 
 from bvpnav.lam.lcurve import curvature as _curvature
+from bvpnav.lam.lcurve import curvature_slope as _curvature_slope
 from bvpnav.lam.lcurve import spline_curvature as _spline_curvature
 from bvpnav.lam.sweep import DirectSweep as _DirectSweep
 from bvpnav.solve import lambda_curve
@@ -33,3 +35,34 @@ def test_lcurve_refines_beyond_the_grid_and_lands_near_the_paper():
     # the paper reports lambda_L = 3.611 for this row (mean over its realisations)
     assert 3.611 / 2 < lam < 3.611 * 2
     assert set(curve.to_frame().columns) >= {"lam", "residual_norm", "info_norm", "lcurve"}
+
+
+def test_curvature_slope_is_the_derivative_of_the_curvature():
+    """The complex-step slope of the exact curvature equals its central difference in
+    log lambda (to the difference's own error) across the corner and both flanks."""
+    prob, _ = table1()
+    eng = _DirectSweep(prob)
+    eps = 1e-3
+    slopes, diffs = [], []
+    for lam in np.geomspace(1e-3, 1e3, 7):
+        a, b, c = (eng.point(lam * np.exp(e)) for e in (-eps, 0.0, eps))
+        slopes.append(_curvature_slope(b))
+        diffs.append((_curvature(c) - _curvature(a)) / (2 * eps))
+    np.testing.assert_allclose(slopes, diffs, rtol=1e-4, atol=1e-6 * np.max(np.abs(diffs)))
+    assert np.ptp(np.sign(diffs)) == 2   # both signs: the corner lies inside
+
+
+@pytest.mark.filterwarnings("ignore::bvpnav.log.BvpnavWarning")  # the L-curve's lambda misfits sigma_a
+@pytest.mark.parametrize("make", [lambda: table1()[0], lambda: known_noise(0, n=2001)[0],
+                                  lambda: known_noise(1, n=2001)[0]], ids=["table1", "noise0", "noise1"])
+def test_lcurve_alone_samples_every_two_decades_and_chooses_the_one_decade_grids_corner(make):
+    """With slopes the default sweep of ``solve(lam="lcurve")`` is 7 points, not 13: the same
+    corner to the refinement's tolerance (1 % in lambda), in fewer evaluations."""
+    from bvpnav.lam import REFINE_XATOL
+    from bvpnav.lam.sweep import DIRECT_POINTS, SLOPE_POINTS
+
+    coarse = make().solve(solver="direct", lam="lcurve").curve   # the default sweep
+    fine = lambda_curve(make(), rules=("lcurve",), points=DIRECT_POINTS)
+    assert len(coarse.lam) == SLOPE_POINTS == 7
+    assert abs(np.log(coarse.lam_chosen / fine.lam_chosen)) < REFINE_XATOL
+    assert coarse.evaluations < fine.evaluations

@@ -26,6 +26,20 @@ def test_derivative_identity_rho_prime_equals_minus_lam_eta_prime():
     assert abs(d_rho + lam * b["deta2"]) < 1e-5 * abs(d_rho)
 
 
+@pytest.mark.parametrize("make", [lambda: table1()[0], lambda: known_noise(0, n=2001)[0]],
+                         ids=["load form, LU", "acceleration form, banded"])
+def test_second_derivative_of_eta2_is_six_times_the_squared_change_of_the_lambda_rows(make):
+    """d2eta2 = 6 ||S A x'||^2 (no second solve) equals the central difference of the
+    exact first derivative, from lambda = 0.01 to 300, in both forms and factorizations."""
+    eng = _DirectSweep(make())
+    eps = 1e-3
+    for lam in (0.01, 2.0, 300.0):
+        a, b, c = eng.point(lam * (1 - eps)), eng.point(lam), eng.point(lam * (1 + eps))
+        fd = (c["deta2"] - a["deta2"]) / (2 * lam * eps)
+        assert b["d2eta2"] > 0
+        assert abs(b["d2eta2"] - fd) < 1e-4 * abs(fd), (lam, b["d2eta2"], fd)
+
+
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_gcv_and_discrepancy_find_the_ml_weight_with_known_noise(seed):
     prob, truth = known_noise(seed)
@@ -215,3 +229,83 @@ def test_refine_extremum_keeps_to_its_bounds():
     g = -(s - peak) ** 2
     u = refine_extremum(lambda v: -(v - peak) ** 2, s, g, 5, best="max", bounds=(s[2], s[6]))
     assert abs(u - peak) < 1e-3
+
+
+def _slope(f, u, h=1e-6):
+    return (f(u + h) - f(u - h)) / (2 * h)
+
+
+@pytest.mark.parametrize("decades", [1.0, 2.0])
+def test_refine_with_slopes_reaches_the_tolerance_in_fewer_evaluations_than_values_alone(decades):
+    """Given each point's slope, the search lands within xatol of every peak (the flat tops
+    included, where the slope has a zero of order three or more) and over the set spends
+    fewer new evaluations than the value-only search from the same samples; a minimum is
+    the same search negated."""
+    from bvpnav.lam import REFINE_XATOL, refine_extremum, refine_with_slopes
+
+    s = np.arange(-6, 7) * decades * np.log(10.0)
+    ours = theirs = 0
+    for name, (f, u_star) in PEAKS.items():
+        scores = np.array([f(u) for u in s])
+        slopes = np.array([_slope(f, u) for u in s])
+        k = int(np.argmax(scores))
+        calls = []
+        u = refine_with_slopes(lambda v, f=f, calls=calls: calls.append(v) or (f(v), _slope(f, v)),
+                               s, scores, slopes, k)
+        assert abs(u - u_star) < REFINE_XATOL, (name, u, u_star)
+        ours += len(calls)
+        counted = []
+        refine_extremum(lambda v, f=f, counted=counted: counted.append(v) or f(v), s, scores, k)
+        theirs += len(counted)
+        v = refine_with_slopes(lambda w, f=f: (-f(w), -_slope(f, w)), s, -scores, -slopes, k, best="min")
+        assert abs(v - u_star) < REFINE_XATOL, name
+    assert ours < theirs, (ours, theirs)
+
+
+def test_hermite_peak_is_exact_for_a_cubic():
+    """The cubic -u^3/3 + u has its maximum at u = 1; from its values and slopes at any
+    bracket the maximiser is found to rounding (and the midpoint without a maximum)."""
+    from bvpnav.lam import hermite_peak
+
+    def g(u):
+        return -u**3 / 3 + u
+
+    def d(u):
+        return 1 - u**2
+
+    for a, b in ((0.0, 1.7), (-0.5, 3.0), (0.9, 1.05)):
+        assert hermite_peak(a, b, g(a), g(b), d(a), d(b)) == pytest.approx(1.0, abs=1e-12)
+    # both ends on the rising side and no maximum inside: the midpoint
+    assert hermite_peak(-0.5, 0.5, g(-0.5), g(0.5), d(-0.5), d(0.5)) == pytest.approx(0.0)
+
+
+def test_refine_with_slopes_keeps_to_bounds_and_falls_back_without_a_bracket():
+    """A peak beyond a bound returns the bound; a slope of zero at the best sample (no
+    bracket from the signs) is the value-only search's answer; a point where the slope is
+    exactly zero is returned as it is."""
+    from bvpnav.lam import REFINE_XATOL, refine_extremum, refine_with_slopes
+
+    s = np.log(np.geomspace(1e-3, 1e3, 7))
+    peak = s[5] + 0.4 * (s[6] - s[5])
+    g, dg = -(s - peak) ** 2, -2 * (s - peak)
+    assert refine_with_slopes(lambda v: (-(v - peak) ** 2, -2 * (v - peak)), s, g, dg, 5,
+                              bounds=(s[1], s[5])) == s[5]
+    peak = s[3]
+    g, dg = -(s - peak) ** 4, -4 * (s - peak) ** 3
+    assert dg[3] == 0
+    f = lambda v: -(v - peak) ** 4   # noqa: E731
+    assert refine_with_slopes(lambda v: (f(v), -4 * (v - peak) ** 3), s, g, dg, 3) == \
+        refine_extremum(f, s, g, 3)
+    peak = s[3] + 0.3
+    g, dg = -(s - peak) ** 2, -2 * (s - peak)
+    u = refine_with_slopes(lambda v: (-(v - peak) ** 2, 0.0), s, g, dg, 3)
+    assert s[3] + REFINE_XATOL <= u <= s[4] - REFINE_XATOL
+
+
+def test_guard_samples_cover_two_decades_at_each_end_of_the_default_grids():
+    from bvpnav.lam import guard_samples
+
+    assert guard_samples(np.log(np.geomspace(1e-6, 1e6, 13))) == 2
+    assert guard_samples(np.log(np.geomspace(1e-6, 1e6, 7))) == 1
+    assert guard_samples(np.log(np.geomspace(1e-6, 1e6, 5))) == 1
+    assert guard_samples(np.log(np.geomspace(1e-3, 1e-1, 9))) == 2

@@ -16,6 +16,8 @@ anywhere that calls :func:`register_rule`), checked by :func:`bvpnav.testing.che
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..errors import InputError
@@ -26,7 +28,7 @@ from ..plugins import discover
 REFINE_XATOL = 1e-2
 
 __all__ = ["REFINE_XATOL", "LambdaRule", "register_rule", "unregister_rule", "get_rule", "rule_names",
-           "NEEDS", "edge_warning", "refine_extremum"]
+           "NEEDS", "edge_warning", "refine_extremum", "refine_with_slopes", "hermite_peak", "guard_samples"]
 
 #: What a rule may need from the sweep.
 NEEDS = ("least_squares", "trace", "noise", "acceleration")
@@ -55,14 +57,19 @@ class LambdaRule:
     #: more solve per lambda on the direct sweep); rules that read only ``rho2``, ``eta2``
     #: and ``trace`` set it False.
     uses_derivative: bool = True
+    #: Whether its refinement reads the exact slope of its score at every point (the
+    #: direct sweep's ``d2eta2``, :func:`refine_with_slopes`): then a sweep of such rules
+    #: alone samples every two decades by default (:data:`bvpnav.lam.sweep.SLOPE_POINTS`).
+    slopes: bool = False
 
     def scores(self, sweep, pts: list[dict], s: np.ndarray) -> np.ndarray:
         """The rule's score at each sampled point (``s = log lambda``).
 
         Each point is a dict with ``lam``, ``rho2`` (the squared norm of the terms not
         weighted by lambda), ``eta2`` (the lambda-weighted terms), ``x`` (the stacked
-        solution) and, with the direct sweep, ``deta2`` (d eta2 / d lam), ``quasi``
-        (``||lam dr/dlam||`` in m) and, when a rule needs it, ``trace``.
+        solution) and, with the direct sweep, ``deta2`` (d eta2 / d lam), ``d2eta2``
+        (d^2 eta2 / d lam^2), ``quasi`` (``||lam dr/dlam||`` in m) and, when a rule needs
+        it, ``trace``.
         """
         raise NotImplementedError
 
@@ -244,6 +251,135 @@ def refine_extremum(f, s: np.ndarray, scores: np.ndarray, k: int, best: str = "m
         pts[v] = sign * float(f(v))
     xs = sorted(pts)
     return inside(max(xs, key=lambda u: pts[u]))
+
+
+def hermite_peak(a: float, b: float, ga: float, gb: float, da: float, db: float) -> float:
+    r"""The maximiser inside ``[a, b]`` of the cubic with values ``ga, gb`` and slopes
+    ``da, db`` at the ends (the midpoint when the cubic has no interior maximum).
+
+    Notes
+    -----
+    With :math:`h = b - a`, :math:`t = (u - a)/h`, :math:`m_0 = h\,d_a`, :math:`m_1 = h\,d_b`,
+    the cubic Hermite interpolant's derivative is :math:`h^{-1}(\alpha t^2 + \beta t + m_0)`
+    with :math:`\alpha = 6(g_a - g_b) + 3(m_0 + m_1)` and
+    :math:`\beta = -6(g_a - g_b) - 4m_0 - 2m_1`; its maximiser is the root in :math:`[0, 1]`
+    where the second derivative :math:`2\alpha t + \beta` is negative (roots taken in the
+    cancellation-free form of the quadratic formula). With :math:`m_0 > 0 > m_1` exactly one
+    root lies in :math:`(0, 1)` and it is the maximum.
+    """
+    h = b - a
+    m0, m1 = h * da, h * db
+    alpha = 6.0 * (ga - gb) + 3.0 * (m0 + m1)
+    beta = -6.0 * (ga - gb) - 4.0 * m0 - 2.0 * m1
+    if abs(alpha) <= 1e-12 * (abs(beta) + abs(m0)):
+        roots = [-m0 / beta] if beta != 0 else []
+    else:
+        disc = beta * beta - 4.0 * alpha * m0
+        if disc < 0:
+            roots = []
+        else:
+            q = -0.5 * (beta + math.copysign(math.sqrt(disc), beta))
+            roots = [q / alpha] + ([m0 / q] if q != 0 else [])
+    peaks = [t for t in roots if 0.0 <= t <= 1.0 and 2.0 * alpha * t + beta < 0]
+    return a + (peaks[0] if peaks else 0.5) * h
+
+
+def _holds_peak(p: tuple, q: tuple) -> bool:
+    """Whether ``[p, q]`` (each ``(u, g, slope)``, ``p`` left) must hold a local maximum of
+    a smooth ``g``: rising at ``p`` or below ``q`` there, and falling at ``q`` or below ``p``."""
+    return (p[2] > 0 or p[1] < q[1]) and (q[2] < 0 or q[1] < p[1])
+
+
+def refine_with_slopes(f, s: np.ndarray, scores: np.ndarray, slopes: np.ndarray, k: int,
+                       best: str = "max", xatol: float = REFINE_XATOL, maxiter: int = 30,
+                       bounds: tuple[float, float] | None = None) -> float:
+    r"""The extremum near sample ``k`` of a score whose slope is known at every point.
+
+    Like :func:`refine_extremum`, but each evaluation ``f(u) -> (score, d score / du)`` also
+    gives the slope: the extremum is kept in a bracket the values and slopes prove holds
+    one, and located by the cubic through the bracket's values and slopes
+    (:func:`hermite_peak`), or by the secant of the two newest slopes when they lie on one
+    side of it; the search ends after three or four evaluations from a bracket two decades
+    wide, where :func:`refine_extremum` takes five or six from one decade.
+
+    Parameters
+    ----------
+    f : callable
+        ``f(u) -> (score, slope)`` at ``lambda = exp(u)``.
+    s, scores, slopes : ndarray
+        The samples' ``log lambda`` (increasing), scores and slopes (per unit of ``log lambda``).
+    k, best, xatol, maxiter, bounds
+        As in :func:`refine_extremum`.
+
+    Returns
+    -------
+    float
+        ``log lambda`` of the extremum.
+
+    Notes
+    -----
+    A bracket :math:`[a, b]` holds a local maximum of the score :math:`g` (negated for a
+    minimum) when :math:`g` rises at :math:`a` (:math:`g'(a) > 0`) or :math:`g(a) < g(b)`,
+    and falls at :math:`b` or :math:`g(b) < g(a)`. The first is the best sample ``k`` and
+    the neighbour its slope points to. Each step evaluates a point :math:`v` at least
+    ``xatol`` inside, and keeps the half that still provably holds a maximum (the one with
+    the better end if both do). A point within ``xatol`` of the newest one is moved to
+    ``xatol`` beside it, on the side its slope points to: once the model has converged,
+    that one evaluation closes the bracket on the other side of the extremum. The search
+    stops when :math:`b - a \le 2` ``xatol`` and returns the cubic's maximiser there.
+    Without such a bracket beside ``k`` (a slope of zero, the best sample at an end) the
+    search is :func:`refine_extremum`'s on the scores alone; a maximiser beyond a bound
+    returns the bound.
+    """
+    sign = 1.0 if best == "max" else -1.0
+    lo, hi = (-np.inf, np.inf) if bounds is None else (float(bounds[0]), float(bounds[1]))
+    n = len(s)
+
+    def sample(j: int) -> tuple:
+        return float(s[j]), sign * float(scores[j]), sign * float(slopes[j])
+
+    j = k if sign * slopes[k] > 0 else k - 1
+    if not (0 <= j < n - 1 and sign * slopes[k] != 0 and _holds_peak(sample(j), sample(j + 1))):
+        return refine_extremum(lambda u: f(u)[0], s, scores, k, best=best, xatol=xatol,
+                               maxiter=maxiter, bounds=bounds)
+    a, b = sample(j), sample(j + 1)
+    newest = [a, b] if j == k else [b, a]   # the best sample last
+    for _ in range(maxiter):
+        v = hermite_peak(a[0], b[0], a[1], b[1], a[2], b[2])
+        if b[0] - a[0] <= 2.0 * xatol or not lo <= v <= hi:
+            break
+        p, q = newest
+        if p[2] * q[2] > 0 and p[2] != q[2]:   # both newest on one side: their secant
+            w = q[0] - q[2] * (q[0] - p[0]) / (q[2] - p[2])
+            if a[0] < w < b[0]:
+                v = w
+        if abs(v - q[0]) < xatol:   # converged on the newest point: confirm beside it
+            v = q[0] + xatol if q[2] > 0 else q[0] - xatol
+        v = min(max(v, a[0] + xatol), b[0] - xatol)
+        gv, dv = (sign * float(x) for x in f(v))
+        if dv == 0.0:   # the extremum itself
+            return min(max(v, lo), hi)
+        c = (v, gv, dv)
+        left, right = _holds_peak(a, c), _holds_peak(c, b)
+        if left and right:
+            left = a[1] >= b[1]
+        elif not (left or right):   # no proof either way: the scores alone, from the best
+            pts = sorted([a, c, b])
+            g = [x[1] for x in pts]
+            return refine_extremum(lambda u: f(u)[0], np.array([x[0] for x in pts]),
+                                   sign * np.array(g), int(np.argmax(g)), best=best,
+                                   xatol=xatol, maxiter=maxiter, bounds=bounds)
+        a, b = (a, c) if left else (c, b)
+        newest = [newest[1], c]
+    return min(max(v, lo), hi)
+
+
+def guard_samples(s: np.ndarray) -> int:
+    """How many samples at each end of a sweep a rule that never chooses the range's ends
+    leaves out: the two outermost, or the outermost one when samples lie two decades or
+    more apart (the same two decades at each end of the default ranges, 13 samples one
+    decade apart or 7 two decades apart)."""
+    return 1 if len(s) > 1 and s[1] - s[0] >= 2.0 * math.log(10.0) * (1.0 - 1e-9) else 2
 
 
 def bracket(s: np.ndarray, k: int) -> tuple[float, float]:

@@ -7,9 +7,18 @@ import math
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from . import WIDEN, LambdaRule, bracket, edge_warning, refine_extremum, register_rule
+from . import (
+    WIDEN,
+    LambdaRule,
+    bracket,
+    edge_warning,
+    guard_samples,
+    refine_extremum,
+    refine_with_slopes,
+    register_rule,
+)
 
-__all__ = ["LCurve", "curvature", "spline_curvature"]
+__all__ = ["LCurve", "curvature", "curvature_slope", "spline_curvature"]
 
 
 def curvature(pt: dict) -> float:
@@ -33,8 +42,42 @@ def curvature(pt: dict) -> float:
     lam, r, e, de = pt["lam"], pt["rho2"], pt["eta2"], pt["deta2"]
     if de == 0 or r <= 0 or e <= 0:
         return 0.0
-    return float(2.0 / (r * e * abs(de)) * (1.0 + lam * de / e + lam**2 * de / r)
-                 / (lam**2 / r**2 + 1.0 / e**2) ** 1.5)
+    return float(_kappa(lam, r, e, de))
+
+
+def _kappa(lam, r, e, de):
+    """:func:`curvature`'s formula, for real or complex arguments (``|de|`` taken by the
+    sign of its real part, so that a complex step passes through it)."""
+    mag = de if de.real > 0 else -de
+    return (2.0 / (r * e * mag) * (1.0 + lam * de / e + lam**2 * de / r)
+            / (lam**2 / r**2 + 1.0 / e**2) ** 1.5)
+
+
+def curvature_slope(pt: dict) -> float:
+    r""":math:`d\kappa / d\log\lambda` of :func:`curvature`, exact (needs ``d2eta2``).
+
+    Notes
+    -----
+    Along the solution path :math:`\hat\rho' = -\lambda\hat\eta'` and
+    :math:`\hat\rho'' = -\hat\eta' - \lambda\hat\eta''`, and the second derivative of the
+    lambda-weighted terms is :math:`\hat\eta'' = 6\,\lVert S A x'\rVert^2` (the point's
+    ``d2eta2``: the minimiser's sensitivity is symmetric, so no second solve is needed, see
+    :meth:`bvpnav.lam.sweep.DirectSweep.point`). :math:`\kappa` is a closed form in
+    :math:`(\lambda, \hat\rho, \hat\eta, \hat\eta')`; its total derivative is taken by a
+    complex step, every argument moved by :math:`ih` times its own derivative,
+
+    .. math:: \frac{d\kappa}{d\log\lambda} = \frac{\lambda}{h}\,
+        \operatorname{Im}\kappa(\lambda + ih,\ \hat\rho - ih\lambda\hat\eta',\
+        \hat\eta + ih\hat\eta',\ \hat\eta' + ih\hat\eta''),
+
+    exact to rounding for :math:`h = 10^{-20}\lambda` (no difference is formed).
+    """
+    lam, r, e, de, dde = pt["lam"], pt["rho2"], pt["eta2"], pt["deta2"], pt["d2eta2"]
+    if de == 0 or r <= 0 or e <= 0:
+        return 0.0
+    h = 1e-20 * lam
+    k = _kappa(complex(lam, h), complex(r, -h * lam * de), complex(e, h * de), complex(de, h * dde))
+    return float(lam * k.imag / h)
 
 
 def spline_curvature(s: np.ndarray, rho2, eta2, s_eval: np.ndarray) -> np.ndarray:
@@ -52,13 +95,18 @@ class LCurve(LambdaRule):
 
     Notes
     -----
-    The two outermost sweep points on each side are never chosen (a "corner" there is the
-    range ending, reported in the curve's warnings). Exact curvature (:func:`curvature`)
-    with the direct sweep, refined by :func:`bvpnav.lam.refine_extremum`; a spline through the samples
-    (:func:`spline_curvature`) with the cvxpy sweep, refined by sampling more densely.
+    The two outermost sweep points on each side (the outermost one when samples lie two
+    decades apart, :func:`bvpnav.lam.guard_samples`) are never chosen (a "corner" there is
+    the range ending, reported in the curve's warnings). With the direct sweep the
+    curvature (:func:`curvature`) and its slope (:func:`curvature_slope`) are exact at
+    every point, so the sweep samples every two decades by default and the corner is
+    refined from values and slopes (:func:`bvpnav.lam.refine_with_slopes`); with the cvxpy
+    sweep a spline through the samples (:func:`spline_curvature`), refined by sampling
+    more densely.
     """
 
     name = "lcurve"
+    slopes = True
 
     def scores(self, sweep, pts, s):
         if sweep.engine == "direct":
@@ -66,16 +114,38 @@ class LCurve(LambdaRule):
         return spline_curvature(s, [p["rho2"] for p in pts], [p["eta2"] for p in pts], s)
 
     def refine(self, sweep, pts, s, scores, curve):
-        inner = np.arange(2, len(s) - 2)
+        g = guard_samples(s)
+        inner = np.arange(g, len(s) - g)
         k = int(inner[np.argmax(scores[inner])])
-        edge_warning(curve, self.name, k, 2, scores, best="max")
+        edge_warning(curve, self.name, k, g, scores, best="max")
         if scores[k] <= 0:
             curve.warnings.append("lcurve: the curve has no convex corner in lam_range=("
                                   f"{curve.lam_range[0]:g}, {curve.lam_range[1]:g}); {WIDEN}, or "
                                   "choose another rule (e.g. lam='quasi')")
+        if sweep.engine == "direct" and all("d2eta2" in p for p in pts):
+            def f(u):
+                pt = sweep.point(math.exp(u))
+                return curvature(pt), curvature_slope(pt)
+
+            lo, hi = s[g], s[-1 - g]
+            u, sc = list(s[max(k - 1, 0):k + 2]), list(scores[max(k - 1, 0):k + 2])
+            sl = [curvature_slope(p) for p in pts[max(k - 1, 0):k + 2]]
+            if s[1] - s[0] > 1.5 * math.log(10.0):
+                # samples more than a decade apart: the half-way points beside the best one
+                # (inside the bounds), so that a corner between samples is not missed
+                for mid in (0.5 * (u[0] + u[1]), 0.5 * (u[-2] + u[-1])):
+                    if lo <= mid <= hi and mid not in u:
+                        val, slope = f(mid)
+                        j = int(np.searchsorted(u, mid))
+                        u.insert(j, mid), sc.insert(j, val), sl.insert(j, slope)
+            u, sc = np.array(u), np.array(sc)
+            allowed = np.flatnonzero((u >= lo) & (u <= hi))
+            j = int(allowed[np.argmax(sc[allowed])])
+            return float(math.exp(refine_with_slopes(f, u, sc, np.array(sl), j, best="max",
+                                                     bounds=(lo, hi))))
         if sweep.engine == "direct":
             return float(math.exp(refine_extremum(lambda u: curvature(sweep.point(math.exp(u))), s,
-                                                  scores, k, best="max", bounds=(s[2], s[-3]))))
+                                                  scores, k, best="max", bounds=(s[g], s[-1 - g]))))
         a, b = bracket(s, k)
         fine = np.linspace(a, b, 9)[1:-1]
         for u in fine[np.abs(fine - s[k]) > 1e-6]:

@@ -54,10 +54,16 @@ from ..plot import lcurve
 from . import get_rule, rule_names
 
 __all__ = ["LambdaCurve", "DirectSweep", "CvxpySweep", "sweep_curve", "check_range", "DIRECT_POINTS",
-           "CVXPY_POINTS"]
+           "SLOPE_POINTS", "CVXPY_POINTS"]
 
 #: Default coarse sweep of the direct engine (exact curve at each point, then refined).
 DIRECT_POINTS = 13
+
+#: Default coarse sweep of the direct engine when every rule asked reads its score's
+#: exact slope (:attr:`bvpnav.lam.LambdaRule.slopes`, the L-curve): one sample every two
+#: decades of the default range, since a value and a slope per sample locate an extremum
+#: between samples (:func:`bvpnav.lam.refine_with_slopes`).
+SLOPE_POINTS = 7
 
 #: Default coarse sweep of the cvxpy engine (spline through the samples).
 CVXPY_POINTS = 25
@@ -270,8 +276,8 @@ class DirectSweep:
     def point(self, lam: float, need_trace: bool | None = None, probes: int | None = None,
               seed: int | None = None) -> dict:
         """The curve at one lambda (cached): ``rho2``, ``eta2``, ``x``, with
-        ``need_derivative`` (the default) ``deta2`` and ``quasi``, and, when asked,
-        ``trace``."""
+        ``need_derivative`` (the default) ``deta2``, ``d2eta2`` and ``quasi``, and, when
+        asked, ``trace``."""
         need_trace = self.need_trace if need_trace is None else need_trace
         probes = self.probes if probes is None else probes
         seed = self.seed if seed is None else seed
@@ -356,8 +362,22 @@ class DirectSweep:
         return fac, fac.solve_x(form.rhs()).real.copy(), h
 
     def _derivative(self, form, fac, banded: bool, x: np.ndarray, scaled: list, lam: float) -> dict:
-        """``deta2`` and ``quasi`` from :math:`dx/d\\lambda`, one more solve with the factor
-        (a complex-step factor's real part, see :meth:`_complex_point`)."""
+        r"""``deta2``, ``d2eta2`` and ``quasi`` from :math:`dx/d\lambda`, one more solve with
+        the factor (a complex-step factor's real part, see :meth:`_complex_point`).
+
+        Notes
+        -----
+        With the hard rows as :math:`x = x_0 + Z y` and the lambda-weighted residual
+        :math:`r = S(Ax + c)`, the minimiser solves :math:`(H + \lambda G) y = \ldots`,
+        :math:`G = Z^T A^T S^2 A Z`, so :math:`y' = -M^{-1} g` with :math:`M = H + \lambda G`
+        and :math:`g = Z^T A^T S r`. Then :math:`\hat\eta' = 2 g^T y'`; differentiating
+        :math:`M y' = -g` gives :math:`y'' = -2 M^{-1} G y'`, and since :math:`M` is
+        symmetric :math:`g^T y'' = 2 y'^T G y'`, so
+
+        .. math:: \hat\eta'' = 2\lVert S A x'\rVert^2 + 2 g^T y'' = 6\lVert S A x'\rVert^2,
+
+        the second derivative for the price of a norm (:func:`bvpnav.lam.lcurve.curvature_slope`).
+        """
         m, n = form.D.A.shape
         # dx/dlam from the same factorization: H x' + E^T mu' = -sum A^T S^2 (A x + c)
         g = np.zeros(n)
@@ -367,10 +387,14 @@ class DirectSweep:
         dx = fac.solve_x(rhs) if banded else fac.refined(rhs, 1, window=slice(m, m + n))[0][m:m + n]
         if dx.dtype.kind == "c":
             dx = dx.real.copy()
-        deta2 = sum(2.0 * float(np.sum(r * ((t.residual.A @ dx) / t.sigma)))
-                    for t, r in zip(self.lam_terms, scaled, strict=True))
+        deta2 = d2eta2 = 0.0
+        for t, r in zip(self.lam_terms, scaled, strict=True):
+            dr = (t.residual.A @ dx) / t.sigma   # S A x', the lambda rows' change
+            deta2 += 2.0 * float(r @ dr)
+            d2eta2 += 6.0 * float(dr @ dr)
         pos = np.concatenate([self.model.r_index(a) for a in range(self.model.d)])
-        return {"deta2": deta2, "quasi": float(np.linalg.norm(lam * dx[pos]) / math.sqrt(pos.size))}
+        return {"deta2": deta2, "d2eta2": d2eta2,
+                "quasi": float(np.linalg.norm(lam * dx[pos]) / math.sqrt(pos.size))}
 
     # --- GCV's trace: d w / d a_hat
     def _rhs_jacobian_apply(self, Z: np.ndarray) -> np.ndarray:
@@ -610,8 +634,10 @@ def sweep_curve(form, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6), p
     points : int, optional
         Coarse sweep size; every rule is then refined inside its best bracket (to 1 % in
         lambda, :func:`bvpnav.lam.refine_extremum`). Default: 13 (one per decade of the default range) with
-        the ``direct`` engine, whose curve is exact at every point, and 25 with the
-        ``cvxpy`` engine, whose curvature is a spline through the samples.
+        the ``direct`` engine, whose curve is exact at every point; 7 (one per two decades,
+        :data:`SLOPE_POINTS`) when every rule asked reads its score's exact slope (the
+        L-curve alone, e.g. ``solve(lam="lcurve")``); 25 with the ``cvxpy`` engine, whose
+        curvature is a spline through the samples.
     tau : float
         Discrepancy safety factor.
     probes, seed : int
@@ -656,13 +682,14 @@ def _sweep_curve(form, rules, rule, lam_range, points, tau, probes, seed, progre
     ls = non_least_squares_term(form) is None
     if engine == "auto":
         engine = "direct" if ls else "cvxpy"
-    if points is None:
-        points = DIRECT_POINTS if engine == "direct" else CVXPY_POINTS
-    lo, hi = _check_range(lam_range, points)
     if engine == "direct" and not ls:
         raise InputError("engine='direct' needs a least-squares problem (no band, robust or "
                          "inequality items); use engine='cvxpy'")
     names = _usable_rules(form, names, rule, engine)
+    if points is None:
+        points = (CVXPY_POINTS if engine != "direct" else
+                  SLOPE_POINTS if all(get_rule(r).slopes for r in names) else DIRECT_POINTS)
+    lo, hi = _check_range(lam_range, points)
     form.check_scales(lo)  # the sweep's extremes: every weight stays resolvable
     form.check_scales(hi)
     form.check_observability()
