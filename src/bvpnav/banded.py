@@ -688,6 +688,16 @@ class BandPlan:
         """Indices of the objective rows kept as unknowns."""
         return np.flatnonzero(~self.fold)
 
+    @functools.cached_property
+    def elim_index(self) -> slice | np.ndarray:
+        """:attr:`elim` as a slice when it is one run of consecutive unknowns (the usual
+        case: an axis' accelerations residuals, or all axes'), for the solves' gathers and
+        scatters (a view and a block copy instead of an index array each time)."""
+        el = self.elim
+        if el.size and el[-1] - el[0] + 1 == el.size and np.all(np.diff(el) == 1):
+            return slice(int(el[0]), int(el[-1]) + 1)
+        return el
+
     def describe(self) -> str:
         """E.g. ``"banded (kl=4, ku=4, 200001 unknowns, border 0)"``."""
         return f"banded (kl={self.kl}, ku={self.ku}, {self.size} unknowns, border {self.border})"
@@ -1399,17 +1409,27 @@ class BandedKKT(Factorization):
         nu = self._unf.size
         b1, bx, bmu = rhs[:m], rhs[m:m + n], rhs[m + n:]
         b1f = b1[pl.fold] if nu else b1
-        r = np.concatenate([bx + _mul(self._Df.T, b1f) if b1f.any() else bx, b1[self._unf], bmu])
+        r = np.empty((n + nu + bmu.shape[0],) + rhs.shape[1:], dtype=rhs.dtype)
+        if b1f.any():
+            np.add(bx, _mul(self._Df.T, b1f), out=r[:n])
+        else:
+            r[:n] = bx
+        r[n:n + nu] = b1[self._unf]
+        r[n + nu:] = bmu
         if el.size:
+            ei = pl.elim_index
             hcol = self._h.reshape((-1,) + (1,) * (r.ndim - 1))
-            gz = r[el] / hcol
+            gz = r[ei] / hcol
             r[n + nu:] -= _mul(self._Ez, gz)
         # without unfolded rows the reduced unknowns (x, mu) are z's own tail: solved in place
         z = None if x_only or nu else np.empty_like(rhs)
         zr = self._reduced_solve(r, out=None if z is None else z[m:])
         mu = zr[n + nu:]
         if el.size:
-            zr[el] = gz - _mul(self._EzT, mu) / hcol
+            w = _mul(self._EzT, mu)
+            w /= hcol
+            np.subtract(gz, w, out=w)
+            zr[ei] = w
         x = zr[:n]
         if x_only:
             return x

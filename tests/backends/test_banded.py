@@ -101,6 +101,13 @@ def test_local_rows_keep_one_axis_at_bandwidth_five_with_no_border():
     assert fac.plan.size == 2 * t.size + 3   # r, mu per node; v0, v1; the hard position's mu
     z, steps, corr = fac.refined(ls.rhs(), 3, 1e-14)
     assert corr < 1e-10
+    # the eliminated accelerations of one axis are one run: the solves index them by a slice
+    assert isinstance(fac.plan.elim_index, slice)
+    np.testing.assert_array_equal(np.arange(ls.D.A.shape[1])[fac.plan.elim_index], fac.plan.elim)
+    # three axes interleave them with the positions: an index array, the same unknowns
+    ls3 = least_squares_form(problem().formulation, 1.0)
+    plan3 = BandedKKT(ls3.D.A, ls3.E.A, column_nodes(problem().formulation.model), lam_rows=ls3.lam_rows).plan
+    assert not isinstance(plan3.elim_index, slice) and plan3.elim_index is plan3.elim
 
 
 @pytest.mark.parametrize("lam", [1e-3, 0.7, 50.0])
