@@ -1360,13 +1360,17 @@ class BandedKKT(Factorization):
 
     def _reduced_solve(self, r: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """Solve the reduced (unscaled, after eliminations) system for ``r`` (R,) or (R, c),
-        into ``out`` when given (an array like ``r``)."""
+        into ``out`` when given (an array like ``r``). A real ``r`` with a factor of complex
+        parts gives the real part of the solution (the scalings, the gathers and the
+        scatters are real: only the band's and the border's solves are complex)."""
         pl = self.plan
         # one right-hand side stays one-dimensional (gathers and scatters of a vector are
         # about twice as fast as of an (R, 1) array's rows)
         sU = self._sU if r.ndim == 1 else self._sU[:, None]
         R = r[pl.pos_order]
         R *= sU
+        if R.dtype != self._lu.dtype:
+            R = R.astype(self._lu.dtype)
         y = self._band_solve(R, overwrite=True)   # R is this solve's own gathered copy
         # every reduced unknown is banded, in the border or eliminated; solve() fills the
         # eliminated ones, so nothing needs zeroing here
@@ -1378,8 +1382,11 @@ class BandedKKT(Factorization):
             L = y.shape[0] // self._runs
             for a, cols, Xa in self._xruns:   # y -= A^{-1} B zW, run by run
                 y[a * L:(a + 1) * L] -= Xa @ zW[cols]
-            out[pl.border_order] = zW * sW
-        y *= sU
+            out[pl.border_order] = (zW * sW).real if out.dtype.kind != "c" else zW * sW
+        if out.dtype.kind != "c" and y.dtype.kind == "c":
+            y = y.real * sU
+        else:
+            y *= sU
         out[pl.pos_order] = y
         return out
 
@@ -1391,6 +1398,20 @@ class BandedKKT(Factorization):
         """The ``x`` part of :meth:`solve` alone (the residuals are not formed), for a
         lambda sweep's points."""
         return self._solve(self._as_rhs(rhs), x_only=True)
+
+    def solve_x_real(self, rhs: np.ndarray) -> np.ndarray:
+        r"""The real part of :meth:`solve_x` for a real ``rhs`` (one or several columns).
+
+        With a factor of :meth:`AffineBand.at_complex`'s parts at :math:`\lambda + ih` this
+        is the solution at :math:`\lambda` to :math:`O(h^2)`: the eliminations, scalings,
+        gathers and scatters stay real (they are real linear maps, so the real part may be
+        taken after the band's solve), only ``zgbtrs`` and the border's solve are complex.
+        The same as :meth:`solve_x` for a real factor.
+        """
+        rhs = np.asarray(rhs)
+        if rhs.dtype.kind == "c":
+            raise TypeError("solve_x_real takes a real right-hand side")
+        return self._solve(rhs.astype(float, copy=False), x_only=True)
 
     def _as_rhs(self, rhs) -> np.ndarray:
         """``rhs`` as a new or given array of the factor's type (float, or complex for a

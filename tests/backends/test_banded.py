@@ -545,3 +545,32 @@ def test_border_coupling_by_columns_equals_the_summed_coo_assembly(error_model):
     # a block over two columns
     two = np.where(np.arange(r0.size) % 2 == 0, c0, (c0 + 1) % k)
     assert _coupling_by_columns([(r0, two, v0)], nb, k) is None
+
+
+@pytest.mark.parametrize("error_model", [None, Bias()], ids=["no-border", "border"])
+def test_the_real_part_of_a_complex_factors_solve_is_taken_after_the_real_maps(error_model):
+    """``solve_x_real`` keeps the eliminations, scalings, gathers and scatters real and
+    takes the real part after the band's (and the border's) complex solve: equal to the
+    real part of the all-complex ``solve_x``, for one and for several right-hand sides, and
+    the same as ``solve_x`` for a real factor."""
+    from bvpnav.banded import AffineBand, canonical
+    from bvpnav.lsq import banded_plan
+
+    form = problem(Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05), n=301, error_model=error_model).formulation
+    ls = least_squares_form(form, 1.0)
+    plan = banded_plan(ls, form)
+    D, E = canonical(ls.D.A), canonical(ls.E.A)
+    lam_rows = np.asarray(ls.lam_rows, dtype=bool)
+    affine = AffineBand(plan.assemble(D, E), plan.objective_part(D[lam_rows]), plan.kl)
+    lam = 3.0
+    at = ls.at_lam(lam)
+    cplx = BandedKKT(at.D.A, at.E.A, plan=plan, parts=affine.at_complex(lam, 1e-3 * lam))
+    assert (cplx.k > 0) == (error_model is not None)
+    rng = np.random.default_rng(0)
+    for rhs in (at.rhs(), rng.standard_normal((at.rhs().size, 3))):
+        want = cplx.solve_x(rhs).real
+        np.testing.assert_allclose(cplx.solve_x_real(rhs), want, rtol=0, atol=1e-13 * np.max(np.abs(want)))
+    real = BandedKKT(at.D.A, at.E.A, plan=plan, parts=affine.at(lam))
+    np.testing.assert_array_equal(real.solve_x_real(at.rhs()), real.solve_x(at.rhs()))
+    with pytest.raises(TypeError, match="real right-hand side"):
+        cplx.solve_x_real(at.rhs() * 1j)

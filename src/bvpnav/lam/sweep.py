@@ -359,7 +359,7 @@ class DirectSweep:
         # imaginary part of a solve with the right-hand side's derivative would carry
         # dx = K^-1 (b' - K' x) with b' and K' x cancelling inside the factorization,
         # accurate only to |x| eps / lambda; 14 % off at lambda = 1e6 on 2,000 samples)
-        return fac, fac.solve_x(form.rhs()).real.copy(), h
+        return fac, fac.solve_x_real(form.rhs()), h
 
     def _derivative(self, form, fac, banded: bool, x: np.ndarray, scaled: list, lam: float) -> dict:
         r"""``deta2``, ``d2eta2`` and ``quasi`` from :math:`dx/d\lambda`, one more solve with
@@ -384,9 +384,7 @@ class DirectSweep:
         for t, r in zip(self.lam_terms, scaled, strict=True):
             g -= t.residual.A.T @ (r / t.sigma)
         rhs = np.concatenate([np.zeros(m), g, np.zeros(form.E.m)])
-        dx = fac.solve_x(rhs) if banded else fac.refined(rhs, 1, window=slice(m, m + n))[0][m:m + n]
-        if dx.dtype.kind == "c":
-            dx = dx.real.copy()
+        dx = fac.solve_x_real(rhs) if banded else fac.refined(rhs, 1, window=slice(m, m + n))[0][m:m + n]
         deta2 = d2eta2 = 0.0
         for t, r in zip(self.lam_terms, scaled, strict=True):
             dr = (t.residual.A @ dx) / t.sigma   # S A x', the lambda rows' change
@@ -508,7 +506,7 @@ class DirectSweep:
             Dp = ls.D.A[fixed]
             R = np.zeros((fac.S.shape[0], fixed.size))
             R[m:m + n] = Dp.T.toarray()
-            X = fac.solve(R)[m:m + n].real
+            X = fac.solve_x_real(R)
             # (S^-1)_xx = -Sigma in the augmented system's sign convention: its x block is the
             # inverse of [D^T D, E^T; E, 0] restricted, with -I on the residuals
             prior = float(np.sum(Dp.toarray().T * X))
