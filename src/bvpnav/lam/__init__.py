@@ -325,8 +325,11 @@ def refine_with_slopes(f, s: np.ndarray, scores: np.ndarray, slopes: np.ndarray,
     ``xatol`` inside, and keeps the half that still provably holds a maximum (the one with
     the better end if both do). A point within ``xatol`` of the newest one is moved to
     ``xatol`` beside it, on the side its slope points to: once the model has converged,
-    that one evaluation closes the bracket on the other side of the extremum. The search
-    stops when :math:`b - a \le 2` ``xatol`` and returns the cubic's maximiser there.
+    that one evaluation closes the bracket on the other side of the extremum; likewise a
+    point within 1.9 ``xatol`` of a bracket end is moved to 1.9 ``xatol`` from it, past the
+    model's extremum, so that a right model is confirmed and the bracket closed by the
+    same evaluation. The search stops when :math:`b - a \le 2` ``xatol`` and returns the
+    cubic's maximiser there.
     Without such a bracket beside ``k`` (a slope of zero, the best sample at an end) the
     search is :func:`refine_extremum`'s on the scores alone; a maximiser beyond a bound
     returns the bound.
@@ -355,6 +358,10 @@ def refine_with_slopes(f, s: np.ndarray, scores: np.ndarray, slopes: np.ndarray,
                 v = w
         if abs(v - q[0]) < xatol:   # converged on the newest point: confirm beside it
             v = q[0] + xatol if q[2] > 0 else q[0] - xatol
+        elif v - a[0] < 1.9 * xatol < b[0] - v:   # near an end: close the bracket past v
+            v = a[0] + 1.9 * xatol
+        elif b[0] - v < 1.9 * xatol < v - a[0]:
+            v = b[0] - 1.9 * xatol
         v = min(max(v, a[0] + xatol), b[0] - xatol)
         gv, dv = (sign * float(x) for x in f(v))
         if dv == 0.0:   # the extremum itself
