@@ -177,13 +177,29 @@ class Factorization:
 
 def canonical(A: sp.spmatrix) -> sp.csr_matrix:
     """``A`` as CSR without duplicates or explicit zeros (a copy when it had any: an explicit
-    zero must not tie a row to a node)."""
+    zero must not tie a row to a node). A matrix found canonical is marked with its data
+    array, so that asking again (a lambda sweep's ``E`` at every point) does not scan it."""
     A = as_csr(A)
+    if getattr(A, "_bvpnav_canonical", None) is A.data and A.has_canonical_format:
+        return A
     if not A.has_canonical_format or (A.data.size and not np.all(A.data)):
         A = A.copy()
         A.sum_duplicates()
         A.eliminate_zeros()
+    A._bvpnav_canonical = A.data
     return A
+
+
+def row_scaled(A: sp.csr_matrix, k: np.ndarray, entries: np.ndarray | None = None) -> sp.csr_matrix:
+    """``diag(k) A`` for a CSR ``A`` (a new matrix sharing ``A``'s index arrays), marked
+    canonical when ``A`` is (:func:`canonical`) and no ``k`` is zero; ``entries`` (optional)
+    is ``A``'s row of every stored entry, ``np.repeat(arange(m), diff(indptr))``."""
+    rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr)) if entries is None else entries
+    out = sp.csr_matrix((A.data * k[rows], A.indices, A.indptr), shape=A.shape)
+    if getattr(A, "_bvpnav_canonical", None) is A.data and np.all(k):
+        out.has_canonical_format = True
+        out._bvpnav_canonical = out.data
+    return out
 
 
 def _row_maxima(ab: np.ndarray) -> np.ndarray:

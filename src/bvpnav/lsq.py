@@ -27,6 +27,7 @@ ill-conditioned roughly like :math:`N^4`).
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -34,7 +35,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .banded import BandedKKT, BandPlan, DiagonalRows, Factorization, NotBanded, canonical
+from .banded import BandedKKT, BandPlan, DiagonalRows, Factorization, NotBanded, canonical, row_scaled
 from .formulation import as_formulation
 from .model import Affine
 
@@ -68,6 +69,11 @@ class LeastSquaresForm:
     lam_rows: np.ndarray | None = None
     lam: float | None = None
 
+    @functools.cached_property
+    def _entry_rows(self) -> np.ndarray:
+        """The row of every stored entry of ``D`` (for :meth:`at_lam`'s row scaling)."""
+        return np.repeat(np.arange(self.D.A.shape[0]), np.diff(self.D.A.indptr))
+
     def at_lam(self, lam: float) -> LeastSquaresForm:
         r"""The same form at another lambda: the rows of :attr:`lam_rows` rescaled by
         :math:`\sqrt{\lambda / \lambda_0}` (no item is compiled again)."""
@@ -75,7 +81,7 @@ class LeastSquaresForm:
             raise ValueError("at_lam needs a form made by least_squares_form")
         k = np.where(self.lam_rows, np.sqrt(lam / self.lam), 1.0)
         A = self.D.A
-        scaled = sp.csr_matrix((A.data * np.repeat(k, np.diff(A.indptr)), A.indices, A.indptr), shape=A.shape)
+        scaled = row_scaled(A, k, self._entry_rows)
         return LeastSquaresForm(Affine(scaled, self.D.c * k, self.D.labels), self.E, self.eq_blocks,
                                 self.lam_rows, float(lam))
 

@@ -574,3 +574,18 @@ def test_the_real_part_of_a_complex_factors_solve_is_taken_after_the_real_maps(e
     np.testing.assert_array_equal(real.solve_x_real(at.rhs()), real.solve_x(at.rhs()))
     with pytest.raises(TypeError, match="real right-hand side"):
         cplx.solve_x_real(at.rhs() * 1j)
+
+
+def test_row_scaling_keeps_a_canonical_matrix_marked_and_a_zero_scale_is_scanned_again():
+    """``row_scaled`` (a lambda's rows) keeps the canonical mark of its source when no scale
+    is zero, so ``canonical`` returns it as it is; a zero scale makes explicit zeros, which
+    ``canonical`` then removes (an explicit zero must not tie a row to a node)."""
+    from bvpnav.banded import canonical, row_scaled
+
+    A = canonical(sp.csr_matrix(np.array([[1.0, 0.0, 2.0], [0.0, 3.0, 0.0]])))
+    B = row_scaled(A, np.array([2.0, 0.5]))
+    assert canonical(B) is B
+    np.testing.assert_array_equal(B.toarray(), [[2.0, 0.0, 4.0], [0.0, 1.5, 0.0]])
+    C = row_scaled(A, np.array([1.0, 0.0]))
+    assert C.nnz == 3 and canonical(C).nnz == 2
+    np.testing.assert_array_equal(canonical(C).toarray(), [[1.0, 0.0, 2.0], [0.0, 0.0, 0.0]])
