@@ -547,16 +547,29 @@ def test_border_coupling_by_columns_equals_the_summed_coo_assembly(error_model):
     assert _coupling_by_columns([(r0, two, v0)], nb, k) is None
 
 
-@pytest.mark.parametrize("error_model", [None, Bias()], ids=["no-border", "border"])
-def test_the_real_part_of_a_complex_factors_solve_is_taken_after_the_real_maps(error_model):
+def _one_axis():
+    t = np.linspace(0.0, 10.0, 301)
+    prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=np.sin(t)), sigma_a=0.05)
+    # end velocities (interior ones would keep the accelerations they touch out of the
+    # eliminated run: a lambda row touches them)
+    return prob.add(Position(t=t[::30], value=0.0, sigma=1.0), Position(t=0.0, value=0.0),
+                    Velocity(t=[0.0, 10.0], value=0.3, sigma=0.05))
+
+
+@pytest.mark.parametrize("make", [
+    lambda: problem(Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05), n=301),
+    lambda: problem(Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05), n=301, error_model=Bias()),
+    _one_axis], ids=["no-border", "border", "one-axis"])
+def test_the_real_part_of_a_complex_factors_solve_is_taken_after_the_real_maps(make):
     """``solve_x_real`` keeps the eliminations, scalings, gathers and scatters real and
     takes the real part after the band's (and the border's) complex solve: equal to the
     real part of the all-complex ``solve_x``, for one and for several right-hand sides, and
-    the same as ``solve_x`` for a real factor."""
+    the same as ``solve_x`` for a real factor; with three axes the eliminated unknowns are
+    an index array, with one a slice (``BandPlan.elim_index``)."""
     from bvpnav.banded import AffineBand, canonical
     from bvpnav.lsq import banded_plan
 
-    form = problem(Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05), n=301, error_model=error_model).formulation
+    form = make().formulation
     ls = least_squares_form(form, 1.0)
     plan = banded_plan(ls, form)
     D, E = canonical(ls.D.A), canonical(ls.E.A)
@@ -565,7 +578,8 @@ def test_the_real_part_of_a_complex_factors_solve_is_taken_after_the_real_maps(e
     lam = 3.0
     at = ls.at_lam(lam)
     cplx = BandedKKT(at.D.A, at.E.A, plan=plan, parts=affine.at_complex(lam, 1e-3 * lam))
-    assert (cplx.k > 0) == (error_model is not None)
+    assert (cplx.k > 0) == (form.model.q > 0)
+    assert isinstance(plan.elim_index, slice) == (form.model.d == 1)
     rng = np.random.default_rng(0)
     for rhs in (at.rhs(), rng.standard_normal((at.rhs().size, 3))):
         want = cplx.solve_x(rhs).real

@@ -66,3 +66,31 @@ def test_lcurve_alone_samples_every_two_decades_and_chooses_the_one_decade_grids
     assert len(coarse.lam) == SLOPE_POINTS == 7
     assert abs(np.log(coarse.lam_chosen / fine.lam_chosen)) < REFINE_XATOL
     assert coarse.evaluations < fine.evaluations
+
+
+def test_a_range_narrower_than_twelve_decades_keeps_thirteen_samples():
+    """Seven samples only where they lie two decades apart: on (1e-2, 1e2) the L-curve keeps
+    13 and finds the corner inside (about 6, the paper's row), as a 13-point sweep does."""
+    from bvpnav.lam import REFINE_XATOL
+    from bvpnav.lam.sweep import DIRECT_POINTS
+
+    curve = table1()[0].solve(solver="direct", lam="lcurve", rule={"lam_range": (1e-2, 1e2)}).curve
+    assert len(curve.lam) == DIRECT_POINTS and not curve.warnings
+    fine = lambda_curve(table1()[0], rules=("lcurve",), points=13, lam_range=(1e-2, 1e2))
+    assert abs(np.log(curve.lam_chosen / fine.lam_chosen)) < REFINE_XATOL
+    assert 3.611 / 2 < curve.lam_chosen < 3.611 * 2
+
+
+def test_a_corner_just_beyond_the_allowed_range_warns_with_seven_samples():
+    """The corner (about 6) lies in the excluded first sixth of the range: the sample beyond
+    it (two decades out) scores lower than the first allowed one, but the exact slope there
+    points out of the range, so the bound is returned with an edge warning."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        curve = table1()[0].solve(solver="direct", lam="lcurve",
+                                  rule={"lam_range": (0.26801, 2.6801e11)}).curve
+    assert len(curve.lam) == 7
+    assert curve.lam_chosen == pytest.approx(26.801, rel=1e-12)
+    assert any("low edge" in w for w in curve.warnings), curve.warnings

@@ -26,11 +26,28 @@ def test_derivative_identity_rho_prime_equals_minus_lam_eta_prime():
     assert abs(d_rho + lam * b["deta2"]) < 1e-5 * abs(d_rho)
 
 
-@pytest.mark.parametrize("make", [lambda: table1()[0], lambda: known_noise(0, n=2001)[0]],
-                         ids=["load form, LU", "acceleration form, banded"])
+def _with_bias():
+    """Three axes with a bias per axis (the banded factor's border) and soft velocities."""
+    from bvpnav.constraints import Velocity
+    from bvpnav.error_models import Bias
+
+    rng = np.random.default_rng(4)
+    t = np.linspace(0.0, 10.0, 801)
+    acc = np.column_stack([-np.sin(t), -0.25 * np.cos(0.5 * t), np.full(t.size, 0.2)])
+    acc += 0.05 * rng.standard_normal(acc.shape) + [0.03, -0.02, 0.01]
+    prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=acc), sigma_a=0.05, error_model=Bias())
+    r = np.column_stack([np.sin(t), np.cos(0.5 * t), 0.1 * t**2])
+    return prob.add(Position(t=t[::50], value=r[::50], sigma=0.1), Position(t=0.0, value=r[0]),
+                    Velocity(t=[0.0, 10.0], value=[[1.0, 0.0, 0.0], [np.cos(10.0), -0.5 * np.sin(5.0), 2.0]],
+                             sigma=0.05))
+
+
+@pytest.mark.parametrize("make", [lambda: table1()[0], lambda: known_noise(0, n=2001)[0], _with_bias],
+                         ids=["load form, LU", "acceleration form, banded", "three axes, bias border"])
 def test_second_derivative_of_eta2_is_six_times_the_squared_change_of_the_lambda_rows(make):
     """d2eta2 = 6 ||S A x'||^2 (no second solve) equals the central difference of the
-    exact first derivative, from lambda = 0.01 to 300, in both forms and factorizations."""
+    exact first derivative, from lambda = 0.01 to 300, in both forms and factorizations,
+    with error-model parameters in the banded factor's border too."""
     eng = _DirectSweep(make())
     eps = 1e-3
     for lam in (0.01, 2.0, 300.0):
@@ -309,3 +326,50 @@ def test_guard_samples_cover_two_decades_at_each_end_of_the_default_grids():
     assert guard_samples(np.log(np.geomspace(1e-6, 1e6, 7))) == 1
     assert guard_samples(np.log(np.geomspace(1e-6, 1e6, 5))) == 1
     assert guard_samples(np.log(np.geomspace(1e-3, 1e-1, 9))) == 2
+
+
+def test_refine_with_slopes_bisects_when_it_creeps_on_a_flat_top():
+    """-|u - c|^p with p = 6, 8, 10: the slope's zero is of order p - 1, where secants creep
+    from one side; after five such steps the search bisects and ends inside the tolerance's
+    bracket (2 xatol wide) in well under maxiter evaluations."""
+    from bvpnav.lam import REFINE_XATOL, refine_with_slopes
+
+    for decades in (1.0, 2.0):
+        s = np.arange(-6, 7) * decades * np.log(10.0)
+        for p in (6, 8, 10):
+            for c in (0.77, 0.3):
+                def f(u, p=p, c=c):
+                    return -abs(u - c) ** p
+                scores = np.array([f(u) for u in s])
+                slopes = np.array([_slope(f, u) for u in s])
+                calls = []
+                u = refine_with_slopes(lambda v, f=f, calls=calls: calls.append(v) or (f(v), _slope(f, v)),
+                                       s, scores, slopes, int(np.argmax(scores)))
+                # ended by the bracket, not by running out of evaluations (maxiter = 30)
+                assert abs(u - c) < 2 * REFINE_XATOL and len(calls) < 30, (decades, p, c, u, len(calls))
+
+
+def test_refine_with_slopes_takes_a_zero_slope_only_at_a_best_point_and_stops_at_nan():
+    """A degenerate point whose slope is exactly zero but whose score is below the bracket's
+    ends does not end the search; a score that is not finite ends it inside the bracket."""
+    from bvpnav.lam import REFINE_XATOL, refine_with_slopes
+
+    s = np.log(np.geomspace(1e-3, 1e3, 7))
+    peak = s[3] + 0.5
+
+    def f(v):
+        return -(v - peak) ** 2
+
+    g, dg = f(s), -2 * (s - peak)
+    calls = []
+
+    def degenerate(v):   # the first evaluation looks like a point of no curve at all
+        calls.append(v)
+        if len(calls) == 1:
+            return -1e3, 0.0
+        return f(v), -2 * (v - peak)
+
+    u = refine_with_slopes(degenerate, s, g, dg, 3)
+    assert len(calls) > 1 and abs(u - peak) < 2 * REFINE_XATOL   # searched on past it
+    u = refine_with_slopes(lambda v: (float("nan"), float("nan")), s, g, dg, 3)
+    assert s[3] <= u <= s[4]

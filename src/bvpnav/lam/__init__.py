@@ -328,8 +328,13 @@ def refine_with_slopes(f, s: np.ndarray, scores: np.ndarray, slopes: np.ndarray,
     that one evaluation closes the bracket on the other side of the extremum; likewise a
     point within 1.9 ``xatol`` of a bracket end is moved to 1.9 ``xatol`` from it, past the
     model's extremum, so that a right model is confirmed and the bracket closed by the
-    same evaluation. The search stops when :math:`b - a \le 2` ``xatol`` and returns the
-    cubic's maximiser there.
+    same evaluation. After five steps in a row that moved the same end (the slope's zero
+    of a flat top, where secants creep) the next step bisects. The search stops when
+    :math:`b - a \le 2` ``xatol`` (or after ``maxiter`` evaluations, or at a score or
+    slope that is not finite) and returns the cubic's maximiser there: for a smooth
+    maximum far closer than ``xatol``, on a flat top within the bracket's width. A slope of
+    exactly zero ends the search only at a point at least as good as both ends (a
+    degenerate point's slope of zero is not a maximum).
     Without such a bracket beside ``k`` (a slope of zero, the best sample at an end) the
     search is :func:`refine_extremum`'s on the scores alone; a maximiser beyond a bound
     returns the bound.
@@ -347,12 +352,18 @@ def refine_with_slopes(f, s: np.ndarray, scores: np.ndarray, slopes: np.ndarray,
                                maxiter=maxiter, bounds=bounds)
     a, b = sample(j), sample(j + 1)
     newest = [a, b] if j == k else [b, a]   # the best sample last
+    moved = ""   # which end each step replaced ("a" or "b"), newest last
     for _ in range(maxiter):
         v = hermite_peak(a[0], b[0], a[1], b[1], a[2], b[2])
         if b[0] - a[0] <= 2.0 * xatol or not lo <= v <= hi:
             break
         p, q = newest
-        if p[2] * q[2] > 0 and p[2] != q[2]:   # both newest on one side: their secant
+        if moved[-5:] in ("aaaaa", "bbbbb"):
+            # creeping: five steps in a row from one side (the slope's zero is of high
+            # order, a flat top, where secants and cubics converge linearly; four is still
+            # a secant's usual approach to a skewed peak): bisect
+            v, moved = 0.5 * (a[0] + b[0]), ""
+        elif p[2] * q[2] > 0 and p[2] != q[2]:   # both newest on one side: their secant
             w = q[0] - q[2] * (q[0] - p[0]) / (q[2] - p[2])
             if a[0] < w < b[0]:
                 v = w
@@ -364,7 +375,9 @@ def refine_with_slopes(f, s: np.ndarray, scores: np.ndarray, slopes: np.ndarray,
             v = b[0] - 1.9 * xatol
         v = min(max(v, a[0] + xatol), b[0] - xatol)
         gv, dv = (sign * float(x) for x in f(v))
-        if dv == 0.0:   # the extremum itself
+        if not (np.isfinite(gv) and np.isfinite(dv)):
+            break   # no model beyond this: the cubic of the bracket so far
+        if dv == 0.0 and gv >= max(a[1], b[1]):   # the extremum itself
             return min(max(v, lo), hi)
         c = (v, gv, dv)
         left, right = _holds_peak(a, c), _holds_peak(c, b)
@@ -377,15 +390,18 @@ def refine_with_slopes(f, s: np.ndarray, scores: np.ndarray, slopes: np.ndarray,
                                    sign * np.array(g), int(np.argmax(g)), best=best,
                                    xatol=xatol, maxiter=maxiter, bounds=bounds)
         a, b = (a, c) if left else (c, b)
+        moved += "b" if left else "a"
         newest = [newest[1], c]
+    v = hermite_peak(a[0], b[0], a[1], b[1], a[2], b[2])
     return min(max(v, lo), hi)
 
 
 def guard_samples(s: np.ndarray) -> int:
     """How many samples at each end of a sweep a rule that never chooses the range's ends
     leaves out: the two outermost, or the outermost one when samples lie two decades or
-    more apart (the same two decades at each end of the default ranges, 13 samples one
-    decade apart or 7 two decades apart)."""
+    more apart (the same two decades at each end of the default range with 13 samples one
+    decade apart or 7 two decades apart; the same sixth of any range of 12 decades or more
+    with 13 or 7 samples)."""
     return 1 if len(s) > 1 and s[1] - s[0] >= 2.0 * math.log(10.0) * (1.0 - 1e-9) else 2
 
 

@@ -138,11 +138,19 @@ class LCurve(LambdaRule):
                         val, slope = f(mid)
                         j = int(np.searchsorted(u, mid))
                         u.insert(j, mid), sc.insert(j, val), sl.insert(j, slope)
+            # the slope says where the corner lies: rising out of the allowed range at its
+            # first or last sample (or a refinement that stops at a bound) is an edge,
+            # whatever the excluded samples score (a corner just beyond a bound)
+            slope_k = sl[u.index(s[k])]
+            if (k == g and slope_k < 0) or (k == len(s) - 1 - g and slope_k > 0):
+                edge_warning(curve, self.name, k, g)
             u, sc = np.array(u), np.array(sc)
             allowed = np.flatnonzero((u >= lo) & (u <= hi))
             j = int(allowed[np.argmax(sc[allowed])])
-            return float(math.exp(refine_with_slopes(f, u, sc, np.array(sl), j, best="max",
-                                                     bounds=(lo, hi))))
+            best = refine_with_slopes(f, u, sc, np.array(sl), j, best="max", bounds=(lo, hi))
+            if best <= lo or best >= hi:
+                edge_warning(curve, self.name, g if best <= lo else len(s) - 1 - g, g)
+            return float(math.exp(best))
         if sweep.engine == "direct":
             return float(math.exp(refine_extremum(lambda u: curvature(sweep.point(math.exp(u))), s,
                                                   scores, k, best="max", bounds=(s[g], s[-1 - g]))))

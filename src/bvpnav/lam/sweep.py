@@ -367,7 +367,8 @@ class DirectSweep:
 
         Notes
         -----
-        With the hard rows as :math:`x = x_0 + Z y` and the lambda-weighted residual
+        With the hard rows as :math:`x = x_0 + Z y` (their right-hand side does not depend
+        on lambda, so neither do :math:`x_0` and :math:`Z`) and the lambda-weighted residual
         :math:`r = S(Ax + c)`, the minimiser solves :math:`(H + \lambda G) y = \ldots`,
         :math:`G = Z^T A^T S^2 A Z`, so :math:`y' = -M^{-1} g` with :math:`M = H + \lambda G`
         and :math:`g = Z^T A^T S r`. Then :math:`\hat\eta' = 2 g^T y'`; differentiating
@@ -632,10 +633,10 @@ def sweep_curve(form, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6), p
     points : int, optional
         Coarse sweep size; every rule is then refined inside its best bracket (to 1 % in
         lambda, :func:`bvpnav.lam.refine_extremum`). Default: 13 (one per decade of the default range) with
-        the ``direct`` engine, whose curve is exact at every point; 7 (one per two decades,
-        :data:`SLOPE_POINTS`) when every rule asked reads its score's exact slope (the
-        L-curve alone, e.g. ``solve(lam="lcurve")``); 25 with the ``cvxpy`` engine, whose
-        curvature is a spline through the samples.
+        the ``direct`` engine, whose curve is exact at every point; 7 (:data:`SLOPE_POINTS`,
+        two decades apart or more) when every rule asked reads its score's exact slope (the
+        L-curve alone, e.g. ``solve(lam="lcurve")``) and the range spans 12 decades or more;
+        25 with the ``cvxpy`` engine, whose curvature is a spline through the samples.
     tau : float
         Discrepancy safety factor.
     probes, seed : int
@@ -684,10 +685,14 @@ def _sweep_curve(form, rules, rule, lam_range, points, tau, probes, seed, progre
         raise InputError("engine='direct' needs a least-squares problem (no band, robust or "
                          "inequality items); use engine='cvxpy'")
     names = _usable_rules(form, names, rule, engine)
+    lo, hi = _check_range(lam_range, DIRECT_POINTS if points is None else points)
     if points is None:
-        points = (CVXPY_POINTS if engine != "direct" else
-                  SLOPE_POINTS if all(get_rule(r).slopes for r in names) else DIRECT_POINTS)
-    lo, hi = _check_range(lam_range, points)
+        # one sample every two decades or more only where the range spans 12 decades or
+        # more: then the outermost sample excludes the same sixth of the range at each end
+        # as the two outermost of 13 (bvpnav.lam.guard_samples)
+        wide = math.log10(hi / lo) >= 2.0 * (SLOPE_POINTS - 1) - 1e-9
+        points = (CVXPY_POINTS if engine != "direct" else SLOPE_POINTS
+                  if wide and all(get_rule(r).slopes for r in names) else DIRECT_POINTS)
     form.check_scales(lo)  # the sweep's extremes: every weight stays resolvable
     form.check_scales(hi)
     form.check_observability()

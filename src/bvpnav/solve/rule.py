@@ -110,8 +110,9 @@ def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6
     ``bvpnav.lam.sweep``), e.g. ``gcv`` in the load form or ``discrepancy`` without
     ``sigma_a``; the chosen rule itself must run, or :class:`~bvpnav.InputError` says why.
     L-curve: maximise the curvature of :math:`(\\log\\rho, \\log\\eta)`; the two
-    outermost sweep points on each side are never chosen (a "corner" there is the range
-    ending, and is reported in ``warnings``). GCV: minimise
+    outermost sweep points on each side (the outermost one where samples lie two decades
+    or more apart, :func:`bvpnav.lam.guard_samples`) are never chosen (a "corner" there is
+    the range ending, and is reported in ``warnings``). GCV: minimise
     :math:`G = \\hat\\rho / \\mathrm{tr}(I - A_\\lambda)^2`, with
     :math:`\\mathrm{tr}(I - A_\\lambda) = -\\mathrm{tr}(\\partial w / \\partial \\hat a)`.
     Quasi-optimality: minimise :math:`\\|\\lambda\\, dr/d\\lambda\\|`.
