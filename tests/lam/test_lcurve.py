@@ -94,3 +94,32 @@ def test_a_corner_just_beyond_the_allowed_range_warns_with_seven_samples():
     assert len(curve.lam) == 7
     assert curve.lam_chosen == pytest.approx(26.801, rel=1e-12)
     assert any("low edge" in w for w in curve.warnings), curve.warnings
+
+
+def test_the_cvxpy_spline_keeps_two_samples_from_each_end_on_a_coarse_grid():
+    """Only the direct sweep's exact values and slopes make one guard sample enough: the
+    cvxpy sweep's spline (end effects) keeps two even with samples two decades apart."""
+    from bvpnav.lam.lcurve import LCurve
+    from bvpnav.lam.sweep import LambdaCurve
+
+    class Spline:   # a cvxpy-like sweep on an analytic L-shaped curve
+        engine = "cvxpy"
+
+        def __init__(self):
+            self.cache = {}
+
+        def point(self, lam):
+            p = {"lam": lam, "rho2": 1.0 + lam, "eta2": 1.0 + 1.0 / lam}
+            self.cache[float(lam)] = p
+            return p
+
+    lams = np.geomspace(1e-6, 1e6, 7)
+    s = np.log(lams)
+    sweep = Spline()
+    pts = [sweep.point(v) for v in lams]
+    scores = np.array([0.0, 5.0, 1.0, 0.5, 0.2, 0.1, 0.0])   # best at the first allowed-by-one sample
+    curve = LambdaCurve(lam=lams, residual_norm=np.ones(7), info_norm=np.ones(7), rule="lcurve",
+                        engine="cvxpy", lam_range=(1e-6, 1e6))
+    lam = LCurve().refine(sweep, pts, s, scores, curve)
+    assert lams[1] < lam and np.log(lam) >= s[2] - np.log(100.0)   # chosen from k = 2's bracket
+    assert any("low edge" in w for w in curve.warnings)

@@ -95,9 +95,9 @@ class LCurve(LambdaRule):
 
     Notes
     -----
-    The two outermost sweep points on each side (the outermost one when samples lie two
-    decades apart, :func:`bvpnav.lam.guard_samples`) are never chosen (a "corner" there is
-    the range ending, reported in the curve's warnings). With the direct sweep the
+    The two outermost sweep points on each side (with the direct sweep, the outermost one
+    when samples lie two decades apart, :func:`bvpnav.lam.guard_samples`) are never chosen
+    (a "corner" there is the range ending, reported in the curve's warnings). With the direct sweep the
     curvature (:func:`curvature`) and its slope (:func:`curvature_slope`) are exact at
     every point, so the sweep samples every two decades by default and the corner is
     refined from values and slopes (:func:`bvpnav.lam.refine_with_slopes`); with the cvxpy
@@ -114,7 +114,9 @@ class LCurve(LambdaRule):
         return spline_curvature(s, [p["rho2"] for p in pts], [p["eta2"] for p in pts], s)
 
     def refine(self, sweep, pts, s, scores, curve):
-        g = guard_samples(s)
+        # the outermost sample alone on a coarse grid of exact values and slopes; a spline
+        # through the cvxpy sweep's samples keeps two away from its ends (end effects)
+        g = guard_samples(s) if sweep.engine == "direct" else 2
         inner = np.arange(g, len(s) - g)
         k = int(inner[np.argmax(scores[inner])])
         edge_warning(curve, self.name, k, g, scores, best="max")
