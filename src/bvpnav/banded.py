@@ -1418,19 +1418,18 @@ class BandedKKT(Factorization):
         taken after the band's solve), only ``zgbtrs`` and the border's solve are complex.
         The same as :meth:`solve_x` for a real factor.
         """
-        rhs = np.asarray(rhs)
-        if rhs.dtype.kind == "c":
-            raise TypeError("solve_x_real takes a real right-hand side")
-        return self._solve(rhs.astype(float, copy=False), x_only=True)
+        return self._solve(self._as_rhs(rhs, real=True), x_only=True)
 
-    def _as_rhs(self, rhs) -> np.ndarray:
+    def _as_rhs(self, rhs, real: bool = False) -> np.ndarray:
         """``rhs`` as a new or given array of the factor's type (float, or complex for a
-        factor of :meth:`AffineBand.at_complex`'s parts)."""
-        if self._lu.dtype.kind == "c":
+        factor of :meth:`AffineBand.at_complex`'s parts), or a real one with ``real``
+        (:meth:`solve_x_real`)."""
+        if self._lu.dtype.kind == "c" and not real:
             return np.asarray(rhs, dtype=complex)
         rhs = np.asarray(rhs)
         if rhs.dtype.kind == "c":
-            raise TypeError("a complex right-hand side needs a factor of complex parts "
+            raise TypeError("solve_x_real takes a real right-hand side" if real else
+                            "a complex right-hand side needs a factor of complex parts "
                             "(AffineBand.at_complex)")
         return rhs.astype(float, copy=False)
 

@@ -41,7 +41,7 @@ from .formulation import Formulation
 from .imu import ImuData
 from .items import MODES, Item, item_class
 from .lam import NEEDS
-from .lam.sweep import CvxpySweep, DirectSweep, LambdaCurve
+from .lam.sweep import SLOPE_POINTS, CvxpySweep, DirectSweep, LambdaCurve
 from .model import Affine, Cone, NavModel
 from .problem import NavigationProblem
 from .solve.chain import solve_fixed
@@ -758,9 +758,9 @@ def check_rule(rule) -> None:
         ``needs`` a subset of :data:`bvpnav.lam.NEEDS`; ``slopes`` a bool, and True only
         with ``uses_derivative``; on a small least-squares problem (direct sweep, sampled
         every two decades for a rule that reads slopes) ``scores`` one number per sampled
-        lambda and ``refine`` a lambda
-        inside the sweep's range, the same on a second run; and, unless the rule needs
-        least squares, the same on the cvxpy sweep of a problem with a robust item.
+        lambda and ``refine`` a lambda inside the sweep's range, the same on a second run;
+        and, unless the rule needs least squares, the same on the cvxpy sweep of a problem
+        with a robust item.
     """
     name = getattr(rule, "name", None)
     who = f"lambda rule {name!r}"
@@ -777,7 +777,7 @@ def check_rule(rule) -> None:
     ls, robust = _ls_formulation(sigma_a=0.05)
     # as sweep_curve samples for this rule alone: every two decades on the direct sweep
     # when it reads slopes
-    grids = {"direct": np.geomspace(1e-6, 1e6, 7) if slopes else np.geomspace(1e-3, 1e3, 13),
+    grids = {"direct": np.geomspace(1e-6, 1e6, SLOPE_POINTS) if slopes else np.geomspace(1e-3, 1e3, 13),
              "cvxpy": np.geomspace(1e-3, 1e3, 13)}
     opts, _ = prepare(1.0, fallback=None)
     # as sweep_curve builds it for this rule alone: without dx/dlam when the rule says it

@@ -13,7 +13,6 @@ from . import (
     bracket,
     edge_warning,
     guard_samples,
-    refine_extremum,
     refine_with_slopes,
     register_rule,
 )
@@ -97,12 +96,12 @@ class LCurve(LambdaRule):
     -----
     The two outermost sweep points on each side (with the direct sweep, the outermost one
     when samples lie two decades apart, :func:`bvpnav.lam.guard_samples`) are never chosen
-    (a "corner" there is the range ending, reported in the curve's warnings). With the direct sweep the
-    curvature (:func:`curvature`) and its slope (:func:`curvature_slope`) are exact at
-    every point, so the sweep samples every two decades by default and the corner is
-    refined from values and slopes (:func:`bvpnav.lam.refine_with_slopes`); with the cvxpy
-    sweep a spline through the samples (:func:`spline_curvature`), refined by sampling
-    more densely.
+    (a "corner" there is the range ending, reported in the curve's warnings). With the
+    direct sweep the curvature (:func:`curvature`) and its slope (:func:`curvature_slope`)
+    are exact at every point, so the sweep samples every two decades by default and the
+    corner is refined from values and slopes (:func:`bvpnav.lam.refine_with_slopes`); with
+    the cvxpy sweep a spline through the samples (:func:`spline_curvature`), refined by
+    sampling more densely.
     """
 
     name = "lcurve"
@@ -124,7 +123,7 @@ class LCurve(LambdaRule):
             curve.warnings.append("lcurve: the curve has no convex corner in lam_range=("
                                   f"{curve.lam_range[0]:g}, {curve.lam_range[1]:g}); {WIDEN}, or "
                                   "choose another rule (e.g. lam='quasi')")
-        if sweep.engine == "direct" and all("d2eta2" in p for p in pts):
+        if sweep.engine == "direct":   # its points carry d2eta2 with deta2: exact slopes
             def f(u):
                 pt = sweep.point(math.exp(u))
                 return curvature(pt), curvature_slope(pt)
@@ -153,9 +152,6 @@ class LCurve(LambdaRule):
             if best <= lo or best >= hi:
                 edge_warning(curve, self.name, g if best <= lo else len(s) - 1 - g, g)
             return float(math.exp(best))
-        if sweep.engine == "direct":
-            return float(math.exp(refine_extremum(lambda u: curvature(sweep.point(math.exp(u))), s,
-                                                  scores, k, best="max", bounds=(s[g], s[-1 - g]))))
         a, b = bracket(s, k)
         fine = np.linspace(a, b, 9)[1:-1]
         for u in fine[np.abs(fine - s[k]) > 1e-6]:
