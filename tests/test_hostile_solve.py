@@ -116,7 +116,9 @@ OPTION_CASES = [
                  r"'direct' option refine=-1", r"an integer from 0 to 100", id="direct-refine"),
     pytest.param(lambda p: p.solve(solver="direct", options={"pivot": True}), InputError,
                  r"'direct' has no option 'pivot'", r"valid options: \['ldl_accept', 'method', "
-                 r"'refine'\]", id="direct-unknown-option"),
+                 r"'refine', 'refine_tol'\]", id="direct-unknown-option"),
+    pytest.param(lambda p: p.solve(solver="direct", options={"refine_tol": 1.0}), InputError,
+                 r"'direct' option refine_tol=1\.0", r"between 0 and 1", id="direct-refine-tol"),
     pytest.param(lambda p: p.solve(solver="csne", options={"tol": 0.0}), InputError,
                  r"'csne' option tol=0\.0", r"between 0 and 1", id="csne-tol"),
     pytest.param(lambda p: p.solve(verify="yes"), InputError, r"verify='yes'",

@@ -141,25 +141,32 @@ class Factorization:
         raise NotImplementedError
 
     def refined(self, rhs: np.ndarray, steps: int, tol: float = 0.0, window: slice | None = None,
-                stall: float | None = None):
-        """Solve with up to ``steps`` iterative-refinement steps in double precision.
+                stall: float | None = None, record: dict | None = None):
+        r"""Solve with up to ``steps`` iterative-refinement steps in double precision.
 
         Returns ``(z, steps_taken, last_relative_correction)``; the correction is measured
         on ``window`` (default: all of ``z``) and refinement stops below ``tol``, or, with
         ``stall``, as soon as a correction is not at least ``stall`` times smaller than the
-        one before (the rounding floor has been reached).
+        one before (the rounding floor has been reached). With ``record`` (a dict) and at
+        least one step, ``record["residual"]`` and ``record["z"]`` are
+        :math:`\|b - S z_{k-1}\|_\infty` and :math:`\|z_{k-1}\|_\infty` of the last
+        iterate whose residual was formed (the answer is it plus the last correction).
 
         Notes
         -----
-        :math:`z_{k+1} = z_k + \\tilde S^{-1} (b - S z_k)` with the factorised
-        :math:`\\tilde S`; it converges when :math:`\\|I - \\tilde S^{-1} S\\| < 1`.
+        :math:`z_{k+1} = z_k + \tilde S^{-1} (b - S z_k)` with the factorised
+        :math:`\tilde S`; it converges when :math:`\|I - \tilde S^{-1} S\| < 1`.
         """
         window = window if window is not None else slice(None)
         z = self.solve(rhs)
         corr, k = np.inf, 0
         for _ in range(steps):
             k += 1
-            dz = self.solve(rhs - self.S @ z)
+            res = rhs - self.S @ z
+            if record is not None:
+                record["residual"], record["z"] = float(np.max(np.abs(res))), float(np.max(np.abs(z)))
+            dz = self.solve(res)
+            del res
             z += dz
             prev, corr = corr, float(np.max(np.abs(dz[window])) / max(np.max(np.abs(z[window])), 1e-300))
             if corr < tol or (stall is not None and corr > stall * prev):
@@ -383,6 +390,75 @@ def _affine_runs(p: np.ndarray, absent: np.ndarray | None = None) -> list:
         else:
             out.append((u0, u1, p0, s))
     return out
+
+
+#: Largest period tried by :class:`_Moves` (one axis interleaves two unknowns per node).
+MAX_MOVE_PERIOD = 4
+
+#: Most slices :class:`_Moves` uses before it keeps the index array instead.
+MAX_MOVE_SLICES = 256
+
+
+class _Moves:
+    """The map ``R = r[order]`` between reduced unknowns and band rows (and back, ``out[order]
+    = y``) as strided slices where ``order`` is made of a few interleaved arithmetic runs
+    (one axis: ``r_j`` and ``mu_j`` alternate; three axes: the same per axis), an index
+    array for the rest.
+
+    Parameters
+    ----------
+    order : ndarray of int (nb,)
+        Reduced unknown of each band row (:attr:`BandPlan.pos_order`), distinct.
+
+    Notes
+    -----
+    Each phase ``c`` of a period ``P`` (band rows ``c, c + P, ...``) is split into runs
+    where the reduced index grows by a constant step (:func:`_affine_runs`); a run of
+    ``u1 - u0`` rows is the slice pair ``band[c + P u0 : c + P u1 : P]`` and
+    ``reduced[p0 : p0 + s (u1 - u0) : s]``. A slice copy of 2e5 doubles took 0.04 ms where
+    numpy's fancy indexing with the int32 positions took 0.4 ms (gather) and 0.66 ms
+    (scatter): two of each per solve.
+    """
+
+    def __init__(self, order: np.ndarray):
+        order = np.asarray(order)
+        self.nb = nb = order.size
+        self.pairs: list = []
+        rest = np.arange(nb, dtype=np.int64)
+        for P in range(1, MAX_MOVE_PERIOD + 1):
+            pairs, loose = [], []
+            for c in range(min(P, nb)):
+                for u0, u1, p0, s in _affine_runs(order[c::P]):
+                    if s is None or s <= 0:
+                        loose.append(c + P * np.arange(u0, u1, dtype=np.int64))
+                    else:
+                        pairs.append((slice(c + P * u0, c + P * (u1 - 1) + 1, P),
+                                      slice(p0, p0 + s * (u1 - u0 - 1) + 1, s)))
+            left = np.concatenate(loose) if loose else np.zeros(0, dtype=np.int64)
+            if len(pairs) <= MAX_MOVE_SLICES and left.size < rest.size:
+                self.pairs, rest = pairs, left
+                if 2 * left.size < MIN_STRIDE_RUN:
+                    break
+        self.band_rest = np.sort(rest)
+        self.red_rest = order[self.band_rest].astype(np.int64)
+
+    def gather(self, r: np.ndarray) -> np.ndarray:
+        """``r[order]`` (a new array; ``r`` (R,) or (R, c))."""
+        if not self.pairs:
+            return r[self.red_rest]
+        R = np.empty((self.nb,) + r.shape[1:], dtype=r.dtype)
+        for b, q in self.pairs:
+            R[b] = r[q]
+        if self.band_rest.size:
+            R[self.band_rest] = r[self.red_rest]
+        return R
+
+    def scatter(self, y: np.ndarray, out: np.ndarray) -> None:
+        """``out[order] = y``."""
+        for b, q in self.pairs:
+            out[q] = y[b]
+        if self.band_rest.size:
+            out[self.red_rest] = y[self.band_rest]
 
 
 def _row_groups(diagonal: DiagonalRows) -> list:
@@ -695,6 +771,12 @@ class BandPlan:
     def unfolded(self) -> np.ndarray:
         """Indices of the objective rows kept as unknowns."""
         return np.flatnonzero(~self.fold)
+
+    @functools.cached_property
+    def moves(self) -> _Moves:
+        """:attr:`pos_order` as slices (:class:`_Moves`), for the solves' gathers and
+        scatters."""
+        return _Moves(self.pos_order)
 
     @functools.cached_property
     def elim_index(self) -> slice | np.ndarray:
@@ -1377,7 +1459,7 @@ class BandedKKT(Factorization):
         # one right-hand side stays one-dimensional (gathers and scatters of a vector are
         # about twice as fast as of an (R, 1) array's rows)
         sU = self._sU if r.ndim == 1 else self._sU[:, None]
-        R = r[pl.pos_order]
+        R = pl.moves.gather(r)
         R *= sU
         if R.dtype != self._lu.dtype:
             R = R.astype(self._lu.dtype)
@@ -1397,7 +1479,7 @@ class BandedKKT(Factorization):
             y = y.real * sU
         else:
             y *= sU
-        out[pl.pos_order] = y
+        pl.moves.scatter(y, out)
         return out
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:

@@ -517,10 +517,13 @@ def factor_form(form: LeastSquaresForm, problem, method: str = "lu", delta: floa
     return BorderedLU(form.augmented(), dense, np.arange(m + n, m + n + p))
 
 
-#: Relative correction below which refinement of a banded answer stops: the correction
-#: measures the error of the answer before the step, which the step itself removes (one
-#: step usually; a second where the first solve was off by more).
-BANDED_TOL = 1e-10
+#: Relative correction below which refinement of a banded answer stops, by accuracy
+#: preset (the direct back end's ``refine_tol``): a hundredth of the preset's forward-error
+#: bound (:data:`FORWARD_RTOL`). The correction measures the error of the answer before
+#: the step, which the step itself removes, so the answer is better than this (one step
+#: usually; at lambda = 0.005 on the benchmark's 1e5 samples the first correction was
+#: 4.2e-10 and a second one, 1.0e-11, only showed the rounding floor).
+BANDED_TOL = {name: 1e-2 * v for name, v in FORWARD_RTOL.items()}
 
 #: Largest normwise backward error at which a refined LDL^T answer is accepted.
 LDL_BACKWARD = 1e-12
@@ -528,7 +531,7 @@ LDL_BACKWARD = 1e-12
 
 def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14,
                         method: str = "auto", ldl_steps: int = 30, ldl_tol: float = 1e-12,
-                        ldl_accept: float = 1e-7):
+                        ldl_accept: float = 1e-7, banded_tol: float = BANDED_TOL["default"]):
     """Solve the equality-constrained least-squares form directly.
 
     One sparse factorization of the augmented system (error-model parameters eliminated
@@ -550,6 +553,9 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
         used instead and the reason is recorded. ``"auto"``: ``"ldl"`` for the
         acceleration-residual form, ``"lu"`` for the load form (whose condition number,
         roughly N^4, defeats a regularized factorization).
+    banded_tol : float
+        Stop refining a banded answer when the relative correction falls below this
+        (:data:`BANDED_TOL`).
 
     Returns
     -------
@@ -589,7 +595,7 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
             fac = banded_factor(form, problem)
             # a pivoted LU (exact but for folding the local rows): one refinement step whose
             # correction measures the first solve's error usually settles it
-            z, k, corr = _accepted(fac, rhs, window, ldl_steps, BANDED_TOL, ldl_accept, notes, "banded")
+            z, k, corr = _accepted(fac, rhs, window, ldl_steps, banded_tol, ldl_accept, notes, "banded")
             if z is None:
                 fac, method = None, "lu"
         except NotBanded as exc:
@@ -623,19 +629,32 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
 
 
 def _accepted(fac, rhs, window, steps, tol, accept, notes, name):
-    """Refine a factorization that is not exact for ``S`` (regularized, or folded) and accept
+    r"""Refine a factorization that is not exact for ``S`` (regularized, or folded) and accept
     its answer only with a small correction and a normwise backward error near rounding;
-    ``(None, k, corr)`` with the reason in ``notes`` otherwise."""
-    z, k, corr = fac.refined(rhs, steps, tol, window=window, stall=0.5)
+    ``(None, k, corr)`` with the reason in ``notes`` otherwise.
+
+    Notes
+    -----
+    The backward error :math:`\|b - S z\|_\infty / (\|S\|_\infty \|z\|_\infty +
+    \|b\|_\infty)` is that of the last iterate whose residual the refinement formed: the
+    answer is that iterate plus the last correction, whose relative size ``corr`` is
+    checked too (LAPACK's ``xGERFS`` likewise judges the iterate it has the residual of).
+    Without a refinement step the residual of the answer is formed here.
+    """
+    record: dict = {}
+    z, k, corr = fac.refined(rhs, steps, tol, window=window, stall=0.5, record=record)
     # a small correction alone can mislead (a wild first solve makes every later
-    # correction small relative to z): also require the normwise backward error
-    # |rhs - S z| / (|S| |z| + |rhs|) (infinity norms) to be near rounding
+    # correction small relative to z): also require the normwise backward error to be
+    # near rounding
     eta = np.inf
     if np.all(np.isfinite(z)):
         S = fac.S
         norm = S.norm_inf() if hasattr(S, "norm_inf") else spla.norm(S, np.inf)
-        den = norm * np.max(np.abs(z)) + np.max(np.abs(rhs))
-        eta = float(np.max(np.abs(rhs - S @ z)) / max(den, 1e-300))
+        if "residual" in record:
+            res, zmax = record["residual"], record["z"]
+        else:
+            res, zmax = float(np.max(np.abs(rhs - S @ z))), float(np.max(np.abs(z)))
+        eta = res / max(norm * zmax + float(np.max(np.abs(rhs))), 1e-300)
     if not (np.isfinite(corr) and corr <= accept):
         notes.append(f"{name} refinement stalled at correction {corr:.1e}")
         return None, k, corr

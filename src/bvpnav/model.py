@@ -372,9 +372,11 @@ class NavModel:
         """The acceleration residuals ``w`` (m/s^2), axis-major."""
         parts = []
         for a in self.axes_of(axes):
-            A = sp.csr_matrix(
-                (np.ones(self.N), (np.arange(self.N), self.w_index(a))), shape=(self.N, self.size)
-            )
+            # one entry per row: the CSR arrays directly (no COO conversion and its sort)
+            cols = np.asarray(self.w_index(a), dtype=np.int32 if self.size < 2**31 else np.int64)
+            A = sp.csr_matrix((np.ones(self.N), cols, np.arange(self.N + 1, dtype=cols.dtype)),
+                              shape=(self.N, self.size))
+            A.has_canonical_format = True
             parts.append(Affine(A, np.zeros(self.N)))
         return Affine.vstack(parts)
 

@@ -603,3 +603,103 @@ def test_row_scaling_keeps_a_canonical_matrix_marked_and_a_zero_scale_is_scanned
     C = row_scaled(A, np.array([1.0, 0.0]))
     assert C.nnz == 3 and canonical(C).nnz == 2
     np.testing.assert_array_equal(canonical(C).toarray(), [[1.0, 0.0, 2.0], [0.0, 0.0, 0.0]])
+
+
+@pytest.mark.parametrize("axes", [1, 3])
+def test_band_rows_move_by_slices_and_give_the_index_arrays_own_answer(axes):
+    """``BandPlan.moves`` gathers and scatters the band rows by a few strided slices (an
+    axis interleaves ``r_j`` and ``mu_j``: period 2, two runs per axis) and an index array
+    for the rest: the same arrays as numpy's fancy indexing with ``pos_order``, for one and
+    several right-hand sides."""
+    from bvpnav.lsq import banded_plan
+
+    prob = problem(n=2001, error_model=Bias() if axes == 3 else None)
+    if axes == 1:
+        data = prob.data
+        prob = bvpnav.NavigationProblem(bvpnav.ImuData(data.t, data.acc[:, 0]), sigma_a=0.05)
+        prob.add(Position(t=[0.0, 10.0], value=0.0, name="ends"))
+        prob.add(Position(t=np.arange(0.5, 10.0, 1.0), value=0.1, sigma=1.0, name="fixes"))
+    form = prob.formulation
+    ls = least_squares_form(form, 1.0)
+    plan = banded_plan(ls, form)
+    moves = plan.moves
+    # a handful of slices and a few loose rows, not an index array for everything
+    assert 0 < len(moves.pairs) <= 2 * axes and moves.band_rest.size < 64
+    rng = np.random.default_rng(1)
+    for r in (rng.standard_normal(plan.pos.size), rng.standard_normal((plan.pos.size, 3))):
+        np.testing.assert_array_equal(moves.gather(r), r[plan.pos_order])
+        y = rng.standard_normal((plan.size,) + r.shape[1:])
+        out, want = np.zeros_like(r), np.zeros_like(r)
+        moves.scatter(y, out)
+        want[plan.pos_order] = y
+        np.testing.assert_array_equal(out, want)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_moves_of_an_arbitrary_order_equal_fancy_indexing(seed):
+    """Orders that are not runs (a random permutation), runs with a remainder, and periods
+    up to the limit: ``_Moves`` falls back to index arrays where slices do not cover."""
+    from bvpnav.banded import _Moves
+
+    rng = np.random.default_rng(seed)
+    n = 3000
+    orders = [rng.permutation(n),
+              np.concatenate([[2999, 5], np.arange(1000, 2000), rng.permutation(np.arange(6, 1000))]),
+              np.stack([np.arange(0, 1000), np.arange(1000, 2000), np.arange(2000, 3000)], 1).ravel(),
+              np.arange(n)[::-1].copy()]
+    for order in orders:
+        moves = _Moves(order.astype(np.int32))
+        r = rng.standard_normal(n)
+        np.testing.assert_array_equal(moves.gather(r), r[order])
+        y = rng.standard_normal(order.size)
+        out, want = np.zeros(n), np.zeros(n)
+        moves.scatter(y, out)
+        want[order] = y
+        np.testing.assert_array_equal(out, want)
+    assert len(_Moves(orders[2]).pairs) == 3 and _Moves(orders[2]).band_rest.size == 0   # period 3
+    assert _Moves(orders[0]).pairs == [] and _Moves(orders[0]).band_rest.size == n        # no runs
+
+
+def test_the_backward_error_is_judged_on_the_iterate_the_refinement_formed_the_residual_of():
+    """``refined(record=...)`` keeps the residual and size of the last iterate whose
+    residual was formed (the answer is it plus the last correction); they equal a fresh
+    computation at that iterate, and the banded answer is accepted on them."""
+    prob = problem(Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05))
+    ls = least_squares_form(prob.formulation, 1.0)
+    fac = BandedKKT(ls.D.A, ls.E.A, column_nodes(prob.formulation.model), lam_rows=ls.lam_rows)
+    rhs = ls.rhs()
+    record: dict = {}
+    z, k, corr = fac.refined(rhs, 1, 0.0, record=record)
+    z0 = fac.solve(rhs)
+    assert k == 1
+    assert record["residual"] == pytest.approx(float(np.max(np.abs(rhs - fac.S @ z0))), rel=1e-12)
+    assert record["z"] == float(np.max(np.abs(z0)))
+    eta = record["residual"] / (fac.S.norm_inf() * record["z"] + np.max(np.abs(rhs)))
+    assert eta < 1e-14   # a pivoted banded LU: backward stable
+    # no step, no record: the caller forms the answer's residual itself
+    rec0: dict = {}
+    fac.refined(rhs, 0, record=rec0)
+    assert rec0 == {}
+
+
+@pytest.mark.parametrize("lam", [1e-4, 1.0])
+def test_banded_refinement_stops_at_the_presets_tolerance_with_the_answer_at_the_rounding_floor(lam):
+    """The banded answer's refinement stops once the correction is below the preset's
+    ``refine_tol`` (a hundredth of its forward-error bound: 1e-8 by default). On this
+    problem the rounding floor is about 2e-10: the default takes one step, ``high``
+    (1e-10) refines until the corrections stall, and the answers agree with each other and
+    with the pivoted sparse LU far inside 1e-8 (measured 1e-10 .. 4e-10)."""
+    from bvpnav.lsq import BANDED_TOL, FORWARD_RTOL
+
+    assert all(BANDED_TOL[k] == pytest.approx(1e-2 * FORWARD_RTOL[k]) for k in FORWARD_RTOL)
+    prob = problem(Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05), n=4001)
+    default = prob.solve(solver="direct", lam=lam, fallback=None)
+    high = prob.solve(solver="direct", lam=lam, accuracy="high", fallback=None)
+    forced = prob.solve(solver="direct", lam=lam, options={"refine_tol": 1e-16}, fallback=None)
+    lu = prob.solve(solver="direct", lam=lam, options={"method": "lu"}, fallback=None)
+    assert default.stats["refinements"] == 1 and default.stats["correction"] <= 1e-8
+    assert high.stats["refinements"] >= 2 and forced.stats["refinements"] >= 2
+    assert default.stats["verified"] and high.stats["verified"]
+    scale = np.max(np.abs(lu.x))
+    for other in (high, lu):
+        assert np.max(np.abs(default.x - other.x)) <= 1e-8 * scale

@@ -9,7 +9,9 @@ Registered in the back-end table on import (the folder is discovered):
   parameters bordered; the default for the acceleration form), ``"ldl"`` (QDLDL on the
   statically regularized quasi-definite matrix; the fallback when rows are not local),
   ``"lu"`` (SuperLU with pivoting; the default for the load form, whose residuals must
-  not be squared) or ``"auto"``.
+  not be squared) or ``"auto"``. Option ``refine_tol``: the banded answer's refinement
+  stops when the relative correction is below it (1e-6, 1e-8, 1e-10 for the ``low``,
+  ``default`` and ``high`` presets: a hundredth of their forward-error bounds).
 - ``csne``: the 2011 paper's corrected semi-normal equations: the normal matrix
   :math:`\\tilde A = \\sum D_k^T D_k` (banded for banded items) is factorised once and the
   least-squares residual is corrected by iterative refinement
@@ -31,7 +33,14 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import InputError, SolveError
-from ..lsq import BorderedLU, Factored, least_squares_form, non_least_squares_term, solve_least_squares
+from ..lsq import (
+    BANDED_TOL,
+    BorderedLU,
+    Factored,
+    least_squares_form,
+    non_least_squares_term,
+    solve_least_squares,
+)
 from . import Backend, RawSolve, register_backend
 from .cvxpy_solvers import use_conic
 
@@ -54,6 +63,7 @@ VALUES: dict[str, tuple[Callable[[Any], bool], str]] = {
     "max_iter": (lambda v: _is_int(v) and 1 <= v <= 10_000, "an integer from 1 to 10000"),
     "ldl_accept": (lambda v: _is_real(v) and 0 < v < 1, "a number between 0 and 1"),
     "tol": (lambda v: _is_real(v) and 0 < v < 1, "a number between 0 and 1"),
+    "refine_tol": (lambda v: _is_real(v) and 0 < v < 1, "a number between 0 and 1"),
 }
 
 
@@ -92,9 +102,9 @@ class DirectBackend(_LeastSquaresBackend):
 
     name = "direct"
     memory_per_sample = {"acceleration": 1300.0, "load": 2960.0}
-    presets = {"low": {"refine": 1, "method": "auto", "ldl_accept": 1e-5},
-               "default": {"refine": 3, "method": "auto", "ldl_accept": 1e-7},
-               "high": {"refine": 6, "method": "auto", "ldl_accept": 1e-9}}
+    presets = {name: {"refine": refine, "method": "auto", "ldl_accept": accept,
+                      "refine_tol": BANDED_TOL[name]}
+               for name, refine, accept in (("low", 1, 1e-5), ("default", 3, 1e-7), ("high", 6, 1e-9))}
 
     def run(self, form, lam: float, options: dict, verbose: bool = False) -> RawSolve:
         self.refuse(form)
@@ -102,7 +112,8 @@ class DirectBackend(_LeastSquaresBackend):
         try:
             x, info = solve_least_squares(form, lam, refine=int(options["refine"]),
                                           method=options.get("method", "auto"),
-                                          ldl_accept=float(options.get("ldl_accept", 1e-7)))
+                                          ldl_accept=float(options.get("ldl_accept", 1e-7)),
+                                          banded_tol=float(options.get("refine_tol", BANDED_TOL["default"])))
         except (RuntimeError, np.linalg.LinAlgError) as exc:  # singular factorization / Schur
             raise SolveError(f"direct: the KKT matrix is singular ({exc}); some unknown is not "
                              "determined by the information",
