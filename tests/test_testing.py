@@ -547,6 +547,11 @@ class _MaybeSlopes(_OutsideRule):
     slopes = "yes"
 
 
+class _MaybeCoarse(_OutsideRule):
+    name = "maybe-coarse"
+    coarse = 1
+
+
 @pytest.mark.parametrize("plugin, rule", [
     (_Sloppy(), "run"), (_BadPreset(), "presets"), (_Upper(), "name"), (_Vague(), "accepts"),
 ], ids=lambda p: getattr(p, "name", str(p)))
@@ -559,6 +564,7 @@ def test_broken_back_end_fails_naming_the_rule(plugin, rule):
     (_OutsideRule(), "refine (direct sweep)"), (_ShortRule(), "scores (direct sweep)"),
     (_RandomRule(), "deterministic (direct sweep)"), (_NeedyRule(), "needs"),
     (_DerivativeReader(), "scores (direct sweep)"), (_BlindSlopes(), "slopes"), (_MaybeSlopes(), "slopes"),
+    (_MaybeCoarse(), "coarse"),
 ], ids=lambda p: getattr(p, "name", str(p)))
 def test_broken_rule_fails_naming_the_rule(plugin, rule):
     pattern = rf"^lambda rule {plugin.name!r}: rule '{re.escape(rule)}' broken: "

@@ -80,8 +80,8 @@ ratio in the note: an earlier run of the same code, Clarabel run once, gave 20.7
     1 ax          100000  clarabel re-solve     0.249     4.6    3    1.9e-12  True
     1 ax         1000000  direct                1.136     1.9    3    3.3e-12  True
     1 ax         1000000  direct backend        0.850     1.4    3    3.3e-12  -
-    1 ax         1000000  clarabel              7.300    12.4    3    4.2e-12  True   compile 2.37 s, first 6.1x
-    1 ax         1000000  clarabel re-solve     3.649     6.1    3    2.9e-12  True   first run 1.9x
+    1 ax         1000000  clarabel              7.300    12.4    3    4.2e-12  True   compile 2.37 s, 1st 6.1x
+    1 ax         1000000  clarabel re-solve     3.649     6.1    3    2.9e-12  True   1st run 1.9x
     3 ax +SF+B    100000  direct                0.498     2.4    3    2.5e-12  True
     3 ax +SF+B    100000  clarabel              3.117    14.9    3    2.5e-12  True   compile 0.99 s
     3 ax +SF+B    100000  clarabel re-solve     1.348     6.5    3    2.2e-12  True

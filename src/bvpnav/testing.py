@@ -755,9 +755,10 @@ def check_rule(rule) -> None:
     ------
     AssertionError
         Naming the rule and the broken rule of the contract: a non-empty ``name``;
-        ``needs`` a subset of :data:`bvpnav.lam.NEEDS`; ``slopes`` a bool, and True only
-        with ``uses_derivative``; on a small least-squares problem (direct sweep, sampled
-        every two decades for a rule that reads slopes) ``scores`` one number per sampled
+        ``needs`` a subset of :data:`bvpnav.lam.NEEDS`; ``slopes`` and ``coarse`` bools,
+        ``slopes`` True only with ``uses_derivative``; on a small least-squares problem
+        (direct sweep, sampled every two decades for a rule that reads slopes or samples
+        coarsely) ``scores`` one number per sampled
         lambda and ``refine`` a lambda inside the sweep's range, the same on a second run;
         and, unless the rule needs least squares, the same on the cvxpy sweep of a problem
         with a robust item.
@@ -774,10 +775,13 @@ def check_rule(rule) -> None:
     _require(isinstance(slopes, bool), who, "slopes", f"slopes must be True or False, got {slopes!r}")
     _require(not slopes or getattr(rule, "uses_derivative", True), who, "slopes",
              "a rule that reads slopes (d2eta2) needs the derivative solve: uses_derivative = True")
+    coarse = getattr(rule, "coarse", False)
+    _require(isinstance(coarse, bool), who, "coarse", f"coarse must be True or False, got {coarse!r}")
     ls, robust = _ls_formulation(sigma_a=0.05)
     # as sweep_curve samples for this rule alone: every two decades on the direct sweep
-    # when it reads slopes
-    grids = {"direct": np.geomspace(1e-6, 1e6, SLOPE_POINTS) if slopes else np.geomspace(1e-3, 1e3, 13),
+    # when it reads slopes or samples coarsely
+    grids = {"direct": (np.geomspace(1e-6, 1e6, SLOPE_POINTS) if slopes or coarse
+                        else np.geomspace(1e-3, 1e3, 13)),
              "cvxpy": np.geomspace(1e-3, 1e3, 13)}
     opts, _ = prepare(1.0, fallback=None)
     # as sweep_curve builds it for this rule alone: without dx/dlam when the rule says it

@@ -28,7 +28,8 @@ from ..plugins import discover
 REFINE_XATOL = 1e-2
 
 __all__ = ["REFINE_XATOL", "LambdaRule", "register_rule", "unregister_rule", "get_rule", "rule_names",
-           "NEEDS", "edge_warning", "refine_extremum", "refine_with_slopes", "hermite_peak", "guard_samples"]
+           "NEEDS", "edge_warning", "refine_extremum", "refine_with_slopes", "hermite_peak", "guard_samples",
+           "half_way_points"]
 
 #: What a rule may need from the sweep.
 NEEDS = ("least_squares", "trace", "noise", "acceleration")
@@ -61,6 +62,11 @@ class LambdaRule:
     #: direct sweep's ``d2eta2``, :func:`refine_with_slopes`): then a sweep of such rules
     #: alone samples every two decades by default (:data:`bvpnav.lam.sweep.SLOPE_POINTS`).
     slopes: bool = False
+    #: Whether its refinement evaluates the half-way points beside its best sample when the
+    #: samples lie more than a decade apart (:func:`half_way_points`): then a sweep of such
+    #: rules alone samples every two decades on a range of 12 decades or more (the
+    #: neighbourhood of the best sample is then as fine as one sample per decade).
+    coarse: bool = False
 
     def scores(self, sweep, pts: list[dict], s: np.ndarray) -> np.ndarray:
         """The rule's score at each sampled point (``s = log lambda``).
@@ -403,6 +409,20 @@ def guard_samples(s: np.ndarray) -> int:
     decade apart or 7 two decades apart; the same sixth of any range of 12 decades or more
     with 13 or 7 samples)."""
     return 1 if len(s) > 1 and s[1] - s[0] >= 2.0 * math.log(10.0) * (1.0 - 1e-9) else 2
+
+
+def half_way_points(s: np.ndarray, k: int, lo: float | None = None, hi: float | None = None) -> list[float]:
+    """The ``log lambda`` half-way between sample ``k`` and each neighbour, within ``[lo,
+    hi]`` (default: the samples' range), when the samples lie more than 1.5 decades apart
+    (none otherwise): a coarse sweep's rule evaluates them so that an extremum between
+    the best sample and a neighbour is bracketed as on a grid one decade apart."""
+    s = np.asarray(s, dtype=float)
+    if len(s) < 2 or s[1] - s[0] <= 1.5 * math.log(10.0):
+        return []
+    lo = float(s[0]) if lo is None else lo
+    hi = float(s[-1]) if hi is None else hi
+    mids = [0.5 * (s[j] + s[j + 1]) for j in (k - 1, k) if 0 <= j < len(s) - 1]
+    return [float(m) for m in mids if lo <= m <= hi]
 
 
 def bracket(s: np.ndarray, k: int) -> tuple[float, float]:

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from . import LambdaRule, edge_warning, refine_extremum, register_rule
+from . import LambdaRule, edge_warning, half_way_points, refine_extremum, register_rule
 
 __all__ = ["GCV", "gcv"]
 
@@ -28,20 +28,36 @@ class GCV(LambdaRule):
     observations; in the load form the data term :math:`\\|M w\\|^2` is mass-matrix
     weighted (correlated), and on the 2011 example the function decreases to the edge of
     the range (a warning says so).
+
+    On samples more than a decade apart (``solve(lam="gcv")`` samples every two decades
+    on a range of 12 decades or more) the half-way points beside the best sample are
+    evaluated first (:func:`bvpnav.lam.half_way_points`), so the minimum is refined from
+    a bracket one decade wide on each side, as on a grid of one sample per decade; a best
+    sample at an end of the range warns only when its half-way point does not score
+    better.
     """
 
     name = "gcv"
     uses_derivative = False
+    coarse = True
     needs = frozenset({"least_squares", "trace"})
 
     def scores(self, sweep, pts, s):
         return np.array([gcv(p) for p in pts])
 
     def refine(self, sweep, pts, s, scores, curve):
+        def f(u):
+            return gcv(sweep.point(math.exp(u)))
+
         k = int(np.argmin(scores))
-        edge_warning(curve, self.name, k, 0, scores, best="min")
-        return float(math.exp(refine_extremum(lambda u: gcv(sweep.point(math.exp(u))), s, scores, k,
-                                              best="min")))
+        u, sc = list(s), list(scores)
+        for mid in half_way_points(s, k):
+            j = int(np.searchsorted(u, mid))
+            u.insert(j, mid), sc.insert(j, f(mid))
+        j = int(np.argmin(sc))
+        if u[j] in (s[0], s[-1]):   # still an end of the range: the minimum may lie beyond it
+            edge_warning(curve, self.name, k, 0, scores, best="min")
+        return float(math.exp(refine_extremum(f, np.array(u), np.array(sc), j, best="min")))
 
 
 register_rule(GCV())

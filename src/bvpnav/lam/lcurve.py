@@ -13,6 +13,7 @@ from . import (
     bracket,
     edge_warning,
     guard_samples,
+    half_way_points,
     refine_with_slopes,
     register_rule,
 )
@@ -106,6 +107,7 @@ class LCurve(LambdaRule):
 
     name = "lcurve"
     slopes = True
+    coarse = True
 
     def scores(self, sweep, pts, s):
         if sweep.engine == "direct":
@@ -131,14 +133,12 @@ class LCurve(LambdaRule):
             lo, hi = s[g], s[-1 - g]
             u, sc = list(s[max(k - 1, 0):k + 2]), list(scores[max(k - 1, 0):k + 2])
             sl = [curvature_slope(p) for p in pts[max(k - 1, 0):k + 2]]
-            if s[1] - s[0] > 1.5 * math.log(10.0):
-                # samples more than a decade apart: the half-way points beside the best one
-                # (inside the bounds), so that a corner between samples is not missed
-                for mid in (0.5 * (u[0] + u[1]), 0.5 * (u[-2] + u[-1])):
-                    if lo <= mid <= hi and mid not in u:
-                        val, slope = f(mid)
-                        j = int(np.searchsorted(u, mid))
-                        u.insert(j, mid), sc.insert(j, val), sl.insert(j, slope)
+            # samples more than a decade apart: the half-way points beside the best one
+            # (inside the bounds), so that a corner between samples is not missed
+            for mid in half_way_points(s, k, lo, hi):
+                val, slope = f(mid)
+                j = int(np.searchsorted(u, mid))
+                u.insert(j, mid), sc.insert(j, val), sl.insert(j, slope)
             # the slope says where the corner lies: rising out of the allowed range at its
             # first or last sample (or a refinement that stops at a bound) is an edge,
             # whatever the excluded samples score (a corner just beyond a bound)

@@ -59,10 +59,11 @@ __all__ = ["LambdaCurve", "DirectSweep", "CvxpySweep", "sweep_curve", "check_ran
 #: Default coarse sweep of the direct engine (exact curve at each point, then refined).
 DIRECT_POINTS = 13
 
-#: Default coarse sweep of the direct engine when every rule asked reads its score's
-#: exact slope (:attr:`bvpnav.lam.LambdaRule.slopes`, the L-curve): one sample every two
-#: decades of the default range, since a value and a slope per sample locate an extremum
-#: between samples (:func:`bvpnav.lam.refine_with_slopes`).
+#: Default coarse sweep of the direct engine when every rule asked samples coarsely
+#: (:attr:`bvpnav.lam.LambdaRule.coarse`: the L-curve, whose exact slopes locate an
+#: extremum between samples, :func:`bvpnav.lam.refine_with_slopes`, and GCV; both
+#: evaluate the half-way points beside their best sample, :func:`bvpnav.lam.half_way_points`):
+#: one sample every two decades of the default range.
 SLOPE_POINTS = 7
 
 #: Default coarse sweep of the cvxpy engine (spline through the samples).
@@ -634,8 +635,9 @@ def sweep_curve(form, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6), p
         Coarse sweep size; every rule is then refined inside its best bracket (to 1 % in
         lambda, :func:`bvpnav.lam.refine_extremum`). Default: 13 (one per decade of the default range) with
         the ``direct`` engine, whose curve is exact at every point; 7 (:data:`SLOPE_POINTS`,
-        two decades apart or more) when every rule asked reads its score's exact slope (the
-        L-curve alone, e.g. ``solve(lam="lcurve")``) and the range spans 12 decades or more;
+        two decades apart or more) when every rule asked samples coarsely (the L-curve or
+        GCV alone, e.g. ``solve(lam="gcv")``, :attr:`bvpnav.lam.LambdaRule.coarse`) and the
+        range spans 12 decades or more;
         25 with the ``cvxpy`` engine, whose curvature is a spline through the samples.
     tau : float
         Discrepancy safety factor.
@@ -692,7 +694,7 @@ def _sweep_curve(form, rules, rule, lam_range, points, tau, probes, seed, progre
         # as the two outermost of 13 (bvpnav.lam.guard_samples)
         wide = math.log10(hi / lo) >= 2.0 * (SLOPE_POINTS - 1) - 1e-9
         points = (CVXPY_POINTS if engine != "direct" else SLOPE_POINTS
-                  if wide and all(get_rule(r).slopes for r in names) else DIRECT_POINTS)
+                  if wide and all(get_rule(r).coarse for r in names) else DIRECT_POINTS)
     form.check_scales(lo)  # the sweep's extremes: every weight stays resolvable
     form.check_scales(hi)
     form.check_observability()
