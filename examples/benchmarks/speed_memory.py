@@ -22,8 +22,8 @@ Rows (``speed`` table): for each case and N, every variant is timed in the same 
 the variants interleaved, ``--repeat`` times (median of the per-repetition ratios to the
 reference; at N >= 1e6 the reference, ``direct``, its back end and the Clarabel rows are
 repeated, ``csne`` runs once and is divided by the median reference time; a Clarabel row's
-note gives its first run's ratio too: the first solve of that size in the process pays for
-faulting in fresh memory, 14.8 s against 6.7 s for the next at 1e6 on one VM):
+note gives its first run's time too: the first solve of that size in the process may pay
+for faulting in fresh memory, 14.8 s against 6.7 s for the next at 1e6 on one VM):
 ``direct`` as a user calls it
 (``prob.solve(solver="direct")`` on a freshly built problem), ``direct back end`` (the
 back end's ``run`` alone, items compiled beforehand: no verification, no ``Solution``),
@@ -69,9 +69,8 @@ Measured on another CPU (issue 18, ninth session)
 csne3@1e6,clarabel3@1e6 --memory --lam-huge``, on a VM whose CPU reports "AMD EPYC"
 (32 MB L3, OpenBLAS's SkylakeX kernels); the eighth session's table below came from
 another VM. The band rows move by slices, one residual product fewer per direct solve,
-the refinement stops at the preset's 1e-8; Clarabel repeated at 1e6 (the first run's
-ratio in the note: an earlier run of the same code, Clarabel run once, gave 20.7x at
-1e6)::
+the refinement stops at the preset's 1e-8; Clarabel repeated at 1e6 (an earlier run of
+the same code, Clarabel run once, gave 20.7x at 1e6)::
 
     case               N  variant              time s   x ref runs     vs ref  verified
     1 ax          100000  direct                0.128     1.8    3    1.4e-12  True
@@ -80,8 +79,8 @@ ratio in the note: an earlier run of the same code, Clarabel run once, gave 20.7
     1 ax          100000  clarabel re-solve     0.249     4.6    3    1.9e-12  True
     1 ax         1000000  direct                1.136     1.9    3    3.3e-12  True
     1 ax         1000000  direct backend        0.850     1.4    3    3.3e-12  -
-    1 ax         1000000  clarabel              7.300    12.4    3    4.2e-12  True   compile 2.37 s, 1st 6.1x
-    1 ax         1000000  clarabel re-solve     3.649     6.1    3    2.9e-12  True   1st run 1.9x
+    1 ax         1000000  clarabel              7.300    12.4    3    4.2e-12  True   compile 2.37 s
+    1 ax         1000000  clarabel re-solve     3.649     6.1    3    2.9e-12  True
     3 ax +SF+B    100000  direct                0.498     2.4    3    2.5e-12  True
     3 ax +SF+B    100000  clarabel              3.117    14.9    3    2.5e-12  True   compile 0.99 s
     3 ax +SF+B    100000  clarabel re-solve     1.348     6.5    3    2.2e-12  True
@@ -106,6 +105,19 @@ three axes 2.2x and 2.6x, Clarabel 20.7x / 6.0x at 1e6, 15.4x / 6.0x for three a
 this CPU a lambda point costs about 0.4 of a single solve (a copy of the band, ``dgbtrf``
 and two ``dgbtrs``: 36 ms against 90 ms), where the eighth session's VM measured about
 0.3: the L-curve's 14 points cannot fit in five single solves here.
+
+After GCV's two-decade grid with half-way points (aa45b5d; ``--sizes 1e5 --sizes3 1e5
+--no-peers --skip osqp,csne,csne3,clarabel3 --lam-huge``, same VM)::
+
+    lambda rules, N = 100000, 1 axis: single direct solve 0.09 s (the reference 0.044 s)
+    rule        lambda  evaluations  ms/eval  total s  x single   x ref
+    lcurve    0.005152           14     42.8     0.59       6.4      13
+    gcv         0.5475           13     42.0     0.62       6.7      14
+    quasi        5.164           19     42.8     0.87       9.5      20
+    lambda rules, N = 1000000, 1 axis: single direct solve 1.28 s (the reference 0.657 s)
+    lcurve     0.01145           11    437.9     5.44       4.2       8
+    gcv         0.7266           16    570.6     8.65       6.7      13
+    quasi        3.234           19    413.2     9.39       7.3      14
 
 Measured after the L-curve's slopes (issue 18, eighth session)
 --------------------------------------------------------------
@@ -631,7 +643,7 @@ def speed_case(n: int, axes: int, repeat: int, skip: set[str]) -> list[dict]:
         last = rs[-1]
         note = last.get("note", "")
         if v.startswith("clarabel") and len(rs) > 1:
-            note += f", first run {ratios[0]:.1f}x"
+            note += f", first run {rs[0]['time']:.2f} s"
         err = rel_diff(last["r"], last.get("ref", ref)) if last["r"] is not None else float("nan")
         rows.append({"case": f"{axes} ax" + (" +SF+B" if axes > 1 else ""), "n": n, "variant": v,
                      "time": float(np.median([rr["time"] for rr in rs])), "ratio": float(np.median(ratios)),
@@ -920,7 +932,7 @@ def main(argv: list[str] | None = None) -> None:
         _quiet(lambda: make_problem(make_spec(2000, 1)).solve(solver="direct"))
         print("speed: ratios to the reference measured in the same process, interleaved, median of "
               f"{args.repeat} (at N >= 1e6 csne runs once and is divided by the median of the "
-              "reference's runs; Clarabel's notes give the first run's ratio too); "
+              "reference's runs; Clarabel's notes give the first run's time too); "
               "vs ref = max|r - r_ref| / max|r_ref|")
         print(SPEED_HEAD)
         for axes, ns in ((1, sizes), (3, sizes3)):
