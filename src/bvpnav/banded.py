@@ -141,16 +141,13 @@ class Factorization:
         raise NotImplementedError
 
     def refined(self, rhs: np.ndarray, steps: int, tol: float = 0.0, window: slice | None = None,
-                stall: float | None = None, record: dict | None = None):
+                stall: float | None = None):
         r"""Solve with up to ``steps`` iterative-refinement steps in double precision.
 
         Returns ``(z, steps_taken, last_relative_correction)``; the correction is measured
         on ``window`` (default: all of ``z``) and refinement stops below ``tol``, or, with
         ``stall``, as soon as a correction is not at least ``stall`` times smaller than the
-        one before (the rounding floor has been reached). With ``record`` (a dict) and at
-        least one step, ``record["residual"]`` and ``record["z"]`` are
-        :math:`\|b - S z_{k-1}\|_\infty` and :math:`\|z_{k-1}\|_\infty` of the last
-        iterate whose residual was formed (the answer is it plus the last correction).
+        one before (the rounding floor has been reached).
 
         Notes
         -----
@@ -162,11 +159,7 @@ class Factorization:
         corr, k = np.inf, 0
         for _ in range(steps):
             k += 1
-            res = rhs - self.S @ z
-            if record is not None:
-                record["residual"], record["z"] = float(np.max(np.abs(res))), float(np.max(np.abs(z)))
-            dz = self.solve(res)
-            del res
+            dz = self.solve(rhs - self.S @ z)
             z += dz
             prev, corr = corr, float(np.max(np.abs(dz[window])) / max(np.max(np.abs(z[window])), 1e-300))
             if corr < tol or (stall is not None and corr > stall * prev):

@@ -629,32 +629,22 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
 
 
 def _accepted(fac, rhs, window, steps, tol, accept, notes, name):
-    r"""Refine a factorization that is not exact for ``S`` (regularized, or folded) and accept
+    """Refine a factorization that is not exact for ``S`` (regularized, or folded) and accept
     its answer only with a small correction and a normwise backward error near rounding;
-    ``(None, k, corr)`` with the reason in ``notes`` otherwise.
-
-    Notes
-    -----
-    The backward error :math:`\|b - S z\|_\infty / (\|S\|_\infty \|z\|_\infty +
-    \|b\|_\infty)` is that of the last iterate whose residual the refinement formed: the
-    answer is that iterate plus the last correction, whose relative size ``corr`` is
-    checked too (LAPACK's ``xGERFS`` likewise judges the iterate it has the residual of).
-    Without a refinement step the residual of the answer is formed here.
-    """
-    record: dict = {}
-    z, k, corr = fac.refined(rhs, steps, tol, window=window, stall=0.5, record=record)
+    ``(None, k, corr)`` with the reason in ``notes`` otherwise."""
+    z, k, corr = fac.refined(rhs, steps, tol, window=window, stall=0.5)
     # a small correction alone can mislead (a wild first solve makes every later
-    # correction small relative to z): also require the normwise backward error to be
-    # near rounding
+    # correction small relative to z, and the correction is measured on x alone): also
+    # require the answer's own normwise backward error |rhs - S z| / (|S| |z| + |rhs|)
+    # (infinity norms) to be near rounding. Judging the iterate before the last step
+    # instead (its residual is already formed) would save this product but not bound the
+    # answer's residuals and multipliers, which the step may have moved (found in review)
     eta = np.inf
     if np.all(np.isfinite(z)):
         S = fac.S
         norm = S.norm_inf() if hasattr(S, "norm_inf") else spla.norm(S, np.inf)
-        if "residual" in record:
-            res, zmax = record["residual"], record["z"]
-        else:
-            res, zmax = float(np.max(np.abs(rhs - S @ z))), float(np.max(np.abs(z)))
-        eta = res / max(norm * zmax + float(np.max(np.abs(rhs))), 1e-300)
+        den = norm * np.max(np.abs(z)) + np.max(np.abs(rhs))
+        eta = float(np.max(np.abs(rhs - S @ z)) / max(den, 1e-300))
     if not (np.isfinite(corr) and corr <= accept):
         notes.append(f"{name} refinement stalled at correction {corr:.1e}")
         return None, k, corr

@@ -660,26 +660,26 @@ def test_moves_of_an_arbitrary_order_equal_fancy_indexing(seed):
     assert _Moves(orders[0]).pairs == [] and _Moves(orders[0]).band_rest.size == n        # no runs
 
 
-def test_the_backward_error_is_judged_on_the_iterate_the_refinement_formed_the_residual_of():
-    """``refined(record=...)`` keeps the residual and size of the last iterate whose
-    residual was formed (the answer is it plus the last correction); they equal a fresh
-    computation at that iterate, and the banded answer is accepted on them."""
-    prob = problem(Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05))
-    ls = least_squares_form(prob.formulation, 1.0)
-    fac = BandedKKT(ls.D.A, ls.E.A, column_nodes(prob.formulation.model), lam_rows=ls.lam_rows)
-    rhs = ls.rhs()
-    record: dict = {}
-    z, k, corr = fac.refined(rhs, 1, 0.0, record=record)
-    z0 = fac.solve(rhs)
-    assert k == 1
-    assert record["residual"] == pytest.approx(float(np.max(np.abs(rhs - fac.S @ z0))), rel=1e-12)
-    assert record["z"] == float(np.max(np.abs(z0)))
-    eta = record["residual"] / (fac.S.norm_inf() * record["z"] + np.max(np.abs(rhs)))
-    assert eta < 1e-14   # a pivoted banded LU: backward stable
-    # no step, no record: the caller forms the answer's residual itself
-    rec0: dict = {}
-    fac.refined(rhs, 0, record=rec0)
-    assert rec0 == {}
+def test_an_answer_whose_last_step_moved_the_residuals_is_refused():
+    """The backward error is the answer's own (after the last step), not that of the iterate
+    before it: a factor exact on ``x`` but wrong elsewhere converges on the window (the
+    correction 1e-12) while the off-window part grows; the answer is refused with the
+    reason, where judging the previous iterate accepted it (found in review)."""
+    from bvpnav.banded import Factorization
+    from bvpnav.lsq import _accepted
+
+    class Stub(Factorization):   # S = I; the factor is slightly off on x and far off elsewhere
+        def __init__(self):
+            self.S = sp.identity(2, format="csr")
+            self.M = np.diag([1.0 - 1e-4, 1001.0])
+
+        def solve(self, r):
+            return self.M @ r
+
+    notes: list = []
+    z, k, corr = _accepted(Stub(), np.array([1.0, 1e-22]), slice(0, 1), 30, 1e-12, 1e-7, notes, "ldl")
+    assert z is None and corr < 1e-11
+    assert notes and "backward error" in notes[0]
 
 
 @pytest.mark.parametrize("lam", [1e-4, 1.0])
