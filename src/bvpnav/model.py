@@ -29,6 +29,26 @@ from .imu import ImuData
 __all__ = ["Affine", "Cone", "NavModel", "RowLabels"]
 
 
+def _as_csr(blk) -> sp.csr_matrix:
+    """A block as CSR; a dense one whose nonzero columns hold no zero (the error-model
+    columns ``M G`` of one axis: the other axes' columns all zero) directly from those
+    columns, without scanning every entry for nonzeros (three axes with six parameters at
+    N = 1e6: 18 million entries, 12 million of them zero)."""
+    if sp.issparse(blk) or np.ndim(blk) != 2:
+        return sp.csr_matrix(blk)
+    blk = np.asarray(blk, dtype=float)
+    cols = np.flatnonzero(np.any(blk != 0, axis=0))
+    vals = blk[:, cols]
+    if not cols.size or not np.all(vals):
+        return sp.csr_matrix(blk)
+    m, k = vals.shape
+    itype = np.int32 if max(m * k, blk.shape[1]) < 2**31 else np.int64
+    indptr = np.arange(0, m * k + 1, k, dtype=itype)
+    out = sp.csr_matrix((vals.ravel(), np.tile(cols.astype(itype), m), indptr), shape=blk.shape)
+    out.has_canonical_format = True
+    return out
+
+
 def rows_side_by_side(row_blocks: list, ncols: int) -> sp.csr_matrix:
     """One CSR matrix from groups of row blocks: group ``g`` is a list of ``(block,
     column)`` (sparse or dense blocks of the same rows, placed from ``column`` on, in
@@ -42,7 +62,7 @@ def rows_side_by_side(row_blocks: list, ncols: int) -> sp.csr_matrix:
     fewer than placing each axis with scipy's ``hstack`` and stacking the axes). Blocks
     with sorted column indices and no duplicates give a canonical result.
     """
-    groups = [[(sp.csr_matrix(blk), int(col)) for blk, col in group] for group in row_blocks]
+    groups = [[(_as_csr(blk), int(col)) for blk, col in group] for group in row_blocks]
     counts = [sum(np.diff(blk.indptr) for blk, _ in group) for group in groups]
     indptr = np.zeros(sum(len(c) for c in counts) + 1, dtype=np.int64)
     np.cumsum(np.concatenate(counts), out=indptr[1:])
@@ -158,7 +178,16 @@ class Affine:
         if k.ndim == 0:
             return Affine(self.A * float(k), self.c * float(k), self.labels)
         k = np.broadcast_to(k, (self.m,))
-        return Affine(sp.diags(k) @ self.A, self.c * k, self.labels)
+        A = self.A
+        if sp.issparse(A) and A.format == "csr" and A.has_canonical_format and np.all(k):
+            # row scaling on the stored values (no sparse product: 3e6 rows took 0.13 s by
+            # diags(k) @ A); the index arrays are shared, which is safe for a canonical
+            # matrix (nothing sorts or merges them again) and keeps the result canonical
+            scaled = sp.csr_matrix((A.data * np.repeat(k, np.diff(A.indptr)), A.indices, A.indptr),
+                                   shape=A.shape)
+            scaled.has_canonical_format = True
+            return Affine(scaled, self.c * k, self.labels)
+        return Affine(sp.diags(k) @ A, self.c * k, self.labels)
 
     __rmul__ = __mul__
 
