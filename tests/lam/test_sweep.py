@@ -414,3 +414,52 @@ def test_gcv_on_a_coarse_grid_looks_half_way_before_calling_the_best_sample_an_e
     assert abs(np.log(inner.lam_chosen / fine.lam_chosen)) < REFINE_XATOL and not inner.warnings
     edge = table1_problem(2001, seed=0)[0].solve(solver="direct", lam="gcv").curve
     assert edge.lam_chosen == pytest.approx(1e6) and any("high edge" in w for w in edge.warnings)
+
+
+class _FakeSweep:
+    """A GCV sweep of a given function of ``u = log lambda`` (trace 1): ``rho2 = g(u)``."""
+
+    engine = "direct"
+
+    def __init__(self, g):
+        self.g, self.cache = g, {}
+
+    def point(self, lam):
+        key = float(lam)
+        if key not in self.cache:
+            self.cache[key] = {"rho2": float(self.g(np.log(key))), "trace": 1.0}
+        return self.cache[key]
+
+
+def _gcv_refine(g, n):
+    from types import SimpleNamespace
+
+    from bvpnav.lam.gcv import GCV
+
+    lams = np.geomspace(1e-6, 1e6, n)
+    sweep = _FakeSweep(g)
+    pts = [sweep.point(lam) for lam in lams]
+    curve = SimpleNamespace(lam=lams, lam_range=(1e-6, 1e6), warnings=[])
+    rule = GCV()
+    lam = rule.refine(sweep, pts, np.log(lams), rule.scores(sweep, pts, np.log(lams)), curve)
+    return lam, len(sweep.cache), curve.warnings
+
+
+def test_coarse_gcv_looks_at_every_half_way_point_before_calling_an_end_an_edge():
+    """A dip 0.4 decade wide at lambda = 10 (an odd decade, between the coarse samples 1 and
+    100) on a background falling to the low end: the best coarse sample is the end 1e-6 and
+    its half-way point scores no better; every half-way point is then evaluated, the dip
+    is found as on the one-decade grid, and nothing warns (found in review: without this
+    the end was returned with a warning to widen the range)."""
+    ln10 = np.log(10.0)
+
+    def g(u):
+        return np.exp(2 + 0.3 * np.tanh(u / ln10 / 3) - 2 * np.exp(-0.5 * ((u / ln10 - 1) / 0.4) ** 2))
+
+    fine = _gcv_refine(g, 13)
+    coarse = _gcv_refine(g, 7)
+    assert 8.0 < fine[0] < 12.0 and not fine[2]
+    assert abs(np.log(coarse[0] / fine[0])) < 1e-6 and not coarse[2]
+    # a background that falls to the end without a dip keeps its edge warning
+    lam, evals, warnings = _gcv_refine(lambda u: np.exp(u / ln10 / 3), 7)
+    assert lam == pytest.approx(1e-6) and any("low edge" in w for w in warnings) and evals == 13

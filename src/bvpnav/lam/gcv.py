@@ -32,9 +32,11 @@ class GCV(LambdaRule):
     On samples more than a decade apart (``solve(lam="gcv")`` samples every two decades
     on a range of 12 decades or more) the half-way points beside the best sample are
     evaluated first (:func:`bvpnav.lam.half_way_points`), so the minimum is refined from
-    a bracket one decade wide on each side, as on a grid of one sample per decade; a best
-    sample at an end of the range warns only when its half-way point does not score
-    better.
+    a bracket one decade wide on each side, as on a grid of one sample per decade. When
+    the best is still an end of the range, every half-way point is evaluated (the whole
+    one-decade grid) before the end is reported as an edge. A minimum narrower than about
+    a decade, away from the best coarse sample, can still be missed where the one-decade
+    grid would see it (see the guide's lambda page for measured rates).
     """
 
     name = "gcv"
@@ -51,11 +53,22 @@ class GCV(LambdaRule):
 
         k = int(np.argmin(scores))
         u, sc = list(s), list(scores)
-        for mid in half_way_points(s, k):
-            j = int(np.searchsorted(u, mid))
-            u.insert(j, mid), sc.insert(j, f(mid))
+
+        def look(mids):
+            for mid in mids:
+                if mid not in u:
+                    i = int(np.searchsorted(u, mid))
+                    u.insert(i, mid), sc.insert(i, f(mid))
+
+        look(half_way_points(s, k))
         j = int(np.argmin(sc))
-        if u[j] in (s[0], s[-1]):   # still an end of the range: the minimum may lie beyond it
+        if (j == 0 or j == len(u) - 1) and len(u) > len(s):
+            # still an end on a coarse grid: before calling it an edge, every half-way point
+            # (the one-decade grid's samples), so that a minimum inside the range that the
+            # coarse samples straddle is not mistaken for one beyond it
+            look([0.5 * (a + b) for a, b in zip(s[:-1], s[1:], strict=True)])
+            j = int(np.argmin(sc))
+        if j == 0 or j == len(u) - 1:   # an end of the range: the minimum may lie beyond it
             edge_warning(curve, self.name, k, 0, scores, best="min")
         return float(math.exp(refine_extremum(f, np.array(u), np.array(sc), j, best="min")))
 
