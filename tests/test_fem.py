@@ -212,3 +212,40 @@ def test_fem_rows_are_each_axis_blocks_placed_in_its_columns(axes, error_model):
     # dense blocks, and groups of other sizes
     B = rows_side_by_side([[(np.eye(2), 1)], [(sp.csr_matrix([[0.0, 3.0]]), 0), (np.array([[5.0]]), 3)]], 4)
     np.testing.assert_array_equal(B.toarray(), [[0, 1, 0, 0], [0, 0, 1, 0], [0, 3, 0, 5]])
+
+
+def test_affine_row_scaling_equals_the_diagonal_product_and_keeps_zero_scales_exact():
+    """``Affine * k`` scales a canonical CSR matrix's stored values (sharing its index
+    arrays) where every ``k`` is nonzero: the same matrix as ``diag(k) @ A``, canonical; a
+    zero scale takes the product (no explicit zeros that would tie a row to a node)."""
+    from bvpnav.model import Affine
+
+    rng = np.random.default_rng(0)
+    A = sp.random(300, 50, density=0.05, format="csr", random_state=1)
+    A.sum_duplicates()
+    c = rng.normal(size=300)
+    k = rng.uniform(0.5, 2.0, 300)
+    out = Affine(A, c) * k
+    assert out.A.has_canonical_format and np.shares_memory(out.A.indices, A.indices)
+    np.testing.assert_array_equal(out.A.toarray(), (sp.diags(k) @ A).toarray())
+    np.testing.assert_array_equal(out.c, c * k)
+    k[3] = 0.0
+    zero = Affine(A, c) * k
+    assert not np.shares_memory(zero.A.indices, A.indices)
+    np.testing.assert_array_equal(zero.A.toarray(), (sp.diags(k) @ A).toarray())
+
+
+def test_dense_blocks_become_csr_from_their_nonzero_columns_as_scipy_converts_them():
+    """``rows_side_by_side`` takes a dense block (the error-model columns) from its nonzero
+    columns when they hold no zero, else by scipy's conversion: the same matrix either way,
+    for an all-zero block, a full one, zero columns, and a zero inside a nonzero column."""
+    from bvpnav.model import _as_csr
+
+    rng = np.random.default_rng(2)
+    blocks = [np.zeros((5, 3)), rng.normal(size=(6, 4)), np.c_[np.zeros(7), rng.normal(size=7), np.zeros(7)],
+              np.c_[rng.normal(size=4), [0.0, 1.0, 2.0, 0.0]], np.zeros((0, 3))]
+    for blk in blocks:
+        got, want = _as_csr(blk), sp.csr_matrix(blk)
+        assert got.nnz == want.nnz and got.shape == want.shape
+        np.testing.assert_array_equal(got.toarray(), blk)
+        assert got.has_canonical_format
