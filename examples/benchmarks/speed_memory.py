@@ -65,59 +65,46 @@ Run ``python examples/benchmarks/speed_memory.py [--quick] [--memory] [--huge]``
 
 Measured on another CPU (issue 18, ninth session)
 -------------------------------------------------
-2026-12-04, main at 2fe1088 (the Clarabel rows repeated at 1e6), ``--skip
-csne3@1e6,clarabel3@1e6 --memory --lam-huge``, on a VM whose CPU reports "AMD EPYC"
-(32 MB L3, OpenBLAS's SkylakeX kernels); the eighth session's table below came from
-another VM. The band rows move by slices, one residual product fewer per direct solve,
-the refinement stops at the preset's 1e-8; Clarabel repeated at 1e6 (an earlier run of
-the same code, Clarabel run once, gave 20.7x at 1e6)::
+2026-12-04, main at 8ad269e, ``--skip csne3@1e6,clarabel3@1e6 --memory --huge``, on a VM
+whose CPU reports "AMD EPYC" (32 MB L3, OpenBLAS's SkylakeX kernels); the eighth
+session's table below came from another VM. The band rows move by slices, the refinement
+stops at the preset's 1e-8, GCV samples every two decades with half-way points, the
+data rows are scaled without a sparse product; Clarabel repeated at 1e6 (the note gives
+the first run's time)::
 
     case               N  variant              time s   x ref runs     vs ref  verified
-    1 ax          100000  direct                0.128     1.8    3    1.4e-12  True
-    1 ax          100000  direct backend        0.076     1.3    3    1.4e-12  -
-    1 ax          100000  clarabel              0.651    10.5    3    2.2e-12  True   compile 0.22 s
-    1 ax          100000  clarabel re-solve     0.249     4.6    3    1.9e-12  True
-    1 ax         1000000  direct                1.136     1.9    3    3.3e-12  True
-    1 ax         1000000  direct backend        0.850     1.4    3    3.3e-12  -
-    1 ax         1000000  clarabel              7.300    12.4    3    4.2e-12  True   compile 2.37 s
-    1 ax         1000000  clarabel re-solve     3.649     6.1    3    2.9e-12  True
-    3 ax +SF+B    100000  direct                0.498     2.4    3    2.5e-12  True
-    3 ax +SF+B    100000  clarabel              3.117    14.9    3    2.5e-12  True   compile 0.99 s
-    3 ax +SF+B    100000  clarabel re-solve     1.348     6.5    3    2.2e-12  True
-    3 ax +SF+B   1000000  direct                7.441     3.1    3    3.3e-12  True
-    3 ax +SF+B   1000000  direct backend        5.810     2.3    3    3.3e-12  -
+    1 ax          100000  direct                0.130     2.2    3    1.4e-12  True
+    1 ax          100000  direct backend        0.095     1.6    3    1.4e-12  -
+    1 ax          100000  clarabel              0.545    10.9    3    2.2e-12  True   compile 0.22 s
+    1 ax          100000  clarabel re-solve     0.270     4.4    3    1.9e-12  True
+    1 ax         1000000  direct                1.183     1.8    3    3.3e-12  True
+    1 ax         1000000  direct backend        0.984     1.5    3    3.3e-12  -
+    1 ax         1000000  clarabel              7.270    10.9    3    4.2e-12  True   compile 2.5, 1st 12.6 s
+    1 ax         1000000  clarabel re-solve     2.950     4.0    3    2.9e-12  True
+    3 ax +SF+B    100000  direct                0.324     2.0    3    2.5e-12  True
+    3 ax +SF+B    100000  clarabel              2.094    12.7    3    2.5e-12  True   compile 0.75 s
+    3 ax +SF+B    100000  clarabel re-solve     0.849     5.2    3    2.2e-12  True
+    3 ax +SF+B   1000000  direct                6.908     2.9    3    3.3e-12  True
+    3 ax +SF+B   1000000  direct backend        5.120     2.3    3    3.3e-12  -
 
-    lambda rules, N = 100000: single direct solve 0.09 s (the reference 0.058 s)
-    lcurve    0.005152           14     36.4     0.60       6.4      10
-    gcv         0.5475           17     45.9     0.78       8.3      14
-    quasi        5.164           19     47.6     0.78       8.2      14
-    lambda rules, N = 1000000: single direct solve 1.21 s (the reference 0.610 s)
-    lcurve     0.01145           11    436.3     5.70       4.7       9
-    gcv         0.7266           20    509.2    11.38       9.4      19
-    quasi        3.234           19    510.2    10.48       8.6      17
-
-    peak memory, N = 1e6: reference 747 MB, direct 1109 MB (1.7x above the base, 964
-    B/sample; 1.48x in total), csne 2111 MB, clarabel 3070 MB (3020 B/sample)
-
-The run before (same code but Clarabel once at 1e6): direct 2.0x at 1e5, 1.9x at 1e6,
-three axes 2.2x and 2.6x, Clarabel 20.7x / 6.0x at 1e6, 15.4x / 6.0x for three axes at
-1e5, lcurve 6.6, gcv 9.1, quasi 8.9 single solves, 1e7 samples in 9.2 GB (40.1 s). On
-this CPU a lambda point costs about 0.4 of a single solve (a copy of the band, ``dgbtrf``
-and two ``dgbtrs``: 36 ms against 90 ms), where the eighth session's VM measured about
-0.3: the L-curve's 14 points cannot fit in five single solves here.
-
-After GCV's two-decade grid with half-way points (aa45b5d; ``--sizes 1e5 --sizes3 1e5
---no-peers --skip osqp,csne,csne3,clarabel3 --lam-huge``, same VM)::
-
-    lambda rules, N = 100000, 1 axis: single direct solve 0.09 s (the reference 0.044 s)
+    lambda rules, N = 100000: single direct solve 0.09 s (the reference 0.042 s)
     rule        lambda  evaluations  ms/eval  total s  x single   x ref
-    lcurve    0.005152           14     42.8     0.59       6.4      13
-    gcv         0.5475           13     42.0     0.62       6.7      14
-    quasi        5.164           19     42.8     0.87       9.5      20
-    lambda rules, N = 1000000, 1 axis: single direct solve 1.28 s (the reference 0.657 s)
-    lcurve     0.01145           11    437.9     5.44       4.2       8
-    gcv         0.7266           16    570.6     8.65       6.7      13
-    quasi        3.234           19    413.2     9.39       7.3      14
+    lcurve    0.005152           14     35.4     0.55       6.1      13
+    gcv         0.5475           13     41.6     0.60       6.7      14
+    quasi        5.164           19     35.0     0.73       8.1      17
+
+    peak memory, N = 1e6: reference 746 MB, direct 1111 MB (1.49x; 967 B/sample above
+    the base), csne 2112 MB, clarabel 3057 MB (3007 B/sample); 1e7 samples x 1 axis:
+    9215 MB, verified, 40.1 s
+
+Other runs of this session on the same VM (code between d03b5c6 and aa45b5d): direct
+1.8-2.0x at 1e5 and 1.9x at 1e6, three axes 2.2-2.4x and 2.6-3.1x; Clarabel run once at
+1e6 20.7x (its first run in the process), repeated 12.4x; three axes at 1e5 14.9-15.4x /
+6.0-6.5x; lcurve 6.4-6.6, gcv 8.3-9.1 single solves with 17 evaluations, 6.7 with 13
+(4.2 and 6.7 at 1e6). On this CPU a lambda point costs about 0.4 of a single solve (a
+copy of the band, ``dgbtrf`` and two ``dgbtrs``: 36 ms against 90 ms), where the eighth
+session's VM measured about 0.3: the L-curve's 14 points cannot fit in five single
+solves here.
 
 Measured after the L-curve's slopes (issue 18, eighth session)
 --------------------------------------------------------------
