@@ -239,13 +239,13 @@ def test_dense_blocks_become_csr_from_their_nonzero_columns_as_scipy_converts_th
     """``rows_side_by_side`` takes a dense block (the error-model columns) from its nonzero
     columns when they hold no zero, else by scipy's conversion: the same matrix either way,
     for an all-zero block, a full one, zero columns, and a zero inside a nonzero column."""
-    from bvpnav.model import _as_csr
+    from bvpnav.model import _block_csr
 
     rng = np.random.default_rng(2)
     blocks = [np.zeros((5, 3)), rng.normal(size=(6, 4)), np.c_[np.zeros(7), rng.normal(size=7), np.zeros(7)],
               np.c_[rng.normal(size=4), [0.0, 1.0, 2.0, 0.0]], np.zeros((0, 3))]
     for blk in blocks:
-        got, want = _as_csr(blk), sp.csr_matrix(blk)
+        got, want = _block_csr(blk), sp.csr_matrix(blk)
         assert got.nnz == want.nnz and got.shape == want.shape
         np.testing.assert_array_equal(got.toarray(), blk)
         assert got.has_canonical_format

@@ -183,13 +183,15 @@ def canonical(A: sp.spmatrix) -> sp.csr_matrix:
 
 
 def row_scaled(A: sp.csr_matrix, k: np.ndarray, entries: np.ndarray | None = None) -> sp.csr_matrix:
-    """``diag(k) A`` for a CSR ``A`` (a new matrix sharing ``A``'s index arrays), marked
-    canonical when ``A`` is (:func:`canonical`) and no ``k`` is zero; ``entries`` (optional)
+    """``diag(k) A`` for a CSR ``A`` (a new matrix sharing ``A``'s index arrays, so in
+    canonical format when ``A`` is), marked canonical when ``A`` is marked
+    (:func:`canonical`) and no ``k`` is zero; ``entries`` (optional)
     is ``A``'s row of every stored entry, ``np.repeat(arange(m), diff(indptr))``."""
     rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr)) if entries is None else entries
     out = sp.csr_matrix((A.data * k[rows], A.indices, A.indptr), shape=A.shape)
-    if getattr(A, "_bvpnav_canonical", None) is A.data and np.all(k):
+    if A.has_canonical_format:   # the same sorted, unique indices
         out.has_canonical_format = True
+    if getattr(A, "_bvpnav_canonical", None) is A.data and np.all(k):
         out._bvpnav_canonical = out.data
     return out
 

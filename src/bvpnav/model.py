@@ -21,7 +21,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import fem
-from .banded import as_csr
+from .banded import as_csr, row_scaled
 from .errors import InputError
 from .grid import as_times
 from .imu import ImuData
@@ -29,7 +29,7 @@ from .imu import ImuData
 __all__ = ["Affine", "Cone", "NavModel", "RowLabels"]
 
 
-def _as_csr(blk) -> sp.csr_matrix:
+def _block_csr(blk) -> sp.csr_matrix:
     """A block as CSR; a dense one whose nonzero columns hold no zero (the error-model
     columns ``M G`` of one axis: the other axes' columns all zero) directly from those
     columns, without scanning every entry for nonzeros (three axes with six parameters at
@@ -62,7 +62,7 @@ def rows_side_by_side(row_blocks: list, ncols: int) -> sp.csr_matrix:
     fewer than placing each axis with scipy's ``hstack`` and stacking the axes). Blocks
     with sorted column indices and no duplicates give a canonical result.
     """
-    groups = [[(_as_csr(blk), int(col)) for blk, col in group] for group in row_blocks]
+    groups = [[(_block_csr(blk), int(col)) for blk, col in group] for group in row_blocks]
     counts = [sum(np.diff(blk.indptr) for blk, _ in group) for group in groups]
     indptr = np.zeros(sum(len(c) for c in counts) + 1, dtype=np.int64)
     np.cumsum(np.concatenate(counts), out=indptr[1:])
@@ -183,10 +183,7 @@ class Affine:
             # row scaling on the stored values (no sparse product: 3e6 rows took 0.13 s by
             # diags(k) @ A); the index arrays are shared, which is safe for a canonical
             # matrix (nothing sorts or merges them again) and keeps the result canonical
-            scaled = sp.csr_matrix((A.data * np.repeat(k, np.diff(A.indptr)), A.indices, A.indptr),
-                                   shape=A.shape)
-            scaled.has_canonical_format = True
-            return Affine(scaled, self.c * k, self.labels)
+            return Affine(row_scaled(A, k), self.c * k, self.labels)
         return Affine(sp.diags(k) @ A, self.c * k, self.labels)
 
     __rmul__ = __mul__

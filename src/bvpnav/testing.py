@@ -757,8 +757,8 @@ def check_rule(rule) -> None:
         Naming the rule and the broken rule of the contract: a non-empty ``name``;
         ``needs`` a subset of :data:`bvpnav.lam.NEEDS`; ``slopes`` and ``coarse`` bools,
         ``slopes`` True only with ``uses_derivative``; on a small least-squares problem
-        (direct sweep, sampled every two decades for a rule that reads slopes or samples
-        coarsely) ``scores`` one number per sampled
+        (direct sweep, sampled every two decades for a rule that samples coarsely, as
+        ``sweep_curve`` samples it) ``scores`` one number per sampled
         lambda and ``refine`` a lambda inside the sweep's range, the same on a second run;
         and, unless the rule needs least squares, the same on the cvxpy sweep of a problem
         with a robust item.
@@ -779,9 +779,8 @@ def check_rule(rule) -> None:
     _require(isinstance(coarse, bool), who, "coarse", f"coarse must be True or False, got {coarse!r}")
     ls, robust = _ls_formulation(sigma_a=0.05)
     # as sweep_curve samples for this rule alone: every two decades on the direct sweep
-    # when it reads slopes or samples coarsely
-    grids = {"direct": (np.geomspace(1e-6, 1e6, SLOPE_POINTS) if slopes or coarse
-                        else np.geomspace(1e-3, 1e3, 13)),
+    # when it samples coarsely
+    grids = {"direct": np.geomspace(1e-6, 1e6, SLOPE_POINTS) if coarse else np.geomspace(1e-3, 1e3, 13),
              "cvxpy": np.geomspace(1e-3, 1e3, 13)}
     opts, _ = prepare(1.0, fallback=None)
     # as sweep_curve builds it for this rule alone: without dx/dlam when the rule says it

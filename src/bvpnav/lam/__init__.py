@@ -59,13 +59,14 @@ class LambdaRule:
     #: and ``trace`` set it False.
     uses_derivative: bool = True
     #: Whether its refinement reads the exact slope of its score at every point (the
-    #: direct sweep's ``d2eta2``, :func:`refine_with_slopes`): then a sweep of such rules
-    #: alone samples every two decades by default (:data:`bvpnav.lam.sweep.SLOPE_POINTS`).
+    #: direct sweep's ``d2eta2``, :func:`refine_with_slopes`; it needs
+    #: ``uses_derivative``).
     slopes: bool = False
     #: Whether its refinement evaluates the half-way points beside its best sample when the
     #: samples lie more than a decade apart (:func:`half_way_points`): then a sweep of such
-    #: rules alone samples every two decades on a range of 12 decades or more (the
-    #: neighbourhood of the best sample is then as fine as one sample per decade).
+    #: rules alone samples every two decades on a range of 12 decades or more
+    #: (:data:`bvpnav.lam.sweep.SLOPE_POINTS`; the neighbourhood of the best sample is
+    #: then as fine as one sample per decade).
     coarse: bool = False
 
     def scores(self, sweep, pts: list[dict], s: np.ndarray) -> np.ndarray:
