@@ -35,7 +35,16 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .banded import BandedKKT, BandPlan, DiagonalRows, Factorization, NotBanded, canonical, row_scaled
+from .banded import (
+    BandedKKT,
+    BandPlan,
+    DiagonalRows,
+    Factorization,
+    KeptFactors,
+    NotBanded,
+    canonical,
+    row_scaled,
+)
 from .formulation import as_formulation
 from .model import Affine
 
@@ -435,6 +444,12 @@ def fem_rows_by_diagonals(problem) -> DiagonalRows:
 #: stage drops it once the chosen lambda is solved.
 BAND_AFFINE = "band_affine"
 
+#: The formulation-cache key of a lambda sweep's last factorizations
+#: (:class:`~bvpnav.banded.KeptFactors`): the solve at the chosen lambda takes the factor
+#: at that lambda when one is kept, else writes its band into a buffer the sweep used; the
+#: rule stage drops them with :data:`BAND_AFFINE`.
+BAND_FACTORS = "band_factors"
+
 
 def banded_plan(form: LeastSquaresForm, problem) -> BandPlan:
     """The symbolic analysis of a form's banded factorization (axes end to end, else
@@ -485,11 +500,19 @@ def banded_factor(form: LeastSquaresForm, problem, plan=None, parts=None) -> Ban
     formulation = as_formulation(problem)
     plan = banded_plan(form, problem) if plan is None else plan
     if parts is None and form.lam is not None:
-        # after a lambda sweep of this formulation, its scaled band at any lambda is one copy
-        # (bvpnav.banded.AffineBand): the solve at the chosen lambda assembles nothing
+        # after a lambda sweep of this formulation: its factor at this lambda when it kept
+        # one (its last point's), else its scaled band at any lambda is one copy
+        # (bvpnav.banded.AffineBand) into a buffer the sweep already touched: the solve at
+        # the chosen lambda assembles nothing
+        kept = formulation.cache.get(BAND_FACTORS)
+        kept = kept if isinstance(kept, KeptFactors) and kept.plan is plan else None
+        fac = None if kept is None else kept.take(form.lam)
+        if fac is not None:
+            return fac.for_matrices(form.D.A, form.E.A)
         cached = formulation.cache.get(BAND_AFFINE)
         if cached is not None and cached[0] is plan:
-            parts = cached[1].at(form.lam)
+            band = cached[1]
+            parts = band.at(form.lam, out=None if kept is None else kept.buffer(band.scaled0.shape))
     return BandedKKT(form.D.A, form.E.A, params=formulation.model.l_index, plan=plan, parts=parts,
                      diagonal=None if parts is not None else fem_rows_by_diagonals(formulation))
 

@@ -228,6 +228,98 @@ def test_the_chosen_lambda_solved_from_the_sweeps_band_equals_a_fresh_solve():
     np.testing.assert_allclose(sol.x, ref.x, rtol=0, atol=1e-10 * np.max(np.abs(ref.x)))
 
 
+@pytest.mark.filterwarnings("ignore::bvpnav.log.BvpnavWarning")  # the rules' lambdas misfit sigma_a
+@pytest.mark.parametrize("rule", ["lcurve", "gcv", "quasi"])
+def test_the_chosen_lambda_is_factored_in_a_buffer_of_the_sweep(monkeypatch, rule):
+    """After the sweep, the solve at the chosen lambda writes its band into memory the sweep
+    used (no fresh band-sized array): one factorization, verified, equal to a fresh solve
+    at that lambda, and nothing is kept with the formulation afterwards."""
+    from bvpnav.banded import BandedKKT, KeptFactors
+
+    prob, _ = known_noise(0, n=2001)
+    factored, buffers = [], []
+    original = BandedKKT._factor_parts
+    monkeypatch.setattr(BandedKKT, "_factor_parts", lambda self, parts: (factored.append(1),
+                                                                        original(self, parts))[1])
+    original_buffer = KeptFactors.buffer
+    monkeypatch.setattr(KeptFactors, "buffer", lambda self, shape: (buffers.append(original_buffer(
+        self, shape)), buffers[-1])[1])
+    sol = prob.solve(solver="direct", lam=rule)
+    assert sol.stats["verified"] and sol.stats["factorization"].startswith("banded")
+    assert len(buffers) == 1 and buffers[0] is not None
+    # the sweep's own factorizations (GCV's trace: each of its points is one complex one)
+    assert len(factored) == sol.curve.evaluations + 1
+    assert not {"band_affine", "band_factors"} & set(prob.formulation.cache)
+    fresh, _ = known_noise(0, n=2001)
+    ref = fresh.solve(solver="direct", lam=sol.lam)
+    np.testing.assert_allclose(sol.x, ref.x, rtol=0, atol=1e-10 * np.max(np.abs(ref.x)))
+
+
+def test_the_last_points_factor_is_handed_to_a_solve_at_its_lambda(monkeypatch):
+    """A solve at exactly the sweep's last lambda takes that point's factor (no
+    factorization) and answers as a fresh solve; at another lambda it factors again."""
+    from bvpnav.banded import BandedKKT
+    from bvpnav.lsq import solve_least_squares
+
+    prob, _ = known_noise(1, n=2001)
+    form = prob.formulation
+    eng = _DirectSweep(form)
+    for lam in (0.3, 0.7):
+        eng.point(lam)
+    eng.hand_off()
+    factored = []
+    original = BandedKKT._factor_parts
+    monkeypatch.setattr(BandedKKT, "_factor_parts", lambda self, parts: (factored.append(1),
+                                                                        original(self, parts))[1])
+    x_last = solve_least_squares(form, 0.7)[0]
+    assert factored == []
+    x_other = solve_least_squares(form, 0.3)[0]   # not kept (its buffer held the point at 0.7)
+    assert factored == [1]
+    fresh, _ = known_noise(1, n=2001)
+    for lam, x in ((0.7, x_last), (0.3, x_other)):
+        ref = solve_least_squares(fresh.formulation, lam)[0]
+        np.testing.assert_allclose(x, ref, rtol=0, atol=1e-10 * np.max(np.abs(ref)))
+
+
+def test_a_kept_factor_and_its_buffer_are_handed_out_once():
+    """KeptFactors: a factor is taken once; a buffer taken for a new band ends the factor
+    that lived in it; spare buffers go first."""
+    from bvpnav.banded import KeptFactors
+
+    kept = KeptFactors(plan=None)
+    a, b, spare = np.zeros((5, 3)), np.zeros((5, 3)), np.zeros((5, 3))
+    kept.keep(1.0, "factor at 1", a)
+    kept.keep(2.0, "factor at 2", b)
+    kept.spare(spare)
+    assert kept.take(1.0) == "factor at 1" and kept.take(1.0) is None and kept.take(3.0) is None
+    out = kept.buffer((5, 3))
+    out[:] = 7.0
+    assert np.all(spare == 7.0) and np.all(b == 0.0) and kept.lams() == [2.0]
+    out = kept.buffer((5, 3))   # no spare left: the kept factor's buffer, which ends it
+    out[:] = 8.0
+    assert np.all(b == 8.0) and kept.lams() == [] and kept.buffer((5, 3)) is None
+    assert kept.take(2.0) is None
+
+
+def test_a_factor_for_other_matrices_of_its_pattern_refines_against_them():
+    """BandedKKT.for_matrices: the factor of one lambda's form answers the form of a lambda
+    0.1 % away after refinement against that form's own matrices (the solve at the chosen
+    lambda measures its residuals on its own form), and refuses another pattern."""
+    from bvpnav.banded import NotBanded
+    from bvpnav.lsq import banded_factor, least_squares_form
+
+    prob, _ = known_noise(0, n=501)
+    form = prob.formulation
+    f1, f2 = least_squares_form(form, 0.5), least_squares_form(form, 0.5005)
+    fac = banded_factor(f1, form).for_matrices(f2.D.A, f2.E.A)
+    z, k, corr = fac.refined(f2.rhs(), 5, 1e-14)
+    exact = banded_factor(f2, form).refined(f2.rhs(), 3, 1e-14)[0]
+    assert k >= 2   # the first solve is off by about the change of lambda
+    np.testing.assert_allclose(z, exact, rtol=0, atol=1e-11 * np.max(np.abs(exact)))
+    with pytest.raises(NotBanded, match="pattern"):
+        fac.for_matrices(f2.D.A[:-1], f2.E.A)
+
+
 def test_refine_extremum_keeps_to_its_bounds():
     """A rule that never chooses its outermost samples (the L-curve's two on each side)
     gives bounds: a better neighbour beyond a bound, or a parabola whose vertex lies

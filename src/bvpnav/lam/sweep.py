@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..banded import AffineBand, BandedKKT, NotBanded, canonical
+from ..banded import AffineBand, BandedKKT, KeptFactors, NotBanded, canonical
 from ..cvx import compiled
 from ..errors import InputError
 from ..formulation import LAM_RANGE, as_formulation
@@ -43,6 +43,7 @@ from ..log import progress as progress_bar
 from ..log import warn as _warn
 from ..lsq import (
     BAND_AFFINE,
+    BAND_FACTORS,
     banded_factor,
     banded_plan,
     factor_form,
@@ -199,6 +200,7 @@ class DirectSweep:
         self._plan = None
         self._parts = None
         self._buffers: list = [None, None, None]
+        self._kept: tuple | None = None   # (lambda, factor, buffer index) of the last real point
         #: How the last log-determinant derivative was taken ("complex step" or
         #: "central difference"), None before GCV's first trace by the log-determinant.
         self.logdet_derivative = None
@@ -238,7 +240,8 @@ class DirectSweep:
         factor of the current point, dead when the next point starts; 1: the log-
         determinant's neighbours, dead once their determinant is read; the complex one for
         ``h``, dead once the point's quantities are read), so that ``dgbtrf`` works in
-        place of an array already mapped instead of a fresh one per lambda."""
+        place of an array already mapped instead of a fresh one per lambda; after the
+        sweep they serve the solve at the chosen lambda (:meth:`hand_off`)."""
         affine = self._affine_parts()
         if not affine:
             return None
@@ -250,14 +253,40 @@ class DirectSweep:
 
     def _factor(self, form, lam: float | None = None):
         """The banded factor with the plan made once (the pattern is the same at every
-        lambda), or the pivoted sparse LU when the problem is not banded."""
+        lambda), or the pivoted sparse LU when the problem is not banded. The last banded
+        factor at a ``lam`` is kept for :meth:`hand_off`."""
         if self._plan is not None:
+            self._kept = None   # its buffer is about to be overwritten
             try:
                 parts = None if lam is None else self._combined(lam)
-                return banded_factor(form, self.form, plan=self._plan, parts=parts)
+                fac = banded_factor(form, self.form, plan=self._plan, parts=parts)
             except (RuntimeError, np.linalg.LinAlgError):
                 pass
+            else:
+                if lam is not None:
+                    self._kept = (float(lam), fac, 0 if parts is not None else None)
+                return fac
         return factor_form(form, self.form)
+
+    def hand_off(self) -> None:
+        """Hand the last real point's factor and the buffers no factor uses to the solve at
+        the chosen lambda (:data:`bvpnav.lsq.BAND_FACTORS`, read by
+        :func:`bvpnav.lsq.banded_factor`): its band is written into memory the sweep has
+        already touched instead of a fresh array, or, when it is the last point's lambda,
+        not factored again. The sweep's buffers are then the solve's: the sweep evaluates
+        no more points after this."""
+        if self._plan is None:
+            return
+        kept = KeptFactors(self._plan)
+        used = None
+        if self._kept is not None:
+            lam, fac, used = self._kept
+            kept.keep(lam, fac, None if used is None else self._buffers[used])
+        for b, buf in enumerate(self._buffers):
+            if buf is not None and b != used:
+                kept.spare(buf)
+        self._kept, self._buffers = None, [None] * len(self._buffers)
+        self.form.cache[BAND_FACTORS] = kept
 
     def _logdet(self, lam: float) -> float:
         """:meth:`bvpnav.banded.BandedKKT.logdet` at ``lam``: from the combined parts by
@@ -721,6 +750,8 @@ def _sweep_curve(form, rules, rule, lam_range, points, tau, probes, seed, progre
             r = get_rule(name)
             curve.scores[name] = r.scores(eng, pts, s)
             curve.chosen[name] = float(r.refine(eng, pts, s, curve.scores[name], curve))
+        if isinstance(eng, DirectSweep):
+            eng.hand_off()
     curve.evaluations = len(eng.cache)
     curve.trace_method = getattr(eng, "trace_method", None)
     curve.factorization = getattr(eng, "factorization", None)

@@ -16,7 +16,7 @@ from ..errors import InputError
 from ..formulation import as_formulation
 from ..lam import rule_names
 from ..lam.sweep import LambdaCurve, sweep_curve
-from ..lsq import BAND_AFFINE
+from ..lsq import BAND_AFFINE, BAND_FACTORS
 from ..result import Solution
 from .chain import solve_fixed
 from .options import SolveOptions, prepare
@@ -49,7 +49,9 @@ def with_rule(inner: Stage) -> Stage:
         finally:
             # the sweep's band along lambda served the solve at the chosen lambda; a band of
             # the whole problem is not kept alive with the formulation after it
-            as_formulation(form).cache.pop(BAND_AFFINE, None)
+            cache = as_formulation(form).cache
+            cache.pop(BAND_AFFINE, None)
+            cache.pop(BAND_FACTORS, None)
         sol.lam_rule = lam
         sol.curve = curve
         # already issued by the sweep (once); recorded here for the CLI and the JSON summary
@@ -131,6 +133,7 @@ def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6
                       tau=tau, probes=probes, seed=seed, progress=progress, engine=engine)
     finally:
         form.cache.pop(BAND_AFFINE, None)   # not kept alive with the formulation (see with_rule)
+        form.cache.pop(BAND_FACTORS, None)
 
 
 def choose_lambda(problem, rule: str = "lcurve", **kwargs) -> float:
