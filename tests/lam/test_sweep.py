@@ -371,6 +371,58 @@ def test_refine_with_slopes_reaches_the_tolerance_in_fewer_evaluations_than_valu
     assert ours < theirs, (ours, theirs)
 
 
+@pytest.mark.parametrize("decades", [1.0, 2.0])
+def test_the_septic_step_model_saves_evaluations_over_the_bracket_cubic(monkeypatch, decades):
+    """refine_with_slopes steps to the peak of the degree-7 Hermite polynomial through the
+    bracket's ends and the two evaluated points nearest it: over the peaks, no more
+    evaluations than with the bracket's cubic alone (hermite_fit_peak disabled), strictly
+    fewer in all, and every answer within xatol."""
+    import bvpnav.lam as lam_mod
+    from bvpnav.lam import REFINE_XATOL, refine_with_slopes
+
+    s = np.arange(-6, 7) * decades * np.log(10.0)
+
+    def count() -> list[int]:
+        out = []
+        for f, u_star in PEAKS.values():
+            scores = np.array([f(u) for u in s])
+            slopes = np.array([_slope(f, u) for u in s])
+            calls = []
+            u = refine_with_slopes(lambda v, f=f, calls=calls: calls.append(v) or (f(v), _slope(f, v)),
+                                   s, scores, slopes, int(np.argmax(scores)))
+            assert abs(u - u_star) < REFINE_XATOL
+            out.append(len(calls))
+        return out
+
+    septic = count()
+    monkeypatch.setattr(lam_mod, "hermite_fit_peak", lambda *a, **k: None)
+    cubic = count()
+    print(f"{decades} decades apart: septic {septic}, cubic {cubic}")
+    assert sum(septic) < sum(cubic), (septic, cubic)
+    assert max(np.subtract(septic, cubic)) <= 1, (septic, cubic)
+
+
+def test_hermite_fit_peak_is_exact_for_a_septic_and_none_without_a_maximum():
+    """Values and slopes at four points determine a degree-7 polynomial: its maximiser in
+    the bracket is found to rounding, from points inside and far outside it; a function
+    rising across the bracket has none there."""
+    from bvpnav.lam import hermite_fit_peak
+
+    def g(u):   # a single maximum at u = 0.3 (the derivative's other roots are complex)
+        return -(u - 0.3) ** 2 * (1.0 + 0.2 * u**2 + 0.01 * u**4) + 0.002 * (u - 0.3) ** 7
+
+    def _poly_slope(u):
+        w = u - 0.3
+        return (-2 * w * (1.0 + 0.2 * u**2 + 0.01 * u**4) - w**2 * (0.4 * u + 0.04 * u**3)
+                + 0.014 * w**6)
+
+    for a, b, far in ((-1.0, 1.0, (2.5, -4.0)), (0.2, 0.5, (0.9, -0.6)), (0.29, 0.31, (1.5, -2.0))):
+        pts = [(x, g(x), _poly_slope(x)) for x in (a, b, *far)]
+        assert hermite_fit_peak(pts, a, b) == pytest.approx(0.3, abs=1e-9)
+    rising = [(x, x + x**3, 1 + 3 * x**2) for x in (0.0, 1.0, 2.0, -1.0)]
+    assert hermite_fit_peak(rising, 0.0, 1.0) is None
+
+
 def test_hermite_peak_is_exact_for_a_cubic():
     """The cubic -u^3/3 + u has its maximum at u = 1; from its values and slopes at any
     bracket the maximiser is found to rounding (and the midpoint without a maximum)."""

@@ -28,8 +28,8 @@ from ..plugins import discover
 REFINE_XATOL = 1e-2
 
 __all__ = ["REFINE_XATOL", "LambdaRule", "register_rule", "unregister_rule", "get_rule", "rule_names",
-           "NEEDS", "edge_warning", "refine_extremum", "refine_with_slopes", "hermite_peak", "guard_samples",
-           "half_way_points"]
+           "NEEDS", "edge_warning", "refine_extremum", "refine_with_slopes", "hermite_peak",
+           "hermite_fit_peak", "guard_samples", "half_way_points"]
 
 #: What a rule may need from the sweep.
 NEEDS = ("least_squares", "trace", "noise", "acceleration")
@@ -291,6 +291,65 @@ def hermite_peak(a: float, b: float, ga: float, gb: float, da: float, db: float)
     return a + (peaks[0] if peaks else 0.5) * h
 
 
+def hermite_fit_peak(points: list, a: float, b: float) -> float | None:
+    r"""The highest local maximiser inside ``[a, b]`` of the polynomial with the given
+    values and slopes (``points``: ``(u, g, slope)`` at distinct ``u``; degree
+    ``2 len(points) - 1``), or None when it has none there.
+
+    Notes
+    -----
+    Confluent divided differences in :math:`t = (u - c)/r` (:math:`c, r` the centre and
+    half-width of ``[a, b]``, slopes times :math:`r`), the Newton form expanded to powers of
+    :math:`t`; the maximisers are the real roots of the derivative in :math:`[-1, 1]` where
+    the second derivative is negative. Only a step's position: the bracket's proof never
+    reads it.
+    """
+    c, r = 0.5 * (a + b), 0.5 * (b - a)
+    z = [(x[0] - c) / r for x in points for _ in (0, 1)]
+    q = [x[1] for x in points for _ in (0, 1)]
+    dq = [x[2] * r for x in points]
+    m = len(z)
+    coef, col = [q[0]], list(q)
+    for order in range(1, m):   # column `order` of the divided-difference table
+        new = []
+        for i in range(m - order):
+            dz = z[i + order] - z[i]
+            new.append(dq[i // 2] if dz == 0 else (col[i + 1] - col[i]) / dz)
+        col = new
+        coef.append(col[0])
+    if not np.all(np.isfinite(coef)):
+        return None
+    poly, basis = np.polynomial.Polynomial([0.0]), np.polynomial.Polynomial([1.0])
+    for i, cf in enumerate(coef):
+        poly = poly + cf * basis
+        basis = basis * np.polynomial.Polynomial([-z[i], 1.0])
+    d1, d2 = poly.deriv(), poly.deriv(2)
+    peaks = [float(t.real) for t in d1.roots()
+             if abs(t.imag) <= 1e-9 and -1.0 < t.real < 1.0 and d2(t.real) < 0]
+    if not peaks:
+        return None
+    return c + r * max(peaks, key=poly)
+
+
+def _model_step(a: tuple, b: tuple, p: tuple, q: tuple, seen: list, cubic: float) -> float:
+    """Where :func:`refine_with_slopes` steps inside the bracket ``[a, b]`` (each point
+    ``(u, g, slope)``; ``p, q`` the two newest, ``seen`` every evaluated one): the peak of
+    the polynomial through the bracket's ends and the two evaluated points nearest outside
+    it (values and slopes, degree 7: the bracket's cubic ignores the curve beyond its ends,
+    which shapes the peak as much once one end is near it), else the secant of the newest
+    slopes when both lie on one side of it, else the bracket's cubic peak ``cubic``."""
+    out = sorted((x for x in seen if not a[0] <= x[0] <= b[0] and np.isfinite(x[1] + x[2])),
+                 key=lambda x: min(abs(x[0] - a[0]), abs(x[0] - b[0])))[:2]
+    w = hermite_fit_peak([a, b, *out], a[0], b[0])
+    if w is not None:
+        return w
+    if p[2] * q[2] > 0 and p[2] != q[2]:
+        w = q[0] - q[2] * (q[0] - p[0]) / (q[2] - p[2])
+        if a[0] < w < b[0]:
+            return w
+    return cubic
+
+
 def _holds_peak(p: tuple, q: tuple) -> bool:
     """Whether ``[p, q]`` (each ``(u, g, slope)``, ``p`` left) must hold a local maximum of
     a smooth ``g``: rising at ``p`` or below ``q`` there, and falling at ``q`` or below ``p``."""
@@ -304,10 +363,17 @@ def refine_with_slopes(f, s: np.ndarray, scores: np.ndarray, slopes: np.ndarray,
 
     Like :func:`refine_extremum`, but each evaluation ``f(u) -> (score, d score / du)`` also
     gives the slope: the extremum is kept in a bracket the values and slopes prove holds
-    one, and located by the cubic through the bracket's values and slopes
-    (:func:`hermite_peak`), or by the secant of the two newest slopes when they lie on one
-    side of it; the search ends after three or four evaluations from a bracket two decades
-    wide, where :func:`refine_extremum` takes five or six from one decade.
+    one, and each step goes to the peak of the degree-7 polynomial through the values and
+    slopes of the bracket's ends and of the two evaluated points nearest outside it
+    (:func:`hermite_fit_peak`: the curve beyond a bracket end shapes the peak as much as the
+    bracket does once one end is near it), else of the bracket's cubic
+    (:func:`hermite_peak`) or the secant of the two newest slopes when they lie on one side
+    of it; the search ends after two to four evaluations from a bracket two decades wide,
+    where :func:`refine_extremum` takes five or six from one decade. (On the benchmark's
+    L-curve at 1e5 samples the polynomial took the refinement from five evaluations to
+    three, and the L-curve rule from 14 to 12; over the test-suite's peaks 31 against 55
+    with the cubic alone.) The model only places the steps: the bracket's proof never
+    reads it.
 
     Parameters
     ----------
@@ -358,6 +424,7 @@ def refine_with_slopes(f, s: np.ndarray, scores: np.ndarray, slopes: np.ndarray,
         return refine_extremum(lambda u: f(u)[0], s, scores, k, best=best, xatol=xatol,
                                maxiter=maxiter, bounds=bounds)
     a, b = sample(j), sample(j + 1)
+    seen = [sample(i) for i in range(n)]   # every evaluated point, for the step's model
     newest = [a, b] if j == k else [b, a]   # the best sample last
     moved = ""   # which end each step replaced ("a" or "b"), newest last
     for _ in range(maxiter):
@@ -370,10 +437,8 @@ def refine_with_slopes(f, s: np.ndarray, scores: np.ndarray, slopes: np.ndarray,
             # order, a flat top, where secants and cubics converge linearly; four is still
             # a secant's usual approach to a skewed peak): bisect
             v, moved = 0.5 * (a[0] + b[0]), ""
-        elif p[2] * q[2] > 0 and p[2] != q[2]:   # both newest on one side: their secant
-            w = q[0] - q[2] * (q[0] - p[0]) / (q[2] - p[2])
-            if a[0] < w < b[0]:
-                v = w
+        else:
+            v = _model_step(a, b, p, q, seen, v)
         if abs(v - q[0]) < xatol:   # converged on the newest point: confirm beside it
             v = q[0] + xatol if q[2] > 0 else q[0] - xatol
         elif v - a[0] < 1.9 * xatol < b[0] - v:   # near an end: close the bracket past v
@@ -387,6 +452,7 @@ def refine_with_slopes(f, s: np.ndarray, scores: np.ndarray, slopes: np.ndarray,
         if dv == 0.0 and gv >= max(a[1], b[1]):   # the extremum itself
             return min(max(v, lo), hi)
         c = (v, gv, dv)
+        seen.append(c)
         left, right = _holds_peak(a, c), _holds_peak(c, b)
         if left and right:
             left = a[1] >= b[1]
