@@ -1564,16 +1564,19 @@ class BandedKKT(Factorization):
         lambda sweep's points."""
         return self._solve(self._as_rhs(rhs), x_only=True)
 
-    def solve_x_real(self, rhs: np.ndarray) -> np.ndarray:
+    def solve_x_real(self, rhs: np.ndarray, eliminated: bool = True) -> np.ndarray:
         r"""The real part of :meth:`solve_x` for a real ``rhs`` (one or several columns).
 
         With a factor of :meth:`AffineBand.at_complex`'s parts at :math:`\lambda + ih` this
         is the solution at :math:`\lambda` to :math:`O(h^2)`: the eliminations, scalings,
         gathers and scatters stay real (they are real linear maps, so the real part may be
         taken after the band's solve), only ``zgbtrs`` and the border's solve are complex.
-        The same as :meth:`solve_x` for a real factor.
+        The same as :meth:`solve_x` for a real factor. With ``eliminated=False`` the
+        eliminated unknowns (:attr:`BandPlan.elim_index`, the acceleration corrections) are
+        not back-substituted and come out NaN, for a caller that reads none of them (a
+        lambda sweep's :math:`dx/d\lambda` where no lambda-weighted row touches them).
         """
-        return self._solve(self._as_rhs(rhs, real=True), x_only=True)
+        return self._solve(self._as_rhs(rhs, real=True), x_only=True, eliminated=eliminated)
 
     def _as_rhs(self, rhs, real: bool = False) -> np.ndarray:
         """``rhs`` as a new or given array of the factor's type (float, or complex for a
@@ -1588,7 +1591,7 @@ class BandedKKT(Factorization):
                             "(AffineBand.at_complex)")
         return rhs.astype(float, copy=False)
 
-    def _solve(self, rhs: np.ndarray, x_only: bool = False) -> np.ndarray:
+    def _solve(self, rhs: np.ndarray, x_only: bool = False, eliminated: bool = True) -> np.ndarray:
         pl = self.plan
         m, n, el = pl.m, pl.n, pl.elim
         nu = self._unf.size
@@ -1605,16 +1608,19 @@ class BandedKKT(Factorization):
             ei = pl.elim_index
             hcol = self._h.reshape((-1,) + (1,) * (r.ndim - 1))
             gz = r[ei] / hcol
-            r[n + nu:] -= _mul(self._Ez, gz)
+            if gz.any():   # (none for a sweep's dx/dlambda: no lambda row touches w)
+                r[n + nu:] -= _mul(self._Ez, gz)
         # without unfolded rows the reduced unknowns (x, mu) are z's own tail: solved in place
         z = None if x_only or nu else np.empty_like(rhs)
         zr = self._reduced_solve(r, out=None if z is None else z[m:])
         mu = zr[n + nu:]
-        if el.size:
+        if el.size and not (x_only and not eliminated):
             w = _mul(self._EzT, mu)
             w /= hcol
             np.subtract(gz, w, out=w)
             zr[ei] = w
+        elif el.size:
+            zr[ei] = np.nan   # not back-substituted (solve_x_real's eliminated=False)
         x = zr[:n]
         if x_only:
             return x

@@ -42,6 +42,39 @@ def _with_bias():
                              sigma=0.05))
 
 
+def _velocity_rows():
+    """Known noise plus soft velocities inside elements (rows that read w there)."""
+    from bvpnav.constraints import Velocity
+
+    prob, _ = known_noise(0, n=2001)
+    return prob.add(Velocity(t=[2.5, 7.52], value=[np.cos(2.5), np.cos(7.52)], sigma=0.02))
+
+
+@pytest.mark.parametrize("make", [lambda: known_noise(0, n=2001)[0], _velocity_rows],
+                         ids=["position rows", "velocity rows inside elements"])
+def test_the_derivative_solve_skips_the_eliminated_accelerations(make):
+    """dx/dlambda skips the eliminated accelerations' back-substitution: no lambda-weighted
+    row reads one (a w that any soft row reads, as a velocity inside an element does, is
+    not eliminated). deta2 equals the central difference of eta2, and equals the one with
+    the back-substitution; the skipped entries are NaN, the others the full solve's."""
+    eng = _DirectSweep(make())
+    lam, eps = 0.8, 1e-5
+    a, b, c = eng.point(lam * (1 - eps)), eng.point(lam), eng.point(lam * (1 + eps))
+    fac = eng._factor(eng._ls.at_lam(lam), lam)
+    assert eng._lam_rows_read_eliminated(fac) is False
+    d_eta = (c["eta2"] - a["eta2"]) / (2 * lam * eps)
+    assert abs(d_eta - b["deta2"]) < 1e-5 * abs(b["deta2"])
+    full = _DirectSweep(make())
+    full._reads_eliminated = True   # as if a lambda row read w: back-substituted
+    assert full.point(lam)["deta2"] == pytest.approx(b["deta2"], rel=1e-12)
+    rhs = np.random.default_rng(0).standard_normal(fac.S.shape[0])
+    x_all, x_part = fac.solve_x_real(rhs), fac.solve_x_real(rhs, eliminated=False)
+    el = fac.plan.elim
+    assert el.size and np.all(np.isnan(x_part[el]))
+    keep = np.setdiff1d(np.arange(x_all.size), el)
+    np.testing.assert_array_equal(x_part[keep], x_all[keep])
+
+
 @pytest.mark.parametrize("make", [lambda: table1()[0], lambda: known_noise(0, n=2001)[0], _with_bias],
                          ids=["load form, LU", "acceleration form, banded", "three axes, bias border"])
 def test_second_derivative_of_eta2_is_six_times_the_squared_change_of_the_lambda_rows(make):

@@ -201,6 +201,7 @@ class DirectSweep:
         self._parts = None
         self._buffers: list = [None, None, None]
         self._kept: tuple | None = None   # (lambda, factor, buffer index) of the last real point
+        self._reads_eliminated = None
         #: How the last log-determinant derivative was taken ("complex step" or
         #: "central difference"), None before GCV's first trace by the log-determinant.
         self.logdet_derivative = None
@@ -415,7 +416,10 @@ class DirectSweep:
         for t, r in zip(self.lam_terms, scaled, strict=True):
             g -= t.residual.A.T @ (r / t.sigma)
         rhs = np.concatenate([np.zeros(m), g, np.zeros(form.E.m)])
-        dx = fac.solve_x_real(rhs) if banded else fac.refined(rhs, 1, window=slice(m, m + n))[0][m:m + n]
+        if banded:   # the eliminated unknowns (w) only where a lambda row reads them
+            dx = fac.solve_x_real(rhs, eliminated=self._lam_rows_read_eliminated(fac))
+        else:
+            dx = fac.refined(rhs, 1, window=slice(m, m + n))[0][m:m + n]
         deta2 = d2eta2 = 0.0
         for t, r in zip(self.lam_terms, scaled, strict=True):
             dr = (t.residual.A @ dx) / t.sigma   # S A x', the lambda rows' change
@@ -424,6 +428,17 @@ class DirectSweep:
         pos = np.concatenate([self.model.r_index(a) for a in range(self.model.d)])
         return {"deta2": deta2, "d2eta2": d2eta2,
                 "quasi": float(np.linalg.norm(lam * dx[pos]) / math.sqrt(pos.size))}
+
+    def _lam_rows_read_eliminated(self, fac) -> bool:
+        r"""Whether a lambda-weighted row reads an unknown the banded factor eliminates (then
+        :math:`dx/d\lambda` needs them back-substituted; the quasi-optimality value reads
+        positions only). False by the plan's construction (a ``w`` that any soft row reads
+        is not eliminated), checked once per sweep."""
+        if self._reads_eliminated is None:
+            el = fac.plan.elim
+            self._reads_eliminated = bool(el.size) and any(
+                t.residual.A.tocsc()[:, el].nnz for t in self.lam_terms)
+        return self._reads_eliminated
 
     # --- GCV's trace: d w / d a_hat
     def _rhs_jacobian_apply(self, Z: np.ndarray) -> np.ndarray:
