@@ -948,6 +948,7 @@ class BandPlan:
         plan = cls(fold=fold, elim=elim, pos=pos, bpos=bpos, kl=0, n=n, m=m, p=p,
                    nnz_D=D.nnz, nnz_E=E.nnz)
         plan.pos_order, plan.border_order = order, border
+        plan.band_node = node[order]   # the node of each band position (CondensedKKT)
         plan.segments = plan._segment(node, segments)
         del Drow, Dcol, nnz_row, alone, entries, lo, hi, elo, ehi, node, reach, local, order, border
         plan._analyse(D, E, max_band, diagonal)
@@ -1564,7 +1565,7 @@ class BandedKKT(Factorization):
         lambda sweep's points."""
         return self._solve(self._as_rhs(rhs), x_only=True)
 
-    def solve_x_real(self, rhs: np.ndarray, eliminated: bool = True) -> np.ndarray:
+    def solve_x_real(self, rhs: np.ndarray, eliminated: bool = True, interior: bool = True) -> np.ndarray:
         r"""The real part of :meth:`solve_x` for a real ``rhs`` (one or several columns).
 
         With a factor of :meth:`AffineBand.at_complex`'s parts at :math:`\lambda + ih` this
@@ -1575,6 +1576,7 @@ class BandedKKT(Factorization):
         eliminated unknowns (:attr:`BandPlan.elim_index`, the acceleration corrections) are
         not back-substituted and come out NaN, for a caller that reads none of them (a
         lambda sweep's :math:`dx/d\lambda` where no lambda-weighted row touches them).
+        ``interior`` is :class:`CondensedKKT`'s (ignored here).
         """
         return self._solve(self._as_rhs(rhs, real=True), x_only=True, eliminated=eliminated)
 
@@ -1705,3 +1707,223 @@ class BandedKKT(Factorization):
         if other.size:
             H = H - W[np.ix_(bp, other)] @ np.linalg.solve(W[np.ix_(other, other)], W[np.ix_(other, bp)])
         return H
+
+
+def _band_of(rows: np.ndarray, cols: np.ndarray, vals: np.ndarray, n: int, kl: int) -> np.ndarray:
+    """Entries ``A[rows, cols] += vals`` of an (n, n) matrix of bandwidth ``kl`` in this
+    module's LAPACK layout (C order (n, 3 kl + 1), entry ``(j, kl + s)`` = ``A[j + s - kl, j]``)."""
+    flat = cols * (3 * kl + 1) + (2 * kl + rows - cols)
+    return np.bincount(flat, weights=vals, minlength=n * (3 * kl + 1)).reshape(n, 3 * kl + 1)
+
+
+class CondensedBand:
+    r"""A lambda sweep's band condensed onto the unknowns lambda changes: one banded
+    factorization of the rest for the whole sweep, then a small one per lambda.
+
+    Parameters
+    ----------
+    plan : BandPlan
+    affine : AffineBand
+        The band along lambda (one run, no border).
+    max_share : float
+        Refuse (:class:`NotBanded`) when the condensed unknowns exceed this share of the
+        band (the small factorization would not be small).
+
+    Raises
+    ------
+    NotBanded
+        When the band has a border or several runs, or too many unknowns would be kept.
+    numpy.linalg.LinAlgError
+        When the interior is singular.
+
+    Notes
+    -----
+    With the band at lambda = 1 scaled, :math:`M = A^{(1)}`, the band at lambda is
+    :math:`A(\lambda) = \Delta (M + (\lambda - 1) \tilde A_1) \Delta`, where
+    :math:`\tilde A_1` (the lambda-weighted rows' part, scaled like :math:`M`) and the
+    change of scale :math:`\Delta` touch only the unknowns of the nodes those rows weigh.
+    The kept set :math:`T` is every unknown of those nodes, of nodes that hold other than
+    the usual unknowns (boundary velocities, hard rows' multipliers), and of enough
+    neighbouring nodes that each run of :math:`T` is at least :math:`2 k_l + 1` long: the
+    other unknowns :math:`I` then fall into segments the band does not couple, each the
+    FEM equations of its nodes alone (as many multipliers as positions, a nonsingular
+    system). With :math:`K = M_{II}` factored once (``dgbtrf`` of the band with
+    :math:`T`'s rows and columns made the identity),
+
+    .. math:: S(\lambda) = M_{TT} - M_{TI} K^{-1} M_{IT} + (\lambda - 1)\tilde A_{1,TT},
+
+    banded in :math:`T`'s order, and :math:`M(\lambda)^{-1} b` is :math:`x_T = S^{-1}
+    (b_T - M_{TI} K^{-1} b_I)`, :math:`x_I = K^{-1} (b_I - M_{IT} x_T)`. The columns of
+    :math:`M_{IT}` at the same distance from the same side of their runs reach disjoint
+    segments, so :math:`K^{-1} M_{IT}` is :math:`2 k_l` solves, not :math:`|T|`.
+    """
+
+    def __init__(self, plan: BandPlan, affine: AffineBand, max_share: float = 0.25):
+        if plan.border or affine.runs != 1 or affine.B is not None and affine.B.shape[1]:
+            raise NotBanded("condensation needs one run and no border")
+        ab0, kl = affine.scaled0, plan.kl
+        nb = ab0.shape[0]
+        node = np.asarray(plan.band_node)
+        counts = np.bincount(node)
+        typical = int(np.argmax(np.bincount(counts[counts > 0])))
+        special = counts != typical
+        special[node[affine.touched]] = True
+        reach = -(-kl // typical)   # nodes on each side: at least kl unknowns
+        nodes = np.flatnonzero(special)
+        win = (nodes[:, None] + np.arange(-reach, reach + 1)).ravel()
+        keep = np.zeros(counts.size, dtype=bool)
+        keep[win[(win >= 0) & (win < counts.size)]] = True
+        inT = keep[node]
+        T = np.flatnonzero(inT)
+        if not T.size or T.size > max_share * nb:
+            raise NotBanded(f"{T.size} of {nb} unknowns would be kept")
+        loc = np.full(nb, -1, dtype=np.int64)
+        loc[T] = np.arange(T.size)
+        cut = np.flatnonzero(np.diff(T) > 1)
+        starts, ends = T[np.concatenate([[0], cut + 1])], T[np.concatenate([cut, [T.size - 1]])]
+        inner = (starts > 0) & (ends < nb - 1)
+        if np.any((ends - starts < 2 * kl) & inner):   # pragma: no cover - by construction
+            raise NotBanded("a kept run shorter than 2 kl + 1")
+        # K: the band with T's rows and columns the identity
+        K = ab0.copy()
+        K[T] = 0.0
+        s = np.arange(2 * kl + 1)
+        j = T[:, None] + kl - s[None, :]   # A[t, j] sits at (j, kl + s)
+        ok = (j >= 0) & (j < nb)
+        K[j[ok], np.broadcast_to(kl + s, j.shape)[ok]] = 0.0
+        K[T, 2 * kl] = 1.0
+        lu, piv, info = lapack.dgbtrf(K.T, kl, kl, overwrite_ab=1)
+        if info != 0:
+            raise np.linalg.LinAlgError(f"the condensed band's interior is singular (pivot {info})")
+        self._K = K   # dgbtrf's storage (lu is its transposed view)
+        self._lu, self._piv, self.kl, self.nb = lu, piv, kl, nb
+        # M's entries in T's columns (M is symmetric: also its rows)
+        r = T[:, None] + s[None, :] - kl
+        v = ab0[T][:, kl:]
+        ok = (r >= 0) & (r < nb) & (v != 0)
+        c = np.broadcast_to(T[:, None], r.shape)[ok]
+        r, v = r[ok], v[ok]
+        out = ~inT[r]
+        self.M_IT = sp.csr_matrix(sp.csc_matrix((v[out], (r[out], loc[c[out]])), shape=(nb, T.size)))
+        self.M_TI = self.M_IT.T.tocsr()
+        # K^-1 M_IT by groups of columns reaching disjoint segments (side and offset)
+        cols = np.unique(c[out])
+        q = np.searchsorted(starts, cols, side="right") - 1
+        left = ((cols - starts[q] < kl) & (starts[q] > 0)) | (ends[q] == nb - 1)
+        off = np.where(left, cols - starts[q], ends[q] - cols)
+        group = np.where(left, 0, kl) + off
+        seg = np.where(left, q, q + 1)   # segment q lies between runs q - 1 and q
+        G = 2 * kl
+        R = np.zeros((nb, G), order="F")
+        Mc = self.M_IT[:, loc[cols]].tocoo()
+        R[Mc.row, group[Mc.col]] = Mc.data   # one column of a group per row: no sums
+        Y, info = lapack.dgbtrs(lu, kl, kl, R, piv, overwrite_b=1)
+        P = self.M_TI @ Y                     # (|T|, G): each T row reads one segment
+        owner = np.full((G, starts.size + 1), -1, dtype=np.int64)
+        owner[group, seg] = loc[cols]
+        rows_T = loc[cols]
+        partner = owner[:, seg].T             # (len(cols), G): the column of each group there
+        ok = partner >= 0
+        tt = ~out
+        Sr = np.concatenate([loc[r[tt]], np.broadcast_to(rows_T[:, None], partner.shape)[ok]])
+        Sc = np.concatenate([loc[c[tt]], partner[ok]])
+        Sv = np.concatenate([v[tt], -P[rows_T][ok]])
+        self.kT = kT = int(np.max(np.abs(Sr - Sc)))
+        self._S1 = _band_of(Sr, Sc, Sv, T.size, kT)
+        # the lambda part, scaled like M, on the rows of affine.rows (all in T)
+        s1 = affine.sU0
+        ri = affine.rows[:, None] + s[None, :] - kl
+        inside = (ri >= 0) & (ri < nb)
+        v1 = affine.ab1[:, kl:] * s1[affine.rows][:, None] * s1[np.clip(ri, 0, nb - 1)]
+        ok = inside & (v1 != 0)
+        self._A1 = _band_of(loc[ri[ok]], loc[np.broadcast_to(affine.rows[:, None], ri.shape)[ok]],
+                            v1[ok], T.size, kT)
+        self.T, self.inT, self.plan, self.affine, self._s1 = T, inT, plan, affine, s1
+        self._interior_rhs = None   # (b_I, K^-1 b_I) of the last right-hand side
+
+    def buffer(self) -> np.ndarray:
+        """The band-sized array of the interior's factor, dead once the sweep is done (for
+        :class:`KeptFactors`)."""
+        return self._K
+
+    def at(self, lam: float) -> tuple:
+        """``(factor of S(lam), piv, Delta, sU)`` at ``lam`` (see the Notes)."""
+        ab = self._S1 + (lam - 1.0) * self._A1
+        lu, piv, info = lapack.dgbtrf(ab.T, self.kT, self.kT, overwrite_ab=1)
+        if info != 0:
+            raise np.linalg.LinAlgError(f"the condensed system is singular at lambda={lam:g} (pivot {info})")
+        sU = self.affine._rows_at(lam)[1]
+        return lu, piv, sU / self._s1, sU
+
+    def solve(self, small: tuple, R: np.ndarray, interior: bool = True) -> np.ndarray:
+        """``A(lam)^{-1} R`` for ``R`` (nb,) in the scaled band's order, ``small`` from
+        :meth:`at`; the unknowns outside ``T`` are NaN without ``interior``."""
+        lu, piv, d = small[:3]
+        b = R / d
+        bI = b.copy()
+        bI[self.T] = 0.0
+        kl, T = self.kl, self.T
+        g = b[T]
+        if bI.any():
+            last = self._interior_rhs
+            if last is not None and np.array_equal(last[0], bI):
+                u = last[1]   # a sweep's points share the right-hand side off T
+            else:
+                u = lapack.dgbtrs(self._lu, kl, kl, bI, self._piv)[0]
+                self._interior_rhs = (bI, u)
+            g = g - self.M_TI @ u
+        xT = lapack.dgbtrs(lu, self.kT, self.kT, g, piv)[0]
+        x = np.full(self.nb, np.nan)
+        x[T] = xT
+        if interior:
+            rhs = bI - self.M_IT @ xT
+            rhs[T] = 0.0
+            xI = lapack.dgbtrs(self._lu, kl, kl, rhs, self._piv)[0]
+            x[~self.inT] = xI[~self.inT]
+        x /= d
+        return x
+
+
+class CondensedKKT(BandedKKT):
+    """:class:`BandedKKT` at one lambda of a :class:`CondensedBand`: its band solves are
+    the condensed ones (a small factorization per lambda), the rest (folding, eliminated
+    accelerations, gathers, scales) as in :class:`BandedKKT`. Real, one run, no border;
+    no log-determinant. :meth:`solve_x_real` with ``interior=False`` leaves the unknowns
+    outside the condensed set NaN (a sweep's :math:`dx/d\\lambda`, read on the lambda rows
+    alone)."""
+
+    def __init__(self, D: sp.csr_matrix, E: sp.csr_matrix, condensed: CondensedBand, lam: float,
+                 params: np.ndarray | None = None):
+        D, E = canonical(D), canonical(E)
+        pl = condensed.plan
+        if not pl.same_pattern(D, E):
+            raise NotBanded("the sparsity pattern changed since the plan was made")
+        self.plan, self.S = pl, AugmentedOperator(D, E)
+        self.params = np.asarray(params if params is not None else [], dtype=int)
+        self._unf = pl.unfolded
+        self._Df = D[pl.fold] if self._unf.size else D
+        if pl.elim.size:
+            self._Ez, self._EzT = pl._eliminated(E)
+        self._h = condensed.affine.h
+        self.k, self._runs = 0, 1
+        self._condensed = condensed
+        self._small = condensed.at(lam)
+        self._sU = self._small[3]
+        self._lu = np.zeros((0, 0))   # the dtype of the solves (real)
+        self._interior = True
+
+    def _trs(self, R: np.ndarray, overwrite: bool = False) -> np.ndarray:
+        if R.ndim == 1:
+            return self._condensed.solve(self._small, R, self._interior)
+        return np.column_stack([self._condensed.solve(self._small, R[:, i], self._interior)
+                                for i in range(R.shape[1])])
+
+    def solve_x_real(self, rhs: np.ndarray, eliminated: bool = True, interior: bool = True) -> np.ndarray:
+        self._interior = interior
+        try:
+            return super().solve_x_real(rhs, eliminated)
+        finally:
+            self._interior = True
+
+    def logdet(self) -> float:
+        raise NotImplementedError("a condensed factor has no log-determinant")

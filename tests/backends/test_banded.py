@@ -263,7 +263,7 @@ def test_gcv_trace_falls_back_to_probes_when_a_neighbour_factor_is_not_banded(mo
     sweep = DirectSweep(form, trace="logdet", probes=200)
     real = sweep._factor
     monkeypatch.setattr(sweep, "_combined", lambda lam, buffer=0, h=0.0: None)
-    monkeypatch.setattr(sweep, "_factor", lambda f, lam=None: real(f, lam) if lam == 1.0
+    monkeypatch.setattr(sweep, "_factor", lambda f, lam=None, **kw: real(f, lam) if lam == 1.0
                         else factor_form(f, form))
     est = sweep.point(1.0, need_trace=True)["trace"]
     assert sweep.trace_method.startswith("Hutchinson (200 probes); no log-determinant: the banded "

@@ -58,6 +58,11 @@ class LambdaRule:
     #: more solve per lambda on the direct sweep); rules that read only ``rho2``, ``eta2``
     #: and ``trace`` set it False.
     uses_derivative: bool = True
+    #: Whether it reads the points' ``quasi`` (the norm of the whole :math:`dx/d\lambda`);
+    #: rules that read only the lambda rows' change (``deta2``, ``d2eta2``) set it False,
+    #: and a sweep of such rules alone solves for :math:`dx/d\lambda` on those rows' reach
+    #: (:class:`bvpnav.banded.CondensedKKT`; ``quasi`` is then NaN).
+    reads_quasi: bool = True
     #: Whether its refinement reads the exact slope of its score at every point (the
     #: direct sweep's ``d2eta2``, :func:`refine_with_slopes`; it needs
     #: ``uses_derivative``).

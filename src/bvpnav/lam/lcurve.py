@@ -108,6 +108,7 @@ class LCurve(LambdaRule):
     name = "lcurve"
     slopes = True
     coarse = True
+    reads_quasi = False
 
     def scores(self, sweep, pts, s):
         if sweep.engine == "direct":

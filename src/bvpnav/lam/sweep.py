@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..banded import AffineBand, BandedKKT, KeptFactors, NotBanded, canonical
+from ..banded import AffineBand, BandedKKT, CondensedBand, CondensedKKT, KeptFactors, NotBanded, canonical
 from ..cvx import compiled
 from ..errors import InputError
 from ..formulation import LAM_RANGE, as_formulation
@@ -178,11 +178,14 @@ class DirectSweep:
     engine = "direct"
 
     def __init__(self, form, exact_trace_limit: int = 300, need_trace: bool = False, probes: int = 24,
-                 seed: int = 0, tau: float = 1.5, trace: str = "auto", need_derivative: bool = True):
+                 seed: int = 0, tau: float = 1.5, trace: str = "auto", need_derivative: bool = True,
+                 need_quasi: bool = True, condense: bool = True):
         self.form = as_formulation(form)
         self.exact_trace_limit = exact_trace_limit
         self.need_trace, self.probes, self.seed, self.tau = need_trace, probes, seed, tau
         self.need_derivative = need_derivative
+        self.need_quasi = need_quasi
+        self._cond = None if condense else False
         self.model = self.form.model
         self.terms = self.form.terms()
         self.lam_terms = [t for t in self.terms if t.mode == "soft" and t.scaled_by_lam]
@@ -252,10 +255,31 @@ class DirectSweep:
             bufs[buffer] = np.empty(affine.scaled0.shape, dtype=complex if h else float)
         return affine.at_complex(lam, h, out=bufs[buffer]) if h else affine.at(lam, out=bufs[buffer])
 
-    def _factor(self, form, lam: float | None = None):
+    def _condensed(self):
+        """The sweep's :class:`bvpnav.banded.CondensedBand` (made at the first point), or
+        False: no band affine in lambda, a border, several runs, GCV's trace asked (its
+        log-determinant and probes take the whole factor), or lambda touching too much."""
+        if self._cond is None:
+            self._cond = False
+            affine = self._affine_parts() if self._plan is not None else None
+            if affine and not self.need_trace:
+                try:
+                    self._cond = CondensedBand(self._plan, affine)
+                except (NotBanded, np.linalg.LinAlgError) as exc:
+                    log.debug("lambda sweep: no condensation (%s)", exc)
+        return self._cond
+
+    def _factor(self, form, lam: float | None = None, condensed: bool = False):
         """The banded factor with the plan made once (the pattern is the same at every
         lambda), or the pivoted sparse LU when the problem is not banded. The last banded
-        factor at a ``lam`` is kept for :meth:`hand_off`."""
+        factor at a ``lam`` is kept for :meth:`hand_off`. With ``condensed``, a
+        :class:`bvpnav.banded.CondensedKKT` where the sweep has a condensed band."""
+        cond = self._condensed() if condensed and lam is not None else False
+        if cond:
+            try:
+                return CondensedKKT(form.D.A, form.E.A, cond, lam, params=self.model.l_index)
+            except (RuntimeError, np.linalg.LinAlgError):
+                pass   # the whole band's factor below
         if self._plan is not None:
             self._kept = None   # its buffer is about to be overwritten
             try:
@@ -286,6 +310,9 @@ class DirectSweep:
         for b, buf in enumerate(self._buffers):
             if buf is not None and b != used:
                 kept.spare(buf)
+        if self._cond:
+            kept.spare(self._cond.buffer())
+            self._cond = None
         self._kept, self._buffers = None, [None] * len(self._buffers)
         self.form.cache[BAND_FACTORS] = kept
 
@@ -328,7 +355,7 @@ class DirectSweep:
             banded = True
         else:
             try:
-                fac = self._factor(form, lam)
+                fac = self._factor(form, lam, condensed=not need_trace)
             except (RuntimeError, np.linalg.LinAlgError) as exc:
                 raise InputError(f"lambda={lam:g}: the KKT matrix is singular ({exc}); some unknown "
                                  "is not determined by the information") from exc
@@ -417,7 +444,8 @@ class DirectSweep:
             g -= t.residual.A.T @ (r / t.sigma)
         rhs = np.concatenate([np.zeros(m), g, np.zeros(form.E.m)])
         if banded:   # the eliminated unknowns (w) only where a lambda row reads them
-            dx = fac.solve_x_real(rhs, eliminated=self._lam_rows_read_eliminated(fac))
+            dx = fac.solve_x_real(rhs, eliminated=self._lam_rows_read_eliminated(fac),
+                                  interior=self.need_quasi)
         else:
             dx = fac.refined(rhs, 1, window=slice(m, m + n))[0][m:m + n]
         deta2 = d2eta2 = 0.0
@@ -748,7 +776,9 @@ def _sweep_curve(form, rules, rule, lam_range, points, tau, probes, seed, progre
     need_trace = any("trace" in get_rule(r).needs for r in names)
     if engine == "direct":
         eng = DirectSweep(form, need_trace=need_trace, probes=probes, seed=seed, tau=tau,
-                          need_derivative=any(get_rule(r).uses_derivative for r in names))
+                          need_derivative=any(get_rule(r).uses_derivative for r in names),
+                          need_quasi=any(get_rule(r).uses_derivative
+                                         and getattr(get_rule(r), "reads_quasi", True) for r in names))
     else:
         if solve_at is None:
             raise InputError("the cvxpy sweep needs a solve stage (solve_at); use "
