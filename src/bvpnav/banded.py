@@ -1841,6 +1841,26 @@ class CondensedBand:
         self.T, self.inT, self.plan, self.affine, self._s1 = T, inT, plan, affine, s1
         self._interior_rhs = None   # (b_I, K^-1 b_I) of the last right-hand side
 
+    def logdet_slope(self, lam: float, h: float) -> float:
+        r""":math:`d\log|\det \hat A(\lambda)| / d\lambda` of the unscaled band, by a
+        complex step ``h`` on the small system alone.
+
+        Notes
+        -----
+        :math:`\hat A(\lambda) = \mathrm{diag}(s_1)^{-1} M(\lambda)\,\mathrm{diag}(s_1)^{-1}`
+        with the fixed scales :math:`s_1`, and :math:`\det M = \det K \det S(\lambda)` with
+        :math:`K` fixed, so the derivative is that of :math:`\log|\det S|`: the pivots of
+        :math:`S(\lambda + ih) = S(\lambda) + ih\tilde A_{1,TT}` (``zgbtrf``) give
+        :math:`\sum_j \operatorname{Im} U_{jj} / \operatorname{Re} U_{jj} / h`, exact to
+        rounding as in :meth:`BandedKKT.logdet_step`.
+        """
+        ab = self._S1 + complex(lam - 1.0, h) * self._A1
+        lu, _, info = lapack.zgbtrf(ab.T, self.kT, self.kT, overwrite_ab=1)
+        if info != 0:
+            raise np.linalg.LinAlgError(f"the condensed system is singular at lambda={lam:g} (pivot {info})")
+        u = lu[2 * self.kT]
+        return float(np.sum(u.imag / u.real)) / h
+
     def buffer(self) -> np.ndarray:
         """The band-sized array of the interior's factor, dead once the sweep is done (for
         :class:`KeptFactors`)."""
@@ -1906,7 +1926,7 @@ class CondensedKKT(BandedKKT):
             self._Ez, self._EzT = pl._eliminated(E)
         self._h = condensed.affine.h
         self.k, self._runs = 0, 1
-        self._condensed = condensed
+        self._condensed, self._lam = condensed, float(lam)
         self._small = condensed.at(lam)
         self._sU = self._small[3]
         self._lu = np.zeros((0, 0))   # the dtype of the solves (real)
@@ -1926,4 +1946,8 @@ class CondensedKKT(BandedKKT):
             self._interior = True
 
     def logdet(self) -> float:
-        raise NotImplementedError("a condensed factor has no log-determinant")
+        raise NotImplementedError("a condensed factor has no log-determinant (see logdet_slope)")
+
+    def logdet_slope(self, h: float) -> float:
+        """:meth:`CondensedBand.logdet_slope` at this factor's lambda."""
+        return self._condensed.logdet_slope(self._lam, h)

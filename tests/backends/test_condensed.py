@@ -111,7 +111,7 @@ def test_without_the_interior_only_the_kept_unknowns_are_solved():
 
 
 @pytest.mark.filterwarnings("ignore::bvpnav.log.BvpnavWarning")  # the rules' lambdas misfit sigma_a
-@pytest.mark.parametrize("rule", ["lcurve", "quasi"])
+@pytest.mark.parametrize("rule", ["lcurve", "quasi", "gcv"])
 def test_a_rule_chooses_the_same_lambda_with_and_without_condensation(monkeypatch, rule):
     """The rule's lambda from condensed points is the whole band's to 1e-4 in log lambda,
     and the solve there (the whole band's, verified) agrees to 1e-9."""
@@ -125,6 +125,21 @@ def test_a_rule_chooses_the_same_lambda_with_and_without_condensation(monkeypatc
     assert sol.stats["verified"] and ref.stats["verified"]
     assert abs(np.log(sol.lam / ref.lam)) < 1e-4, (sol.lam, ref.lam)
     np.testing.assert_allclose(sol.x, ref.x, rtol=0, atol=1e-9 * np.max(np.abs(ref.x)) + 1e-6)
+
+
+@pytest.mark.parametrize("extra", ["fixes only", "a hard position inside"])
+def test_gcvs_trace_from_the_condensed_log_determinant_is_the_whole_bands(extra):
+    """GCV's trace by the log-determinant: the small system's complex step (the interior's
+    determinant does not move with lambda) equals the whole band's complex step to 1e-8."""
+    prob = fixes(EXTRAS[extra])
+    cond = DirectSweep(prob.formulation, need_trace=True, need_derivative=False)
+    whole = DirectSweep(prob.formulation, need_trace=True, need_derivative=False, condense=False)
+    for lam in (1e-4, 1e-1, 10.0, 1e4):
+        p, q = cond.point(lam), whole.point(lam)
+        assert p["trace"] == pytest.approx(q["trace"], rel=1e-8), (lam, p["trace"], q["trace"])
+        assert p["rho2"] == pytest.approx(q["rho2"], rel=1e-6)
+    assert cond.logdet_derivative == "complex step (condensed)" and whole.logdet_derivative == "complex step"
+    assert isinstance(cond._cond, CondensedBand)
 
 
 @pytest.mark.parametrize("make, why", [

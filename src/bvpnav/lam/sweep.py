@@ -257,12 +257,14 @@ class DirectSweep:
 
     def _condensed(self):
         """The sweep's :class:`bvpnav.banded.CondensedBand` (made at the first point), or
-        False: no band affine in lambda, a border, several runs, GCV's trace asked (its
-        log-determinant and probes take the whole factor), or lambda touching too much."""
+        False: no band affine in lambda, a border, several runs, GCV's trace by exact
+        columns or probes (they take the whole factor; the log-determinant's derivative is
+        the small system's, :meth:`bvpnav.banded.CondensedBand.logdet_slope`), or lambda
+        touching too much."""
         if self._cond is None:
             self._cond = False
             affine = self._affine_parts() if self._plan is not None else None
-            if affine and not self.need_trace:
+            if affine and (not self.need_trace or self._complex_applies()):
                 try:
                     self._cond = CondensedBand(self._plan, affine)
                 except (NotBanded, np.linalg.LinAlgError) as exc:
@@ -346,16 +348,20 @@ class DirectSweep:
             return pt
         form = self._ls.at_lam(lam)
         m, n = form.D.A.shape
-        # GCV's trace by the log-determinant: one complex factorization at lambda + ih gives
-        # the point, dx/dlambda and the determinant's derivative (see _complex_point)
-        step = self._complex_point(form, lam) if need_trace and self._complex_applies() else None
+        # GCV's trace by the log-determinant: on a condensed band, the small system's complex
+        # step (_trace_logdet); else one complex factorization of the whole band at
+        # lambda + ih gives the point, dx/dlambda and the determinant's derivative
+        # (_complex_point)
+        by_logdet = need_trace and self._complex_applies()
+        condensed = not need_trace or (by_logdet and bool(self._condensed()))
+        step = self._complex_point(form, lam) if by_logdet and not condensed else None
         h = None
         if step is not None:
             fac, x, h = step
             banded = True
         else:
             try:
-                fac = self._factor(form, lam, condensed=not need_trace)
+                fac = self._factor(form, lam, condensed=condensed)
             except (RuntimeError, np.linalg.LinAlgError) as exc:
                 raise InputError(f"lambda={lam:g}: the KKT matrix is singular ({exc}); some unknown "
                                  "is not determined by the information") from exc
@@ -567,7 +573,10 @@ class DirectSweep:
         m, n = ls.D.A.shape
         fixed = np.flatnonzero(~ls.lam_rows)
         fixed = fixed[fixed >= m0]
-        if h is not None:   # a complex factor at lambda + ih (_complex_point)
+        if isinstance(fac, CondensedKKT):   # the condensed system's: K does not move
+            dlog = lam * fac.logdet_slope(COMPLEX_STEP * lam)
+            self.logdet_derivative = "complex step (condensed)"
+        elif h is not None:   # a complex factor at lambda + ih (_complex_point)
             dlog = lam * fac.logdet_step(h)
             self.logdet_derivative = "complex step"
         else:
