@@ -1804,7 +1804,8 @@ class CondensedBand:
         c = np.broadcast_to(T[:, None], r.shape)[ok]
         r, v = r[ok], v[ok]
         out = ~inT[r]
-        self.M_IT = sp.csr_matrix(sp.csc_matrix((v[out], (r[out], loc[c[out]])), shape=(nb, T.size)))
+        # by columns: a product with it visits T's few columns, not the band's rows
+        self.M_IT = sp.csc_matrix((v[out], (r[out], loc[c[out]])), shape=(nb, T.size))
         self.M_TI = self.M_IT.T.tocsr()
         # K^-1 M_IT by groups of columns reaching disjoint segments (side and offset)
         cols = np.unique(c[out])
@@ -1893,13 +1894,13 @@ class CondensedBand:
                 self._interior_rhs = (bI, u)
             g = g - self.M_TI @ u
         xT = lapack.dgbtrs(lu, self.kT, self.kT, g, piv)[0]
-        x = np.full(self.nb, np.nan)
-        x[T] = xT
         if interior:
-            rhs = bI - self.M_IT @ xT
+            rhs = bI - self.M_IT @ xT   # (bI may be the cached interior right-hand side)
             rhs[T] = 0.0
-            xI = lapack.dgbtrs(self._lu, kl, kl, rhs, self._piv)[0]
-            x[~self.inT] = xI[~self.inT]
+            x = lapack.dgbtrs(self._lu, kl, kl, rhs, self._piv, overwrite_b=1)[0]   # 0 on T
+        else:
+            x = np.full(self.nb, np.nan)
+        x[T] = xT
         x /= d
         return x
 
