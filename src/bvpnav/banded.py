@@ -1758,17 +1758,23 @@ class CondensedBand:
     segments, so :math:`K^{-1} M_{IT}` is :math:`2 k_l` solves, not :math:`|T|`.
     """
 
-    def __init__(self, plan: BandPlan, affine: AffineBand, max_share: float = 0.25):
+    def __init__(self, plan: BandPlan, affine: AffineBand, plain: np.ndarray, max_share: float = 0.25):
         if plan.border or affine.runs != 1 or affine.B is not None and affine.B.shape[1]:
             raise NotBanded("condensation needs one run and no border")
         ab0, kl = affine.scaled0, plan.kl
         nb = ab0.shape[0]
         node = np.asarray(plan.band_node)
-        counts = np.bincount(node)
-        typical = int(np.argmax(np.bincount(counts[counts > 0])))
-        special = counts != typical
+        plain = np.asarray(plain, dtype=bool)[plan.pos_order]   # per band position
+        # a node is kept with everything but positions and FEM multipliers (boundary
+        # velocities, hard rows' multipliers, accelerations a soft row reads), and with
+        # the unknowns the lambda rows weigh
+        special = np.bincount(node, weights=~plain).astype(bool)
         special[node[affine.touched]] = True
-        reach = -(-kl // typical)   # nodes on each side: at least kl unknowns
+        counts = np.bincount(node)
+        if not np.any(~special):
+            raise NotBanded("no node holds positions and FEM multipliers alone")
+        fewest = int(np.min(counts[~special & (counts > 0)], initial=1))
+        reach = -(-kl // max(fewest, 1))   # nodes on each side: at least kl unknowns
         nodes = np.flatnonzero(special)
         win = (nodes[:, None] + np.arange(-reach, reach + 1)).ravel()
         keep = np.zeros(counts.size, dtype=bool)
@@ -1793,8 +1799,10 @@ class CondensedBand:
         K[j[ok], np.broadcast_to(kl + s, j.shape)[ok]] = 0.0
         K[T, 2 * kl] = 1.0
         lu, piv, info = lapack.dgbtrf(K.T, kl, kl, overwrite_ab=1)
-        if info != 0:
-            raise np.linalg.LinAlgError(f"the condensed band's interior is singular (pivot {info})")
+        pivots = np.abs(lu[2 * kl])
+        if info != 0 or pivots.min() <= 1e-13 * pivots.max():   # a guard: never met by FEM segments
+            raise np.linalg.LinAlgError(f"the condensed band's interior is singular or nearly "
+                                        f"(pivots {pivots.min():.1e} .. {pivots.max():.1e})")
         self._K = K   # dgbtrf's storage (lu is its transposed view)
         self._lu, self._piv, self.kl, self.nb = lu, piv, kl, nb
         # M's entries in T's columns (M is symmetric: also its rows)
@@ -1829,16 +1837,16 @@ class CondensedBand:
         Sr = np.concatenate([loc[r[tt]], np.broadcast_to(rows_T[:, None], partner.shape)[ok]])
         Sc = np.concatenate([loc[c[tt]], partner[ok]])
         Sv = np.concatenate([v[tt], -P[rows_T][ok]])
-        self.kT = kT = int(np.max(np.abs(Sr - Sc)))
-        self._S1 = _band_of(Sr, Sc, Sv, T.size, kT)
         # the lambda part, scaled like M, on the rows of affine.rows (all in T)
         s1 = affine.sU0
         ri = affine.rows[:, None] + s[None, :] - kl
         inside = (ri >= 0) & (ri < nb)
         v1 = affine.ab1[:, kl:] * s1[affine.rows][:, None] * s1[np.clip(ri, 0, nb - 1)]
         ok = inside & (v1 != 0)
-        self._A1 = _band_of(loc[ri[ok]], loc[np.broadcast_to(affine.rows[:, None], ri.shape)[ok]],
-                            v1[ok], T.size, kT)
+        Ar, Ac = loc[ri[ok]], loc[np.broadcast_to(affine.rows[:, None], ri.shape)[ok]]
+        self.kT = kT = int(max(np.max(np.abs(Sr - Sc)), np.max(np.abs(Ar - Ac), initial=0)))
+        self._S1 = _band_of(Sr, Sc, Sv, T.size, kT)
+        self._A1 = _band_of(Ar, Ac, v1[ok], T.size, kT)
         self.T, self.inT, self.plan, self.affine, self._s1 = T, inT, plan, affine, s1
         self._interior_rhs = None   # (b_I, K^-1 b_I) of the last right-hand side
 
@@ -1868,18 +1876,20 @@ class CondensedBand:
         return self._K
 
     def at(self, lam: float) -> tuple:
-        """``(factor of S(lam), piv, Delta, sU)`` at ``lam`` (see the Notes)."""
+        """``(factor of S(lam), piv, Delta, sU, e)`` at ``lam`` (see the Notes; ``e`` the
+        small band's own scale at ``lam``)."""
         ab = self._S1 + (lam - 1.0) * self._A1
+        e = scale_band(ab, self.kT)   # equilibrated at lam, as the whole band is
         lu, piv, info = lapack.dgbtrf(ab.T, self.kT, self.kT, overwrite_ab=1)
         if info != 0:
             raise np.linalg.LinAlgError(f"the condensed system is singular at lambda={lam:g} (pivot {info})")
         sU = self.affine._rows_at(lam)[1]
-        return lu, piv, sU / self._s1, sU
+        return lu, piv, sU / self._s1, sU, e
 
     def solve(self, small: tuple, R: np.ndarray, interior: bool = True) -> np.ndarray:
         """``A(lam)^{-1} R`` for ``R`` (nb,) in the scaled band's order, ``small`` from
         :meth:`at`; the unknowns outside ``T`` are NaN without ``interior``."""
-        lu, piv, d = small[:3]
+        lu, piv, d, _, e = small
         b = R / d
         bI = b.copy()
         bI[self.T] = 0.0
@@ -1893,7 +1903,8 @@ class CondensedBand:
                 u = lapack.dgbtrs(self._lu, kl, kl, bI, self._piv)[0]
                 self._interior_rhs = (bI, u)
             g = g - self.M_TI @ u
-        xT = lapack.dgbtrs(lu, self.kT, self.kT, g, piv)[0]
+        xT = lapack.dgbtrs(lu, self.kT, self.kT, g * e, piv)[0]
+        xT *= e
         if interior:
             rhs = bI - self.M_IT @ xT   # (bI may be the cached interior right-hand side)
             rhs[T] = 0.0

@@ -266,10 +266,23 @@ class DirectSweep:
             affine = self._affine_parts() if self._plan is not None else None
             if affine and (not self.need_trace or self._complex_applies()):
                 try:
-                    self._cond = CondensedBand(self._plan, affine)
+                    self._cond = CondensedBand(self._plan, affine, self._plain_unknowns())
                 except (NotBanded, np.linalg.LinAlgError) as exc:
                     log.debug("lambda sweep: no condensation (%s)", exc)
         return self._cond
+
+    def _plain_unknowns(self) -> np.ndarray:
+        """Which reduced unknowns (``x``, the unfolded residuals, the multipliers) are
+        positions or FEM multipliers (:class:`bvpnav.banded.CondensedBand` keeps every
+        node that holds another)."""
+        pl, model = self._plan, self.model
+        n, nu = pl.n, pl.unfolded.size
+        plain = np.zeros(n + nu + pl.p, dtype=bool)
+        plain[np.concatenate([model.r_index(a) for a in range(model.d)])] = True
+        for label, rows in self._ls.eq_blocks:
+            if label == "fem":
+                plain[n + nu:][rows] = True
+        return plain
 
     def _factor(self, form, lam: float | None = None, condensed: bool = False):
         """The banded factor with the plan made once (the pattern is the same at every
@@ -280,7 +293,7 @@ class DirectSweep:
         if cond:
             try:
                 return CondensedKKT(form.D.A, form.E.A, cond, lam, params=self.model.l_index)
-            except (RuntimeError, np.linalg.LinAlgError):
+            except (NotBanded, RuntimeError, np.linalg.LinAlgError):
                 pass   # the whole band's factor below
         if self._plan is not None:
             self._kept = None   # its buffer is about to be overwritten
