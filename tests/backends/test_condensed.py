@@ -1,4 +1,4 @@
-"""The lambda sweep's condensed band (bvpnav.banded.CondensedBand, CondensedKKT): the
+"""The lambda sweep's condensed band (bvpnav.condensed.CondensedBand, CondensedKKT): the
 unknowns lambda does not touch factored once, a small system per lambda. Its curve points
 must be the whole band's, its selection of the kept unknowns must leave a nonsingular
 interior with every kind of item, and it must step aside where it does not apply."""
@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 import bvpnav
-from bvpnav.banded import BandedKKT, CondensedBand, CondensedKKT, NotBanded
+from bvpnav.banded import BandedKKT, NotBanded
+from bvpnav.condensed import CondensedBand, CondensedKKT
 from bvpnav.constraints import Position, Velocity, ZeroVelocity
 from bvpnav.error_models import Bias
 from bvpnav.lam.sweep import DirectSweep

@@ -34,7 +34,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..banded import AffineBand, BandedKKT, CondensedBand, CondensedKKT, KeptFactors, NotBanded, canonical
+from ..banded import AffineBand, BandedKKT, KeptFactors, NotBanded, canonical
+from ..condensed import CondensedBand, CondensedKKT
 from ..cvx import compiled
 from ..errors import InputError
 from ..formulation import LAM_RANGE, as_formulation
@@ -256,10 +257,10 @@ class DirectSweep:
         return affine.at_complex(lam, h, out=bufs[buffer]) if h else affine.at(lam, out=bufs[buffer])
 
     def _condensed(self):
-        """The sweep's :class:`bvpnav.banded.CondensedBand` (made at the first point), or
+        """The sweep's :class:`bvpnav.condensed.CondensedBand` (made at the first point), or
         False: no band affine in lambda, a border, several runs, GCV's trace by exact
         columns or probes (they take the whole factor; the log-determinant's derivative is
-        the small system's, :meth:`bvpnav.banded.CondensedBand.logdet_slope`), or lambda
+        the small system's, :meth:`bvpnav.condensed.CondensedBand.logdet_slope`), or lambda
         touching too much."""
         if self._cond is None:
             self._cond = False
@@ -273,7 +274,7 @@ class DirectSweep:
 
     def _plain_unknowns(self) -> np.ndarray:
         """Which reduced unknowns (``x``, the unfolded residuals, the multipliers) are
-        positions or FEM multipliers (:class:`bvpnav.banded.CondensedBand` keeps every
+        positions or FEM multipliers (:class:`bvpnav.condensed.CondensedBand` keeps every
         node that holds another)."""
         pl, model = self._plan, self.model
         n, nu = pl.n, pl.unfolded.size
@@ -288,7 +289,7 @@ class DirectSweep:
         """The banded factor with the plan made once (the pattern is the same at every
         lambda), or the pivoted sparse LU when the problem is not banded. The last banded
         factor at a ``lam`` is kept for :meth:`hand_off`. With ``condensed``, a
-        :class:`bvpnav.banded.CondensedKKT` where the sweep has a condensed band."""
+        :class:`bvpnav.condensed.CondensedKKT` where the sweep has a condensed band."""
         cond = self._condensed() if condensed and lam is not None else False
         if cond:
             try:
