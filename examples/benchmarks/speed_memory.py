@@ -63,6 +63,53 @@ variants to leave out, e.g. ``csne3@1e6,clarabel3@1e6``; ``name@N`` or ``name`` 
 
 Run ``python examples/benchmarks/speed_memory.py [--quick] [--memory] [--huge]``.
 
+Measured after the condensed lambda sweep (issue 18, tenth session)
+------------------------------------------------------------------
+2026-12-04, main at 3686a19, ``--sizes 1e4,1e5,1e6 --sizes3 1e5,1e6 --skip
+csne@1e6,csne3@1e6,clarabel3@1e6,clarabel@1e6 --lam-huge --memory --huge --no-peers``,
+on the ninth session's VM ("AMD EPYC"), which ran slower this day: the reference took
+0.070-0.077 s at 1e5 (0.042-0.068 s the day before), and the session's starting commit
+d55a012 measured direct 2.3x at 1e6 in a run beside this one (1.8x the day before). The
+lambda sweep condenses the band onto the unknowns lambda changes (``bvpnav.condensed``),
+the L-curve steps by a degree-7 Hermite model (12 evaluations, was 14), GCV takes the
+condensed log-determinant; the direct path is unchanged::
+
+    case               N  variant              time s   x ref runs     vs ref  verified
+    1 ax          100000  direct                0.111     1.6    3    1.4e-12  True
+    1 ax          100000  direct backend        0.086     1.2    3    1.4e-12  -
+    1 ax          100000  clarabel              0.626     8.3    3    2.2e-12  True   compile 0.20 s
+    1 ax          100000  clarabel re-solve     0.272     3.9    3    1.9e-12  True
+    1 ax         1000000  direct                1.941     2.3    3    3.3e-12  True
+    1 ax         1000000  direct backend        1.071     1.3    3    3.3e-12  -
+    3 ax +SF+B    100000  direct                0.446     2.2    3    2.5e-12  True
+    3 ax +SF+B    100000  clarabel              2.652    13.4    3    2.5e-12  True   compile 1.04 s
+    3 ax +SF+B    100000  clarabel re-solve     1.088     5.6    3    2.2e-12  True
+    3 ax +SF+B   1000000  direct                9.162     3.4    3    3.3e-12  True
+    3 ax +SF+B   1000000  direct backend        6.141     2.7    3    3.3e-12  -
+
+    lambda rules, N = 100000: single direct solve 0.14 s (the reference 0.077 s)
+    rule        lambda  evaluations  ms/eval  total s  x single   x ref
+    lcurve    0.005152           12     40.2     0.57       4.1       7
+    gcv         0.5475           13     31.4     0.52       3.7       7
+    quasi        5.164           19     32.9     0.70       4.9       9
+
+    lambda rules, N = 1000000: single direct solve 1.31 s (the reference 0.813 s)
+    lcurve     0.01145           11    497.3     6.30       4.8       8
+    gcv         0.7266           16    426.8     7.40       5.7       9
+    quasi        3.234           19    509.6    10.62       8.1      13
+
+    peak memory, N = 1e6: reference 745 MB, direct 1126 MB (1.51x; 984 B/sample above
+    the base), csne 2108 MB, clarabel 3067 MB; 1e7 samples x 1 axis: 9292 MB, verified,
+    44.2 s
+
+Other runs of this session on the same VM: lcurve 3.9-4.2 and 3.7 at 1e6, gcv 3.2-3.6
+and 4.8-5.5, quasi 4.7-6.5 and 6.1-6.2; direct 1.6-2.0x at 1e5 and 2.2x at 1e6, three
+axes 3.4-3.5x at 1e6 (2.5x for d55a012 beside it, its reference 15 % slower in that
+run). The L-curve's peak memory at 1e6 is 1.76 GB (1.60 GB before the condensation: the
+interior's factor lives for the sweep). A condensed point at 1e5 costs a small ``dgbtrf``
+(12,016 unknowns, bandwidth 6) and one ``dgbtrs`` with the interior's factor, about 28
+ms with the set-up against 38-42 ms for a copy and a factorization of the whole band.
+
 Measured on another CPU (issue 18, ninth session)
 -------------------------------------------------
 2026-12-04, main at 8ad269e, ``--skip csne3@1e6,clarabel3@1e6 --memory --huge``, on a VM
