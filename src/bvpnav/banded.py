@@ -1357,17 +1357,30 @@ class BandedKKT(Factorization):
         D, E = canonical(D), canonical(E)
         if plan is None:
             plan = BandPlan.build(D, E, colnode, lam_rows=lam_rows, diagonal=diagonal)
-        elif not plan.same_pattern(D, E):
-            raise NotBanded("the sparsity pattern changed since the plan was made")
         self.plan = pl = plan
-        self.S = AugmentedOperator(D, E)
+        D, E = self._bind(D, E)
         self.params = np.asarray(params if params is not None else [], dtype=int)
+        self._factor_parts(pl.assemble(D, E, diagonal) if parts is None else parts)
+
+    def _bind(self, D: sp.csr_matrix, E: sp.csr_matrix) -> tuple:
+        """``S``, the folded rows and the eliminated columns from ``D`` and ``E``, which must
+        have the pattern of :attr:`plan`; returns them canonical.
+
+        Raises
+        ------
+        NotBanded
+            When ``D`` and ``E`` have another pattern.
+        """
+        D, E = canonical(D), canonical(E)
+        pl = self.plan
+        if not pl.same_pattern(D, E):
+            raise NotBanded("the sparsity pattern changed since the plan was made")
+        self.S = AugmentedOperator(D, E)
         self._unf = pl.unfolded
         self._Df = D[pl.fold] if self._unf.size else D
-        el = pl.elim
-        if el.size:
+        if pl.elim.size:
             self._Ez, self._EzT = pl._eliminated(E)
-        self._factor_parts(pl.assemble(D, E, diagonal) if parts is None else parts)
+        return D, E
 
     def for_matrices(self, D: sp.csr_matrix, E: sp.csr_matrix) -> BandedKKT:
         """This factorization as that of ``S`` built from ``D`` and ``E``: the same pattern
@@ -1381,15 +1394,8 @@ class BandedKKT(Factorization):
         NotBanded
             When ``D`` and ``E`` have another pattern.
         """
-        D, E = canonical(D), canonical(E)
-        pl = self.plan
-        if not pl.same_pattern(D, E):
-            raise NotBanded("the sparsity pattern changed since the plan was made")
         out = copy.copy(self)
-        out.S = AugmentedOperator(D, E)
-        out._Df = D[pl.fold] if self._unf.size else D
-        if pl.elim.size:
-            out._Ez, out._EzT = pl._eliminated(E)
+        out._bind(D, E)
         return out
 
     @classmethod

@@ -13,7 +13,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.linalg import lapack
 
-from .banded import AffineBand, AugmentedOperator, BandedKKT, BandPlan, NotBanded, canonical, scale_band
+from .banded import AffineBand, BandedKKT, BandPlan, NotBanded, scale_band
 
 __all__ = ["CondensedBand", "CondensedKKT"]
 
@@ -255,16 +255,9 @@ class CondensedKKT(BandedKKT):
 
     def __init__(self, D: sp.csr_matrix, E: sp.csr_matrix, condensed: CondensedBand, lam: float,
                  params: np.ndarray | None = None):
-        D, E = canonical(D), canonical(E)
-        pl = condensed.plan
-        if not pl.same_pattern(D, E):
-            raise NotBanded("the sparsity pattern changed since the plan was made")
-        self.plan, self.S = pl, AugmentedOperator(D, E)
+        self.plan = condensed.plan
+        self._bind(D, E)
         self.params = np.asarray(params if params is not None else [], dtype=int)
-        self._unf = pl.unfolded
-        self._Df = D[pl.fold] if self._unf.size else D
-        if pl.elim.size:
-            self._Ez, self._EzT = pl._eliminated(E)
         self._h = condensed.affine.h
         self.k, self._runs = 0, 1
         self._condensed, self._lam = condensed, float(lam)
