@@ -664,10 +664,17 @@ class AffineBand:
     def _rows_at(self, lam: float) -> tuple[np.ndarray, np.ndarray]:
         """The changing rows at ``lam``, scaled, and the scales of one run."""
         vals = self.ab0 + (lam - 1.0) * self.ab1
-        sU = self.sU0.copy()
-        sU[self.touched] = _scales(_row_maxima(vals[self.own]))
+        sU = self.scales_at(lam)
         _scale_rows(vals, sU, self.kl, self.rows)
         return vals, sU
+
+    def scales_at(self, lam: float) -> np.ndarray:
+        """The scales of one run at ``lam`` (:func:`scale_band`'s, of the band the rows
+        that change make at ``lam``): only the touched rows' maxima are taken, no row is
+        scaled."""
+        sU = self.sU0.copy()
+        sU[self.touched] = _scales(_row_maxima(self.ab0[self.own] + (lam - 1.0) * self.ab1[self.own]))
+        return sU
 
 
 class KeptFactors:

@@ -176,7 +176,7 @@ class CondensedBand:
         self.kT = kT = int(max(np.max(np.abs(Sr - Sc)), np.max(np.abs(Ar - Ac), initial=0)))
         self._S1 = _band_of(Sr, Sc, Sv, T.size, kT)
         self._A1 = _band_of(Ar, Ac, v1[ok], T.size, kT)
-        self.T, self.inT, self.plan, self.affine, self._s1 = T, inT, plan, affine, s1
+        self.T, self.inT, self.plan, self.affine = T, inT, plan, affine
         self._interior_rhs = None   # (b_I, K^-1 b_I) of the last right-hand side
 
     def logdet_slope(self, lam: float, h: float) -> float:
@@ -212,8 +212,8 @@ class CondensedBand:
         lu, piv, info = lapack.dgbtrf(ab.T, self.kT, self.kT, overwrite_ab=1)
         if info != 0:
             raise np.linalg.LinAlgError(f"the condensed system is singular at lambda={lam:g} (pivot {info})")
-        sU = self.affine._rows_at(lam)[1]
-        return lu, piv, sU / self._s1, sU, e
+        sU = self.affine.scales_at(lam)
+        return lu, piv, sU / self.affine.sU0, sU, e
 
     def solve(self, small: tuple, R: np.ndarray, interior: bool = True) -> np.ndarray:
         """``A(lam)^{-1} R`` for ``R`` (nb,) in the scaled band's order, ``small`` from
