@@ -214,6 +214,53 @@ def test_fem_rows_are_each_axis_blocks_placed_in_its_columns(axes, error_model):
     np.testing.assert_array_equal(B.toarray(), [[0, 1, 0, 0], [0, 0, 1, 0], [0, 3, 0, 5]])
 
 
+def test_rows_side_by_side_writes_uniform_stretches_by_slices_and_the_rest_by_index():
+    """Blocks whose entry counts per row are constant on a stretch (written as 2-D slices)
+    and vary elsewhere (rows before, after and between, written by index arrays), with
+    empty rows and a block empty on the stretch: the same matrix as scipy's ``hstack`` of
+    the blocks moved to their columns by COO and stacked, canonical."""
+    from bvpnav.model import _uniform_rows, rows_side_by_side
+
+    rng = np.random.default_rng(7)
+
+    def block(rows: int, width: int, counts: np.ndarray) -> sp.csr_matrix:
+        cols = [np.sort(rng.choice(width, size=c, replace=False)) for c in counts]
+        indptr = np.r_[0, np.cumsum(counts)]
+        return sp.csr_matrix((rng.normal(size=indptr[-1]) + 3.0, np.concatenate(cols), indptr),
+                             shape=(rows, width))
+
+    for trial in range(20):
+        groups, want = [], []
+        for _ in range(rng.integers(1, 4)):
+            R = int(rng.integers(1, 40))
+            col, group = 0, []
+            for _ in range(rng.integers(1, 4)):
+                width = int(rng.integers(1, 6))
+                counts = np.full(R, rng.integers(0, width + 1))
+                odd = rng.random(R) < (0.0 if trial % 4 == 0 else 0.2)   # rows off the stretch
+                counts[odd] = rng.integers(0, width + 1, size=int(odd.sum()))
+                blk = block(R, width, counts)
+                col += int(rng.integers(0, 3))
+                group.append((blk, col))
+                col += width
+            groups.append(group)
+            coo = [(blk.tocoo(), c) for blk, c in group]
+            want.append(sp.csr_matrix((np.concatenate([m.data for m, _ in coo]),
+                                       (np.concatenate([m.row for m, _ in coo]),
+                                        np.concatenate([m.col + c for m, c in coo]))), shape=(R, 30)))
+        got = rows_side_by_side(groups, 30)
+        ref = sp.vstack(want, format="csr")
+        ref.sort_indices()
+        assert got.has_canonical_format
+        np.testing.assert_array_equal(got.indptr, ref.indptr)
+        np.testing.assert_array_equal(got.indices, ref.indices)
+        np.testing.assert_array_equal(got.data, ref.data)
+    # the stretch found: the longest run of rows with the middle row's counts in every block
+    assert _uniform_rows([np.array([1, 3, 3, 3, 2, 3, 3, 3, 3, 1]), np.full(10, 2)]) == (5, 9)
+    assert _uniform_rows([np.array([2, 2, 2])]) == (0, 3)
+    assert _uniform_rows([np.array([2, 2])]) == (0, 0)
+
+
 def test_affine_row_scaling_equals_the_diagonal_product_and_keeps_zero_scales_exact():
     """``Affine * k`` scales a canonical CSR matrix's stored values (sharing its index
     arrays) where every ``k`` is nonzero: the same matrix as ``diag(k) @ A``, canonical; a

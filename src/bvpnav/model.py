@@ -59,8 +59,12 @@ def rows_side_by_side(row_blocks: list, ncols: int) -> sp.csr_matrix:
     Every entry is written once into the result's arrays, at its row's offset plus the
     entries the blocks before it hold in that row: no per-group matrix, empty filler
     blocks or stacked copy (three axes' FEM rows at N = 1e6: about 0.5 GB of temporaries
-    fewer than placing each axis with scipy's ``hstack`` and stacking the axes). Blocks
-    with sorted column indices and no duplicates give a canonical result.
+    fewer than placing each axis with scipy's ``hstack`` and stacking the axes). Where
+    every block holds the same number of entries in each row of a stretch (the FEM rows
+    but their first and last), the stretch is written as 2-D slices (rows by entries),
+    the other rows by index arrays (three axes with six parameters at N = 1e6: 24 million
+    entries, 0.7 s by index arrays alone). Blocks with sorted column indices and no
+    duplicates give a canonical result.
     """
     groups = [[(_block_csr(blk), int(col)) for blk, col in group] for group in row_blocks]
     counts = [sum(np.diff(blk.indptr) for blk, _ in group) for group in groups]
@@ -72,17 +76,51 @@ def rows_side_by_side(row_blocks: list, ncols: int) -> sp.csr_matrix:
     data = np.empty(nnz)
     row0 = 0
     for group, cnt in zip(groups, counts, strict=True):
-        filled = indptr[row0:row0 + cnt.size].copy()   # next free place in each row
-        for blk, col in group:
-            per_row = np.diff(blk.indptr)
-            dest = np.repeat(filled - blk.indptr[:-1], per_row)
-            dest += np.arange(blk.nnz)
-            indices[dest] = blk.indices
+        R = cnt.size
+        per = [np.diff(blk.indptr) for blk, _ in group]
+        lo, hi = _uniform_rows(per)
+        if hi > lo:   # rows lo .. hi - 1: cnt[lo] entries each, one 2-D slice of the arrays
+            s, C = int(indptr[row0 + lo]), int(cnt[lo])
+            I2 = indices[s:s + (hi - lo) * C].reshape(hi - lo, C)
+            D2 = data[s:s + (hi - lo) * C].reshape(hi - lo, C)
+        edge = np.r_[0:lo, hi:R]
+        filled = indptr[row0 + edge]   # next free place in each edge row (a copy)
+        at = 0
+        for (blk, col), pr in zip(group, per, strict=True):
+            if hi > lo and (c := int(pr[lo])):
+                a, b = int(blk.indptr[lo]), int(blk.indptr[hi])
+                np.add(blk.indices[a:b].reshape(-1, c), col, out=I2[:, at:at + c], casting="unsafe")
+                D2[:, at:at + c] = blk.data[a:b].reshape(-1, c)
+                at += c
+            if not edge.size:
+                continue
+            ends = blk.indptr
+            src = np.r_[ends[0]:ends[lo], ends[hi]:ends[R]].astype(np.int64)
+            dest = np.repeat(filled - ends[edge], pr[edge])
+            dest += src
+            indices[dest] = blk.indices[src]
             indices[dest] += col
-            data[dest] = blk.data
-            filled += per_row
-        row0 += cnt.size
+            data[dest] = blk.data[src]
+            filled += pr[edge]
+        row0 += R
     return sp.csr_matrix((data, indices, indptr.astype(itype, copy=False)), shape=(row0, ncols))
+
+
+def _uniform_rows(per: list) -> tuple[int, int]:
+    """The longest stretch of rows ``[lo, hi)`` in which each block has one entry count
+    (``per``: each block's entries per row); ``(0, 0)`` for fewer than three rows."""
+    R = per[0].size if per else 0
+    if R < 3:
+        return 0, 0
+    bad = np.zeros(R, dtype=bool)
+    for pr in per:
+        bad |= pr != pr[R // 2]
+    idx = np.flatnonzero(bad)
+    if not idx.size:
+        return 0, R
+    edges = np.concatenate([[-1], idx, [R]])
+    g = int(np.argmax(np.diff(edges)))
+    return int(edges[g]) + 1, int(edges[g + 1])
 
 
 class RowLabels(Sequence):
