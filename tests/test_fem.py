@@ -296,3 +296,22 @@ def test_dense_blocks_become_csr_from_their_nonzero_columns_as_scipy_converts_th
         assert got.nnz == want.nnz and got.shape == want.shape
         np.testing.assert_array_equal(got.toarray(), blk)
         assert got.has_canonical_format
+
+
+def test_abs_product_by_blocks_of_rows_equals_the_whole_absolute_matrix(monkeypatch):
+    """``|A| v`` taken a few stored entries at a time (blocks cut inside long rows, empty
+    rows, an empty matrix) equals the product with the whole absolute matrix; ``row_scale``
+    is ``|A| |x| + |c|``."""
+    import bvpnav.model as md
+
+    rng = np.random.default_rng(3)
+    for block in (1, 7, 64, 1 << 20):
+        monkeypatch.setattr(md, "ABS_BLOCK", block)
+        for trial in range(5):
+            A = sp.random(40, 25, density=0.2 * trial, format="csr", random_state=trial)
+            A.data -= 0.5
+            v = rng.normal(size=25)
+            np.testing.assert_allclose(md.abs_product(A, v), abs(A) @ v, rtol=1e-14, atol=1e-15)
+            c = rng.normal(size=40)
+            np.testing.assert_allclose(md.Affine(A, c).row_scale(v), abs(A) @ np.abs(v) + np.abs(c),
+                                       rtol=1e-14, atol=1e-15)

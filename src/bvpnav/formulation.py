@@ -317,9 +317,10 @@ class Formulation:
         for k, pname in enumerate(m.param_names):
             r, v = [], []
             for a in range(m.d):
-                mg = m.fem_blocks(a)["l"][:, k]   # M G, made once per axis with the model
-                if not mg.any():   # the parameter does not act on this axis
-                    continue
+                mcols, mgs = m.mg_columns(a)   # M G, made once per axis with the model
+                if k not in mcols or not mgs[:, np.searchsorted(mcols, k)].any():
+                    continue   # the parameter does not act on this axis
+                mg = mgs[:, np.searchsorted(mcols, k)]
                 s = np.cumsum(mg)[:-1]  # element slopes with v0 = 0
                 r += [m.r_index(a), [m.v_end_index(a)[1]]]
                 v += [np.concatenate([[0.0], np.cumsum(s * h)]), [s[-1] + mg[-1]]]

@@ -42,6 +42,7 @@ from .banded import (
     Factorization,
     KeptFactors,
     NotBanded,
+    abs_max,
     canonical,
     row_scaled,
 )
@@ -429,9 +430,10 @@ def fem_rows_by_diagonals(problem) -> DiagonalRows:
         rows.append(a * N + vb.row)
         cols.append(np.asarray(model.v_end_index(a))[vb.col])
         vals.append(vb.data)
-        if "l" in blocks:   # the columns copied: a view would keep all q columns of M G alive
-            dense += [(a * N, int(model.l_index[k]), blocks["l"][:, k].copy()) for k in range(model.q)
-                      if blocks["l"][:, k].any()]
+        if model.q:   # the columns copied: a view would keep all of the axis' M G alive
+            mcols, mg = model.mg_columns(a)
+            dense += [(a * N, int(model.l_index[k]), mg[:, i].copy()) for i, k in enumerate(mcols)
+                      if mg[:, i].any()]
     extra = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                           shape=(N * d, model.size))
     out = DiagonalRows(N * d, tri, dense, extra)
@@ -659,15 +661,18 @@ def _accepted(fac, rhs, window, steps, tol, accept, notes, name):
     # a small correction alone can mislead (a wild first solve makes every later
     # correction small relative to z, and the correction is measured on x alone): also
     # require the answer's own normwise backward error |rhs - S z| / (|S| |z| + |rhs|)
-    # (infinity norms) to be near rounding. Judging the iterate before the last step
-    # instead (its residual is already formed) would save this product but not bound the
-    # answer's residuals and multipliers, which the step may have moved (found in review)
+    # (infinity norms of the vectors; for |S| its largest entry, which is at most the
+    # infinity norm, so the measure is the stricter) to be near rounding. Judging the
+    # iterate before the last step instead (its residual is already formed) would save
+    # this product but not bound the answer's residuals and multipliers, which the step
+    # may have moved (found in review)
     eta = np.inf
     if np.all(np.isfinite(z)):
         S = fac.S
-        norm = S.norm_inf() if hasattr(S, "norm_inf") else spla.norm(S, np.inf)
-        den = norm * np.max(np.abs(z)) + np.max(np.abs(rhs))
-        eta = float(np.max(np.abs(rhs - S @ z)) / max(den, 1e-300))
+        norm = S.max_abs() if hasattr(S, "max_abs") else float(abs(S).max())
+        den = norm * abs_max(z) + abs_max(rhs)
+        res = S.residual(rhs, z) if hasattr(S, "residual") else rhs - S @ z
+        eta = abs_max(res) / max(den, 1e-300)
     if not (np.isfinite(corr) and corr <= accept):
         notes.append(f"{name} refinement stalled at correction {corr:.1e}")
         return None, k, corr

@@ -38,14 +38,47 @@ def _block_csr(blk) -> sp.csr_matrix:
         return sp.csr_matrix(blk)
     blk = np.asarray(blk, dtype=float)
     cols = np.flatnonzero(np.any(blk != 0, axis=0))
-    vals = blk[:, cols]
-    if not cols.size or not np.all(vals):
-        return sp.csr_matrix(blk)
+    return columns_csr(cols, blk[:, cols], blk.shape[1])
+
+
+def columns_csr(cols: np.ndarray, vals: np.ndarray, ncols: int) -> sp.csr_matrix:
+    """The (m, ncols) CSR matrix whose columns ``cols`` (increasing) hold ``vals`` (m,
+    cols.size) and whose other columns are zero, canonical; made directly from ``vals``
+    when it holds no zero (every row then has ``cols.size`` entries), else through scipy's
+    conversion, which drops the zeros."""
+    vals = np.asarray(vals, dtype=float)
     m, k = vals.shape
-    itype = np.int32 if max(m * k, blk.shape[1]) < 2**31 else np.int64
+    if not k or not np.all(vals):
+        dense = np.zeros((m, ncols))
+        dense[:, cols] = vals
+        return sp.csr_matrix(dense)
+    itype = np.int32 if max(m * k, ncols) < 2**31 else np.int64
     indptr = np.arange(0, m * k + 1, k, dtype=itype)
-    out = sp.csr_matrix((vals.ravel(), np.tile(cols.astype(itype), m), indptr), shape=blk.shape)
+    out = sp.csr_matrix((vals.ravel(), np.tile(np.asarray(cols).astype(itype), m), indptr), shape=(m, ncols))
     out.has_canonical_format = True
+    return out
+
+
+#: Stored entries whose absolute values :func:`abs_product` takes at a time (8 MB).
+ABS_BLOCK = 1 << 20
+
+
+def abs_product(A: sp.csr_matrix, v: np.ndarray) -> np.ndarray:
+    """``|A| v`` for a CSR ``A``, a block of rows at a time: the absolute values of about
+    :data:`ABS_BLOCK` stored entries at once, on ``A``'s own index arrays, instead of an
+    absolute-value copy of every entry (three axes' FEM rows at N = 1e6: 24 million
+    entries, 192 MB of fresh memory per call)."""
+    m = A.shape[0]
+    out = np.zeros(m)
+    if not A.nnz:
+        return out
+    cuts = np.unique(np.r_[0, np.searchsorted(A.indptr, np.arange(ABS_BLOCK, A.nnz, ABS_BLOCK)), m])
+    for r0, r1 in zip(cuts[:-1], cuts[1:], strict=True):
+        s, e = int(A.indptr[r0]), int(A.indptr[r1])
+        if e > s:
+            blk = sp.csr_matrix((np.abs(A.data[s:e]), A.indices[s:e], A.indptr[r0:r1 + 1] - s),
+                                shape=(r1 - r0, A.shape[1]))
+            out[r0:r1] = blk @ v
     return out
 
 
@@ -259,9 +292,9 @@ class Affine:
     def row_scale(self, x: np.ndarray) -> np.ndarray:
         """``|A| |x| + |c|`` per row: the size of the terms that cancel in each row."""
         A = self.A if sp.issparse(self.A) and self.A.format == "csr" else sp.csr_matrix(self.A)
-        # |A| on A's own index arrays (abs() of a sparse matrix copies them too)
-        absA = sp.csr_matrix((np.abs(A.data), A.indices, A.indptr), shape=A.shape)
-        return absA @ np.abs(x) + np.abs(self.c)
+        out = abs_product(A, np.abs(x))
+        out += np.abs(self.c)
+        return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -417,14 +450,31 @@ class NavModel:
         parameters, ``l`` (``M G``, dense (N, q), s); :meth:`fem_rows` places them."""
         blocks = {"r": self.K, "w": self.M, "vb": fem.boundary_columns(self.grid)}
         if self.q:
-            # M G depends on the grid and the error model only (not on the accelerations, so
-            # with_acc's copies share it): made once per axis, read by fem_rows and by
-            # bvpnav.lsq.fem_rows_by_diagonals
-            cache = self.__dict__.setdefault("_mg_cache", {})
-            if axis not in cache:
-                cache[axis] = self.M @ self.G[:, axis, :]
-            blocks["l"] = cache[axis]
+            blocks["l"] = columns_csr(*self.mg_columns(axis), self.q)
         return blocks
+
+    def mg_columns(self, axis: int) -> tuple[np.ndarray, np.ndarray]:
+        """``M G`` of one axis (s) by the parameters acting on it: ``(cols, vals)``, the
+        columns of ``G`` not all zero and their products (N, cols.size).
+
+        Notes
+        -----
+        It depends on the grid and the error model only (not on the accelerations, so
+        :meth:`with_acc`'s copies share it): made once per axis, read by :meth:`fem_blocks`,
+        :func:`bvpnav.lsq.fem_rows_by_diagonals` and the observability check. The other
+        columns, zero, are neither multiplied nor stored (three axes with six parameters at
+        N = 1e6: a dense (N, q) product per axis was 48 MB, two thirds of it zeros).
+        """
+        cache = self.__dict__.setdefault("_mg_cache", {})
+        if axis not in cache:
+            cache[axis] = self._times_g(self.M, axis)
+        return cache[axis]
+
+    def _times_g(self, V: sp.spmatrix, axis: int) -> tuple[np.ndarray, np.ndarray]:
+        """``V G`` of one axis by the columns of ``G`` not all zero: ``(cols, vals)``."""
+        G = self.G[:, axis, :]
+        cols = np.flatnonzero(np.any(G != 0, axis=0))
+        return cols, np.asarray(V @ np.ascontiguousarray(G[:, cols]))
 
     def _fem_rows(self) -> Affine:
         # every axis' rows written into one matrix (no per-axis matrix and stacked copy)
@@ -494,7 +544,7 @@ class NavModel:
         for a in ax:
             blocks = {"r": Vr, "w": Va, "vb": Vb}
             if self.q:
-                blocks["l"] = Va @ self.G[:, a, :]
+                blocks["l"] = columns_csr(*self._times_g(Va, a), self.q)
             parts.append(Affine(self._place(blocks, a), Va @ self.data.acc[:, a]))
         out = self._interleave(parts, times.size)
         return Affine(out.A, out.c, self._labels("v", times, ax))
@@ -504,7 +554,7 @@ class NavModel:
         Vr, Va, Vb = self._node_vel
         blocks = {"r": Vr, "w": Va, "vb": Vb}
         if self.q:
-            blocks["l"] = Va @ self.G[:, axis, :]
+            blocks["l"] = columns_csr(*self._times_g(Va, axis), self.q)
         return Affine(self._place(blocks, axis), Va @ self.data.acc[:, axis])
 
     def node_velocity_values(self, axis: int, xval: np.ndarray) -> np.ndarray:

@@ -412,9 +412,10 @@ def test_the_band_scaled_as_it_is_placed_equals_scaling_the_placed_band(case):
         np.testing.assert_array_equal(B.toarray(), B0.toarray())
 
 
-def test_augmented_operator_infinity_norm_equals_the_dense_matrix_norm():
-    """norm_inf sums |entries| per row and column from the stored values; random shapes with
-    empty rows and columns give the dense augmented matrix's largest absolute row sum."""
+def test_augmented_operator_residual_and_largest_entry_equal_the_dense_matrix():
+    """``residual`` is ``rhs - S z`` (into a given buffer too) and ``max_abs`` the largest
+    absolute entry of the dense augmented matrix, a lower bound of its infinity norm; random
+    shapes with empty rows and columns."""
     import scipy.sparse as sp
 
     from bvpnav.banded import AugmentedOperator
@@ -427,7 +428,14 @@ def test_augmented_operator_infinity_norm_equals_the_dense_matrix_norm():
         D.data -= 0.5
         E.data -= 0.5
         S = sp.bmat([[-sp.identity(m), D, None], [D.T, None, E.T], [None, E, None]]).toarray()
-        assert AugmentedOperator(D, E).norm_inf() == pytest.approx(np.abs(S).sum(axis=1).max(), rel=1e-14)
+        op = AugmentedOperator(D, E)
+        assert op.max_abs() == np.abs(S).max() <= np.abs(S).sum(axis=1).max()
+        z, rhs = rng.normal(size=(2, m + n + p))
+        want = rhs - S @ z
+        np.testing.assert_allclose(op.residual(rhs, z), want, rtol=1e-13, atol=1e-14)
+        buf = np.full_like(rhs, np.nan)
+        assert op.residual(rhs, z, out=buf) is buf
+        np.testing.assert_allclose(buf, want, rtol=1e-13, atol=1e-14)
 
 
 @pytest.mark.parametrize("slice_rows", [7, 64, 1000])

@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..backends import VERIFY_RTOL
+from ..banded import abs_max
 from ..formulation import as_formulation
 from ..lsq import FORWARD_RTOL, check_factor, forward_error, least_squares_form
 from ..result import Verification
@@ -104,7 +105,7 @@ def verify(form, xval: np.ndarray, lam: float, accuracy: str = "default", duals:
     rtol = VERIFY_RTOL[accuracy]
     model = form.model
     fem = model.fem_rows()
-    fem_rel = float(np.max(np.abs(fem.value(xval))) / max(np.max(fem.row_scale(xval)), 1e-300))
+    fem_rel = abs_max(fem.value(xval)) / max(float(np.max(fem.row_scale(xval))), 1e-300)
     worst, worst_item = _worst_violation(form, xval)
     stat = None if duals is None else stationarity(form, xval, lam, duals)
     nonfinite = _nonfinite(form, xval)
@@ -139,7 +140,7 @@ def _gradient_floor(form, xval: np.ndarray, lam: float, data) -> float:
         v_a = model.node_velocity_values(a, xval)
         a_scale = max(float(np.max(np.abs(r_a))) / T**2, float(np.max(np.abs(v_a))) / T)
         probe[model.w_index(a)] = np.maximum(np.abs(model.data.acc[:, a]), a_scale)
-    floor = float(np.max(np.abs(2.0 * (data.A.T @ data.value(probe)))))
+    floor = 2.0 * abs_max(data.A.T @ data.value(probe))
     for term in form.terms():
         floor = max(floor, term.gradient_floor(xval, lam))
     return floor
@@ -163,8 +164,9 @@ def stationarity(form, xval: np.ndarray, lam: float, duals: dict) -> float | Non
     y = duals.get("fem")
     if y is None:
         return None
-    grads = [2.0 * (data.A.T @ data.value(xval)),
-             form.model.fem_rows().A.T @ np.asarray(y, dtype=float).ravel()]
+    g0 = data.A.T @ data.value(xval)
+    g0 *= 2.0
+    grads = [g0, form.model.fem_rows().A.T @ np.asarray(y, dtype=float).ravel()]
     for term in form.terms():
         g = term.gradient(xval, lam, duals.get(term.label))
         if g is None:
@@ -174,5 +176,5 @@ def stationarity(form, xval: np.ndarray, lam: float, duals: dict) -> float | Non
     for g in grads[1:]:
         total += g
     floor = _gradient_floor(form, xval, lam, data)
-    scale = max(max(float(np.max(np.abs(g))) for g in grads), floor, 1e-300)
-    return float(np.max(np.abs(total)) / scale)
+    scale = max(max(abs_max(g) for g in grads), floor, 1e-300)
+    return abs_max(total) / scale
