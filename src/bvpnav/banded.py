@@ -164,13 +164,14 @@ class Factorization:
         raise NotImplementedError
 
     def refined(self, rhs: np.ndarray, steps: int, tol: float = 0.0, window: slice | None = None,
-                stall: float | None = None):
+                stall: float | None = None, scratch: np.ndarray | None = None):
         r"""Solve with up to ``steps`` iterative-refinement steps in double precision.
 
         Returns ``(z, steps_taken, last_relative_correction)``; the correction is measured
         on ``window`` (default: all of ``z``) and refinement stops below ``tol``, or, with
         ``stall``, as soon as a correction is not at least ``stall`` times smaller than the
-        one before (the rounding floor has been reached).
+        one before (the rounding floor has been reached). ``scratch`` (an array like a
+        one-dimensional ``rhs``) holds the residuals when ``S`` forms them in place.
 
         Notes
         -----
@@ -181,7 +182,7 @@ class Factorization:
         z = self.solve(rhs)
         corr, k = np.inf, 0
         residual = getattr(self.S, "residual", None) if np.ndim(rhs) == 1 else None
-        res = None
+        res = scratch
         for _ in range(steps):
             k += 1
             if residual is not None:   # into one buffer reused by every step
@@ -367,7 +368,7 @@ def _scale_entries(strided: list, band: list, nb: int) -> np.ndarray:
         np.maximum.at(colmax, pj, a)
         if mirror:
             np.maximum.at(colmax, pi, a)
-    sU = _scales(colmax)
+    sU = _scales(colmax, overwrite=True)
     for e in strided:
         v = e.v
         v *= sU[e.span(1, 0, nb)[0]]   # the row's scale, then the column's, as below
@@ -448,7 +449,7 @@ class _Moves:
         order = np.asarray(order)
         self.nb = nb = order.size
         self.pairs: list = []
-        rest = np.arange(nb, dtype=np.int64)
+        rest, left_size = None, nb   # None: every band row (made only if no period does better)
         for P in range(1, MAX_MOVE_PERIOD + 1):
             pairs, loose = [], []
             for c in range(min(P, nb)):
@@ -459,11 +460,11 @@ class _Moves:
                         pairs.append((slice(c + P * u0, c + P * (u1 - 1) + 1, P),
                                       slice(p0, p0 + s * (u1 - u0 - 1) + 1, s)))
             left = np.concatenate(loose) if loose else np.zeros(0, dtype=np.int64)
-            if len(pairs) <= MAX_MOVE_SLICES and left.size < rest.size:
-                self.pairs, rest = pairs, left
+            if len(pairs) <= MAX_MOVE_SLICES and left.size < left_size:
+                self.pairs, rest, left_size = pairs, left, left.size
                 if 2 * left.size < MIN_STRIDE_RUN:
                     break
-        self.band_rest = np.sort(rest)
+        self.band_rest = np.sort(rest) if rest is not None else np.arange(nb, dtype=np.int64)
         self.red_rest = order[self.band_rest].astype(np.int64)
 
     def gather(self, r: np.ndarray) -> np.ndarray:
@@ -588,9 +589,14 @@ def _equal_runs(ab: np.ndarray, runs: int) -> bool:
     return all(np.array_equal(ab[:L], ab[a * L:(a + 1) * L]) for a in range(1, runs))
 
 
-def _scales(colmax: np.ndarray) -> np.ndarray:
-    """The symmetric scale ``1 / sqrt(column maximum)`` (1 for an empty column)."""
-    return 1.0 / np.sqrt(np.where(colmax > 0, colmax, 1.0))
+def _scales(colmax: np.ndarray, overwrite: bool = False) -> np.ndarray:
+    """The symmetric scale ``1 / sqrt(column maximum)`` (1 for an empty column); in place of
+    ``colmax`` with ``overwrite`` (no three temporaries of the band's length)."""
+    out = colmax if overwrite else colmax.copy()
+    out[~(out > 0)] = 1.0
+    np.sqrt(out, out=out)
+    np.divide(1.0, out, out=out)
+    return out
 
 
 def scale_band(ab: np.ndarray, kl: int) -> np.ndarray:
@@ -604,7 +610,7 @@ def scale_band(ab: np.ndarray, kl: int) -> np.ndarray:
     accuracy on hard zero-velocity rows. Entries before ``ab[:, kl]`` are the LU's fill
     space (zero), so the maxima are those of whole rows.
     """
-    sU = _scales(_row_maxima(ab))
+    sU = _scales(_row_maxima(ab), overwrite=True)
     _scale_rows(ab, sU, kl)
     return sU
 

@@ -657,7 +657,9 @@ def _accepted(fac, rhs, window, steps, tol, accept, notes, name):
     """Refine a factorization that is not exact for ``S`` (regularized, or folded) and accept
     its answer only with a small correction and a normwise backward error near rounding;
     ``(None, k, corr)`` with the reason in ``notes`` otherwise."""
-    z, k, corr = fac.refined(rhs, steps, tol, window=window, stall=0.5)
+    S = fac.S
+    scratch = np.empty_like(rhs) if hasattr(S, "residual") and np.ndim(rhs) == 1 else None
+    z, k, corr = fac.refined(rhs, steps, tol, window=window, stall=0.5, scratch=scratch)
     # a small correction alone can mislead (a wild first solve makes every later
     # correction small relative to z, and the correction is measured on x alone): also
     # require the answer's own normwise backward error |rhs - S z| / (|S| |z| + |rhs|)
@@ -668,10 +670,9 @@ def _accepted(fac, rhs, window, steps, tol, accept, notes, name):
     # may have moved (found in review)
     eta = np.inf
     if np.all(np.isfinite(z)):
-        S = fac.S
         norm = S.max_abs() if hasattr(S, "max_abs") else float(abs(S).max())
         den = norm * abs_max(z) + abs_max(rhs)
-        res = S.residual(rhs, z) if hasattr(S, "residual") else rhs - S @ z
+        res = S.residual(rhs, z, out=scratch) if scratch is not None else rhs - S @ z
         eta = abs_max(res) / max(den, 1e-300)
     if not (np.isfinite(corr) and corr <= accept):
         notes.append(f"{name} refinement stalled at correction {corr:.1e}")
