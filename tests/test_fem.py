@@ -315,3 +315,21 @@ def test_abs_product_by_blocks_of_rows_equals_the_whole_absolute_matrix(monkeypa
             c = rng.normal(size=40)
             np.testing.assert_allclose(md.Affine(A, c).row_scale(v), abs(A) @ np.abs(v) + np.abs(c),
                                        rtol=1e-14, atol=1e-15)
+
+
+@pytest.mark.parametrize("n", [2, 3, 4, 9, 1000])
+def test_tridiagonal_equals_scipy_diags_in_canonical_csr_and_keeps_its_diagonals(n):
+    """``fem.tridiagonal`` (written straight into CSR arrays) is scipy's ``diags`` matrix
+    entry for entry, canonical, with 32-bit indices, and carries the diagonals it was made
+    from (read by the FEM rows' diagonal description)."""
+    rng = np.random.default_rng(n)
+    lo, dg, up = rng.normal(size=n - 1), rng.normal(size=n), rng.normal(size=n - 1)
+    A = fem.tridiagonal(lo, dg, up)
+    want = sp.diags([lo, dg, up], [-1, 0, 1], format="csr")
+    want.sort_indices()
+    assert A.has_canonical_format and A.indices.dtype == np.int32 and A.indptr.dtype == np.int32
+    np.testing.assert_array_equal(A.indptr, want.indptr)
+    np.testing.assert_array_equal(A.indices, want.indices)
+    np.testing.assert_array_equal(A.data, want.data)
+    for k, v in zip((-1, 0, 1), A._bvpnav_diagonals, strict=True):
+        np.testing.assert_array_equal(v, A.diagonal(k))
