@@ -425,7 +425,8 @@ def fem_rows_by_diagonals(problem) -> DiagonalRows:
         blocks = model.fem_blocks(a)
         for key, c0 in (("r", model.r_index(a)[0]), ("w", model.w_index(a)[0])):
             A = blocks[key]   # K and M keep the diagonals they were made from (fem.tridiagonal)
-            lo, dg, up = getattr(A, "_bvpnav_diagonals", None) or (A.diagonal(-1), A.diagonal(0), A.diagonal(1))
+            lo, dg, up = (getattr(A, "_bvpnav_diagonals", None)
+                          or (A.diagonal(-1), A.diagonal(0), A.diagonal(1)))
             tri.append((a * N, int(c0), lo, dg, up))
         vb = blocks["vb"].tocoo()
         rows.append(a * N + vb.row)

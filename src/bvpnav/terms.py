@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .banded import abs_max
 from .model import Affine
 
 if TYPE_CHECKING:
@@ -168,8 +169,8 @@ class Term:
         size = self.residual.row_scale(x)
         if self.mode == "robust" and self.huber is not None:
             size = np.minimum(size, self.huber)
-        w = 2.0 * size / self.sigma**2
-        return float(np.max(self.weight(lam) * (abs(self.residual.A).T @ w)))
+        w = size * (2.0 * self.weight(lam) / self.sigma**2)   # the weights on the rows: one n-vector
+        return abs_max(abs(self.residual.A).T @ w)
 
 
 class TermKind:
@@ -244,13 +245,14 @@ class Equality(TermKind):
 
     def gradient(self, term, x, lam, duals):
         A, r, k = term.residual.A, term.residual.value(x), term.weight(lam)
+        # the scalars on the rows before the product: one vector of the unknowns' length
         if term.mode == "soft":
-            return k * 2.0 * (A.T @ (r / term.sigma**2))
+            return A.T @ (r * (2.0 * k / term.sigma**2))
         if term.mode == "robust":
             if term.huber is None:
                 return None
             g = np.where(np.abs(r) <= term.huber, 2.0 * r, 2.0 * term.huber * np.sign(r))
-            return k * (A.T @ (g / term.sigma**2))
+            return A.T @ (g * (k / term.sigma**2))
         return _constraint_gradient(term, duals, band_pair=term.mode == "band")
 
     def shown(self, term, x):
@@ -301,7 +303,7 @@ class Inequality(TermKind):
     def gradient(self, term, x, lam, duals):
         if term.mode == "soft":
             A, r = term.residual.A, term.residual.value(x)
-            return term.weight(lam) * 2.0 * (A.T @ (np.maximum(r, 0) / term.sigma**2))
+            return A.T @ (np.maximum(r, 0) * (2.0 * term.weight(lam) / term.sigma**2))
         if term.mode == "robust":
             return None
         return _constraint_gradient(term, duals, band_pair=False)
