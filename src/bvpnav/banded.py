@@ -1575,7 +1575,8 @@ class BandedKKT(Factorization):
 
     def _reduced_solve(self, r: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """Solve the reduced (unscaled, after eliminations) system for ``r`` (R,) or (R, c),
-        into ``out`` when given (an array like ``r``). A real ``r`` with a factor of complex
+        into ``out`` when given (an array like ``r``, or ``r`` itself: it is gathered before
+        anything is written). A real ``r`` with a factor of complex
         parts gives the real part of the solution (the scalings, the gathers and the
         scatters are real: only the band's and the border's solves are complex)."""
         pl = self.plan
@@ -1648,7 +1649,12 @@ class BandedKKT(Factorization):
         nu = self._unf.size
         b1, bx, bmu = rhs[:m], rhs[m:m + n], rhs[m + n:]
         b1f = b1[pl.fold] if nu else b1
-        r = np.empty((n + nu + bmu.shape[0],) + rhs.shape[1:], dtype=rhs.dtype)
+        # without unfolded rows the reduced unknowns (x, mu) are z's own tail: the reduced
+        # right-hand side is formed there and solved in place (the gather copies it before
+        # anything is written back: 72 MB fewer per solve for three axes at N = 1e6)
+        z = None if x_only or nu else np.empty_like(rhs)
+        r = (np.empty((n + nu + bmu.shape[0],) + rhs.shape[1:], dtype=rhs.dtype) if z is None
+             else z[m:])
         if b1f.any():
             np.add(bx, _mul(self._Df.T, b1f), out=r[:n])
         else:
@@ -1661,9 +1667,7 @@ class BandedKKT(Factorization):
             gz = r[ei] / hcol
             if gz.any():   # (none for a sweep's dx/dlambda: no lambda row touches w)
                 r[n + nu:] -= _mul(self._Ez, gz)
-        # without unfolded rows the reduced unknowns (x, mu) are z's own tail: solved in place
-        z = None if x_only or nu else np.empty_like(rhs)
-        zr = self._reduced_solve(r, out=None if z is None else z[m:])
+        zr = self._reduced_solve(r, out=None if z is None else r)
         mu = zr[n + nu:]
         if el.size and not (x_only and not eliminated):
             w = _mul(self._EzT, mu)
