@@ -163,9 +163,9 @@ def least_squares_form(form, lam: float, surrogate: bool = False) -> LeastSquare
         return None
     model = form.model
     obj = [form.data_rows()]
-    eq = [model.fem_rows()]
-    blocks = [("fem", slice(0, eq[0].m))]
-    start = eq[0].m
+    eq = []   # the items' equality rows, below the FEM rows
+    start = model.N * model.d
+    blocks = [("fem", slice(0, start))]
     scaled = [np.zeros(obj[0].m, dtype=bool)]
     for term in form.terms():
         role = term.least_squares_role(surrogate)
@@ -180,7 +180,10 @@ def least_squares_form(form, lam: float, surrogate: bool = False) -> LeastSquare
     # lambda of a sweep then shares these arrays instead of cleaning a copy of its own. Each
     # part is cleaned before stacking: a hard item's explicit zero would otherwise copy the
     # whole FEM block (60 ms at N = 1e6), and stacked canonical parts are canonical
-    D, E = (Affine.vstack([Affine(canonical(a.A), a.c, a.labels) for a in parts]) for parts in (obj, eq))
+    D = Affine.vstack([Affine(canonical(a.A), a.c, a.labels) for a in obj])
+    # the FEM rows and the items' below them written once (not the FEM rows, then a copy)
+    E = model.fem_rows_and([Affine(canonical(a.A), a.c, a.labels) for a in eq])
+    E = Affine(canonical(E.A), E.c, E.labels)
     return LeastSquaresForm(D, E, blocks, np.concatenate(scaled), float(lam))
 
 

@@ -269,16 +269,20 @@ class Affine:
         return Affine(self.A[idx], self.c[idx], labels)
 
     @staticmethod
+    def stacked_labels(parts: Sequence[Affine]) -> Sequence[str] | None:
+        """The row labels of ``parts`` stacked (None unless every part has labels)."""
+        if not all(p.labels is not None for p in parts):
+            return None
+        if any(isinstance(p.labels, RowLabels) for p in parts):
+            return RowLabels([q for p in parts for q in (
+                p.labels.parts if isinstance(p.labels, RowLabels) else [p.labels])])
+        return tuple(lab for p in parts for lab in p.labels)
+
+    @staticmethod
     def vstack(parts: Sequence[Affine]) -> Affine:
         """Stack several maps row-wise."""
         parts = list(parts)
-        labels = None
-        if all(p.labels is not None for p in parts):
-            if any(isinstance(p.labels, RowLabels) for p in parts):
-                labels = RowLabels([q for p in parts for q in (
-                    p.labels.parts if isinstance(p.labels, RowLabels) else [p.labels])])
-            else:
-                labels = tuple(lab for p in parts for lab in p.labels)
+        labels = Affine.stacked_labels(parts)
         if len(parts) == 1:   # one part: its arrays, not a copy (maps are never changed in place)
             A = parts[0].A
             return Affine(A if sp.issparse(A) and A.format == "csr" else sp.csr_matrix(A), parts[0].c, labels)
@@ -476,11 +480,37 @@ class NavModel:
         cols = np.flatnonzero(np.any(G != 0, axis=0))
         return cols, np.asarray(V @ np.ascontiguousarray(G[:, cols]))
 
-    def _fem_rows(self) -> Affine:
-        # every axis' rows written into one matrix (no per-axis matrix and stacked copy)
-        A = rows_side_by_side([self._placed(self.fem_blocks(a), a) for a in range(self.d)], self.size)
-        c = np.concatenate([self.M @ self.data.acc[:, a] for a in range(self.d)])
-        return Affine(A, c, RowLabels([(f"fem_{self.axes[a]}", self.N) for a in range(self.d)]))
+    def _fem_rows(self, below: Sequence[Affine] = ()) -> Affine:
+        # every axis' rows written into one matrix (no per-axis matrix and stacked copy),
+        # and the rows ``below`` after them
+        groups = [self._placed(self.fem_blocks(a), a) for a in range(self.d)]
+        A = rows_side_by_side(groups + [[(p.A, 0)] for p in below], self.size)
+        c = np.concatenate([self.M @ self.data.acc[:, a] for a in range(self.d)] + [p.c for p in below])
+        fem = Affine(A, c, RowLabels([(f"fem_{self.axes[a]}", self.N) for a in range(self.d)]))
+        return fem if not below else Affine(A, c, Affine.stacked_labels([fem, *below]))
+
+    def fem_rows_and(self, below: Sequence[Affine]) -> Affine:
+        """:meth:`fem_rows` with the rows ``below`` (maps of the stacked unknowns, canonical)
+        after them, as one map whose matrix is written once; :meth:`fem_rows` is then a view
+        of its first rows (its arrays' prefixes), not a second copy.
+
+        Notes
+        -----
+        The equality rows of :func:`bvpnav.lsq.least_squares_form`: stacking the FEM rows
+        and a few items' rows copied every FEM entry (three axes with six parameters at
+        N = 1e6: 288 MB of fresh memory). With the FEM rows already made, they are stacked.
+        """
+        below = list(below)
+        if getattr(self, "_fem_cache", None) is not None or not below:
+            return Affine.vstack([self.fem_rows(), *below])
+        out = self._fem_rows(below)
+        p = self.N * self.d
+        A, end = out.A, int(out.A.indptr[p])
+        fem = sp.csr_matrix((A.data[:end], A.indices[:end], A.indptr[:p + 1]), shape=(p, A.shape[1]))
+        fem.has_canonical_format = A.has_canonical_format
+        self._fem_cache = Affine(fem, out.c[:p], RowLabels([(f"fem_{self.axes[a]}", self.N)
+                                                            for a in range(self.d)]))
+        return out
 
     def residual_rows(self, axes=None) -> Affine:
         """The acceleration residuals ``w`` (m/s^2), axis-major."""

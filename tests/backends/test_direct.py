@@ -155,3 +155,47 @@ def test_one_refinement_step_is_the_forward_error_estimate():
         check = verify(form, raw.x, 0.7, "default", raw.duals, factored)
         assert check.forward_error == fresh and check.verified
     assert verify(form, raw.x, 0.7, "default", raw.duals, raw.factored).forward_error == corr
+
+
+@pytest.mark.parametrize("axes, error_model", [(1, False), (3, True)])
+def test_equality_rows_are_written_once_with_the_fem_rows_a_view_of_their_top(axes, error_model):
+    """The least-squares form's equality rows are the FEM rows with the hard items' rows
+    below them, entry for entry as stacking them would give, canonical, labelled; the
+    model's FEM rows made with them are a view of their first rows (no second copy), and
+    a model whose FEM rows exist already stacks them (the same matrix)."""
+    import scipy.sparse as sp
+
+    from bvpnav.error_models import Bias, ScaleFactor
+    from bvpnav.lsq import least_squares_form
+
+    rng = np.random.default_rng(1)
+    t = np.linspace(0.0, 5.0, 201)
+    acc = rng.normal(size=(t.size, axes))
+
+    def problem():
+        prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=acc if axes > 1 else acc[:, 0]),
+                                        error_model=ScaleFactor() + Bias() if error_model else None)
+        prob.add(Position(t=[0.0, 5.0], value=np.zeros((2, axes)) if axes > 1 else [0.0, 0.0]))
+        prob.add(Position(t=np.arange(0.5, 5.0, 0.5), value=rng.normal(size=(9, axes)) if axes > 1
+                          else rng.normal(size=9), sigma=1.0))
+        prob.add(Velocity(t=[0.0, 5.0], value=np.zeros((2, axes)) if axes > 1 else [0.0, 0.0], sigma=0.1))
+        prob.add(Velocity(t=2.5, value=np.zeros(axes) if axes > 1 else 0.0))
+        return prob.formulation
+
+    form = problem()
+    E = least_squares_form(form, 1.0).E
+    fem = form.model.fem_rows()
+    items = [t_.residual for t_ in form.terms() if t_.least_squares_role(False) == "E"]
+    want = sp.vstack([fem.A] + [it.A for it in items], format="csr")
+    assert E.A.has_canonical_format and E.m == fem.m + sum(it.m for it in items)
+    np.testing.assert_array_equal(E.A.toarray(), want.toarray())
+    np.testing.assert_array_equal(E.c, np.concatenate([fem.c] + [it.c for it in items]))
+    assert list(E.labels) == list(fem.labels) + [lab for it in items for lab in it.labels]
+    assert np.shares_memory(fem.A.data, E.A.data) and np.shares_memory(fem.A.indices, E.A.indices)
+    # FEM rows made before: stacked, the same rows
+    other = problem()
+    other.model.fem_rows()
+    E2 = least_squares_form(other, 1.0).E
+    assert not np.shares_memory(other.model.fem_rows().A.data, E2.A.data)
+    np.testing.assert_array_equal(E2.A.toarray(), E.A.toarray())
+    np.testing.assert_array_equal(E2.c, E.c)
