@@ -31,6 +31,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import scipy.sparse as sp
 
 from .banded import abs_max
 from .model import Affine
@@ -156,6 +157,12 @@ class Term:
         smooth or the duals it needs are missing (stationarity cannot be judged)."""
         return self.table.gradient(self, x, lam, duals)
 
+    def gradient_rows(self, x: np.ndarray, lam: float, duals) -> np.ndarray | None:
+        """The weights ``u`` on this term's rows whose product ``A^T u`` with its residual's
+        matrix is :meth:`gradient` (None where that is None): the verification adds
+        ``A^T u`` on ``A``'s columns alone (:func:`transposed_product`)."""
+        return self.table.gradient_rows(self, x, lam, duals)
+
     def shown(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(raw, shown)``: the residual rows at ``x`` and what a solution reports of
         them (for inequalities and cones only the violation ``max(., 0)``)."""
@@ -169,8 +176,27 @@ class Term:
         size = self.residual.row_scale(x)
         if self.mode == "robust" and self.huber is not None:
             size = np.minimum(size, self.huber)
-        w = size * (2.0 * self.weight(lam) / self.sigma**2)   # the weights on the rows: one n-vector
-        return abs_max(abs(self.residual.A).T @ w)
+        w = size * (2.0 * self.weight(lam) / self.sigma**2)   # the weights on the rows
+        A = self.residual.A
+        return abs_max(transposed_product(sp.csr_matrix((np.abs(A.data), A.indices, A.indptr),
+                                                        shape=A.shape), w)[1])
+
+
+def transposed_product(A: sp.spmatrix, u: np.ndarray) -> tuple[np.ndarray | slice, np.ndarray]:
+    """``A^T u`` on the columns ``A`` touches: ``(cols, values)``, the product being
+    ``values`` at ``cols`` and zero elsewhere.
+
+    A few rows (an item's) touch a few columns: their sums are formed there alone instead
+    of a vector of every unknown (48 MB each for three axes at N = 1e6). A matrix with
+    entries in more than an eighth of its columns gives ``(slice(None), A^T u)``.
+    """
+    A = A.tocsr() if A.format != "csr" else A
+    n = A.shape[1]
+    if A.nnz * 8 > n:
+        return slice(None), np.asarray(A.T @ u, dtype=float)
+    rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
+    cols, at = np.unique(A.indices, return_inverse=True)
+    return cols, np.bincount(at.ravel(), weights=A.data * u[rows], minlength=cols.size)
 
 
 class TermKind:
@@ -188,6 +214,11 @@ class TermKind:
         raise NotImplementedError
 
     def gradient(self, term: Term, x: np.ndarray, lam: float, duals) -> np.ndarray | None:
+        u = self.gradient_rows(term, x, lam, duals)
+        return None if u is None else term.residual.A.T @ u
+
+    def gradient_rows(self, term: Term, x: np.ndarray, lam: float, duals) -> np.ndarray | None:
+        """See :meth:`Term.gradient_rows`."""
         raise NotImplementedError
 
     def shown(self, term: Term, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -213,13 +244,14 @@ def _active_tol(term: Term, x: np.ndarray) -> np.ndarray:
     return 1e-6 * np.maximum(term.residual.row_scale(x), 1e-300)
 
 
-def _constraint_gradient(term: Term, duals, band_pair: bool) -> np.ndarray | None:
+def _constraint_rows(duals, band_pair: bool) -> np.ndarray | None:
+    """A constraint's gradient weights on its rows: its duals (a band's pair subtracted)."""
     if not duals or any(d is None for d in duals):
         return None
-    z = np.asarray(duals[0]).ravel()
+    z = np.asarray(duals[0], dtype=float).ravel()
     if band_pair:
-        z = z - np.asarray(duals[1]).ravel()
-    return term.residual.A.T @ z
+        z = z - np.asarray(duals[1], dtype=float).ravel()
+    return z
 
 
 class Equality(TermKind):
@@ -243,17 +275,17 @@ class Equality(TermKind):
         r = term.residual.value(x)
         return np.abs(r) if term.mode == "hard" else np.maximum(np.abs(r) - term.tol, 0)
 
-    def gradient(self, term, x, lam, duals):
-        A, r, k = term.residual.A, term.residual.value(x), term.weight(lam)
-        # the scalars on the rows before the product: one vector of the unknowns' length
+    def gradient_rows(self, term, x, lam, duals):
+        k = term.weight(lam)
         if term.mode == "soft":
-            return A.T @ (r * (2.0 * k / term.sigma**2))
+            return term.residual.value(x) * (2.0 * k / term.sigma**2)
         if term.mode == "robust":
             if term.huber is None:
                 return None
+            r = term.residual.value(x)
             g = np.where(np.abs(r) <= term.huber, 2.0 * r, 2.0 * term.huber * np.sign(r))
-            return A.T @ (g * (k / term.sigma**2))
-        return _constraint_gradient(term, duals, band_pair=term.mode == "band")
+            return g * (k / term.sigma**2)
+        return _constraint_rows(duals, band_pair=term.mode == "band")
 
     def shown(self, term, x):
         r = term.residual.value(x)
@@ -300,13 +332,12 @@ class Inequality(TermKind):
         r = term.residual.value(x)
         return np.maximum(r - (term.tol if term.mode == "band" else 0.0), 0)
 
-    def gradient(self, term, x, lam, duals):
+    def gradient_rows(self, term, x, lam, duals):
         if term.mode == "soft":
-            A, r = term.residual.A, term.residual.value(x)
-            return A.T @ (np.maximum(r, 0) * (2.0 * term.weight(lam) / term.sigma**2))
+            return np.maximum(term.residual.value(x), 0) * (2.0 * term.weight(lam) / term.sigma**2)
         if term.mode == "robust":
             return None
-        return _constraint_gradient(term, duals, band_pair=False)
+        return _constraint_rows(duals, band_pair=False)
 
     def relation(self, term, tol_text):
         return "<= 0" if term.mode == "hard" else f"<= {tol_text} {term.units}"
@@ -366,21 +397,20 @@ class SecondOrderCone(TermKind):
         e = term.residual.excess(x)
         return e, np.maximum(e, 0)
 
-    def gradient(self, term, x, lam, duals):
-        g = self._gradient(term, x, duals)
-        return None if g is None else (term.weight(lam) * g if term.is_penalty else g)
+    def gradient_rows(self, term, x, lam, duals):
+        u = self._rows(term, x, duals)
+        return None if u is None else (term.weight(lam) * u if term.is_penalty else u)
 
-    def _gradient(self, term, x, duals):
+    def _rows(self, term, x, duals):
         res = term.residual
         k = res.size
-        A = res.A
         if term.mode in ("hard", "band"):
             if not duals or duals[0] is None:
                 return None
             mu, Y = duals[0]
             z = np.column_stack([np.asarray(mu, dtype=float).ravel(),
                                  np.asarray(Y, dtype=float).reshape(k - 1, -1).T]).ravel()
-            return -(A.T @ z)
+            return -z
         if term.mode == "robust":
             return None
         v = res.value(x).reshape(res.groups, k)
@@ -393,7 +423,7 @@ class SecondOrderCone(TermKind):
         on = e > 0
         dz[on, 1:] = coef[on, None] * v[on, 1:] / nu[on, None]
         dz[on, 0] = -coef[on]
-        return A.T @ dz.ravel()
+        return dz.ravel()
 
     def relation(self, term, tol_text):
         rel = "<= 0" if term.mode == "hard" else f"<= {tol_text} {term.units}"

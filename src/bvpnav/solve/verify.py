@@ -18,6 +18,7 @@ from ..banded import abs_max
 from ..formulation import as_formulation
 from ..lsq import FORWARD_RTOL, check_factor, forward_error, least_squares_form
 from ..result import Verification
+from ..terms import transposed_product
 from .conditioning import assess_conditioning
 
 __all__ = ["verify", "stationarity"]
@@ -164,17 +165,22 @@ def stationarity(form, xval: np.ndarray, lam: float, duals: dict) -> float | Non
     y = duals.get("fem")
     if y is None:
         return None
-    g0 = data.A.T @ data.value(xval)
-    g0 *= 2.0
-    grads = [g0, form.model.fem_rows().A.T @ np.asarray(y, dtype=float).ravel()]
+    # the gradients added into one vector as they come, each one's size kept for the scale;
+    # an item's on the columns it touches (transposed_product)
+    total = data.A.T @ data.value(xval)
+    total *= 2.0
+    scale = abs_max(total)
+    g = form.model.fem_rows().A.T @ np.asarray(y, dtype=float).ravel()
+    scale = max(scale, abs_max(g))
+    total += g
+    del g
     for term in form.terms():
-        g = term.gradient(xval, lam, duals.get(term.label))
-        if g is None:
+        u = term.gradient_rows(xval, lam, duals.get(term.label))
+        if u is None:
             return None
-        grads.append(g)
-    total = grads[0].copy()
-    for g in grads[1:]:
-        total += g
+        cols, g = transposed_product(term.residual.A, u)
+        scale = max(scale, abs_max(g))
+        total[cols] += g
     floor = _gradient_floor(form, xval, lam, data)
-    scale = max(max(abs_max(g) for g in grads), floor, 1e-300)
+    scale = max(scale, floor, 1e-300)
     return abs_max(total) / scale
