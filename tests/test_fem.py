@@ -333,3 +333,31 @@ def test_tridiagonal_equals_scipy_diags_in_canonical_csr_and_keeps_its_diagonals
     np.testing.assert_array_equal(A.data, want.data)
     for k, v in zip((-1, 0, 1), A._bvpnav_diagonals, strict=True):
         np.testing.assert_array_equal(v, A.diagonal(k))
+
+
+def test_time_labels_are_made_on_demand_and_read_as_the_formatted_strings():
+    """Position and velocity rows are labelled ``f"{q}{axis}(t={t:.6g})"`` time-major, made
+    on demand (``TimeLabels``), and stay lazy when stacked with other rows' labels; every
+    way of reading them (index, negative index, slice, iteration, a stack's rows, a row
+    selection) gives the strings."""
+    from bvpnav.model import Affine, RowLabels, TimeLabels
+
+    t = np.linspace(0.0, 10.0, 1001)
+    prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=np.zeros((t.size, 3))))
+    m = prob.formulation.model
+    times = np.array([1.0, 2.5, 7.123456789])
+    P, V = m.position(times), m.velocity(times[:2], axes=["y", "z"])
+    want_p = [f"{ax}(t={tk:.6g})" for tk in times for ax in "xyz"]
+    want_v = [f"v{ax}(t={tk:.6g})" for tk in times[:2] for ax in "yz"]
+    assert isinstance(P.labels, TimeLabels) and list(P.labels) == want_p
+    assert list(V.labels) == want_v and V.labels[-1] == want_v[-1] and P.labels[2:5] == want_p[2:5]
+    with pytest.raises(IndexError):
+        P.labels[len(want_p)]
+    both = Affine.vstack([P, m.fem_rows(), V])
+    assert isinstance(both.labels, RowLabels) and len(both.labels) == both.m
+    assert both.labels[len(want_p) - 1] == want_p[-1] and both.labels[-1] == want_v[-1]
+    assert both.labels[len(want_p)] == "fem_x[0]"
+    assert list(P.rows([0, 4]).labels) == [want_p[0], want_p[4]]
+    one = m.position(times, axes=["x"])   # one axis: the rows as made, no reordering copy
+    assert list(one.labels) == [f"x(t={tk:.6g})" for tk in times]
+    np.testing.assert_array_equal(one.A.toarray(), P.A.toarray()[0::3])

@@ -167,7 +167,8 @@ class RowLabels(Sequence):
     """
 
     def __init__(self, parts: Sequence):
-        self.parts = [(str(q[0]), int(q[1])) if _is_indexed(q) else tuple(q) for q in parts]
+        self.parts = [(str(q[0]), int(q[1])) if _is_indexed(q)
+                      else (q if isinstance(q, TimeLabels) else tuple(q)) for q in parts]
         self._ends = np.cumsum([q[1] if _is_indexed(q) else len(q) for q in self.parts])
 
     def __len__(self) -> int:
@@ -192,6 +193,39 @@ class RowLabels(Sequence):
         q = self.parts[k]
         j = i - (int(self._ends[k - 1]) if k else 0)
         return f"{q[0]}[{j}]" if _is_indexed(q) else q[j]
+
+
+class TimeLabels(Sequence):
+    """Labels of rows at times, made on demand (``"vx(t=2.5)"``): row ``k * len(axes) + a``
+    is time ``k``, axis ``a`` (the 10,000 fixes of a long recording are not formatted per
+    solve).
+
+    Parameters
+    ----------
+    quantity : str
+        The labels' prefix (``""`` for positions, ``"v"`` for velocities).
+    axes : sequence of str
+        Axis names, in row order within a time.
+    times : ndarray
+        Times, s.
+    """
+
+    def __init__(self, quantity: str, axes: Sequence[str], times: np.ndarray):
+        self.quantity, self.axes, self.times = str(quantity), list(axes), np.asarray(times, dtype=float)
+
+    def __len__(self) -> int:
+        return self.times.size * len(self.axes)
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return [self[k] for k in range(*i.indices(len(self)))]
+        i = int(i)
+        if i < 0:
+            i += len(self)
+        if not 0 <= i < len(self):
+            raise IndexError(i)
+        k, a = divmod(i, len(self.axes))
+        return f"{self.quantity}{self.axes[a]}(t={self.times[k]:.6g})"
 
 
 def _is_indexed(q) -> bool:
@@ -273,7 +307,7 @@ class Affine:
         """The row labels of ``parts`` stacked (None unless every part has labels)."""
         if not all(p.labels is not None for p in parts):
             return None
-        if any(isinstance(p.labels, RowLabels) for p in parts):
+        if any(isinstance(p.labels, RowLabels | TimeLabels) for p in parts):
             return RowLabels([q for p in parts for q in (
                 p.labels.parts if isinstance(p.labels, RowLabels) else [p.labels])])
         return tuple(lab for p in parts for lab in p.labels)
@@ -533,13 +567,15 @@ class NavModel:
         return Affine.vstack(parts)
 
     # ------------------------------------------------- evaluation at times
-    def _labels(self, quantity: str, times: np.ndarray, axes: tuple[int, ...]) -> tuple[str, ...]:
-        return tuple(f"{quantity}{self.axes[a]}(t={tk:.6g})" for tk in times for a in axes)
+    def _labels(self, quantity: str, times: np.ndarray, axes: tuple[int, ...]) -> TimeLabels:
+        return TimeLabels(quantity, [self.axes[a] for a in axes], times)
 
     def _interleave(self, per_axis: list[Affine], m: int) -> Affine:
         """Stack per-axis blocks of m rows so that row ``k * nax + a`` is time k, axis a."""
         stacked = Affine.vstack(per_axis)
         nax = len(per_axis)
+        if nax == 1:   # already in that order
+            return stacked
         order = (np.arange(nax)[None, :] * m + np.arange(m)[:, None]).ravel()
         return Affine(stacked.A[order], stacked.c[order])
 
