@@ -701,33 +701,39 @@ SPEED_HEAD = (f"{'case':<11}{'N':>9}  {'variant':<18}{'time s':>9}{'x ref':>8}{'
 
 # ------------------------------------------------------------------ lambda rules
 def lambda_table(n: int) -> None:
-    """The lambda rules as multiples of a single direct solve (1 axis)."""
+    """The lambda rules as multiples of a single direct solve (1 axis), each rule's run
+    beside a single solve (the median of three per-run ratios, as in the speed table: the
+    VM's speed drifts over a run)."""
     spec = make_spec(n, 1)
     _quiet(lambda: make_problem(spec).solve(solver="direct"))   # warm-up (first-call imports)
-    singles = []
-    for _ in range(3):
+
+    def timed_solve(lam=None):
         prob = make_problem(spec)
         t0 = time.perf_counter()
-        _quiet(lambda prob=prob: prob.solve(solver="direct"))
-        singles.append(time.perf_counter() - t0)
-    single = float(np.median(singles))
+        sol = _quiet(lambda: prob.solve(solver="direct") if lam is None else
+                     prob.solve(solver="direct", lam=lam))
+        return time.perf_counter() - t0, sol
+
+    singles, rows = [], []
+    for rule in ("lcurve", "gcv", "quasi"):
+        ratios, times = [], []
+        for _ in range(3):   # (a rule's first run pays its own warm-up: the median drops it)
+            single = timed_solve()[0]
+            dt, sol = timed_solve(rule)
+            singles.append(single)
+            ratios.append(dt / single)
+            times.append(dt)
+        rows.append((rule, sol, float(np.median(times)), float(np.median(ratios))))
     t_ref = min(_timed(lambda: reference_solve(spec)) for _ in range(2))
-    print(f"\nlambda rules, N = {n}, 1 axis: single direct solve {single:.2f} s (the reference "
-          f"{t_ref:.3f} s)")
+    print(f"\nlambda rules, N = {n}, 1 axis: single direct solve {float(np.median(singles)):.2f} s "
+          f"(the reference {t_ref:.3f} s; x single: the median of three ratios to a solve beside it)")
     print(f"{'rule':<8}{'lambda':>10}{'evaluations':>13}{'ms/eval':>9}{'total s':>9}{'x single':>10}"
           f"{'x ref':>8}  warnings")
-    for rule in ("lcurve", "gcv", "quasi"):
-        times = []
-        for _ in range(3):   # the median of three (a rule's first run pays its own warm-up)
-            prob = make_problem(spec)
-            t0 = time.perf_counter()
-            sol = _quiet(lambda rule=rule, prob=prob: prob.solve(solver="direct", lam=rule))
-            times.append(time.perf_counter() - t0)
-        dt = float(np.median(times))
+    for rule, sol, dt, ratio in rows:
         curve = sol.curve
         warn = "; ".join(w[:70] for w in getattr(curve, "warnings", [])) or "-"
         per = 1e3 * curve.seconds / max(curve.evaluations, 1)   # the sweep's time per lambda
-        print(f"{rule:<8}{sol.lam:>10.4g}{curve.evaluations:>13d}{per:>9.1f}{dt:>9.2f}{dt / single:>10.1f}"
+        print(f"{rule:<8}{sol.lam:>10.4g}{curve.evaluations:>13d}{per:>9.1f}{dt:>9.2f}{ratio:>10.1f}"
               f"{dt / t_ref:>8.0f}  {warn}", flush=True)
 
 
