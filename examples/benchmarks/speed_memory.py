@@ -34,8 +34,9 @@ relative to its max-norm, and bvpnav's own ``stats["verified"]``.
 
 ``lambda`` table: ``prob.solve(solver="direct", lam=rule)`` for ``lcurve``, ``gcv``,
 ``quasi`` at N = 1e5 (1 axis; ``--lam-huge`` adds 1e6), the median of three runs, as
-multiples of a single direct solve (the median of three) timed beside it, the number of
-evaluations and the lambda chosen.
+multiples of a single direct solve: each run beside a single solve, the median of the
+three ratios (before the eleventh session the single solves were all timed first), the
+number of evaluations and the lambda chosen.
 
 ``memory`` table (``--memory``): one child process per row (``_memory.py``, VmHWM) at
 ``--memory-n`` (1e6): a baseline child (imports, data, the problem with its items, no
@@ -62,6 +63,58 @@ variants to leave out, e.g. ``csne3@1e6,clarabel3@1e6``; ``name@N`` or ``name`` 
 (1e4; 2e3 with ``--quick``).
 
 Run ``python examples/benchmarks/speed_memory.py [--quick] [--memory] [--huge]``.
+
+Measured after the fresh-memory diet (issue 18, eleventh session)
+-----------------------------------------------------------------
+2026-12-04, main at 0b0847e, ``--sizes 1e4,1e5,1e6 --sizes3 1e5,1e6 --skip
+csne@1e6,csne3@1e6,clarabel3@1e6 --lam-huge --memory --huge --no-peers``, on the tenth
+session's VM. perf showed 41 % of a three-axis run's samples in the kernel clearing fresh
+pages (``clear_page_erms``; the VM reports freed pages to its host): a direct solve at
+three axes and N = 1e6 mapped 4.78 GB of fresh memory (strace), the reference 1.74 GB.
+The session cut it to 3.10 GB (M G by its acting columns, the equality rows written
+once, |A| |x| by blocks, one residual buffer, the reduced right-hand side solved in
+place, the stationarity from row weights, ...) and some arithmetic (uniform stretches of
+rows as 2-D slices, the band's scales in place, K's and M's diagonals kept); the lambda
+table now times each rule beside a single solve::
+
+    case               N  variant              time s   x ref runs     vs ref  verified
+    1 ax          100000  direct                0.119     1.7    3    1.4e-12  True
+    1 ax          100000  direct backend        0.095     1.1    3    1.4e-12  -
+    1 ax          100000  clarabel              0.647     9.5    3    2.2e-12  True   compile 0.23 s
+    1 ax          100000  clarabel re-solve     0.282     4.0    3    1.9e-12  True
+    1 ax         1000000  direct                1.039     1.2    3    3.3e-12  True
+    1 ax         1000000  direct backend        0.887     1.1    3    3.3e-12  -
+    1 ax         1000000  clarabel              7.717     9.9    3    4.2e-12  True   compile 2.48, 1st 9.09 s
+    1 ax         1000000  clarabel re-solve     3.152     4.8    3    2.9e-12  True
+    3 ax +SF+B    100000  direct                0.386     2.0    3    2.5e-12  True
+    3 ax +SF+B    100000  clarabel              2.645    12.8    3    2.5e-12  True   compile 1.00 s
+    3 ax +SF+B    100000  clarabel re-solve     1.174     6.1    3    2.2e-12  True
+    3 ax +SF+B   1000000  direct                4.619     2.0    3    3.3e-12  True
+    3 ax +SF+B   1000000  direct backend        3.910     1.6    3    3.3e-12  -
+
+    lambda rules, N = 100000: single direct solve 0.10 s (the reference 0.049 s)
+    rule        lambda  evaluations  ms/eval  total s  x single   x ref
+    lcurve    0.005152           12     28.2     0.40       4.2       8
+    gcv         0.5475           13     29.7     0.50       5.3      10
+    quasi        5.164           19     31.7     0.66       6.6      14
+
+    lambda rules, N = 1000000: single direct solve 1.09 s (the reference 0.658 s)
+    lcurve     0.01145           11    369.1     4.27       4.4       6
+    gcv         0.7266           16    348.0     5.68       5.8       9
+    quasi        3.234           19    374.1     7.63       6.8      12
+
+    peak memory, N = 1e6: reference 745 MB, direct 1004 MB (1.35x; 855 B/sample above
+    the base), csne 2058 MB, clarabel 3042 MB; 1e7 samples x 1 axis: 8326 MB, verified,
+    37.4 s
+
+Other runs of this session with the final code or near it: direct 1.6-2.0x at 1e5 and
+1.2-1.9x at 1e6 (one axis), 1.8-2.2x and 2.0-2.9x (three axes); the session's starting
+commit beside it 2.4-3.1x and 3.2-4.2x at 1e6. lcurve 4.2-4.7, gcv 4.6-5.3 single
+solves at 1e5 timed beside them (4.3-5.2 and 4.5-6.7 with the single solves timed
+first); Clarabel's three-axis re-solve at 1e5 4.8-6.1x. With glibc keeping freed memory
+(``GLIBC_TUNABLES=glibc.malloc.mmap_max=0:glibc.malloc.trim_threshold=68719476736``) the
+three-axis solve at 1e6 spends no time clearing pages: 1.85x against 2.69x in runs side
+by side on a slow afternoon of the VM.
 
 Measured after the condensed lambda sweep (issue 18, tenth session)
 ------------------------------------------------------------------
