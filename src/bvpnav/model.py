@@ -156,7 +156,25 @@ def _uniform_rows(per: list) -> tuple[int, int]:
     return int(edges[g]) + 1, int(edges[g + 1])
 
 
-class RowLabels(Sequence):
+class _LabelsOnDemand(Sequence):
+    """A sequence of row labels made when read: subclasses give ``__len__`` and
+    ``_label(i)`` for ``0 <= i < len``; indexing (negative too) and slices come from here."""
+
+    def _label(self, i: int) -> str:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return [self[k] for k in range(*i.indices(len(self)))]
+        i = int(i)
+        if i < 0:
+            i += len(self)
+        if not 0 <= i < len(self):
+            raise IndexError(i)
+        return self._label(i)
+
+
+class RowLabels(_LabelsOnDemand):
     """Row labels made on demand (``"fem_x[12]"``): N strings are not built per solve.
 
     Parameters
@@ -181,21 +199,14 @@ class RowLabels(Sequence):
             else:
                 yield from q
 
-    def __getitem__(self, i):
-        if isinstance(i, slice):
-            return [self[k] for k in range(*i.indices(len(self)))]
-        i = int(i)
-        if i < 0:
-            i += len(self)
-        if not 0 <= i < len(self):
-            raise IndexError(i)
+    def _label(self, i: int) -> str:
         k = int(np.searchsorted(self._ends, i, side="right"))
         q = self.parts[k]
         j = i - (int(self._ends[k - 1]) if k else 0)
         return f"{q[0]}[{j}]" if _is_indexed(q) else q[j]
 
 
-class TimeLabels(Sequence):
+class TimeLabels(_LabelsOnDemand):
     """Labels of rows at times, made on demand (``"vx(t=2.5)"``): row ``k * len(axes) + a``
     is time ``k``, axis ``a`` (the 10,000 fixes of a long recording are not formatted per
     solve).
@@ -216,14 +227,7 @@ class TimeLabels(Sequence):
     def __len__(self) -> int:
         return self.times.size * len(self.axes)
 
-    def __getitem__(self, i):
-        if isinstance(i, slice):
-            return [self[k] for k in range(*i.indices(len(self)))]
-        i = int(i)
-        if i < 0:
-            i += len(self)
-        if not 0 <= i < len(self):
-            raise IndexError(i)
+    def _label(self, i: int) -> str:
         k, a = divmod(i, len(self.axes))
         return f"{self.quantity}{self.axes[a]}(t={self.times[k]:.6g})"
 
