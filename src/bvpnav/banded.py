@@ -110,6 +110,15 @@ def abs_max(v: np.ndarray) -> float:
     return max(float(v.max()), -float(v.min()))
 
 
+def residual(S, rhs: np.ndarray, z: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """``rhs - S z`` for the augmented matrix ``S`` of any factorization: formed in place
+    (into ``out`` when given) by :meth:`AugmentedOperator.residual` for one right-hand
+    side, else by the product."""
+    if np.ndim(rhs) == 1 and hasattr(S, "residual"):
+        return S.residual(rhs, z, out=out)
+    return rhs - S @ z
+
+
 class AugmentedOperator:
     """The augmented matrix ``S`` of :mod:`bvpnav.lsq` as an operator (never assembled).
 
@@ -181,14 +190,10 @@ class Factorization:
         window = window if window is not None else slice(None)
         z = self.solve(rhs)
         corr, k = np.inf, 0
-        residual = getattr(self.S, "residual", None) if np.ndim(rhs) == 1 else None
         res = scratch
         for _ in range(steps):
             k += 1
-            if residual is not None:   # into one buffer reused by every step
-                res = residual(rhs, z, out=res)
-            else:
-                res = rhs - self.S @ z
+            res = residual(self.S, rhs, z, out=res)   # into one buffer reused by every step
             dz = self.solve(res)
             z += dz
             prev, corr = corr, abs_max(dz[window]) / max(abs_max(z[window]), 1e-300)

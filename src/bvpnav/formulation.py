@@ -318,9 +318,10 @@ class Formulation:
             r, v = [], []
             for a in range(m.d):
                 mcols, mgs = m.mg_columns(a)   # M G, made once per axis with the model
-                if k not in mcols or not mgs[:, np.searchsorted(mcols, k)].any():
+                i = int(np.searchsorted(mcols, k))
+                if i == mcols.size or mcols[i] != k or not mgs[:, i].any():
                     continue   # the parameter does not act on this axis
-                mg = mgs[:, np.searchsorted(mcols, k)]
+                mg = mgs[:, i]
                 s = np.cumsum(mg)[:-1]  # element slopes with v0 = 0
                 r += [m.r_index(a), [m.v_end_index(a)[1]]]
                 v += [np.concatenate([[0.0], np.cumsum(s * h)]), [s[-1] + mg[-1]]]

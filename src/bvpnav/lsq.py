@@ -44,6 +44,7 @@ from .banded import (
     NotBanded,
     abs_max,
     canonical,
+    residual,
     row_scaled,
 )
 from .formulation import as_formulation
@@ -230,7 +231,7 @@ def forward_error(form, xval: np.ndarray, lam: float, duals: dict | None,
     m = form.D.m
     try:
         fac = factored[1] if factored is not None else check_factor(form, problem)
-        resid = form.rhs() - fac.S @ z
+        resid = residual(fac.S, form.rhs(), z)
         # the banded factor gives the correction's x part alone (no residuals formed)
         dx = fac.solve_x(resid) if hasattr(fac, "solve_x") else fac.solve(resid)[m:m + xval.size]
     except (RuntimeError, np.linalg.LinAlgError):  # singular: the information does not determine x
@@ -677,7 +678,7 @@ def _accepted(fac, rhs, window, steps, tol, accept, notes, name):
     if np.all(np.isfinite(z)):
         norm = S.max_abs() if hasattr(S, "max_abs") else float(abs(S).max())
         den = norm * abs_max(z) + abs_max(rhs)
-        res = S.residual(rhs, z, out=scratch) if scratch is not None else rhs - S @ z
+        res = residual(S, rhs, z, out=scratch)
         eta = abs_max(res) / max(den, 1e-300)
     if not (np.isfinite(corr) and corr <= accept):
         notes.append(f"{name} refinement stalled at correction {corr:.1e}")

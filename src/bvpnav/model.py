@@ -307,20 +307,21 @@ class Affine:
         return Affine(self.A[idx], self.c[idx], labels)
 
     @staticmethod
-    def stacked_labels(parts: Sequence[Affine]) -> Sequence[str] | None:
-        """The row labels of ``parts`` stacked (None unless every part has labels)."""
-        if not all(p.labels is not None for p in parts):
+    def stacked_labels(labels: Sequence) -> Sequence[str] | None:
+        """Row-label sequences stacked (None unless every one is given); made on demand
+        when any of them is."""
+        if any(lab is None for lab in labels):
             return None
-        if any(isinstance(p.labels, RowLabels | TimeLabels) for p in parts):
-            return RowLabels([q for p in parts for q in (
-                p.labels.parts if isinstance(p.labels, RowLabels) else [p.labels])])
-        return tuple(lab for p in parts for lab in p.labels)
+        if any(isinstance(lab, RowLabels | TimeLabels) for lab in labels):
+            return RowLabels([q for lab in labels for q in (
+                lab.parts if isinstance(lab, RowLabels) else [lab])])
+        return tuple(s for lab in labels for s in lab)
 
     @staticmethod
     def vstack(parts: Sequence[Affine]) -> Affine:
         """Stack several maps row-wise."""
         parts = list(parts)
-        labels = Affine.stacked_labels(parts)
+        labels = Affine.stacked_labels([p.labels for p in parts])
         if len(parts) == 1:   # one part: its arrays, not a copy (maps are never changed in place)
             A = parts[0].A
             return Affine(A if sp.issparse(A) and A.format == "csr" else sp.csr_matrix(A), parts[0].c, labels)
@@ -524,8 +525,11 @@ class NavModel:
         groups = [self._placed(self.fem_blocks(a), a) for a in range(self.d)]
         A = rows_side_by_side(groups + [[(p.A, 0)] for p in below], self.size)
         c = np.concatenate([self.M @ self.data.acc[:, a] for a in range(self.d)] + [p.c for p in below])
-        fem = Affine(A, c, RowLabels([(f"fem_{self.axes[a]}", self.N) for a in range(self.d)]))
-        return fem if not below else Affine(A, c, Affine.stacked_labels([fem, *below]))
+        return Affine(A, c, Affine.stacked_labels([self._fem_labels(), *(p.labels for p in below)]))
+
+    def _fem_labels(self) -> RowLabels:
+        """The FEM rows' labels, ``fem_x[j]`` axis by axis."""
+        return RowLabels([(f"fem_{self.axes[a]}", self.N) for a in range(self.d)])
 
     def fem_rows_and(self, below: Sequence[Affine]) -> Affine:
         """:meth:`fem_rows` with the rows ``below`` (maps of the stacked unknowns, canonical)
@@ -546,8 +550,7 @@ class NavModel:
         A, end = out.A, int(out.A.indptr[p])
         fem = sp.csr_matrix((A.data[:end], A.indices[:end], A.indptr[:p + 1]), shape=(p, A.shape[1]))
         fem.has_canonical_format = A.has_canonical_format
-        self._fem_cache = Affine(fem, out.c[:p], RowLabels([(f"fem_{self.axes[a]}", self.N)
-                                                            for a in range(self.d)]))
+        self._fem_cache = Affine(fem, out.c[:p], self._fem_labels())
         return out
 
     def residual_rows(self, axes=None) -> Affine:
