@@ -26,6 +26,15 @@ def _band_of(rows: np.ndarray, cols: np.ndarray, vals: np.ndarray, n: int, kl: i
     return np.bincount(flat, weights=vals, minlength=n * (3 * kl + 1)).reshape(n, 3 * kl + 1)
 
 
+def _gbtrs(lu: np.ndarray, k: int, piv: np.ndarray, b: np.ndarray, overwrite: bool = False) -> np.ndarray:
+    """``dgbtrs`` with ``k`` sub- and superdiagonals, its ``info`` checked (nonzero: an
+    argument LAPACK refused)."""
+    x, info = lapack.dgbtrs(lu, k, k, b, piv, overwrite_b=overwrite)
+    if info != 0:  # pragma: no cover - argument error
+        raise np.linalg.LinAlgError(f"dgbtrs failed (info {info})")
+    return x
+
+
 class CondensedBand:
     r"""A lambda sweep's band condensed onto the unknowns lambda changes: one banded
     factorization of the rest for the whole sweep, then a small one per lambda.
@@ -154,7 +163,7 @@ class CondensedBand:
             R = np.zeros((nb, kl), order="F")
             sel = (group[Mc.col] >= side) & (group[Mc.col] < side + kl)
             R[Mc.row[sel], group[Mc.col[sel]] - side] = Mc.data[sel]   # one column of a group per row
-            R = lapack.dgbtrs(lu, kl, kl, R, piv, overwrite_b=1)[0]
+            R = _gbtrs(lu, kl, piv, R, overwrite=True)
             P[:, side:side + kl] = self.M_TI @ R
             del R
         owner = np.full((G, starts.size + 1), -1, dtype=np.int64)
@@ -229,15 +238,15 @@ class CondensedBand:
             if last is not None and np.array_equal(last[0], bI):
                 u = last[1]   # a sweep's points share the right-hand side off T
             else:
-                u = lapack.dgbtrs(self._lu, kl, kl, bI, self._piv)[0]
+                u = _gbtrs(self._lu, kl, self._piv, bI)
                 self._interior_rhs = (bI, u)
             g = g - self.M_TI @ u
-        xT = lapack.dgbtrs(lu, self.kT, self.kT, g * e, piv)[0]
+        xT = _gbtrs(lu, self.kT, piv, g * e)
         xT *= e
         if interior:
             rhs = bI - self.M_IT @ xT   # (bI may be the cached interior right-hand side)
             rhs[T] = 0.0
-            x = lapack.dgbtrs(self._lu, kl, kl, rhs, self._piv, overwrite_b=1)[0]   # 0 on T
+            x = _gbtrs(self._lu, kl, self._piv, rhs, overwrite=True)   # 0 on T
         else:
             x = np.full(self.nb, np.nan)
         x[T] = xT

@@ -35,6 +35,15 @@ def _curve(form, rule: str, opts: SolveOptions, inner: Stage, rules=None, **swee
                        check_memory=lambda: check_memory(form, direct), **{**opts.rule, **sweep})
 
 
+def _drop_sweep_bands(form) -> None:
+    """Forget a sweep's bands (the band along lambda and the factors kept for the solve at
+    the chosen lambda): bands of the whole problem are not kept alive with the formulation
+    after the sweep."""
+    cache = as_formulation(form).cache
+    cache.pop(BAND_AFFINE, None)
+    cache.pop(BAND_FACTORS, None)
+
+
 def with_rule(inner: Stage) -> Stage:
     """The stage that resolves a rule name in ``lam`` before calling ``inner``."""
 
@@ -47,11 +56,8 @@ def with_rule(inner: Stage) -> Stage:
                      curve.lam_chosen, curve.engine, curve.evaluations, curve.seconds)
             sol = inner(form, curve.lam_chosen, opts)
         finally:
-            # the sweep's band along lambda served the solve at the chosen lambda; a band of
-            # the whole problem is not kept alive with the formulation after it
-            cache = as_formulation(form).cache
-            cache.pop(BAND_AFFINE, None)
-            cache.pop(BAND_FACTORS, None)
+            # the sweep's band along lambda served the solve at the chosen lambda
+            _drop_sweep_bands(form)
         sol.lam_rule = lam
         sol.curve = curve
         # already issued by the sweep (once); recorded here for the CLI and the JSON summary
@@ -132,8 +138,7 @@ def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6
                       lam_range=lam_range, points=points,
                       tau=tau, probes=probes, seed=seed, progress=progress, engine=engine)
     finally:
-        form.cache.pop(BAND_AFFINE, None)   # not kept alive with the formulation (see with_rule)
-        form.cache.pop(BAND_FACTORS, None)
+        _drop_sweep_bands(form)
 
 
 def choose_lambda(problem, rule: str = "lcurve", **kwargs) -> float:
