@@ -36,7 +36,7 @@ from .errors import (
 )
 
 if TYPE_CHECKING:  # the lazy names below, for type checkers and IDEs
-    from . import align, attitude, baselines, error_models, lam, scenarios, sensors, simulate, solve
+    from . import align, attitude, baselines, error_models, evaluate, lam, scenarios, sensors, simulate, solve
     from .backends import available_solvers
     from .compare import compare_solvers
     from .grid import TimeGrid
@@ -71,6 +71,7 @@ __all__ = [
     "compare_solvers",
     "detect",
     "error_models",
+    "evaluate",
     "lam",
     "lambda_curve",
     "readers",
@@ -112,6 +113,7 @@ _LAZY = {
     "strapdown": ("strapdown", None),
     "sensors": ("sensors", None),
     "align": ("align", None),
+    "evaluate": ("evaluate", None),
 }
 
 

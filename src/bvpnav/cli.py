@@ -383,6 +383,34 @@ def _cmd_readers(args) -> int:
     return EXIT_OK
 
 
+def _cmd_evaluate(args) -> int:
+    from . import evaluate as ev
+    from .io import plain_json, write_json
+
+    _check(args, {"TRAJ": args.trajectory, "--truth": args.truth}, {"--plot": args.plot, "--out": args.out},
+           figures=("--plot",))
+    if args.out is not None and not str(args.out).lower().endswith(".json"):
+        raise InputError(f"--out {args.out!r}: the figures are written as JSON; give a .json path")
+    res = ev.evaluate(args.trajectory, args.truth, align=args.align, rpe_delta=args.delta,
+                      rpe_unit=args.delta_unit, max_diff=args.max_diff, method=args.sync, offset=args.offset)
+    if args.all_pairs and args.delta is not None:
+        res["rpe"] = ev.rpe(ev.read_trajectory(args.trajectory), ev.read_trajectory(args.truth), args.delta,
+                            args.delta_unit, align=args.align, all_pairs=True, max_diff=args.max_diff,
+                            method=args.sync, offset=args.offset)
+    for r in res.values():
+        _say(args, ev.format_result(r))
+    if args.out is not None:
+        record = {k: {"stats": r.stats(), "settings": r.settings,
+                      "alignment": {"method": r.alignment.method, "rotation": r.alignment.rotation,
+                                    "translation": r.alignment.translation, "scale": r.alignment.scale}}
+                  for k, r in res.items()}
+        record |= {"estimate": str(args.trajectory), "reference": str(args.truth)}
+        write_json(plain_json(record), args.out)
+    if args.plot is not None:
+        ev.plot(list(res.values()), args.plot)
+    return 0
+
+
 def _write_geodetic(sol, origin, path, frame: str) -> None:
     """Write t, lat, lon (degrees), height (m, WGS-84) of a 3-axis solution about ``origin``."""
     from .geodesy import trajectory_to_geodetic
@@ -637,6 +665,32 @@ def build_parser() -> argparse.ArgumentParser:
     st.add_argument("--plot", metavar="PNG", help="draw the detector's statistic and the intervals")
     st.add_argument("--out", metavar="CSV", help="write the intervals (t0, t1 in s)")
     st.set_defaults(func=_cmd_stationary)
+
+    ev = add(
+        "evaluate", help="score a trajectory against a reference (ATE / RPE)",
+        description="Absolute trajectory error (APE) and, with --delta, relative error (RPE) of TRAJ "
+                    "against --truth, computed as evo_ape / evo_rpe compute the translation part: pairs "
+                    "in time within --max-diff, an alignment fitted first, then rmse, mean, median, std, "
+                    "min and max (m) with the RMS per axis, horizontal and vertical. TRAJ and REF are "
+                    "TUM files (t x y z qx qy qz qw) or tables with t, x, y[, z] (bvpnav solve's --out, "
+                    "a truth.csv; a 2-D reference scores x and y only).")
+    ev.add_argument("trajectory", metavar="TRAJ", help="the estimate: .tum/.txt (TUM) or .csv/.parquet")
+    ev.add_argument("--truth", required=True, metavar="REF", help="the reference, same formats")
+    ev.add_argument("--align", default="rigid", choices=("none", "translation", "yaw", "rigid", "similarity",
+                    "scale"), help="fit before scoring: yaw = rotation about z and a translation (the rigid "
+                    "2-D fit); rigid = SE(3); similarity = Sim(3); scale = scale only (default: %(default)s)")
+    ev.add_argument("--max-diff", type=float, default=0.01, metavar="S", help="largest time difference of a "
+                    "pair, s (default: %(default)s, as evo)")
+    ev.add_argument("--sync", choices=("nearest", "interpolate"), default="nearest", help="pair the nearest "
+                    "samples (as evo) or interpolate TRAJ at REF's times (default: %(default)s)")
+    ev.add_argument("--offset", type=float, default=0.0, metavar="S", help="seconds added to TRAJ's times")
+    ev.add_argument("--delta", type=float, metavar="D", help="also the RPE over pairs D apart")
+    ev.add_argument("--delta-unit", choices=("m", "s", "frames"), default="m", help="D in metres of path, "
+                    "seconds or samples (default: %(default)s)")
+    ev.add_argument("--all-pairs", action="store_true", help="RPE over all pairs D apart, not consecutive")
+    ev.add_argument("--plot", metavar="PNG", help="draw the map view and the errors over time")
+    ev.add_argument("--out", metavar="JSON", help="write the figures (and the alignment) as JSON")
+    ev.set_defaults(func=_cmd_evaluate)
 
     rd = add("readers", help="list the file formats bvpnav reads",
              description="Every reader: its name ([input] format), the suffixes it claims, whether its "
