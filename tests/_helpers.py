@@ -94,7 +94,7 @@ def table1_problem(n, residual="acceleration", seed=1, scale=0.05, bias=-0.5):
 
 def kkt_reference(prob, lam, refinements=3):
     """An independent reference: the KKT system of the same problem, sparse LU plus
-    iterative refinement (written here from the definitions, not from bvpnav.lsq)."""
+    iterative refinement (written here from the definitions, not from bvpnav.linalg.lsq)."""
     m = prob.model
     terms = prob.terms()
     E = bvpnav.Affine.vstack([m.fem_rows()] + [t.residual for t in terms if t.mode == "hard"])

@@ -17,7 +17,7 @@ import bvpnav
 from bvpnav.backends import Backend, RawSolve, register_backend, unregister_backend
 from bvpnav.constraints import Position
 from bvpnav.lam import LambdaRule, register_rule, unregister_rule
-from bvpnav.lsq import least_squares_form, non_least_squares_term
+from bvpnav.linalg.lsq import least_squares_form, non_least_squares_term
 
 T = np.linspace(0.0, 10.0, 101)
 ACC = np.sin(T) + np.random.default_rng(3).normal(0.0, 0.2, T.size)  # m/s^2

@@ -25,7 +25,7 @@ from bvpnav.constraints import (
     ZeroVelocity,
 )
 from bvpnav.errors import InputError, SolveError
-from bvpnav.lsq import least_squares_form
+from bvpnav.linalg.lsq import least_squares_form
 
 #: Time lattice, s: every time used below is an integer multiple of this.
 Q = 1.0 / 256.0
@@ -175,7 +175,7 @@ def solve(t, acc, specs, values, lam, tmap=None, flip=False):
 def rounding_bound(prob, lam: float) -> np.ndarray:
     """What rounding alone may change in one backward-stable solve, per state column.
 
-    With the augmented least-squares matrix ``S`` (:mod:`bvpnav.lsq`) of 1-norm condition
+    With the augmented least-squares matrix ``S`` (:mod:`bvpnav.linalg.lsq`) of 1-norm condition
     ``kappa`` and its solution ``z`` (residuals, unknowns, multipliers), a solve with
     backward error ``eps`` is off by at most ``kappa * eps * |z|_inf`` in any unknown.
     Positions are unknowns; a node velocity is ``V x`` with
@@ -470,7 +470,7 @@ def test_direct_ldl_path_does_not_accept_a_wrong_factorization():
     to 1e-13 but the default direct back end answers with a FEM residual of 0.3
     (verification rejected it, so only the fallback chain saved the user). The refined
     LDL^T answer is now accepted only with a normwise backward error near rounding
-    (``bvpnav.lsq.LDL_BACKWARD``); here it is 8e-2, so the LU runs and says why."""
+    (``bvpnav.linalg.lsq.LDL_BACKWARD``); here it is 8e-2, so the LU runs and says why."""
     k = [0, 25, 65, 111, 159, 215, 263, 282, 299, 317, 353, 399, 417, 445, 460, 486, 514, 529, 563,
          581, 609, 640, 672, 714, 739, 761, 807, 847, 871, 890, 950, 974, 991, 1017, 1041, 1056,
          1074, 1091, 1140, 1158, 1185, 1212, 1245, 1291, 1308, 1325, 1365, 1387, 1409, 1429, 1460,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bvpnav.selinv import CyclicReduction, block_tridiagonal_dense, equilibrated_inverse
+from bvpnav.linalg.selinv import CyclicReduction, block_tridiagonal_dense, equilibrated_inverse
 
 
 def _random(n, b, seed, definite=False):

@@ -22,9 +22,9 @@ from bvpnav.constraints import (
     Velocity,
     ZeroVelocity,
 )
-from bvpnav.covariance import posterior, quadratic_model
 from bvpnav.error_models import Bias, ScaleFactor
 from bvpnav.errors import InputError
+from bvpnav.linalg.covariance import posterior, quadratic_model
 
 
 def dense_covariance(form, x, lam):

@@ -48,10 +48,10 @@ from _helpers import load_benchmark_module
 
 import bvpnav as bv
 from bvpnav.constraints import Position, Velocity
-from bvpnav.covariance import posterior
 from bvpnav.error_models import Bias
+from bvpnav.linalg.covariance import posterior
+from bvpnav.linalg.lsq import least_squares_form
 from bvpnav.log import BvpnavWarning
-from bvpnav.lsq import least_squares_form
 from bvpnav.solve.uncertainty import param_jacobian
 
 P1, P2 = 0.6826894921370859, 0.9544997361036416  # P(|Z| <= 1), P(|Z| <= 2)
@@ -73,7 +73,7 @@ hard_nodes = _model.hard_nodes
 class FastEstimator:
     """The same estimator as ``solve(solver="direct", lam=1)``, for many realisations.
 
-    The problem is ``min ||D x + c||^2 s.t. E x + e = 0`` (:func:`bvpnav.lsq.least_squares_form`)
+    The problem is ``min ||D x + c||^2 s.t. E x + e = 0`` (:func:`bvpnav.linalg.lsq.least_squares_form`)
     with ``D``, ``E`` independent of the item values and ``c``, ``e`` affine in them; their
     derivative is taken from forms built at unit values (exact for affine maps). The
     augmented system ``[[-I, D, 0], [D^T, 0, E^T], [0, E, 0]]`` is factorized once (dense

@@ -123,7 +123,7 @@ csne@1e6,csne3@1e6,clarabel3@1e6,clarabel@1e6 --lam-huge --memory --huge --no-pe
 on the ninth session's VM ("AMD EPYC"), which ran slower this day: the reference took
 0.070-0.077 s at 1e5 (0.042-0.068 s the day before), and the session's starting commit
 d55a012 measured direct 2.3x at 1e6 in a run beside this one (1.8x the day before). The
-lambda sweep condenses the band onto the unknowns lambda changes (``bvpnav.condensed``),
+lambda sweep condenses the band onto the unknowns lambda changes (``bvpnav.linalg.condensed``),
 the L-curve steps by a degree-7 Hermite model (12 evaluations, was 14), GCV takes the
 condensed log-determinant; the direct path is unchanged::
 

@@ -42,7 +42,7 @@ from _memory import own_peak_mb, run_case
 
 import bvpnav
 from bvpnav.constraints import Position
-from bvpnav.lsq import _LDL, least_squares_form
+from bvpnav.linalg.lsq import _LDL, least_squares_form
 from bvpnav.scenarios import cubic_prior, quintic_trajectory
 
 PAPER_CSNE_MS = {500: 1, 1000: 2, 2000: 4, 4000: 8, 8000: 16, 16000: 34, 32000: 103, 64000: 212,

@@ -10,7 +10,7 @@ import pandas as pd
 
 from .backends import ACCURACIES, available_solvers, check_options, resolve_solver
 from .errors import BvpnavError, InputError, SolveError
-from .lsq import least_squares_form, non_least_squares_term
+from .linalg.lsq import least_squares_form, non_least_squares_term
 from .solve import check_lam, choose_lambda
 
 __all__ = ["compare_solvers", "COLUMNS"]

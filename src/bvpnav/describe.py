@@ -19,7 +19,7 @@ import scipy.sparse.linalg as spla
 from .cvx import current_lam
 from .errors import InputError
 from .formulation import as_formulation
-from .lsq import least_squares_form
+from .linalg.lsq import least_squares_form
 from .model import Affine
 
 __all__ = ["describe", "matrices", "Matrices"]

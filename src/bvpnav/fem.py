@@ -77,7 +77,7 @@ def tridiagonal(lower: np.ndarray, diag: np.ndarray, upper: np.ndarray) -> sp.cs
     DIA-to-CSR conversion, about five times slower at N = 1e6; 64-bit index arrays would be
     converted by the constructor, a third of the time). The diagonals are kept on the
     matrix as ``_bvpnav_diagonals`` (``(lower, diag, upper)``, read by
-    :func:`bvpnav.lsq.fem_rows_by_diagonals` instead of extracting them again)."""
+    :func:`bvpnav.linalg.lsq.fem_rows_by_diagonals` instead of extracting them again)."""
     n = diag.size
     itype = np.int32 if 3 * n < 2**31 else np.int64
     data = np.empty(3 * n - 2)

@@ -21,10 +21,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import fem
-from .banded import as_csr, row_scaled
 from .errors import InputError
 from .grid import as_times
 from .imu import ImuData
+from .sparse import as_csr, row_scaled
 
 __all__ = ["Affine", "Cone", "NavModel", "RowLabels"]
 
@@ -504,7 +504,7 @@ class NavModel:
         -----
         It depends on the grid and the error model only (not on the accelerations, so
         :meth:`with_acc`'s copies share it): made once per axis, read by :meth:`fem_blocks`,
-        :func:`bvpnav.lsq.fem_rows_by_diagonals` and the observability check. The other
+        :func:`bvpnav.linalg.lsq.fem_rows_by_diagonals` and the observability check. The other
         columns, zero, are neither multiplied nor stored (three axes with six parameters at
         N = 1e6: a dense (N, q) product per axis was 48 MB, two thirds of it zeros).
         """
@@ -538,7 +538,7 @@ class NavModel:
 
         Notes
         -----
-        The equality rows of :func:`bvpnav.lsq.least_squares_form`: stacking the FEM rows
+        The equality rows of :func:`bvpnav.linalg.lsq.least_squares_form`: stacking the FEM rows
         and a few items' rows copied every FEM entry (three axes with six parameters at
         N = 1e6: 288 MB of fresh memory). With the FEM rows already made, they are stacked.
         """

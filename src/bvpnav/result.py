@@ -359,7 +359,7 @@ class Uncertainty(_Record):
         singular with them (0 normally; the covariance is exact either way).
     border_condition, pivot_condition : float
         Equilibrated condition numbers of the border's Schur complement and the worst
-        block pivot (above :data:`bvpnav.covariance.BORDER_COND_WARN` the solution warns).
+        block pivot (above :data:`bvpnav.linalg.covariance.BORDER_COND_WARN` the solution warns).
     time : float
         Seconds spent.
     """

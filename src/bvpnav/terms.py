@@ -33,8 +33,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import scipy.sparse as sp
 
-from .banded import abs_max
 from .model import Affine
+from .sparse import abs_max
 
 if TYPE_CHECKING:
     import cvxpy as cp

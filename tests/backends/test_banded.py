@@ -15,12 +15,12 @@ import pytest
 import scipy.sparse as sp
 
 import bvpnav
-from bvpnav.banded import MAX_BORDER, BandedKKT, BandPlan, NotBanded
 from bvpnav.constraints import AverageVelocity, Position, Symmetry, Velocity
 from bvpnav.error_models import Bias, ScaleFactor
 from bvpnav.items import registry
 from bvpnav.lam.sweep import DirectSweep
-from bvpnav.lsq import column_nodes, least_squares_form
+from bvpnav.linalg.banded import MAX_BORDER, BandedKKT, BandPlan, NotBanded
+from bvpnav.linalg.lsq import column_nodes, least_squares_form
 
 #: Item kinds that are equality-constrained least squares in the hard and soft modes.
 KINDS = sorted(k for k, cls in registry().items() if cls.example().kind == "equality")
@@ -177,8 +177,9 @@ def test_complex_step_points_keep_the_derivative_accurate_at_large_lambdas(lam):
 def _affine_band(n: int):
     """``(formulation, plan, AffineBand)`` of three axes with a soft velocity item and a
     bias: the band along lambda as the sweep makes it."""
-    from bvpnav.banded import AffineBand, canonical
-    from bvpnav.lsq import banded_plan, least_squares_form
+    from bvpnav.linalg.banded import AffineBand
+    from bvpnav.linalg.lsq import banded_plan, least_squares_form
+    from bvpnav.sparse import canonical
 
     form = problem(Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05), n=n, error_model=Bias()).formulation
     ls = least_squares_form(form, 1.0)
@@ -192,7 +193,7 @@ def _affine_band(n: int):
 def test_affine_band_at_a_complex_lambda_is_the_real_band_plus_the_step(lam):
     """The complex parts at lambda + ih are the real parts at lambda, scaled with the real
     lambda's scales, plus ih times the lambda part so scaled (the band is affine in lambda)."""
-    from bvpnav.banded import _scale_rows
+    from bvpnav.linalg.banded import _scale_rows
 
     form, plan, affine = _affine_band(n=301)
     h = 1e-3 * lam   # large enough to see the imaginary part next to the real one
@@ -234,8 +235,8 @@ def test_affine_band_at_a_lambda_is_the_scaled_assembly_there(lam):
     the rounding of the combination A(1) + (lam - 1) A_1 (an entry made of lambda rows
     alone carries an absolute error of about eps times its size at lambda = 1, a relative
     one of eps / lam: hence the tolerance's 1 / lam below 1)."""
-    from bvpnav.banded import canonical
-    from bvpnav.lsq import least_squares_form
+    from bvpnav.linalg.lsq import least_squares_form
+    from bvpnav.sparse import canonical
 
     form, plan, affine = _affine_band(n=601)
     assert 0 < affine.rows.size < plan.size   # a few rows, not the whole band
@@ -255,7 +256,7 @@ def test_gcv_trace_falls_back_to_probes_when_a_neighbour_factor_is_not_banded(mo
     factor fails there and the sparse LU takes over (it has no log-determinant), the trace
     comes from Hutchinson's probes instead, named in ``trace_method``, and agrees with the
     exact trace within the probes' standard error."""
-    from bvpnav.lsq import factor_form
+    from bvpnav.linalg.lsq import factor_form
 
     prob = problem(Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05), n=60)
     form = prob.formulation
@@ -314,9 +315,10 @@ def test_equal_axes_are_assembled_as_one_run_of_the_whole_band(item, equal, by_d
     whole band, written entry by entry, is that run repeated. Otherwise the whole band; and
     with too many cells to sort (a large problem's FEM rows entry by entry) the whole band
     too, whose equal runs the factorization then finds itself."""
-    from bvpnav import banded
-    from bvpnav.banded import _Stride, canonical
-    from bvpnav.lsq import fem_rows_by_diagonals
+    from bvpnav.linalg import banded
+    from bvpnav.linalg.banded import _Stride
+    from bvpnav.linalg.lsq import fem_rows_by_diagonals
+    from bvpnav.sparse import canonical
 
     prob = problem(item, error_model=Bias())
     form = prob.formulation
@@ -353,7 +355,7 @@ def test_fem_rows_placed_by_diagonals_equal_the_entry_by_entry_assembly(case):
     that block come from the generic product, and a description that does not match E
     (an entry missing) is not used."""
     from bvpnav.constraints import ZeroVelocity
-    from bvpnav.lsq import fem_rows_by_diagonals
+    from bvpnav.linalg.lsq import fem_rows_by_diagonals
     if case == "1-axis":
         prob = problem(n=301)
         t, acc = prob.data.t, prob.data.acc[:, 0]
@@ -392,8 +394,8 @@ def test_the_band_scaled_as_it_is_placed_equals_scaling_the_placed_band(case):
     """The assembly scales the band from its entries' column maxima as it places them;
     that is scale_band on the placed band (column maxima of the whole band), entry for
     entry, with the border parts untouched."""
-    from bvpnav.banded import scale_band
     from bvpnav.constraints import ZeroVelocity
+    from bvpnav.linalg.banded import scale_band
 
     item = {"points": None, "bias": None, "zero-velocity": ZeroVelocity(t0=4.0, t1=5.0),
             "average-velocity": AverageVelocity(t0=[0.5], t1=[9.5], value=[0.1], sigma=0.05)}[case]
@@ -418,7 +420,7 @@ def test_augmented_operator_residual_and_largest_entry_equal_the_dense_matrix():
     shapes with empty rows and columns."""
     import scipy.sparse as sp
 
-    from bvpnav.banded import AugmentedOperator
+    from bvpnav.linalg.banded import AugmentedOperator
 
     rng = np.random.default_rng(0)
     for trial in range(20):
@@ -443,9 +445,9 @@ def test_the_band_written_a_slice_at_a_time_equals_writing_each_block_whole(slic
     """Long sorted writes go into the band a slice of rows at a time (all blocks' parts in
     one slice together); with slices of a few rows (many cuts, blocks ending mid-slice) the
     band is the same as writing every block at once."""
-    import bvpnav.banded as banded
+    import bvpnav.linalg.banded as banded
     from bvpnav.constraints import ZeroVelocity
-    from bvpnav.lsq import fem_rows_by_diagonals
+    from bvpnav.linalg.lsq import fem_rows_by_diagonals
 
     prob = problem(ZeroVelocity(t0=4.0, t1=5.0), n=801, error_model=Bias())
     form = prob.formulation
@@ -466,7 +468,7 @@ def test_evenly_spaced_positions_are_found_as_runs_and_the_rest_goes_entry_by_en
     slices (step > 0), stretches of unknowns in neither band nor border (step 0: their
     entries dropped) and the rest (None: placed entry by entry): the run boundaries fall
     where the step changes, short stretches join the irregular ones."""
-    from bvpnav.banded import MIN_STRIDE_RUN, _affine_runs
+    from bvpnav.linalg.banded import MIN_STRIDE_RUN, _affine_runs
 
     k = 3 * MIN_STRIDE_RUN
     a = 2 * np.arange(k)                              # one axis: r_j, mu_j interleaved
@@ -495,9 +497,9 @@ def test_the_strided_band_writes_equal_the_entry_by_entry_writes(item, monkeypat
     """The FEM diagonals written as strided slices of the band (_Stride) give the band, its
     scale, the border coupling and the border bit for bit as placing every entry by index
     (MIN_STRIDE_RUN beyond any block: no run qualifies)."""
-    import bvpnav.banded as banded
+    import bvpnav.linalg.banded as banded
     from bvpnav.constraints import ZeroVelocity
-    from bvpnav.lsq import fem_rows_by_diagonals
+    from bvpnav.linalg.lsq import fem_rows_by_diagonals
 
     prob = problem(ZeroVelocity(t0=4.0, t1=5.0) if item == "zero-velocity" else None, n=801,
                    error_model=Bias() if item == "bias" else None)
@@ -527,8 +529,8 @@ def test_border_coupling_by_columns_equals_the_summed_coo_assembly(error_model):
     (each a dense FEM column of one parameter); it equals the COO assembly, which sums
     duplicates, and a column reached by two blocks, or rows out of order, take that
     assembly instead (None)."""
-    from bvpnav.banded import _coupling_by_columns
-    from bvpnav.lsq import banded_plan, fem_rows_by_diagonals, least_squares_form
+    from bvpnav.linalg.banded import _coupling_by_columns
+    from bvpnav.linalg.lsq import banded_plan, fem_rows_by_diagonals, least_squares_form
 
     prob = problem(n=201, error_model=error_model)
     form = prob.formulation
@@ -574,8 +576,9 @@ def test_the_real_part_of_a_complex_factors_solve_is_taken_after_the_real_maps(m
     real part of the all-complex ``solve_x``, for one and for several right-hand sides, and
     the same as ``solve_x`` for a real factor; with three axes the eliminated unknowns are
     an index array, with one a slice (``BandPlan.elim_index``)."""
-    from bvpnav.banded import AffineBand, canonical
-    from bvpnav.lsq import banded_plan
+    from bvpnav.linalg.banded import AffineBand
+    from bvpnav.linalg.lsq import banded_plan
+    from bvpnav.sparse import canonical
 
     form = make().formulation
     ls = least_squares_form(form, 1.0)
@@ -602,7 +605,7 @@ def test_row_scaling_keeps_a_canonical_matrix_marked_and_a_zero_scale_is_scanned
     """``row_scaled`` (a lambda's rows) keeps the canonical mark of its source when no scale
     is zero, so ``canonical`` returns it as it is; a zero scale makes explicit zeros, which
     ``canonical`` then removes (an explicit zero must not tie a row to a node)."""
-    from bvpnav.banded import canonical, row_scaled
+    from bvpnav.sparse import canonical, row_scaled
 
     A = canonical(sp.csr_matrix(np.array([[1.0, 0.0, 2.0], [0.0, 3.0, 0.0]])))
     B = row_scaled(A, np.array([2.0, 0.5]))
@@ -619,7 +622,7 @@ def test_band_rows_move_by_slices_and_give_the_index_arrays_own_answer(axes):
     axis interleaves ``r_j`` and ``mu_j``: period 2, two runs per axis) and an index array
     for the rest: the same arrays as numpy's fancy indexing with ``pos_order``, for one and
     several right-hand sides."""
-    from bvpnav.lsq import banded_plan
+    from bvpnav.linalg.lsq import banded_plan
 
     prob = problem(n=2001, error_model=Bias() if axes == 3 else None)
     if axes == 1:
@@ -647,7 +650,7 @@ def test_band_rows_move_by_slices_and_give_the_index_arrays_own_answer(axes):
 def test_moves_of_an_arbitrary_order_equal_fancy_indexing(seed):
     """Orders that are not runs (a random permutation), runs with a remainder, and periods
     up to the limit: ``_Moves`` falls back to index arrays where slices do not cover."""
-    from bvpnav.banded import _Moves
+    from bvpnav.linalg.banded import _Moves
 
     rng = np.random.default_rng(seed)
     n = 3000
@@ -673,8 +676,8 @@ def test_an_answer_whose_last_step_moved_the_residuals_is_refused():
     before it: a factor exact on ``x`` but wrong elsewhere converges on the window (the
     correction 1e-12) while the off-window part grows; the answer is refused with the
     reason, where judging the previous iterate accepted it (found in review)."""
-    from bvpnav.banded import Factorization
-    from bvpnav.lsq import _accepted
+    from bvpnav.linalg.banded import Factorization
+    from bvpnav.linalg.lsq import _accepted
 
     class Stub(Factorization):   # S = I; the factor is slightly off on x and far off elsewhere
         def __init__(self):
@@ -697,7 +700,7 @@ def test_banded_refinement_stops_at_the_presets_tolerance_with_the_answer_at_the
     problem the rounding floor is about 2e-10: the default takes one step, ``high``
     (1e-10) refines until the corrections stall, and the answers agree with each other and
     with the pivoted sparse LU far inside 1e-8 (measured 1e-10 .. 4e-10)."""
-    from bvpnav.lsq import BANDED_TOL, FORWARD_RTOL
+    from bvpnav.linalg.lsq import BANDED_TOL, FORWARD_RTOL
 
     assert all(BANDED_TOL[k] == pytest.approx(1e-2 * FORWARD_RTOL[k]) for k in FORWARD_RTOL)
     prob = problem(Velocity(t=[2.0, 7.0], value=0.3, sigma=0.05), n=4001)

@@ -1,4 +1,4 @@
-"""The lambda sweep's condensed band (bvpnav.condensed.CondensedBand, CondensedKKT): the
+"""The lambda sweep's condensed band (bvpnav.linalg.condensed.CondensedBand, CondensedKKT): the
 unknowns lambda does not touch factored once, a small system per lambda. Its curve points
 must be the whole band's, its selection of the kept unknowns must leave a nonsingular
 interior with every kind of item, and it must step aside where it does not apply."""
@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 import bvpnav
-from bvpnav.banded import BandedKKT, NotBanded
-from bvpnav.condensed import CondensedBand, CondensedKKT
 from bvpnav.constraints import Position, Velocity, ZeroVelocity
 from bvpnav.error_models import Bias
 from bvpnav.lam.sweep import DirectSweep
+from bvpnav.linalg.banded import BandedKKT, NotBanded
+from bvpnav.linalg.condensed import CondensedBand, CondensedKKT
 
 
 def fixes(extra=(), n: int = 4001, every: int = 80, seed: int = 0,

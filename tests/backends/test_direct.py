@@ -131,7 +131,7 @@ def test_one_refinement_step_is_the_forward_error_estimate():
     KKT reference refined six times; measured 4.9e-12 against 3.1e-13). A record that
     misses the preset's bound, or that is of another array, gets a fresh step instead."""
     from bvpnav.backends import resolve_solver, solver_options
-    from bvpnav.lsq import FORWARD_RTOL, Factored, forward_error
+    from bvpnav.linalg.lsq import FORWARD_RTOL, Factored, forward_error
     from bvpnav.solve.verify import verify
 
     prob, _ = table1_problem(2001)
@@ -166,7 +166,7 @@ def test_equality_rows_are_written_once_with_the_fem_rows_a_view_of_their_top(ax
     import scipy.sparse as sp
 
     from bvpnav.error_models import Bias, ScaleFactor
-    from bvpnav.lsq import least_squares_form
+    from bvpnav.linalg.lsq import least_squares_form
 
     rng = np.random.default_rng(1)
     t = np.linspace(0.0, 5.0, 201)

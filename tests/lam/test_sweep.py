@@ -220,7 +220,7 @@ def test_refine_extremum_returns_the_bracket_end_when_the_best_is_there():
 def test_sweep_and_chosen_lambda_share_one_band_plan(monkeypatch):
     """The sweep's banded plan is cached on the formulation; the solve at the chosen lambda
     reuses it (the symbolic analysis is done once per rule solve)."""
-    from bvpnav.banded import BandPlan
+    from bvpnav.linalg.banded import BandPlan
 
     prob, _ = known_noise(0, n=2001)
     built = []
@@ -267,7 +267,7 @@ def test_the_chosen_lambda_is_factored_in_a_buffer_of_the_sweep(monkeypatch, rul
     """After the sweep, the solve at the chosen lambda writes its band into memory the sweep
     used (no fresh band-sized array): one factorization, verified, equal to a fresh solve
     at that lambda, and nothing is kept with the formulation afterwards."""
-    from bvpnav.banded import BandedKKT, KeptFactors
+    from bvpnav.linalg.banded import BandedKKT, KeptFactors
 
     prob, _ = known_noise(0, n=2001)
     factored, buffers = [], []
@@ -291,8 +291,8 @@ def test_the_chosen_lambda_is_factored_in_a_buffer_of_the_sweep(monkeypatch, rul
 def test_the_last_points_factor_is_handed_to_a_solve_at_its_lambda(monkeypatch):
     """A solve at exactly the sweep's last lambda takes that point's factor (no
     factorization) and answers as a fresh solve; at another lambda it factors again."""
-    from bvpnav.banded import BandedKKT
-    from bvpnav.lsq import solve_least_squares
+    from bvpnav.linalg.banded import BandedKKT
+    from bvpnav.linalg.lsq import solve_least_squares
 
     prob, _ = known_noise(1, n=2001)
     form = prob.formulation
@@ -317,7 +317,7 @@ def test_the_last_points_factor_is_handed_to_a_solve_at_its_lambda(monkeypatch):
 def test_a_kept_factor_and_its_buffer_are_handed_out_once():
     """KeptFactors: a factor is taken once; a buffer taken for a new band ends the factor
     that lived in it; spare buffers go first."""
-    from bvpnav.banded import KeptFactors
+    from bvpnav.linalg.banded import KeptFactors
 
     kept = KeptFactors(plan=None)
     a, b, spare = np.zeros((5, 3)), np.zeros((5, 3)), np.zeros((5, 3))
@@ -338,8 +338,8 @@ def test_a_factor_for_other_matrices_of_its_pattern_refines_against_them():
     """BandedKKT.for_matrices: the factor of one lambda's form answers the form of a lambda
     0.1 % away after refinement against that form's own matrices (the solve at the chosen
     lambda measures its residuals on its own form), and refuses another pattern."""
-    from bvpnav.banded import NotBanded
-    from bvpnav.lsq import banded_factor, least_squares_form
+    from bvpnav.linalg.banded import NotBanded
+    from bvpnav.linalg.lsq import banded_factor, least_squares_form
 
     prob, _ = known_noise(0, n=501)
     form = prob.formulation

@@ -69,7 +69,7 @@ class RawSolve:
         ``{"fem": y, label: [y per constraint]}`` in cvxpy's sign convention.
     factored : tuple, optional
         ``(LeastSquaresForm, factorization)`` of the formulation at this ``lam``, reused by
-        verification (direct back ends: a :class:`bvpnav.lsq.Factored`, which also holds
+        verification (direct back ends: a :class:`bvpnav.linalg.lsq.Factored`, which also holds
         the last refinement step's correction of ``x``).
     """
 

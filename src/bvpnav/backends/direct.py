@@ -2,10 +2,10 @@
 
 Registered in the back-end table on import (the folder is discovered):
 
-- ``direct``: one factorization of the KKT system (see :mod:`bvpnav.lsq`) with the
+- ``direct``: one factorization of the KKT system (see :mod:`bvpnav.linalg.lsq`) with the
   error-model parameters eliminated through their Schur complement, then iterative
   refinement against the exact augmented system. Option ``method``: ``"banded"``
-  (:mod:`bvpnav.banded`: unknowns ordered by time node, LAPACK's banded LU, far rows and
+  (:mod:`bvpnav.linalg.banded`: unknowns ordered by time node, LAPACK's banded LU, far rows and
   parameters bordered; the default for the acceleration form), ``"ldl"`` (QDLDL on the
   statically regularized quasi-definite matrix; the fallback when rows are not local),
   ``"lu"`` (SuperLU with pivoting; the default for the load form, whose residuals must
@@ -33,7 +33,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import InputError, SolveError
-from ..lsq import (
+from ..linalg.lsq import (
     BANDED_TOL,
     BorderedLU,
     Factored,

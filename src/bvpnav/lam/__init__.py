@@ -61,7 +61,7 @@ class LambdaRule:
     #: Whether it reads the points' ``quasi`` (the norm of the whole :math:`dx/d\lambda`);
     #: rules that read only the lambda rows' change (``deta2``, ``d2eta2``) set it False,
     #: and a sweep of such rules alone solves for :math:`dx/d\lambda` on those rows' reach
-    #: (:class:`bvpnav.condensed.CondensedKKT`; ``quasi`` is then NaN).
+    #: (:class:`bvpnav.linalg.condensed.CondensedKKT`; ``quasi`` is then NaN).
     reads_quasi: bool = True
     #: Whether its refinement reads the exact slope of its score at every point (the
     #: direct sweep's ``d2eta2``, :func:`refine_with_slopes`; it needs

@@ -12,7 +12,7 @@ lambda-weighted items. Every rule looks at the curve :math:`\\lambda \\mapsto
 Two sweeps:
 
 - :class:`DirectSweep` (problems that are equality-constrained least squares): one sparse
-  factorization per lambda (:class:`bvpnav.lsq.BorderedLU`), the derivative
+  factorization per lambda (:class:`bvpnav.linalg.lsq.BorderedLU`), the derivative
   :math:`dx/d\\lambda` from the same factorization, hence the L-curve curvature and the
   quasi-optimality function *exactly* at every lambda; GCV's trace by exact columns for
   small problems and Hutchinson's randomized estimator (seeded Rademacher probes, one
@@ -34,15 +34,12 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..banded import AffineBand, BandedKKT, KeptFactors, NotBanded, canonical
-from ..condensed import CondensedBand, CondensedKKT
 from ..cvx import compiled
 from ..errors import InputError
 from ..formulation import LAM_RANGE, as_formulation
-from ..log import once, progress_enabled, sweeping
-from ..log import progress as progress_bar
-from ..log import warn as _warn
-from ..lsq import (
+from ..linalg.banded import AffineBand, BandedKKT, KeptFactors, NotBanded
+from ..linalg.condensed import CondensedBand, CondensedKKT
+from ..linalg.lsq import (
     BAND_AFFINE,
     BAND_FACTORS,
     banded_factor,
@@ -52,7 +49,11 @@ from ..lsq import (
     least_squares_form,
     non_least_squares_term,
 )
+from ..log import once, progress_enabled, sweeping
+from ..log import progress as progress_bar
+from ..log import warn as _warn
 from ..plot import lcurve
+from ..sparse import canonical
 from . import get_rule, rule_names
 
 __all__ = ["LambdaCurve", "DirectSweep", "CvxpySweep", "sweep_curve", "check_range", "DIRECT_POINTS",
@@ -220,7 +221,7 @@ class DirectSweep:
                 self.factorization = f"lu (banded failed: {exc})"
 
     def _affine_parts(self):
-        """The band along lambda (:class:`bvpnav.banded.AffineBand`): affine in lambda
+        """The band along lambda (:class:`bvpnav.linalg.banded.AffineBand`): affine in lambda
         when every lambda-weighted row is folded (unknowns they touch are never
         eliminated), so a new lambda costs one copy of the scaled band, a few rows and one
         ``dgbtrf``, no assembly; False when a lambda row is not folded."""
@@ -238,8 +239,8 @@ class DirectSweep:
         return self._parts
 
     def _combined(self, lam: float, buffer: int = 0, h: float = 0.0) -> tuple | None:
-        """The scaled banded parts at ``lam`` (:meth:`bvpnav.banded.AffineBand.at`), or at
-        ``lam + ih`` with ``h`` (:meth:`~bvpnav.banded.AffineBand.at_complex`), or None.
+        """The scaled banded parts at ``lam`` (:meth:`bvpnav.linalg.banded.AffineBand.at`), or at
+        ``lam + ih`` with ``h`` (:meth:`~bvpnav.linalg.banded.AffineBand.at_complex`), or None.
 
         The band is written into one of three arrays the sweep owns (``buffer`` 0: the
         factor of the current point, dead when the next point starts; 1: the log-
@@ -257,10 +258,10 @@ class DirectSweep:
         return affine.at_complex(lam, h, out=bufs[buffer]) if h else affine.at(lam, out=bufs[buffer])
 
     def _condensed(self):
-        """The sweep's :class:`bvpnav.condensed.CondensedBand` (made at the first point), or
+        """The sweep's :class:`bvpnav.linalg.condensed.CondensedBand` (made at the first point), or
         False: no band affine in lambda, a border, several runs, GCV's trace by exact
         columns or probes (they take the whole factor; the log-determinant's derivative is
-        the small system's, :meth:`bvpnav.condensed.CondensedBand.logdet_slope`), or lambda
+        the small system's, :meth:`bvpnav.linalg.condensed.CondensedBand.logdet_slope`), or lambda
         touching too much."""
         if self._cond is None:
             self._cond = False
@@ -274,7 +275,7 @@ class DirectSweep:
 
     def _plain_unknowns(self) -> np.ndarray:
         """Which reduced unknowns (``x``, the unfolded residuals, the multipliers) are
-        positions or FEM multipliers (:class:`bvpnav.condensed.CondensedBand` keeps every
+        positions or FEM multipliers (:class:`bvpnav.linalg.condensed.CondensedBand` keeps every
         node that holds another)."""
         pl, model = self._plan, self.model
         n, nu = pl.n, pl.unfolded.size
@@ -289,7 +290,7 @@ class DirectSweep:
         """The banded factor with the plan made once (the pattern is the same at every
         lambda), or the pivoted sparse LU when the problem is not banded. The last banded
         factor at a ``lam`` is kept for :meth:`hand_off`. With ``condensed``, a
-        :class:`bvpnav.condensed.CondensedKKT` where the sweep has a condensed band."""
+        :class:`bvpnav.linalg.condensed.CondensedKKT` where the sweep has a condensed band."""
         cond = self._condensed() if condensed and lam is not None else False
         if cond:
             try:
@@ -311,8 +312,8 @@ class DirectSweep:
 
     def hand_off(self) -> None:
         """Hand the last real point's factor and the buffers no factor uses to the solve at
-        the chosen lambda (:data:`bvpnav.lsq.BAND_FACTORS`, read by
-        :func:`bvpnav.lsq.banded_factor`): its band is written into memory the sweep has
+        the chosen lambda (:data:`bvpnav.linalg.lsq.BAND_FACTORS`, read by
+        :func:`bvpnav.linalg.lsq.banded_factor`): its band is written into memory the sweep has
         already touched instead of a fresh array, or, when it is the last point's lambda,
         not factored again. The sweep's buffers are then the solve's: the sweep evaluates
         no more points after this."""
@@ -333,7 +334,7 @@ class DirectSweep:
         self.form.cache[BAND_FACTORS] = kept
 
     def _logdet(self, lam: float) -> float:
-        """:meth:`bvpnav.banded.BandedKKT.logdet` at ``lam``: from the combined parts by
+        """:meth:`bvpnav.linalg.banded.BandedKKT.logdet` at ``lam``: from the combined parts by
         the numeric factorization alone where the band is affine in lambda."""
         try:
             parts = self._combined(lam, buffer=1)
@@ -416,7 +417,7 @@ class DirectSweep:
         -----
         The folded system is affine in lambda, :math:`K(\lambda)`; factored at
         :math:`\lambda + ih` (:data:`COMPLEX_STEP` relative) its pivots give
-        :math:`d\log|\det K|/d\lambda` (:meth:`bvpnav.banded.BandedKKT.logdet_step`,
+        :math:`d\log|\det K|/d\lambda` (:meth:`bvpnav.linalg.banded.BandedKKT.logdet_step`,
         exact to rounding), and since :math:`K(\lambda + ih)^{-1} = K^{-1} - ih\,K^{-1}
         K' K^{-1} + O(h^2)` the real part of a solve with the real right-hand side is the
         point. One ``zgbtrf`` (about 1.7 times a ``dgbtrf``) and one ``zgbtrs`` replace the
@@ -574,9 +575,9 @@ class DirectSweep:
 
         since :math:`Z^T H Z = Z^T (D_0^T D_0 + D_p^T D_p + \lambda D_1^T D_1) Z`. With
         a factor at :math:`\lambda + ih` (``h`` given, :meth:`_complex_point`) the
-        derivative is the complex step :meth:`bvpnav.banded.BandedKKT.logdet_step`, exact to
+        derivative is the complex step :meth:`bvpnav.linalg.banded.BandedKKT.logdet_step`, exact to
         rounding; otherwise (a band not affine in lambda) a central difference of
-        :meth:`bvpnav.banded.BandedKKT.logdet` at :math:`\lambda e^{\pm\delta}` (two more
+        :meth:`bvpnav.linalg.banded.BandedKKT.logdet` at :math:`\lambda e^{\pm\delta}` (two more
         factorizations, :math:`\delta = 10^{-3}`: truncation error about
         :math:`\delta^2/6` relative). :math:`\Sigma` on the few prior rows by solves with
         this factorization. Tests compare both with the trace by exact columns.

@@ -38,7 +38,7 @@ import scipy.sparse.linalg as spla
 
 from ..error_models._base import KEPT_ZERO, SensorCorrection, SensorErrorModel, sensor_axes
 from ..formulation import as_formulation
-from ..lsq import least_squares_form
+from ..linalg.lsq import least_squares_form
 
 __all__ = ["RELATIVE_SV_WARN", "GAIN_LIMIT", "information_matrix", "relative_singular_values",
            "assess_conditioning"]
@@ -93,7 +93,7 @@ def information_matrix(problem, lam: float, factored: tuple | None = None) -> np
 
     Notes
     -----
-    With the augmented matrix ``S`` of :mod:`bvpnav.lsq` (unknowns ``rho, x, mu``) split
+    With the augmented matrix ``S`` of :mod:`bvpnav.linalg.lsq` (unknowns ``rho, x, mu``) split
     into the parameters ``L`` and the rest ``B``,
 
     .. math:: H = S_{LL} - S_{LB} S_{BB}^{-1} S_{BL},

@@ -33,8 +33,8 @@ import numpy as np
 from ..errors import InputError
 from ..formulation import as_formulation
 from ..imu import STANDARD_GRAVITY
+from ..linalg.lsq import non_least_squares_term
 from ..log import warn
-from ..lsq import non_least_squares_term
 from ..result import Solution
 
 __all__ = ["check", "assess", "attach", "MISFIT_HIGH", "MISFIT_LOW", "MISFIT_MIN_DOF", "ACC_BIAS_LIMIT",

@@ -16,7 +16,7 @@ from ..errors import InputError
 from ..formulation import as_formulation
 from ..lam import rule_names
 from ..lam.sweep import LambdaCurve, sweep_curve
-from ..lsq import BAND_AFFINE, BAND_FACTORS
+from ..linalg.lsq import BAND_AFFINE, BAND_FACTORS
 from ..result import Solution
 from .chain import solve_fixed
 from .options import SolveOptions, prepare

@@ -1,6 +1,6 @@
 """The last stage of a solve: standard deviations of the answer (``solve(uncertainty=...)``).
 
-What the numbers are (:mod:`bvpnav.covariance` computes them, in O(N)):
+What the numbers are (:mod:`bvpnav.linalg.covariance` computes them, in O(N)):
 
 - with ``uncertainty=True`` the covariance of the estimate under the weights as stated:
   the data rows weighted by ``1/sigma_a`` per sample, each soft item by
@@ -27,8 +27,8 @@ import numpy as np
 import pandas as pd
 from scipy import stats as _stats
 
-from ..covariance import BORDER_COND_WARN, posterior
 from ..formulation import as_formulation
+from ..linalg.covariance import BORDER_COND_WARN, posterior
 from ..log import warn
 from ..result import Solution, Uncertainty
 

@@ -14,10 +14,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..backends import VERIFY_RTOL
-from ..banded import abs_max
 from ..formulation import as_formulation
-from ..lsq import FORWARD_RTOL, check_factor, forward_error, least_squares_form
+from ..linalg.lsq import FORWARD_RTOL, check_factor, forward_error, least_squares_form
 from ..result import Verification
+from ..sparse import abs_max
 from ..terms import transposed_product
 from .conditioning import assess_conditioning
 
@@ -56,7 +56,7 @@ def _nonfinite(form, xval: np.ndarray) -> list[str]:
 def _forward(form, xval, lam, duals, factored, bound: float) -> tuple[float | None, tuple | None]:
     """The forward-error estimate, factoring once (shared with the conditioning); the back
     end's last refinement step on this very ``xval`` when its correction meets ``bound``
-    (:class:`bvpnav.lsq.Factored`: an upper estimate; one more step otherwise)."""
+    (:class:`bvpnav.linalg.lsq.Factored`: an upper estimate; one more step otherwise)."""
     last = getattr(factored, "refined", None)
     if last is not None and last[0] is xval and np.isfinite(last[1]) and last[1] <= bound:
         return float(last[1]), factored
@@ -82,12 +82,12 @@ def verify(form, xval: np.ndarray, lam: float, accuracy: str = "default", duals:
     lam : float
     accuracy : {"low", "default", "high"}
         Selects the tolerances (:data:`bvpnav.backends.VERIFY_RTOL`,
-        :data:`bvpnav.lsq.FORWARD_RTOL`).
+        :data:`bvpnav.linalg.lsq.FORWARD_RTOL`).
     duals : dict, optional
         cvxpy-convention duals (for stationarity and the forward error).
     factored : (LeastSquaresForm, factorization), optional
         The direct back end's factorization at this ``lam``, reused (with
-        :class:`bvpnav.lsq.Factored`'s record of the last refinement step, its correction
+        :class:`bvpnav.linalg.lsq.Factored`'s record of the last refinement step, its correction
         is the forward-error estimate when it meets the preset's bound).
 
     Returns

@@ -1,6 +1,6 @@
 """The least-squares KKT system as a banded matrix with a border: O(N) factorizations.
 
-The augmented system of :mod:`bvpnav.lsq`,
+The augmented system of :mod:`bvpnav.linalg.lsq`,
 
 .. math::
 
@@ -49,6 +49,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.linalg import lapack
 
+from ..sparse import abs_max, as_csr, canonical
+
 __all__ = ["BandedKKT", "BandPlan", "DiagonalRows", "NotBanded", "Factorization", "AugmentedOperator",
            "KeptFactors",
            "row_span", "MAX_BAND", "MAX_BORDER", "FOLD_SPAN"]
@@ -69,10 +71,6 @@ class NotBanded(ValueError):
     """The problem's rows are not local enough for the banded factorization (says why)."""
 
 
-def as_csr(A) -> sp.csr_matrix:
-    """``A`` in CSR form, itself when it already is (``scipy.sparse.csr_matrix(A)`` copies
-    even a CSR matrix)."""
-    return A if sp.issparse(A) and A.format == "csr" else sp.csr_matrix(A)
 
 
 def row_span(A: sp.csr_matrix, colnode: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -101,13 +99,6 @@ def column_squares(A: sp.csr_matrix, cols: np.ndarray) -> np.ndarray:
     return np.bincount(A.indices, weights=A.data ** 2, minlength=A.shape[1])[cols]
 
 
-def abs_max(v: np.ndarray) -> float:
-    """``max |v|`` of a real array without its absolute-value copy (0 for an empty one)."""
-    if not v.size:
-        return 0.0
-    if np.iscomplexobj(v):
-        return float(np.max(np.abs(v)))
-    return max(float(v.max()), -float(v.min()))
 
 
 def residual(S, rhs: np.ndarray, z: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
@@ -120,7 +111,7 @@ def residual(S, rhs: np.ndarray, z: np.ndarray, out: np.ndarray | None = None) -
 
 
 class AugmentedOperator:
-    """The augmented matrix ``S`` of :mod:`bvpnav.lsq` as an operator (never assembled).
+    """The augmented matrix ``S`` of :mod:`bvpnav.linalg.lsq` as an operator (never assembled).
 
     Parameters
     ----------
@@ -202,33 +193,8 @@ class Factorization:
         return z, k, (0.0 if k == 0 else corr)
 
 
-def canonical(A: sp.spmatrix) -> sp.csr_matrix:
-    """``A`` as CSR without duplicates or explicit zeros (a copy when it had any: an explicit
-    zero must not tie a row to a node). A matrix found canonical is marked with its data
-    array, so that asking again (a lambda sweep's ``E`` at every point) does not scan it."""
-    A = as_csr(A)
-    if getattr(A, "_bvpnav_canonical", None) is A.data and A.has_canonical_format:
-        return A
-    if not A.has_canonical_format or (A.data.size and not np.all(A.data)):
-        A = A.copy()
-        A.sum_duplicates()
-        A.eliminate_zeros()
-    A._bvpnav_canonical = A.data
-    return A
 
 
-def row_scaled(A: sp.csr_matrix, k: np.ndarray, entries: np.ndarray | None = None) -> sp.csr_matrix:
-    """``diag(k) A`` for a CSR ``A`` (a new matrix sharing ``A``'s index arrays, so in
-    canonical format when ``A`` is), marked canonical when ``A`` is marked
-    (:func:`canonical`) and no ``k`` is zero; ``entries`` (optional)
-    is ``A``'s row of every stored entry, ``np.repeat(arange(m), diff(indptr))``."""
-    rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr)) if entries is None else entries
-    out = sp.csr_matrix((A.data * k[rows], A.indices, A.indptr), shape=A.shape)
-    if A.has_canonical_format:   # the same sorted, unique indices
-        out.has_canonical_format = True
-    if getattr(A, "_bvpnav_canonical", None) is A.data and np.all(k):
-        out._bvpnav_canonical = out.data
-    return out
 
 
 def _row_maxima(ab: np.ndarray) -> np.ndarray:
@@ -717,7 +683,7 @@ class AffineBand:
 
 class KeptFactors:
     """A lambda sweep's last factorizations, handed to the solve at the chosen lambda
-    (:func:`bvpnav.lsq.banded_factor`), and the sweep's band buffers that no factor needs.
+    (:func:`bvpnav.linalg.lsq.banded_factor`), and the sweep's band buffers that no factor needs.
 
     Each is handed out once: a factor taken is the solve's own, and a buffer taken (for a
     new factor written in place) ends the factor that lived in it.
@@ -771,7 +737,7 @@ class KeptFactors:
 @dataclass(eq=False)
 class DiagonalRows:
     """The first :attr:`rows` rows of ``E`` by their diagonals (the FEM rows, see
-    :func:`bvpnav.lsq.fem_rows_by_diagonals`): the plan places them by formula, a few
+    :func:`bvpnav.linalg.lsq.fem_rows_by_diagonals`): the plan places them by formula, a few
     arrays of length N, instead of entry by entry.
 
     Attributes
@@ -1749,7 +1715,7 @@ class BandedKKT(Factorization):
     # ---------------------------------------------------------- conditioning
     @property
     def keep(self):
-        """Not None when there are error-model parameters (as :class:`bvpnav.lsq.BorderedLU`)."""
+        """Not None when there are error-model parameters (as :class:`bvpnav.linalg.lsq.BorderedLU`)."""
         return True if self.params.size else None
 
     @property

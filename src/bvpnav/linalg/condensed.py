@@ -4,7 +4,7 @@ On the speed benchmark's 1e5 samples with a position fix a second, lambda change
 of the band's 200,004 unknowns: :class:`CondensedBand` factors the others once for the
 whole sweep and forms their Schur complement onto the kept ones, and each lambda factors
 that small band (:class:`CondensedKKT`), instead of copying and factoring the whole band
-(:class:`bvpnav.banded.AffineBand`) at every point.
+(:class:`bvpnav.linalg.banded.AffineBand`) at every point.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ __all__ = ["CondensedBand", "CondensedKKT"]
 
 def _band_of(rows: np.ndarray, cols: np.ndarray, vals: np.ndarray, n: int, kl: int) -> np.ndarray:
     """Entries ``A[rows, cols] += vals`` of an (n, n) matrix of bandwidth ``kl`` in the
-    LAPACK layout of :mod:`bvpnav.banded` (C order (n, 3 kl + 1), entry ``(j, kl + s)`` =
+    LAPACK layout of :mod:`bvpnav.linalg.banded` (C order (n, 3 kl + 1), entry ``(j, kl + s)`` =
     ``A[j + s - kl, j]``)."""
     flat = cols * (3 * kl + 1) + (2 * kl + rows - cols)
     return np.bincount(flat, weights=vals, minlength=n * (3 * kl + 1)).reshape(n, 3 * kl + 1)
@@ -199,7 +199,7 @@ class CondensedBand:
         :math:`K` fixed, so the derivative is that of :math:`\log|\det S|`: the pivots of
         :math:`S(\lambda + ih) = S(\lambda) + ih\tilde A_{1,TT}` (``zgbtrf``) give
         :math:`\sum_j \operatorname{Im} U_{jj} / \operatorname{Re} U_{jj} / h`, exact to
-        rounding as in :meth:`bvpnav.banded.BandedKKT.logdet_step`.
+        rounding as in :meth:`bvpnav.linalg.banded.BandedKKT.logdet_step`.
         """
         ab = self._S1 + complex(lam - 1.0, h) * self._A1
         lu, _, info = lapack.zgbtrf(ab.T, self.kT, self.kT, overwrite_ab=1)
@@ -210,7 +210,7 @@ class CondensedBand:
 
     def buffer(self) -> np.ndarray:
         """The band-sized array of the interior's factor, dead once the sweep is done (for
-        :class:`bvpnav.banded.KeptFactors`)."""
+        :class:`bvpnav.linalg.banded.KeptFactors`)."""
         return self._K
 
     def at(self, lam: float) -> tuple:

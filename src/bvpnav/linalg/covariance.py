@@ -24,7 +24,7 @@ residuals and FEM multipliers of node ``j``, and the rows of local items next to
 which makes ``K`` block tridiagonal except for a border: the end velocities, the first
 position, the error-model parameters and the rows of non-local items (average
 velocities, symmetry). The block-tridiagonal part is factorised by cyclic reduction
-(:mod:`bvpnav.selinv`), which also gives its inverse on its own pattern; the border enters
+(:mod:`bvpnav.linalg.selinv`), which also gives its inverse on its own pattern; the border enters
 through its Schur complement (a few right-hand sides). Everything is O(N) in time and
 memory and vectorized.
 
@@ -42,11 +42,12 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from .banded import canonical, row_span
-from .errors import InputError, SolveError
-from .formulation import as_formulation
+from ..errors import InputError, SolveError
+from ..formulation import as_formulation
+from ..model import Affine
+from ..sparse import canonical
+from .banded import row_span
 from .lsq import LeastSquaresForm, least_squares_form
-from .model import Affine
 from .selinv import CyclicReduction, equilibrated_inverse, symmetric_scale
 
 __all__ = ["Covariance", "posterior", "quadratic_model", "MAX_BORDER_ROWS", "BORDER_COND_WARN"]

@@ -35,6 +35,9 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ..formulation import as_formulation
+from ..model import Affine
+from ..sparse import abs_max, canonical, row_scaled
 from .banded import (
     BandedKKT,
     BandPlan,
@@ -42,13 +45,8 @@ from .banded import (
     Factorization,
     KeptFactors,
     NotBanded,
-    abs_max,
-    canonical,
     residual,
-    row_scaled,
 )
-from .formulation import as_formulation
-from .model import Affine
 
 __all__ = ["LeastSquaresForm", "least_squares_form", "non_least_squares_term", "forward_error",
            "check_factor", "BorderedLU", "banded_plan", "banded_factor", "fem_rows_by_diagonals",
@@ -414,7 +412,7 @@ def column_nodes(model, interleave: bool = False) -> np.ndarray:
 
 def fem_rows_by_diagonals(problem) -> DiagonalRows:
     """The FEM rows (the first ``N d`` rows of a form's ``E``) of a formulation's model as
-    :class:`~bvpnav.banded.DiagonalRows`: per axis the tridiagonal ``K`` on the positions
+    :class:`~bvpnav.linalg.banded.DiagonalRows`: per axis the tridiagonal ``K`` on the positions
     and ``M`` on the acceleration residuals, the dense ``M G`` columns of the error-model
     parameters, and the end velocities' two entries. Kept in the formulation's cache with
     the model it describes."""
@@ -447,13 +445,13 @@ def fem_rows_by_diagonals(problem) -> DiagonalRows:
     return out
 
 
-#: The formulation-cache key of a lambda sweep's :class:`~bvpnav.banded.AffineBand`
+#: The formulation-cache key of a lambda sweep's :class:`~bvpnav.linalg.banded.AffineBand`
 #: (``(plan, band)``): the sweep stores it, :func:`banded_factor` reads it, and the rule
 #: stage drops it once the chosen lambda is solved.
 BAND_AFFINE = "band_affine"
 
 #: The formulation-cache key of a lambda sweep's last factorizations
-#: (:class:`~bvpnav.banded.KeptFactors`): the solve at the chosen lambda takes the factor
+#: (:class:`~bvpnav.linalg.banded.KeptFactors`): the solve at the chosen lambda takes the factor
 #: at that lambda when one is kept, else writes its band into a buffer the sweep used; the
 #: rule stage drops them with :data:`BAND_AFFINE`.
 BAND_FACTORS = "band_factors"
@@ -469,7 +467,7 @@ def banded_plan(form: LeastSquaresForm, problem) -> BandPlan:
 
     Raises
     ------
-    bvpnav.banded.NotBanded
+    bvpnav.linalg.banded.NotBanded
         When rows couple distant instants beyond the banded path's limits (the caller falls
         back to a sparse factorization).
     """
@@ -495,14 +493,14 @@ def banded_plan(form: LeastSquaresForm, problem) -> BandPlan:
 
 
 def banded_factor(form: LeastSquaresForm, problem, plan=None, parts=None) -> BandedKKT:
-    """:class:`bvpnav.banded.BandedKKT` of a form; ``plan`` (:func:`banded_plan`) from an
+    """:class:`bvpnav.linalg.banded.BandedKKT` of a form; ``plan`` (:func:`banded_plan`) from an
     earlier factor of the same pattern is reused, and ``parts`` assembled values with it
-    (by default the lambda sweep's :class:`~bvpnav.banded.AffineBand` at the form's lambda
+    (by default the lambda sweep's :class:`~bvpnav.linalg.banded.AffineBand` at the form's lambda
     when the formulation has one, else an assembly).
 
     Raises
     ------
-    bvpnav.banded.NotBanded
+    bvpnav.linalg.banded.NotBanded
         As :func:`banded_plan`.
     """
     formulation = as_formulation(problem)
@@ -510,7 +508,7 @@ def banded_factor(form: LeastSquaresForm, problem, plan=None, parts=None) -> Ban
     if parts is None and form.lam is not None:
         # after a lambda sweep of this formulation: its factor at this lambda when it kept
         # one (its last point's), else its scaled band at any lambda is one copy
-        # (bvpnav.banded.AffineBand) into a buffer the sweep already touched: the solve at
+        # (bvpnav.linalg.banded.AffineBand) into a buffer the sweep already touched: the solve at
         # the chosen lambda assembles nothing
         kept = formulation.cache.get(BAND_FACTORS)
         kept = kept if isinstance(kept, KeptFactors) and kept.plan is plan else None
@@ -534,7 +532,7 @@ def factor_form(form: LeastSquaresForm, problem, method: str = "lu", delta: floa
     multipliers (the augmented matrix already has ``-I`` on the residual rows); several
     times faster, but its answers need refinement against the exact matrix.
     ``method="banded"``: :func:`banded_factor` (raises
-    :class:`~bvpnav.banded.NotBanded` for rows that are not local).
+    :class:`~bvpnav.linalg.banded.NotBanded` for rows that are not local).
     """
     if method == "banded":
         return banded_factor(form, problem)
