@@ -32,10 +32,16 @@ def test_registry_holds_the_foundation_items():
 @pytest.mark.parametrize("name", ITEMS)
 def test_item_in_a_solved_problem(name):
     """Every item (soft) joins a well-posed problem and the solve is verified."""
-    item = item_class(name).example()
-    t = np.linspace(0.0, 10.0, 101)
-    acc = np.column_stack([np.sin(t), np.cos(t), 0.1 * t])
-    prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=acc))
+    cls = item_class(name)
+    item = cls.example()
+    model = cls.example_model()  # the model the example is written for, when it is not the default
+    if model is None:
+        t = np.linspace(0.0, 10.0, 101)
+        acc = np.column_stack([np.sin(t), np.cos(t), 0.1 * t])
+        prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=acc))
+    else:
+        prob = bvpnav.NavigationProblem(model.data, error_model=model.error_model if cls.needs_error_model
+                                        else None)
     prob.add(bvpnav.constraints.Position(t=[0.0, 10.0], value=0.0))
     kw = {"mode": None, "tol": None, "huber": None, "sigma": 1.0 if item.kind != "cone" else None}
     prob.add(dataclasses.replace(item, **kw))

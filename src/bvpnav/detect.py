@@ -481,22 +481,30 @@ def intervals_from_mask(t, mask, *, min_duration: float = 0.0) -> list[tuple[flo
     return [(float(a), float(b)) for a, b in zip(t0[keep], t1[keep], strict=True)]
 
 
-def zero_velocity_items(intervals, **item_kw: Any) -> list:
-    """One :class:`bvpnav.constraints.ZeroVelocity` per interval.
+def zero_velocity_items(intervals, angular_rate: float | bool | None = None, **item_kw: Any) -> list:
+    """One :class:`bvpnav.constraints.ZeroVelocity` per interval (and, on request, one
+    :class:`bvpnav.constraints.ZeroAngularRate`).
 
     Parameters
     ----------
     intervals : list of (float, float) or Detection
         ``(t0, t1)`` in s, e.g. from :func:`stationary`.
+    angular_rate : float or True, optional
+        Also say that the body does not turn in each interval: a ``ZeroAngularRate`` with
+        this ``sigma`` (rad/s: the gyro's white noise per sample), or hard with ``True``.
+        It makes a gyro bias observable (it needs a gyro error model such as
+        :class:`bvpnav.error_models.GyroBias`). Default: velocity only.
     **item_kw
-        Passed to every item (``sigma`` in m/s, ``mode``, ``axes``, ``huber``, ...);
-        ``name`` gets the interval's number appended (``"stance 0"``, ...).
+        Passed to every ZeroVelocity (``sigma`` in m/s, ``mode``, ``axes``, ``huber``, ...);
+        ``name`` gets the interval's number appended (``"stance 0"``, ...; the angular-rate
+        items ``"stance 0 rate"``, ...).
 
     Returns
     -------
-    list of ZeroVelocity
+    list of ZeroVelocity (and ZeroAngularRate)
+        The velocity items first, then the angular-rate items, in interval order.
     """
-    from bvpnav.constraints import ZeroVelocity
+    from bvpnav.constraints import ZeroAngularRate, ZeroVelocity
 
     if isinstance(intervals, Detection):
         intervals = intervals.intervals
@@ -507,4 +515,10 @@ def zero_velocity_items(intervals, **item_kw: Any) -> list:
         if name is not None:
             kw["name"] = f"{name} {k}"
         out.append(ZeroVelocity(t0=float(t0), t1=float(t1), **kw))
+    if angular_rate is None or angular_rate is False:
+        return out
+    sigma = None if angular_rate is True else angular_rate
+    for k, (t0, t1) in enumerate(intervals):
+        kw = {} if name is None else {"name": f"{name} {k} rate"}
+        out.append(ZeroAngularRate(t=(float(t0), float(t1)), sigma=sigma, **kw))
     return out

@@ -141,6 +141,10 @@ class Item:
     #: True for an item that cannot compile before it is linearized about a trajectory
     #: (only :class:`Linearizable` items ever say so).
     needs_linearization: ClassVar[bool] = False
+    #: True for an item whose rows act only on error-model parameters (a gyro stance acts on
+    #: the gyro bias): the contract check then solves it with its :meth:`example_model`'s
+    #: error model.
+    needs_error_model: ClassVar[bool] = False
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
@@ -220,6 +224,13 @@ class Item:
         (``tests/test_contract.py``) can exercise it without a list to maintain.
         """
         raise NotImplementedError(f"{cls.__name__} must implement example() for the contract test")
+
+    @classmethod
+    def example_model(cls):
+        """The :class:`~bvpnav.NavModel` that :meth:`example` is written for, or None for the
+        default (three axes x, y, z on [0, 10] s, navigation-frame accelerations). An item
+        that needs strapdown data or an error model returns one."""
+        return None
 
     def math(self) -> str:
         """One line of plain-text mathematics for ``describe()``."""

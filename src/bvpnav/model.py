@@ -622,6 +622,57 @@ class NavModel:
         out = self._interleave(parts, times.size)
         return Affine(out.A, out.c, self._labels("v", times, ax))
 
+    def body_rate(self, t, axes=None, what: str = "body rate") -> Affine:
+        r"""The corrected gyro rates in the body frame at times ``t`` (rad/s), affine in the
+        gyro error models' parameters: rows ordered time-major, then body axis.
+
+        Parameters
+        ----------
+        t : array_like of float
+            Times, s, inside the window (between samples the rates are linear).
+        axes : str or sequence of str, optional
+            Body axes among ``"x", "y", "z"`` (default all three).
+        what : str
+            What asks (for error messages).
+
+        Notes
+        -----
+        :math:`\omega(t) = \sum_i \phi_i(t) \left(\omega_i + \sum_p \partial\omega_i/\partial
+        l_p \; \delta l_p
+ight)`, with :math:`\omega_i` the rates corrected by the current
+        totals of the attitude error models (the measured rates when there are none) and
+        :math:`\partial\omega_i/\partial l_p` their ``rate_columns``: the gyro bias enters as
+        :math:`\omega = \hat\omega - b`. An error model without rate columns contributes
+        nothing, so without a gyro error model the rows are constant.
+        """
+        times = as_times(t, what)
+        point = getattr(self.data, "attitude_point", None)
+        rates = point.rates if point is not None else getattr(self.data, "gyro", None)
+        if rates is None:
+            raise InputError(f"{what}: needs the gyro rates; build the data with bvpnav.ImuData.from_gyro "
+                             "(or a reader given a gyro column)")
+        body = ("x", "y", "z")
+        names = (axes,) if isinstance(axes, str) else (body if axes is None else tuple(axes))
+        bad = [a for a in names if a not in body]
+        if bad or not names:
+            raise InputError(f"{what}: body axes {list(names)}; give some of {list(body)}")
+        ax = tuple(body.index(a) for a in names)
+        P = self.grid.interpolation_matrix(times, what)
+        W = np.zeros((self.N, 3, self.q))
+        comps = getattr(self.error_model, "components", (self.error_model,))
+        for comp in comps:
+            if comp is None or not hasattr(comp, "rate_columns"):
+                continue
+            cols = np.asarray(comp.rate_columns(self.data), dtype=float)
+            idx = [self.param_names.index(n) for n in comp.names(self.data)]
+            W[:, :, idx] += cols
+        L = self.params().A
+        empty = sp.csr_matrix((times.size, self.size))
+        parts = [Affine(sp.csr_matrix(P @ W[:, a, :]) @ L if self.q else empty,
+                        P @ np.asarray(rates, dtype=float)[:, a]) for a in ax]
+        out = self._interleave(parts, times.size)
+        return Affine(out.A, out.c, TimeLabels("omega_", list(names), times))
+
     def node_velocity(self, axis: int) -> Affine:
         """Velocity at every node of one axis (m/s)."""
         Vr, Va, Vb = self._node_vel

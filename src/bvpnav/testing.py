@@ -162,10 +162,19 @@ def _allowed_columns(model: NavModel, axes: tuple[str, ...]) -> set[int]:
 
 
 def _other_model(model: NavModel) -> NavModel:
-    """The same axes and window on a coarser grid (navigation-frame accelerations)."""
+    """The same axes and window on a coarser grid (navigation-frame accelerations; strapdown
+    data with gyro rates stay strapdown, with the same error model)."""
     t = model.grid.t
     t2 = np.linspace(float(t[0]), float(t[-1]), max(t.size // 2 + 1, 3))
-    acc = np.column_stack([np.interp(t2, t, model.data.acc[:, a]) for a in range(model.d)])
+    data = model.data
+    if getattr(data, "gyro", None) is not None:
+        def on(v):
+            return np.column_stack([np.interp(t2, t, v[:, a]) for a in range(v.shape[1])])
+
+        coarse = ImuData.from_gyro(t2, on(data.specific_force), on(data.gyro),
+                                   initial_attitude=data.attitude[0], gravity=data.gravity)
+        return NavModel(coarse, model.error_model)
+    acc = np.column_stack([np.interp(t2, t, data.acc[:, a]) for a in range(model.d)])
     return NavModel(ImuData(t2, acc, axes=model.axes))
 
 
@@ -227,7 +236,9 @@ def _solve_with(item: Item, model: NavModel, mode: str, who: str) -> None:
         else:
             base = Position(t=ends, value=0.0, name="check_item ends (hard)")
         checked = _switch(item, mode, sigma=1.0)
-        prob = NavigationProblem(model.data)  # no error model: its parameters would need more items
+        # no error model (its parameters would need more items) unless the item acts on it alone
+        em = model.error_model if item.needs_error_model else None
+        prob = NavigationProblem(model.data, error_model=em)
         prob.add(base, checked)
         sol = prob.solve(lam=1.0)
     _require(sol.stats.get("verified"), who, rule, f"the solve was not verified ({sol.stats.get('status')})")
@@ -256,8 +267,10 @@ def check_item(item_or_class: Item | type[Item], model: NavModel | None = None) 
     item_or_class : Item or type
         An item instance, or an item class (its ``example()`` is checked).
     model : NavModel, optional
-        The model to compile against. Default: three axes ``x, y, z`` on [0, 10] s
-        (101 samples), the window every ``example()`` is written for.
+        The model to compile against. Default: the class's ``example_model()`` when it gives
+        one (an item that needs strapdown data or an error model), else three axes
+        ``x, y, z`` on [0, 10] s (101 samples), the window every other ``example()`` is
+        written for.
 
     Returns
     -------
@@ -325,7 +338,8 @@ def check_item(item_or_class: Item | type[Item], model: NavModel | None = None) 
         cls = type(item)
         who = f"item {cls.__name__}"
     if model is None:
-        model = NavModel(_default_data())
+        model = cls.example_model() if hasattr(cls, "example_model") else None
+        model = NavModel(_default_data()) if model is None else model
     _check_item(item, model, who)
 
 

@@ -72,6 +72,11 @@ Stage = Callable[..., Solution]
 ATTITUDE_DEFAULTS: dict = {"tol": 1e-7, "ftol": 1e-12, "max_iter": 30, "heading": "auto",
                            "candidates": 12, "loop": True, "progress": None}
 
+#: Weight of the violation of hard and band rows that act on the attitude models alone
+#: (:meth:`_Loop.item_cost`), per (item unit)^2: a violation of 1e-8 rad/s weighs as much as
+#: a unit of the objective.
+MERIT_WEIGHT = 1e16
+
 #: Largest damping weight tried before the loop stops at a point no step improves.
 MAX_DAMPING = 1e12
 
@@ -171,7 +176,10 @@ class _Loop:
 
     def _form(self, data, error_model) -> Formulation:
         f = self.form
-        out = Formulation(data, f.residual, f.sigma_a if f.sigma_a_given else None, error_model, f.items)
+        items = f.items
+        if error_model is not f.error_model:  # attitude fixed: items on the gyro model alone drop out
+            items = [it for it in items if not it.needs_error_model]
+        out = Formulation(data, f.residual, f.sigma_a if f.sigma_a_given else None, error_model, items)
         # the same items and error model at every point: what determines the unknowns was
         # checked on the first formulation of each kind (an SVD, a fifth of a solve)
         out._observable = self.checked.get(id(error_model), False)
@@ -202,7 +210,38 @@ class _Loop:
         sol = self._solve(self._form(data, self.rest_model))
         used = sol.__dict__.get("_formulation")
         j = objective_value(used, sol.x, float(sol.lam)) + sum(c.prior_cost(data) for c in self.comps)
-        return j, sol
+        return j + self.item_cost(data, float(sol.lam)), sol
+
+    def item_cost(self, data, lam: float) -> float:
+        r"""The cost, at zero increments, of the items that act on the attitude error models
+        alone (:attr:`bvpnav.Item.needs_error_model`, e.g. a gyro stance): they are left out of
+        the fixed-attitude solve and counted here, as the priors are.
+
+        Notes
+        -----
+        Soft and robust items add their penalties. Hard and band rows, which each linearized
+        step meets, add the quadratic merit :math:`\mu \sum_k v_k^2` of their violation
+        :math:`v_k = \max(|ho_k| - tol_k, 0)` (``tol`` 0 when hard) with
+        :math:`\mu` = :data:`MERIT_WEIGHT`, so that a point that breaks them never wins
+        against one that keeps them.
+        """
+        items = [it for it in self.form.items if it.needs_error_model]
+        if not items:
+            return 0.0
+        f = self.form
+        form = Formulation(data, f.residual, f.sigma_a if f.sigma_a_given else None, f.error_model, items)
+        x = np.zeros(form.model.size)
+        cost = 0.0
+        for term in form.terms():
+            if term.item is None:
+                continue
+            if term.is_penalty:
+                cost += term.weight(lam) * _penalty(term, x)
+            else:
+                tol = 0.0 if term.tol is None else term.tol
+                v = np.maximum(np.abs(term.residual.value(x)) - tol, 0.0)
+                cost += MERIT_WEIGHT * float(v @ v)
+        return cost
 
     def step(self, values: dict, damping: float) -> tuple[dict, float, Solution]:
         """One damped linearized solve at ``values``: new totals, attitude change (rad), solution."""
