@@ -16,6 +16,22 @@ Quick start::
     prob.add(Position(t=[t[0], t[-1]], value=[0.0, 10.0]))
     sol = prob.solve()
     sol.trajectory  # index t (s); columns x (m), vx (m/s)
+
+Examples
+--------
+A car starting at rest at the origin, under a constant 0.5 m/s^2 for 2 s:
+
+>>> import numpy as np
+>>> import bvpnav
+>>> from bvpnav.constraints import Position, Velocity
+>>> t = np.linspace(0.0, 2.0, 21)
+>>> data = bvpnav.ImuData(t=t, acc=np.full(21, 0.5))
+>>> prob = bvpnav.NavigationProblem(data)
+>>> prob.add(Position(t=0.0, value=0.0), Velocity(t=0.0, value=0.0))
+NavigationProblem(...)
+>>> sol = prob.solve(solver="direct")
+>>> print(f"{sol.position('x')[-1]:.3f} m, {sol.velocity('x')[-1]:.3f} m/s")
+1.000 m, 1.000 m/s
 """
 
 from __future__ import annotations

@@ -45,6 +45,15 @@ class TimeGrid:
     .. math:: \\phi_j(t) = \\max(0, 1 - |t - t_j| / h), \\quad h = h_{j-1} \\text{ or } h_j,
 
     so any piecewise-linear function is :math:`r(t) = \\sum_j r_j \\phi_j(t)`.
+
+    Examples
+    --------
+    >>> from bvpnav import TimeGrid
+    >>> grid = TimeGrid([0.0, 0.5, 1.0, 2.0])
+    >>> grid
+    TimeGrid(N=4, t0=0 s, t1=2 s)
+    >>> grid.duration, grid.h.tolist()
+    (2.0, [0.5, 0.5, 1.0])
     """
 
     t: np.ndarray

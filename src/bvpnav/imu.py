@@ -148,6 +148,17 @@ class ImuData:
     positions are wanted in (z up with the default gravity); the body frame is the
     accelerometer triad's. To integrate the attitude from gyro rates use
     :meth:`from_gyro`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from bvpnav import ImuData
+    >>> data = ImuData(t=[0.0, 0.1, 0.2, 0.3], acc=[[0.0, 1.0], [0.1, 1.0], [0.2, 1.0], [0.3, 1.0]],
+    ...                axes=("x", "y"))
+    >>> data
+    ImuData(N=4, axes=('x', 'y'), navigation-frame, t=[0, 0.3] s)
+    >>> data.n, data.ndim
+    (4, 2)
     """
 
     def __init__(

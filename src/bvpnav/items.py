@@ -125,6 +125,22 @@ class Item:
     is repeated to fit. Items whose instants are the grid nodes (intervals, symmetry,
     bounds, cones, tracks) take a scalar or one value per row. ``axes=[]`` (no axis) is
     refused at construction.
+
+    Examples
+    --------
+    The mode follows from the arguments (no ``sigma``: hard; ``sigma`` alone: soft):
+
+    >>> from bvpnav.constraints import Position
+    >>> Position(t=1.0, value=0.5).mode
+    'hard'
+    >>> soft = Position(t=1.0, value=0.5, sigma=0.1)
+    >>> soft.mode, soft.units, soft.kind
+    ('soft', 'm', 'equality')
+    >>> Position.registered_name()
+    'position'
+    >>> from bvpnav.items import item_class
+    >>> item_class("position") is Position
+    True
     """
 
     axes: Any = None

@@ -249,6 +249,18 @@ class Affine:
     labels : sequence of str, optional
         One label per row (e.g. ``"x(t=2.5)"``) for reports (a tuple, or
         :class:`RowLabels` made on demand).
+
+    Examples
+    --------
+    Two rows, ``x0 + 1`` and ``2 x1``, of an unknown vector of length 2; affine maps add and scale:
+
+    >>> import numpy as np
+    >>> import scipy.sparse as sp
+    >>> from bvpnav import Affine
+    >>> f = Affine(sp.csr_matrix(np.diag([1.0, 2.0])), np.array([1.0, 0.0]), labels=("a", "b"))
+    >>> g = 3 * f - f
+    >>> g.m, g.A.toarray().tolist(), g.c.tolist()
+    (2, [[2.0, 0.0], [0.0, 4.0]], [2.0, 0.0])
     """
 
     A: sp.csr_matrix
@@ -396,6 +408,20 @@ class NavModel:
 
     i.e. the 2010 paper's ``K r = f(\\hat a) + F l + f(w)`` with ``f(a) = -M a`` and
     ``F = -M G``. The corrected acceleration is ``a_c = \\hat a + G l + w``.
+
+    Examples
+    --------
+    Five samples on one axis: the unknowns are five positions, five acceleration residuals and
+    the two end velocities; the position at 0.5 s is the middle node's unknown:
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> model = bvpnav.NavModel(bvpnav.ImuData(t=np.linspace(0.0, 1.0, 5), acc=np.zeros(5)))
+    >>> model.N, model.d, model.size
+    (5, 1, 12)
+    >>> row = model.position([0.5])
+    >>> row.A.toarray().nonzero()[1].tolist(), row.c.tolist()
+    ([2], [0.0])
     """
 
     def __init__(self, data: ImuData, error_model=None):

@@ -62,6 +62,22 @@ class NavigationProblem:
     with :math:`J_0 = \\|w / \\sigma_a\\|^2` or :math:`\\|M w\\|^2` (= :math:`\\|K r + Bv - f\\|^2`).
     Robust items use the Huber function or L1 in place of the square; band items add
     :math:`|D x - e| \\le tol`; inequality items add :math:`g(x) \\le 0`.
+
+    Examples
+    --------
+    Constant acceleration 0.5 m/s^2 for 2 s between two known positions (0 m and 3 m): the
+    initial velocity is :math:`(3 - 0.25 \\cdot 2^2) / 2 = 1` m/s.
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> from bvpnav.constraints import Position
+    >>> t = np.linspace(0.0, 2.0, 21)
+    >>> prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=np.full(21, 0.5)))
+    >>> prob.add(Position(t=[0.0, 2.0], value=[0.0, 3.0]))
+    NavigationProblem(...)
+    >>> sol = prob.solve(solver="direct")
+    >>> print(f"v(0) = {sol.velocity('x')[0]:.3f} m/s, v(2) = {sol.velocity('x')[-1]:.3f} m/s")
+    v(0) = 1.000 m/s, v(2) = 2.000 m/s
     """
 
     def __init__(

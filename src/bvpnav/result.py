@@ -470,6 +470,25 @@ class Solution:
         For strapdown data, the body-to-navigation attitude per sample the answer uses:
         corrected by the attitude error models' estimates when there are any, else the
         data's. None for navigation-frame data. See :attr:`attitude_angles`.
+
+    Examples
+    --------
+    A solution's trajectory is a table indexed by time (s), with positions (m) and
+    velocities (m/s) per axis:
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> from bvpnav.constraints import Position, Velocity
+    >>> t = np.linspace(0.0, 1.0, 11)
+    >>> prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=np.full(11, 2.0)))
+    >>> sol = prob.add(Position(t=0.0, value=0.0), Velocity(t=0.0, value=0.0)).solve(solver="direct")
+    >>> print(sol.trajectory.tail(2).round(3))
+            x   vx
+    t
+    0.9  0.81  1.8
+    1.0  1.00  2.0
+    >>> sol.lam, sol.stats["solver"], sol.stats["status"]
+    (1.0, 'direct', 'optimal')
     """
 
     trajectory: pd.DataFrame
