@@ -12,6 +12,17 @@ One generic sweep (:func:`bvpnav.lam.sweep.sweep_curve`) runs every rule.
 The family is a discovered folder, like ``bvpnav.constraints``: each module here defines
 a rule and registers it with :func:`register_rule`; adding a rule is one file (here, or
 anywhere that calls :func:`register_rule`), checked by :func:`bvpnav.testing.check_rule`.
+
+Examples
+--------
+The built-in rules, and the one a name stands for:
+
+>>> from bvpnav.lam import get_rule, rule_names
+>>> sorted(rule_names())
+['discrepancy', 'gcv', 'lcurve', 'quasi']
+>>> rule = get_rule("gcv")
+>>> rule.name, sorted(rule.needs)
+('gcv', ['least_squares', 'trace'])
 """
 
 from __future__ import annotations
@@ -50,6 +61,37 @@ class LambdaRule:
         Lowercase name, passed as ``solve(lam=name)``.
     needs : frozenset of str
         Subset of :data:`NEEDS`.
+
+    Examples
+    --------
+    A rule that balances the two terms, choosing the sampled lambda where the data term
+    :math:`\\rho^2` and the lambda-weighted term :math:`\\eta^2` are closest (a plug-in
+    written for this example, not a recommended rule):
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> from bvpnav.constraints import Position
+    >>> rng = np.random.default_rng(0)
+    >>> t = np.linspace(0.0, 10.0, 101)
+    >>> acc = -0.5 * np.sin(t) + 0.05 * rng.standard_normal(t.size)  # truth r = 0.5 sin t (m)
+    >>> prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=acc), sigma_a=0.05)
+    >>> tk = t[::10]
+    >>> fixes = Position(t=tk, value=0.5 * np.sin(tk) + 0.01 * rng.standard_normal(tk.size), sigma=0.01)
+    >>> prob = prob.add(fixes)
+    >>> from bvpnav.lam import LambdaRule, register_rule, unregister_rule
+    >>> class Balance(LambdaRule):
+    ...     name = "balance"
+    ...     uses_derivative = False
+    ...     reads_quasi = False
+    ...     def scores(self, sweep, pts, s):
+    ...         return np.array([-abs(np.log(p["rho2"] / p["eta2"])) for p in pts])
+    ...     def refine(self, sweep, pts, s, scores, curve):
+    ...         return float(curve.lam[int(np.argmax(scores))])
+    >>> _ = register_rule(Balance())
+    >>> curve = bvpnav.lambda_curve(prob, rules=["balance"], rule="balance", lam_range=(1e-3, 1e3), points=7)
+    >>> print(f"{curve.lam_chosen:g}")
+    1
+    >>> unregister_rule("balance")
     """
 
     name: str = ""
@@ -98,7 +140,25 @@ _RULES: dict[str, LambdaRule] = {}
 
 
 def register_rule(rule: LambdaRule) -> LambdaRule:
-    """Add (or replace) a rule under its name."""
+    """Add (or replace) a rule under its name.
+
+    Examples
+    --------
+    >>> from bvpnav.lam import LambdaRule, register_rule, rule_names, unregister_rule
+    >>> class Fixed(LambdaRule):
+    ...     name = "ten"
+    ...     def scores(self, sweep, pts, s):
+    ...         return s
+    ...     def refine(self, sweep, pts, s, scores, curve):
+    ...         return 10.0
+    >>> register_rule(Fixed())
+    <bvpnav lambda rule 'ten'>
+    >>> "ten" in rule_names()
+    True
+    >>> unregister_rule("ten")
+    >>> "ten" in rule_names()
+    False
+    """
     if not isinstance(getattr(rule, "name", None), str) or not rule.name:
         raise InputError(f"register_rule({rule!r}): a rule needs a non-empty name")
     needs = set(getattr(rule, "needs", ()))
@@ -114,7 +174,19 @@ def register_rule(rule: LambdaRule) -> LambdaRule:
 
 
 def unregister_rule(name: str) -> None:
-    """Remove a registered rule (e.g. one a test added)."""
+    """Remove a registered rule (e.g. one a test added).
+
+    Examples
+    --------
+    >>> from bvpnav.lam import LambdaRule, register_rule, rule_names, unregister_rule
+    >>> class Fixed(LambdaRule):
+    ...     name = "ten"
+    >>> _ = register_rule(Fixed())
+    >>> unregister_rule("ten")
+    >>> "ten" in rule_names()
+    False
+    >>> unregister_rule("ten")  # removing an absent rule is no error
+    """
     _RULES.pop(name, None)
 
 
@@ -124,13 +196,33 @@ def _discover() -> None:
 
 
 def rule_names() -> tuple[str, ...]:
-    """Names of every registered rule (the built-ins first)."""
+    """Names of every registered rule (the built-ins first).
+
+    Examples
+    --------
+    >>> from bvpnav.lam import rule_names
+    >>> sorted(rule_names())
+    ['discrepancy', 'gcv', 'lcurve', 'quasi']
+    """
     _discover()
     return tuple(_RULES)
 
 
 def get_rule(name: str) -> LambdaRule:
-    """The rule of a name, or :class:`InputError` listing the known ones."""
+    """The rule of a name, or :class:`InputError` listing the known ones.
+
+    Examples
+    --------
+    >>> import bvpnav
+    >>> from bvpnav.lam import get_rule
+    >>> get_rule("lcurve")
+    <bvpnav lambda rule 'lcurve'>
+    >>> try:
+    ...     get_rule("lcruve")
+    ... except bvpnav.InputError as exc:
+    ...     print(exc)
+    lam rule 'lcruve' is not known; choose one of [...] or a number
+    """
     _discover()
     if isinstance(name, str) and name in _RULES:
         return _RULES[name]
@@ -146,6 +238,22 @@ def edge_warning(curve, name: str, k: int, guard: int, scores=None, best: str = 
     there score better, or ``k`` is an end sample): a local extremum at the first or last
     allowed sample is interior, and its refined lambda lies between the samples. Without
     ``scores`` every ``k`` within ``guard`` of an end warns. Returns True when it warned.
+
+    Examples
+    --------
+    The best of seven samples one decade apart is the first a rule may choose, and the
+    excluded sample beyond it scores better still:
+
+    >>> import numpy as np
+    >>> from types import SimpleNamespace
+    >>> from bvpnav.lam import edge_warning
+    >>> curve = SimpleNamespace(lam=np.logspace(-3, 3, 7), lam_range=(1e-3, 1e3), warnings=[])
+    >>> edge_warning(curve, "gcv", k=1, guard=1, scores=[5.0, 4.0, 3.0, 2.0, 1.0, 0.0, -1.0])
+    True
+    >>> print(curve.warnings[0])
+    gcv: the best value lies at the low edge of lam_range=(0.001, 1000) (best sample lam=0.01), ...
+    >>> edge_warning(curve, "gcv", k=3, guard=1)  # an interior sample
+    False
     """
     n = len(curve.lam)
     low, high = k <= guard, k >= n - 1 - guard
@@ -220,6 +328,17 @@ def refine_extremum(f, s: np.ndarray, scores: np.ndarray, k: int, best: str = "m
     extremum lies at (or beyond) it: the end is returned, as a bounded search would. With
     ``bounds``, a best point or vertex beyond a bound (the model's extremum lies in the
     excluded range, and the best allowed point is the bound itself) returns the bound.
+
+    Examples
+    --------
+    The maximum of :math:`g(u) = -(u - 0.3)^2` from samples at :math:`u = -1, 0, 1`:
+
+    >>> import numpy as np
+    >>> from bvpnav.lam import refine_extremum
+    >>> g = lambda u: -(u - 0.3) ** 2
+    >>> s = np.array([-1.0, 0.0, 1.0])
+    >>> print(f"{refine_extremum(g, s, g(s), k=1):.3f}")
+    0.300
     """
     lo, hi = (-np.inf, np.inf) if bounds is None else (float(bounds[0]), float(bounds[1]))
 
@@ -278,6 +397,15 @@ def hermite_peak(a: float, b: float, ga: float, gb: float, da: float, db: float)
     where the second derivative :math:`2\alpha t + \beta` is negative (roots taken in the
     cancellation-free form of the quadratic formula). With :math:`m_0 > 0 > m_1` exactly one
     root lies in :math:`(0, 1)` and it is the maximum.
+
+    Examples
+    --------
+    Values 0 at both ends of :math:`[0, 1]`, slopes +1 and -1: the symmetric cubic peaks at the
+    middle:
+
+    >>> from bvpnav.lam import hermite_peak
+    >>> hermite_peak(0.0, 1.0, 0.0, 0.0, 1.0, -1.0)
+    0.5
     """
     h = b - a
     m0, m1 = h * da, h * db
@@ -308,6 +436,17 @@ def hermite_fit_peak(points: list, a: float, b: float) -> float | None:
     :math:`t`; the maximisers are the real roots of the derivative in :math:`[-1, 1]` where
     the second derivative is negative. Only a step's position: the bracket's proof never
     reads it.
+
+    Examples
+    --------
+    Three points of :math:`g(u) = \\sin 2u` with their slopes: the quintic through them peaks
+    near :math:`\\pi/4 = 0.7854`:
+
+    >>> import math
+    >>> from bvpnav.lam import hermite_fit_peak
+    >>> points = [(u, math.sin(2 * u), 2 * math.cos(2 * u)) for u in (0.0, 0.5, 1.0)]
+    >>> print(f"{hermite_fit_peak(points, 0.0, 1.0):.3f}")
+    0.785
     """
     c, r = 0.5 * (a + b), 0.5 * (b - a)
     z = [(x[0] - c) / r for x in points for _ in (0, 1)]
@@ -416,6 +555,18 @@ def refine_with_slopes(f, s: np.ndarray, scores: np.ndarray, slopes: np.ndarray,
     Without such a bracket beside ``k`` (a slope of zero, the best sample at an end) the
     search is :func:`refine_extremum`'s on the scores alone; a maximiser beyond a bound
     returns the bound.
+
+    Examples
+    --------
+    The same maximum of :math:`g(u) = -(u - 0.3)^2`, with its slope :math:`-2 (u - 0.3)`:
+
+    >>> import numpy as np
+    >>> from bvpnav.lam import refine_with_slopes
+    >>> f = lambda u: (-(u - 0.3) ** 2, -2.0 * (u - 0.3))
+    >>> s = np.array([-1.0, 0.0, 1.0])
+    >>> scores, slopes = f(s)
+    >>> print(f"{refine_with_slopes(f, s, scores, slopes, k=1):.3f}")
+    0.300
     """
     sign = 1.0 if best == "max" else -1.0
     lo, hi = (-np.inf, np.inf) if bounds is None else (float(bounds[0]), float(bounds[1]))
@@ -479,7 +630,17 @@ def guard_samples(s: np.ndarray) -> int:
     leaves out: the two outermost, or the outermost one when samples lie two decades or
     more apart (the same two decades at each end of the default range with 13 samples one
     decade apart or 7 two decades apart; the same sixth of any range of 12 decades or more
-    with 13 or 7 samples)."""
+    with 13 or 7 samples).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from bvpnav.lam import guard_samples
+    >>> guard_samples(np.log(np.logspace(-6, 6, 13)))  # one decade apart
+    2
+    >>> guard_samples(np.log(np.logspace(-6, 6, 7)))   # two decades apart
+    1
+    """
     return 1 if len(s) > 1 and s[1] - s[0] >= 2.0 * math.log(10.0) * (1.0 - 1e-9) else 2
 
 
@@ -487,7 +648,18 @@ def half_way_points(s: np.ndarray, k: int, lo: float | None = None, hi: float | 
     """The ``log lambda`` half-way between sample ``k`` and each neighbour, within ``[lo,
     hi]`` (default: the samples' range), when the samples lie more than 1.5 decades apart
     (none otherwise): a coarse sweep's rule evaluates them so that an extremum between
-    the best sample and a neighbour is bracketed as on a grid one decade apart."""
+    the best sample and a neighbour is bracketed as on a grid one decade apart.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from bvpnav.lam import half_way_points
+    >>> s = np.log(np.logspace(-6, 6, 7))  # two decades apart
+    >>> [f"{np.exp(u):g}" for u in half_way_points(s, 3)]
+    ['0.1', '10']
+    >>> half_way_points(np.log(np.logspace(-6, 6, 13)), 6)  # one decade apart: none
+    []
+    """
     s = np.asarray(s, dtype=float)
     if len(s) < 2 or s[1] - s[0] <= 1.5 * math.log(10.0):
         return []

@@ -124,6 +124,30 @@ def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6
     :math:`G = \\hat\\rho / \\mathrm{tr}(I - A_\\lambda)^2`, with
     :math:`\\mathrm{tr}(I - A_\\lambda) = -\\mathrm{tr}(\\partial w / \\partial \\hat a)`.
     Quasi-optimality: minimise :math:`\\|\\lambda\\, dr/d\\lambda\\|`.
+
+    Examples
+    --------
+    A noisy accelerometer (0.05 m/s^2) and ten soft position fixes (0.01 m) of the motion
+    :math:`r = 0.5 \\sin t` m; three rules on nine lambdas:
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> from bvpnav.constraints import Position
+    >>> rng = np.random.default_rng(0)
+    >>> t = np.linspace(0.0, 10.0, 101)
+    >>> acc = -0.5 * np.sin(t) + 0.05 * rng.standard_normal(t.size)  # truth r = 0.5 sin t (m)
+    >>> prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=acc), sigma_a=0.05)
+    >>> tk = t[::10]
+    >>> fixes = Position(t=tk, value=0.5 * np.sin(tk) + 0.01 * rng.standard_normal(tk.size), sigma=0.01)
+    >>> prob = prob.add(fixes)
+    >>> curve = bvpnav.lambda_curve(prob, rules=["gcv", "discrepancy", "lcurve"], rule="gcv",
+    ...                             lam_range=(1e-3, 1e3), points=9)
+    >>> print(f"gcv chose lam = {curve.lam_chosen:.1f}")
+    gcv chose lam = 1.3
+    >>> sol = prob.solve(lam=curve.lam_chosen, solver="direct")
+    >>> rms = np.sqrt(np.mean((sol.position("x") - 0.5 * np.sin(t)) ** 2))
+    >>> print(f"position error {rms:.3f} m")
+    position error 0.006 m
     """
     form = as_formulation(problem)
     extra = dict(solve_kw or {})
@@ -142,5 +166,22 @@ def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6
 
 
 def choose_lambda(problem, rule: str = "lcurve", **kwargs) -> float:
-    """The lambda a rule chooses (see :func:`lambda_curve` for the options)."""
+    """The lambda a rule chooses (see :func:`lambda_curve` for the options).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> from bvpnav.constraints import Position
+    >>> rng = np.random.default_rng(0)
+    >>> t = np.linspace(0.0, 10.0, 101)
+    >>> acc = -0.5 * np.sin(t) + 0.05 * rng.standard_normal(t.size)  # truth r = 0.5 sin t (m)
+    >>> prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=acc), sigma_a=0.05)
+    >>> tk = t[::10]
+    >>> fixes = Position(t=tk, value=0.5 * np.sin(tk) + 0.01 * rng.standard_normal(tk.size), sigma=0.01)
+    >>> prob = prob.add(fixes)
+    >>> lam = bvpnav.solve.choose_lambda(prob, rule="gcv", lam_range=(1e-3, 1e3), points=9)
+    >>> print(f"{lam:.1f}")
+    1.3
+    """
     return lambda_curve(problem, rules=(rule,), rule=rule, **kwargs).lam_chosen
