@@ -104,6 +104,22 @@ def compare_solvers(problem, solvers: Sequence[str] | None = None, presets: Sequ
     -----
     Runs use ``fallback=None`` and ``verify=False`` so each row shows that solver's own
     answer; ``verified`` then says whether bvpnav would have accepted it.
+
+    Examples
+    --------
+    Two back ends on the same problem, each verified against bvpnav's own residual checks:
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> from bvpnav.constraints import Position
+    >>> t = np.linspace(0.0, 2.0, 21)
+    >>> prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=np.full(21, 0.5)))
+    >>> prob = prob.add(Position(t=[0.0, 2.0], value=[0.0, 3.0]))
+    >>> table = bvpnav.compare_solvers(prob, solvers=["direct", "clarabel"])
+    >>> print(table[["solver", "status", "verified"]].to_string(index=False))
+      solver  status  verified
+      direct optimal      True
+    clarabel optimal      True
     """
     if solvers is None:
         have = set(available_solvers())

@@ -93,6 +93,19 @@ class Backend:
         measured; used to refuse a solve that cannot fit before any work.
     least_squares_only : bool
         True for back ends that solve equality-constrained least squares only.
+
+    Examples
+    --------
+    The registered back ends are instances of this contract:
+
+    >>> from bvpnav.backends import registry
+    >>> direct = registry()["direct"]
+    >>> direct
+    <bvpnav back end 'direct' (DirectBackend)>
+    >>> direct.least_squares_only, sorted(direct.presets)
+    (True, ['default', 'high', 'low'])
+    >>> direct.valid_options()
+    ['ldl_accept', 'method', 'refine', 'refine_tol']
     """
 
     name: str = ""
@@ -166,7 +179,15 @@ def registry() -> dict[str, Backend]:
 
 
 def available_solvers() -> list[str]:
-    """Lowercase names of every usable solver: installed cvxpy solvers and direct back ends."""
+    """Lowercase names of every usable solver: installed cvxpy solvers and direct back ends.
+
+    Examples
+    --------
+    >>> import bvpnav
+    >>> solvers = bvpnav.available_solvers()
+    >>> "direct" in solvers and "clarabel" in solvers
+    True
+    """
     return sorted(registry())
 
 

@@ -43,7 +43,20 @@ DEFAULT_FALLBACK: tuple = (("clarabel", {"static_regularization_enable": True}),
 
 def check_lam(lam):
     """``lam`` as a float (or a rule name), or :class:`InputError` naming the value and
-    the valid ones."""
+    the valid ones.
+
+    Examples
+    --------
+    >>> import bvpnav
+    >>> from bvpnav.solve import check_lam
+    >>> check_lam(10), check_lam("lcurve")
+    (10.0, 'lcurve')
+    >>> try:
+    ...     check_lam(-1.0)
+    ... except bvpnav.InputError as exc:
+    ...     print(exc)
+    lam=-1.0: must be a finite number >= 0
+    """
     rules = list(rule_names())
     if isinstance(lam, str):
         if lam not in rules:
@@ -102,6 +115,15 @@ class SolveOptions:
     uncertainty : bool or str
         False, True (the covariance of the weights as stated) or ``"scaled"`` (times the
         a-posteriori variance factor); see :mod:`bvpnav.solve.uncertainty`.
+
+    Examples
+    --------
+    >>> from bvpnav.solve import prepare
+    >>> opts, lam = prepare(lam=2.0, solver="direct", accuracy="high")
+    >>> opts.backend.name, opts.accuracy, opts.verify, lam
+    ('direct', 'high', True, 2.0)
+    >>> [backend.name for backend, _ in opts.chain]
+    ['direct', ...]
     """
 
     backend: Backend
@@ -179,6 +201,19 @@ def prepare(lam=1.0, solver: str = "clarabel", accuracy: str = "default", verify
     InputError
         Naming the option, its value and the valid ones (``SolverNotFound`` for an
         unknown solver name).
+
+    Examples
+    --------
+    >>> import bvpnav
+    >>> from bvpnav.solve import prepare
+    >>> opts, lam = prepare(lam="gcv", solver="direct")
+    >>> opts.backend.name, lam
+    ('direct', 'gcv')
+    >>> try:
+    ...     prepare(accuracy="highest")
+    ... except bvpnav.InputError as exc:
+    ...     print(exc)
+    accuracy='highest'; choose one of ['low', 'default', 'high']
     """
     if on_conflict not in ("raise", "demote"):
         raise InputError(f"on_conflict={on_conflict!r}; choose 'raise' or 'demote'")

@@ -59,7 +59,24 @@ STAGES = (with_demotion, with_attitude, with_sequential, with_rule)
 
 
 def run(form, lam, opts: SolveOptions) -> Solution:
-    """Run the pipeline on a formulation with checked options."""
+    """Run the pipeline on a formulation with checked options.
+
+    Examples
+    --------
+    Options checked once by :func:`~bvpnav.solve.options.prepare`, then the pipeline:
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> from bvpnav.constraints import Position
+    >>> t = np.linspace(0.0, 2.0, 21)
+    >>> prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=np.full(21, 0.5)))
+    >>> prob = prob.add(Position(t=[0.0, 2.0], value=[0.0, 3.0]))
+    >>> from bvpnav.solve import prepare, run
+    >>> opts, lam = prepare(1.0, solver="direct")
+    >>> sol = run(prob.formulation, lam, opts)
+    >>> print(f"v(0) = {sol.velocity('x')[0]:.3f} m/s")
+    v(0) = 1.000 m/s
+    """
     stage = solve_fixed
     for wrap in reversed(STAGES):
         stage = wrap(stage)
@@ -80,6 +97,20 @@ def solve(form, lam=1.0, **options) -> Solution:
     compilation and the solver's iteration log, on stdout); bvpnav's own account of the
     solve is on the ``bvpnav`` logger at INFO and DEBUG (see the module docstring and
     :mod:`bvpnav.log`), whatever ``verbose`` is.
+
+    Examples
+    --------
+    The function behind :meth:`bvpnav.NavigationProblem.solve`:
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> from bvpnav.constraints import Position
+    >>> t = np.linspace(0.0, 2.0, 21)
+    >>> prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=np.full(21, 0.5)))
+    >>> prob = prob.add(Position(t=[0.0, 2.0], value=[0.0, 3.0]))
+    >>> sol = bvpnav.solve.solve(prob, solver="direct")
+    >>> print(f"v(0) = {sol.velocity('x')[0]:.3f} m/s, v(2) = {sol.velocity('x')[-1]:.3f} m/s")
+    v(0) = 1.000 m/s, v(2) = 2.000 m/s
     """
     form = as_formulation(form)
     opts, lam = prepare(lam, **options)
@@ -103,6 +134,27 @@ def solve_sequential(problem, solver: str = "clarabel", lam: float | str = 1.0, 
     Returns
     -------
     Solution
+
+    Examples
+    --------
+    A vehicle drives 10 m along the x axis in 10 s; a small bias on the y accelerometer
+    (0.02 sin t m/s^2) would bend its path, but it is known to stay on the line y = 0
+    (:class:`~bvpnav.constraints.TrackLine`, an item solved by linearization):
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> from bvpnav.constraints import Position, TrackLine
+    >>> t = np.linspace(0.0, 10.0, 51)
+    >>> acc = np.zeros((51, 2))
+    >>> acc[:, 1] = 0.02 * np.sin(t)
+    >>> prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=acc, axes=("x", "y")))
+    >>> prob = prob.add(Position(t=[0.0, 10.0], value=[[0.0, 0.0], [10.0, 0.0]]),
+    ...                 TrackLine(x=[0.0, 5.0, 10.0], y=[0.0, 0.0, 0.0], axes=("x", "y"), sigma=0.01))
+    >>> sol = bvpnav.solve.solve_sequential(prob, solver="direct")
+    >>> sol.stats["sequential"]["converged"]
+    True
+    >>> print(f"largest |y| {np.abs(sol.position('y')).max():.3f} m")
+    largest |y| 0.000 m
     """
     seq = dict(tol=tol, max_iter=max_iter, initial=initial, lam_each=lam_each, continuation=continuation,
                soft_tol=soft_tol, progress=progress)
