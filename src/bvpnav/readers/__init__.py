@@ -17,6 +17,23 @@ an attitude) with their frames stated; information found in the file (GNSS fixes
 odometry) as items; and ``notes``: everything the reader did to the data (resampling a
 sensor onto the accelerometer's times, aligning two clocks), said, never silent.
 :meth:`Recording.imu_data` turns it into :class:`bvpnav.ImuData`.
+
+Examples
+--------
+A CSV file read by its suffix (the table reader):
+
+>>> import tempfile
+>>> from pathlib import Path
+>>> tmp = tempfile.TemporaryDirectory()
+>>> path = Path(tmp.name) / "drive.csv"
+>>> _ = path.write_text("t,acc_x\\n0.0,0.5\\n0.1,0.5\\n0.2,0.5\\n")
+>>> from bvpnav.readers import read
+>>> rec = read(path)
+>>> rec.n, rec.axes, rec.acc[:, 0].tolist()
+(3, ('x',), [0.5, 0.5, 0.5])
+>>> rec.imu_data()
+ImuData(N=3, axes=('x',), navigation-frame, t=[0, 0.2] s)
+>>> tmp.cleanup()
 """
 
 from __future__ import annotations
@@ -99,6 +116,18 @@ class Recording:
     ``specific_force`` the attitude comes from ``attitude`` or from integrating ``gyro``
     (:meth:`bvpnav.ImuData.from_gyro`), and the navigation-frame acceleration is
     :math:`a = C_{nb} f + g`.
+
+    Examples
+    --------
+    A recording made in code (a reader returns one); its samples become :class:`bvpnav.ImuData`:
+
+    >>> import numpy as np
+    >>> from bvpnav.readers import Recording
+    >>> rec = Recording(t=np.array([0.0, 0.1, 0.2]), source="example", acc=np.full((3, 1), 0.5), axes=("x",))
+    >>> rec.n, rec.is_strapdown
+    (3, False)
+    >>> rec.imu_data()
+    ImuData(N=3, axes=('x',), navigation-frame, t=[0, 0.2] s)
     """
 
     t: np.ndarray
@@ -175,6 +204,30 @@ class Reader:
         The ``pip install 'bvpnav[<extra>]'`` that brings ``modules``.
     description : str
         One line for ``bvpnav readers`` and the docs.
+
+    Examples
+    --------
+    A reader for a made-up format of two columns, time (s) and acceleration (m/s^2):
+
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import numpy as np
+    >>> from bvpnav.readers import Reader, Recording, read, register_reader, unregister_reader
+    >>> class TwoColumns(Reader):
+    ...     name = "twocol"
+    ...     suffixes = (".twocol",)
+    ...     description = "time (s) and acceleration (m/s^2), one sample a line"
+    ...     def read(self, path, options):
+    ...         t, a = np.loadtxt(path, unpack=True)
+    ...         return Recording(t=t, source=str(path), acc=a[:, None], axes=("x",))
+    >>> _ = register_reader(TwoColumns())
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> path = Path(tmp.name) / "walk.twocol"
+    >>> _ = path.write_text("0.0 0.5\\n0.1 0.5\\n0.2 0.5\\n")
+    >>> read(path).imu_data()
+    ImuData(N=3, axes=('x',), navigation-frame, t=[0, 0.2] s)
+    >>> unregister_reader("twocol")
+    >>> tmp.cleanup()
     """
 
     name: str = ""
@@ -213,7 +266,20 @@ _READERS: dict[str, Reader] = {}
 
 
 def register_reader(reader: Reader) -> Reader:
-    """Register a reader under its name (replacing one of the same name); returns it."""
+    """Register a reader under its name (replacing one of the same name); returns it.
+
+    Examples
+    --------
+    >>> from bvpnav.readers import Reader, register_reader, registry, unregister_reader
+    >>> class Mine(Reader):
+    ...     name = "mine"
+    ...     suffixes = (".mine",)
+    >>> register_reader(Mine())
+    <reader 'mine' ['.mine']>
+    >>> "mine" in registry()
+    True
+    >>> unregister_reader("mine")
+    """
     if not isinstance(reader, Reader) or not reader.name or reader.name != reader.name.lower():
         raise TypeError(f"{reader!r}: a reader is a Reader instance with a lowercase name")
     _READERS[reader.name] = reader
@@ -221,7 +287,18 @@ def register_reader(reader: Reader) -> Reader:
 
 
 def unregister_reader(name: str) -> None:
-    """Remove a registered reader (tests)."""
+    """Remove a registered reader (tests).
+
+    Examples
+    --------
+    >>> from bvpnav.readers import Reader, register_reader, registry, unregister_reader
+    >>> class Mine(Reader):
+    ...     name = "mine"
+    >>> _ = register_reader(Mine())
+    >>> unregister_reader("mine")
+    >>> "mine" in registry()
+    False
+    """
     _READERS.pop(name, None)
 
 
@@ -230,13 +307,33 @@ def _discover() -> None:
 
 
 def registry() -> dict[str, Reader]:
-    """Every reader by name."""
+    """Every reader by name.
+
+    Examples
+    --------
+    >>> from bvpnav.readers import registry
+    >>> sorted(registry())
+    ['nmea', 'phone', 'rosbag', 'table']
+    """
     _discover()
     return dict(_READERS)
 
 
 def get_reader(name: str) -> Reader:
-    """The reader called ``name``; an unknown name lists the known ones."""
+    """The reader called ``name``; an unknown name lists the known ones.
+
+    Examples
+    --------
+    >>> import bvpnav
+    >>> from bvpnav.readers import get_reader
+    >>> get_reader("table")
+    <reader 'table' ['.csv', '.parquet', '.pq']>
+    >>> try:
+    ...     get_reader("tabel")
+    ... except bvpnav.InputError as exc:
+    ...     print(exc)
+    [input] format = 'tabel' is not a known reader (did you mean 'table'?); readers: [...]
+    """
     table = registry()
     if not isinstance(name, str) or name.lower() not in table:
         close = difflib.get_close_matches(str(name), sorted(table), n=1)
@@ -264,7 +361,16 @@ def _head(path: Path) -> bytes:
 def reader_for(path: str | os.PathLike, format: str | None = None) -> Reader:
     """The reader for ``path``: the one named ``format``, else the one whose suffix and
     ``sniff`` agree, else the one whose suffix matches. A file no reader claims is refused
-    with the list of formats."""
+    with the list of formats.
+
+    Examples
+    --------
+    >>> from bvpnav.readers import reader_for
+    >>> reader_for("drive.csv").name, reader_for("gnss.nmea").name
+    ('table', 'nmea')
+    >>> reader_for("drive.txt", format="table").name
+    'table'
+    """
     if format is not None:
         return get_reader(format)
     p = Path(path)
@@ -283,7 +389,17 @@ def reader_for(path: str | os.PathLike, format: str | None = None) -> Reader:
 
 
 def require(reader: Reader, path: str | os.PathLike | None = None) -> None:
-    """Import the reader's optional modules, or refuse naming the ``pip install``."""
+    """Import the reader's optional modules, or refuse naming the ``pip install``.
+
+    Examples
+    --------
+    A reader's optional modules are imported, or the pip install is named:
+
+    >>> from bvpnav.readers import get_reader, require
+    >>> require(get_reader("table"))  # needs nothing beyond bvpnav's own dependencies
+    >>> get_reader("rosbag").modules, get_reader("rosbag").extra
+    (('rosbags', 'pymap3d'), 'ros')
+    """
     for mod in reader.modules:
         try:
             importlib.import_module(mod)
@@ -308,6 +424,19 @@ def read(path: str | os.PathLike, input: Mapping[str, Any] | None = None) -> Rec
     Returns
     -------
     Recording
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> path = Path(tmp.name) / "drive.csv"
+    >>> _ = path.write_text("t,acc_x\\n0.0,0.5\\n0.1,0.5\\n0.2,0.5\\n")
+    >>> from bvpnav.readers import read
+    >>> rec = read(path)
+    >>> rec.t.tolist(), rec.acc[:, 0].tolist(), rec.notes
+    ([0.0, 0.1, 0.2], [0.5, 0.5, 0.5], ())
+    >>> tmp.cleanup()
     """
     from ..strapdown import FRAME_OPTIONS
 
@@ -349,6 +478,18 @@ def read_recording(path: str | os.PathLike, input: dict | None = None):
         Naming the file and the column, row or record, with the fix; also when the file
         holds information (GNSS fixes, odometry), which an ``ImuData`` cannot carry: read
         it with :func:`bvpnav.readers.read` to get ``recording.items`` too.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> path = Path(tmp.name) / "drive.csv"
+    >>> _ = path.write_text("t,acc_x\\n0.0,0.5\\n0.1,0.5\\n0.2,0.5\\n")
+    >>> from bvpnav.readers import read_recording
+    >>> read_recording(path)
+    ImuData(N=3, axes=('x',), navigation-frame, t=[0, 0.2] s)
+    >>> tmp.cleanup()
     """
     rec = read(path, input)
     if rec.items:
@@ -454,6 +595,25 @@ def align(info: Recording, to: Recording, *, clock_offset: float | None = None,
     With origins :math:`o_i` and :math:`o_r`, an instant :math:`t_i` of ``info`` becomes
     :math:`t = t_i + (o_i - o_r)` (in integer nanoseconds, then seconds), or
     :math:`t = t_i + \\text{clock\\_offset}`.
+
+    Examples
+    --------
+    GNSS fixes whose clock starts 3 s after the IMU's: their instants move by +3 s, and the
+    one that falls after the IMU's 10 s window is left out (and said so):
+
+    >>> import numpy as np
+    >>> from bvpnav.constraints import Position
+    >>> from bvpnav.readers import Recording, align
+    >>> imu = Recording(t=np.linspace(0.0, 10.0, 101), source="imu", time_origin="2026-05-01T10:00:00Z",
+    ...                 acc=np.zeros((101, 1)), axes=("x",))
+    >>> fixes = Position(t=[0.0, 5.0, 20.0], value=[1.0, 2.0, 3.0], sigma=1.0)
+    >>> gnss = Recording(t=np.array([0.0, 5.0, 20.0]), source="gnss", time_origin="2026-05-01T10:00:03Z",
+    ...                  items=(fixes,))
+    >>> items, notes = align(gnss, imu)
+    >>> items[0].t.tolist(), items[0].value.tolist()
+    ([3.0, 8.0], [1.0, 2.0])
+    >>> print(notes[0])
+    gnss: times shifted by +3.000000000 s (origin 2026-05-01T10:00:03Z -> 2026-05-01T10:00:00Z)
     """
     notes: list[str] = []
     if clock_offset is not None and same_clock:
