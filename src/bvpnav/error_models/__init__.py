@@ -31,6 +31,23 @@ with ``f`` the true specific force in sensor axes, ``s`` the scale-factor errors
 
 Write your own by subclassing :class:`ErrorModel` and implementing ``names(data)``
 and ``columns(data)`` (see ``examples/custom_error_model.py``).
+
+Examples
+--------
+An accelerometer that reads 0.1 m/s^2 high, its bias estimated from three known positions
+and the initial velocity of the motion :math:`r = 0.5 \\sin t` m:
+
+>>> import numpy as np
+>>> import bvpnav
+>>> from bvpnav.constraints import Position, Velocity
+>>> t = np.linspace(0.0, 10.0, 101)
+>>> tk = [0.0, 5.0, 10.0]
+>>> known = [Position(t=tk, value=0.5 * np.sin(tk)), Velocity(t=0.0, value=0.5)]  # r = 0.5 sin t (m)
+>>> from bvpnav.error_models import Bias
+>>> data = bvpnav.ImuData(t=t, acc=-0.5 * np.sin(t) + 0.1)
+>>> sol = bvpnav.NavigationProblem(data, error_model=Bias(), items=known).solve(solver="direct")
+>>> print(f"bias {sol.error_params['bias_x']:.3f} m/s^2")
+bias 0.100 m/s^2
 """
 
 from __future__ import annotations

@@ -56,7 +56,19 @@ __all__ = [
 
 # ------------------------------------------------------------------ data views
 def sensor_axes(data) -> tuple[str, ...]:
-    """Names of the sensor axes: body ``x, y, z`` (strapdown) or the navigation axes."""
+    """Names of the sensor axes: body ``x, y, z`` (strapdown) or the navigation axes.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> from bvpnav.error_models import sensor_axes
+    >>> sensor_axes(bvpnav.ImuData(t=[0.0, 0.5, 1.0], acc=np.zeros((3, 2)), axes=("e", "n")))
+    ('e', 'n')
+    >>> f, w = np.tile([0.0, 0.0, 9.80665], (3, 1)), np.zeros((3, 3))
+    >>> sensor_axes(bvpnav.ImuData.from_gyro([0.0, 0.5, 1.0], f, w))  # strapdown: the body axes
+    ('x', 'y', 'z')
+    """
     return ("x", "y", "z") if data.is_strapdown else tuple(data.axes)
 
 
@@ -65,6 +77,19 @@ def sensor_frame(data) -> np.ndarray:
 
     The body-to-navigation matrices ``C_i`` for strapdown data; identity matrices for
     navigation-frame data (the sensor axes are the navigation axes).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> t = np.linspace(0.0, 1.0, 11)
+    >>> f = np.tile([0.0, 0.0, 9.80665], (11, 1))  # at rest, z up (m/s^2)
+    >>> w = np.tile([0.0, 0.0, 0.1], (11, 1))      # turning about z at 0.1 rad/s
+    >>> data = bvpnav.ImuData.from_gyro(t, f, w)
+    >>> from bvpnav.error_models import sensor_frame
+    >>> C = sensor_frame(data)  # body to navigation, one matrix per sample
+    >>> C.shape, np.round(C[-1], 3).tolist()[0]  # after 1 s at 0.1 rad/s about z
+    ((11, 3, 3), [0.995, -0.1, 0.0])
     """
     if data.is_strapdown:
         return data.attitude.as_matrix()
@@ -76,6 +101,18 @@ def sensor_signal(data) -> np.ndarray:
     """The measured sensor output per sample, shape (N, n_sensor), m/s^2.
 
     Body-frame specific force for strapdown data, else the navigation-frame ``acc``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> t = np.linspace(0.0, 1.0, 11)
+    >>> f = np.tile([0.0, 0.0, 9.80665], (11, 1))  # at rest, z up (m/s^2)
+    >>> w = np.tile([0.0, 0.0, 0.1], (11, 1))      # turning about z at 0.1 rad/s
+    >>> data = bvpnav.ImuData.from_gyro(t, f, w)
+    >>> from bvpnav.error_models import sensor_signal
+    >>> sensor_signal(data)[0].tolist()  # the body-frame specific force (m/s^2)
+    [0.0, 0.0, 9.80665]
     """
     return data.specific_force if data.is_strapdown else data.acc
 
@@ -119,6 +156,12 @@ class Param(NamedTuple):
         Sensor axis (scale, bias, misalignment row) or navigation axis (gravity).
     j : int
         Sensor axis picked up (misalignment column); equal to ``i`` for scale, -1 else.
+
+    Examples
+    --------
+    >>> from bvpnav.error_models import Param
+    >>> Param("bias_x", "bias", 0)
+    Param(name='bias_x', role='bias', i=0, j=-1)
     """
 
     name: str
@@ -171,6 +214,32 @@ class ErrorModel(_Combinable):
     parameter is the reported one (``report`` returns ``l``) and priors and bounds act
     on ``l`` directly; the built-in sensor models override this with an exact
     nonlinear reparametrisation (see :mod:`bvpnav.error_models._base`).
+
+    Examples
+    --------
+    A custom model, a bias that grows linearly in time (the sensor reads high by
+    :math:`d\\,(t - t_0)`, d in m/s^3), estimated from three known positions and the initial
+    velocity of the motion :math:`r = 0.5 \\sin t` m:
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> from bvpnav.constraints import Position, Velocity
+    >>> t = np.linspace(0.0, 10.0, 101)
+    >>> tk = [0.0, 5.0, 10.0]
+    >>> known = [Position(t=tk, value=0.5 * np.sin(tk)), Velocity(t=0.0, value=0.5)]  # r = 0.5 sin t (m)
+    >>> from dataclasses import dataclass
+    >>> from bvpnav.error_models import ErrorModel, sensor_axes, sensor_frame
+    >>> @dataclass(frozen=True, kw_only=True, eq=False)
+    ... class BiasDrift(ErrorModel):
+    ...     units = "m/s^3"
+    ...     def names(self, data):
+    ...         return [f"drift_{a}" for a in sensor_axes(data)]
+    ...     def columns(self, data):  # acceleration change per unit d: -C (t - t0)
+    ...         return -sensor_frame(data) * (data.t - data.t[0])[:, None, None]
+    >>> data = bvpnav.ImuData(t=t, acc=-0.5 * np.sin(t) + 0.01 * t)
+    >>> sol = bvpnav.NavigationProblem(data, error_model=BiasDrift(), items=known).solve(solver="direct")
+    >>> print(f"drift {sol.error_params['drift_x']:.4f} m/s^3")
+    drift 0.0100 m/s^3
     """
 
     axes: Any = None
@@ -339,6 +408,19 @@ class SensorCorrection:
     beta : ndarray (n_sensor,), m/s^2
     dg : ndarray (d,), m/s^2
     g_nominal : ndarray (d,), m/s^2
+
+    Examples
+    --------
+    A sensor that reads 2 % high and 0.1 m/s^2 high, in the internal form
+    :math:`f = (1 + E)\\hat f + \\beta`:
+
+    >>> import numpy as np
+    >>> from bvpnav.error_models import Param, SensorCorrection
+    >>> corr = SensorCorrection(E=np.array([[1 / 1.02 - 1]]), beta=np.array([-0.1 / 1.02]),
+    ...                         dg=np.zeros(1), g_nominal=np.zeros(1))
+    >>> scale, bias = Param("scale_x", "scale", 0, 0), Param("bias_x", "bias", 0)
+    >>> print(f"{corr.value(scale):.4f} {corr.value(bias):.4f} m/s^2")
+    0.0200 0.1000 m/s^2
     """
 
     E: np.ndarray
@@ -460,6 +542,25 @@ class SensorErrorModel(ErrorModel):
         G[:, :, \\beta_k] = C_i[:, k], \\quad G[:, :, dg_a] = e_a
 
     (the 2010 paper's eq. 31-34 with ``F = -M G``).
+
+    Examples
+    --------
+    The built-in accelerometer models list their parameters with roles; columns follow from
+    the roles:
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> t = np.linspace(0.0, 1.0, 11)
+    >>> f = np.tile([0.0, 0.0, 9.80665], (11, 1))  # at rest, z up (m/s^2)
+    >>> w = np.tile([0.0, 0.0, 0.1], (11, 1))      # turning about z at 0.1 rad/s
+    >>> data = bvpnav.ImuData.from_gyro(t, f, w)
+    >>> from bvpnav.error_models import Bias, ScaleFactor
+    >>> Bias(axes="z").params(data)
+    [Param(name='bias_z', role='bias', i=2, j=-1)]
+    >>> ScaleFactor(axes="z").params(data)
+    [Param(name='scale_z', role='scale', i=2, j=2)]
+    >>> Bias(axes="z").columns(data)[0].tolist()  # sensor z is navigation z at the start
+    [[0.0], [0.0], [1.0]]
     """
 
     def params(self, data) -> list[Param]:
@@ -545,6 +646,15 @@ class CompositeErrorModel(_Combinable):
     The columns are concatenated, ``G = [G_1 | G_2 | ...]``. Reporting evaluates the
     built-in sensor models jointly (bias, scale and misalignment share one exact
     correction matrix) and every other model on its own slice of ``l``.
+
+    Examples
+    --------
+    >>> from bvpnav.error_models import Bias, ScaleFactor, UnknownGravity
+    >>> model = ScaleFactor() + Bias() + UnknownGravity()
+    >>> model
+    ScaleFactor() + Bias() + UnknownGravity()
+    >>> [type(c).__name__ for c in model.components]
+    ['ScaleFactor', 'Bias', 'UnknownGravity']
     """
 
     def __init__(self, *components):

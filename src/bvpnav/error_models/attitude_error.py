@@ -45,6 +45,21 @@ class AttitudeError(AttitudeErrorModel):
     and :math:`\\partial\\varepsilon/\\partial\\psi = \\exp([\\theta\\times]) e_z`; the
     linearization error of the acceleration is :math:`O(\\delta^2)` in the increment.
     A tilt of 1 mrad puts about 0.01 m/s^2 of gravity into the horizontal acceleration.
+
+    Examples
+    --------
+    Tilts with a 10 mrad prior and a free heading:
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> t = np.linspace(0.0, 1.0, 11)
+    >>> f = np.tile([0.0, 0.0, 9.80665], (11, 1))  # at rest, z up (m/s^2)
+    >>> w = np.tile([0.0, 0.0, 0.1], (11, 1))      # turning about z at 0.1 rad/s
+    >>> data = bvpnav.ImuData.from_gyro(t, f, w)
+    >>> from bvpnav.error_models import AttitudeError
+    >>> model = AttitudeError(sigma=(0.01, 0.01, None))
+    >>> model.names(data), model.columns(data).shape
+    (['attitude_x', 'attitude_y', 'attitude_z'], (11, 3, 3))
     """
 
     units = "rad"

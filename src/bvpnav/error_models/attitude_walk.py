@@ -73,6 +73,14 @@ def walk_interval(acc_noise: float, arw: float, gravity: float = _G0, ratio: flo
     car) and is covered by the same spacing. Tactical grade (:math:`n_a` = 5e-4,
     :math:`n_g` = 2e-5): 4.4 s; consumer (2e-3, 1e-4): 3.5 s; navigation (5e-5, 1e-6):
     8.8 s.
+
+    Examples
+    --------
+    An accelerometer noise of 0.01 m/s^2/sqrt(Hz) and a gyro ARW of 1 mrad/sqrt(s):
+
+    >>> from bvpnav.error_models import walk_interval
+    >>> print(f"{walk_interval(0.01, 1e-3):.2f} s")
+    1.77 s
     """
     for v, what in ((acc_noise, "acc_noise"), (arw, "arw"), (gravity, "gravity"), (ratio, "ratio")):
         positive_option(v, f"walk_interval: {what}")
@@ -121,6 +129,15 @@ def bridge_intensity(drift: float, interval: float) -> float:
     grade with 30 s knots: gyro :math:`(10^{-6})^2 \\cdot 900 / 12 = 7.5\\times10^{-11}`
     rad^2/s against :math:`n_g^2 = 4\\times10^{-10}`; accelerometer
     :math:`7.5\\times10^{-9}` against :math:`n_a^2 = 2.5\\times10^{-7}`.
+
+    Examples
+    --------
+    A bias drifting at 1e-4 rad/s/sqrt(s), modelled at knots 10 s apart:
+    :math:`q^2 \\Delta^2 / 12 = 10^{-8} \\cdot 100 / 12`:
+
+    >>> from bvpnav.error_models import bridge_intensity
+    >>> print(f"{bridge_intensity(1e-4, 10.0):.3e}")
+    8.333e-08
     """
     q = positive_option(drift, "bridge_intensity: drift")
     d = positive_option(interval, "bridge_intensity: interval")
@@ -180,6 +197,21 @@ class AttitudeWalk(AttitudeErrorModel):
     zero outside its two intervals. The walk does not change the gyro-propagated columns
     of :class:`GyroBias` and :class:`AttitudeError` except by the rotation
     :math:`\\exp([\\psi\\times])` (see :func:`~bvpnav.error_models._attitude.propagate`).
+
+    Examples
+    --------
+    A walk at knots 0.5 s apart on a 1 s recording: two knots per axis after the first:
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> t = np.linspace(0.0, 1.0, 11)
+    >>> f = np.tile([0.0, 0.0, 9.80665], (11, 1))  # at rest, z up (m/s^2)
+    >>> w = np.tile([0.0, 0.0, 0.1], (11, 1))      # turning about z at 0.1 rad/s
+    >>> data = bvpnav.ImuData.from_gyro(t, f, w)
+    >>> from bvpnav.error_models import AttitudeWalk
+    >>> model = AttitudeWalk(arw=1e-3, interval=0.5)
+    >>> model.names(data)[:2], model.columns(data).shape
+    (['attitude_walk_x[1]', 'attitude_walk_x[2]'], (11, 3, 6))
     """
 
     arw: Any = None

@@ -48,6 +48,20 @@ class Bias(SensorErrorModel):
     :math:`b_m = -(I + E)^{-1}\\beta_m`; the random-walk prior is on
     :math:`-(\\beta_{m+1} - \\beta_m)`, which is :math:`b_{m+1} - b_m` without a scale
     factor and to first order in it with one.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> from bvpnav.constraints import Position, Velocity
+    >>> t = np.linspace(0.0, 10.0, 101)
+    >>> tk = [0.0, 5.0, 10.0]
+    >>> known = [Position(t=tk, value=0.5 * np.sin(tk)), Velocity(t=0.0, value=0.5)]  # r = 0.5 sin t (m)
+    >>> from bvpnav.error_models import Bias
+    >>> data = bvpnav.ImuData(t=t, acc=-0.5 * np.sin(t) + 0.1)  # reads 0.1 m/s^2 high
+    >>> sol = bvpnav.NavigationProblem(data, error_model=Bias(), items=known).solve(solver="direct")
+    >>> print(f"bias {sol.error_params['bias_x']:.3f} m/s^2")
+    bias 0.100 m/s^2
     """
 
     interval: Any = None

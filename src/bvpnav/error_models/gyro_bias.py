@@ -60,6 +60,22 @@ class GyroBias(AttitudeErrorModel):
     :math:`\\psi \\times C f`. Columns are exact first derivatives of the discrete
     integration; the re-integrated acceleration differs from the linearized one by
     :math:`O(\\delta^2)`.
+
+    Examples
+    --------
+    The parameters and their columns on a short strapdown recording:
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> t = np.linspace(0.0, 1.0, 11)
+    >>> f = np.tile([0.0, 0.0, 9.80665], (11, 1))  # at rest, z up (m/s^2)
+    >>> w = np.tile([0.0, 0.0, 0.1], (11, 1))      # turning about z at 0.1 rad/s
+    >>> data = bvpnav.ImuData.from_gyro(t, f, w)
+    >>> from bvpnav.error_models import GyroBias
+    >>> GyroBias().names(data)
+    ['gyro_bias_x', 'gyro_bias_y', 'gyro_bias_z']
+    >>> GyroBias(interval=0.5).names(data)[:3]  # a bias at knots 0.5 s apart
+    ['gyro_bias_x[0]', 'gyro_bias_x[1]', 'gyro_bias_x[2]']
     """
 
     interval: Any = None

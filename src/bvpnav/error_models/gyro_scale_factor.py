@@ -30,6 +30,19 @@ class GyroScaleFactor(AttitudeErrorModel):
     attitude and acceleration follow as for :class:`GyroBias`. A scale factor is
     identifiable only on an axis that turns enough (a heading error of
     :math:`s_z \\Delta\\psi` after a total turn :math:`\\Delta\\psi`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> t = np.linspace(0.0, 1.0, 11)
+    >>> f = np.tile([0.0, 0.0, 9.80665], (11, 1))  # at rest, z up (m/s^2)
+    >>> w = np.tile([0.0, 0.0, 0.1], (11, 1))      # turning about z at 0.1 rad/s
+    >>> data = bvpnav.ImuData.from_gyro(t, f, w)
+    >>> from bvpnav.error_models import GyroScaleFactor
+    >>> model = GyroScaleFactor(axes="z")  # only the axis that turns
+    >>> model.names(data), model.columns(data).shape
+    (['gyro_scale_z'], (11, 3, 1))
     """
 
     units = ""

@@ -35,6 +35,22 @@ class Misalignment(SensorErrorModel):
     :math:`D = (I+E)^{-1}`. Together with :class:`ScaleFactor` this is exact; without it
     the correction is exact to first order in :math:`\\Theta`. Priors and bounds use the
     first-order relation :math:`\\Theta_{ij} \\approx -E_{ij}`.
+
+    Examples
+    --------
+    Six small angles for a triad, or the pairs named:
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> t = np.linspace(0.0, 1.0, 11)
+    >>> f = np.tile([0.0, 0.0, 9.80665], (11, 1))  # at rest, z up (m/s^2)
+    >>> w = np.tile([0.0, 0.0, 0.1], (11, 1))      # turning about z at 0.1 rad/s
+    >>> data = bvpnav.ImuData.from_gyro(t, f, w)
+    >>> from bvpnav.error_models import Misalignment
+    >>> [name[-2:] for name in Misalignment().names(data)]
+    ['xy', 'xz', 'yx', 'yz', 'zx', 'zy']
+    >>> Misalignment(pairs=["xy"]).columns(data).shape  # (samples, navigation axes, parameters)
+    (11, 3, 1)
     """
 
     pairs: Any = None

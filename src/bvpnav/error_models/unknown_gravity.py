@@ -31,6 +31,23 @@ class UnknownGravity(SensorErrorModel):
     Estimating it absorbs a small tilt of the initial attitude (the horizontal
     components) and the local value of g. With navigation-frame data it is a constant
     acceleration offset per axis (indistinguishable from a bias there).
+
+    Examples
+    --------
+    With navigation-frame data it is a constant acceleration offset per axis, reported as the
+    full component (here a tilt that leaked 0.05 m/s^2 of gravity into the axis):
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> from bvpnav.constraints import Position, Velocity
+    >>> t = np.linspace(0.0, 10.0, 101)
+    >>> tk = [0.0, 5.0, 10.0]
+    >>> known = [Position(t=tk, value=0.5 * np.sin(tk)), Velocity(t=0.0, value=0.5)]  # r = 0.5 sin t (m)
+    >>> from bvpnav.error_models import UnknownGravity
+    >>> data = bvpnav.ImuData(t=t, acc=-0.5 * np.sin(t) - 0.05)
+    >>> sol = bvpnav.NavigationProblem(data, error_model=UnknownGravity(), items=known).solve(solver="direct")
+    >>> print(f"gravity_x {sol.error_params['gravity_x']:.3f} m/s^2")
+    gravity_x 0.050 m/s^2
     """
 
     units = "m/s^2"
