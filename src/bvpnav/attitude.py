@@ -8,6 +8,17 @@ Conventions used throughout bvpnav:
   frame, expressed in body axes, in rad/s, so that :math:`\\dot C = C [\\omega\\times]`
   (Earth rotation is neglected, as in the papers);
 - quaternions are scipy's scalar-last ``(x, y, z, w)``.
+
+Examples
+--------
+A body turning about its z axis at 0.5 rad/s for 1 s:
+
+>>> import numpy as np
+>>> from bvpnav.attitude import integrate_gyro
+>>> t = np.linspace(0.0, 1.0, 11)
+>>> C = integrate_gyro(t, np.tile([0.0, 0.0, 0.5], (11, 1)))
+>>> print(np.round(C[-1].as_rotvec(), 6) + 0.0)
+[0.  0.  0.5]
 """
 
 from __future__ import annotations
@@ -60,6 +71,15 @@ def step_rotation_vectors(t, gyro) -> np.ndarray:
 
     the trapezoid rule plus the two-sample coning correction. It is exact for a
     constant rate axis.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from bvpnav.attitude import step_rotation_vectors
+    >>> t = np.linspace(0.0, 1.0, 11)
+    >>> phi = step_rotation_vectors(t, np.tile([0.0, 0.0, 0.5], (11, 1)))
+    >>> phi.shape, (np.round(phi[0], 6) + 0.0).tolist()  # one per step: 0.5 rad/s times 0.1 s
+    ((10, 3), [0.0, 0.0, 0.05])
     """
     grid = TimeGrid(t)
     w = _rates(gyro, grid.n)
@@ -73,6 +93,16 @@ def cumulative_product(steps: Rotation) -> Rotation:
     Uses ``log2(M)`` vectorised compositions (a parallel prefix scan) instead of a
     Python loop; composition is associative, so the result equals the sequential
     product up to rounding.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from scipy.spatial.transform import Rotation
+    >>> from bvpnav.attitude import cumulative_product
+    >>> steps = Rotation.from_rotvec(np.tile([0.0, 0.0, 0.05], (10, 1)))
+    >>> C = cumulative_product(steps)
+    >>> len(C), (np.round(C[-1].as_rotvec(), 6) + 0.0).tolist()
+    (10, [0.0, 0.0, 0.5])
     """
     q = steps.as_quat()
     m = q.shape[0]
@@ -107,6 +137,17 @@ def integrate_gyro(t, gyro, initial=None) -> Rotation:
     :func:`step_rotation_vectors`. The global attitude error is :math:`O(h^2)` for a
     smooth rate; it is exact (to rounding) for a fixed rotation axis with a rate that
     is linear in time between samples.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from scipy.spatial.transform import Rotation
+    >>> from bvpnav.attitude import integrate_gyro
+    >>> t = np.linspace(0.0, 1.0, 11)
+    >>> start = Rotation.from_euler("z", 90, degrees=True)  # heading 90 degrees
+    >>> C = integrate_gyro(t, np.tile([0.0, 0.0, 0.5], (11, 1)), initial=start)
+    >>> len(C), round(float(C[-1].as_euler("zyx", degrees=True)[0]), 3)  # 90 + 28.648 degrees
+    (11, 118.648)
     """
     phi = step_rotation_vectors(t, gyro)
     if initial is None:
@@ -139,6 +180,17 @@ def body_rates(t, attitude: Rotation) -> np.ndarray:
     :math:`\\omega_k \\approx \\log(C_{k-1}^T C_{k+1}) / (t_{k+1} - t_{k-1})`
     (one-sided at the ends); second order in the step for uniform sampling.
     Meant for checks and for attitude histories given only as samples.
+
+    Examples
+    --------
+    The rates back from an attitude history:
+
+    >>> import numpy as np
+    >>> from bvpnav.attitude import body_rates, integrate_gyro
+    >>> t = np.linspace(0.0, 1.0, 11)
+    >>> C = integrate_gyro(t, np.tile([0.1, 0.0, 0.5], (11, 1)))
+    >>> (np.round(body_rates(t, C)[5], 6) + 0.0).tolist()
+    [0.1, 0.0, 0.5]
     """
     grid = TimeGrid(t)
     n = grid.n

@@ -88,7 +88,7 @@ def sensor_frame(data) -> np.ndarray:
     >>> data = bvpnav.ImuData.from_gyro(t, f, w)
     >>> from bvpnav.error_models import sensor_frame
     >>> C = sensor_frame(data)  # body to navigation, one matrix per sample
-    >>> C.shape, np.round(C[-1], 3).tolist()[0]  # after 1 s at 0.1 rad/s about z
+    >>> C.shape, (np.round(C[-1], 3) + 0.0).tolist()[0]  # after 1 s at 0.1 rad/s about z
     ((11, 3, 3), [0.995, -0.1, 0.0])
     """
     if data.is_strapdown:
