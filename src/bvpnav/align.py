@@ -30,6 +30,20 @@ angles are related by :math:`\\phi_{ned} = \\phi_{enu}`,
 :math:`\\theta_{ned} = -\\theta_{enu}`, :math:`\\psi_{ned} = \\pi/2 - \\psi_{enu}`
 (positive pitch is nose *down* about the left axis, nose *up* about the right axis).
 For the *same* body triad in both frames, :math:`C_{ned} = T\\, C_{enu}`.
+
+Examples
+--------
+A triad at rest, rolled by -0.01 rad, pitched by 0.02 rad, heading 0.3 rad counterclockwise
+from east (ENU); the accelerometer gives roll and pitch, a known heading completes it:
+
+>>> import numpy as np
+>>> from scipy.spatial.transform import Rotation
+>>> C = Rotation.from_euler("ZYX", [0.3, 0.02, -0.01])  # yaw, pitch, roll (rad)
+>>> f = np.tile(C.inv().apply([0.0, 0.0, 9.80665]), (21, 1))  # at rest: -C^T g (m/s^2)
+>>> from bvpnav.align import align
+>>> C0 = align(np.linspace(0.0, 2.0, 21), f, stationary=(0.0, 2.0), yaw=0.3)
+>>> (np.round(C0.as_euler("ZYX"), 6) + 0.0).tolist()
+[0.3, 0.02, -0.01]
 """
 
 from __future__ import annotations
@@ -118,6 +132,17 @@ def roll_pitch_from_stationary(specific_force, frame: str = "enu", *, gravity: f
     The yaw does not enter (gravity is along the yaw axis). Exact for a noise-free
     triad at rest; an accelerometer bias :math:`b` tilts the answer by about
     :math:`|b_{xy}|/g_0` rad.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from scipy.spatial.transform import Rotation
+    >>> C = Rotation.from_euler("ZYX", [0.3, 0.02, -0.01])  # yaw, pitch, roll (rad)
+    >>> f = np.tile(C.inv().apply([0.0, 0.0, 9.80665]), (21, 1))  # at rest: -C^T g (m/s^2)
+    >>> from bvpnav.align import roll_pitch_from_stationary
+    >>> roll, pitch = roll_pitch_from_stationary(f)
+    >>> print(f"roll {roll:.4f} rad, pitch {pitch:.4f} rad")
+    roll -0.0100 rad, pitch 0.0200 rad
     """
     fr = _frame(frame)
     f = _array(specific_force, "specific_force", "m/s^2")
@@ -191,6 +216,17 @@ def heading_from_positions(t, positions, frame: str = "enu", min_distance: float
     north). This is the body's yaw when body x points along the travel direction (a
     car or a walker moving forward, no side slip) and the path is straight between the
     two fixes; on a curve it is the chord's direction.
+
+    Examples
+    --------
+    Ten metres travelled at 0.3 rad north of east (ENU):
+
+    >>> import numpy as np
+    >>> from bvpnav.align import heading_from_positions
+    >>> t = np.linspace(0.0, 10.0, 11)
+    >>> xy = np.column_stack([t * np.cos(0.3), t * np.sin(0.3)])
+    >>> print(f"{heading_from_positions(t, xy):.4f} rad")
+    0.3000 rad
     """
     _frame(frame)  # the formula is the same in both frames (see Notes)
     tt = _array(t, "t", "s").ravel()
@@ -245,6 +281,15 @@ def heading_from_velocity(velocity, frame: str = "enu", min_speed: float = 0.5):
     The body's yaw when body x points along the velocity (no side slip). A noise
     :math:`\\sigma_v` on each horizontal component gives a heading error of about
     :math:`\\sigma_v / |v_{xy}|` rad.
+
+    Examples
+    --------
+    >>> import math
+    >>> from bvpnav.align import heading_from_velocity
+    >>> print(f"{heading_from_velocity([1.0, 1.0]):.4f} rad")  # north-east in ENU
+    0.7854 rad
+    >>> print(f"{heading_from_velocity([1.0, 1.0], frame='ned'):.4f} rad")  # north = east in NED
+    0.7854 rad
     """
     _frame(frame)
     v = _array(velocity, "velocity", "m/s")
@@ -287,6 +332,14 @@ def initial_attitude(roll, pitch, yaw, frame: str = "enu") -> Rotation:
     The same formula in both frames (scipy ``Rotation.from_euler("ZYX", [yaw, pitch,
     roll])``); the frame states what the angles mean. Body x points at
     :math:`C e_x = (\\cos\\psi\\cos\\theta,\\ \\sin\\psi\\cos\\theta,\\ -\\sin\\theta)`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from bvpnav.align import initial_attitude
+    >>> C = initial_attitude(-0.01, 0.02, 0.3)  # roll, pitch, yaw (rad)
+    >>> (np.round(C.as_euler("ZYX"), 6) + 0.0).tolist()
+    [0.3, 0.02, -0.01]
     """
     from scipy.spatial.transform import Rotation
 
@@ -328,6 +381,13 @@ def attitude_angles(rotation: Rotation, frame: str = "enu", *, t=None, unwrap: b
     :math:`C = R_z(\\psi) R_y(\\theta) R_x(\\phi)`. At :math:`\\theta = \\pm 90`
     degrees (body x vertical) roll and yaw are not separable (gimbal lock; scipy warns
     and sets roll to zero).
+
+    Examples
+    --------
+    >>> from bvpnav.align import attitude_angles, initial_attitude
+    >>> print(attitude_angles(initial_attitude(-0.01, 0.02, 0.3)).round(3).to_string())
+       roll_deg  pitch_deg  yaw_deg
+    0    -0.573      1.146   17.189
     """
     from scipy.spatial.transform import Rotation
 
@@ -431,6 +491,20 @@ def align(t, specific_force, *, stationary, positions=None, position_times=None,
     the attitude integrated from identity at ``t[0]``
     (:func:`bvpnav.attitude.integrate_gyro`); a rotation about the navigation z axis
     does not change roll or pitch, so :math:`\\psi_k` does not matter.
+
+    Examples
+    --------
+    Roll and pitch from 2 s at rest, the heading given (ENU, counterclockwise from east):
+
+    >>> import numpy as np
+    >>> from scipy.spatial.transform import Rotation
+    >>> C = Rotation.from_euler("ZYX", [0.3, 0.02, -0.01])  # yaw, pitch, roll (rad)
+    >>> f = np.tile(C.inv().apply([0.0, 0.0, 9.80665]), (21, 1))  # at rest: -C^T g (m/s^2)
+    >>> from bvpnav.align import align, attitude_angles
+    >>> C0 = align(np.linspace(0.0, 2.0, 21), f, stationary=(0.0, 2.0), yaw=0.3)
+    >>> print(attitude_angles(C0).round(3).to_string())
+       roll_deg  pitch_deg  yaw_deg
+    0    -0.573      1.146   17.189
     """
     from .grid import TimeGrid
 

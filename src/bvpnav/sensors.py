@@ -29,6 +29,17 @@ widen that prior. Use
     prob = NavigationProblem(data, error_model=g.error_model(), sigma_a=g.sigma_a(100.0))
     mine = from_datasheet(acc_noise="150 ug/sqrt(Hz)", acc_bias="40 mg", gyro_noise="0.2 deg/sqrt(h)",
                           gyro_bias="10 deg/h", base="consumer")
+
+Examples
+--------
+>>> from bvpnav.sensors import GRADES, grade
+>>> sorted(GRADES)
+['consumer', 'navigation', 'tactical']
+>>> g = grade("tactical")
+>>> print(f"sigma_a at 100 Hz: {g.sigma_a(100.0):.4f} m/s^2")
+sigma_a at 100 Hz: 0.0050 m/s^2
+>>> g.error_model()
+Bias(sigma=0.005, interval=30.0, drift=1e-05) + GyroBias(sigma=5e-05, interval=30.0, drift=1e-06) + ...
 """
 
 from __future__ import annotations
@@ -163,6 +174,15 @@ class SensorGrade:
         Short name (the key in :data:`GRADES` for a preset).
     description : str
         One line saying what sensors the grade stands for.
+
+    Examples
+    --------
+    >>> from bvpnav.sensors import grade
+    >>> g = grade("consumer")
+    >>> g.acc_noise, g.gyro_bias, g.tilt  # m/s^2/sqrt(Hz), rad/s, rad
+    (0.002, 0.005, 0.02)
+    >>> print(f"{g.sigma_a(100.0):.3f} m/s^2")  # one sample's noise at 100 Hz: 2e-3 * sqrt(100)
+    0.020 m/s^2
     """
 
     acc_noise: float
@@ -395,6 +415,18 @@ def grade(name: str) -> SensorGrade:
     ------
     InputError
         For an unknown name, listing the valid ones.
+
+    Examples
+    --------
+    >>> import bvpnav
+    >>> from bvpnav.sensors import grade
+    >>> grade("navigation").gyro_bias  # rad/s
+    5e-08
+    >>> try:
+    ...     grade("military")
+    ... except bvpnav.InputError as exc:
+    ...     print(exc)
+    grade 'military': unknown sensor grade; valid grades: consumer, tactical, navigation ...
     """
     key = name.strip().lower() if isinstance(name, str) else None
     if key not in GRADES:
@@ -477,6 +509,17 @@ def from_datasheet(*, acc_noise: Any = None, acc_bias: Any = None, acc_bias_walk
     instability* (the Allan-deviation floor) is not a random walk; taking
     ``gyro_bias_walk`` = instability / sqrt(interval) for the error model's knot interval
     is a common and rough substitute when no rate random walk is given.
+
+    Examples
+    --------
+    A datasheet's numbers in its own units; what it does not give comes from ``base``:
+
+    >>> from bvpnav.sensors import from_datasheet
+    >>> mine = from_datasheet(acc_noise="150 ug/sqrt(Hz)", acc_bias="40 mg", base="consumer")
+    >>> print(f"{mine.acc_noise:.3e} m/s^2/sqrt(Hz), {mine.acc_bias:.4f} m/s^2")
+    1.471e-03 m/s^2/sqrt(Hz), 0.3923 m/s^2
+    >>> mine.gyro_noise == from_datasheet(base="consumer").gyro_noise
+    True
     """
     if not isinstance(one_sided, bool):
         raise InputError(f"one_sided={one_sided!r}: give True (one-sided densities) or False")

@@ -20,6 +20,18 @@ rates, perhaps an orientation from the device. This module applies what the spec
 Conventions are those of :mod:`bvpnav.attitude`: ``C`` rotates body vectors into the
 navigation frame, ``v_nav = C v_body``; rates are body rates relative to the navigation
 frame (Earth rotation neglected).
+
+Examples
+--------
+The navigation frame and gravity from the spec's ``[input]`` options:
+
+>>> from bvpnav.strapdown import frame_change, gravity_vector
+>>> gravity_vector({}, "enu").tolist()
+[0.0, 0.0, -9.80665]
+>>> gravity_vector({"gravity": 9.81}, "ned").tolist()
+[0.0, 0.0, 9.81]
+>>> frame_change("enu", "ned").tolist()
+[[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]]
 """
 
 from __future__ import annotations
@@ -50,7 +62,18 @@ _ENU_TO_NED = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
 
 
 def frame_change(src: str, dst: str) -> np.ndarray:
-    """The 3x3 matrix taking vectors in frame ``src`` to frame ``dst`` (``enu``/``ned``)."""
+    """The 3x3 matrix taking vectors in frame ``src`` to frame ``dst`` (``enu``/``ned``).
+
+    Examples
+    --------
+    ENU to NED swaps east and north and turns up into down:
+
+    >>> import numpy as np
+    >>> from bvpnav.strapdown import frame_change
+    >>> T = frame_change("enu", "ned")
+    >>> (T @ [1.0, 2.0, 3.0]).tolist()  # east 1, north 2, up 3 -> north 2, east 1, down -3
+    [2.0, 1.0, -3.0]
+    """
     for f in (src, dst):
         if f not in FRAMES:
             raise InputError(f"frame {f!r}: valid navigation frames: {sorted(FRAMES)}")
@@ -69,6 +92,17 @@ def rotation_option(value: Any, what: str) -> Rotation:
         (``scalar = "first"`` for ``[w, x, y, z]``; unit norm to 1e-6).
     what : str
         The option's name for messages.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from bvpnav.strapdown import rotation_option
+    >>> R = rotation_option({"euler": [0, 0, 90], "sequence": "xyz", "degrees": True}, "body_to_sensor")
+    >>> (np.round(R.as_rotvec(), 6) + 0.0).tolist()
+    [0.0, 0.0, 1.570796]
+    >>> R2 = rotation_option({"quaternion": [0, 0, 0.7071068, 0.7071068], "scalar": "last"}, "body_to_sensor")
+    >>> print(f"{np.degrees(R2.magnitude()):.3f}")
+    90.000
     """
     from scipy.spatial.transform import Rotation
 
@@ -117,6 +151,14 @@ def gravity_vector(options: Mapping[str, Any], frame: str) -> np.ndarray:
     A magnitude ``g`` points down: :math:`(0, 0, -g)` in ENU, :math:`(0, 0, g)` in NED.
     ``"wgs84"`` is the normal gravity of the WGS-84 ellipsoid at the given latitude and
     height (:func:`bvpnav.geodesy.normal_gravity`).
+
+    Examples
+    --------
+    >>> from bvpnav.strapdown import gravity_vector
+    >>> gravity_vector({"gravity": "wgs84", "latitude": 45.0, "height": 0.0}, "enu").round(5).tolist()
+    [0.0, 0.0, -9.8062]
+    >>> gravity_vector({"gravity": [0.0, 0.01, -9.8]}, "enu").tolist()
+    [0.0, 0.01, -9.8]
     """
     g = options.get("gravity", STANDARD_GRAVITY)
     lat, h = options.get("latitude"), options.get("height")
@@ -170,6 +212,21 @@ def imu_data(rec: Any, options: Mapping[str, Any]) -> ImuData:
     body-to-navigation attitude is :math:`C_{nb} = T_{nr} C_{rs} R` (:math:`T_{nr}` the
     fixed ENU/NED change); otherwise it is integrated from :math:`\\omega_b` starting at
     ``initial_attitude``. Then :math:`a = C_{nb} f_b + g`.
+
+    Examples
+    --------
+    A level triad at rest (specific force +g on z, up) in the default ENU frame:
+
+    >>> import numpy as np
+    >>> from bvpnav.readers import Recording
+    >>> from bvpnav.strapdown import imu_data
+    >>> rec = Recording(t=np.linspace(0.0, 1.0, 11), source="example",
+    ...                 specific_force=np.tile([0.0, 0.0, 9.80665], (11, 1)), gyro=np.zeros((11, 3)))
+    >>> data = imu_data(rec, {})
+    >>> data
+    ImuData(N=11, axes=('x', 'y', 'z'), strapdown, t=[0, 1] s)
+    >>> (np.round(data.acc[0], 9) + 0.0).tolist()  # at rest: no acceleration
+    [0.0, 0.0, 0.0]
     """
     from scipy.spatial.transform import Rotation
 
