@@ -22,6 +22,18 @@ Example::
     from bvpnav import detect
     intervals = detect.stationary(data)               # [(t0, t1), ...] in s
     prob.add(*detect.zero_velocity_items(intervals, sigma=0.01))
+
+Examples
+--------
+A simulated foot: standing, two strides, standing; the stance phases are found from the
+IMU alone:
+
+>>> from bvpnav import detect, scenarios
+>>> walk = scenarios.walking(rate=100.0, n_strides=2)  # stands 1.5 s, two strides, stands
+>>> detect.stationary(walk.data)
+[(0.0, 1.5), (2.1, 2.51), (3.1, 4.61)]
+>>> [(round(a, 2), round(b, 2)) for a, b in walk.params["stance_intervals"]]  # the truth
+[(0.0, 1.5), (2.1, 2.5), (3.1, 4.61)]
 """
 
 from __future__ import annotations
@@ -95,6 +107,16 @@ class Detection:
         Window length W in samples.
     params : dict
         The detector's settings (noise levels, thresholds, gravity, min_duration).
+
+    Examples
+    --------
+    >>> from bvpnav import detect, scenarios
+    >>> walk = scenarios.walking(rate=100.0, n_strides=2)  # stands 1.5 s, two strides, stands
+    >>> det = detect.stationary(walk.data, return_statistic=True)
+    >>> det.method, det.window, det.threshold
+    ('shoe', 3, 30000.0)
+    >>> bool((det.mask == (det.statistic < det.threshold)).all())
+    True
     """
 
     intervals: list
@@ -169,6 +191,16 @@ def shoe_statistic(specific_force, gyro, window: int, *, sigma_a: float = SHOE_S
     0.091 (rad/s)^2; OpenShoe's defaults used here give 3 (m/s^2)^2 and the same
     0.091 (rad/s)^2). Only the products :math:`\\gamma\\sigma_a^2` and
     :math:`\\gamma\\sigma_\\omega^2` matter for the decision.
+
+    Examples
+    --------
+    A triad at rest reads gravity on its up axis and no rate: the statistic is zero:
+
+    >>> import numpy as np
+    >>> from bvpnav.detect import shoe_statistic
+    >>> f, w = np.tile([0.0, 0.0, 9.80665], (10, 1)), np.zeros((10, 3))
+    >>> shoe_statistic(f, w, window=3).tolist()
+    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
     """
     f = np.asarray(specific_force, dtype=float)
     w = np.asarray(gyro, dtype=float)
@@ -218,6 +250,15 @@ def magnitude_statistic(specific_force, gyro, window: int, *,
 
     (the second term only with gyro rates), so :math:`S_n < 1` exactly when both window
     means are below their thresholds.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from bvpnav.detect import magnitude_statistic
+    >>> f, w = np.tile([0.0, 0.0, 9.80665], (10, 1)), np.zeros((10, 3))
+    >>> f[5:, 0] = 3.0  # moving from sample 5 on: 3 m/s^2 along x
+    >>> np.round(magnitude_statistic(f, w, window=3), 3).tolist()  # per window, over its threshold
+    [0.0, 0.0, 0.0, 0.299, 0.598, 0.897, 0.897, 0.897]
     """
     f = np.asarray(specific_force, dtype=float)
     acc = _window_sum(np.abs(np.linalg.norm(f, axis=1) - gravity), window) / (window * acc_threshold)
@@ -343,6 +384,14 @@ def stationary_mask(data: ImuData, method: str = "shoe", *, window: int | None =
     statistic : ndarray, shape (N,)
         Per sample, the smallest window statistic over the W windows that hold it
         (dimensionless), so that ``mask == (statistic < threshold)``.
+
+    Examples
+    --------
+    >>> from bvpnav import detect, scenarios
+    >>> walk = scenarios.walking(rate=100.0, n_strides=2)  # stands 1.5 s, two strides, stands
+    >>> mask, statistic = detect.stationary_mask(walk.data)
+    >>> mask.shape, int(mask.sum())  # stationary samples of 462
+    ((462,), 345)
     """
     mask, stat, _, _ = _detect(data, method, window, threshold, sigma_a, sigma_w, acc_threshold,
                                gyro_threshold, gravity)
@@ -434,6 +483,16 @@ def stationary(data: ImuData, method: str = "shoe", *, window: int | None = None
 
     which is OpenShoe's rule (a window below :math:`\\gamma` marks all its W samples) and
     gaitmap's with windows overlapping by W - 1 samples.
+
+    Examples
+    --------
+    >>> from bvpnav import detect, scenarios
+    >>> walk = scenarios.walking(rate=100.0, n_strides=2)  # stands 1.5 s, two strides, stands
+    >>> intervals = detect.stationary(walk.data)
+    >>> intervals
+    [(0.0, 1.5), (2.1, 2.51), (3.1, 4.61)]
+    >>> detect.stationary(walk.data, min_duration=1.0)  # the two long stands only
+    [(0.0, 1.5), (3.1, 4.61)]
     """
     if isinstance(min_duration, bool) or not np.isfinite(min_duration) or min_duration < 0:
         raise InputError(f"min_duration={min_duration!r}: give a duration >= 0 in s (0 keeps every "
@@ -467,6 +526,13 @@ def intervals_from_mask(t, mask, *, min_duration: float = 0.0) -> list[tuple[flo
     -------
     list of (float, float)
         First and last sample time of each run, sorted and non-overlapping.
+
+    Examples
+    --------
+    >>> from bvpnav.detect import intervals_from_mask
+    >>> t = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5]
+    >>> intervals_from_mask(t, [True, True, False, False, True, True])
+    [(0.0, 0.1), (0.4, 0.5)]
     """
     t = np.asarray(t, dtype=float)
     m = np.asarray(mask, dtype=bool)
@@ -503,6 +569,14 @@ def zero_velocity_items(intervals, angular_rate: float | bool | None = None, **i
     -------
     list of ZeroVelocity (and ZeroAngularRate)
         The velocity items first, then the angular-rate items, in interval order.
+
+    Examples
+    --------
+    >>> from bvpnav.detect import zero_velocity_items
+    >>> zero_velocity_items([(0.0, 1.5), (3.1, 4.6)])
+    [ZeroVelocity(mode='hard', t0=0.0, t1=1.5), ZeroVelocity(mode='hard', t0=3.1, t1=4.6)]
+    >>> zero_velocity_items([(0.0, 1.5)], sigma=0.01)  # soft, 0.01 m/s
+    [ZeroVelocity(mode='soft', sigma=0.01, t0=0.0, t1=1.5)]
     """
     from bvpnav.constraints import ZeroAngularRate, ZeroVelocity
 
