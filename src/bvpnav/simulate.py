@@ -18,6 +18,23 @@ remaining error in a test is the estimator's, not the discretisation's.
 Conventions: navigation frame z up, gravity ``(0, 0, -9.80665)`` m/s^2 by default;
 attitude is body to navigation (``v_nav = C v_body``), Euler angles are scipy's
 intrinsic ``"ZYX"`` (yaw, pitch, roll); gyro rates are body-frame, rad/s.
+
+Examples
+--------
+Noise-free data of a motion whose waypoints lie on the sampling grid are solved exactly
+(to rounding) from the two end positions and the initial velocity:
+
+>>> import numpy as np
+>>> from bvpnav import simulate
+>>> motion = simulate.Motion.from_waypoints([0.0, 1.0, 2.0], [[0, 0, 0], [1, 0, 0], [2, 1, 0]])
+>>> import bvpnav
+>>> from bvpnav.constraints import Position, Velocity
+>>> sim = simulate.simulate_imu(motion, rate=10.0)
+>>> prob = bvpnav.NavigationProblem(sim.imu_data()).add(
+...     Position(t=[0.0, 2.0], value=[[0, 0, 0], [2, 1, 0]]), Velocity(t=0.0, value=[0, 0, 0]))
+>>> err = np.abs(prob.solve(solver="direct").position() - sim.position(sim.t)).max()
+>>> bool(err < 1e-9)
+True
 """
 
 from __future__ import annotations
@@ -70,6 +87,17 @@ class SensorErrors:
     -----
     :math:`\\hat u = (I + \\mathrm{diag}(s))(I + \\Theta) u + b + n`, the convention the
     error models in :mod:`bvpnav.error_models` invert.
+
+    Examples
+    --------
+    An accelerometer triad reading 0.1 m/s^2 high on every axis:
+
+    >>> import numpy as np
+    >>> from bvpnav import simulate
+    >>> motion = simulate.Motion.from_waypoints([0.0, 1.0, 2.0], [[0, 0, 0], [1, 0, 0], [2, 1, 0]])
+    >>> sim = simulate.simulate_imu(motion, rate=10.0, accel=simulate.SensorErrors(bias=0.1))
+    >>> (np.round(sim.specific_force - sim.specific_force_true, 9) + 0.0)[0].tolist()
+    [0.1, 0.1, 0.1]
     """
 
     bias: Any = 0.0
@@ -127,6 +155,12 @@ def sample_times(t0: float, t1: float, rate: float) -> np.ndarray:
     """Uniform sample times ``t0 + k / rate`` (s) covering ``[t0, t1]``.
 
     ``(t1 - t0) * rate`` must be (close to) an integer so that ``t1`` is a sample.
+
+    Examples
+    --------
+    >>> from bvpnav.simulate import sample_times
+    >>> sample_times(0.0, 1.0, 4.0).tolist()
+    [0.0, 0.25, 0.5, 0.75, 1.0]
     """
     if not (np.isfinite(rate) and rate > 0):
         raise InputError(f"rate={rate!r}: must be a positive number of samples per s")
@@ -153,6 +187,19 @@ def zyx_body_rate(angles: np.ndarray, rates: np.ndarray) -> np.ndarray:
             -\\dot\\theta\\sin\\phi + \\dot\\psi\\cos\\theta\\cos\\phi \\end{bmatrix}
 
     with yaw :math:`\\psi`, pitch :math:`\\theta` and roll :math:`\\phi`.
+
+    Examples
+    --------
+    A yaw rate of 0.5 rad/s, level: 0.5 rad/s about the body z axis; at a pitch of +90
+    degrees: -0.5 rad/s about the body x axis:
+
+    >>> import numpy as np
+    >>> from bvpnav.simulate import zyx_body_rate
+    >>> zyx_body_rate(np.array([[0.0, 0.0, 0.0]]), np.array([[0.5, 0.0, 0.0]])).tolist()
+    [[0.0, 0.0, 0.5]]
+    >>> pitched = zyx_body_rate(np.array([[0.0, np.pi / 2, 0.0]]), np.array([[0.5, 0.0, 0.0]]))
+    >>> (np.round(pitched, 9) + 0.0).tolist()
+    [[-0.5, 0.0, 0.0]]
     """
     _, th, ph = np.asarray(angles, dtype=float).T
     dps, dth, dph = np.asarray(rates, dtype=float).T
@@ -176,6 +223,16 @@ class Motion:
     Notes
     -----
     The body rate follows from the Euler rates (:func:`zyx_body_rate`).
+
+    Examples
+    --------
+    Cubic splines through waypoints (put on the sampling grid) and level, heading 0:
+
+    >>> import numpy as np
+    >>> from bvpnav import simulate
+    >>> motion = simulate.Motion.from_waypoints([0.0, 1.0, 2.0], [[0, 0, 0], [1, 0, 0], [2, 1, 0]])
+    >>> (np.round(motion.pos([1.0]), 9) + 0.0).tolist()  # m
+    [[1.0, 0.0, 0.0]]
     """
 
     position: Any
@@ -278,6 +335,17 @@ class Simulation:
         The errors applied.
     motion : Motion
     seed : int or None
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from bvpnav import simulate
+    >>> motion = simulate.Motion.from_waypoints([0.0, 1.0, 2.0], [[0, 0, 0], [1, 0, 0], [2, 1, 0]])
+    >>> sim = simulate.simulate_imu(motion, rate=10.0)
+    >>> sim.imu_data()
+    ImuData(N=21, axes=('x', 'y', 'z'), strapdown, t=[0, 2] s)
+    >>> sim.truth.loc[1.0, ["x", "vx", "vy", "ay"]].round(3).tolist()  # m, m/s, m/s, m/s^2
+    [1.0, 1.5, 0.75, 3.0]
     """
 
     t: np.ndarray
@@ -362,6 +430,17 @@ def simulate_imu(
     :math:`f = C^T (\\ddot r - g)` (specific force, body frame) and
     :math:`\\omega = \\omega_b` from the Euler rates; then the sensor model of
     :class:`SensorErrors` is applied.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from bvpnav import simulate
+    >>> motion = simulate.Motion.from_waypoints([0.0, 1.0, 2.0], [[0, 0, 0], [1, 0, 0], [2, 1, 0]])
+    >>> sim = simulate.simulate_imu(motion, rate=10.0, gyro=simulate.SensorErrors(noise=1e-3), seed=0)
+    >>> sim.t.size, sim.gyro.shape
+    (21, (21, 3))
+    >>> bool(np.abs(sim.gyro - sim.body_rate_true).max() < 5e-3)  # the noise, 1e-3 rad/s per sample
+    True
     """
     t0 = motion.t0 if t0 is None else float(t0)
     t1 = motion.t1 if t1 is None else float(t1)
@@ -431,6 +510,15 @@ def strapdown_3d_2010(
         Starts and ends at rest; positions wander a few metres, yaw turns through
         about one revolution and pitch/roll swing by up to ~35 degrees, so body-frame
         biases and the navigation-frame gravity are distinguishable.
+
+    Examples
+    --------
+    >>> from bvpnav.simulate import strapdown_3d_2010
+    >>> sim = strapdown_3d_2010(rate=20.0, duration=4.0)
+    >>> sim.imu_data()
+    ImuData(N=81, axes=('x', 'y', 'z'), strapdown, t=[0, 4] s)
+    >>> sim.gravity.tolist()  # the paper's slightly tilted gravity, m/s^2
+    [0.03, -0.02, -9.815]
     """
     duration = float(duration)
     if duration < 4 or abs(duration - round(duration)) > 1e-9:
@@ -488,6 +576,17 @@ class RateTable:
     errors : dict
         The bias (m/s^2), scale (1), mounting angle (rad) and noise std (m/s^2) used.
     test : int
+
+    Examples
+    --------
+    >>> from bvpnav.simulate import rate_table
+    >>> table = rate_table(rate=100.0)
+    >>> table.data
+    ImuData(N=2001, axes=('x',), navigation-frame, t=[0, 20] s)
+    >>> print(f"radius {table.radius:.4f} m, arc length {table.position[-1]:.1f} m, at rest again")
+    radius 0.2365 m, arc length 10.4 m, at rest again
+    >>> float(table.velocity[-1])
+    0.0
     """
 
     t: np.ndarray
@@ -590,6 +689,15 @@ def rate_table(
     The sensor reads
 
     .. math:: \\hat a = (1 + s)(R\\dot\\omega\\cos\\mu + R\\omega^2\\sin\\mu) + b + n.
+
+    Examples
+    --------
+    >>> from bvpnav.simulate import rate_table
+    >>> table = rate_table(test=1, rate=100.0)
+    >>> table.errors["bias"], table.errors["scale"]  # m/s^2, dimensionless
+    (0.2, 0.01)
+    >>> table.rest_acc.shape  # 2 s at rest before the motion, for the bias
+    (200,)
     """
     if test not in _RATE_TABLE_TESTS:
         raise InputError(f"test={test!r}; the paper has tests 1 and 2")
