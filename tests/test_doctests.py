@@ -46,6 +46,10 @@ def _walk(package: str) -> list[str]:
 
 
 def _module_names() -> list[str]:
+    # the plug-in families discover their folders first, so that their registries keep the
+    # order they document (built-ins first), not the alphabetical order of the walk below
+    bvpnav.lam.rule_names()
+    bvpnav.readers.registry()
     names = _walk("bvpnav")
     if "bvpnav.constraints" not in names:  # an editable install maps it from constraints/
         names += _walk("bvpnav.constraints")
@@ -107,7 +111,8 @@ def _public_objects() -> list[tuple[str, object]]:
                     objs.append((f"bvpnav.{name}.{sub}", member))
     for module, name in PLUGIN_BASES:
         objs.append((f"{module}.{name}", getattr(importlib.import_module(module), name)))
-    return objs
+    seen: set[int] = set()  # a base exported by its package is listed once
+    return [(p, o) for p, o in objs if not (id(o) in seen or seen.add(id(o)))]
 
 
 def _qualified(obj) -> str:
