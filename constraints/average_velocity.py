@@ -17,7 +17,7 @@ __all__ = ["AverageVelocity"]
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class AverageVelocity(Item):
-    """The mean velocity over one or many intervals ``[t0, t1]`` is known.
+    r"""The mean velocity over one or many intervals ``[t0, t1]`` is known.
 
     Parameters
     ----------
@@ -34,7 +34,7 @@ class AverageVelocity(Item):
     -----
     The mean of v over an interval is exact in terms of positions:
 
-    .. math:: \\rho = \\frac{r(t_1) - r(t_0)}{t_1 - t_0} - \\bar v.
+    .. math:: \rho = \frac{r(t_1) - r(t_0)}{t_1 - t_0} - \bar v.
     """
 
     t0: Any

@@ -102,7 +102,7 @@ def evaluate_profile(v: np.ndarray, tt: np.ndarray | None, times: np.ndarray, a:
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class PositionBound(Item):
-    """The position of each chosen axis stays between bounds over an interval.
+    r"""The position of each chosen axis stays between bounds over an interval.
 
     Parameters
     ----------
@@ -124,7 +124,7 @@ class PositionBound(Item):
     :math:`t_k` (the grid nodes inside the interval, ``t0``, ``t1`` and the profile's
     breakpoints inside it):
 
-    .. math:: g = \\ell(t_k) - r_a(t_k) \\le 0, \\qquad g = r_a(t_k) - u(t_k) \\le 0.
+    .. math:: g = \ell(t_k) - r_a(t_k) \le 0, \qquad g = r_a(t_k) - u(t_k) \le 0.
 
     The FEM position is piecewise linear between nodes and so is a piecewise-linear
     bound between its breakpoints, so the bound holding at these times means it holds

@@ -20,7 +20,7 @@ __all__ = ["HalfSpace"]
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class HalfSpace(Item):
-    """The position stays in the half-space ``n . r(t) <= b`` over an interval.
+    r"""The position stays in the half-space ``n . r(t) <= b`` over an interval.
 
     Parameters
     ----------
@@ -39,11 +39,11 @@ class HalfSpace(Item):
     -----
     Inequality residual at every grid node inside the interval and at ``t0``, ``t1``:
 
-    .. math:: g_k = \\sum_a n_a\\, r_a(t_k) - b \\le 0.
+    .. math:: g_k = \sum_a n_a\, r_a(t_k) - b \le 0.
 
     The FEM position is piecewise linear, so the half-space (a convex set) holding at
     the nodes means it holds at every instant. Example: a ground plane
-    :math:`z \\ge 0.3 x - 5` is ``HalfSpace(axes=("x", "z"), normal=(0.3, -1), b=5)``.
+    :math:`z \ge 0.3 x - 5` is ``HalfSpace(axes=("x", "z"), normal=(0.3, -1), b=5)``.
     """
 
     normal: Any

@@ -19,7 +19,7 @@ __all__ = ["Linear"]
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Linear(Item):
-    """User rows ``sum_k sum_a C[i, k, a] q_a(t_k) = value_i``.
+    r"""User rows ``sum_k sum_a C[i, k, a] q_a(t_k) = value_i``.
 
     Parameters
     ----------
@@ -41,7 +41,7 @@ class Linear(Item):
 
     Notes
     -----
-    The residual is :math:`\\rho_i = \\sum_{k,a} C_{ika}\\, q_a(t_k) - e_i`, i.e. the
+    The residual is :math:`\rho_i = \sum_{k,a} C_{ika}\, q_a(t_k) - e_i`, i.e. the
     2011 paper's general ``D r = e`` row by row.
     """
 

@@ -14,7 +14,7 @@ __all__ = ["Position"]
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Position(Item):
-    """The position is known at one or many instants.
+    r"""The position is known at one or many instants.
 
     Parameters
     ----------
@@ -30,8 +30,8 @@ class Position(Item):
 
     Notes
     -----
-    Residual per instant k and axis a: :math:`\\rho = r_a(t_k) - p_{k,a}` with
-    :math:`r_a(t) = \\sum_j r_{a,j} \\phi_j(t)`. At ``t = T0`` or ``T1`` in hard mode
+    Residual per instant k and axis a: :math:`\rho = r_a(t_k) - p_{k,a}` with
+    :math:`r_a(t) = \sum_j r_{a,j} \phi_j(t)`. At ``t = T0`` or ``T1`` in hard mode
     this is the Dirichlet boundary condition.
     """
 

@@ -19,7 +19,7 @@ __all__ = ["SpeedLimit"]
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class SpeedLimit(Item):
-    """The speed stays below a limit: ``|v(t)|_2 <= v_max`` at the grid nodes.
+    r"""The speed stays below a limit: ``|v(t)|_2 <= v_max`` at the grid nodes.
 
     Parameters
     ----------
@@ -31,16 +31,16 @@ class SpeedLimit(Item):
         Axes whose velocity components make up the speed; default all axes.
     sigma, mode, huber, tol, name
         See :class:`bvpnav.items.Item`; ``sigma`` and ``tol`` in m/s, applied to the
-        excess speed. ``soft`` penalises :math:`\\max(|v| - v_{max}, 0)^2/\\sigma^2`,
-        ``robust`` :math:`\\max(|v| - v_{max}, 0)/\\sigma`, ``band`` allows
-        :math:`|v| \\le v_{max} + tol`.
+        excess speed. ``soft`` penalises :math:`\max(|v| - v_{max}, 0)^2/\sigma^2`,
+        ``robust`` :math:`\max(|v| - v_{max}, 0)/\sigma`, ``band`` allows
+        :math:`|v| \le v_{max} + tol`.
 
     Notes
     -----
     One second-order cone per check time :math:`t_k` (the grid nodes inside the
     interval, and ``t0``, ``t1``):
 
-    .. math:: \\|v(t_k)\\|_2 \\le v_{max},
+    .. math:: \|v(t_k)\|_2 \le v_{max},
 
     with the node velocities of :meth:`bvpnav.model.NavModel.velocity` (affine in the
     positions, the acceleration residuals and the end velocities). Between nodes the

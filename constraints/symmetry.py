@@ -17,7 +17,7 @@ __all__ = ["Symmetry"]
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Symmetry(Item):
-    """Positions mirrored about the instant ``about`` are equal (or opposite).
+    r"""Positions mirrored about the instant ``about`` are equal (or opposite).
 
     Parameters
     ----------
@@ -29,15 +29,15 @@ class Symmetry(Item):
         Explicit offsets ``tau`` in s; default: the sample times after ``c`` (so every
         node to the right of ``c`` is paired with its mirror image).
     parity : {"even", "odd"}
-        ``even``: :math:`r(c + \\tau) = r(c - \\tau)` (the 2011 paper's symmetry, e.g. a
-        there-and-back motion); ``odd``: :math:`r(c + \\tau) - r(c) = -(r(c - \\tau) - r(c))`.
+        ``even``: :math:`r(c + \tau) = r(c - \tau)` (the 2011 paper's symmetry, e.g. a
+        there-and-back motion); ``odd``: :math:`r(c + \tau) - r(c) = -(r(c - \tau) - r(c))`.
     axes, sigma, mode, huber, tol, name
         See :class:`bvpnav.items.Item`; ``sigma`` in m.
 
     Notes
     -----
-    Even residual :math:`\\rho_k = r(c + \\tau_k) - r(c - \\tau_k)`; odd residual
-    :math:`\\rho_k = r(c + \\tau_k) + r(c - \\tau_k) - 2 r(c)`. Positions between nodes
+    Even residual :math:`\rho_k = r(c + \tau_k) - r(c - \tau_k)`; odd residual
+    :math:`\rho_k = r(c + \tau_k) + r(c - \tau_k) - 2 r(c)`. Positions between nodes
     are interpolated linearly (the FEM's own representation).
     """
 

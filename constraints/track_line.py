@@ -106,7 +106,7 @@ def _to_segments(Q: np.ndarray, A, d, L, S0):
 
 def project_onto_polyline(vertices, t, positions, ambiguity: float = 0.5,
                           beyond_ends: str = "drop") -> TrackProjection:
-    """Nearest segment of each sample, with the paper's ambiguous and out-of-range cases.
+    r"""Nearest segment of each sample, with the paper's ambiguous and out-of-range cases.
 
     Parameters
     ----------
@@ -133,10 +133,10 @@ def project_onto_polyline(vertices, t, positions, ambiguity: float = 0.5,
     Notes
     -----
     Per sample ``p`` the nearest point ``q`` on the polyline is found. If ``q`` lies inside
-    segment ``i`` the row is the segment's line, :math:`n_i \\cdot r = n_i \\cdot v_i` with
+    segment ``i`` the row is the segment's line, :math:`n_i \cdot r = n_i \cdot v_i` with
     the unit normal :math:`n_i` (the paper's equation 24 scaled to metres). If ``q`` is an
     interior vertex (``p`` in the wedge outside a corner) the row is the linearized
-    distance to that vertex, :math:`u \\cdot r = u \\cdot q` with
+    distance to that vertex, :math:`u \cdot r = u \cdot q` with
     :math:`u = (p - q)/|p - q|` (the bisector normal when ``p`` is on the vertex).
 
     Out of range: a sample whose nearest point is an end of the polyline *and* that lies
@@ -252,7 +252,7 @@ def project_onto_polyline(vertices, t, positions, ambiguity: float = 0.5,
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class TrackLine(Linearizable, Item):
-    """The object moves along a known planar polyline (timing unknown).
+    r"""The object moves along a known planar polyline (timing unknown).
 
     Parameters
     ----------
@@ -288,7 +288,7 @@ class TrackLine(Linearizable, Item):
     At each time :math:`t_k` the nearest point :math:`q_k` of the polyline to the
     current estimate :math:`p_k` gives the row
 
-    .. math:: \\rho_k = n_k \\cdot r(t_k) - n_k \\cdot q_k,
+    .. math:: \rho_k = n_k \cdot r(t_k) - n_k \cdot q_k,
 
     the signed distance of :math:`r(t_k)` from the tangent line at :math:`q_k`, with
     :math:`n_k` the segment's unit normal (or the unit direction from :math:`q_k` to

@@ -14,7 +14,7 @@ __all__ = ["Velocity"]
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Velocity(Item):
-    """The velocity is known at one or many instants.
+    r"""The velocity is known at one or many instants.
 
     Parameters
     ----------
@@ -29,7 +29,7 @@ class Velocity(Item):
 
     Notes
     -----
-    Residual :math:`\\rho = v_a(t_k) - u_{k,a}`. At the window's ends the velocity is
+    Residual :math:`\rho = v_a(t_k) - u_{k,a}`. At the window's ends the velocity is
     the FEM's natural boundary unknown :math:`v_0` or :math:`v_1` itself, so an end
     velocity in hard mode is an exact Neumann condition. Elsewhere
     :math:`v_j = (r_j - r_{j-1})/h_{j-1} + h_{j-1}(a_{j-1} + 2a_j)/6` with the corrected

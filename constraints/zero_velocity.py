@@ -16,7 +16,7 @@ __all__ = ["ZeroVelocity"]
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class ZeroVelocity(Item):
-    """The object is at rest during ``[t0, t1]``.
+    r"""The object is at rest during ``[t0, t1]``.
 
     Parameters
     ----------
@@ -28,7 +28,7 @@ class ZeroVelocity(Item):
     Notes
     -----
     One row per sample inside the interval plus its two ends:
-    :math:`\\rho_k = v(t_k) = 0` for :math:`t_k \\in [t_0, t_1]`, with the consistent FEM
+    :math:`\rho_k = v(t_k) = 0` for :math:`t_k \in [t_0, t_1]`, with the consistent FEM
     velocity (see :class:`~bvpnav.constraints.Velocity`).
     """
 

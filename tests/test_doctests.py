@@ -11,11 +11,14 @@ another name; importing by dotted name also tests the installed package, not the
 
 from __future__ import annotations
 
+import ast
 import doctest
 import importlib
 import inspect
+import io
 import pkgutil
 import re
+import tokenize
 from types import ModuleType
 
 import pytest
@@ -154,3 +157,29 @@ def test_examples_section_count_matches_the_collected_doctests():
             if _EXAMPLES.search(inspect.getdoc(obj) or "") and _qualified(obj) not in TESTS:
                 missing.append(_qualified(obj))
     assert not missing, f"Examples sections doctest does not collect: {missing}"
+
+
+def _docstring_tokens(path: str) -> list[tokenize.TokenInfo]:
+    src = open(path, encoding="utf-8").read()
+    starts = {(n.body[0].value.lineno, n.body[0].value.col_offset) for n in ast.walk(ast.parse(src))
+              if isinstance(n, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef))
+              and n.body and isinstance(n.body[0], ast.Expr) and isinstance(n.body[0].value, ast.Constant)
+              and isinstance(n.body[0].value.value, str)}
+    return [tok for tok in tokenize.generate_tokens(io.StringIO(src).readline)
+            if tok.type == tokenize.STRING and tok.start in starts]
+
+
+def test_docstrings_with_a_backslash_are_raw():
+    """Math is written in docstrings as in LaTeX, ``:math:`\\sigma```: a docstring holding a
+    backslash is a raw string (``r\"\"\"``), so no backslash is doubled and none is an escape."""
+    offenders = []
+    for name in _module_names():
+        if name in UNIMPORTABLE:
+            continue
+        path = importlib.import_module(name).__file__
+        for tok in _docstring_tokens(path):
+            prefix = re.match(r"[A-Za-z]*", tok.string).group(0)
+            if "\\" in tok.string and "r" not in prefix.lower():
+                offenders.append(f"{path}:{tok.start[0]}")
+    assert not offenders, ("docstrings with a backslash that are not raw strings; write r\"\"\" and single "
+                           f"backslashes: {offenders}")

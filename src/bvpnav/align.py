@@ -1,4 +1,4 @@
-"""Initial alignment: roll and pitch from a stationary interval, heading from the motion.
+r"""Initial alignment: roll and pitch from a stationary interval, heading from the motion.
 
 Frames (the conventions of :mod:`bvpnav.attitude` and :mod:`bvpnav.strapdown`):
 
@@ -10,10 +10,10 @@ Frames (the conventions of :mod:`bvpnav.attitude` and :mod:`bvpnav.strapdown`):
 - the attitude ``C`` rotates body vectors into the navigation frame,
   :math:`v_n = C v_b` (scipy ``Rotation.apply``), with Euler angles
 
-  .. math:: C = R_z(\\psi)\\, R_y(\\theta)\\, R_x(\\phi)
+  .. math:: C = R_z(\psi)\, R_y(\theta)\, R_x(\phi)
 
-  (scipy ``Rotation.from_euler("ZYX", [yaw, pitch, roll])``): roll :math:`\\phi` about
-  body x, pitch :math:`\\theta` about the once-rotated y, yaw :math:`\\psi` about the
+  (scipy ``Rotation.from_euler("ZYX", [yaw, pitch, roll])``): roll :math:`\phi` about
+  body x, pitch :math:`\theta` about the once-rotated y, yaw :math:`\psi` about the
   navigation z axis. In ENU the yaw is counterclockwise from east about up (0 = body x
   pointing east, +90 deg = north); in NED it is the aerospace heading, clockwise from
   north about down (0 = north, +90 deg = east). The formula is the same in both
@@ -24,12 +24,12 @@ Frames (the conventions of :mod:`bvpnav.attitude` and :mod:`bvpnav.strapdown`):
 
 One physical attitude in both frames: with body axes x forward, y left, z up (FLU) for
 ENU and x forward, y right, z down (FRD) for NED,
-:math:`C_{ned} = T\\, C_{enu}\\, B` with :math:`T` the ENU-to-NED change
-:math:`(e, n, u) \\to (n, e, -u)` and :math:`B = \\mathrm{diag}(1, -1, -1)`, and the
-angles are related by :math:`\\phi_{ned} = \\phi_{enu}`,
-:math:`\\theta_{ned} = -\\theta_{enu}`, :math:`\\psi_{ned} = \\pi/2 - \\psi_{enu}`
+:math:`C_{ned} = T\, C_{enu}\, B` with :math:`T` the ENU-to-NED change
+:math:`(e, n, u) \to (n, e, -u)` and :math:`B = \mathrm{diag}(1, -1, -1)`, and the
+angles are related by :math:`\phi_{ned} = \phi_{enu}`,
+:math:`\theta_{ned} = -\theta_{enu}`, :math:`\psi_{ned} = \pi/2 - \psi_{enu}`
 (positive pitch is nose *down* about the left axis, nose *up* about the right axis).
-For the *same* body triad in both frames, :math:`C_{ned} = T\\, C_{enu}`.
+For the *same* body triad in both frames, :math:`C_{ned} = T\, C_{enu}`.
 
 Examples
 --------
@@ -94,7 +94,7 @@ def _array(value: Any, what: str, unit: str) -> np.ndarray:
 
 def roll_pitch_from_stationary(specific_force, frame: str = "enu", *, gravity: float = STANDARD_GRAVITY,
                                tolerance: float = GRAVITY_TOLERANCE) -> tuple[float, float]:
-    """Roll and pitch of a triad at rest from its mean specific force.
+    r"""Roll and pitch of a triad at rest from its mean specific force.
 
     Parameters
     ----------
@@ -106,13 +106,13 @@ def roll_pitch_from_stationary(specific_force, frame: str = "enu", *, gravity: f
     gravity : float
         Magnitude of gravity, m/s^2 (default 9.80665), for the plausibility check only.
     tolerance : float
-        Accepted relative departure of :math:`|\\bar f|` from ``gravity`` (default 0.05).
+        Accepted relative departure of :math:`|\bar f|` from ``gravity`` (default 0.05).
 
     Returns
     -------
     (roll, pitch) : tuple of float
-        rad, with :math:`C = R_z(\\psi) R_y(\\theta) R_x(\\phi)`; roll in
-        :math:`(-\\pi, \\pi]`, pitch in :math:`[-\\pi/2, \\pi/2]`.
+        rad, with :math:`C = R_z(\psi) R_y(\theta) R_x(\phi)`; roll in
+        :math:`(-\pi, \pi]`, pitch in :math:`[-\pi/2, \pi/2]`.
 
     Raises
     ------
@@ -122,13 +122,13 @@ def roll_pitch_from_stationary(specific_force, frame: str = "enu", *, gravity: f
 
     Notes
     -----
-    At rest :math:`f = -C^T g = s\\, g_0\\, C^T e_z` with :math:`s = +1` in ENU (z up)
+    At rest :math:`f = -C^T g = s\, g_0\, C^T e_z` with :math:`s = +1` in ENU (z up)
     and :math:`s = -1` in NED (z down); with :math:`C = R_z R_y R_x`,
 
-    .. math:: s\\, \\bar f / g_0 = (-\\sin\\theta,\\ \\sin\\phi\\cos\\theta,\\ \\cos\\phi\\cos\\theta),
+    .. math:: s\, \bar f / g_0 = (-\sin\theta,\ \sin\phi\cos\theta,\ \cos\phi\cos\theta),
 
-    so :math:`\\phi = \\operatorname{atan2}(s \\bar f_y, s \\bar f_z)` and
-    :math:`\\theta = \\operatorname{atan2}(-s \\bar f_x, \\sqrt{\\bar f_y^2 + \\bar f_z^2})`.
+    so :math:`\phi = \operatorname{atan2}(s \bar f_y, s \bar f_z)` and
+    :math:`\theta = \operatorname{atan2}(-s \bar f_x, \sqrt{\bar f_y^2 + \bar f_z^2})`.
     The yaw does not enter (gravity is along the yaw axis). Exact for a noise-free
     triad at rest; an accelerometer bias :math:`b` tilts the answer by about
     :math:`|b_{xy}|/g_0` rad.
@@ -177,7 +177,7 @@ def _horizontal(values: np.ndarray, what: str) -> np.ndarray:
 
 
 def heading_from_positions(t, positions, frame: str = "enu", min_distance: float = 10.0) -> float:
-    """Yaw of the direction of travel between the first position fixes far enough apart.
+    r"""Yaw of the direction of travel between the first position fixes far enough apart.
 
     Parameters
     ----------
@@ -191,12 +191,12 @@ def heading_from_positions(t, positions, frame: str = "enu", min_distance: float
     min_distance : float
         Horizontal distance, m, the second fix must be from the first (default 10).
         Choose it well above the fixes' noise: the heading's error is about
-        :math:`\\sqrt 2\\, \\sigma_p / d` rad for a horizontal noise :math:`\\sigma_p`.
+        :math:`\sqrt 2\, \sigma_p / d` rad for a horizontal noise :math:`\sigma_p`.
 
     Returns
     -------
     float
-        Yaw in rad, in :math:`(-\\pi, \\pi]`: counterclockwise from east in ENU,
+        Yaw in rad, in :math:`(-\pi, \pi]`: counterclockwise from east in ENU,
         clockwise from north in NED (the yaw of :func:`initial_attitude`).
 
     Raises
@@ -208,9 +208,9 @@ def heading_from_positions(t, positions, frame: str = "enu", min_distance: float
     Notes
     -----
     With :math:`p_0` the first fix and :math:`p_k` the first later fix with
-    :math:`\\|p_k - p_0\\|_{xy} \\ge d_{min}`,
+    :math:`\|p_k - p_0\|_{xy} \ge d_{min}`,
 
-    .. math:: \\psi = \\operatorname{atan2}(y_k - y_0,\\ x_k - x_0)
+    .. math:: \psi = \operatorname{atan2}(y_k - y_0,\ x_k - x_0)
 
     in both frames (in NED, x = north and y = east make this the clockwise angle from
     north). This is the body's yaw when body x points along the travel direction (a
@@ -253,7 +253,7 @@ def heading_from_positions(t, positions, frame: str = "enu", min_distance: float
 
 
 def heading_from_velocity(velocity, frame: str = "enu", min_speed: float = 0.5):
-    """Yaw of the horizontal velocity.
+    r"""Yaw of the horizontal velocity.
 
     Parameters
     ----------
@@ -268,7 +268,7 @@ def heading_from_velocity(velocity, frame: str = "enu", min_speed: float = 0.5):
     Returns
     -------
     float or ndarray of shape (N,)
-        Yaw in rad: :math:`\\psi = \\operatorname{atan2}(v_y, v_x)`, counterclockwise
+        Yaw in rad: :math:`\psi = \operatorname{atan2}(v_y, v_x)`, counterclockwise
         from east in ENU, clockwise from north in NED.
 
     Raises
@@ -279,8 +279,8 @@ def heading_from_velocity(velocity, frame: str = "enu", min_speed: float = 0.5):
     Notes
     -----
     The body's yaw when body x points along the velocity (no side slip). A noise
-    :math:`\\sigma_v` on each horizontal component gives a heading error of about
-    :math:`\\sigma_v / |v_{xy}|` rad.
+    :math:`\sigma_v` on each horizontal component gives a heading error of about
+    :math:`\sigma_v / |v_{xy}|` rad.
 
     Examples
     --------
@@ -310,7 +310,7 @@ def heading_from_velocity(velocity, frame: str = "enu", min_speed: float = 0.5):
 
 
 def initial_attitude(roll, pitch, yaw, frame: str = "enu") -> Rotation:
-    """Body-to-navigation attitude from roll, pitch and yaw.
+    r"""Body-to-navigation attitude from roll, pitch and yaw.
 
     Parameters
     ----------
@@ -323,15 +323,15 @@ def initial_attitude(roll, pitch, yaw, frame: str = "enu") -> Rotation:
     Returns
     -------
     scipy.spatial.transform.Rotation
-        One rotation for scalar angles, else N: :math:`C = R_z(\\psi) R_y(\\theta)
-        R_x(\\phi)` with :math:`v_n = C v_b`, ready for
+        One rotation for scalar angles, else N: :math:`C = R_z(\psi) R_y(\theta)
+        R_x(\phi)` with :math:`v_n = C v_b`, ready for
         ``ImuData.from_gyro(..., initial_attitude=C)``.
 
     Notes
     -----
     The same formula in both frames (scipy ``Rotation.from_euler("ZYX", [yaw, pitch,
     roll])``); the frame states what the angles mean. Body x points at
-    :math:`C e_x = (\\cos\\psi\\cos\\theta,\\ \\sin\\psi\\cos\\theta,\\ -\\sin\\theta)`.
+    :math:`C e_x = (\cos\psi\cos\theta,\ \sin\psi\cos\theta,\ -\sin\theta)`.
 
     Examples
     --------
@@ -356,7 +356,7 @@ def initial_attitude(roll, pitch, yaw, frame: str = "enu") -> Rotation:
 
 
 def attitude_angles(rotation: Rotation, frame: str = "enu", *, t=None, unwrap: bool = False) -> pd.DataFrame:
-    """Roll, pitch and yaw in degrees per sample: the inverse of :func:`initial_attitude`.
+    r"""Roll, pitch and yaw in degrees per sample: the inverse of :func:`initial_attitude`.
 
     Parameters
     ----------
@@ -377,8 +377,8 @@ def attitude_angles(rotation: Rotation, frame: str = "enu", *, t=None, unwrap: b
 
     Notes
     -----
-    scipy ``as_euler("ZYX")`` gives :math:`(\\psi, \\theta, \\phi)` of
-    :math:`C = R_z(\\psi) R_y(\\theta) R_x(\\phi)`. At :math:`\\theta = \\pm 90`
+    scipy ``as_euler("ZYX")`` gives :math:`(\psi, \theta, \phi)` of
+    :math:`C = R_z(\psi) R_y(\theta) R_x(\phi)`. At :math:`\theta = \pm 90`
     degrees (body x vertical) roll and yaw are not separable (gimbal lock; scipy warns
     and sets roll to zero).
 
@@ -436,7 +436,7 @@ def _stationary_rows(stationary: Any, t: np.ndarray) -> np.ndarray:
 def align(t, specific_force, *, stationary, positions=None, position_times=None, velocity=None,
           yaw: float | None = None, gyro=None, frame: str = "enu", min_distance: float = 10.0,
           gravity: float = STANDARD_GRAVITY, tolerance: float = GRAVITY_TOLERANCE) -> Rotation:
-    """The body-to-navigation attitude at ``t[0]`` from a stationary interval and the motion.
+    r"""The body-to-navigation attitude at ``t[0]`` from a stationary interval and the motion.
 
     Parameters
     ----------
@@ -471,7 +471,7 @@ def align(t, specific_force, *, stationary, positions=None, position_times=None,
     Returns
     -------
     scipy.spatial.transform.Rotation
-        :math:`C_0 = R_z(\\psi) R_y(\\theta_0) R_x(\\phi_0)`, for
+        :math:`C_0 = R_z(\psi) R_y(\theta_0) R_x(\phi_0)`, for
         ``ImuData.from_gyro(t, specific_force, gyro, initial_attitude=C_0, gravity=...)``.
 
     Raises
@@ -486,11 +486,11 @@ def align(t, specific_force, *, stationary, positions=None, position_times=None,
     heading from positions or a velocity is the direction of travel some time after
     ``t[0]``; it is taken as the yaw at ``t[0]`` (the vehicle starts moving forward
     along body x, without turning first). When the stationary interval starts at sample
-    :math:`k > 0`, its attitude :math:`C_k = R_z(\\psi_k) R_y(\\theta) R_x(\\phi)` is
-    carried back with the gyro, :math:`C_0 = C_k \\Delta_k^{-1}` with :math:`\\Delta_k`
+    :math:`k > 0`, its attitude :math:`C_k = R_z(\psi_k) R_y(\theta) R_x(\phi)` is
+    carried back with the gyro, :math:`C_0 = C_k \Delta_k^{-1}` with :math:`\Delta_k`
     the attitude integrated from identity at ``t[0]``
     (:func:`bvpnav.attitude.integrate_gyro`); a rotation about the navigation z axis
-    does not change roll or pitch, so :math:`\\psi_k` does not matter.
+    does not change roll or pitch, so :math:`\psi_k` does not matter.
 
     Examples
     --------

@@ -1,11 +1,11 @@
-"""Attitude from gyro rates (scipy ``Rotation``), body-to-navigation convention.
+r"""Attitude from gyro rates (scipy ``Rotation``), body-to-navigation convention.
 
 Conventions used throughout bvpnav:
 
 - the attitude ``C(t)`` rotates body-frame vectors into the navigation frame,
   ``v_nav = C v_body`` (``Rotation.apply``);
 - gyro rates ``omega`` are the body's angular velocity relative to the navigation
-  frame, expressed in body axes, in rad/s, so that :math:`\\dot C = C [\\omega\\times]`
+  frame, expressed in body axes, in rad/s, so that :math:`\dot C = C [\omega\times]`
   (Earth rotation is neglected, as in the papers);
 - quaternions are scipy's scalar-last ``(x, y, z, w)``.
 
@@ -48,7 +48,7 @@ def _rates(gyro, n: int, what: str = "gyro") -> np.ndarray:
 
 
 def step_rotation_vectors(t, gyro) -> np.ndarray:
-    """Body-frame rotation vector of every step ``t_k -> t_{k+1}``, rad.
+    r"""Body-frame rotation vector of every step ``t_k -> t_{k+1}``, rad.
 
     Parameters
     ----------
@@ -66,8 +66,8 @@ def step_rotation_vectors(t, gyro) -> np.ndarray:
     With the rate linear over the step (the same assumption the FEM makes for the
     acceleration), the rotation vector to third order is
 
-    .. math:: \\phi_k = \\frac{h_k}{2}(\\omega_k + \\omega_{k+1})
-              + \\frac{h_k^2}{12}\\, \\omega_k \\times \\omega_{k+1},
+    .. math:: \phi_k = \frac{h_k}{2}(\omega_k + \omega_{k+1})
+              + \frac{h_k^2}{12}\, \omega_k \times \omega_{k+1},
 
     the trapezoid rule plus the two-sample coning correction. It is exact for a
     constant rate axis.
@@ -116,7 +116,7 @@ def cumulative_product(steps: Rotation) -> Rotation:
 
 
 def integrate_gyro(t, gyro, initial=None) -> Rotation:
-    """Body-to-navigation attitude per sample from body angular rates.
+    r"""Body-to-navigation attitude per sample from body angular rates.
 
     Parameters
     ----------
@@ -133,7 +133,7 @@ def integrate_gyro(t, gyro, initial=None) -> Rotation:
 
     Notes
     -----
-    :math:`C_{k+1} = C_k \\exp([\\phi_k \\times])` with :math:`\\phi_k` from
+    :math:`C_{k+1} = C_k \exp([\phi_k \times])` with :math:`\phi_k` from
     :func:`step_rotation_vectors`. The global attitude error is :math:`O(h^2)` for a
     smooth rate; it is exact (to rounding) for a fixed rotation axis with a rate that
     is linear in time between samples.
@@ -162,7 +162,7 @@ def integrate_gyro(t, gyro, initial=None) -> Rotation:
 
 
 def body_rates(t, attitude: Rotation) -> np.ndarray:
-    """Body angular rates (rad/s) implied by an attitude sequence, by central differences.
+    r"""Body angular rates (rad/s) implied by an attitude sequence, by central differences.
 
     Parameters
     ----------
@@ -177,7 +177,7 @@ def body_rates(t, attitude: Rotation) -> np.ndarray:
 
     Notes
     -----
-    :math:`\\omega_k \\approx \\log(C_{k-1}^T C_{k+1}) / (t_{k+1} - t_{k-1})`
+    :math:`\omega_k \approx \log(C_{k-1}^T C_{k+1}) / (t_{k+1} - t_{k-1})`
     (one-sided at the ends); second order in the step for uniform sampling.
     Meant for checks and for attitude histories given only as samples.
 

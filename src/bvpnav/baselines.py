@@ -54,7 +54,7 @@ def _twice(t, a, v0, r0, integrate):
 
 
 def trapezoid(t, acc, v0=0.0, r0=0.0):
-    """Velocity and position by the cumulative trapezoid rule, twice.
+    r"""Velocity and position by the cumulative trapezoid rule, twice.
 
     Parameters
     ----------
@@ -72,7 +72,7 @@ def trapezoid(t, acc, v0=0.0, r0=0.0):
 
     Notes
     -----
-    :math:`v_{k+1} = v_k + \\tfrac{h_k}{2}(a_k + a_{k+1})`, the same for ``r`` from ``v``;
+    :math:`v_{k+1} = v_k + \tfrac{h_k}{2}(a_k + a_{k+1})`, the same for ``r`` from ``v``;
     the local error is :math:`O(h^3)`, the global error :math:`O(h^2)` plus the integrated
     measurement errors.
 
@@ -116,7 +116,7 @@ def simpson(t, acc, v0=0.0, r0=0.0):
 
 
 def romberg_block(y: np.ndarray, h: float) -> float:
-    """Romberg's estimate of the integral of 2^k + 1 equally spaced samples ``y``.
+    r"""Romberg's estimate of the integral of 2^k + 1 equally spaced samples ``y``.
 
     Notes
     -----
@@ -126,7 +126,7 @@ def romberg_block(y: np.ndarray, h: float) -> float:
 
     Examples
     --------
-    The integral of :math:`\\sin` over :math:`[0, \\pi]` (exactly 2) from nine samples:
+    The integral of :math:`\sin` over :math:`[0, \pi]` (exactly 2) from nine samples:
 
     >>> import numpy as np
     >>> from bvpnav.baselines import romberg_block
@@ -228,7 +228,7 @@ def romberg(t, acc, v0=0.0, r0=0.0, block: int = 8):
 
 def rts_smoother(t, acc, measurements, sigma_a: float = 1.0, sigma_bias: float = 0.0,
                  bias0_std: float = 10.0, initial=None, initial_std=(1e3, 1e3)) -> pd.DataFrame:
-    """Kalman filter and Rauch-Tung-Striebel smoother with state (position, velocity, bias).
+    r"""Kalman filter and Rauch-Tung-Striebel smoother with state (position, velocity, bias).
 
     Parameters
     ----------
@@ -260,16 +260,16 @@ def rts_smoother(t, acc, measurements, sigma_a: float = 1.0, sigma_bias: float =
     Notes
     -----
     Between samples :math:`k, k+1` (step :math:`h`), with the mean measured acceleration
-    :math:`u = (\\hat a_k + \\hat a_{k+1})/2`,
+    :math:`u = (\hat a_k + \hat a_{k+1})/2`,
 
     .. math::
-        x_{k+1} = F x_k + g\\,u + g\\,\\epsilon, \\quad
-        F = \\begin{bmatrix} 1 & h & -h^2/2 \\\\ 0 & 1 & -h \\\\ 0 & 0 & 1 \\end{bmatrix},
-        \\quad g = (h^2/2, h, 0)^T,
+        x_{k+1} = F x_k + g\,u + g\,\epsilon, \quad
+        F = \begin{bmatrix} 1 & h & -h^2/2 \\ 0 & 1 & -h \\ 0 & 0 & 1 \end{bmatrix},
+        \quad g = (h^2/2, h, 0)^T,
 
-    with :math:`\\epsilon \\sim N(0, \\sigma_a^2)` and the bias random walk adding
-    :math:`\\sigma_b^2 h` to its variance. The smoother is the standard RTS recursion
-    :math:`\\hat x_k^s = \\hat x_k + C_k (\\hat x_{k+1}^s - \\hat x_{k+1}^-)` with
+    with :math:`\epsilon \sim N(0, \sigma_a^2)` and the bias random walk adding
+    :math:`\sigma_b^2 h` to its variance. The smoother is the standard RTS recursion
+    :math:`\hat x_k^s = \hat x_k + C_k (\hat x_{k+1}^s - \hat x_{k+1}^-)` with
     :math:`C_k = P_k F^T (P_{k+1}^-)^{-1}`.
 
     Examples

@@ -72,8 +72,8 @@ CONNECT_TIMEOUT = 10.0
 
 
 def display_path(path) -> str:
-    """A path as text that can always be written (summary.csv, JSON, the terminal): a file
-    name that is not valid UTF-8 keeps its bytes as ``\\xNN`` escapes instead of failing."""
+    r"""A path as text that can always be written (summary.csv, JSON, the terminal): a file
+    name that is not valid UTF-8 keeps its bytes as ``\xNN`` escapes instead of failing."""
     return os.fsencode(path).decode("utf-8", "backslashreplace")
 
 

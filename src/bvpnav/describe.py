@@ -68,7 +68,7 @@ class Matrices:
 
 
 def matrices(problem) -> Matrices:
-    """Assemble :class:`Matrices` for a problem whose items are hard or soft.
+    r"""Assemble :class:`Matrices` for a problem whose items are hard or soft.
 
     Raises
     ------
@@ -79,8 +79,8 @@ def matrices(problem) -> Matrices:
     -----
     The problem solved by ``problem.solve(lam=lam)`` is then
 
-    .. math:: \\min_x \\|J x\\|^2 + \\lambda \\|(D x - e)/\\sigma\\|^2
-              \\quad \\text{s.t.} \\quad A_{eq} x = b_{eq}.
+    .. math:: \min_x \|J x\|^2 + \lambda \|(D x - e)/\sigma\|^2
+              \quad \text{s.t.} \quad A_{eq} x = b_{eq}.
     """
     problem = as_formulation(problem)
     model = problem.model

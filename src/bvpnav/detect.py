@@ -1,4 +1,4 @@
-"""Stationary intervals from the IMU itself: where the sensor is still (zero-velocity detection).
+r"""Stationary intervals from the IMU itself: where the sensor is still (zero-velocity detection).
 
 :func:`stationary` finds the intervals in which a strapdown IMU (body-frame specific
 force and gyro rates) is at rest, as ``(t0, t1)`` pairs in s that go straight into
@@ -9,8 +9,8 @@ force and gyro rates) is at rest, as ``(t0, t1)`` pairs in s that go straight in
   algorithm evaluation", IEEE Trans. Biomed. Eng. 57(11), 2657-2666, 2010 (the
   detector of OpenShoe and, with differences listed in :func:`shoe_statistic`, of
   gaitmap's ``ShoeZuptDetector``);
-- ``"magnitude"``: moving-window means of :math:`|\\,\\|f\\| - g\\,|` and, where there are
-  gyro rates, of :math:`\\|\\omega\\|` below two thresholds.
+- ``"magnitude"``: moving-window means of :math:`|\,\|f\| - g\,|` and, where there are
+  gyro rates, of :math:`\|\omega\|` below two thresholds.
 
 Windows are counted in samples (``window``), not seconds: the published statistic is a
 sum over W consecutive samples, and so it stays that on non-uniform time steps. Every
@@ -146,7 +146,7 @@ def _window_sum(x: np.ndarray, window: int) -> np.ndarray:
 
 def shoe_statistic(specific_force, gyro, window: int, *, sigma_a: float = SHOE_SIGMA_A,
                    sigma_w: float = SHOE_SIGMA_W, gravity: float = STANDARD_GRAVITY) -> np.ndarray:
-    """The SHOE test statistic of every window of ``window`` consecutive samples.
+    r"""The SHOE test statistic of every window of ``window`` consecutive samples.
 
     Parameters
     ----------
@@ -174,23 +174,23 @@ def shoe_statistic(specific_force, gyro, window: int, *, sigma_a: float = SHOE_S
 
     .. math::
 
-        T_n = \\frac{1}{W} \\sum_{l=n}^{n+W-1} \\left( \\frac{1}{\\sigma_a^2}
-            \\left\\| f_l - g \\frac{\\bar f_n}{\\|\\bar f_n\\|} \\right\\|^2
-            + \\frac{1}{\\sigma_\\omega^2} \\|\\omega_l\\|^2 \\right),
-        \\qquad \\bar f_n = \\frac{1}{W} \\sum_{l=n}^{n+W-1} f_l,
+        T_n = \frac{1}{W} \sum_{l=n}^{n+W-1} \left( \frac{1}{\sigma_a^2}
+            \left\| f_l - g \frac{\bar f_n}{\|\bar f_n\|} \right\|^2
+            + \frac{1}{\sigma_\omega^2} \|\omega_l\|^2 \right),
+        \qquad \bar f_n = \frac{1}{W} \sum_{l=n}^{n+W-1} f_l,
 
     the generalized likelihood ratio of "still" (specific force of magnitude g along an
     unknown direction, zero rates, white noise) against "moving"; the sensor is still
-    where :math:`T_n < \\gamma`. This is the published definition and OpenShoe's. gaitmap's
+    where :math:`T_n < \gamma`. This is the published definition and OpenShoe's. gaitmap's
     ``find_static_samples_shoe`` differs: it takes the gravity direction from the mean of
-    the *whole* recording instead of each window's :math:`\\bar f_n`, uses g = 9.81 m/s^2,
+    the *whole* recording instead of each window's :math:`\bar f_n`, uses g = 9.81 m/s^2,
     gyro rates in deg/s, windows that advance by half their length, and calls a window
     still when its statistic is ``<=`` the threshold (its defaults:
     0.15 s windows, variances 3.5e-9 (m/s^2)^2 and 1.3e-7 (deg/s)^2, threshold 2.31e9,
-    i.e. :math:`\\gamma\\sigma_a^2` = 8.1 (m/s^2)^2 and :math:`\\gamma\\sigma_\\omega^2` =
+    i.e. :math:`\gamma\sigma_a^2` = 8.1 (m/s^2)^2 and :math:`\gamma\sigma_\omega^2` =
     0.091 (rad/s)^2; OpenShoe's defaults used here give 3 (m/s^2)^2 and the same
-    0.091 (rad/s)^2). Only the products :math:`\\gamma\\sigma_a^2` and
-    :math:`\\gamma\\sigma_\\omega^2` matter for the decision.
+    0.091 (rad/s)^2). Only the products :math:`\gamma\sigma_a^2` and
+    :math:`\gamma\sigma_\omega^2` matter for the decision.
 
     Examples
     --------
@@ -219,7 +219,7 @@ def magnitude_statistic(specific_force, gyro, window: int, *,
                         acc_threshold: float = MAGNITUDE_ACC_THRESHOLD,
                         gyro_threshold: float | None = MAGNITUDE_GYRO_THRESHOLD,
                         gravity: float = STANDARD_GRAVITY) -> np.ndarray:
-    """The magnitude detector's statistic of every window of ``window`` samples.
+    r"""The magnitude detector's statistic of every window of ``window`` samples.
 
     Parameters
     ----------
@@ -230,9 +230,9 @@ def magnitude_statistic(specific_force, gyro, window: int, *,
     window : int
         Window length W, samples.
     acc_threshold : float
-        Threshold on the window mean of :math:`|\\|f_l\\| - g|`, m/s^2.
+        Threshold on the window mean of :math:`|\|f_l\| - g|`, m/s^2.
     gyro_threshold : float or None
-        Threshold on the window mean of :math:`\\|\\omega_l\\|`, rad/s.
+        Threshold on the window mean of :math:`\|\omega_l\|`, rad/s.
     gravity : float
         g, m/s^2.
 
@@ -245,8 +245,8 @@ def magnitude_statistic(specific_force, gyro, window: int, *,
     -----
     .. math::
 
-        S_n = \\max\\left( \\frac{1}{W a_{th}} \\sum_{l=n}^{n+W-1} \\bigl|\\|f_l\\| - g\\bigr|,\\;
-            \\frac{1}{W \\omega_{th}} \\sum_{l=n}^{n+W-1} \\|\\omega_l\\| \\right)
+        S_n = \max\left( \frac{1}{W a_{th}} \sum_{l=n}^{n+W-1} \bigl|\|f_l\| - g\bigr|,\;
+            \frac{1}{W \omega_{th}} \sum_{l=n}^{n+W-1} \|\omega_l\| \right)
 
     (the second term only with gyro rates), so :math:`S_n < 1` exactly when both window
     means are below their thresholds.
@@ -419,7 +419,7 @@ def stationary(data: ImuData, method: str = "shoe", *, window: int | None = None
                acc_threshold: float | None = None, gyro_threshold: float | str | None = "auto",
                gravity: float = STANDARD_GRAVITY, min_duration: float = 0.0,
                return_statistic: bool = False) -> list[tuple[float, float]] | Detection:
-    """Intervals in which the IMU is stationary, detected from its own samples.
+    r"""Intervals in which the IMU is stationary, detected from its own samples.
 
     Parameters
     ----------
@@ -435,18 +435,18 @@ def stationary(data: ImuData, method: str = "shoe", *, window: int | None = None
         (3, OpenShoe's). In seconds a window spans W - 1 sample steps, so at r Hz a window
         of s seconds is about ``round(s * r) + 1`` samples.
     threshold : float, optional
-        SHOE: the threshold :math:`\\gamma` (dimensionless), default
+        SHOE: the threshold :math:`\gamma` (dimensionless), default
         :data:`SHOE_THRESHOLD`. Not for ``"magnitude"``.
     sigma_a, sigma_w : float, optional
         SHOE: accelerometer (m/s^2) and gyro (rad/s) noise standard deviations, default
         :data:`SHOE_SIGMA_A`, :data:`SHOE_SIGMA_W`. Only the products with the threshold
-        matter (:math:`\\gamma\\sigma_a^2` in (m/s^2)^2, :math:`\\gamma\\sigma_\\omega^2` in
+        matter (:math:`\gamma\sigma_a^2` in (m/s^2)^2, :math:`\gamma\sigma_\omega^2` in
         (rad/s)^2).
     acc_threshold : float, optional
-        Magnitude test: threshold on the window mean of :math:`|\\|f\\| - g|`, m/s^2,
+        Magnitude test: threshold on the window mean of :math:`|\|f\| - g|`, m/s^2,
         default :data:`MAGNITUDE_ACC_THRESHOLD`.
     gyro_threshold : float, None or "auto"
-        Magnitude test: threshold on the window mean of :math:`\\|\\omega\\|`, rad/s.
+        Magnitude test: threshold on the window mean of :math:`\|\omega\|`, rad/s.
         ``"auto"`` (default): :data:`MAGNITUDE_GYRO_THRESHOLD` when ``data.gyro`` is
         set, else the acceleration alone; None: the acceleration alone.
     gravity : float
@@ -479,9 +479,9 @@ def stationary(data: ImuData, method: str = "shoe", *, window: int | None = None
     :func:`shoe_statistic`; magnitude: :func:`magnitude_statistic` with threshold 1),
     sample :math:`k` is stationary when some window holding it is below the threshold,
 
-    .. math:: \\min_{n:\\, n \\le k \\le n+W-1} T_n < \\gamma,
+    .. math:: \min_{n:\, n \le k \le n+W-1} T_n < \gamma,
 
-    which is OpenShoe's rule (a window below :math:`\\gamma` marks all its W samples) and
+    which is OpenShoe's rule (a window below :math:`\gamma` marks all its W samples) and
     gaitmap's with windows overlapping by W - 1 samples.
 
     Examples

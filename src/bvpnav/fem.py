@@ -1,4 +1,4 @@
-"""Linear finite elements for r''(t) = a(t) on a non-uniform grid (pure scipy.sparse).
+r"""Linear finite elements for r''(t) = a(t) on a non-uniform grid (pure scipy.sparse).
 
 Weak form
 ---------
@@ -6,8 +6,8 @@ For every test function u,
 
 .. math::
 
-    \\int_{T_0}^{T_1} \\dot r \\dot u \\, dt
-      = -\\int_{T_0}^{T_1} a u \\, dt + v(T_1) u(T_1) - v(T_0) u(T_0).
+    \int_{T_0}^{T_1} \dot r \dot u \, dt
+      = -\int_{T_0}^{T_1} a u \, dt + v(T_1) u(T_1) - v(T_0) u(T_0).
 
 With hat functions for r, u and a (a interpolated linearly between samples) this is,
 per axis, the N equations
@@ -20,7 +20,7 @@ where ``K`` is the stiffness matrix (``1/h_{j-1} + 1/h_j`` on the diagonal, ``-1
 beside it, ``1/h`` at the two ends), ``M`` the consistent mass matrix
 (``(h_{j-1} + h_j)/3`` on the diagonal, ``h_j/6`` beside it) and ``v_0``, ``v_1`` the
 end velocities, which are unknowns of the system (natural boundary terms). The load
-vector of the papers is ``f = -M a``. Summing all rows gives ``v_1 - v_0 = \\int a``.
+vector of the papers is ``f = -M a``. Summing all rows gives ``v_1 - v_0 = \int a``.
 """
 
 from __future__ import annotations
@@ -103,7 +103,7 @@ def tridiagonal(lower: np.ndarray, diag: np.ndarray, upper: np.ndarray) -> sp.cs
 
 
 def load(grid: TimeGrid, acc: np.ndarray) -> np.ndarray:
-    """Load vector ``f = -M a`` of linearly interpolated samples, m/s.
+    r"""Load vector ``f = -M a`` of linearly interpolated samples, m/s.
 
     Parameters
     ----------
@@ -113,7 +113,7 @@ def load(grid: TimeGrid, acc: np.ndarray) -> np.ndarray:
 
     Notes
     -----
-    .. math:: f_j = -\\tfrac{h_{j-1}}{6}(a_{j-1} + 2a_j) - \\tfrac{h_j}{6}(2a_j + a_{j+1})
+    .. math:: f_j = -\tfrac{h_{j-1}}{6}(a_{j-1} + 2a_j) - \tfrac{h_j}{6}(2a_j + a_{j+1})
     """
     return -(mass(grid) @ np.asarray(acc, dtype=float))
 
@@ -131,7 +131,7 @@ def boundary_columns(grid: TimeGrid) -> sp.csr_matrix:
 
 
 def node_velocity_operators(grid: TimeGrid) -> tuple[sp.csr_matrix, sp.csr_matrix, sp.csr_matrix]:
-    """Operators giving nodal velocities ``v = Vr r + Va a + Vb [v0, v1]``.
+    r"""Operators giving nodal velocities ``v = Vr r + Va a + Vb [v0, v1]``.
 
     Returns
     -------
@@ -143,7 +143,7 @@ def node_velocity_operators(grid: TimeGrid) -> tuple[sp.csr_matrix, sp.csr_matri
     -----
     Interior node j uses the natural boundary term of the sub-domain ``[T_0, t_j]``:
 
-    .. math:: v_j = \\frac{r_j - r_{j-1}}{h_{j-1}} + \\frac{h_{j-1}}{6}(a_{j-1} + 2a_j),
+    .. math:: v_j = \frac{r_j - r_{j-1}}{h_{j-1}} + \frac{h_{j-1}}{6}(a_{j-1} + 2a_j),
 
     which equals the same formula from the right (``[t_j, T_1]``) whenever FEM row j
     holds. It is exact when r is a cubic (a linear in t) and the nodal positions
@@ -157,7 +157,7 @@ def node_velocity_operators(grid: TimeGrid) -> tuple[sp.csr_matrix, sp.csr_matri
 def velocity_operators(
     grid: TimeGrid, times, what: str = "time"
 ) -> tuple[sp.csr_matrix, sp.csr_matrix, sp.csr_matrix]:
-    """Operators for the velocity at arbitrary times inside the window.
+    r"""Operators for the velocity at arbitrary times inside the window.
 
     Returns ``(Vr, Va, Vb)`` with ``len(times)`` rows, as in
     :func:`node_velocity_operators`.
@@ -166,7 +166,7 @@ def velocity_operators(
     -----
     For ``t = t_j + s`` inside element j the acceleration is linear, so
 
-    .. math:: v(t) = v_j + a_j s + (a_{j+1} - a_j) \\frac{s^2}{2 h_j}.
+    .. math:: v(t) = v_j + a_j s + (a_{j+1} - a_j) \frac{s^2}{2 h_j}.
 
     Times on a node use the nodal rows directly (exact at the ends).
     """

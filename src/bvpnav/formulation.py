@@ -140,7 +140,7 @@ def _check_acc(data: ImuData) -> None:
 
 
 class Formulation:
-    """Data + objective form + error model + items, compiled (once) to terms.
+    r"""Data + objective form + error model + items, compiled (once) to terms.
 
     Parameters
     ----------
@@ -157,8 +157,8 @@ class Formulation:
 
     Notes
     -----
-    The data term :math:`J_0` is :math:`\\sum_i \\|w_i / \\sigma_a\\|^2` (acceleration form)
-    or :math:`\\|M w\\|^2 = \\|K r + B v - f - F l\\|^2` (load form); see
+    The data term :math:`J_0` is :math:`\sum_i \|w_i / \sigma_a\|^2` (acceleration form)
+    or :math:`\|M w\|^2 = \|K r + B v - f - F l\|^2` (load form); see
     :meth:`data_rows`.
     """
 

@@ -125,7 +125,7 @@ def _same_length(arrays: dict[str, np.ndarray]) -> int:
 
 def geodetic_to_local(lat: Any, lon: Any, height: Any, origin: Sequence[float], frame: str = "enu"
                       ) -> np.ndarray:
-    """Geodetic WGS-84 coordinates to a local tangent frame about ``origin``.
+    r"""Geodetic WGS-84 coordinates to a local tangent frame about ``origin``.
 
     Parameters
     ----------
@@ -152,15 +152,15 @@ def geodetic_to_local(lat: Any, lon: Any, height: Any, origin: Sequence[float], 
     Notes
     -----
     The point's ECEF position :math:`p` and the origin's :math:`p_0` are differenced and
-    rotated into the tangent plane at :math:`(\\varphi_0, \\lambda_0)`:
+    rotated into the tangent plane at :math:`(\varphi_0, \lambda_0)`:
 
     .. math::
 
-        \\begin{pmatrix} e \\\\ n \\\\ u \\end{pmatrix} =
-        \\begin{pmatrix} -\\sin\\lambda_0 & \\cos\\lambda_0 & 0 \\\\
-        -\\sin\\varphi_0\\cos\\lambda_0 & -\\sin\\varphi_0\\sin\\lambda_0 & \\cos\\varphi_0 \\\\
-        \\cos\\varphi_0\\cos\\lambda_0 & \\cos\\varphi_0\\sin\\lambda_0 & \\sin\\varphi_0
-        \\end{pmatrix} (p - p_0),
+        \begin{pmatrix} e \\ n \\ u \end{pmatrix} =
+        \begin{pmatrix} -\sin\lambda_0 & \cos\lambda_0 & 0 \\
+        -\sin\varphi_0\cos\lambda_0 & -\sin\varphi_0\sin\lambda_0 & \cos\varphi_0 \\
+        \cos\varphi_0\cos\lambda_0 & \cos\varphi_0\sin\lambda_0 & \sin\varphi_0
+        \end{pmatrix} (p - p_0),
 
     and NED is :math:`(n, e, -u)`. The frame is exact (no flat-Earth approximation): a
     point 10 km away lies about 8 m below the tangent plane (``z < 0`` in ENU).
@@ -225,7 +225,7 @@ def local_to_geodetic(xyz: Any, origin: Sequence[float], frame: str = "enu"
 
 
 def normal_gravity(lat_deg: Any, h_m: Any = 0.0) -> Any:
-    """Magnitude of WGS-84 normal gravity at a latitude and a height above the ellipsoid.
+    r"""Magnitude of WGS-84 normal gravity at a latitude and a height above the ellipsoid.
 
     Parameters
     ----------
@@ -252,19 +252,19 @@ def normal_gravity(lat_deg: Any, h_m: Any = 0.0) -> Any:
 
     .. math::
 
-        \\gamma_0(\\varphi) = \\gamma_e \\frac{1 + k \\sin^2\\varphi}{\\sqrt{1 - e^2 \\sin^2\\varphi}},
-        \\qquad k = \\frac{b\\,\\gamma_p}{a\\,\\gamma_e} - 1,
+        \gamma_0(\varphi) = \gamma_e \frac{1 + k \sin^2\varphi}{\sqrt{1 - e^2 \sin^2\varphi}},
+        \qquad k = \frac{b\,\gamma_p}{a\,\gamma_e} - 1,
 
-    with :math:`\\gamma_e = 9.7803253359`, :math:`\\gamma_p = 9.8321849378` m/s^2. Above
+    with :math:`\gamma_e = 9.7803253359`, :math:`\gamma_p = 9.8321849378` m/s^2. Above
     it, the second-order free-air correction (TR8350.2 eq. 4-3; Groves eq. 2.139):
 
     .. math::
 
-        \\gamma(\\varphi, h) = \\gamma_0(\\varphi) \\left[1 - \\frac{2}{a}
-        \\left(1 + f + m - 2 f \\sin^2\\varphi\\right) h + \\frac{3}{a^2} h^2\\right],
-        \\qquad m = \\frac{\\omega^2 a^2 b}{GM},
+        \gamma(\varphi, h) = \gamma_0(\varphi) \left[1 - \frac{2}{a}
+        \left(1 + f + m - 2 f \sin^2\varphi\right) h + \frac{3}{a^2} h^2\right],
+        \qquad m = \frac{\omega^2 a^2 b}{GM},
 
-    a vertical gradient of about :math:`-3.086 \\times 10^{-6}` s^-2; good to well below
+    a vertical gradient of about :math:`-3.086 \times 10^{-6}` s^-2; good to well below
     1e-6 m/s^2 for heights up to about 20 km.
     """
     scalar = np.ndim(lat_deg) == 0 and np.ndim(h_m) == 0
@@ -307,7 +307,7 @@ def _sigma_rows(sigma: Any, n: int, frame: str) -> np.ndarray:
 def position_items(t: Any, lat: Any, lon: Any, height: Any, origin: Sequence[float], frame: str = "enu",
                    sigma: Any = None, name: str = "gnss fixes",
                    axes: Sequence[str] = ("x", "y", "z")) -> Position:
-    """GNSS fixes as one :class:`bvpnav.constraints.Position` item in a local frame.
+    r"""GNSS fixes as one :class:`bvpnav.constraints.Position` item in a local frame.
 
     Parameters
     ----------
@@ -335,9 +335,9 @@ def position_items(t: Any, lat: Any, lon: Any, height: Any, origin: Sequence[flo
 
     Notes
     -----
-    Residual per fix k and axis a: :math:`\\rho = r_a(t_k) - p_{k,a}` with :math:`p_k`
+    Residual per fix k and axis a: :math:`\rho = r_a(t_k) - p_{k,a}` with :math:`p_k`
     the fix in the local frame (:func:`geodetic_to_local`); soft with weight
-    :math:`1/\\sigma_{k,a}^2`.
+    :math:`1/\sigma_{k,a}^2`.
     """
     from .constraints import Position
 

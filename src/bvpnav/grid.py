@@ -28,7 +28,7 @@ def as_times(t, name: str = "t") -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class TimeGrid:
-    """Strictly increasing sample times ``t_1 < ... < t_N`` in s.
+    r"""Strictly increasing sample times ``t_1 < ... < t_N`` in s.
 
     Parameters
     ----------
@@ -42,9 +42,9 @@ class TimeGrid:
     -----
     The steps are :math:`h_i = t_{i+1} - t_i`. The hat function of node ``j`` is
 
-    .. math:: \\phi_j(t) = \\max(0, 1 - |t - t_j| / h), \\quad h = h_{j-1} \\text{ or } h_j,
+    .. math:: \phi_j(t) = \max(0, 1 - |t - t_j| / h), \quad h = h_{j-1} \text{ or } h_j,
 
-    so any piecewise-linear function is :math:`r(t) = \\sum_j r_j \\phi_j(t)`.
+    so any piecewise-linear function is :math:`r(t) = \sum_j r_j \phi_j(t)`.
 
     Examples
     --------

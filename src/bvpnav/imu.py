@@ -240,7 +240,7 @@ class ImuData:
         initial_attitude: Rotation | None = None,
         gravity=None,
     ) -> ImuData:
-        """Strapdown data whose attitude is integrated from gyro rates.
+        r"""Strapdown data whose attitude is integrated from gyro rates.
 
         Parameters
         ----------
@@ -257,9 +257,9 @@ class ImuData:
 
         Notes
         -----
-        :math:`C_{k+1} = C_k \\exp([\\phi_k\\times])` with the step rotation vector
-        :math:`\\phi_k = \\tfrac{h_k}{2}(\\omega_k + \\omega_{k+1}) + \\tfrac{h_k^2}{12}\\,
-        \\omega_k \\times \\omega_{k+1}` (see :func:`bvpnav.attitude.integrate_gyro`);
+        :math:`C_{k+1} = C_k \exp([\phi_k\times])` with the step rotation vector
+        :math:`\phi_k = \tfrac{h_k}{2}(\omega_k + \omega_{k+1}) + \tfrac{h_k^2}{12}\,
+        \omega_k \times \omega_{k+1}` (see :func:`bvpnav.attitude.integrate_gyro`);
         then :math:`a_i = C_i f_i + g`. The rates are kept in ``data.gyro``.
 
         Frames. The navigation frame is the one the positions are wanted in: ENU (x east,

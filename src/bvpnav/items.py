@@ -79,7 +79,7 @@ def positive_array(value, what: str, allow_none: bool = True):
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Item:
-    """Base class of additional information.
+    r"""Base class of additional information.
 
     Parameters
     ----------
@@ -100,13 +100,13 @@ class Item:
 
     Notes
     -----
-    With residual :math:`\\rho = D x - e` (item units) the modes are
+    With residual :math:`\rho = D x - e` (item units) the modes are
 
-    - hard: :math:`\\rho = 0`;
-    - soft: :math:`\\lambda \\sum_i (\\rho_i/\\sigma_i)^2` added to the objective;
-    - robust: :math:`\\lambda \\sum_i \\mathrm{huber}(\\rho_i/\\sigma_i, M/\\sigma_i)`, or
-      :math:`\\lambda \\sum_i |\\rho_i|/\\sigma_i` without a threshold;
-    - band: :math:`|\\rho_i| \\le \\mathrm{tol}_i`.
+    - hard: :math:`\rho = 0`;
+    - soft: :math:`\lambda \sum_i (\rho_i/\sigma_i)^2` added to the objective;
+    - robust: :math:`\lambda \sum_i \mathrm{huber}(\rho_i/\sigma_i, M/\sigma_i)`, or
+      :math:`\lambda \sum_i |\rho_i|/\sigma_i` without a threshold;
+    - band: :math:`|\rho_i| \le \mathrm{tol}_i`.
 
     **Broadcasting rule** (one function, :func:`broadcast_rows`, for ``value``, ``sigma``
     and ``tol`` of every item). An item with K instants on A axes has K * A residual rows,

@@ -354,7 +354,7 @@ class Affine:
 
 @dataclass(frozen=True, eq=False)
 class Cone(Affine):
-    """Affine rows grouped into second-order cones: ``||u_k||_2 <= s_k``.
+    r"""Affine rows grouped into second-order cones: ``||u_k||_2 <= s_k``.
 
     The rows come in consecutive groups of ``size``; in group ``k`` the first row is the
     bound ``s_k`` and the remaining ``size - 1`` rows are the vector ``u_k`` (both affine
@@ -369,7 +369,7 @@ class Cone(Affine):
 
     Notes
     -----
-    The constraint is :math:`\\|A_{u,k} x + c_{u,k}\\|_2 \\le A_{s,k} x + c_{s,k}` per group.
+    The constraint is :math:`\|A_{u,k} x + c_{u,k}\|_2 \le A_{s,k} x + c_{s,k}` per group.
     """
 
     size: int = 2
@@ -392,7 +392,7 @@ class Cone(Affine):
 
 
 class NavModel:
-    """Typed context handed to every item's ``compile``: the unknowns and their maps.
+    r"""Typed context handed to every item's ``compile``: the unknowns and their maps.
 
     Parameters
     ----------
@@ -404,10 +404,10 @@ class NavModel:
     -----
     Per axis ``a`` the hard FEM constraint is
 
-    .. math:: K r_a + e_1 v_{0,a} - e_N v_{1,a} + M (\\hat a_a + G_a l + w_a) = 0,
+    .. math:: K r_a + e_1 v_{0,a} - e_N v_{1,a} + M (\hat a_a + G_a l + w_a) = 0,
 
-    i.e. the 2010 paper's ``K r = f(\\hat a) + F l + f(w)`` with ``f(a) = -M a`` and
-    ``F = -M G``. The corrected acceleration is ``a_c = \\hat a + G l + w``.
+    i.e. the 2010 paper's ``K r = f(\hat a) + F l + f(w)`` with ``f(a) = -M a`` and
+    ``F = -M G``. The corrected acceleration is ``a_c = \hat a + G l + w``.
 
     Examples
     --------
@@ -613,11 +613,11 @@ class NavModel:
         return Affine(stacked.A[order], stacked.c[order])
 
     def position(self, t, axes=None, what: str = "position") -> Affine:
-        """Positions at times ``t`` (m): rows ordered time-major, then axis.
+        r"""Positions at times ``t`` (m): rows ordered time-major, then axis.
 
         Notes
         -----
-        The FEM position is piecewise linear: :math:`r(t) = \\sum_j r_j \\phi_j(t)`.
+        The FEM position is piecewise linear: :math:`r(t) = \sum_j r_j \phi_j(t)`.
         """
         times = as_times(t, what)
         ax = self.axes_of(axes, what)

@@ -477,12 +477,12 @@ def comparison(table, ax=None):
 
 
 def stationary(data, result, path=None, *, method: str = "shoe", **detector_kw):
-    """Check a stationary detection: the statistic against its threshold, the signals, the intervals.
+    r"""Check a stationary detection: the statistic against its threshold, the signals, the intervals.
 
     Three panels against time (s), the stationary intervals shaded on each: the
     detector's per-sample statistic (log scale) with the threshold as a dashed line (a
-    sample is stationary below it); the specific-force magnitude :math:`\\|f\\|` (m/s^2)
-    with g; the gyro magnitude :math:`\\|\\omega\\|` (rad/s, log scale) when the data has
+    sample is stationary below it); the specific-force magnitude :math:`\|f\|` (m/s^2)
+    with g; the gyro magnitude :math:`\|\omega\|` (rad/s, log scale) when the data has
     gyro rates. Where the statistic of the moving samples comes close to the line, the
     threshold is marginal.
 

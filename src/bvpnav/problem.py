@@ -29,7 +29,7 @@ __all__ = ["NavigationProblem"]
 
 
 class NavigationProblem:
-    """Accelerations plus additional information, posed as one convex problem.
+    r"""Accelerations plus additional information, posed as one convex problem.
 
     Parameters
     ----------
@@ -37,9 +37,9 @@ class NavigationProblem:
         Sample times and accelerations.
     residual : {"acceleration", "load"}
         Objective form. ``"acceleration"`` (default) penalises the acceleration
-        residual, :math:`\\sum_i \\|w_i\\|^2 / \\sigma_a^2` (the MAP estimate for white
+        residual, :math:`\sum_i \|w_i\|^2 / \sigma_a^2` (the MAP estimate for white
         accelerometer noise of standard deviation ``sigma_a``); ``"load"`` penalises the
-        FEM load residual :math:`\\|K r - f(\\hat a) - F l\\|^2`, the 2011 paper's
+        FEM load residual :math:`\|K r - f(\hat a) - F l\|^2`, the 2011 paper's
         Tikhonov form.
     sigma_a : float or array_like, optional
         Accelerometer noise standard deviation in m/s^2 (scalar or one per axis), for
@@ -56,17 +56,17 @@ class NavigationProblem:
 
     .. math::
 
-        \\min_{r, w, v_0, v_1, l}\\; J_0(w) + \\lambda \\sum_{k \\in soft} \\|(D_k x - e_k)/\\sigma_k\\|^2
-        \\quad\\text{s.t.}\\quad K r + B v + M(\\hat a + G l + w) = 0,\\; D_h x = e_h,
+        \min_{r, w, v_0, v_1, l}\; J_0(w) + \lambda \sum_{k \in soft} \|(D_k x - e_k)/\sigma_k\|^2
+        \quad\text{s.t.}\quad K r + B v + M(\hat a + G l + w) = 0,\; D_h x = e_h,
 
-    with :math:`J_0 = \\|w / \\sigma_a\\|^2` or :math:`\\|M w\\|^2` (= :math:`\\|K r + Bv - f\\|^2`).
+    with :math:`J_0 = \|w / \sigma_a\|^2` or :math:`\|M w\|^2` (= :math:`\|K r + Bv - f\|^2`).
     Robust items use the Huber function or L1 in place of the square; band items add
-    :math:`|D x - e| \\le tol`; inequality items add :math:`g(x) \\le 0`.
+    :math:`|D x - e| \le tol`; inequality items add :math:`g(x) \le 0`.
 
     Examples
     --------
     Constant acceleration 0.5 m/s^2 for 2 s between two known positions (0 m and 3 m): the
-    initial velocity is :math:`(3 - 0.25 \\cdot 2^2) / 2 = 1` m/s.
+    initial velocity is :math:`(3 - 0.25 \cdot 2^2) / 2 = 1` m/s.
 
     >>> import numpy as np
     >>> import bvpnav

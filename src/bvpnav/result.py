@@ -509,11 +509,11 @@ class Solution:
 
     @property
     def attitude_angles(self) -> pd.DataFrame | None:
-        """Roll, pitch and yaw of :attr:`attitude` per sample, degrees (None without one).
+        r"""Roll, pitch and yaw of :attr:`attitude` per sample, degrees (None without one).
 
         Notes
         -----
-        :math:`C = R_z(\\text{yaw})\\, R_y(\\text{pitch})\\, R_x(\\text{roll})` (body to
+        :math:`C = R_z(\text{yaw})\, R_y(\text{pitch})\, R_x(\text{roll})` (body to
         navigation; scipy's ``as_euler("ZYX")``): in the ENU frame with body axes
         forward-left-up, yaw is the heading counterclockwise from east about up; in NED
         with forward-right-down, the aerospace angles (yaw clockwise from north).

@@ -125,7 +125,7 @@ def cubic_prior(t0: float, t1: float, r0: float, r1: float, v0: float, v1: float
 
 def tikhonov2011(rate: float = 50.0, scale: float = 0.05, bias: float = -0.5,
                  noise: float = 1.0, seed: int = 0) -> Scenario:
-    """The 2011 paper's Example 1: a quintic trajectory and an erroneous accelerometer.
+    r"""The 2011 paper's Example 1: a quintic trajectory and an erroneous accelerometer.
 
     Parameters
     ----------
@@ -142,7 +142,7 @@ def tikhonov2011(rate: float = 50.0, scale: float = 0.05, bias: float = -0.5,
 
     Notes
     -----
-    The measurement is :math:`\\hat a(t) = (1 + s) a(t) + \\mathcal N(\\mu, \\sigma^2)`.
+    The measurement is :math:`\hat a(t) = (1 + s) a(t) + \mathcal N(\mu, \sigma^2)`.
 
     Examples
     --------
@@ -172,7 +172,7 @@ def walking(rate: float = 100.0, n_strides: int = 10, *, stride_time: float = 1.
             stance_fraction: float = 0.4, stride_length: float = 1.4, lift: float = 0.12,
             pitch: float = 0.6, stand: float = 1.5, accel_noise: float = 0.03, gyro_noise: float = 0.008,
             accel_bias: float = 0.02, gyro_bias: float = 0.001, seed: int = 0) -> Scenario:
-    """A foot-mounted strapdown IMU of a person walking, with the true stance phases.
+    r"""A foot-mounted strapdown IMU of a person walking, with the true stance phases.
 
     The foot stands still for ``stand`` s, takes ``n_strides`` strides (a swing, then a
     stance in which the foot is exactly still) and stands still for ``stand`` s again.
@@ -224,14 +224,14 @@ def walking(rate: float = 100.0, n_strides: int = 10, *, stride_time: float = 1.
 
     Notes
     -----
-    In a swing of duration :math:`T` with :math:`\\tau = (t - t_s)/T`, the forward
-    displacement is :math:`L(10\\tau^3 - 15\\tau^4 + 6\\tau^5)`, the height
-    :math:`64 h \\tau^3 (1 - \\tau)^3` and the pitch proportional to
-    :math:`\\tau^3 (1 - \\tau)^3 (1 - \\tau/0.6)`: position, velocity, acceleration,
+    In a swing of duration :math:`T` with :math:`\tau = (t - t_s)/T`, the forward
+    displacement is :math:`L(10\tau^3 - 15\tau^4 + 6\tau^5)`, the height
+    :math:`64 h \tau^3 (1 - \tau)^3` and the pitch proportional to
+    :math:`\tau^3 (1 - \tau)^3 (1 - \tau/0.6)`: position, velocity, acceleration,
     attitude and body rate are continuous, and exactly constant (zero rates) in the
     stances. With the defaults the foot reaches about 4.5 m/s and 25 m/s^2 and the gyros
     about 6 rad/s, as foot-mounted IMUs measure in walking. The sensors read
-    :math:`\\hat u = u + b + n` (see :class:`bvpnav.simulate.SensorErrors`).
+    :math:`\hat u = u + b + n` (see :class:`bvpnav.simulate.SensorErrors`).
 
     Examples
     --------
@@ -602,7 +602,7 @@ def car_drive(duration: float = 600.0, rate: float = 100.0, grade: str = "tactic
               gnss_rate: float = 1.0, gnss_sigma=(1.0, 2.0), seed: int = 0,
               heading_error: float = 5.0 * np.pi / 180.0,
               tilt_error: float | tuple[float, float] = 0.5 * np.pi / 180.0) -> CarDrive:
-    """A car drive of ``duration`` s with a strapdown IMU of a given grade and GNSS fixes.
+    r"""A car drive of ``duration`` s with a strapdown IMU of a given grade and GNSS fixes.
 
     The drive (the same for every seed and grade; a shorter ``duration`` is the start of
     the same drive plus a stop): a 5 s stand, then straights, 90 degree left and right
@@ -643,18 +643,18 @@ def car_drive(duration: float = 600.0, rate: float = 100.0, grade: str = "tactic
     Notes
     -----
     The path is given by three C^4 channels of time, each a sum of smooth steps
-    :math:`\\Delta\\, S((t - t_i)/T_i)` with :math:`S' = 630\\tau^4(1-\\tau)^4`: the speed
-    :math:`v`, the heading :math:`\\psi` and the climb angle :math:`\\gamma`. The velocity is
-    :math:`v\\,u` with :math:`u = (\\cos\\psi\\cos\\gamma, \\sin\\psi\\cos\\gamma, \\sin\\gamma)`,
+    :math:`\Delta\, S((t - t_i)/T_i)` with :math:`S' = 630\tau^4(1-\tau)^4`: the speed
+    :math:`v`, the heading :math:`\psi` and the climb angle :math:`\gamma`. The velocity is
+    :math:`v\,u` with :math:`u = (\cos\psi\cos\gamma, \sin\psi\cos\gamma, \sin\gamma)`,
     the acceleration its analytic derivative, the position its integral (Gauss-Legendre,
     exact to rounding). The attitude is ``Rz(psi) Ry(-gamma) Rx(phi)`` (body x along the
-    velocity) with the roll :math:`\\phi = 0.01\\, v\\dot\\psi`; the body rate follows
+    velocity) with the roll :math:`\phi = 0.01\, v\dot\psi`; the body rate follows
     analytically from the Euler rates (see :class:`bvpnav.simulate.Motion`), the true
     specific force is :math:`f = C^T(a - g)`. The sensors read
 
-    .. math:: \\hat f = f + b_a(t) + n_a, \\quad \\hat\\omega = \\omega + b_g(t) + n_g,
+    .. math:: \hat f = f + b_a(t) + n_a, \quad \hat\omega = \omega + b_g(t) + n_g,
 
-    with :math:`b(t_0) \\sim N(0, \\sigma_b^2)` per axis, :math:`b_{k+1} = b_k + q\\sqrt{h}\\,\\xi_k`
+    with :math:`b(t_0) \sim N(0, \sigma_b^2)` per axis, :math:`b_{k+1} = b_k + q\sqrt{h}\,\xi_k`
     (random walk ``q``) and white noise of standard deviation ``density * sqrt(rate)``.
 
     Examples

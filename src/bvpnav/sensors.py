@@ -207,7 +207,7 @@ class SensorGrade:
             raise InputError("SensorGrade: name and description must be strings")
 
     def sigma_a(self, rate_hz: float, interval: float | None = None) -> float:
-        """Per-sample accelerometer noise standard deviation, m/s^2: NavigationProblem's ``sigma_a``.
+        r"""Per-sample accelerometer noise standard deviation, m/s^2: NavigationProblem's ``sigma_a``.
 
         Parameters
         ----------
@@ -222,36 +222,36 @@ class SensorGrade:
         Returns
         -------
         float
-            :math:`\\sigma_a = n_a \\sqrt{f_s}`, m/s^2, with :math:`n_a` = ``acc_noise``
-            (with ``interval``: :math:`n_a^2 + q_a^2 \\Delta^2 / 12` in place of
+            :math:`\sigma_a = n_a \sqrt{f_s}`, m/s^2, with :math:`n_a` = ``acc_noise``
+            (with ``interval``: :math:`n_a^2 + q_a^2 \Delta^2 / 12` in place of
             :math:`n_a^2`, :math:`q_a` = ``acc_bias_walk``).
 
         Notes
         -----
         bvpnav's acceleration residual :math:`w_i` is one value per sample and axis, and
-        the objective :math:`\\sum_i \\|w_i\\|^2/\\sigma_a^2` is the maximum-a-posteriori
+        the objective :math:`\sum_i \|w_i\|^2/\sigma_a^2` is the maximum-a-posteriori
         estimate for independent per-sample noise of standard deviation
-        :math:`\\sigma_a`. A white noise of continuous-time intensity :math:`n_a`
-        (autocorrelation :math:`n_a^2 \\delta(\\tau)`, units m/s^2/sqrt(Hz)) averaged over
-        one sample period :math:`\\Delta t = 1/f_s` has variance :math:`n_a^2/\\Delta t`,
+        :math:`\sigma_a`. A white noise of continuous-time intensity :math:`n_a`
+        (autocorrelation :math:`n_a^2 \delta(\tau)`, units m/s^2/sqrt(Hz)) averaged over
+        one sample period :math:`\Delta t = 1/f_s` has variance :math:`n_a^2/\Delta t`,
         hence
 
-        .. math:: \\sigma_a = n_a \\sqrt{f_s}.
+        .. math:: \sigma_a = n_a \sqrt{f_s}.
 
         From a datasheet:
 
-        - a density in ug/sqrt(Hz): :math:`n_a = 10^{-6}\\, g_0 \\times` value
+        - a density in ug/sqrt(Hz): :math:`n_a = 10^{-6}\, g_0 \times` value
           (:math:`g_0` = 9.80665 m/s^2); 150 ug/sqrt(Hz) at 100 Hz gives
-          :math:`1.471\\times 10^{-3} \\times 10 = 0.0147` m/s^2;
+          :math:`1.471\times 10^{-3} \times 10 = 0.0147` m/s^2;
         - a velocity random walk in m/s/sqrt(h): :math:`n_a` = value / 60
           (1 m/s/sqrt(h) = 1 m/s / sqrt(3600 s));
         - datasheets usually quote the *one-sided* spectral density
-          :math:`S_1 = 2 n_a^2`, i.e. a figure :math:`\\sqrt 2` larger than the
+          :math:`S_1 = 2 n_a^2`, i.e. a figure :math:`\sqrt 2` larger than the
           intensity; with an ideal anti-alias filter at the Nyquist frequency the
-          per-sample sigma is then :math:`\\sqrt{S_1 f_s / 2}` = figure
-          :math:`\\times\\sqrt{f_s/2}`, a factor :math:`\\sqrt 2` below figure
-          :math:`\\times\\sqrt{f_s}` (``from_datasheet(..., one_sided=True)`` divides by
-          :math:`\\sqrt 2`). A sensor whose internal filter is narrower than
+          per-sample sigma is then :math:`\sqrt{S_1 f_s / 2}` = figure
+          :math:`\times\sqrt{f_s/2}`, a factor :math:`\sqrt 2` below figure
+          :math:`\times\sqrt{f_s}` (``from_datasheet(..., one_sided=True)`` divides by
+          :math:`\sqrt 2`). A sensor whose internal filter is narrower than
           :math:`f_s/2` has a smaller per-sample sigma (use its noise bandwidth in
           place of :math:`f_s/2`). The best number is measured: the standard
           deviation of a stationary recording after removing its mean.
@@ -262,7 +262,7 @@ class SensorGrade:
         return _with_bridge(self.acc_noise, self.acc_bias_walk, interval) * math.sqrt(_rate(rate_hz))
 
     def arw(self, interval: float | None = None) -> float:
-        """Angle random walk for :class:`~bvpnav.error_models.AttitudeWalk`, rad/sqrt(s).
+        r"""Angle random walk for :class:`~bvpnav.error_models.AttitudeWalk`, rad/sqrt(s).
 
         Parameters
         ----------
@@ -273,13 +273,13 @@ class SensorGrade:
         Returns
         -------
         float
-            :math:`\\sqrt{n_g^2 + q_g^2 \\Delta^2 / 12}` (``gyro_noise``, ``gyro_bias_walk``).
+            :math:`\sqrt{n_g^2 + q_g^2 \Delta^2 / 12}` (``gyro_noise``, ``gyro_bias_walk``).
 
         Notes
         -----
         The gyro bias between knots is a Brownian bridge the knots leave out; its
         integral, an attitude error, grows like an angle random walk of intensity
-        :math:`q_g^2 \\Delta^2/12` (:func:`bvpnav.error_models.bridge_intensity`), which
+        :math:`q_g^2 \Delta^2/12` (:func:`bvpnav.error_models.bridge_intensity`), which
         adds to the white noise's :math:`n_g^2`. On the simulated 10-minute car drive
         (``examples/benchmarks/car_drive.py``) this and the accelerometer's counterpart
         (:meth:`sigma_a` with ``interval``) took the 10 s gap from 0.8173 to 0.8164 m.
@@ -287,7 +287,7 @@ class SensorGrade:
         return _with_bridge(self.gyro_noise, self.gyro_bias_walk, interval)
 
     def gyro_sigma(self, rate_hz: float) -> float:
-        """Per-sample gyro noise standard deviation, rad/s: ``gyro_noise * sqrt(rate_hz)``.
+        r"""Per-sample gyro noise standard deviation, rad/s: ``gyro_noise * sqrt(rate_hz)``.
 
         Parameters
         ----------
@@ -296,9 +296,9 @@ class SensorGrade:
 
         Notes
         -----
-        The same relation as :meth:`sigma_a`: :math:`\\sigma_\\omega = n_\\omega\\sqrt{f_s}`.
+        The same relation as :meth:`sigma_a`: :math:`\sigma_\omega = n_\omega\sqrt{f_s}`.
         The angle random walk after ``T`` seconds of integration is
-        :math:`n_\\omega \\sqrt T` rad.
+        :math:`n_\omega \sqrt T` rad.
         """
         return self.gyro_noise * math.sqrt(_rate(rate_hz))
 
@@ -472,7 +472,7 @@ def from_datasheet(*, acc_noise: Any = None, acc_bias: Any = None, acc_bias_walk
                    gyro_noise: Any = None, gyro_bias: Any = None, gyro_bias_walk: Any = None,
                    tilt: Any = None, heading: Any = None, base: str | SensorGrade | None = None,
                    one_sided: bool = False, name: str = "custom", description: str = "") -> SensorGrade:
-    """A :class:`SensorGrade` from datasheet figures in their usual units.
+    r"""A :class:`SensorGrade` from datasheet figures in their usual units.
 
     Parameters
     ----------
@@ -490,7 +490,7 @@ def from_datasheet(*, acc_noise: Any = None, acc_bias: Any = None, acc_bias_walk
         but ``heading`` is required.
     one_sided : bool
         True when the two noise densities are one-sided spectral densities (as most MEMS
-        datasheets quote them): they are divided by :math:`\\sqrt 2` to give the
+        datasheets quote them): they are divided by :math:`\sqrt 2` to give the
         continuous-time intensity (see :meth:`SensorGrade.sigma_a`). Default False (the
         figure is used as the intensity, the conservative choice).
     name, description : str
@@ -504,8 +504,8 @@ def from_datasheet(*, acc_noise: Any = None, acc_bias: Any = None, acc_bias_walk
     -----
     Conversions (:math:`g_0` = 9.80665 m/s^2): 1 ug = :math:`10^{-6} g_0` m/s^2;
     1 mg = :math:`10^{-3} g_0` m/s^2; 1 m/s/sqrt(h) = 1/60 m/s^2/sqrt(Hz);
-    1 deg/sqrt(h) = :math:`\\pi/180/60` rad/s/sqrt(Hz); 1 deg/h = :math:`\\pi/180/3600`
-    rad/s; 1 deg/h/sqrt(h) = :math:`\\pi/180/3600/60` rad/s/sqrt(s). A datasheet's *bias
+    1 deg/sqrt(h) = :math:`\pi/180/60` rad/s/sqrt(Hz); 1 deg/h = :math:`\pi/180/3600`
+    rad/s; 1 deg/h/sqrt(h) = :math:`\pi/180/3600/60` rad/s/sqrt(s). A datasheet's *bias
     instability* (the Allan-deviation floor) is not a random walk; taking
     ``gyro_bias_walk`` = instability / sqrt(interval) for the error model's knot interval
     is a common and rough substitute when no rate random walk is given.

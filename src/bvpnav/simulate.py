@@ -1,11 +1,11 @@
-"""Seeded synthetic inertial data with known truth (the papers' scenarios and more).
+r"""Seeded synthetic inertial data with known truth (the papers' scenarios and more).
 
 A :class:`Motion` is a smooth position history (a cubic spline, m, navigation frame)
 and an attitude history (cubic splines of yaw, pitch and roll, rad). From it
 :func:`simulate_imu` samples body-frame specific force and gyro rates and corrupts
 them with the sensor model of :mod:`bvpnav.error_models`:
 
-.. math:: \\hat u = (I + \\mathrm{diag}(s))(I + \\Theta)\\, u + b + n, \\qquad n \\sim N(0, \\sigma^2)
+.. math:: \hat u = (I + \mathrm{diag}(s))(I + \Theta)\, u + b + n, \qquad n \sim N(0, \sigma^2)
 
 (``u`` the true specific force in m/s^2, or the true body rate in rad/s).
 
@@ -69,7 +69,7 @@ AXES = ("x", "y", "z")
 # ----------------------------------------------------------------- sensor errors
 @dataclass(frozen=True)
 class SensorErrors:
-    """Deterministic errors and white noise of a sensor triad (or a single sensor).
+    r"""Deterministic errors and white noise of a sensor triad (or a single sensor).
 
     Parameters
     ----------
@@ -85,7 +85,7 @@ class SensorErrors:
 
     Notes
     -----
-    :math:`\\hat u = (I + \\mathrm{diag}(s))(I + \\Theta) u + b + n`, the convention the
+    :math:`\hat u = (I + \mathrm{diag}(s))(I + \Theta) u + b + n`, the convention the
     error models in :mod:`bvpnav.error_models` invert.
 
     Examples
@@ -175,18 +175,18 @@ def sample_times(t0: float, t1: float, rate: float) -> np.ndarray:
 
 
 def zyx_body_rate(angles: np.ndarray, rates: np.ndarray) -> np.ndarray:
-    """Body angular rate (N, 3), rad/s, from yaw, pitch, roll (N, 3) in rad (scipy ``"ZYX"``)
+    r"""Body angular rate (N, 3), rad/s, from yaw, pitch, roll (N, 3) in rad (scipy ``"ZYX"``)
     and their rates (N, 3) in rad/s.
 
     Notes
     -----
     .. math::
 
-        \\omega_b = \\begin{bmatrix} \\dot\\phi - \\dot\\psi\\sin\\theta \\\\
-            \\dot\\theta\\cos\\phi + \\dot\\psi\\cos\\theta\\sin\\phi \\\\
-            -\\dot\\theta\\sin\\phi + \\dot\\psi\\cos\\theta\\cos\\phi \\end{bmatrix}
+        \omega_b = \begin{bmatrix} \dot\phi - \dot\psi\sin\theta \\
+            \dot\theta\cos\phi + \dot\psi\cos\theta\sin\phi \\
+            -\dot\theta\sin\phi + \dot\psi\cos\theta\cos\phi \end{bmatrix}
 
-    with yaw :math:`\\psi`, pitch :math:`\\theta` and roll :math:`\\phi`.
+    with yaw :math:`\psi`, pitch :math:`\theta` and roll :math:`\phi`.
 
     Examples
     --------
@@ -403,7 +403,7 @@ def simulate_imu(
     gravity=None,
     seed: int | None = None,
 ) -> Simulation:
-    """Sample a motion as a strapdown IMU would see it.
+    r"""Sample a motion as a strapdown IMU would see it.
 
     Parameters
     ----------
@@ -427,8 +427,8 @@ def simulate_imu(
 
     Notes
     -----
-    :math:`f = C^T (\\ddot r - g)` (specific force, body frame) and
-    :math:`\\omega = \\omega_b` from the Euler rates; then the sensor model of
+    :math:`f = C^T (\ddot r - g)` (specific force, body frame) and
+    :math:`\omega = \omega_b` from the Euler rates; then the sensor model of
     :class:`SensorErrors` is applied.
 
     Examples
@@ -553,7 +553,7 @@ _RATE_TABLE_TESTS = {1: {"repeats": 10, "revolutions": 7.0, "duration": 20.0, "p
 
 @dataclass(eq=False)
 class RateTable:
-    """A tangential accelerometer on a rotating table (2010 paper, Example 1).
+    r"""A tangential accelerometer on a rotating table (2010 paper, Example 1).
 
     Attributes
     ----------
@@ -566,7 +566,7 @@ class RateTable:
     position, velocity, acceleration : ndarray (N,)
         True arc length (m), speed (m/s) and tangential acceleration (m/s^2).
     centripetal : ndarray (N,)
-        True centripetal acceleration :math:`R\\omega^2`, m/s^2.
+        True centripetal acceleration :math:`R\omega^2`, m/s^2.
     radius : float
         m.
     period : float
@@ -649,7 +649,7 @@ def rate_table(
     radius: float = RATE_TABLE_RADIUS,
     seed: int | None = 0,
 ) -> RateTable:
-    """Simulate the 2010 paper's rate-table tests.
+    r"""Simulate the 2010 paper's rate-table tests.
 
     Parameters
     ----------
@@ -684,11 +684,11 @@ def rate_table(
     Notes
     -----
     The paper shows the profile only as a plot; we use one smooth pulse per repeat,
-    :math:`\\omega(\\tau) = \\omega_{max} \\sin^2(\\pi\\tau/P)`, :math:`P = T/\\text{repeats} = 2` s,
-    which starts and ends each repeat at rest and turns by :math:`\\omega_{max} P/2`.
+    :math:`\omega(\tau) = \omega_{max} \sin^2(\pi\tau/P)`, :math:`P = T/\text{repeats} = 2` s,
+    which starts and ends each repeat at rest and turns by :math:`\omega_{max} P/2`.
     The sensor reads
 
-    .. math:: \\hat a = (1 + s)(R\\dot\\omega\\cos\\mu + R\\omega^2\\sin\\mu) + b + n.
+    .. math:: \hat a = (1 + s)(R\dot\omega\cos\mu + R\omega^2\sin\mu) + b + n.
 
     Examples
     --------

@@ -621,8 +621,8 @@ _ESCAPES = {"\\": "\\\\", '"': '\\"', "\b": "\\b", "\t": "\\t", "\n": "\\n", "\f
 
 
 def _toml_string(v: str) -> str:
-    """A TOML basic string for any Python string: quotes, backslashes and control
-    characters escaped, everything outside printable ASCII as ``\\uXXXX``/``\\UXXXXXXXX``
+    r"""A TOML basic string for any Python string: quotes, backslashes and control
+    characters escaped, everything outside printable ASCII as ``\uXXXX``/``\UXXXXXXXX``
     (the file stays ASCII whatever its encoding is read as)."""
     out = []
     for ch in v:

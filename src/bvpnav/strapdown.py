@@ -190,7 +190,7 @@ def gravity_vector(options: Mapping[str, Any], frame: str) -> np.ndarray:
 
 
 def imu_data(rec: Any, options: Mapping[str, Any]) -> ImuData:
-    """:class:`bvpnav.ImuData` from a :class:`~bvpnav.readers.Recording` and the frame options.
+    r""":class:`bvpnav.ImuData` from a :class:`~bvpnav.readers.Recording` and the frame options.
 
     Parameters
     ----------
@@ -207,10 +207,10 @@ def imu_data(rec: Any, options: Mapping[str, Any]) -> ImuData:
     Notes
     -----
     With ``R`` the body-to-sensor rotation (:math:`v_s = R v_b`), the body-frame specific
-    force and rates are :math:`f_b = R^T f_s`, :math:`\\omega_b = R^T \\omega_s`. With an
+    force and rates are :math:`f_b = R^T f_s`, :math:`\omega_b = R^T \omega_s`. With an
     orientation :math:`C_{rs}` from the file (sensor to its reference frame r) the
     body-to-navigation attitude is :math:`C_{nb} = T_{nr} C_{rs} R` (:math:`T_{nr}` the
-    fixed ENU/NED change); otherwise it is integrated from :math:`\\omega_b` starting at
+    fixed ENU/NED change); otherwise it is integrated from :math:`\omega_b` starting at
     ``initial_attitude``. Then :math:`a = C_{nb} f_b + g`.
 
     Examples

@@ -122,14 +122,14 @@ class Term:
         return None
 
     def quadratic_rows(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Rows of this term in its quadratic model at ``x`` (the view of the covariance).
+        r"""Rows of this term in its quadratic model at ``x`` (the view of the covariance).
 
         Returns
         -------
         held, squared : ndarray of int
             Rows held as equalities (hard equalities; active inequalities and band edges;
             an L1 penalty at its kink) and rows that enter squared with weight
-            :math:`\\sqrt{w}/\\sigma` (soft rows; Huber rows inside the threshold; soft
+            :math:`\sqrt{w}/\sigma` (soft rows; Huber rows inside the threshold; soft
             inequalities that are violated). Other rows have no curvature at ``x``.
 
         Notes
@@ -354,12 +354,12 @@ class Inequality(TermKind):
 
 
 class SecondOrderCone(TermKind):
-    """Groups ``(s_k, u_k)`` with excess ``e_k = ||u_k|| - s_k``: hard ``e_k <= 0``, band
+    r"""Groups ``(s_k, u_k)`` with excess ``e_k = ||u_k|| - s_k``: hard ``e_k <= 0``, band
     ``e_k <= tol_k``, soft ``sum pos(e_k)^2 / sigma_k^2``, robust ``sum pos(e_k) / sigma_k``.
 
     Notes
     -----
-    cvxpy's SOC duals ``(mu, Y)`` enter the Lagrangian as :math:`-(\\mu s + \\langle Y, U\\rangle)`.
+    cvxpy's SOC duals ``(mu, Y)`` enter the Lagrangian as :math:`-(\mu s + \langle Y, U\rangle)`.
     """
 
     name = "cone"

@@ -677,7 +677,7 @@ def _ls_formulation(sigma_a: float | None = None):
 
 
 def check_backend(backend) -> None:
-    """Check that a back end keeps the :class:`bvpnav.backends.Backend` contract.
+    r"""Check that a back end keeps the :class:`bvpnav.backends.Backend` contract.
 
     Parameters
     ----------
@@ -700,7 +700,7 @@ def check_backend(backend) -> None:
     Notes
     -----
     The reference is the exact solution of
-    :math:`\\min \\|D x + c\\|^2` s.t. :math:`E x + e = 0` from one sparse factorization
+    :math:`\min \|D x + c\|^2` s.t. :math:`E x + e = 0` from one sparse factorization
     (:class:`bvpnav.backends.direct.DirectBackend`).
     """
     name = getattr(backend, "name", None)

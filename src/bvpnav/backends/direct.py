@@ -1,4 +1,4 @@
-"""Direct back ends: sparse factorizations of the least-squares KKT system, no cvxpy.
+r"""Direct back ends: sparse factorizations of the least-squares KKT system, no cvxpy.
 
 Registered in the back-end table on import (the folder is discovered):
 
@@ -13,9 +13,9 @@ Registered in the back-end table on import (the folder is discovered):
   stops when the relative correction is below it (1e-6, 1e-8, 1e-10 for the ``low``,
   ``default`` and ``high`` presets: a hundredth of their forward-error bounds).
 - ``csne``: the 2011 paper's corrected semi-normal equations: the normal matrix
-  :math:`\\tilde A = \\sum D_k^T D_k` (banded for banded items) is factorised once and the
+  :math:`\tilde A = \sum D_k^T D_k` (banded for banded items) is factorised once and the
   least-squares residual is corrected by iterative refinement
-  (:math:`x \\leftarrow x + \\tilde A^{-1} D^T (d - D x)`); equality constraints are handled
+  (:math:`x \leftarrow x + \tilde A^{-1} D^T (d - D x)`); equality constraints are handled
   by the same refinement on the KKT system built with the normal matrix.
 
 Both refuse problems that are not equality-constrained least squares (inequality, band,
@@ -128,7 +128,7 @@ class DirectBackend(_LeastSquaresBackend):
 
 
 class CsneBackend(_LeastSquaresBackend):
-    """``csne``: corrected semi-normal equations with iterative refinement.
+    r"""``csne``: corrected semi-normal equations with iterative refinement.
 
     Peak memory measured at N = 1,000,000 (one axis): 2.77 GB (acceleration form) and
     3.06 GB (load form).
@@ -140,9 +140,9 @@ class CsneBackend(_LeastSquaresBackend):
 
     .. math::
 
-        \\begin{bmatrix} 2 D^T D & E^T \\\\ E & 0 \\end{bmatrix}
-        \\begin{bmatrix} \\delta x \\\\ \\delta y \\end{bmatrix} =
-        \\begin{bmatrix} -2 D^T (D x - d) - E^T y \\\\ -(E x + e) \\end{bmatrix}
+        \begin{bmatrix} 2 D^T D & E^T \\ E & 0 \end{bmatrix}
+        \begin{bmatrix} \delta x \\ \delta y \end{bmatrix} =
+        \begin{bmatrix} -2 D^T (D x - d) - E^T y \\ -(E x + e) \end{bmatrix}
 
     with one factorization of the (banded, for banded items) matrix, the residuals being
     recomputed from ``D`` itself each time. The normal matrix squares the condition

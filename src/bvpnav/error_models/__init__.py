@@ -1,4 +1,4 @@
-"""Sensor error models: plug-ins that add unknown parameters to the FEM equations.
+r"""Sensor error models: plug-ins that add unknown parameters to the FEM equations.
 
 An error model contributes columns ``G`` (acceleration change per unit of each
 internal parameter) so that the corrected navigation-frame acceleration is
@@ -21,7 +21,7 @@ model               parameters                    units
 
 Measurement convention (the simulator :mod:`bvpnav.simulate` uses the same one):
 
-.. math:: \\hat f = (I + \\mathrm{diag}(s)) (I + \\Theta) f + b + n,
+.. math:: \hat f = (I + \mathrm{diag}(s)) (I + \Theta) f + b + n,
 
 with ``f`` the true specific force in sensor axes, ``s`` the scale-factor errors,
 ``Theta`` the misalignment (zero diagonal, ``Theta_ij`` = how much of axis ``j`` sensor
@@ -35,7 +35,7 @@ and ``columns(data)`` (see ``examples/custom_error_model.py``).
 Examples
 --------
 An accelerometer that reads 0.1 m/s^2 high, its bias estimated from three known positions
-and the initial velocity of the motion :math:`r = 0.5 \\sin t` m:
+and the initial velocity of the motion :math:`r = 0.5 \sin t` m:
 
 >>> import numpy as np
 >>> import bvpnav

@@ -1,4 +1,4 @@
-"""Attitude error models: the shared linearized attitude-error propagation.
+r"""Attitude error models: the shared linearized attitude-error propagation.
 
 An attitude error model has parameters that change the *attitude* the navigation-frame
 acceleration ``a_i = C_i f_i + g`` is computed with: the error of the initial attitude
@@ -14,8 +14,8 @@ an :class:`AttitudePoint` (``data.attitude_point``): the error models stay immut
 read it from the data they are given, so every plug-in signature is unchanged.
 
 Conventions: ``C`` maps body to navigation vectors; a perturbation of the attitude is a
-small rotation :math:`\\psi` in the navigation frame, :math:`C' = \\exp([\\psi\\times]) C`.
-The gyro reads :math:`\\hat\\omega = (1 + s)\\,\\omega + b` per body axis.
+small rotation :math:`\psi` in the navigation frame, :math:`C' = \exp([\psi\times]) C`.
+The gyro reads :math:`\hat\omega = (1 + s)\,\omega + b` per body axis.
 """
 
 from __future__ import annotations
@@ -78,10 +78,10 @@ def positive_option(value, what: str) -> float | None:
 
 def random_walk_term(model, names: list, knots: np.ndarray, drift: float, units: str, label: str,
                      sign: float = 1.0, base: np.ndarray | None = None, anchored: bool = False):
-    """The soft prior of a random walk over knot values, per axis (axis-major ``names``).
+    r"""The soft prior of a random walk over knot values, per axis (axis-major ``names``).
 
-    Rows :math:`\\pm(p_{m+1} - p_m)` (plus the totals' own difference ``base``) with sigma
-    :math:`\\sigma_d \\sqrt{t_{m+1} - t_m}`: the increments of a random walk of density
+    Rows :math:`\pm(p_{m+1} - p_m)` (plus the totals' own difference ``base``) with sigma
+    :math:`\sigma_d \sqrt{t_{m+1} - t_m}`: the increments of a random walk of density
     ``drift`` (units per sqrt(s)) between the knots. ``anchored``: the walk is zero at
     the first knot, which is not a parameter (``names`` hold knots 1, 2, ... per axis), and
     the first row is :math:`p_1 - 0`.
@@ -144,12 +144,12 @@ def _jacobian(phi: np.ndarray, sign: float) -> np.ndarray:
 
 
 def right_jacobian(phi: np.ndarray) -> np.ndarray:
-    """Right Jacobian of SO(3): :math:`\\exp(\\phi + d) = \\exp(\\phi)\\exp(J_r(\\phi) d) + O(d^2)`."""
+    r"""Right Jacobian of SO(3): :math:`\exp(\phi + d) = \exp(\phi)\exp(J_r(\phi) d) + O(d^2)`."""
     return _jacobian(phi, -1.0)
 
 
 def left_jacobian(phi: np.ndarray) -> np.ndarray:
-    """Left Jacobian of SO(3): :math:`\\exp(\\phi + d) = \\exp(J_l(\\phi) d)\\exp(\\phi) + O(d^2)`."""
+    r"""Left Jacobian of SO(3): :math:`\exp(\phi + d) = \exp(J_l(\phi) d)\exp(\phi) + O(d^2)`."""
     return _jacobian(phi, 1.0)
 
 
@@ -164,7 +164,7 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 # ----------------------------------------------------- linearization point
 @dataclass(frozen=True, eq=False)
 class AttitudePoint:
-    """Where the attitude is linearized: raw measurements and the current totals.
+    r"""Where the attitude is linearized: raw measurements and the current totals.
 
     Attributes
     ----------
@@ -176,14 +176,14 @@ class AttitudePoint:
     values : dict of str to float
         Total value of every attitude parameter at this point (their units).
     rates : ndarray (N, 3) or None
-        The corrected rates :math:`\\omega = (\\hat\\omega - b)/(1 + s)`, rad/s.
+        The corrected rates :math:`\omega = (\hat\omega - b)/(1 + s)`, rad/s.
     scale : ndarray (3,)
         Current gyro scale-factor errors (dimensionless; zero when not modelled).
     damping : float
         Levenberg-Marquardt weight of the increments (0: none); see
         :meth:`AttitudeErrorModel.step_scale`.
     walk : ndarray (N, 3) or None
-        Navigation-frame rotation vectors :math:`\\psi_w(t_i)`, rad, applied after the
+        Navigation-frame rotation vectors :math:`\psi_w(t_i)`, rad, applied after the
         integration (:class:`~bvpnav.error_models.AttitudeWalk`):
         ``attitude = exp([psi_w x]) C_integrated``; None when zero.
     """
@@ -217,7 +217,7 @@ def attitude_components(error_model) -> list:
 
 # ------------------------------------------------------------ propagation
 def propagate(data, rate_cols: np.ndarray, initial_cols: np.ndarray) -> np.ndarray:
-    """Navigation-frame attitude perturbation per unit parameter, shape (N, 3, q), rad.
+    r"""Navigation-frame attitude perturbation per unit parameter, shape (N, 3, q), rad.
 
     Parameters
     ----------
@@ -230,30 +230,30 @@ def propagate(data, rate_cols: np.ndarray, initial_cols: np.ndarray) -> np.ndarr
 
     Notes
     -----
-    The attitude is integrated as :math:`C_{k+1} = C_k \\exp([\\phi_k\\times])` with
-    :math:`\\phi_k = \\tfrac{h_k}{2}(\\omega_k + \\omega_{k+1}) + \\tfrac{h_k^2}{12}\\,
-    \\omega_k \\times \\omega_{k+1}` (:func:`bvpnav.attitude.step_rotation_vectors`).
-    Writing a perturbed attitude as :math:`\\exp([\\psi_k\\times]) C_k`, the exact first
+    The attitude is integrated as :math:`C_{k+1} = C_k \exp([\phi_k\times])` with
+    :math:`\phi_k = \tfrac{h_k}{2}(\omega_k + \omega_{k+1}) + \tfrac{h_k^2}{12}\,
+    \omega_k \times \omega_{k+1}` (:func:`bvpnav.attitude.step_rotation_vectors`).
+    Writing a perturbed attitude as :math:`\exp([\psi_k\times]) C_k`, the exact first
     variation of that recursion is
 
-    .. math:: \\psi_1 = \\psi_0, \\qquad \\psi_{k+1} = \\psi_k + C_{k+1} J_r(\\phi_k)\\, \\delta\\phi_k,
+    .. math:: \psi_1 = \psi_0, \qquad \psi_{k+1} = \psi_k + C_{k+1} J_r(\phi_k)\, \delta\phi_k,
 
-    .. math:: \\delta\\phi_k = \\tfrac{h_k}{2}(\\delta\\omega_k + \\delta\\omega_{k+1})
-              + \\tfrac{h_k^2}{12}(\\delta\\omega_k \\times \\omega_{k+1}
-              + \\omega_k \\times \\delta\\omega_{k+1}),
+    .. math:: \delta\phi_k = \tfrac{h_k}{2}(\delta\omega_k + \delta\omega_{k+1})
+              + \tfrac{h_k^2}{12}(\delta\omega_k \times \omega_{k+1}
+              + \omega_k \times \delta\omega_{k+1}),
 
     with :math:`J_r` the right Jacobian of SO(3). It is the derivative of the discrete
     integration itself, so the re-integrated attitude differs from the linearized one
-    by :math:`O(\\delta^2)` in the increment :math:`\\delta`, at every step size; the
+    by :math:`O(\delta^2)` in the increment :math:`\delta`, at every step size; the
     integration's own error against the continuous attitude is :math:`O(h^2)`.
-    Continuous limit: :math:`\\dot\\psi = C\\,\\delta\\omega` (a gyro bias ``b`` gives
-    :math:`\\delta\\omega = -b`, so :math:`\\psi(t) = \\psi_0 - \\int_0^t C b\\,ds`).
+    Continuous limit: :math:`\dot\psi = C\,\delta\omega` (a gyro bias ``b`` gives
+    :math:`\delta\omega = -b`, so :math:`\psi(t) = \psi_0 - \int_0^t C b\,ds`).
 
     With an attitude walk at the point (:class:`~bvpnav.error_models.AttitudeWalk`,
-    attitude :math:`\\exp([\\psi_{w,k}\\times]) C_k`), the recursion runs on the integrated
+    attitude :math:`\exp([\psi_{w,k}\times]) C_k`), the recursion runs on the integrated
     :math:`C_k` and its result is rotated into the walked frame:
-    :math:`\\exp([\\psi_{w}\\times])\\exp([\\psi\\times]) C = \\exp([R_w\\psi\\times])
-    \\exp([\\psi_{w}\\times]) C` with :math:`R_w = \\exp([\\psi_w\\times])`, exactly.
+    :math:`\exp([\psi_{w}\times])\exp([\psi\times]) C = \exp([R_w\psi\times])
+    \exp([\psi_{w}\times]) C` with :math:`R_w = \exp([\psi_w\times])`, exactly.
     """
     from ..attitude import step_rotation_vectors
 
@@ -284,12 +284,12 @@ def propagate(data, rate_cols: np.ndarray, initial_cols: np.ndarray) -> np.ndarr
 
 
 def acceleration_columns(data, psi: np.ndarray) -> np.ndarray:
-    """Navigation-frame acceleration change per unit parameter, (N, 3, q), m/s^2 per unit.
+    r"""Navigation-frame acceleration change per unit parameter, (N, 3, q), m/s^2 per unit.
 
     Notes
     -----
-    :math:`a = C f + g` with :math:`C \\to \\exp([\\psi\\times]) C` changes by
-    :math:`\\psi \\times (C f)` to first order.
+    :math:`a = C f + g` with :math:`C \to \exp([\psi\times]) C` changes by
+    :math:`\psi \times (C f)` to first order.
     """
     fn = data.attitude.apply(data.specific_force)
     return _cross(psi, fn[:, :, None])
@@ -372,8 +372,8 @@ class AttitudeErrorModel(ErrorModel):
         return _per_param(self.prior, q, f"{type(self).__name__}: prior")
 
     def prior_cost(self, data) -> float:
-        """This model's priors at zero increments (the totals of ``data``'s point): its share
-        of the nonlinear objective, :math:`\\sum_k ((x_k - p_k)/\\sigma_k)^2` plus
+        r"""This model's priors at zero increments (the totals of ``data``'s point): its share
+        of the nonlinear objective, :math:`\sum_k ((x_k - p_k)/\sigma_k)^2` plus
         :meth:`extra_prior_cost`."""
         sig = self.prior_sigma(data)
         ok = np.isfinite(sig)
@@ -449,7 +449,7 @@ def _check_strapdown_gyro(data, who: str) -> None:
 
 
 def reintegrate(data, error_model, values: dict, damping: float = 0.0):
-    """The data re-integrated with the attitude totals ``values`` (name -> total).
+    r"""The data re-integrated with the attitude totals ``values`` (name -> total).
 
     Parameters
     ----------
@@ -470,14 +470,14 @@ def reintegrate(data, error_model, values: dict, damping: float = 0.0):
 
     Notes
     -----
-    The corrected rates are :math:`\\omega = (\\hat\\omega - b(t))/(1 + s)` and the
-    initial attitude :math:`C_1 = R\\,\\hat C_1` with ``R`` from
+    The corrected rates are :math:`\omega = (\hat\omega - b(t))/(1 + s)` and the
+    initial attitude :math:`C_1 = R\,\hat C_1` with ``R`` from
     :class:`~bvpnav.error_models.AttitudeError`; then
-    :math:`C_{k+1} = C_k\\exp([\\phi_k\\times])` as in :func:`bvpnav.attitude.integrate_gyro`;
+    :math:`C_{k+1} = C_k\exp([\phi_k\times])` as in :func:`bvpnav.attitude.integrate_gyro`;
     last, an attitude walk (:class:`~bvpnav.error_models.AttitudeWalk`) rotates each
-    :math:`C_k` by :math:`\\exp([\\psi_w(t_k)\\times])`.
+    :math:`C_k` by :math:`\exp([\psi_w(t_k)\times])`.
     For data whose attitude was given (no gyro), only the initial correction applies:
-    :math:`C_k = R\\,\\hat C_k`.
+    :math:`C_k = R\,\hat C_k`.
     """
     from ..attitude import integrate_gyro
     from ..imu import ImuData

@@ -1,4 +1,4 @@
-"""The error-model contract, composition with ``+``, and the exact sensor-correction map.
+r"""The error-model contract, composition with ``+``, and the exact sensor-correction map.
 
 Contract (what :class:`bvpnav.model.NavModel` and :class:`bvpnav.NavigationProblem`
 call):
@@ -14,12 +14,12 @@ call):
 The built-in sensor models share one exact linear reparametrisation. The measurement
 model
 
-.. math:: \\hat f = D f + b, \\qquad D = (I + \\mathrm{diag}(s))(I + \\Theta),
+.. math:: \hat f = D f + b, \qquad D = (I + \mathrm{diag}(s))(I + \Theta),
 
 is inverted exactly by a correction that is *linear* in the internal unknowns
 ``E`` (a matrix) and ``beta`` (a vector):
 
-.. math:: f = (I + E) \\hat f + \\beta, \\qquad I + E = D^{-1}, \\quad \\beta = -D^{-1} b.
+.. math:: f = (I + E) \hat f + \beta, \qquad I + E = D^{-1}, \quad \beta = -D^{-1} b.
 
 ``ScaleFactor`` owns the diagonal of ``E``, ``Misalignment`` its off-diagonal entries,
 ``Bias`` owns ``beta`` and ``UnknownGravity`` an additive correction ``dg`` of the
@@ -190,7 +190,7 @@ class _Combinable:
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
 class ErrorModel(_Combinable):
-    """Base class of error models (the plug-in contract).
+    r"""Base class of error models (the plug-in contract).
 
     Parameters
     ----------
@@ -201,16 +201,16 @@ class ErrorModel(_Combinable):
         ``default_prior``, e.g. zero bias, nominal gravity). Used only with ``sigma``.
     sigma : float or array_like, optional
         Prior standard deviation in the model's units: adds the soft term
-        :math:`\\sum_k ((p_k - p_k^0)/\\sigma_k)^2` to the objective (not scaled by ``lam``).
+        :math:`\sum_k ((p_k - p_k^0)/\sigma_k)^2` to the objective (not scaled by ``lam``).
     bounds : (float, float) or (array_like, array_like), optional
         Lower and upper bounds in the model's units (``-inf``/``inf`` allowed): hard
-        inequalities :math:`lo \\le p \\le hi`.
+        inequalities :math:`lo \le p \le hi`.
 
     Notes
     -----
     A subclass implements ``names(data)`` and ``columns(data)`` (shape (N, d, q): the
     change of the navigation-frame acceleration in m/s^2 per unit parameter). Then the
-    corrected acceleration is :math:`a_c = \\hat a + G l + w`. By default the internal
+    corrected acceleration is :math:`a_c = \hat a + G l + w`. By default the internal
     parameter is the reported one (``report`` returns ``l``) and priors and bounds act
     on ``l`` directly; the built-in sensor models override this with an exact
     nonlinear reparametrisation (see :mod:`bvpnav.error_models._base`).
@@ -218,8 +218,8 @@ class ErrorModel(_Combinable):
     Examples
     --------
     A custom model, a bias that grows linearly in time (the sensor reads high by
-    :math:`d\\,(t - t_0)`, d in m/s^3), estimated from three known positions and the initial
-    velocity of the motion :math:`r = 0.5 \\sin t` m:
+    :math:`d\,(t - t_0)`, d in m/s^3), estimated from three known positions and the initial
+    velocity of the motion :math:`r = 0.5 \sin t` m:
 
     >>> import numpy as np
     >>> import bvpnav
@@ -400,7 +400,7 @@ KEPT_ZERO = 1e-9
 
 @dataclass(frozen=True)
 class SensorCorrection:
-    """Internal sensor correction ``f = (I + E) f_hat + beta`` and gravity correction ``dg``.
+    r"""Internal sensor correction ``f = (I + E) f_hat + beta`` and gravity correction ``dg``.
 
     Attributes
     ----------
@@ -412,7 +412,7 @@ class SensorCorrection:
     Examples
     --------
     A sensor that reads 2 % high and 0.1 m/s^2 high, in the internal form
-    :math:`f = (1 + E)\\hat f + \\beta`:
+    :math:`f = (1 + E)\hat f + \beta`:
 
     >>> import numpy as np
     >>> from bvpnav.error_models import Param, SensorCorrection
@@ -526,7 +526,7 @@ def _sensor_layout(model) -> dict[tuple[str, int, int], str]:
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
 class SensorErrorModel(ErrorModel):
-    """Base of the built-in sensor models (scale, misalignment, bias, gravity).
+    r"""Base of the built-in sensor models (scale, misalignment, bias, gravity).
 
     Subclasses list their internal parameters with :meth:`params`; the columns, the
     physical report and the exact prior/bound rows follow from the roles.
@@ -538,8 +538,8 @@ class SensorErrorModel(ErrorModel):
 
     .. math::
 
-        G[:, :, E_{kj}] = C_i[:, k] \\hat f_{i,j}, \\quad
-        G[:, :, \\beta_k] = C_i[:, k], \\quad G[:, :, dg_a] = e_a
+        G[:, :, E_{kj}] = C_i[:, k] \hat f_{i,j}, \quad
+        G[:, :, \beta_k] = C_i[:, k], \quad G[:, :, dg_a] = e_a
 
     (the 2010 paper's eq. 31-34 with ``F = -M G``).
 
@@ -596,16 +596,16 @@ class SensorErrorModel(ErrorModel):
         return _series(self.physical(corr, model.data), [p.name for p in ps], self.units)
 
     def physical_rows(self, model, value) -> Affine:
-        """Rows linear in the internal unknowns, equal to ``w (p - v)`` with ``w > 0``.
+        r"""Rows linear in the internal unknowns, equal to ``w (p - v)`` with ``w > 0``.
 
         Notes
         -----
         With ``k_i = E_ii`` (zero when scale is not modelled):
 
         - scale: :math:`-k_i - v(1 + k_i) = (s_i - v)(1 + k_i)`;
-        - bias: :math:`-\\beta_i - v(1 + k_i) = (b_i - v)(1 + k_i)`;
+        - bias: :math:`-\beta_i - v(1 + k_i) = (b_i - v)(1 + k_i)`;
         - gravity: :math:`g_a + dg_a - v`;
-        - misalignment: :math:`-E_{ij} - v \\approx \\Theta_{ij} - v` (first order).
+        - misalignment: :math:`-E_{ij} - v \approx \Theta_{ij} - v` (first order).
 
         The first three are exact without misalignment, so bounds on them are exact
         linear inequalities; with misalignment they hold to first order in Theta.

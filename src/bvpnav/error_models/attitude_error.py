@@ -14,7 +14,7 @@ __all__ = ["AttitudeError"]
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
 class AttitudeError(AttitudeErrorModel):
-    """Correction of the initial attitude: tilts about the navigation x and y axes and a
+    r"""Correction of the initial attitude: tilts about the navigation x and y axes and a
     heading about the navigation z axis, rad.
 
     Parameters
@@ -30,20 +30,20 @@ class AttitudeError(AttitudeErrorModel):
 
     Notes
     -----
-    Parameters ``attitude_x``, ``attitude_y``, ``attitude_z`` = :math:`(\\theta_x, \\theta_y, \\psi)`
+    Parameters ``attitude_x``, ``attitude_y``, ``attitude_z`` = :math:`(\theta_x, \theta_y, \psi)`
     give the corrected initial attitude
 
-    .. math:: C_1 = \\exp([(\\theta_x, \\theta_y, 0)\\times])\\, R_z(\\psi)\\, \\hat C_1,
+    .. math:: C_1 = \exp([(\theta_x, \theta_y, 0)\times])\, R_z(\psi)\, \hat C_1,
 
     (body to navigation), so the heading correction is exact for any angle and the tilts
     are rotation-vector components. Every later attitude follows by integrating the
     (corrected) gyro rates from :math:`C_1`, so a change of :math:`C_1` by a small
-    navigation-frame rotation :math:`\\varepsilon` changes every :math:`C_k` by the same
-    :math:`\\varepsilon`; the acceleration :math:`a_k = C_k f_k + g` then changes by
-    :math:`\\varepsilon \\times C_k f_k`. The columns are the exact first derivatives:
-    :math:`\\partial\\varepsilon/\\partial\\theta = J_l(\\theta)` (left Jacobian of SO(3))
-    and :math:`\\partial\\varepsilon/\\partial\\psi = \\exp([\\theta\\times]) e_z`; the
-    linearization error of the acceleration is :math:`O(\\delta^2)` in the increment.
+    navigation-frame rotation :math:`\varepsilon` changes every :math:`C_k` by the same
+    :math:`\varepsilon`; the acceleration :math:`a_k = C_k f_k + g` then changes by
+    :math:`\varepsilon \times C_k f_k`. The columns are the exact first derivatives:
+    :math:`\partial\varepsilon/\partial\theta = J_l(\theta)` (left Jacobian of SO(3))
+    and :math:`\partial\varepsilon/\partial\psi = \exp([\theta\times]) e_z`; the
+    linearization error of the acceleration is :math:`O(\delta^2)` in the increment.
     A tilt of 1 mrad puts about 0.01 m/s^2 of gravity into the horizontal acceleration.
 
     Examples
@@ -95,7 +95,7 @@ class AttitudeError(AttitudeErrorModel):
 
     @staticmethod
     def rotation(theta_x: float, theta_y: float, heading: float) -> Rotation:
-        """The correction :math:`\\exp([(\\theta_x, \\theta_y, 0)\\times]) R_z(\\psi)` (rad)."""
+        r"""The correction :math:`\exp([(\theta_x, \theta_y, 0)\times]) R_z(\psi)` (rad)."""
         return Rotation.from_rotvec([theta_x, theta_y, 0.0]) * Rotation.from_rotvec([0.0, 0.0, heading])
 
     def initial_columns(self, data) -> np.ndarray:

@@ -30,7 +30,7 @@ _G0 = 9.80665
 
 
 def walk_interval(acc_noise: float, arw: float, gravity: float = _G0, ratio: float = 0.25) -> float:
-    """Knot spacing of :class:`AttitudeWalk` from the sensor's two white noises, s.
+    r"""Knot spacing of :class:`AttitudeWalk` from the sensor's two white noises, s.
 
     Parameters
     ----------
@@ -48,27 +48,27 @@ def walk_interval(acc_noise: float, arw: float, gravity: float = _G0, ratio: flo
     Returns
     -------
     float
-        :math:`\\Delta = \\sqrt{12\\,\\rho}\\; n_a / (g\\, n_g)`, s.
+        :math:`\Delta = \sqrt{12\,\rho}\; n_a / (g\, n_g)`, s.
 
     Notes
     -----
-    Sampled at knots :math:`\\Delta` apart and interpolated linearly, a random walk
-    :math:`\\psi` of intensity :math:`n_g^2` is replaced by its conditional mean given
+    Sampled at knots :math:`\Delta` apart and interpolated linearly, a random walk
+    :math:`\psi` of intensity :math:`n_g^2` is replaced by its conditional mean given
     the knots (the mean of a Brownian bridge is linear), so what the model leaves out is
     the bridge between the knots: independent from one interval to the next, zero at the
-    knots, variance :math:`n_g^2 s(\\Delta - s)/\\Delta` at :math:`s` into an interval.
-    Through the specific force (:math:`\\delta a = \\psi\\times f_n`, about
-    :math:`g\\,\\psi` per tilt axis) it is a velocity error over one interval of variance
+    knots, variance :math:`n_g^2 s(\Delta - s)/\Delta` at :math:`s` into an interval.
+    Through the specific force (:math:`\delta a = \psi\times f_n`, about
+    :math:`g\,\psi` per tilt axis) it is a velocity error over one interval of variance
 
-    .. math:: g^2 \\int_0^\\Delta\\!\\!\\int_0^\\Delta \\mathrm{cov}(\\beta(s), \\beta(u))\\,ds\\,du
-              = \\frac{g^2 n_g^2 \\Delta^3}{12},
+    .. math:: g^2 \int_0^\Delta\!\!\int_0^\Delta \mathrm{cov}(\beta(s), \beta(u))\,ds\,du
+              = \frac{g^2 n_g^2 \Delta^3}{12},
 
-    against :math:`n_a^2 \\Delta` from the accelerometer's white noise, which the model
-    does state (``sigma_a``). Their ratio :math:`g^2 n_g^2 \\Delta^2 / (12 n_a^2)` is at
-    most :math:`\\rho` for the spacing above: with the default 1/4 the velocity error
+    against :math:`n_a^2 \Delta` from the accelerometer's white noise, which the model
+    does state (``sigma_a``). Their ratio :math:`g^2 n_g^2 \Delta^2 / (12 n_a^2)` is at
+    most :math:`\rho` for the spacing above: with the default 1/4 the velocity error
     the knots leave out is at most half (in standard deviation) of the one the
     acceleration residual already accounts for, and the left-out part is smoother
-    (correlated over :math:`\\Delta`), so it is at most 12 % of the stated noise.
+    (correlated over :math:`\Delta`), so it is at most 12 % of the stated noise.
     The heading part acts on the horizontal specific force (a fraction of ``g`` on a
     car) and is covered by the same spacing. Tactical grade (:math:`n_a` = 5e-4,
     :math:`n_g` = 2e-5): 4.4 s; consumer (2e-3, 1e-4): 3.5 s; navigation (5e-5, 1e-6):
@@ -88,7 +88,7 @@ def walk_interval(acc_noise: float, arw: float, gravity: float = _G0, ratio: flo
 
 
 def bridge_intensity(drift: float, interval: float) -> float:
-    """White-noise intensity of what knots leave out of a random walk, (unit/s)^2 s.
+    r"""White-noise intensity of what knots leave out of a random walk, (unit/s)^2 s.
 
     Parameters
     ----------
@@ -97,12 +97,12 @@ def bridge_intensity(drift: float, interval: float) -> float:
         (``GyroBias(drift=...)`` in rad/s/sqrt(s), ``Bias(drift=...)`` in
         m/s^2/sqrt(s)).
     interval : float
-        Knot spacing :math:`\\Delta` of the walk's model, s.
+        Knot spacing :math:`\Delta` of the walk's model, s.
 
     Returns
     -------
     float
-        :math:`q^2 \\Delta^2 / 12`: for a gyro bias in rad^2/s (add it to the square of
+        :math:`q^2 \Delta^2 / 12`: for a gyro bias in rad^2/s (add it to the square of
         :class:`AttitudeWalk`'s ``arw``), for an accelerometer bias in m^2/s^4/Hz (add
         it to the square of the accelerometer noise density before
         :meth:`bvpnav.sensors.SensorGrade.sigma_a`).
@@ -110,30 +110,30 @@ def bridge_intensity(drift: float, interval: float) -> float:
     Notes
     -----
     A random walk :math:`b` of intensity :math:`q^2` modelled by its values at knots
-    :math:`\\Delta` apart, interpolated linearly, is replaced by its conditional mean
-    given the knots; what is left out is a Brownian bridge :math:`\\beta` on each
+    :math:`\Delta` apart, interpolated linearly, is replaced by its conditional mean
+    given the knots; what is left out is a Brownian bridge :math:`\beta` on each
     interval, zero at the knots, independent from interval to interval, with
-    :math:`\\mathrm{cov}(\\beta(s), \\beta(u)) = q^2 (\\min(s, u) - s u / \\Delta)`. What the
+    :math:`\mathrm{cov}(\beta(s), \beta(u)) = q^2 (\min(s, u) - s u / \Delta)`. What the
     navigation sees is its integral (the attitude for a gyro bias, the velocity for an
     accelerometer bias), of variance
 
-    .. math:: \\int_0^\\Delta\\!\\!\\int_0^\\Delta \\mathrm{cov}(\\beta(s), \\beta(u))\\,ds\\,du
-              = q^2 \\left(\\frac{\\Delta^3}{3} - \\frac{\\Delta^3}{4}\\right) = \\frac{q^2 \\Delta^3}{12}
+    .. math:: \int_0^\Delta\!\!\int_0^\Delta \mathrm{cov}(\beta(s), \beta(u))\,ds\,du
+              = q^2 \left(\frac{\Delta^3}{3} - \frac{\Delta^3}{4}\right) = \frac{q^2 \Delta^3}{12}
 
-    per interval: over times long against :math:`\\Delta` the integral grows like that
-    of a white noise of intensity :math:`q^2 \\Delta^2 / 12`, which the model states by
+    per interval: over times long against :math:`\Delta` the integral grows like that
+    of a white noise of intensity :math:`q^2 \Delta^2 / 12`, which the model states by
     adding it to the white noise it already has (the angle random walk for the attitude,
     the accelerometer noise for the acceleration residual). Within one interval the
-    left-out part is smoother than white noise (first order in :math:`\\Delta`), so the
+    left-out part is smoother than white noise (first order in :math:`\Delta`), so the
     addition is exact in the long run and an approximation inside an interval. Tactical
-    grade with 30 s knots: gyro :math:`(10^{-6})^2 \\cdot 900 / 12 = 7.5\\times10^{-11}`
-    rad^2/s against :math:`n_g^2 = 4\\times10^{-10}`; accelerometer
-    :math:`7.5\\times10^{-9}` against :math:`n_a^2 = 2.5\\times10^{-7}`.
+    grade with 30 s knots: gyro :math:`(10^{-6})^2 \cdot 900 / 12 = 7.5\times10^{-11}`
+    rad^2/s against :math:`n_g^2 = 4\times10^{-10}`; accelerometer
+    :math:`7.5\times10^{-9}` against :math:`n_a^2 = 2.5\times10^{-7}`.
 
     Examples
     --------
     A bias drifting at 1e-4 rad/s/sqrt(s), modelled at knots 10 s apart:
-    :math:`q^2 \\Delta^2 / 12 = 10^{-8} \\cdot 100 / 12`:
+    :math:`q^2 \Delta^2 / 12 = 10^{-8} \cdot 100 / 12`:
 
     >>> from bvpnav.error_models import bridge_intensity
     >>> print(f"{bridge_intensity(1e-4, 10.0):.3e}")
@@ -149,7 +149,7 @@ def bridge_intensity(drift: float, interval: float) -> float:
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
 class AttitudeWalk(AttitudeErrorModel):
-    """The attitude error a gyro's white noise integrates to: a random walk in the
+    r"""The attitude error a gyro's white noise integrates to: a random walk in the
     navigation frame, at knots, rad.
 
     Parameters
@@ -169,34 +169,34 @@ class AttitudeWalk(AttitudeErrorModel):
     Notes
     -----
     Parameters ``attitude_walk_<axis>[m]``, ``m = 1 .. M`` (axis-major) are the walk
-    :math:`\\psi_m` at the knots :math:`t_1 = \\tau_0 < \\tau_1 < \\dots < \\tau_M = t_N`;
-    at :math:`\\tau_0` the walk is zero (the initial attitude error is
+    :math:`\psi_m` at the knots :math:`t_1 = \tau_0 < \tau_1 < \dots < \tau_M = t_N`;
+    at :math:`\tau_0` the walk is zero (the initial attitude error is
     :class:`AttitudeError`'s). Between knots it is linear,
-    :math:`\\psi(t) = \\sum_m \\varphi_m(t)\\,\\psi_m` (hat functions), and it rotates the
+    :math:`\psi(t) = \sum_m \varphi_m(t)\,\psi_m` (hat functions), and it rotates the
     integrated attitude in the navigation frame,
 
-    .. math:: C_k = \\exp([\\psi(t_k)\\times])\\, C_k^{\\mathrm{int}},
+    .. math:: C_k = \exp([\psi(t_k)\times])\, C_k^{\mathrm{int}},
 
-    the form of the continuous error equation :math:`\\dot\\psi = -C\\,n_\\omega` of a
-    gyro with white noise :math:`n_\\omega` (a random walk of intensity :math:`n_g^2`
+    the form of the continuous error equation :math:`\dot\psi = -C\,n_\omega` of a
+    gyro with white noise :math:`n_\omega` (a random walk of intensity :math:`n_g^2`
     per navigation axis, since :math:`C` is a rotation). The prior is that walk's law
     at the knots, on the totals:
 
-    .. math:: \\psi_1 - 0,\\; \\psi_{m+1} - \\psi_m \\sim N(0, n_g^2 (\\tau_{m+1} - \\tau_m)),
+    .. math:: \psi_1 - 0,\; \psi_{m+1} - \psi_m \sim N(0, n_g^2 (\tau_{m+1} - \tau_m)),
 
     exactly the distribution of a random walk sampled at the knots; what the linear
     interpolation leaves out, and why the spacing of :func:`walk_interval` is enough,
     is in that function's Notes. The acceleration :math:`a_k = C_k f_k + g` changes by
-    :math:`\\varepsilon_k \\times C_k f_k` for a navigation-frame rotation
-    :math:`\\varepsilon_k`, and an increment :math:`\\delta` of the knots gives
-    :math:`\\exp([(\\psi + \\delta_\\psi)\\times]) = \\exp([J_l(\\psi)\\delta_\\psi\\times])
-    \\exp([\\psi\\times]) + O(\\delta^2)`, so the columns are
-    :math:`J_l(\\psi(t_k))\\, e_j\\, \\varphi_m(t_k) \\times C_k f_k` (:math:`J_l` the left
+    :math:`\varepsilon_k \times C_k f_k` for a navigation-frame rotation
+    :math:`\varepsilon_k`, and an increment :math:`\delta` of the knots gives
+    :math:`\exp([(\psi + \delta_\psi)\times]) = \exp([J_l(\psi)\delta_\psi\times])
+    \exp([\psi\times]) + O(\delta^2)`, so the columns are
+    :math:`J_l(\psi(t_k))\, e_j\, \varphi_m(t_k) \times C_k f_k` (:math:`J_l` the left
     Jacobian of SO(3)), exact first derivatives: the re-integrated acceleration differs
-    from the linearized one by :math:`O(\\delta^2)`. They are local: a knot's column is
+    from the linearized one by :math:`O(\delta^2)`. They are local: a knot's column is
     zero outside its two intervals. The walk does not change the gyro-propagated columns
     of :class:`GyroBias` and :class:`AttitudeError` except by the rotation
-    :math:`\\exp([\\psi\\times])` (see :func:`~bvpnav.error_models._attitude.propagate`).
+    :math:`\exp([\psi\times])` (see :func:`~bvpnav.error_models._attitude.propagate`).
 
     Examples
     --------
@@ -281,7 +281,7 @@ class AttitudeWalk(AttitudeErrorModel):
             parts["walk"][:, i] += W @ values[a * m:(a + 1) * m]
 
     def step_scale(self, data) -> np.ndarray:
-        """The walk's prior standard deviation at each knot, :math:`n_g\\sqrt{\\tau_m - \\tau_0}`, rad
+        r"""The walk's prior standard deviation at each knot, :math:`n_g\sqrt{\tau_m - \tau_0}`, rad
         (``default_step_scale`` without ``arw``)."""
         k = self.knots(data)
         if self.arw is None:

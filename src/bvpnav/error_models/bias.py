@@ -16,7 +16,7 @@ __all__ = ["Bias"]
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
 class Bias(SensorErrorModel):
-    """Bias of each accelerometer axis, m/s^2: constant, or drifting as a random walk.
+    r"""Bias of each accelerometer axis, m/s^2: constant, or drifting as a random walk.
 
     Parameters
     ----------
@@ -34,19 +34,19 @@ class Bias(SensorErrorModel):
     drift : float, optional
         Random-walk density of the bias, m/s^2/sqrt(s) (a datasheet's bias random walk,
         or a factor graph's accelerometer bias random-walk sigma): the prior
-        :math:`(b_{m+1} - b_m) \\sim N(0, \\sigma_d^2\\, \\Delta t_m)`. Needs ``interval``.
+        :math:`(b_{m+1} - b_m) \sim N(0, \sigma_d^2\, \Delta t_m)`. Needs ``interval``.
 
     Notes
     -----
     Reported as ``bias_<axis>`` (constant) or ``bias_<axis>[m]`` (knot ``m``) in m/s^2
-    with the sensor's sign: the sensor reads :math:`\\hat f = D f + b`, so a positive bias
-    means it reads high. Internally the correction is :math:`f = (I + E)\\hat f + \\beta`
-    with :math:`b = -(I + E)^{-1}\\beta`; the column of :math:`\\beta_k` is the sensor
+    with the sensor's sign: the sensor reads :math:`\hat f = D f + b`, so a positive bias
+    means it reads high. Internally the correction is :math:`f = (I + E)\hat f + \beta`
+    with :math:`b = -(I + E)^{-1}\beta`; the column of :math:`\beta_k` is the sensor
     axis in the navigation frame, :math:`C_i e_k` (the 2010 paper's :math:`p_{kl1}`
-    vectors, eq. 33, up to ``-M``), times the knot's hat function :math:`\\varphi_m(t_i)`
+    vectors, eq. 33, up to ``-M``), times the knot's hat function :math:`\varphi_m(t_i)`
     when time-varying. The knot values are reported exactly as
-    :math:`b_m = -(I + E)^{-1}\\beta_m`; the random-walk prior is on
-    :math:`-(\\beta_{m+1} - \\beta_m)`, which is :math:`b_{m+1} - b_m` without a scale
+    :math:`b_m = -(I + E)^{-1}\beta_m`; the random-walk prior is on
+    :math:`-(\beta_{m+1} - \beta_m)`, which is :math:`b_{m+1} - b_m` without a scale
     factor and to first order in it with one.
 
     Examples

@@ -23,7 +23,7 @@ __all__ = ["GyroBias"]
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
 class GyroBias(AttitudeErrorModel):
-    """Bias of each gyro axis, rad/s: constant, or drifting as a random walk.
+    r"""Bias of each gyro axis, rad/s: constant, or drifting as a random walk.
 
     Parameters
     ----------
@@ -44,22 +44,22 @@ class GyroBias(AttitudeErrorModel):
     drift : float, optional
         Random-walk density of the bias, rad/s/sqrt(s) (the datasheet's bias random walk
         or a factor graph's bias random-walk sigma): a prior
-        :math:`(b_{m+1} - b_m) \\sim N(0, \\sigma_d^2 \\Delta t_m)` on successive knots.
+        :math:`(b_{m+1} - b_m) \sim N(0, \sigma_d^2 \Delta t_m)` on successive knots.
         Needs ``interval``.
 
     Notes
     -----
-    The gyro reads :math:`\\hat\\omega = (1 + s)\\omega + b`; with
+    The gyro reads :math:`\hat\omega = (1 + s)\omega + b`; with
     :class:`GyroScaleFactor` absent ``s = 0``. Parameters ``gyro_bias_<axis>`` (constant)
     or ``gyro_bias_<axis>[m]`` (knot ``m``), axis-major. The corrected rate is
-    :math:`\\omega = (\\hat\\omega - b(t))/(1 + s)`, so a bias increment
-    :math:`\\delta b_j` changes it by :math:`-\\delta b_j\\,\\varphi_m(t)/(1 + s_j)\\, e_j`
-    (:math:`\\varphi_m` the knot's hat function, 1 for a constant bias); the attitude
-    then changes by :math:`\\psi` of :func:`~bvpnav.error_models._attitude.propagate`
-    (continuous limit :math:`\\psi(t) = -\\int_0^t C\\, b\\, ds`) and the acceleration by
-    :math:`\\psi \\times C f`. Columns are exact first derivatives of the discrete
+    :math:`\omega = (\hat\omega - b(t))/(1 + s)`, so a bias increment
+    :math:`\delta b_j` changes it by :math:`-\delta b_j\,\varphi_m(t)/(1 + s_j)\, e_j`
+    (:math:`\varphi_m` the knot's hat function, 1 for a constant bias); the attitude
+    then changes by :math:`\psi` of :func:`~bvpnav.error_models._attitude.propagate`
+    (continuous limit :math:`\psi(t) = -\int_0^t C\, b\, ds`) and the acceleration by
+    :math:`\psi \times C f`. Columns are exact first derivatives of the discrete
     integration; the re-integrated acceleration differs from the linearized one by
-    :math:`O(\\delta^2)`.
+    :math:`O(\delta^2)`.
 
     Examples
     --------

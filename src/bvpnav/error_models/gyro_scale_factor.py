@@ -13,7 +13,7 @@ __all__ = ["GyroScaleFactor"]
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
 class GyroScaleFactor(AttitudeErrorModel):
-    """Scale-factor error of each gyro axis, dimensionless (0.01 = reads 1 % high).
+    r"""Scale-factor error of each gyro axis, dimensionless (0.01 = reads 1 % high).
 
     Parameters
     ----------
@@ -24,12 +24,12 @@ class GyroScaleFactor(AttitudeErrorModel):
 
     Notes
     -----
-    The gyro reads :math:`\\hat\\omega_j = (1 + s_j)\\omega_j + b_j`, so the corrected rate
-    is :math:`\\omega_j = (\\hat\\omega_j - b_j)/(1 + s_j)` and an increment
-    :math:`\\delta s_j` changes it by :math:`-\\omega_j\\,\\delta s_j/(1 + s_j)`. The
+    The gyro reads :math:`\hat\omega_j = (1 + s_j)\omega_j + b_j`, so the corrected rate
+    is :math:`\omega_j = (\hat\omega_j - b_j)/(1 + s_j)` and an increment
+    :math:`\delta s_j` changes it by :math:`-\omega_j\,\delta s_j/(1 + s_j)`. The
     attitude and acceleration follow as for :class:`GyroBias`. A scale factor is
     identifiable only on an axis that turns enough (a heading error of
-    :math:`s_z \\Delta\\psi` after a total turn :math:`\\Delta\\psi`).
+    :math:`s_z \Delta\psi` after a total turn :math:`\Delta\psi`).
 
     Examples
     --------

@@ -13,7 +13,7 @@ __all__ = ["Misalignment"]
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
 class Misalignment(SensorErrorModel):
-    """Small angles by which each sensor axis leans towards the others, rad.
+    r"""Small angles by which each sensor axis leans towards the others, rad.
 
     Parameters
     ----------
@@ -27,14 +27,14 @@ class Misalignment(SensorErrorModel):
 
     Notes
     -----
-    Reported as ``misalignment_<i><j>`` = :math:`\\Theta_{ij}`: sensor ``i`` reads
-    :math:`(1+s_i)(f_i + \\sum_{j \\ne i} \\Theta_{ij} f_j) + b_i`, i.e. its sensing axis
-    is :math:`e_i + \\sum_j \\Theta_{ij} e_j` (small angles). Internally the off-diagonal
+    Reported as ``misalignment_<i><j>`` = :math:`\Theta_{ij}`: sensor ``i`` reads
+    :math:`(1+s_i)(f_i + \sum_{j \ne i} \Theta_{ij} f_j) + b_i`, i.e. its sensing axis
+    is :math:`e_i + \sum_j \Theta_{ij} e_j` (small angles). Internally the off-diagonal
     :math:`E_{ij}` multiplies the measured output of axis ``j`` into axis ``i`` (column
-    :math:`C e_i \\hat f_j`), and :math:`\\Theta_{ij} = D_{ij}/D_{ii}` with
+    :math:`C e_i \hat f_j`), and :math:`\Theta_{ij} = D_{ij}/D_{ii}` with
     :math:`D = (I+E)^{-1}`. Together with :class:`ScaleFactor` this is exact; without it
-    the correction is exact to first order in :math:`\\Theta`. Priors and bounds use the
-    first-order relation :math:`\\Theta_{ij} \\approx -E_{ij}`.
+    the correction is exact to first order in :math:`\Theta`. Priors and bounds use the
+    first-order relation :math:`\Theta_{ij} \approx -E_{ij}`.
 
     Examples
     --------

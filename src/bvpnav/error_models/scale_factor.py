@@ -11,7 +11,7 @@ __all__ = ["ScaleFactor"]
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
 class ScaleFactor(SensorErrorModel):
-    """Scale-factor error of each accelerometer axis, dimensionless.
+    r"""Scale-factor error of each accelerometer axis, dimensionless.
 
     Parameters
     ----------
@@ -22,10 +22,10 @@ class ScaleFactor(SensorErrorModel):
 
     Notes
     -----
-    Reported as ``scale_<axis>`` = :math:`s` with :math:`\\hat f = (1 + s) f + \\dots`
+    Reported as ``scale_<axis>`` = :math:`s` with :math:`\hat f = (1 + s) f + \dots`
     (0.01 means the sensor reads 1 % high). Internally :math:`k = E_{ii}` multiplies
-    the measured output, :math:`f = (1 + k)\\hat f + \\dots`, which is exact for
-    :math:`k = 1/(1+s) - 1`; the column is :math:`C_i e_k \\hat f_{i,k}` (the paper's
+    the measured output, :math:`f = (1 + k)\hat f + \dots`, which is exact for
+    :math:`k = 1/(1+s) - 1`; the column is :math:`C_i e_k \hat f_{i,k}` (the paper's
     :math:`p_{kl11}`, eq. 32-33).
 
     Examples

@@ -13,7 +13,7 @@ __all__ = ["UnknownGravity"]
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
 class UnknownGravity(SensorErrorModel):
-    """Gravity vector in the navigation frame treated as unknown, m/s^2.
+    r"""Gravity vector in the navigation frame treated as unknown, m/s^2.
 
     Parameters
     ----------
@@ -27,7 +27,7 @@ class UnknownGravity(SensorErrorModel):
     -----
     Reported as ``gravity_<axis>`` = :math:`g_a = g^{nom}_a + dg_a`, the full component.
     The corrected acceleration is :math:`a = C f + g^{nom} + dg`, so the column of
-    :math:`dg_a` is the unit vector :math:`e_a` (the paper's :math:`\\mathbf{p}`, eq. 33).
+    :math:`dg_a` is the unit vector :math:`e_a` (the paper's :math:`\mathbf{p}`, eq. 33).
     Estimating it absorbs a small tilt of the initial attitude (the horizontal
     components) and the local value of g. With navigation-frame data it is a constant
     acceleration offset per axis (indistinguishable from a bias there).

@@ -53,7 +53,7 @@ BUILTIN = ("lcurve", "gcv", "discrepancy", "quasi")
 
 
 class LambdaRule:
-    """The contract of a lambda rule (subclass it).
+    r"""The contract of a lambda rule (subclass it).
 
     Attributes
     ----------
@@ -65,7 +65,7 @@ class LambdaRule:
     Examples
     --------
     A rule that balances the two terms, choosing the sampled lambda where the data term
-    :math:`\\rho^2` and the lambda-weighted term :math:`\\eta^2` are closest (a plug-in
+    :math:`\rho^2` and the lambda-weighted term :math:`\eta^2` are closest (a plug-in
     written for this example, not a recommended rule):
 
     >>> import numpy as np
@@ -278,7 +278,7 @@ def edge_warning(curve, name: str, k: int, guard: int, scores=None, best: str = 
 def refine_extremum(f, s: np.ndarray, scores: np.ndarray, k: int, best: str = "max",
                     xatol: float = REFINE_XATOL, maxiter: int = 30,
                     bounds: tuple[float, float] | None = None) -> float:
-    """The extremum of a smooth function of ``u = log lambda`` near sample ``k``.
+    r"""The extremum of a smooth function of ``u = log lambda`` near sample ``k``.
 
     Successive parabolic interpolation seeded with the sweep's own samples ``k - 1, k,
     k + 1`` (no evaluation is spent re-discovering them, as a cold Brent search would),
@@ -313,16 +313,16 @@ def refine_extremum(f, s: np.ndarray, scores: np.ndarray, k: int, best: str = "m
     With the best evaluated point :math:`u_1` and its evaluated neighbours
     :math:`u_0 < u_1 < u_2`, the parabola through the three has its vertex at
 
-    .. math:: v = u_1 - \\frac{1}{2}\\frac{(u_1 - u_0)^2 (g_1 - g_2) - (u_1 - u_2)^2 (g_1 - g_0)}
+    .. math:: v = u_1 - \frac{1}{2}\frac{(u_1 - u_0)^2 (g_1 - g_2) - (u_1 - u_2)^2 (g_1 - g_0)}
                                        {(u_1 - u_0)(g_1 - g_2) - (u_1 - u_2)(g_1 - g_0)}
 
     (:math:`g` the score, negated for a minimum), inside :math:`[u_0, u_2]` since
-    :math:`g_1 \\ge g_0, g_2`; it converges superlinearly (order about 1.32) at a smooth
+    :math:`g_1 \ge g_0, g_2`; it converges superlinearly (order about 1.32) at a smooth
     extremum. As in Brent's method, a vertex within ``xatol`` of :math:`u_1` is moved to
-    :math:`u_1 \\pm` ``xatol`` on its side so that the bracket closes, a vertex within
+    :math:`u_1 \pm` ``xatol`` on its side so that the bracket closes, a vertex within
     ``xatol / 2`` of a bracket end (the parabola is no model there) is replaced by the
     golden-section point of the larger side, and the search stops when
-    :math:`u_2 - u_0 \\le 4` ``xatol``; when two steps have not shrunk the bracket to 0.7 of
+    :math:`u_2 - u_0 \le 4` ``xatol``; when two steps have not shrunk the bracket to 0.7 of
     its width (parabolas creeping towards the extremum from one side, past a far bracket
     end), the next step is golden-section. When the best point is an end of the bracket the
     extremum lies at (or beyond) it: the end is returned, as a bounded search would. With
@@ -439,8 +439,8 @@ def hermite_fit_peak(points: list, a: float, b: float) -> float | None:
 
     Examples
     --------
-    Three points of :math:`g(u) = \\sin 2u` with their slopes: the quintic through them peaks
-    near :math:`\\pi/4 = 0.7854`:
+    Three points of :math:`g(u) = \sin 2u` with their slopes: the quintic through them peaks
+    near :math:`\pi/4 = 0.7854`:
 
     >>> import math
     >>> from bvpnav.lam import hermite_fit_peak

@@ -13,7 +13,7 @@ __all__ = ["Discrepancy"]
 
 
 class Discrepancy(LambdaRule):
-    """Choose lambda with :math:`\\hat\\rho = \\tau\\, \\mathrm{tr}(I - A_\\lambda)`.
+    r"""Choose lambda with :math:`\hat\rho = \tau\, \mathrm{tr}(I - A_\lambda)`.
 
     Notes
     -----

@@ -12,20 +12,20 @@ __all__ = ["GCV", "gcv"]
 
 
 def gcv(pt: dict) -> float:
-    """The GCV function at one point: :math:`\\hat\\rho / \\mathrm{tr}(I - A_\\lambda)^2`."""
+    r"""The GCV function at one point: :math:`\hat\rho / \mathrm{tr}(I - A_\lambda)^2`."""
     dof = abs(pt["trace"])
     return pt["rho2"] / dof**2 if dof > 0 else np.inf
 
 
 class GCV(LambdaRule):
-    """Minimise :math:`G = \\hat\\rho / \\mathrm{tr}(I - A_\\lambda)^2`.
+    r"""Minimise :math:`G = \hat\rho / \mathrm{tr}(I - A_\lambda)^2`.
 
     Notes
     -----
-    :math:`\\mathrm{tr}(I - A_\\lambda) = -\\mathrm{tr}(\\partial w / \\partial \\hat a)`, by exact
+    :math:`\mathrm{tr}(I - A_\lambda) = -\mathrm{tr}(\partial w / \partial \hat a)`, by exact
     columns for small problems and Hutchinson's randomized estimator for large ones (see
     :class:`bvpnav.lam.sweep.DirectSweep`). GCV treats the data residual as independent
-    observations; in the load form the data term :math:`\\|M w\\|^2` is mass-matrix
+    observations; in the load form the data term :math:`\|M w\|^2` is mass-matrix
     weighted (correlated), and on the 2011 example the function decreases to the edge of
     the range (a warning says so).
 

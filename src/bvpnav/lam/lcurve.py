@@ -22,19 +22,19 @@ __all__ = ["LCurve", "curvature", "curvature_slope", "spline_curvature"]
 
 
 def curvature(pt: dict) -> float:
-    """Signed curvature of :math:`(\\log\\rho, \\log\\eta)` at one lambda from exact derivatives.
+    r"""Signed curvature of :math:`(\log\rho, \log\eta)` at one lambda from exact derivatives.
 
     Notes
     -----
-    With :math:`\\hat\\rho = \\rho^2`, :math:`\\hat\\eta = \\eta^2`, the stationarity of
-    :math:`J = \\hat\\rho + \\lambda\\hat\\eta` along the solution path gives
-    :math:`\\hat\\rho' = -\\lambda\\hat\\eta'`, and the second derivatives cancel from the
-    curvature :math:`(\\zeta'\\eta'' - \\zeta''\\eta')/(\\zeta'^2 + \\eta'^2)^{3/2}` of
-    :math:`(\\zeta, \\eta) = (\\tfrac12\\log\\hat\\rho, \\tfrac12\\log\\hat\\eta)`:
+    With :math:`\hat\rho = \rho^2`, :math:`\hat\eta = \eta^2`, the stationarity of
+    :math:`J = \hat\rho + \lambda\hat\eta` along the solution path gives
+    :math:`\hat\rho' = -\lambda\hat\eta'`, and the second derivatives cancel from the
+    curvature :math:`(\zeta'\eta'' - \zeta''\eta')/(\zeta'^2 + \eta'^2)^{3/2}` of
+    :math:`(\zeta, \eta) = (\tfrac12\log\hat\rho, \tfrac12\log\hat\eta)`:
 
-    .. math:: \\kappa = \\frac{2}{\\hat\\rho\\hat\\eta\\,|\\hat\\eta'|}
-        \\frac{1 + \\lambda\\hat\\eta'/\\hat\\eta + \\lambda^2\\hat\\eta'/\\hat\\rho}
-             {(\\lambda^2/\\hat\\rho^2 + 1/\\hat\\eta^2)^{3/2}}.
+    .. math:: \kappa = \frac{2}{\hat\rho\hat\eta\,|\hat\eta'|}
+        \frac{1 + \lambda\hat\eta'/\hat\eta + \lambda^2\hat\eta'/\hat\rho}
+             {(\lambda^2/\hat\rho^2 + 1/\hat\eta^2)^{3/2}}.
 
     Positive where the curve, traversed with increasing lambda, turns counter-clockwise
     (the 2011 paper's sign convention, its equation 17).
@@ -91,7 +91,7 @@ def spline_curvature(s: np.ndarray, rho2, eta2, s_eval: np.ndarray) -> np.ndarra
 
 
 class LCurve(LambdaRule):
-    """Maximise the curvature of :math:`(\\log\\rho, \\log\\eta)`.
+    r"""Maximise the curvature of :math:`(\log\rho, \log\eta)`.
 
     Notes
     -----

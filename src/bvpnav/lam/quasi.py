@@ -12,14 +12,14 @@ __all__ = ["Quasi"]
 
 
 class Quasi(LambdaRule):
-    """Minimise :math:`\\|\\lambda\\, dr/d\\lambda\\|` (m, RMS over the nodal positions).
+    r"""Minimise :math:`\|\lambda\, dr/d\lambda\|` (m, RMS over the nodal positions).
 
     Notes
     -----
     The function tends to 0 at both ends of any range, so the smallest *interior* local
     minimum is taken. Exact derivatives with the direct sweep (refined by
     :func:`bvpnav.lam.refine_extremum`);
-    finite differences in :math:`\\log\\lambda` between samples with the cvxpy sweep.
+    finite differences in :math:`\log\lambda` between samples with the cvxpy sweep.
     """
 
     name = "quasi"

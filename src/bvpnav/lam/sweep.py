@@ -1,19 +1,19 @@
-"""One generic lambda sweep: sample the curve, then let every rule score and refine.
+r"""One generic lambda sweep: sample the curve, then let every rule score and refine.
 
 The objective of a formulation splits as
 
-.. math:: J(\\lambda) = \\hat\\rho(x) + \\lambda\\, \\hat\\eta(x),
+.. math:: J(\lambda) = \hat\rho(x) + \lambda\, \hat\eta(x),
 
-where :math:`\\hat\\rho` is the sum of squares of every term *not* multiplied by lambda
-(the data term, error-model priors) and :math:`\\hat\\eta` the sum of squares of the
-lambda-weighted items. Every rule looks at the curve :math:`\\lambda \\mapsto
-(\\rho, \\eta) = (\\hat\\rho^{1/2}, \\hat\\eta^{1/2})`.
+where :math:`\hat\rho` is the sum of squares of every term *not* multiplied by lambda
+(the data term, error-model priors) and :math:`\hat\eta` the sum of squares of the
+lambda-weighted items. Every rule looks at the curve :math:`\lambda \mapsto
+(\rho, \eta) = (\hat\rho^{1/2}, \hat\eta^{1/2})`.
 
 Two sweeps:
 
 - :class:`DirectSweep` (problems that are equality-constrained least squares): one sparse
   factorization per lambda (:class:`bvpnav.linalg.lsq.BorderedLU`), the derivative
-  :math:`dx/d\\lambda` from the same factorization, hence the L-curve curvature and the
+  :math:`dx/d\lambda` from the same factorization, hence the L-curve curvature and the
   quasi-optimality function *exactly* at every lambda; GCV's trace by exact columns for
   small problems and Hutchinson's randomized estimator (seeded Rademacher probes, one
   multi-right-hand-side solve) for large ones.
@@ -81,18 +81,18 @@ log = logging.getLogger(__name__)
 
 @dataclass(repr=False)
 class LambdaCurve:
-    """A lambda sweep and the rules' choices.
+    r"""A lambda sweep and the rules' choices.
 
     Attributes
     ----------
     lam : ndarray
         Sampled lambda values (dimensionless), increasing.
     residual_norm : ndarray
-        :math:`\\rho(\\lambda)`, square root of the terms not weighted by lambda
+        :math:`\rho(\lambda)`, square root of the terms not weighted by lambda
         (data term in its own units, e.g. dimensionless for the acceleration form
         with ``sigma_a``, m/s for the load form).
     info_norm : ndarray
-        :math:`\\eta(\\lambda)`, square root of the lambda-weighted item terms.
+        :math:`\eta(\lambda)`, square root of the lambda-weighted item terms.
     scores : dict of str -> ndarray
         Per rule, its score at each sampled lambda (curvature for ``lcurve``, the GCV
         function, the discrepancy ``rho^2 - tau * dof`` and the quasi-optimality

@@ -1,21 +1,21 @@
-"""The least-squares KKT system as a banded matrix with a border: O(N) factorizations.
+r"""The least-squares KKT system as a banded matrix with a border: O(N) factorizations.
 
 The augmented system of :mod:`bvpnav.linalg.lsq`,
 
 .. math::
 
-    S = \\begin{bmatrix} -I & D & 0 \\\\ D^T & 0 & E^T \\\\ 0 & E & 0 \\end{bmatrix},
-    \\qquad S z = b, \\quad z = (\\rho, x, \\mu),
+    S = \begin{bmatrix} -I & D & 0 \\ D^T & 0 & E^T \\ 0 & E & 0 \end{bmatrix},
+    \qquad S z = b, \quad z = (\rho, x, \mu),
 
 is never assembled here. Objective rows of ``D`` that touch only a few neighbouring time
-nodes are *folded*: their residual :math:`\\rho_f = D_f x - b_f` is eliminated exactly,
+nodes are *folded*: their residual :math:`\rho_f = D_f x - b_f` is eliminated exactly,
 which leaves the reduced symmetric system
 
 .. math::
 
-    \\begin{bmatrix} D_f^T D_f & D_u^T & E^T \\\\ D_u & -I & 0 \\\\ E & 0 & 0 \\end{bmatrix}
-    \\begin{bmatrix} x \\\\ \\rho_u \\\\ \\mu \\end{bmatrix} =
-    \\begin{bmatrix} b_x + D_f^T b_f \\\\ b_u \\\\ b_\\mu \\end{bmatrix}
+    \begin{bmatrix} D_f^T D_f & D_u^T & E^T \\ D_u & -I & 0 \\ E & 0 & 0 \end{bmatrix}
+    \begin{bmatrix} x \\ \rho_u \\ \mu \end{bmatrix} =
+    \begin{bmatrix} b_x + D_f^T b_f \\ b_u \\ b_\mu \end{bmatrix}
 
 (``u``: the unfolded rows, those that reach far in time). Every unknown and multiplier
 gets a time node (positions, residuals and FEM multipliers of node ``j`` at ``j``; a
@@ -1323,7 +1323,7 @@ class BandPlan:
 
 
 class BandedKKT(Factorization):
-    """A banded-plus-border factorization of the augmented system (see the module Notes).
+    r"""A banded-plus-border factorization of the augmented system (see the module Notes).
 
     Parameters
     ----------
@@ -1357,7 +1357,7 @@ class BandedKKT(Factorization):
     An unknown ``w`` whose only objective entries are ``h w^2`` (the acceleration residual
     over ``sigma_a``) is eliminated first: ``w = (b_w - E_w^T mu) / h``, which adds
     :math:`-E_w h^{-1} E_w^T` to the multipliers' block (for the FEM rows,
-    :math:`-\\sigma_a^2 M^2`, pentadiagonal). One axis with point fixes then has the
+    :math:`-\sigma_a^2 M^2`, pentadiagonal). One axis with point fixes then has the
     unknowns ``r_j, mu_j`` per node and bandwidth 4. The banded part is scaled
     symmetrically by the square roots of its column maxima before ``dgbtrf``.
     """

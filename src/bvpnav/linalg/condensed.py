@@ -255,11 +255,11 @@ class CondensedBand:
 
 
 class CondensedKKT(BandedKKT):
-    """:class:`BandedKKT` at one lambda of a :class:`CondensedBand`: its band solves are
+    r""":class:`BandedKKT` at one lambda of a :class:`CondensedBand`: its band solves are
     the condensed ones (a small factorization per lambda), the rest (folding, eliminated
     accelerations, gathers, scales) as in :class:`BandedKKT`. Real, one run, no border;
     no log-determinant. :meth:`solve_x_real` with ``interior=False`` leaves the unknowns
-    outside the condensed set NaN (a sweep's :math:`dx/d\\lambda`, read on the lambda rows
+    outside the condensed set NaN (a sweep's :math:`dx/d\lambda`, read on the lambda rows
     alone)."""
 
     def __init__(self, D: sp.csr_matrix, E: sp.csr_matrix, condensed: CondensedBand, lam: float,

@@ -1,11 +1,11 @@
-"""The covariance of an answer: positions, velocities and error-model parameters, in O(N).
+r"""The covariance of an answer: positions, velocities and error-model parameters, in O(N).
 
 The acceleration form is a maximum a-posteriori estimate under a stated Gaussian noise
-model: the data rows are the nodal acceleration residuals :math:`w_j/\\sigma_a`, the soft
+model: the data rows are the nodal acceleration residuals :math:`w_j/\sigma_a`, the soft
 rows the items' misfits over their sigmas, the hard rows hold exactly. Written as
 least squares with equality constraints,
 
-.. math:: \\min_x \\|D x + c\\|^2 \\quad \\text{s.t.} \\quad E x + e = 0,
+.. math:: \min_x \|D x + c\|^2 \quad \text{s.t.} \quad E x + e = 0,
 
 the estimate is linear in the noise, and when the rows of ``D x + c`` at the truth are
 independent with unit variance its covariance is the ``x`` block of the inverse of the
@@ -13,8 +13,8 @@ KKT matrix
 
 .. math::
 
-    K = \\begin{bmatrix} D^T D & E^T \\\\ E & 0 \\end{bmatrix}, \\qquad
-    \\operatorname{Cov}(\\hat x) = (K^{-1})_{xx} = N (N^T D^T D N)^{-1} N^T,
+    K = \begin{bmatrix} D^T D & E^T \\ E & 0 \end{bmatrix}, \qquad
+    \operatorname{Cov}(\hat x) = (K^{-1})_{xx} = N (N^T D^T D N)^{-1} N^T,
 
 with ``N`` a basis of the null space of ``E``: the covariance on the manifold of the hard
 constraints (zero in every direction a hard item fixes).
@@ -94,7 +94,7 @@ def quadratic_model(form, x: np.ndarray, lam: float) -> tuple[LeastSquaresForm, 
 
 @dataclass(eq=False)
 class Covariance:
-    """Covariance of a solution (see the module Notes for what it is).
+    r"""Covariance of a solution (see the module Notes for what it is).
 
     Attributes
     ----------
@@ -104,7 +104,7 @@ class Covariance:
     params : ndarray, shape (q, q)
         Covariance of the error-model parameters in their internal parametrization.
     variance_factor : float
-        A-posteriori variance factor :math:`\\hat\\sigma_0^2 = \\|D \\hat x + c\\|^2 / f`.
+        A-posteriori variance factor :math:`\hat\sigma_0^2 = \|D \hat x + c\|^2 / f`.
     dof : int
         Degrees of freedom ``f``: objective rows minus unknowns plus independent hard rows.
     exact : bool

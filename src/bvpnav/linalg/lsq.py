@@ -1,23 +1,23 @@
-"""The equality-constrained least-squares view of a problem, and a forward-error check.
+r"""The equality-constrained least-squares view of a problem, and a forward-error check.
 
 Problems whose items are all hard or soft (no inequalities, bands or robust
 penalties) are linear least squares with linear equality constraints:
 
 .. math::
 
-    \\min_x \\|D x + c\\|^2 \\quad \\text{s.t.} \\quad E x + e = 0,
+    \min_x \|D x + c\|^2 \quad \text{s.t.} \quad E x + e = 0,
 
 where ``D`` stacks the data rows and the soft rows (weighted by
-:math:`\\sqrt{\\lambda}/\\sigma`, priors by :math:`1/\\sigma`) and ``E`` stacks the FEM rows and
+:math:`\sqrt{\lambda}/\sigma`, priors by :math:`1/\sigma`) and ``E`` stacks the FEM rows and
 the hard items. Its optimality conditions, written with the residual
-:math:`\\rho = D x + c` and :math:`\\mu = y/2` so that no normal matrix is formed, are the
+:math:`\rho = D x + c` and :math:`\mu = y/2` so that no normal matrix is formed, are the
 augmented system
 
 .. math::
 
-    \\begin{bmatrix} -I & D & 0 \\\\ D^T & 0 & E^T \\\\ 0 & E & 0 \\end{bmatrix}
-    \\begin{bmatrix} \\rho \\\\ x \\\\ \\mu \\end{bmatrix} =
-    \\begin{bmatrix} -c \\\\ 0 \\\\ -e \\end{bmatrix}.
+    \begin{bmatrix} -I & D & 0 \\ D^T & 0 & E^T \\ 0 & E & 0 \end{bmatrix}
+    \begin{bmatrix} \rho \\ x \\ \mu \end{bmatrix} =
+    \begin{bmatrix} -c \\ 0 \\ -e \end{bmatrix}.
 
 One step of iterative refinement on this system from a solver's answer estimates that
 answer's forward error; bvpnav uses it to judge solvers' answers on problems where
@@ -58,7 +58,7 @@ FORWARD_RTOL = {"low": 1e-4, "default": 1e-6, "high": 1e-8}
 
 @dataclass(eq=False)
 class LeastSquaresForm:
-    """``min ||D x + c||^2 s.t. E x + e = 0`` with row bookkeeping.
+    r"""``min ||D x + c||^2 s.t. E x + e = 0`` with row bookkeeping.
 
     Attributes
     ----------
@@ -69,7 +69,7 @@ class LeastSquaresForm:
     eq_blocks : list of (label, slice)
         Which rows of ``E`` belong to the FEM (label ``"fem"``) and to each hard item.
     lam_rows : ndarray of bool
-        Rows of ``D`` multiplied by :math:`\\sqrt{\\lambda}` (soft items).
+        Rows of ``D`` multiplied by :math:`\sqrt{\lambda}` (soft items).
     """
 
     D: Affine
@@ -188,7 +188,7 @@ def least_squares_form(form, lam: float, surrogate: bool = False) -> LeastSquare
 
 def forward_error(form, xval: np.ndarray, lam: float, duals: dict | None,
                   factored: tuple | None = None) -> float | None:
-    """Relative forward error of ``xval`` estimated by one refinement step.
+    r"""Relative forward error of ``xval`` estimated by one refinement step.
 
     Parameters
     ----------
@@ -204,7 +204,7 @@ def forward_error(form, xval: np.ndarray, lam: float, duals: dict | None,
     Returns
     -------
     float or None
-        :math:`\\|\\delta x\\|_\\infty / \\|x\\|_\\infty` for the correction :math:`\\delta` of one
+        :math:`\|\delta x\|_\infty / \|x\|_\infty` for the correction :math:`\delta` of one
         refinement step, or None when the problem is not equality-constrained least
         squares.
     factored : (LeastSquaresForm, BorderedLU), optional
@@ -238,7 +238,7 @@ def forward_error(form, xval: np.ndarray, lam: float, duals: dict | None,
 
 
 class Factored(NamedTuple):
-    """A factorization of the augmented system at one ``lam``, handed by a direct back end
+    r"""A factorization of the augmented system at one ``lam``, handed by a direct back end
     to verification (a ``(form, factor)`` pair to code that unpacks two).
 
     Attributes
@@ -247,14 +247,14 @@ class Factored(NamedTuple):
     factor : Factorization
     refined : (ndarray, float) or None
         The answer ``x`` the back end refined with this factor and the relative size
-        :math:`\\|\\delta x\\|_\\infty / \\|x\\|_\\infty` of its one refinement step (None
+        :math:`\|\delta x\|_\infty / \|x\|_\infty` of its one refinement step (None
         when it took none or several).
 
     Notes
     -----
     The step's correction is the one-step forward-error estimate (:func:`forward_error`)
     of the first solve; the answer includes the correction, so while refinement
-    contracts (:math:`\\|I - \\tilde S^{-1} S\\| < 1`) it estimates the answer's own error
+    contracts (:math:`\|I - \tilde S^{-1} S\| < 1`) it estimates the answer's own error
     from above, down to the rounding floor. Verification uses it when it already meets
     the preset's bound and takes a fresh step on the answer otherwise (the bound can
     only be met, never missed, for want of that step). After several steps there is no
@@ -561,7 +561,7 @@ LDL_BACKWARD = 1e-12
 def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14,
                         method: str = "auto", ldl_steps: int = 30, ldl_tol: float = 1e-12,
                         ldl_accept: float = 1e-7, banded_tol: float = BANDED_TOL["default"]):
-    """Solve the equality-constrained least-squares form directly.
+    r"""Solve the equality-constrained least-squares form directly.
 
     One sparse factorization of the augmented system (error-model parameters eliminated
     through their Schur complement) followed by iterative refinement in double precision.
@@ -603,9 +603,9 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
 
     Notes
     -----
-    Refinement: :math:`z_{k+1} = z_k + \\tilde S^{-1} (b - S z_k)`, where :math:`\\tilde S`
+    Refinement: :math:`z_{k+1} = z_k + \tilde S^{-1} (b - S z_k)`, where :math:`\tilde S`
     is the factorised (possibly regularized) matrix; it converges when
-    :math:`\\|I - \\tilde S^{-1} S\\| < 1`.
+    :math:`\|I - \tilde S^{-1} S\| < 1`.
     """
     problem = as_formulation(problem)
     form = least_squares_form(problem, lam)

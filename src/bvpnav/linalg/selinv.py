@@ -79,7 +79,7 @@ class _Level:
 
 
 class CyclicReduction:
-    """Cyclic-reduction factorization of a symmetric block-tridiagonal matrix.
+    r"""Cyclic-reduction factorization of a symmetric block-tridiagonal matrix.
 
     Parameters
     ----------
@@ -102,14 +102,14 @@ class CyclicReduction:
     .. math::
 
         D'_e = D_e - A_{e,e-1} D_{e-1}^{-1} A_{e-1,e} - A_{e,e+1} D_{e+1}^{-1} A_{e+1,e},
-        \\qquad U'_e = -A_{e,e+1} D_{e+1}^{-1} A_{e+1,e+2}.
+        \qquad U'_e = -A_{e,e+1} D_{e+1}^{-1} A_{e+1,e+2}.
 
     The selected inverse ``Z`` runs the levels back: with
     :math:`F_1 = D_o^{-1} A_{o,o-1}` and :math:`F_2 = D_o^{-1} A_{o,o+1}`,
 
     .. math::
 
-        Z_{o,e} = -F_1 Z_{o-1,e} - F_2 Z_{o+1,e}, \\qquad
+        Z_{o,e} = -F_1 Z_{o-1,e} - F_2 Z_{o+1,e}, \qquad
         Z_{o,o} = D_o^{-1} - F_1 Z_{o-1,o} - F_2 Z_{o+1,o},
 
     which needs only the blocks of the even system's inverse on its own pattern

@@ -1,4 +1,4 @@
-"""Readers: how a file becomes samples (and information) for bvpnav.
+r"""Readers: how a file becomes samples (and information) for bvpnav.
 
 Every reader is an object with the :class:`Reader` contract: a lowercase ``name``, the
 file ``suffixes`` it claims, ``sniff(head)`` (does this file look like mine?), the
@@ -26,7 +26,7 @@ A CSV file read by its suffix (the table reader):
 >>> from pathlib import Path
 >>> tmp = tempfile.TemporaryDirectory()
 >>> path = Path(tmp.name) / "drive.csv"
->>> _ = path.write_text("t,acc_x\\n0.0,0.5\\n0.1,0.5\\n0.2,0.5\\n")
+>>> _ = path.write_text("t,acc_x\n0.0,0.5\n0.1,0.5\n0.2,0.5\n")
 >>> from bvpnav.readers import read
 >>> rec = read(path)
 >>> rec.n, rec.axes, rec.acc[:, 0].tolist()
@@ -188,7 +188,7 @@ class Recording:
 
 
 class Reader:
-    """The contract of a file format.
+    r"""The contract of a file format.
 
     Attributes
     ----------
@@ -223,7 +223,7 @@ class Reader:
     >>> _ = register_reader(TwoColumns())
     >>> tmp = tempfile.TemporaryDirectory()
     >>> path = Path(tmp.name) / "walk.twocol"
-    >>> _ = path.write_text("0.0 0.5\\n0.1 0.5\\n0.2 0.5\\n")
+    >>> _ = path.write_text("0.0 0.5\n0.1 0.5\n0.2 0.5\n")
     >>> read(path).imu_data()
     ImuData(N=3, axes=('x',), navigation-frame, t=[0, 0.2] s)
     >>> unregister_reader("twocol")
@@ -410,7 +410,7 @@ def require(reader: Reader, path: str | os.PathLike | None = None) -> None:
 
 
 def read(path: str | os.PathLike, input: Mapping[str, Any] | None = None) -> Recording:
-    """Read a file with the reader its ``[input]`` names (``format``) or its suffix picks.
+    r"""Read a file with the reader its ``[input]`` names (``format``) or its suffix picks.
 
     Parameters
     ----------
@@ -431,7 +431,7 @@ def read(path: str | os.PathLike, input: Mapping[str, Any] | None = None) -> Rec
     >>> from pathlib import Path
     >>> tmp = tempfile.TemporaryDirectory()
     >>> path = Path(tmp.name) / "drive.csv"
-    >>> _ = path.write_text("t,acc_x\\n0.0,0.5\\n0.1,0.5\\n0.2,0.5\\n")
+    >>> _ = path.write_text("t,acc_x\n0.0,0.5\n0.1,0.5\n0.2,0.5\n")
     >>> from bvpnav.readers import read
     >>> rec = read(path)
     >>> rec.t.tolist(), rec.acc[:, 0].tolist(), rec.notes
@@ -454,7 +454,7 @@ def read(path: str | os.PathLike, input: Mapping[str, Any] | None = None) -> Rec
 
 
 def read_recording(path: str | os.PathLike, input: dict | None = None):
-    """Read a recording into :class:`bvpnav.ImuData` with the reader ``[input]`` picks.
+    r"""Read a recording into :class:`bvpnav.ImuData` with the reader ``[input]`` picks.
 
     The reader is chosen by ``input["format"]`` or the file's suffix (CSV and Parquet by
     default: :class:`bvpnav.readers.table.TableReader`, whose options and checks are listed
@@ -485,7 +485,7 @@ def read_recording(path: str | os.PathLike, input: dict | None = None):
     >>> from pathlib import Path
     >>> tmp = tempfile.TemporaryDirectory()
     >>> path = Path(tmp.name) / "drive.csv"
-    >>> _ = path.write_text("t,acc_x\\n0.0,0.5\\n0.1,0.5\\n0.2,0.5\\n")
+    >>> _ = path.write_text("t,acc_x\n0.0,0.5\n0.1,0.5\n0.2,0.5\n")
     >>> from bvpnav.readers import read_recording
     >>> read_recording(path)
     ImuData(N=3, axes=('x',), navigation-frame, t=[0, 0.2] s)
@@ -561,7 +561,7 @@ def _inside(item, lo: float, hi: float):
 
 def align(info: Recording, to: Recording, *, clock_offset: float | None = None,
           same_clock: bool = False) -> tuple[list, list[str]]:
-    """The information items of one file on the clock of another recording.
+    r"""The information items of one file on the clock of another recording.
 
     Parameters
     ----------
@@ -594,7 +594,7 @@ def align(info: Recording, to: Recording, *, clock_offset: float | None = None,
     -----
     With origins :math:`o_i` and :math:`o_r`, an instant :math:`t_i` of ``info`` becomes
     :math:`t = t_i + (o_i - o_r)` (in integer nanoseconds, then seconds), or
-    :math:`t = t_i + \\text{clock\\_offset}`.
+    :math:`t = t_i + \text{clock\_offset}`.
 
     Examples
     --------

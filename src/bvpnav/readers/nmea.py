@@ -1,4 +1,4 @@
-"""NMEA 0183 logs (GGA, RMC, GST sentences of any talker): GNSS fixes as information.
+r"""NMEA 0183 logs (GGA, RMC, GST sentences of any talker): GNSS fixes as information.
 
 A GNSS receiver's log holds no IMU samples: the reader returns an *information-only*
 :class:`~bvpnav.readers.Recording` (``acc`` and ``specific_force`` both None,
@@ -37,9 +37,9 @@ Options (the spec's ``[input]``):
     Default false: a line that does not parse or fails its checksum is refused with its
     line number. True skips such lines and counts them in ``notes``.
 
-Sigma from HDOP (the DOP definition :math:`\\sigma_E^2 + \\sigma_N^2 = HDOP^2 \\sigma_{UERE}^2`):
-:math:`\\sigma_x = \\sigma_y = HDOP \\cdot uere / \\sqrt 2` per horizontal axis and
-:math:`\\sigma_z = vertical\\_factor \\cdot HDOP \\cdot uere`.
+Sigma from HDOP (the DOP definition :math:`\sigma_E^2 + \sigma_N^2 = HDOP^2 \sigma_{UERE}^2`):
+:math:`\sigma_x = \sigma_y = HDOP \cdot uere / \sqrt 2` per horizontal axis and
+:math:`\sigma_z = vertical\_factor \cdot HDOP \cdot uere`.
 
 Times are UTC: the GGA/RMC time of day, the date from RMC (or ``date``), a day added each
 time the time of day falls back by more than 12 h (midnight rollover). ``t`` is in s from

@@ -1,4 +1,4 @@
-"""The damped outer loop for attitude error models (gyro errors, initial attitude).
+r"""The damped outer loop for attitude error models (gyro errors, initial attitude).
 
 An error model with attitude components (:class:`~bvpnav.error_models.AttitudeError`,
 :class:`~bvpnav.error_models.GyroBias`, :class:`~bvpnav.error_models.GyroScaleFactor`)
@@ -11,14 +11,14 @@ convex problems, Levenberg-Marquardt style:
    navigation-frame accelerations and the error-model columns;
 2. solve the convex problem whose attitude unknowns are the *increments* ``delta`` about
    ``x`` (priors on the totals ``x + delta``), with a damping term
-   :math:`\\mu \\sum_p (\\delta_p / s_p)^2`;
-3. evaluate the nonlinear objective :math:`J(x + \\delta)`: re-integrate at the new totals
+   :math:`\mu \sum_p (\delta_p / s_p)^2`;
+3. evaluate the nonlinear objective :math:`J(x + \delta)`: re-integrate at the new totals
    and solve the convex problem with the attitude *fixed* there (every other unknown
    free), adding the attitude priors;
-4. accept the step only if :math:`J` falls (then :math:`\\mu` shrinks tenfold), else
-   raise :math:`\\mu` tenfold and try again from ``x``;
+4. accept the step only if :math:`J` falls (then :math:`\mu` shrinks tenfold), else
+   raise :math:`\mu` tenfold and try again from ``x``;
 5. stop when the largest attitude change over the window that an undamped step makes,
-   :math:`\\max_k \\|\\psi_k(\\delta)\\|`, is below ``tol`` (rad), or when an accepted step
+   :math:`\max_k \|\psi_k(\delta)\|`, is below ``tol`` (rad), or when an accepted step
    lowers :math:`J` by less than ``ftol`` relative.
 
 Linear convergence. Gauss-Newton leaves out the curvature of the acceleration times the
@@ -132,11 +132,11 @@ def _penalty(term, x: np.ndarray) -> float:
 
 
 def objective_value(form, x: np.ndarray, lam: float) -> float:
-    """The convex problem's objective at the stacked solution ``x`` (dimensionless).
+    r"""The convex problem's objective at the stacked solution ``x`` (dimensionless).
 
     Notes
     -----
-    :math:`J = \\|D_0 x + c_0\\|^2 + \\sum_{\\text{items}} \\lambda\\,P_i(x) + \\sum_{\\text{priors}} P_j(x)`
+    :math:`J = \|D_0 x + c_0\|^2 + \sum_{\text{items}} \lambda\,P_i(x) + \sum_{\text{priors}} P_j(x)`
     with the data rows :math:`D_0 x + c_0` of :meth:`bvpnav.formulation.Formulation.data_rows`
     and each penalty :math:`P` as cvxpy is given it (squares, Huber, L1, positive parts).
     """

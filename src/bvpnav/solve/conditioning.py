@@ -117,7 +117,7 @@ def information_matrix(problem, lam: float, factored: tuple | None = None) -> np
 
 
 def relative_singular_values(H: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Singular values of the parameter directions scaled to unit length.
+    r"""Singular values of the parameter directions scaled to unit length.
 
     Parameters
     ----------
@@ -134,10 +134,10 @@ def relative_singular_values(H: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
     Notes
     -----
-    With :math:`H = A^T A` and the scaling :math:`S = \\mathrm{diag}(H)^{-1/2}`, the
+    With :math:`H = A^T A` and the scaling :math:`S = \mathrm{diag}(H)^{-1/2}`, the
     columns of :math:`A S` have unit length and their singular values are
-    :math:`\\sqrt{\\lambda_k(S H S)}`. Two parameters alone with correlation ``rho``
-    between their directions have :math:`\\sqrt{1 \\pm \\rho}`.
+    :math:`\sqrt{\lambda_k(S H S)}`. Two parameters alone with correlation ``rho``
+    between their directions have :math:`\sqrt{1 \pm \rho}`.
     """
     d = np.diag(H).astype(float)
     pos = np.isfinite(d) & (d > 0)

@@ -483,7 +483,7 @@ def _plausibility(sol: Solution, form, data) -> list[str]:
 
 # ---------------------------------------------------------------------- API
 def assess(sol: Solution, form, data=None) -> dict[str, Any]:
-    """The misfit numbers and every plausibility warning of a solution.
+    r"""The misfit numbers and every plausibility warning of a solution.
 
     Parameters
     ----------
@@ -508,16 +508,16 @@ def assess(sol: Solution, form, data=None) -> dict[str, Any]:
 
     Notes
     -----
-    Misfit, per axis :math:`a` with the stated :math:`\\sigma_a`:
+    Misfit, per axis :math:`a` with the stated :math:`\sigma_a`:
 
-    .. math:: \\rho_a = \\sqrt{\\tfrac{1}{N}\\sum_i (w_{i,a}/\\sigma_a)^2}, \\quad
-              \\rho = \\sqrt{\\tfrac{1}{d}\\sum_a \\rho_a^2}, \\quad
-              \\hat\\sigma_0^2 = \\frac{\\sum_i \\|w_i/\\sigma_a\\|^2
-              + \\sum_{\\text{soft rows}} \\lambda_k (r_k/\\sigma_k)^2}{f},
+    .. math:: \rho_a = \sqrt{\tfrac{1}{N}\sum_i (w_{i,a}/\sigma_a)^2}, \quad
+              \rho = \sqrt{\tfrac{1}{d}\sum_a \rho_a^2}, \quad
+              \hat\sigma_0^2 = \frac{\sum_i \|w_i/\sigma_a\|^2
+              + \sum_{\text{soft rows}} \lambda_k (r_k/\sigma_k)^2}{f},
 
     with :math:`f` the objective rows minus the unknowns plus the hard rows. A warning
-    when :math:`\\rho_a` or :math:`\\rho` exceeds :data:`MISFIT_HIGH` (the residual is
-    more than the noise could need), when :math:`\\hat\\sigma_0` is above :data:`MISFIT_HIGH`,
+    when :math:`\rho_a` or :math:`\rho` exceeds :data:`MISFIT_HIGH` (the residual is
+    more than the noise could need), when :math:`\hat\sigma_0` is above :data:`MISFIT_HIGH`,
     or below :data:`MISFIT_LOW` (the sigmas overstated).
     Plausibility: each estimate against the module's limits (accelerometer bias
     :data:`ACC_BIAS_LIMIT` m/s^2, gravity :data:`GRAVITY_MAGNITUDE_LIMIT` m/s^2 and

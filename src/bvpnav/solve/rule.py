@@ -71,7 +71,7 @@ def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6
                  solver: str = "clarabel", accuracy: str = "default", options=None, tau: float = 1.5,
                  probes: int = 24, seed: int = 0, progress=None, engine: str = "auto",
                  solve_kw: dict | None = None) -> LambdaCurve:
-    """Sweep lambda and apply the selection rules.
+    r"""Sweep lambda and apply the selection rules.
 
     Parameters
     ----------
@@ -89,8 +89,8 @@ def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6
     solver, accuracy, options
         For the ``cvxpy`` engine (non-least-squares problems).
     tau : float
-        Discrepancy safety factor: choose lambda with :math:`\\hat\\rho = \\tau\\,
-        \\mathrm{tr}(I - A_\\lambda)` (the data residual's expected size given the stated
+        Discrepancy safety factor: choose lambda with :math:`\hat\rho = \tau\,
+        \mathrm{tr}(I - A_\lambda)` (the data residual's expected size given the stated
         noise, only meaningful for ``residual="acceleration"`` with ``sigma_a`` given).
     probes : int
         Hutchinson probes for GCV's trace when the problem has more than 300 samples x axes
@@ -117,18 +117,18 @@ def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6
     Rules that cannot run on this problem are skipped (logged at INFO on
     ``bvpnav.lam.sweep``), e.g. ``gcv`` in the load form or ``discrepancy`` without
     ``sigma_a``; the chosen rule itself must run, or :class:`~bvpnav.InputError` says why.
-    L-curve: maximise the curvature of :math:`(\\log\\rho, \\log\\eta)`; the two
+    L-curve: maximise the curvature of :math:`(\log\rho, \log\eta)`; the two
     outermost sweep points on each side (the outermost one where samples lie two decades
     or more apart, :func:`bvpnav.lam.guard_samples`) are never chosen (a "corner" there is
     the range ending, and is reported in ``warnings``). GCV: minimise
-    :math:`G = \\hat\\rho / \\mathrm{tr}(I - A_\\lambda)^2`, with
-    :math:`\\mathrm{tr}(I - A_\\lambda) = -\\mathrm{tr}(\\partial w / \\partial \\hat a)`.
-    Quasi-optimality: minimise :math:`\\|\\lambda\\, dr/d\\lambda\\|`.
+    :math:`G = \hat\rho / \mathrm{tr}(I - A_\lambda)^2`, with
+    :math:`\mathrm{tr}(I - A_\lambda) = -\mathrm{tr}(\partial w / \partial \hat a)`.
+    Quasi-optimality: minimise :math:`\|\lambda\, dr/d\lambda\|`.
 
     Examples
     --------
     A noisy accelerometer (0.05 m/s^2) and ten soft position fixes (0.01 m) of the motion
-    :math:`r = 0.5 \\sin t` m; three rules on nine lambdas:
+    :math:`r = 0.5 \sin t` m; three rules on nine lambdas:
 
     >>> import numpy as np
     >>> import bvpnav

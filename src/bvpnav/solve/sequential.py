@@ -229,7 +229,7 @@ def _iterate(loop: _Loop, inner: Stage, opts: SolveOptions, traj: pd.DataFrame) 
 
 
 def with_sequential(inner: Stage) -> Stage:
-    """The stage that solves formulations with :class:`~bvpnav.items.Linearizable` items by
+    r"""The stage that solves formulations with :class:`~bvpnav.items.Linearizable` items by
     sequential convex solves of ``inner`` (see the module docstring).
 
     The stage reads ``opts.sequential`` (:data:`SEQUENTIAL_DEFAULTS`):
@@ -266,24 +266,24 @@ def with_sequential(inner: Stage) -> Stage:
     -----
     Iteration :math:`k` solves the convex problem with every nonlinear item
     :math:`g(r) = 0` replaced by its linearization about the previous estimate
-    :math:`r^{(k-1)}`, and stops when :math:`\\max_{j,a} |r^{(k)}_{a,j} - r^{(k-1)}_{a,j}|
-    < \\mathrm{tol}`. For a soft track this is a Gauss-Newton step on
-    :math:`\\|w\\|^2 + \\lambda \\sum_k (d_k/\\sigma)^2`, a zero-residual problem for
+    :math:`r^{(k-1)}`, and stops when :math:`\max_{j,a} |r^{(k)}_{a,j} - r^{(k-1)}_{a,j}|
+    < \mathrm{tol}`. For a soft track this is a Gauss-Newton step on
+    :math:`\|w\|^2 + \lambda \sum_k (d_k/\sigma)^2`, a zero-residual problem for
     noise-free data, so the change shrinks quadratically once the estimate is near the
     path.
 
     Continuation. A hard (or band) track is first iterated in soft mode with
 
-    .. math:: \\sigma^{(k)} = \\max\\big(d_\\mathrm{rms}(r^{(k-1)}),\\ \\sigma_\\min\\big),
-              \\qquad \\lambda\\,(d/\\sigma_\\mathrm{eff})^2 = (d/\\sigma^{(k)})^2,
+    .. math:: \sigma^{(k)} = \max\big(d_\mathrm{rms}(r^{(k-1)}),\ \sigma_\min\big),
+              \qquad \lambda\,(d/\sigma_\mathrm{eff})^2 = (d/\sigma^{(k)})^2,
 
-    where :math:`d_\\mathrm{rms}` is the RMS distance (m) of the current estimate to the
-    path and :math:`\\sigma_\\min` the item's floor (``TrackLine``: the band half-width,
+    where :math:`d_\mathrm{rms}` is the RMS distance (m) of the current estimate to the
+    path and :math:`\sigma_\min` the item's floor (``TrackLine``: the band half-width,
     or 1e-3 of the path length for a hard track): the track is only as stiff as the
     estimate is near it, so the data term can correct the timing along the path, and it
     stiffens as the estimate approaches. The copy's sigma is scaled by
-    :math:`\\sqrt{\\lambda}` so that its weight does not depend on ``lam`` (a rule name
-    or ``lam = 0`` uses :math:`\\lambda = 1` in this phase). When the change falls below
+    :math:`\sqrt{\lambda}` so that its weight does not depend on ``lam`` (a rule name
+    or ``lam = 0`` uses :math:`\lambda = 1` in this phase). When the change falls below
     ``soft_tol`` the requested mode is switched on and iterated to ``tol``.
     """
 

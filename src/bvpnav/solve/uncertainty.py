@@ -1,4 +1,4 @@
-"""The last stage of a solve: standard deviations of the answer (``solve(uncertainty=...)``).
+r"""The last stage of a solve: standard deviations of the answer (``solve(uncertainty=...)``).
 
 What the numbers are (:mod:`bvpnav.linalg.covariance` computes them, in O(N)):
 
@@ -8,7 +8,7 @@ What the numbers are (:mod:`bvpnav.linalg.covariance` computes them, in O(N)):
   are the true noise this is the posterior covariance of the MAP estimate (and the
   covariance of its error over repeated noise);
 - with ``uncertainty="scaled"`` the same multiplied by the a-posteriori variance factor
-  :math:`\\hat\\sigma_0^2 = \\|D\\hat x + c\\|^2 / f` (the weighted residual sum of squares
+  :math:`\hat\sigma_0^2 = \|D\hat x + c\|^2 / f` (the weighted residual sum of squares
   over its degrees of freedom, as in geodetic adjustment): the answer for sigmas that
   are only relative, or a ``lam`` chosen by a rule. The load form has no noise model in
   its data term, so it is always scaled.

@@ -72,7 +72,7 @@ def _forward(form, xval, lam, duals, factored, bound: float) -> tuple[float | No
 
 def verify(form, xval: np.ndarray, lam: float, accuracy: str = "default", duals: dict | None = None,
            factored: tuple | None = None) -> Verification:
-    """Judge a stacked solution by recomputed residuals.
+    r"""Judge a stacked solution by recomputed residuals.
 
     Parameters
     ----------
@@ -98,7 +98,7 @@ def verify(form, xval: np.ndarray, lam: float, accuracy: str = "default", duals:
     -----
     The answer passes when the relative FEM residual is at most ``rtol``, the worst
     constraint violation at most ``10 rtol``, the stationarity (if known) at most
-    :math:`\\sqrt{rtol}`, the forward error (if known) within the preset's bound, and
+    :math:`\sqrt{rtol}`, the forward error (if known) within the preset's bound, and
     nothing is NaN or infinite except the parameters of a sensor axis the information
     leaves undetermined (named in the warnings instead).
     """
@@ -148,11 +148,11 @@ def _gradient_floor(form, xval: np.ndarray, lam: float, data) -> float:
 
 
 def stationarity(form, xval: np.ndarray, lam: float, duals: dict) -> float | None:
-    """Relative norm of the Lagrangian gradient (None for non-smooth objectives).
+    r"""Relative norm of the Lagrangian gradient (None for non-smooth objectives).
 
     Notes
     -----
-    The gradient :math:`2 J^T J x + A_{fem}^T y + \\sum_k g_k` (each term's part from the
+    The gradient :math:`2 J^T J x + A_{fem}^T y + \sum_k g_k` (each term's part from the
     mode x kind table, :meth:`bvpnav.terms.Term.gradient`) is measured against the
     largest of its parts and a floor: the data-term gradient if the residual were as
     large as the measurement (at least the acceleration scale the trajectory itself sets,
