@@ -35,6 +35,21 @@ class AverageVelocity(Item):
     The mean of v over an interval is exact in terms of positions:
 
     .. math:: \rho = \frac{r(t_1) - r(t_0)}{t_1 - t_0} - \bar v.
+
+    Examples
+    --------
+    A mean velocity of 1.5 m/s over the two seconds (e.g. a distance over a time):
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> t = np.linspace(0.0, 2.0, 21)
+    >>> data = bvpnav.ImuData(t=t, acc=np.full(21, 0.5))  # 0.5 m/s^2 for 2 s
+    >>> from bvpnav.constraints import AverageVelocity, Position
+    >>> prob = bvpnav.NavigationProblem(data).add(Position(t=0.0, value=0.0),
+    ...                                           AverageVelocity(t0=0.0, t1=2.0, value=1.5))
+    >>> sol = prob.solve(solver="direct")
+    >>> print(f"v(0) = {sol.velocity('x')[0]:.3f} m/s, r(2) = {sol.position('x')[-1]:.3f} m")
+    v(0) = 1.000 m/s, r(2) = 3.000 m
     """
 
     t0: Any

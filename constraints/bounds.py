@@ -129,6 +129,21 @@ class PositionBound(Item):
     The FEM position is piecewise linear between nodes and so is a piecewise-linear
     bound between its breakpoints, so the bound holding at these times means it holds
     at every instant of the interval.
+
+    Examples
+    --------
+    Starting at rest, 0.5 m/s^2 would carry the object 1 m in 2 s; a wall at 0.5 m holds it
+    (an inequality: solved by a conic back end):
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> t = np.linspace(0.0, 2.0, 21)
+    >>> data = bvpnav.ImuData(t=t, acc=np.full(21, 0.5))  # 0.5 m/s^2 for 2 s
+    >>> from bvpnav.constraints import Position, PositionBound, Velocity
+    >>> prob = bvpnav.NavigationProblem(data).add(Position(t=0.0, value=0.0), Velocity(t=0.0, value=0.0),
+    ...                                           PositionBound(upper=0.5, t0=0.0, t1=2.0))
+    >>> print(f"r(2) = {prob.solve(solver='clarabel').position('x')[-1]:.3f} m")
+    r(2) = 0.500 m
     """
 
     lower: Any = None

@@ -44,6 +44,21 @@ class HalfSpace(Item):
     The FEM position is piecewise linear, so the half-space (a convex set) holding at
     the nodes means it holds at every instant. Example: a ground plane
     :math:`z \ge 0.3 x - 5` is ``HalfSpace(axes=("x", "z"), normal=(0.3, -1), b=5)``.
+
+    Examples
+    --------
+    Moving diagonally from rest (0.5 m/s^2 on x and y), kept in :math:`x + y \le 1` m:
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> from bvpnav.constraints import HalfSpace, Position, Velocity
+    >>> data = bvpnav.ImuData(t=np.linspace(0.0, 2.0, 21), acc=np.full((21, 2), 0.5), axes=("x", "y"))
+    >>> prob = bvpnav.NavigationProblem(data).add(
+    ...     Position(t=0.0, value=[0.0, 0.0]), Velocity(t=0.0, value=[0.0, 0.0]),
+    ...     HalfSpace(normal=[1.0, 1.0], b=1.0, t0=0.0, t1=2.0))
+    >>> sol = prob.solve(solver="clarabel")
+    >>> print(f"x + y = {sol.position('x')[-1] + sol.position('y')[-1]:.3f} m at 2 s")
+    x + y = 1.000 m at 2 s
     """
 
     normal: Any

@@ -43,6 +43,20 @@ class Linear(Item):
     -----
     The residual is :math:`\rho_i = \sum_{k,a} C_{ika}\, q_a(t_k) - e_i`, i.e. the
     2011 paper's general ``D r = e`` row by row.
+
+    Examples
+    --------
+    The displacement between 0 s and 2 s, :math:`r(2) - r(0) = 3` m, as one user row:
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> t = np.linspace(0.0, 2.0, 21)
+    >>> data = bvpnav.ImuData(t=t, acc=np.full(21, 0.5))  # 0.5 m/s^2 for 2 s
+    >>> from bvpnav.constraints import Linear, Position
+    >>> prob = bvpnav.NavigationProblem(data).add(Position(t=0.0, value=0.0),
+    ...                                           Linear(t=[0.0, 2.0], coef=[[-1.0, 1.0]], value=3.0))
+    >>> print(f"v(0) = {prob.solve(solver='direct').velocity('x')[0]:.3f} m/s")
+    v(0) = 1.000 m/s
     """
 
     t: Any

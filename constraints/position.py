@@ -33,6 +33,21 @@ class Position(Item):
     Residual per instant k and axis a: :math:`\rho = r_a(t_k) - p_{k,a}` with
     :math:`r_a(t) = \sum_j r_{a,j} \phi_j(t)`. At ``t = T0`` or ``T1`` in hard mode
     this is the Dirichlet boundary condition.
+
+    Examples
+    --------
+    Known positions 0 m at 0 s and 3 m at 2 s under 0.5 m/s^2 give the initial velocity
+    :math:`(3 - 0.25 \cdot 2^2) / 2 = 1` m/s:
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> t = np.linspace(0.0, 2.0, 21)
+    >>> data = bvpnav.ImuData(t=t, acc=np.full(21, 0.5))  # 0.5 m/s^2 for 2 s
+    >>> from bvpnav.constraints import Position
+    >>> prob = bvpnav.NavigationProblem(data).add(Position(t=[0.0, 2.0], value=[0.0, 3.0]))
+    >>> sol = prob.solve(solver="direct")
+    >>> print(f"v(0) = {sol.velocity('x')[0]:.3f} m/s")
+    v(0) = 1.000 m/s
     """
 
     t: Any

@@ -45,6 +45,21 @@ class SpeedLimit(Item):
     with the node velocities of :meth:`bvpnav.model.NavModel.velocity` (affine in the
     positions, the acceleration residuals and the end velocities). Between nodes the
     velocity is quadratic in time and is not checked.
+
+    Examples
+    --------
+    From rest, 0.5 m/s^2 would reach 1 m/s at 2 s; the speed is known to stay below 0.8 m/s
+    (a second-order cone: solved by a conic back end):
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> t = np.linspace(0.0, 2.0, 21)
+    >>> data = bvpnav.ImuData(t=t, acc=np.full(21, 0.5))  # 0.5 m/s^2 for 2 s
+    >>> from bvpnav.constraints import Position, SpeedLimit, Velocity
+    >>> prob = bvpnav.NavigationProblem(data).add(Position(t=0.0, value=0.0), Velocity(t=0.0, value=0.0),
+    ...                                           SpeedLimit(v_max=0.8))
+    >>> print(f"{np.abs(prob.solve(solver='clarabel').velocity('x')).max():.3f} m/s")
+    0.800 m/s
     """
 
     v_max: float

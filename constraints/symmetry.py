@@ -39,6 +39,20 @@ class Symmetry(Item):
     Even residual :math:`\rho_k = r(c + \tau_k) - r(c - \tau_k)`; odd residual
     :math:`\rho_k = r(c + \tau_k) + r(c - \tau_k) - 2 r(c)`. Positions between nodes
     are interpolated linearly (the FEM's own representation).
+
+    Examples
+    --------
+    A there-and-back motion :math:`r = (t - 1)^2` m (acceleration 2 m/s^2), mirrored about
+    t = 1 s: the symmetry and the start position give the initial velocity, -2 m/s:
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> from bvpnav.constraints import Position, Symmetry
+    >>> data = bvpnav.ImuData(t=np.linspace(0.0, 2.0, 21), acc=np.full(21, 2.0))
+    >>> prob = bvpnav.NavigationProblem(data).add(Position(t=0.0, value=1.0), Symmetry(about=1.0))
+    >>> sol = prob.solve(solver="direct")
+    >>> print(f"v(0) = {sol.velocity('x')[0]:.3f} m/s, r(1) = {abs(sol.position('x')[10]):.3f} m")
+    v(0) = -2.000 m/s, r(1) = 0.000 m
     """
 
     about: Any

@@ -308,6 +308,23 @@ class TrackLine(Linearizable, Item):
     linearization (the tangent rows at the final estimate): an approximation that ignores
     the path's curvature and the choice of segment, good where the estimate is close to
     the path compared with its radius of curvature.
+
+    Examples
+    --------
+    A vehicle that drives 10 m along x in 10 s and is known to stay on the line y = 0, while a
+    small bias on its y accelerometer would bend the path (solved by sequential linearization):
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> from bvpnav.constraints import Position, TrackLine
+    >>> t = np.linspace(0.0, 10.0, 51)
+    >>> acc = np.column_stack([np.zeros(51), 0.02 * np.sin(t)])
+    >>> prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=acc, axes=("x", "y"))).add(
+    ...     Position(t=[0.0, 10.0], value=[[0.0, 0.0], [10.0, 0.0]]),
+    ...     TrackLine(x=[0.0, 5.0, 10.0], y=[0.0, 0.0, 0.0], axes=("x", "y"), sigma=0.01))
+    >>> sol = prob.solve(solver="direct")
+    >>> print(f"largest |y| {np.abs(sol.position('y')).max():.3f} m")
+    largest |y| 0.000 m
     """
 
     x: Any

@@ -34,6 +34,20 @@ class Velocity(Item):
     velocity in hard mode is an exact Neumann condition. Elsewhere
     :math:`v_j = (r_j - r_{j-1})/h_{j-1} + h_{j-1}(a_{j-1} + 2a_j)/6` with the corrected
     acceleration, integrated exactly between nodes.
+
+    Examples
+    --------
+    The velocity at the end (2 m/s) and the start position fix the motion:
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> t = np.linspace(0.0, 2.0, 21)
+    >>> data = bvpnav.ImuData(t=t, acc=np.full(21, 0.5))  # 0.5 m/s^2 for 2 s
+    >>> from bvpnav.constraints import Position, Velocity
+    >>> prob = bvpnav.NavigationProblem(data).add(Position(t=0.0, value=0.0), Velocity(t=2.0, value=2.0))
+    >>> sol = prob.solve(solver="direct")
+    >>> print(f"v(0) = {sol.velocity('x')[0]:.3f} m/s, r(2) = {sol.position('x')[-1]:.3f} m")
+    v(0) = 1.000 m/s, r(2) = 3.000 m
     """
 
     t: Any

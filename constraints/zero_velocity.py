@@ -30,6 +30,20 @@ class ZeroVelocity(Item):
     One row per sample inside the interval plus its two ends:
     :math:`\rho_k = v(t_k) = 0` for :math:`t_k \in [t_0, t_1]`, with the consistent FEM
     velocity (see :class:`~bvpnav.constraints.Velocity`).
+
+    Examples
+    --------
+    A sensor at rest for 2 s that reads 0.1 m/s^2: the stillness alone reveals its bias:
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> from bvpnav.constraints import Position, ZeroVelocity
+    >>> from bvpnav.error_models import Bias
+    >>> data = bvpnav.ImuData(t=np.linspace(0.0, 2.0, 21), acc=np.full(21, 0.1))
+    >>> prob = bvpnav.NavigationProblem(data, error_model=Bias())
+    >>> sol = prob.add(Position(t=0.0, value=0.0), ZeroVelocity(t0=0.0, t1=2.0)).solve(solver="direct")
+    >>> print(f"bias {sol.error_params['bias_x']:.3f} m/s^2")
+    bias 0.100 m/s^2
     """
 
     t0: Any
