@@ -276,6 +276,21 @@ class ImuData:
         estimate them: :class:`~bvpnav.error_models.GyroBias`,
         :class:`~bvpnav.error_models.AttitudeError` (solved by the damped loop of
         :mod:`bvpnav.solve.attitude`).
+
+        Examples
+        --------
+        A level triad at rest (specific force +g on its z axis, up) turning about z at
+        0.1 rad/s: no navigation-frame acceleration:
+
+        >>> import numpy as np
+        >>> from bvpnav import ImuData
+        >>> t = np.linspace(0.0, 1.0, 11)
+        >>> f, w = np.tile([0.0, 0.0, 9.80665], (11, 1)), np.tile([0.0, 0.0, 0.1], (11, 1))
+        >>> data = ImuData.from_gyro(t, f, w)
+        >>> data
+        ImuData(N=11, axes=('x', 'y', 'z'), strapdown, t=[0, 1] s)
+        >>> bool(np.abs(data.acc).max() < 1e-12)
+        True
         """
         from .attitude import integrate_gyro  # scipy.spatial: loaded for strapdown data only
 
@@ -414,7 +429,18 @@ class ImuData:
         return cls(t, acc, axes=axes)
 
     def to_dataframe(self) -> pd.DataFrame:
-        """Navigation-frame accelerations as a DataFrame indexed by time ``t`` (s)."""
+        """Navigation-frame accelerations as a DataFrame indexed by time ``t`` (s).
+
+        Examples
+        --------
+        >>> from bvpnav import ImuData
+        >>> data = ImuData(t=[0.0, 0.1, 0.2], acc=[0.5, 0.5, 0.5])
+        >>> df = data.to_dataframe()
+        >>> df.columns.tolist(), df.index.name
+        (['ax'], 't')
+        >>> ImuData.from_dataframe(df)
+        ImuData(N=3, axes=('x',), navigation-frame, t=[0, 0.2] s)
+        """
         cols = {f"a{s}": self.acc[:, k] for k, s in enumerate(self.axes)}
         return pd.DataFrame(cols, index=pd.Index(self.t, name="t"))
 

@@ -126,6 +126,21 @@ class NavigationProblem:
 
         An unnamed item whose class label is taken is labelled ``Class#k`` (the item
         itself is not changed); a second item with the same explicit ``name`` is refused.
+
+        Examples
+        --------
+        Items are added in place, and the problem is returned, so calls chain:
+
+        >>> import numpy as np
+        >>> import bvpnav
+        >>> t = np.linspace(0.0, 2.0, 21)
+        >>> data = bvpnav.ImuData(t=t, acc=np.full(21, 0.5))  # 0.5 m/s^2 for 2 s
+        >>> from bvpnav.constraints import Position, Velocity
+        >>> prob = bvpnav.NavigationProblem(data)
+        >>> prob.add(Position(t=0.0, value=0.0)).add(Velocity(t=0.0, value=0.0)) is prob
+        True
+        >>> prob.item_labels
+        ['Position', 'Velocity']
         """
         self._items.extend(label_items(items, self.item_labels))
         self._form = None
@@ -192,7 +207,27 @@ class NavigationProblem:
     def describe(self, format: str = "text", lam: float | None = None, conditioning: bool = True) -> str:
         """The assembled problem in readable mathematics, as plain text or LaTeX lines, with
         ``lam`` (default: the current value) and a KKT condition estimate (see
-        :func:`bvpnav.describe.describe` for the parameters)."""
+        :func:`bvpnav.describe.describe` for the parameters).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import bvpnav
+        >>> t = np.linspace(0.0, 2.0, 21)
+        >>> data = bvpnav.ImuData(t=t, acc=np.full(21, 0.5))  # 0.5 m/s^2 for 2 s
+        >>> from bvpnav.constraints import Position
+        >>> prob = bvpnav.NavigationProblem(data).add(Position(t=[0.0, 2.0], value=[0.0, 3.0]))
+        >>> print(prob.describe())
+        bvpnav problem: N = 21 samples on [0, 2] s (h = 0.1 s); axes: x; residual form: acceleration
+        unknowns x (44 entries):
+          r_x  (21)  nodal positions, m
+          w_x  (21)  acceleration residuals, m/s^2
+          v0_x, v1_x  end velocities, m/s
+        hard constraints:
+          FEM (21 rows): K r + e_1 v_0 - e_N v_1 + M (a_hat + w) = 0
+          Position [hard, 2 rows]: r(t_k) - p_k = 0 at 2 instant(s)  (= 0)
+        ...
+        """
         from .describe import describe
 
         return describe(self.formulation, format=format, lam=lam, conditioning=conditioning)
@@ -205,7 +240,21 @@ class NavigationProblem:
 
     def unobservable(self) -> list[str]:
         """Names of unknown directions that no item pins down (empty when all are; see
-        :meth:`Formulation.unobservable`)."""
+        :meth:`Formulation.unobservable`).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import bvpnav
+        >>> t = np.linspace(0.0, 2.0, 21)
+        >>> data = bvpnav.ImuData(t=t, acc=np.full(21, 0.5))  # 0.5 m/s^2 for 2 s
+        >>> from bvpnav.constraints import Position
+        >>> prob = bvpnav.NavigationProblem(data)
+        >>> prob.unobservable()  # nothing known yet: a double integral's two constants
+        ['axis x: position offset', 'axis x: velocity offset']
+        >>> prob.add(Position(t=[0.0, 2.0], value=[0.0, 3.0])).unobservable()
+        []
+        """
         return self.formulation.unobservable()
 
     # ------------------------------------------------------------ solving

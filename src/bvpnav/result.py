@@ -601,7 +601,20 @@ class Solution:
         return self.trajectory.index.to_numpy()
 
     def rms_error(self, truth: np.ndarray) -> float:
-        """RMS position error (m) against true positions of shape (N,) or (N, d)."""
+        """RMS position error (m) against true positions of shape (N,) or (N, d).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import bvpnav
+        >>> t = np.linspace(0.0, 2.0, 21)
+        >>> data = bvpnav.ImuData(t=t, acc=np.full(21, 0.5))  # 0.5 m/s^2 for 2 s
+        >>> from bvpnav.constraints import Position
+        >>> prob = bvpnav.NavigationProblem(data).add(Position(t=[0.0, 2.0], value=[0.0, 3.0]))
+        >>> sol = prob.solve(solver="direct")
+        >>> bool(sol.rms_error(t + 0.25 * t**2) < 1e-9)  # the truth r = t + t^2/4 (m)
+        True
+        """
         shape = self.position().shape
         try:
             truth = np.asarray(truth, dtype=float).reshape(shape)
