@@ -8,14 +8,21 @@ is DCP and DPP and names the culprit item. :func:`conflicting_items` finds which
 items cannot hold together (a deletion filter over feasibility problems built from the
 very same constraints). cvxpy is imported by :func:`build` and the feasibility checks on
 first use, not with this module.
+
+A solver's "infeasible" is a claim, not a proof: :func:`certificate` checks the Farkas
+certificate the solver left in the constraints' duals against bvpnav's own rows, and a
+verdict counts only when that certificate rules out every answer of a plausible size
+(:class:`Certificate`); the deletion filter accepts only verdicts confirmed this way.
 """
 
 from __future__ import annotations
 
 import warnings
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING, Any
+
+import numpy as np
 
 from .errors import ConvexityError
 from .formulation import as_formulation
@@ -24,7 +31,8 @@ from .model import Affine
 if TYPE_CHECKING:
     import cvxpy as cp
 
-__all__ = ["CvxProblem", "lower", "build", "compiled", "current_lam", "conflicting_items"]
+__all__ = ["CvxProblem", "lower", "build", "compiled", "current_lam", "conflicting_items", "Certificate",
+           "certificate", "CERTIFICATE_FACTOR"]
 
 #: The value of the ``lam`` Parameter when :func:`build` creates it.
 INITIAL_LAM = 1.0
@@ -171,9 +179,165 @@ def current_lam(form) -> float:
     return INITIAL_LAM if cvx is None else float(cvx.lam.value)
 
 
-def _feasible(cvx: CvxProblem, labels) -> bool:
+#: A certificate confirms infeasibility when the box it rules out is at least this many
+#: times the problem's own scale (:attr:`Certificate.scale`).
+CERTIFICATE_FACTOR = 10.0
+
+
+@dataclass(frozen=True)
+class Certificate:
+    """A solver's infeasibility certificate, checked against bvpnav's own rows.
+
+    Attributes
+    ----------
+    radius : float
+        No stacked answer ``x`` with :math:`\\|x\\|_\\infty <` ``radius`` satisfies the
+        constraints (FEM equations and the hard, band and cone items checked): proved by
+        the multipliers alone, in the units of the unknowns (m, m/s, m/s^2, ...).
+    scale : float
+        The problem's own scale: the largest of 1, the stated values and tolerances of
+        the hard items ``C`` and the largest acceleration ``A`` (m/s^2) over the window
+        ``T`` (s) as ``C/T``, ``C/T^2``, ``A``, ``A T``, ``A T^2``. A plausible answer has
+        no unknown beyond it by orders of magnitude.
+    support : tuple of str
+        The items whose multipliers carry the certificate (largest first).
+
+    Notes
+    -----
+    With multipliers ``y`` (equalities, free), ``nu >= 0`` (inequalities and bands,
+    ``r <= tol``) and ``(mu, Y)`` in the second-order cone (cones, ``(s + tol, U)`` in
+    the cone), every feasible ``x`` has
+
+    .. math:: g^T x + \\gamma \\le 0, \\quad g = \\sum_k A_k^T u_k, \\quad
+              \\gamma = \\sum_k (c_k^T u_k - t_k)
+
+    (``u = y``, ``nu``, ``nu_+ - nu_-`` or ``-(mu, Y)`` per row, ``t`` the multipliers
+    times the tolerances), so :math:`\\gamma > 0` proves
+    :math:`\\|x\\|_\\infty \\ge \\gamma / \\|g\\|_1`: the :attr:`radius`. The solver's
+    duals are taken with either sign, projected onto their cones (which keeps the
+    argument valid) and the better radius kept.
+    """
+
+    radius: float
+    scale: float
+    support: tuple = ()
+
+    @property
+    def confirmed(self) -> bool:
+        """Whether the certificate rules out every answer up to ``CERTIFICATE_FACTOR`` times
+        the problem's scale."""
+        return bool(self.radius >= CERTIFICATE_FACTOR * self.scale)
+
+    def describe(self) -> str:
+        """One sentence: what the certificate proves and whether that is enough."""
+        if np.isinf(self.radius):
+            proves = "rules out every answer"
+        else:
+            proves = f"rules out the answers with every unknown within {self.radius:.3g}"
+        need = f"{CERTIFICATE_FACTOR:g} x the problem's scale {self.scale:.3g}"
+        return f"{proves} ({'at least' if self.confirmed else 'only; less than'} {need})"
+
+
+def _soc_project(mu: np.ndarray, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Projection of the columns ``(mu_j, Y[:, j])`` onto the second-order cone."""
+    ny = np.linalg.norm(Y, axis=0)
+    inside, below = ny <= mu, ny <= -mu
+    a = np.where(inside, mu, np.where(below, 0.0, 0.5 * (mu + ny)))
+    unit = np.divide(Y, ny, out=np.zeros_like(Y), where=ny > 0)
+    Yp = np.where(inside, Y, np.where(below, 0.0, a * unit))
+    return a, Yp
+
+
+def _term_multipliers(term, duals: list, sign: float) -> tuple[np.ndarray, float] | None:
+    """``(u, t)`` of one constraint term (see :class:`Certificate`), or None without duals."""
+    if any(d is None for d in duals):
+        return None
+    m = term.residual.m
+    tol = np.zeros(m) if term.tol is None else np.broadcast_to(np.asarray(term.tol, float), (m,))
+    if term.kind == "cone":
+        k = term.residual.size
+        mu, Y = duals[0]
+        mu, Y = _soc_project(sign * np.asarray(mu, float).ravel(),
+                             sign * np.asarray(Y, float).reshape(k - 1, -1))
+        u = -np.column_stack([mu, Y.T]).ravel()
+        return u, float(mu @ tol[::k]) if term.mode == "band" else 0.0
+    d = [np.broadcast_to(np.asarray(v, float).ravel() * sign, (m,)) for v in duals]
+    if term.kind == "equality" and term.mode == "hard":
+        return d[0], 0.0
+    nu = [np.maximum(v, 0.0) for v in d]
+    if term.kind == "equality":  # band: r <= tol and -r <= tol
+        return nu[0] - nu[1], float(tol @ (nu[0] + nu[1]))
+    return nu[0], float(tol @ nu[0]) if term.mode == "band" else 0.0
+
+
+def _scale(form, terms) -> float:
+    """:attr:`Certificate.scale` of a formulation."""
+    data = form.data
+    T = max(float(data.t[-1] - data.t[0]), 1e-300)
+    A = float(np.max(np.abs(data.acc))) if data.acc.size else 0.0
+    C = 0.0
+    for term in terms:
+        C = max(C, float(np.max(np.abs(term.residual.c), initial=0.0)))
+        if term.tol is not None:
+            C = max(C, float(np.max(np.abs(term.tol), initial=0.0)))
+    return float(max(1.0, C, C / T, C / T**2, A, A * T, A * T * T))
+
+
+def certificate(form, cvx: CvxProblem | None = None,
+                labels: Sequence[str] | None = None) -> Certificate | None:
+    """The infeasibility certificate the last solve left in the duals, checked.
+
+    Parameters
+    ----------
+    form : Formulation or NavigationProblem
+    cvx : CvxProblem, optional
+        The compiled problem whose constraints hold the duals (default: the formulation's).
+    labels : sequence of str, optional
+        The items whose constraints took part in that solve (default: every constraint
+        item); the FEM equations always do.
+
+    Returns
+    -------
+    Certificate or None
+        None when a constraint has no dual (the solver left no certificate).
+    """
+    form = as_formulation(form)
+    cvx = compiled(form) if cvx is None else cvx
+    by_label = {t.label: t for t in form.terms()}
+    labels = [lb for lb, cons in cvx.cons.items() if cons] if labels is None else list(labels)
+    terms = [by_label[lb] for lb in labels]
+    y = cvx.fem.dual_value
+    if y is None:
+        return None
+    best = None
+    for sign in (1.0, -1.0):
+        u = sign * np.asarray(y, float).ravel()
+        g = cvx.fem_rows.A.T @ u
+        gamma = float(cvx.fem_rows.c @ u)
+        mass = {}
+        for term in terms:
+            got = _term_multipliers(term, [c.dual_value for c in cvx.cons[term.label]], sign)
+            if got is None:
+                return None
+            u, t = got
+            g = g + term.residual.A.T @ u
+            gamma += float(term.residual.c @ u) - t
+            mass[term.label] = float(np.max(np.abs(u), initial=0.0))
+        norm = float(np.abs(g).sum())
+        radius = 0.0 if gamma <= 0 else (np.inf if norm == 0 else gamma / norm)
+        if best is None or radius > best[0]:
+            top = max(mass.values(), default=0.0)
+            support = tuple(sorted((lb for lb, v in mass.items() if v > 1e-6 * top),
+                                   key=lambda lb: -mass[lb]))
+            best = (radius, support)
+    return Certificate(radius=float(best[0]), scale=_scale(form, terms), support=best[1])
+
+
+def _feasible(cvx: CvxProblem, labels, form=None) -> bool:
     """Whether the FEM equations and the constraints of the items ``labels`` can all hold
-    (the very constraints :func:`build` compiled, modes included)."""
+    (the very constraints :func:`build` compiled, modes included): False only when
+    Clarabel says infeasible and its certificate confirms it (:func:`certificate`; with
+    ``form`` None, on Clarabel's word)."""
     import cvxpy as cp
 
     cons = [cvx.fem] + [c for label in labels for c in cvx.cons[label]]
@@ -184,7 +348,12 @@ def _feasible(cvx: CvxProblem, labels) -> bool:
             prob.solve(solver="CLARABEL")
     except cp.SolverError:
         return True  # cannot tell: do not accuse
-    return prob.status not in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE)
+    if prob.status not in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE):
+        return True
+    if form is None:
+        return False
+    cert = certificate(form, cvx, labels)
+    return cert is None or not cert.confirmed  # an unconfirmed verdict accuses nobody
 
 
 def conflicting_items(form) -> list[str]:
@@ -206,15 +375,17 @@ def conflicting_items(form) -> list[str]:
     Deletion filter (Chinneck): start from every item that compiles to constraints (hard
     and band items, hard inequalities and second-order cones; the FEM equations always
     stay); for each item, if the rest is still infeasible without it, drop it for good.
-    One feasibility solve per item, so this runs only after a solve has failed.
+    One feasibility solve per item, so this runs only after a solve has failed. A
+    feasibility verdict counts only when its certificate is confirmed
+    (:func:`certificate`), so every set the filter keeps was proved infeasible.
     """
     cvx = compiled(form)
     labels = [label for label, cons in cvx.cons.items() if cons]
-    if _feasible(cvx, labels):
+    if _feasible(cvx, labels, form):
         return []
     keep = list(labels)
     for label in labels:
         trial = [k for k in keep if k != label]
-        if not _feasible(cvx, trial):
+        if not _feasible(cvx, trial, form):
             keep = trial
     return keep

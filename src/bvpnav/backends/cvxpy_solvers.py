@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..cvx import compiled, conflicting_items
+from ..cvx import certificate, compiled, conflicting_items
 from ..errors import Infeasible, SolveError, Unbounded
 from . import Backend, RawSolve, register_factory
 
@@ -281,7 +281,7 @@ class CvxpyBackend(Backend):
         import cvxpy as cp
 
         if status in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE):
-            raise self._infeasible(status, form)
+            raise self._infeasible(status, form, cvx)
         if status in (cp.UNBOUNDED, cp.UNBOUNDED_INACCURATE):
             raise Unbounded(
                 f"{self.name}: the problem is unbounded (status {status}); some unknown is not "
@@ -294,22 +294,40 @@ class CvxpyBackend(Backend):
                 attempts=[{"solver": self.name, "status": status, "reason": "no solution"}],
             )
 
-    def _infeasible(self, status: str, form) -> Infeasible:
+    def _infeasible(self, status: str, form, cvx) -> SolveError:
+        """The error of an "infeasible" verdict: :class:`Infeasible` naming a conflicting
+        subset when the solver's certificate is confirmed (:func:`bvpnav.cvx.certificate`),
+        else a plain :class:`SolveError` (a failed attempt: the fallback chain moves on).
+
+        The certificate is checked against bvpnav's own rows; the conflicting subset comes
+        from the deletion filter (:func:`bvpnav.cvx.conflicting_items`), whose every
+        verdict is confirmed the same way, else from the certificate's own support.
+        """
+        try:
+            cert = certificate(form, cvx)
+        except Exception as exc:  # a malformed certificate is no proof
+            cert, why = None, f"its certificate could not be checked ({type(exc).__name__}: {exc})"
+        else:
+            why = "it left no certificate" if cert is None else f"its certificate {cert.describe()}"
+        if cert is None or not cert.confirmed:
+            reason = f"its '{status}' verdict was not confirmed: {why}"
+            return SolveError(f"{self.name}: {reason}",
+                              attempts=[{"solver": self.name, "status": status, "reason": reason}])
         try:
             culprits = conflicting_items(form)
-        except Exception:  # the finder must never hide the solver's verdict
+        except Exception:  # the finder must never hide the confirmed verdict
             culprits = []
         ident = {it.label: it.identify() for it in form.items}  # unnamed items: what they hold
         if culprits:
             which = (f"These hard items conflict: {[ident.get(c, c) for c in culprits]}. Soften one of "
                      "them (give sigma=...).")
         else:
-            hard = [ident.get(t.label, t.label) for t in form.terms() if t.is_constraint]
-            which = (f"No conflicting subset was confirmed (a numerical verdict?). Hard/band "
-                     f"items: {hard}. Soften some of them (give sigma=...) or try another solver.")
+            culprits = list(cert.support)
+            which = (f"No smaller conflicting subset was found; the certificate rests on the hard items "
+                     f"{[ident.get(c, c) for c in culprits]}: soften one of them (give sigma=...).")
         return Infeasible(
-            f"{self.name}: the hard information cannot hold together (status {status}). {which}",
-            attempts=[{"solver": self.name, "status": status, "reason": "infeasible",
+            f"{self.name}: the hard information cannot hold together (status {status}; {why}). {which}",
+            attempts=[{"solver": self.name, "status": status, "reason": "infeasible (certificate confirmed)",
                        "conflicts": culprits}],
         )
 
