@@ -362,6 +362,11 @@ class Uncertainty(_Record):
         block pivot (above :data:`bvpnav.linalg.covariance.BORDER_COND_WARN` the solution warns).
     time : float
         Seconds spent.
+    unscalable : str, optional
+        Why a scaled uncertainty could not be scaled meaningfully: ``"0 degrees of
+        freedom"`` (the variance factor is undefined; the standard deviations are the
+        stated ones, ``scale`` says ``"stated"``) or ``"exact fit"`` (the variance factor
+        is about 0, so are the scaled standard deviations). Not a key otherwise.
     """
 
     scale: str
@@ -375,6 +380,8 @@ class Uncertainty(_Record):
     border_condition: float
     pivot_condition: float
     time: float
+    unscalable: str | None = None
+    _optional = ("unscalable",)
 
 
 @dataclass(eq=False)

@@ -13,6 +13,12 @@ What the numbers are (:mod:`bvpnav.linalg.covariance` computes them, in O(N)):
   are only relative, or a ``lam`` chosen by a rule. The load form has no noise model in
   its data term, so it is always scaled.
 
+A scaled uncertainty that cannot be scaled says so (a warning, and
+``stats["uncertainty"]["unscalable"]``): with no degrees of freedom the variance factor is
+undefined and the stated standard deviations are returned (``scale`` then says
+``"stated"``); on an exact fit (variance factor below :data:`EXACT_FIT`) the scaled
+standard deviations are about zero, which says nothing about the accuracy.
+
 Hard items give zero variance in what they fix. For robust, band and inequality items
 it is the covariance of the quadratic model at the solution, for linearized items
 (``TrackLine``) that of the last linearization: approximations, recorded in
@@ -32,7 +38,11 @@ from ..linalg.covariance import BORDER_COND_WARN, posterior
 from ..log import warn
 from ..result import Solution, Uncertainty
 
-__all__ = ["attach_uncertainty", "param_jacobian"]
+__all__ = ["attach_uncertainty", "param_jacobian", "EXACT_FIT"]
+
+#: A variance factor below this is an exact fit: the weighted residuals are under a
+#: millionth of the stated sigmas.
+EXACT_FIT = 1e-12
 
 
 def param_jacobian(form, l: np.ndarray) -> np.ndarray:
@@ -67,6 +77,25 @@ def _variance_warning(vf: float, dof: int, scale: str) -> str | None:
             "them by the residuals, or correct sigma_a / the items' sigma")
 
 
+def _unscalable(vf: float, dof: int, why: str) -> tuple[str, str] | None:
+    """``(what, warning)`` when a scaled uncertainty cannot be scaled meaningfully."""
+    if dof < 1 or not np.isfinite(vf):
+        return "0 degrees of freedom", (
+            f"uncertainty: {why}, but the residuals have {dof} degrees of freedom (the information "
+            "fixes the estimate exactly: as many conditions as the unknowns need, e.g. a position "
+            "and a velocity at one instant), so the a-posteriori variance factor is undefined; the "
+            "standard deviations returned are those of the stated noise (sigma_a and the items' "
+            "sigma), not scaled. Add redundant information (more fixes) to scale them")
+    if vf < EXACT_FIT:
+        return "exact fit", (
+            f"uncertainty: {why}, but the residuals are zero to within a millionth of the stated "
+            f"sigmas (variance factor {vf:.3g} over {dof} degrees of freedom: an exact fit, e.g. "
+            "noise-free data), so every scaled standard deviation is about 0; that says nothing "
+            "about the accuracy. Use uncertainty=True with the true noise in sigma_a and the "
+            "items' sigma")
+    return None
+
+
 def attach_uncertainty(sol: Solution, form, how) -> Solution:
     """Add standard deviations and covariances to ``sol`` (see the module docstring)."""
     t0 = time.perf_counter()
@@ -74,9 +103,17 @@ def attach_uncertainty(sol: Solution, form, how) -> Solution:
     model = form.model
     cov = posterior(form, sol.x, sol.lam)
     scale = "scaled" if how == "scaled" or form.residual == "load" else "stated"
+    unscalable = None
+    if scale == "scaled":
+        why = ("uncertainty='scaled' was asked for" if how == "scaled" else
+               "the load form's uncertainty is always scaled (its data term has no noise model)")
+        unscalable = _unscalable(float(cov.variance_factor), int(cov.dof), why)
+        if unscalable is not None:
+            sol.warnings.append(unscalable[1])
+            warn(unscalable[1])
+            if unscalable[0] == "0 degrees of freedom":
+                scale = "stated"
     k = cov.variance_factor if scale == "scaled" else 1.0
-    if not np.isfinite(k):
-        k = 1.0
     state = cov.state * k
     rstd, vstd = (np.sqrt(k) * s for s in cov.std())
     for a, ax in enumerate(model.axes):  # x_std, y_std, ..., then vx_std, ...: as the values
@@ -118,5 +155,6 @@ def attach_uncertainty(sol: Solution, form, how) -> Solution:
                       "with the border by its Schur complement", border=cov.border, block=cov.block,
                       hard_rows_in_border=int(cov.hard_rows_in_border),
                       border_condition=float(cov.border_condition),
-                      pivot_condition=float(cov.pivot_condition), time=time.perf_counter() - t0)
+                      pivot_condition=float(cov.pivot_condition), time=time.perf_counter() - t0,
+                      unscalable=None if unscalable is None else unscalable[0])
     return sol.record(uncertainty=rec)
