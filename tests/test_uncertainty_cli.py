@@ -279,8 +279,12 @@ def test_one_axis_error_panel_has_the_band_around_zero(rec):
     p, v = _truth(t)
     acc = np.sin(t)[:, None] + np.random.default_rng(3).normal(0, SIGMA_A, (t.size, 1))
     prob = bvpnav.NavigationProblem(ImuData(t=t, acc=acc), sigma_a=SIGMA_A)
-    prob.add(Position(t=[0.0], value=[0.0], name="start"), Velocity(t=[0.0], value=[0.0], name="rest"))
+    # a fix at the end gives the residuals a degree of freedom: without it the variance
+    # factor is undefined and "scaled" falls back to the stated deviations (issue 40)
+    prob.add(Position(t=[0.0], value=[0.0], name="start"), Velocity(t=[0.0], value=[0.0], name="rest"),
+             Position(t=[10.0], value=[float(p[-1, 0])], sigma=0.5, name="fix"))
     sol = prob.solve(lam=1.0, solver="direct", uncertainty="scaled")
+    assert sol.stats["uncertainty"]["dof"] == 1 and np.isfinite(sol.stats["uncertainty"]["variance_factor"])
     fig = plot.solution(sol, truth=p[:, 0])
     try:
         err = next(a for a in fig.axes if a.get_title() == "position error")
