@@ -201,6 +201,10 @@ class AttitudeLoopReport(_Record):
     seconds : float
     inner : SequentialReport or None
         The report of the last inner sequential loop (items that need linearization).
+    heading : str or None
+        What the heading search found: ``"searched"`` (the best candidate is the start) or
+        ``"unobservable"`` (the candidates cannot differ: the given heading is kept, with
+        a warning); None (not a key) without a search.
     """
 
     kind: str
@@ -215,8 +219,9 @@ class AttitudeLoopReport(_Record):
     solves: int
     seconds: float
     inner: Any = None
+    heading: str | None = None
 
-    _optional = ("inner",)
+    _optional = ("inner", "heading")
 
     def as_dict(self) -> dict[str, Any]:
         out = super().as_dict()

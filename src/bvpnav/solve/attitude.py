@@ -35,6 +35,16 @@ best. With position information that makes the heading observable, this brings t
 within half a spacing (15 degrees for 12 candidates) of the answer, from where the damped
 loop converges; without such information the heading stays what the priors make it.
 
+An unobservable heading is detected, not rounded: when nothing constrains the horizontal
+direction (position fixes at one place only, or a walk with stances only) every candidate
+scores the same, and picking the smallest would pick by rounding. The candidates are
+evaluated in a spread order (the given heading first); for an equality-constrained
+least-squares problem the objective is a trigonometric polynomial of degree 2 in the
+heading (the accelerations are affine in its cosine and sine), so five equal values make
+it constant and the search stops there. Equal means within :data:`HEADING_RTOL` of the
+objective. The given heading is then kept, a warning says why, and the loop's report
+says ``heading="unobservable"``.
+
 Why damped and why priors on totals. An undamped Gauss-Newton loop on a car drive let
 the start heading and the vertical gyro bias slide together until the model had removed
 the car's turning; a prior on the increment (re-centred every iteration) cannot stop
@@ -76,6 +86,16 @@ ATTITUDE_DEFAULTS: dict = {"tol": 1e-7, "ftol": 1e-12, "max_iter": 30, "heading"
 #: (:meth:`_Loop.item_cost`), per (item unit)^2: a violation of 1e-8 rad/s weighs as much as
 #: a unit of the objective.
 MERIT_WEIGHT = 1e16
+
+#: Candidate headings whose objectives differ by at most this fraction of the largest
+#: (and of 1) cannot be told apart: the heading is unobservable. An unobservable heading
+#: leaves differences of rounding (2e-13 relative measured on a foot walk); a position fix
+#: 10 m from the start with 1 m noise changes the objective by tens at 30 degrees.
+HEADING_RTOL = 1e-8
+
+#: Equal objectives at this many distinct headings prove an equality-constrained
+#: least-squares objective constant (a trigonometric polynomial of degree 2).
+HEADING_PROOF = 5
 
 #: Largest damping weight tried before the loop stops at a point no step improves.
 MAX_DAMPING = 1e12
@@ -267,30 +287,60 @@ class _Loop:
         change = float(np.max(np.linalg.norm(psi, axis=1)))
         return new, change, sol
 
-    def heading_start(self, values: dict) -> tuple[dict, list, tuple | None]:
+    def heading_start(self, values: dict) -> tuple[dict, list, tuple | None, str | None]:
         """The start: ``values`` with the best candidate heading, the candidates' objectives,
-        and ``(J, solution)`` of the best (None without a search)."""
+        ``(J, solution)`` of the best (None without a search) and what the search found
+        (None without a search, ``"searched"`` or ``"unobservable"``: the candidates
+        cannot differ and ``values`` keeps the given heading)."""
         from ..error_models.attitude_error import AttitudeError
 
         att = next((c for c in self.comps if isinstance(c, AttitudeError)), None)
         o = self.o
         if att is None or "attitude_z" not in att.names(self.raw):
-            return values, [], None
+            return values, [], None, None
         free = not np.isfinite(att.prior_sigma(self.raw)[att.names(self.raw).index("attitude_z")])
         if o["heading"] == "given" or (o["heading"] == "auto" and not free):
-            return values, [], None
+            return values, [], None, None
         n = int(o["candidates"])
-        found = []
-        best = None
-        for k in range(n):
+        golden = 0.5 * (np.sqrt(5.0) - 1.0)
+        order = sorted(range(n), key=lambda k: (k * golden) % 1.0)  # 0 (the given heading) first
+        # the degree-2 argument holds when every row is a least-squares row of the solve
+        # (no linearized items, no items costed beside it at the point)
+        exact = (not self.form.nonlinear_items
+                 and not any(getattr(it, "needs_error_model", False) for it in self.form.items)
+                 and all(t.least_squares_role() is not None for t in self.form.terms()))
+        found, sols = [], []
+        for m, k in enumerate(order):
             yaw = float(np.angle(np.exp(1j * 2.0 * np.pi * k / n)))
             trial = {**values, "attitude_z": yaw}
             j, sol = self.evaluate(trial)
             found.append({"heading": yaw, "objective": j})
+            sols.append((j, trial, sol))
             log.info("attitude loop: heading %.1f deg -> objective %.6g", np.degrees(yaw), j)
-            if best is None or j < best[0]:
-                best = (j, trial, sol)
-        return best[1], found, (best[0], best[2])
+            if exact and m + 1 == HEADING_PROOF and m + 1 < n and _indistinct(found):
+                break
+        if _indistinct(found):
+            return values, found, (sols[0][0], sols[0][2]), "unobservable"
+        best = min(sols, key=lambda b: b[0])
+        return best[1], found, (best[0], best[2]), "searched"
+
+
+def _indistinct(found: list) -> bool:
+    """Whether the candidates' objectives agree within :data:`HEADING_RTOL`."""
+    j = np.array([c["objective"] for c in found])
+    return bool(np.ptp(j) <= HEADING_RTOL * max(1.0, float(np.max(np.abs(j)))))
+
+
+def _heading_warning(found: list, exact: bool) -> str:
+    j = np.array([c["objective"] for c in found])
+    spread = float(np.ptp(j) / max(1.0, float(np.max(np.abs(j)))))
+    proof = (f"; the objective is a degree-2 trigonometric polynomial of the heading, so {len(found)} "
+             "equal values make it constant and the search stopped there") if exact else ""
+    return (f"attitude loop: the heading is not observable: {len(found)} candidate headings score the "
+            f"same (objectives within {spread:.1g} relative{proof}). No information fixes the "
+            "horizontal direction (e.g. position fixes at one place only, or stances only), so the "
+            "given heading is kept (the data's initial attitude). To determine it, add a position fix "
+            "away from the start, a velocity or heading item, or a prior (AttitudeError(sigma=...))")
 
 
 def _at_point(loop: _Loop, values: dict, at_values: Solution) -> Solution:
@@ -430,7 +480,7 @@ def with_attitude(inner: Stage) -> Stage:
             sol.attitude = reintegrate(form.data, form.error_model, {
                 n: float(sol.error_params[n]) for n in loop.names}).attitude
             return sol
-        values, search, best = loop.heading_start(values)
+        values, search, best, heading = loop.heading_start(values)
         j, at_values = best if best is not None else loop.evaluate(values)
         j0 = j
         values, j, at_values, sol, iters, reason = _iterate(loop, values, j, at_values, o)
@@ -445,13 +495,16 @@ def with_attitude(inner: Stage) -> Stage:
                    "AttitudeError, e.g. from bvpnav.sensors.grade), or a better initial attitude "
                    "(bvpnav.align)")
             _warn(sol, msg)
+        if heading == "unobservable":
+            _warn(sol, _heading_warning(search, len(search) < int(o["candidates"])))
         totals = {n: float(sol.error_params[n]) for n in loop.names}
         sol.attitude = reintegrate(form.data, form.error_model, totals).attitude
         report = AttitudeLoopReport(
             kind="attitude", iterations=iters, converged=converged, reason=reason or "max_iter",
             tol=float(o["tol"]),
             max_iter=int(o["max_iter"]), objective_initial=j0, objective=j, heading_search=search,
-            solves=loop.solves, seconds=time.perf_counter() - t0, inner=sol.records.sequential)
+            solves=loop.solves, seconds=time.perf_counter() - t0, inner=sol.records.sequential,
+            heading=heading)
         sol.records.attitude = report
         sol.record()
         if loop.rule is not None:
