@@ -230,12 +230,12 @@ class Certificate:
 
     def describe(self) -> str:
         """One sentence: what the certificate proves and whether that is enough."""
-        if np.isinf(self.radius):
-            proves = "rules out every answer"
-        else:
-            proves = f"rules out the answers with every unknown within {self.radius:.3g}"
         need = f"{CERTIFICATE_FACTOR:g} x the problem's scale {self.scale:.3g}"
-        return f"{proves} ({'at least' if self.confirmed else 'only; less than'} {need})"
+        if np.isinf(self.radius):
+            return f"rules out every answer (at least {need})"
+        if self.confirmed:
+            return f"rules out every answer with all unknowns within {self.radius:.3g} (at least {need})"
+        return f"rules out only the answers with all unknowns within {self.radius:.3g}, less than {need}"
 
 
 def _soc_project(mu: np.ndarray, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
