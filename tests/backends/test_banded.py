@@ -22,8 +22,11 @@ from bvpnav.lam.sweep import DirectSweep
 from bvpnav.linalg.banded import MAX_BORDER, BandedKKT, BandPlan, NotBanded
 from bvpnav.linalg.lsq import column_nodes, least_squares_form
 
-#: Item kinds that are equality-constrained least squares in the hard and soft modes.
-KINDS = sorted(k for k, cls in registry().items() if cls.example().kind == "equality")
+#: Item kinds that are equality-constrained least squares in the hard and soft modes, whose
+#: example is written for navigation-frame data (not for an example_model() of their own:
+#: ZeroAngularRate needs strapdown data with a gyro model and acts on its parameters alone).
+KINDS = sorted(k for k, cls in registry().items()
+               if cls.example().kind == "equality" and cls.example_model() is None)
 
 
 def problem(item=None, n: int = 801, error_model=None, seed: int = 3) -> bvpnav.NavigationProblem:

@@ -241,7 +241,7 @@ class _Loop:
         -----
         Soft and robust items add their penalties. Hard and band rows, which each linearized
         step meets, add the quadratic merit :math:`\mu \sum_k v_k^2` of their violation
-        :math:`v_k = \max(|ho_k| - tol_k, 0)` (``tol`` 0 when hard) with
+        :math:`v_k = \max(|\rho_k| - tol_k, 0)` (``tol`` 0 when hard) with
         :math:`\mu` = :data:`MERIT_WEIGHT`, so that a point that breaks them never wins
         against one that keeps them.
         """
