@@ -13,12 +13,13 @@ first use, not with this module.
 from __future__ import annotations
 
 import warnings
+import weakref
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING, Any
 
 from .errors import ConvexityError
-from .formulation import as_formulation
+from .formulation import Formulation
 from .model import Affine
 
 if TYPE_CHECKING:
@@ -113,7 +114,7 @@ def data_term(rows: Affine, x: cp.Variable, quadratic_form: bool) -> cp.Expressi
     return cp.sum_squares(lower(rows, x))
 
 
-def build(form) -> CvxProblem:
+def build(form: Formulation) -> CvxProblem:
     """Lower a formulation to one DPP cvxpy problem (see the module docstring).
 
     Raises
@@ -123,7 +124,6 @@ def build(form) -> CvxProblem:
     """
     import cvxpy as cp
 
-    form = as_formulation(form)
     model = form.model
     x = cp.Variable(model.size, name="x")
     lam = cp.Parameter(nonneg=True, value=INITIAL_LAM, name="lam")
@@ -154,20 +154,30 @@ def build(form) -> CvxProblem:
                       penalties=penalties, equality_qp=equality_qp)
 
 
-def compiled(form) -> CvxProblem:
-    """The formulation's cvxpy problem, built on first use and kept with it (DPP: a new
-    ``lam`` re-uses it)."""
-    form = as_formulation(form)
-    cvx = form.cache.get("cvx")
+#: Each formulation's lowering, built on first use and kept as long as the formulation
+#: lives (weakly keyed: nothing here keeps a formulation alive, and a pickled formulation
+#: carries no cvxpy objects). Only this module reads and writes it.
+_COMPILED: weakref.WeakKeyDictionary[Formulation, CvxProblem] = weakref.WeakKeyDictionary()
+
+
+def compiled(form: Formulation) -> CvxProblem:
+    """The formulation's cvxpy problem, built on first use and kept while the formulation
+    lives (DPP: a new ``lam`` re-uses it)."""
+    cvx = _COMPILED.get(form)
     if cvx is None:
-        cvx = form.cache["cvx"] = build(form)
+        cvx = _COMPILED[form] = build(form)
     return cvx
 
 
-def current_lam(form) -> float:
+def is_compiled(form: Formulation) -> bool:
+    """Whether the formulation's cvxpy problem has been built."""
+    return form in _COMPILED
+
+
+def current_lam(form: Formulation) -> float:
     """The ``lam`` Parameter's current value (the last cvxpy solve's), without building the
     problem: :data:`INITIAL_LAM` while it is not built."""
-    cvx = as_formulation(form).cache.get("cvx")
+    cvx = _COMPILED.get(form)
     return INITIAL_LAM if cvx is None else float(cvx.lam.value)
 
 
@@ -187,12 +197,12 @@ def _feasible(cvx: CvxProblem, labels) -> bool:
     return prob.status not in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE)
 
 
-def conflicting_items(form) -> list[str]:
+def conflicting_items(form: Formulation) -> list[str]:
     """Labels of a smallest-by-deletion set of hard items that cannot hold together.
 
     Parameters
     ----------
-    form : Formulation or NavigationProblem
+    form : Formulation
 
     Returns
     -------
