@@ -186,7 +186,7 @@ def rounding_bound(prob, lam: float) -> np.ndarray:
     ndarray, shape (2 d,)
         Bound for the position columns (m) then the velocity columns (m/s).
     """
-    form = least_squares_form(prob, lam)
+    form = least_squares_form(prob.formulation, lam)
     S = form.augmented().tocsc()
     lu = spla.splu(S)
     inv = spla.LinearOperator(S.shape, matvec=lu.solve, rmatvec=lambda v: lu.solve(v, trans="T"),

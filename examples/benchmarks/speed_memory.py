@@ -54,6 +54,33 @@ difference from the reference).
 BLAS runs on one thread (threadpoolctl when installed; the ``*_NUM_THREADS`` variables are
 set before numpy is imported either way). Timings belong here, never in tests.
 
+Measurements behind the design of :mod:`bvpnav.linalg` and the formulation, moved here from
+their code comments (each taken once, on one VM, in the session that made the change):
+
+- ``BandPlan._scatter`` (``SCATTER_SLICE``): 2e6 band rows, eleven strided diagonals: 56 ms
+  by slices of 8192 rows (0.85 MB of a band with kl = 4), 98 ms by 65536, 213 ms whole; one
+  diagonal at a time would stream the whole band once per diagonal (208 MB at N = 1e6).
+- ``_Stride`` copies: a slice copy of 2e5 doubles 0.04 ms, numpy's fancy indexing with int32
+  positions 0.4 ms (gather) and 0.66 ms (scatter).
+- ``KeptFactors.buffer``: writing the chosen lambda's band into memory the sweep touched saves
+  the page faults of a first write, about 20 ms at N = 1e5 and 200 ms at 1e6.
+- Fresh memory avoided, three axes at N = 1e6 (six parameters where bordered): the in-place
+  residual of ``AugmentedOperator`` (96 MB per full-length array), its ``max_abs`` (a copy of
+  ``|E|``, 192 MB), the boolean column marks of the plan (two counts: 96 MB), the border's
+  blocks instead of dense ``(nb, k)`` copies of ``B`` or ``X`` (288 MB each), the run blocks
+  kept as views (210 MB), the reduced right-hand side solved in place (72 MB per solve).
+- The plan's node sort by one combined key: 5.2 -> 3.5 ms against lexsort at N = 1e5; scipy's
+  column indexing of ``E`` 2.0 ms against 3.3 ms for the product with a selection matrix at 1e5.
+- ``least_squares_form``: a hard item's explicit zero copied the whole FEM block (60 ms at
+  N = 1e6) before each part was made canonical before stacking.
+- ``BANDED_TOL``: at lambda = 0.005 on 1e5 samples the first refinement correction was 4.2e-10
+  and a second one, 1.0e-11, only showed the rounding floor.
+- ``Formulation._null_columns``: a dense ``(n, 2 d + q)`` array was 58 MB and 0.1 s at N = 1e5
+  on three axes with six parameters (12 million entries on three axes at N = 1e6).
+- ``csne`` without the parameters' Schur complement: the LU filled in to 8.8 GB and counting on
+  a three-axis, nine-parameter problem of 12,000 samples.
+- ``cvxpy.installed_solvers()`` (cached by the back-end table): about 3 ms per call.
+
 Flags: ``--quick`` (N = 2e3 and 1e4, seconds), ``--sizes`` (1-axis N, default 1e4,1e5,1e6),
 ``--sizes3`` (3-axis N, default the same), ``--repeat`` (3), ``--skip`` (comma-separated
 variants to leave out, e.g. ``csne3@1e6,clarabel3@1e6``; ``name@N`` or ``name`` for all N;

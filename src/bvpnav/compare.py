@@ -124,14 +124,14 @@ def compare_solvers(problem, solvers: Sequence[str] | None = None, presets: Sequ
     if solvers is None:
         have = set(available_solvers())
         solvers = [s for s in ("clarabel", "osqp") if s in have]
-        if non_least_squares_term(problem) is None:
+        if non_least_squares_term(problem.formulation) is None:
             solvers += ["direct", "csne"]
     _check_names(problem, solvers, presets, options)
     lam = check_lam(lam)
     if isinstance(lam, str):
         lam = choose_lambda(problem, lam)
     ref = _reference_positions(reference, problem)
-    form = least_squares_form(problem, lam)
+    ls = least_squares_form(problem.formulation, lam)
     rows = []
     for name in solvers:
         for preset in presets:
@@ -154,8 +154,8 @@ def compare_solvers(problem, solvers: Sequence[str] | None = None, presets: Sequ
                        wall_time=st.get("wall_time"), iterations=st.get("iterations"),
                        objective=st.get("objective"), fem_residual=ver.get("fem_residual"),
                        max_violation=ver.get("max_violation"), forward_error=ver.get("forward_error"))
-            if row["objective"] is None and form is not None:
-                row["objective"] = float(np.sum(form.D.value(sol.x) ** 2))
+            if row["objective"] is None and ls is not None:
+                row["objective"] = float(np.sum(ls.D.value(sol.x) ** 2))
             if ref is not None:
                 e = sol.position().reshape(ref.shape) - ref
                 row.update(rms_error=float(np.sqrt(np.mean(e**2))), max_error=float(np.max(np.abs(e))))

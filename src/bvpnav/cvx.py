@@ -18,6 +18,7 @@ verdict counts only when that certificate rules out every answer of a plausible 
 from __future__ import annotations
 
 import warnings
+import weakref
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING, Any
@@ -25,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .errors import ConvexityError
-from .formulation import as_formulation
+from .formulation import Formulation
 from .model import Affine
 
 if TYPE_CHECKING:
@@ -121,7 +122,7 @@ def data_term(rows: Affine, x: cp.Variable, quadratic_form: bool) -> cp.Expressi
     return cp.sum_squares(lower(rows, x))
 
 
-def build(form) -> CvxProblem:
+def build(form: Formulation) -> CvxProblem:
     """Lower a formulation to one DPP cvxpy problem (see the module docstring).
 
     Raises
@@ -131,7 +132,6 @@ def build(form) -> CvxProblem:
     """
     import cvxpy as cp
 
-    form = as_formulation(form)
     model = form.model
     x = cp.Variable(model.size, name="x")
     lam = cp.Parameter(nonneg=True, value=INITIAL_LAM, name="lam")
@@ -162,20 +162,30 @@ def build(form) -> CvxProblem:
                       penalties=penalties, equality_qp=equality_qp)
 
 
-def compiled(form) -> CvxProblem:
-    """The formulation's cvxpy problem, built on first use and kept with it (DPP: a new
-    ``lam`` re-uses it)."""
-    form = as_formulation(form)
-    cvx = form.cache.get("cvx")
+#: Each formulation's lowering, built on first use and kept as long as the formulation
+#: lives (weakly keyed: nothing here keeps a formulation alive, and a pickled formulation
+#: carries no cvxpy objects). Only this module reads and writes it.
+_COMPILED: weakref.WeakKeyDictionary[Formulation, CvxProblem] = weakref.WeakKeyDictionary()
+
+
+def compiled(form: Formulation) -> CvxProblem:
+    """The formulation's cvxpy problem, built on first use and kept while the formulation
+    lives (DPP: a new ``lam`` re-uses it)."""
+    cvx = _COMPILED.get(form)
     if cvx is None:
-        cvx = form.cache["cvx"] = build(form)
+        cvx = _COMPILED[form] = build(form)
     return cvx
 
 
-def current_lam(form) -> float:
+def is_compiled(form: Formulation) -> bool:
+    """Whether the formulation's cvxpy problem has been built."""
+    return form in _COMPILED
+
+
+def current_lam(form: Formulation) -> float:
     """The ``lam`` Parameter's current value (the last cvxpy solve's), without building the
     problem: :data:`INITIAL_LAM` while it is not built."""
-    cvx = as_formulation(form).cache.get("cvx")
+    cvx = _COMPILED.get(form)
     return INITIAL_LAM if cvx is None else float(cvx.lam.value)
 
 
@@ -283,7 +293,7 @@ def _scale(form, terms) -> float:
     return float(max(1.0, C, C / T, C / T**2, A, A * T, A * T * T))
 
 
-def certificate(form, cvx: CvxProblem | None = None,
+def certificate(form: Formulation, cvx: CvxProblem | None = None,
                 labels: Sequence[str] | None = None) -> Certificate | None:
     """The infeasibility certificate the last solve left in the duals, checked.
 
@@ -301,7 +311,6 @@ def certificate(form, cvx: CvxProblem | None = None,
     Certificate or None
         None when a constraint has no dual (the solver left no certificate).
     """
-    form = as_formulation(form)
     cvx = compiled(form) if cvx is None else cvx
     by_label = {t.label: t for t in form.terms()}
     labels = [lb for lb, cons in cvx.cons.items() if cons] if labels is None else list(labels)
@@ -356,12 +365,12 @@ def _feasible(cvx: CvxProblem, labels, form=None) -> bool:
     return cert is None or not cert.confirmed  # an unconfirmed verdict accuses nobody
 
 
-def conflicting_items(form) -> list[str]:
+def conflicting_items(form: Formulation) -> list[str]:
     """Labels of a smallest-by-deletion set of hard items that cannot hold together.
 
     Parameters
     ----------
-    form : Formulation or NavigationProblem
+    form : Formulation
 
     Returns
     -------

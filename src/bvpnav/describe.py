@@ -18,7 +18,7 @@ import scipy.sparse.linalg as spla
 
 from .cvx import current_lam
 from .errors import InputError
-from .formulation import as_formulation
+from .formulation import Formulation, as_formulation
 from .linalg.lsq import least_squares_form
 from .model import Affine
 
@@ -82,8 +82,8 @@ def matrices(problem) -> Matrices:
     .. math:: \min_x \|J x\|^2 + \lambda \|(D x - e)/\sigma\|^2
               \quad \text{s.t.} \quad A_{eq} x = b_{eq}.
     """
-    problem = as_formulation(problem)
-    model = problem.model
+    form = as_formulation(problem)
+    model = form.model
     d, n = model.d, model.N
     K = sp.block_diag([model.K] * d, format="csr")
     M = sp.block_diag([model.M] * d, format="csr")
@@ -95,7 +95,7 @@ def matrices(problem) -> Matrices:
     legend = [("fem", "hard", "A_eq", slice(0, fem.m))]
     soft, sig = [], []
     row_eq, row_d = fem.m, 0
-    for term in problem.terms():
+    for term in form.terms():
         role = term.least_squares_role()
         if role is None:
             raise InputError(
@@ -126,17 +126,17 @@ def matrices(problem) -> Matrices:
         layout[f"v0_{ax}"] = slice(i0, i0 + 1)
         layout[f"v1_{ax}"] = slice(i1, i1 + 1)
     layout["l"] = slice(model.size - model.q, model.size)
-    J = problem.data_rows().A
+    J = form.data_rows().A
     return Matrices(K=K, M=M, f=f, F=F, A_eq=E.A, b_eq=-E.c, J=J, D=D, e=e, sigma=sigma,
                     legend=legend, layout=layout)
 
 
-def _condition_estimate(problem, lam: float) -> float | None:
+def _condition_estimate(form: Formulation, lam: float) -> float | None:
     """1-norm condition estimate of the augmented KKT matrix (None if not least squares)."""
-    form = least_squares_form(problem, lam)
-    if form is None:
+    ls = least_squares_form(form, lam)
+    if ls is None:
         return None
-    S = form.augmented()
+    S = ls.augmented()
     try:
         lu = spla.splu(S, permc_spec="COLAMD")
     except RuntimeError:
@@ -174,13 +174,13 @@ def describe(problem, format: str = "text", lam: float | None = None,
     if format not in ("text", "latex"):
         raise InputError(f"format={format!r}; choose 'text' or 'latex'")
     tex = format == "latex"
-    problem = as_formulation(problem)
-    model = problem.model
+    form = as_formulation(problem)
+    model = form.model
     if lam is None:
-        lam = current_lam(problem)
+        lam = current_lam(form)
     g = model.grid
     h = g.h
-    terms = problem.terms()
+    terms = form.terms()
     lines: list[str] = []
 
     def head(s: str) -> None:
@@ -191,7 +191,7 @@ def describe(problem, format: str = "text", lam: float | None = None,
 
     step = f"h = {h[0]:.4g} s" if np.allclose(h, h[0]) else f"h = {h.min():.4g}..{h.max():.4g} s"
     head(f"bvpnav problem: N = {g.n} samples on [{g.t0:g}, {g.t1:g}] s ({step}); axes: "
-         f"{', '.join(model.axes)}; residual form: {problem.residual}")
+         f"{', '.join(model.axes)}; residual form: {form.residual}")
     head(f"unknowns x ({model.size} entries):")
     for ax in model.axes:
         math(f"  r_{ax}  ({g.n})  nodal positions, m",
@@ -220,9 +220,9 @@ def describe(problem, format: str = "text", lam: float | None = None,
                  _item_latex(t) + rf"\quad \mathrm{{[{_tex_text(t.label)},\ {t.mode},\ "
                  rf"{t.residual.m}\ rows]}}")
     head("objective:")
-    if problem.residual == "acceleration":
-        math(f"  minimize  sum_i (w_i / sigma_a)^2,  sigma_a = {_fmt(problem.sigma_a)} m/s^2",
-             rf"\min\ \sum_i (w_i/\sigma_a)^2,\quad \sigma_a = {_fmt(problem.sigma_a)}\ \mathrm{{m/s^2}}")
+    if form.residual == "acceleration":
+        math(f"  minimize  sum_i (w_i / sigma_a)^2,  sigma_a = {_fmt(form.sigma_a)} m/s^2",
+             rf"\min\ \sum_i (w_i/\sigma_a)^2,\quad \sigma_a = {_fmt(form.sigma_a)}\ \mathrm{{m/s^2}}")
     else:
         math("  minimize  ||K r + B v - f - F l||^2  (= ||M w||^2, the 2011 paper's load form)",
              r"\min\ \|K r + B v - f - F l\|^2 = \|M w\|^2")
@@ -243,14 +243,14 @@ def describe(problem, format: str = "text", lam: float | None = None,
                                                 if t.mode == "hard" and t.kind == "equality"]).A
     n_ineq = sum(t.residual.m for t in terms if t.kind == "inequality" and t.mode in ("hard", "band"))
     n_cone = sum(t.residual.groups for t in terms if t.kind == "cone" and t.mode in ("hard", "band"))
-    n_obj = problem.data_rows().m + sum(t.residual.m for t in terms if t.mode in ("soft", "robust"))
-    nnz = A_eq.nnz + problem.data_rows().A.nnz + sum(
+    n_obj = form.data_rows().m + sum(t.residual.m for t in terms if t.mode in ("soft", "robust"))
+    nnz = A_eq.nnz + form.data_rows().A.nnz + sum(
         t.residual.A.nnz for t in terms if not (t.mode == "hard" and t.kind == "equality"))
     extra = (f"{n_ineq} inequality rows, " if n_ineq else "") + (f"{n_cone} cones, " if n_cone else "")
     head(f"size: {model.size} unknowns, {A_eq.shape[0]} equality rows, {extra}{n_obj} objective rows, "
          f"{nnz} non-zeros")
     if conditioning:
-        c = _condition_estimate(problem, lam)
+        c = _condition_estimate(form, lam)
         head("condition estimate (1-norm, augmented KKT matrix): "
              + ("n/a (not least squares)" if c is None else f"{c:.3g}"))
     return "\n".join(lines)

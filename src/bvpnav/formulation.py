@@ -10,8 +10,8 @@ linearization) makes a new formulation with :meth:`Formulation.with_items`.
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Iterable
-from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -180,8 +180,7 @@ class Formulation:
         self._model = model
         self._terms: list[Term] | None = None
         self._observable = False
-        #: Caches of the layers above (the cvxpy problem, factorizations), by name.
-        self.cache: dict[str, Any] = {}
+        self._data_rows: Affine | None = None
 
     # ----------------------------------------------------------- copies
     def with_items(self, items: Iterable[Item], error_model: bool = True) -> Formulation:
@@ -245,17 +244,22 @@ class Formulation:
 
     def data_rows(self) -> Affine:
         """Rows whose sum of squares is the data term ``J_0`` (see class Notes); made once
-        and kept in :attr:`cache` (the least-squares form, the cvxpy problem and the
-        verification all read them)."""
-        rows = self.cache.get("data_rows")
-        if rows is None:
+        (the least-squares form, the cvxpy problem and the verification all read them)."""
+        if self._data_rows is None:
             m = self.model
             if self.residual == "acceleration":
-                rows = m.residual_rows() / np.repeat(self.sigma_a, m.N)
+                self._data_rows = m.residual_rows() / np.repeat(self.sigma_a, m.N)
             else:
-                rows = m.load_residual_rows()
-            self.cache["data_rows"] = rows
-        return rows
+                self._data_rows = m.load_residual_rows()
+        return self._data_rows
+
+    def with_acceleration(self, acc: np.ndarray) -> Formulation:
+        """The same formulation with the measured accelerations replaced by ``acc`` (shape
+        ``(N, d)``, m/s^2), sharing everything else: the form is affine in the data, so
+        the lambda sweep's GCV trace differences two of these. Nothing is checked again."""
+        new = copy.copy(self)
+        new._model, new._terms, new._data_rows = self.model.with_acc(acc), None, None
+        return new
 
     @property
     def has_soft_terms(self) -> bool:
@@ -288,11 +292,10 @@ class Formulation:
 
     def _null_columns(self, at: np.ndarray | None = None) -> tuple[sp.csc_matrix, list[str]]:
         """:meth:`null_directions` as a sparse matrix (made from each direction's nonzero
-        entries: a dense (n, 2 d + q) array was 58 MB and 0.1 s at N = 1e5 on three axes
-        with six parameters, for a product with a few item rows). With ``at`` (indices of
-        unknowns), only those rows are filled, the others left empty: the product with rows
-        that touch nothing else is the same, and a few items on three axes at N = 1e6 do
-        not cost the whole (n, 2 d + q) matrix (12 million entries)."""
+        entries: a dense (n, 2 d + q) array costs memory and time of the whole problem's
+        size for a product with a few item rows). With ``at`` (indices of unknowns), only
+        those rows are filled, the others left empty: the product with rows that touch
+        nothing else is the same, and a few items do not cost the whole (n, 2 d + q) matrix."""
         m = self.model
         t = m.grid.t
         keep = None
@@ -408,7 +411,7 @@ class Formulation:
                 "(sigma=None) if it must hold exactly")
 
     def __getstate__(self) -> dict:
-        """The definition without caches (cvxpy objects cannot be pickled)."""
+        """The definition without what is derived from it (rebuilt on first use)."""
         state = dict(self.__dict__)
-        state.update(_model=None, _terms=None, _observable=False, cache={})
+        state.update(_model=None, _terms=None, _observable=False, _data_rows=None)
         return state

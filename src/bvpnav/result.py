@@ -482,6 +482,10 @@ class Solution:
         For strapdown data, the body-to-navigation attitude per sample the answer uses:
         corrected by the attitude error models' estimates when there are any, else the
         data's. None for navigation-frame data. See :attr:`attitude_angles`.
+    formulation : Formulation or None
+        The :class:`~bvpnav.formulation.Formulation` the answer solves (read-only): the
+        problem's own, or the one a solve stage made from it (conflicting items demoted,
+        nonlinear items at their last linearization, the attitude at its estimate).
 
     Examples
     --------
@@ -518,6 +522,13 @@ class Solution:
     error_params_std: pd.Series = field(default_factory=lambda: pd.Series(dtype=float, name="std"))
     attitude: Any = None
     _cov: dict = field(default_factory=dict, repr=False)
+    _formulation: Any = field(default=None, repr=False, compare=False)
+
+    @property
+    def formulation(self):
+        """The :class:`~bvpnav.formulation.Formulation` the answer solves (see the class
+        Attributes; None for a solution made without one)."""
+        return self._formulation
 
     @property
     def attitude_angles(self) -> pd.DataFrame | None:

@@ -147,7 +147,7 @@ def test_one_refinement_step_is_the_forward_error_estimate():
     raw = be.run(form, 0.7, solver_options(be, "default"))
     x, corr = raw.factored.refined
     assert x is raw.x and corr == raw.info["correction"]
-    fresh = forward_error(form, raw.x, 0.7, raw.duals, raw.factored[:2])
+    fresh = forward_error(form, raw.x, 0.7, raw.duals, Factored(*raw.factored[:2]))
     assert 0.0 < fresh < 1e-10 and fresh != corr
     missed = Factored(*raw.factored[:2], (raw.x, 2.0 * FORWARD_RTOL["default"]))
     other = Factored(*raw.factored[:2], (raw.x.copy(), corr))

@@ -15,7 +15,7 @@ from bvpnav.solve import lambda_curve
 
 def test_exact_curvature_matches_spline_of_dense_sweep():
     prob, _ = table1()
-    eng = _DirectSweep(prob)
+    eng = _DirectSweep(prob.formulation)
     lams = np.geomspace(1e-2, 1e2, 81)
     pts = [eng.point(v) for v in lams]
     exact = np.array([_curvature(p) for p in pts])
@@ -41,7 +41,7 @@ def test_curvature_slope_is_the_derivative_of_the_curvature():
     """The complex-step slope of the exact curvature equals its central difference in
     log lambda (to the difference's own error) across the corner and both flanks."""
     prob, _ = table1()
-    eng = _DirectSweep(prob)
+    eng = _DirectSweep(prob.formulation)
     eps = 1e-3
     slopes, diffs = [], []
     for lam in np.geomspace(1e-3, 1e3, 7):

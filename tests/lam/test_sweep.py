@@ -17,7 +17,7 @@ from bvpnav.solve import lambda_curve
 
 def test_derivative_identity_rho_prime_equals_minus_lam_eta_prime():
     prob, _ = table1()
-    eng = _DirectSweep(prob)
+    eng = _DirectSweep(prob.formulation)
     lam, eps = 2.0, 1e-5
     a, b, c = eng.point(lam * (1 - eps)), eng.point(lam), eng.point(lam * (1 + eps))
     d_rho = (c["rho2"] - a["rho2"]) / (2 * lam * eps)
@@ -98,7 +98,7 @@ def test_gcv_and_discrepancy_find_the_ml_weight_with_known_noise(seed):
     # discrepancy with tau = 1.5 over-smooths by design, but stays within a decade
     assert 1.0 < curve.chosen["discrepancy"] < 10.0
     # at the chosen lambda the defining equation holds
-    p = _DirectSweep(prob).point(curve.chosen["discrepancy"], need_trace=True)
+    p = _DirectSweep(prob.formulation).point(curve.chosen["discrepancy"], need_trace=True)
     assert abs(p["rho2"] - 1.5 * abs(p["trace"])) < 1e-3 * p["rho2"]
     sol = prob.solve(lam="gcv", solver="direct")
     assert sol.lam_rule == "gcv" and sol.lam == pytest.approx(sol.curve.chosen["gcv"])
@@ -107,8 +107,8 @@ def test_gcv_and_discrepancy_find_the_ml_weight_with_known_noise(seed):
 
 def test_hutchinson_trace_agrees_with_exact_trace():
     prob, _ = known_noise(0, n=251)
-    exact = _DirectSweep(prob).point(1.0, need_trace=True)["trace"]  # N <= 300: exact columns
-    est = [_DirectSweep(prob, trace="hutchinson").point(1.0, need_trace=True, probes=100,
+    exact = _DirectSweep(prob.formulation).point(1.0, need_trace=True)["trace"]  # N <= 300: exact columns
+    est = [_DirectSweep(prob.formulation, trace="hutchinson").point(1.0, need_trace=True, probes=100,
                                                          seed=s)["trace"] for s in range(4)]
     # Rademacher probes: standard error sqrt(2 ||B||_F^2 / P) <= sqrt(2 |tr B| / P) per estimate
     se = np.sqrt(2 * abs(exact) / 100 / 4)
@@ -240,12 +240,22 @@ def test_a_sweep_without_derivative_rules_skips_the_derivative_solve():
     """GCV alone reads rho2 and the trace: the points carry no deta2 (one solve fewer per
     lambda); asking a rule that needs it afterwards recomputes the point."""
     prob, _ = known_noise(0, n=2001)
-    eng = _DirectSweep(prob, need_trace=True, need_derivative=False)
+    eng = _DirectSweep(prob.formulation, need_trace=True, need_derivative=False)
     p = eng.point(0.7)
     assert "deta2" not in p and "trace" in p
     eng.need_derivative = True
     q = eng.point(0.7)
     assert "deta2" in q and q["rho2"] == pytest.approx(p["rho2"], rel=1e-12)
+
+
+def _holds_no_band(form) -> bool:
+    """Whether nothing of a sweep's bands is kept with the formulation (it holds no cache:
+    the bands live in the solve's workspace)."""
+    from bvpnav.linalg.banded import AffineBand, KeptFactors
+    from bvpnav.linalg.workspace import Workspace
+
+    return not hasattr(form, "cache") and not any(
+        isinstance(v, AffineBand | KeptFactors | Workspace) for v in vars(form).values())
 
 
 @pytest.mark.filterwarnings("ignore::bvpnav.log.BvpnavWarning")  # the L-curve's lambda misfits sigma_a
@@ -255,7 +265,7 @@ def test_the_chosen_lambda_solved_from_the_sweeps_band_equals_a_fresh_solve():
     kept alive with the formulation afterwards."""
     prob, _ = known_noise(0, n=2001)
     sol = prob.solve(solver="direct", lam="lcurve")
-    assert "band_affine" not in prob.formulation.cache and sol.stats["verified"]
+    assert _holds_no_band(prob.formulation) and sol.stats["verified"]
     fresh, _ = known_noise(0, n=2001)
     ref = fresh.solve(solver="direct", lam=sol.lam)
     np.testing.assert_allclose(sol.x, ref.x, rtol=0, atol=1e-10 * np.max(np.abs(ref.x)))
@@ -282,7 +292,7 @@ def test_the_chosen_lambda_is_factored_in_a_buffer_of_the_sweep(monkeypatch, rul
     assert len(buffers) == 1 and buffers[0] is not None
     # the sweep's own factorizations (GCV's trace: each of its points is one complex one)
     assert len(factored) == sol.curve.evaluations + 1
-    assert not {"band_affine", "band_factors"} & set(prob.formulation.cache)
+    assert _holds_no_band(prob.formulation)
     fresh, _ = known_noise(0, n=2001)
     ref = fresh.solve(solver="direct", lam=sol.lam)
     np.testing.assert_allclose(sol.x, ref.x, rtol=0, atol=1e-10 * np.max(np.abs(ref.x)))
@@ -304,9 +314,10 @@ def test_the_last_points_factor_is_handed_to_a_solve_at_its_lambda(monkeypatch):
     original = BandedKKT._factor_parts
     monkeypatch.setattr(BandedKKT, "_factor_parts", lambda self, parts: (factored.append(1),
                                                                         original(self, parts))[1])
-    x_last = solve_least_squares(form, 0.7)[0]
+    x_last = solve_least_squares(form, 0.7, workspace=eng.workspace)[0]
     assert factored == []
-    x_other = solve_least_squares(form, 0.3)[0]   # not kept (its buffer held the point at 0.7)
+    # not kept (its buffer held the point at 0.7)
+    x_other = solve_least_squares(form, 0.3, workspace=eng.workspace)[0]
     assert factored == [1]
     fresh, _ = known_noise(1, n=2001)
     for lam, x in ((0.7, x_last), (0.3, x_other)):

@@ -179,7 +179,7 @@ def test_schur_complement_matches_a_dense_reference():
         sv = np.array(prob.solve(solver=solver, fallback=None).stats["conditioning"]
                       ["relative_singular_values"])
         assert np.allclose(sv, ref, rtol=1e-4, atol=0), (solver, sv, ref)
-    own = relative_singular_values(information_matrix(prob, 1.0))[0]
+    own = relative_singular_values(information_matrix(prob.formulation, 1.0))[0]
     assert np.allclose(own, ref, rtol=1e-4, atol=0)
     assert ref[0] == pytest.approx(SV_Y, rel=DISCRETE)
 

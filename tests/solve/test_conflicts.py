@@ -19,7 +19,7 @@ def test_two_contradictory_hard_positions_are_named_exactly():
     msg = str(exc.value)
     assert "These hard items conflict: ['fix A', 'fix B']" in msg
     assert any(a.get("conflicts") == ["fix A", "fix B"] for a in exc.value.attempts)
-    assert conflicting_items(prob) == ["fix A", "fix B"]
+    assert conflicting_items(prob.formulation) == ["fix A", "fix B"]
 
 
 def test_a_conflict_spread_over_three_items_is_irreducible():
@@ -29,13 +29,13 @@ def test_a_conflict_spread_over_three_items_is_irreducible():
 
     prob = conflict_problem(Position(t=5.0, value=1.0, name="fix"),
                    AverageVelocity(t0=0.0, t1=5.0, value=0.0, name="stopwatch"))
-    names = conflicting_items(prob)
+    names = conflicting_items(prob.formulation)
     assert names == ["ends", "fix", "stopwatch"]  # dropping any one of them resolves it
 
 
 def test_consistent_information_accuses_nobody_even_when_redundant():
     prob = conflict_problem(Position(t=10.0, value=0.0, name="end again"))  # repeats the ends, consistently
-    assert conflicting_items(prob) == []
+    assert conflicting_items(prob.formulation) == []
     assert prob.solve().stats["verified"]
 
 

@@ -57,11 +57,11 @@ def spy(monkeypatch):
     calls: list[dict] = []
     real = chain.attempt
 
-    def spying(form, backend, options, lam, opts):
+    def spying(form, backend, options, lam, opts, *workspace):
         calls.append({"solver": backend.name, "options": dict(options), "verify": opts.verify,
                       "accuracy": opts.accuracy, "chain": [b.name for b, _ in opts.chain],
                       "on_conflict": opts.on_conflict, "lam": lam})
-        return real(form, backend, options, lam, opts)
+        return real(form, backend, options, lam, opts, *workspace)
 
     monkeypatch.setattr(chain, "attempt", spying)
     return calls
@@ -232,3 +232,22 @@ def test_build_is_a_mapping_and_failed_attempts_are_plain_dicts():
         conflict_problem().solve()
     json.dumps(err.value.attempts)  # JSON-ready, as before the typed records
     assert err.value.attempts[-1]["conflicts"] == ["a", "b"]
+
+
+def test_a_solution_names_the_formulation_it_solves():
+    """``Solution.formulation`` (read-only) is the problem's own formulation for a plain
+    solve and the demoted one after a conflict: the item the demotion made soft is soft
+    there, hard in the problem; and no formulation holds a cache of the solve."""
+    prob = ls_problem()
+    sol = prob.solve(solver="direct")
+    assert sol.formulation is prob.formulation
+    with pytest.raises(AttributeError):
+        sol.formulation = None
+    prob = conflict_problem()
+    sol = prob.solve(solver="clarabel", on_conflict="demote")
+    modes = {it.label: it.mode for it in sol.formulation.items}
+    assert sol.formulation is not prob.formulation
+    assert sorted(modes.values()).count("soft") == 2   # 'fixes' and the demoted one
+    demoted = [label for label in ("a", "b") if modes[label] == "soft"]
+    assert len(demoted) == 1 and {it.label: it.mode for it in prob.formulation.items}[demoted[0]] == "hard"
+    assert not hasattr(sol.formulation, "cache") and not hasattr(prob.formulation, "cache")

@@ -15,10 +15,10 @@ def _final_solve_kwargs(monkeypatch, prob, **kw):
     calls = []
     orig = chain.attempt
 
-    def spy(form, backend, options, lam, opts):
+    def spy(form, backend, options, lam, opts, *workspace):
         calls.append({"lam": lam, "fallback": opts.fallback, "verify": opts.verify,
                       "accuracy": opts.accuracy, "options": opts.options, "solver": opts.solver})
-        return orig(form, backend, options, lam, opts)
+        return orig(form, backend, options, lam, opts, *workspace)
 
     monkeypatch.setattr(chain, "attempt", spy)
     sol = prob.solve(**kw)

@@ -26,6 +26,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, SolverNotFound
+from ..formulation import Formulation
+from ..linalg.lsq import Factored
 from ..plugins import discover
 
 __all__ = [
@@ -67,16 +69,16 @@ class RawSolve:
         ``setup_time``, ``compile_time`` in s, ``objective``, ``solver_warnings``, ...).
     duals : dict, optional
         ``{"fem": y, label: [y per constraint]}`` in cvxpy's sign convention.
-    factored : tuple, optional
-        ``(LeastSquaresForm, factorization)`` of the formulation at this ``lam``, reused by
-        verification (direct back ends: a :class:`bvpnav.linalg.lsq.Factored`, which also holds
-        the last refinement step's correction of ``x``).
+    factored : Factored, optional
+        The least-squares form and its factorization at this ``lam``, reused by
+        verification, with the last refinement step's correction of ``x``
+        (:class:`bvpnav.linalg.lsq.Factored`).
     """
 
     x: np.ndarray
     info: dict = field(default_factory=dict)
     duals: dict | None = None
-    factored: tuple | None = None
+    factored: Factored | None = None
 
 
 class Backend:
@@ -93,6 +95,10 @@ class Backend:
         measured; used to refuse a solve that cannot fit before any work.
     least_squares_only : bool
         True for back ends that solve equality-constrained least squares only.
+    uses_workspace : bool
+        True for back ends whose :meth:`run` takes the solve's
+        :class:`~bvpnav.linalg.workspace.Workspace` as the keyword ``workspace`` (the
+        direct back end: the band plan and a lambda sweep's band or factor at ``lam``).
 
     Examples
     --------
@@ -112,8 +118,9 @@ class Backend:
     presets: dict[str, dict[str, Any]] = {}
     memory_per_sample: dict[str, float] = {"acceleration": 5750.0, "load": 5750.0}
     least_squares_only: bool = False
+    uses_workspace: bool = False
 
-    def accepts(self, form) -> str | None:
+    def accepts(self, form: Formulation) -> str | None:
         """None when the back end can take ``form``, else the reason (naming the item)."""
         return None
 
@@ -125,7 +132,7 @@ class Backend:
         """None when ``value`` is valid for option ``key``, else what a valid one is."""
         return None
 
-    def run(self, form, lam: float, options: dict, verbose: bool = False) -> RawSolve:
+    def run(self, form: Formulation, lam: float, options: dict, verbose: bool = False) -> RawSolve:
         """Solve ``form`` at ``lam`` with ``options`` (the preset plus the user's)."""
         raise NotImplementedError
 
@@ -138,7 +145,7 @@ _FACTORIES: list = []
 
 #: Back ends a factory has offered in this process, by name: a later lookup of the same
 #: name does not ask the factories again (cvxpy's ``installed_solvers()`` tries to import
-#: some forty solver packages, about 3 ms, and every solve resolves its fallback chain).
+#: some forty solver packages, and every solve resolves its fallback chain).
 _FOUND: dict = {}
 
 
@@ -272,7 +279,7 @@ def available_memory() -> int | None:
         return None
 
 
-def memory_estimate(backend: Backend, form) -> float:
+def memory_estimate(backend: Backend, form: Formulation) -> float:
     """Estimated peak bytes of solving ``form`` with ``backend``: samples x axes x the
     back end's measured bytes per sample (:attr:`Backend.memory_per_sample`)."""
     per = backend.memory_per_sample
@@ -283,7 +290,7 @@ def _gb(b: float) -> str:
     return f"{b / 1e9:.3g} GB"
 
 
-def memory_shortfall(backend: Backend, form, available: int | None = None) -> str | None:
+def memory_shortfall(backend: Backend, form: Formulation, available: int | None = None) -> str | None:
     """Why ``backend`` would not fit in memory (a sentence naming N, the estimate and the
     limit), or None when it fits or the available memory is unknown."""
     avail = available_memory() if available is None else available
@@ -299,7 +306,7 @@ def memory_shortfall(backend: Backend, form, available: int | None = None) -> st
             f"({MEMORY_SHARE:.0%} of {_gb(avail)} available)")
 
 
-def check_memory(form, backend: Backend) -> None:
+def check_memory(form: Formulation, backend: Backend) -> None:
     """Raise :class:`InputError` before any work when ``backend`` would not fit in memory,
     naming N, the estimate, the limit and the options that would fit."""
     avail = available_memory()

@@ -33,6 +33,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import InputError, SolveError
+from ..formulation import Formulation
 from ..linalg.lsq import (
     BANDED_TOL,
     BorderedLU,
@@ -41,6 +42,7 @@ from ..linalg.lsq import (
     non_least_squares_term,
     solve_least_squares,
 )
+from ..linalg.workspace import Workspace
 from . import Backend, RawSolve, register_backend
 from .cvxpy_solvers import use_conic
 
@@ -76,13 +78,13 @@ class _LeastSquaresBackend(Backend):
         ok, want = VALUES.get(key, (lambda v: True, ""))
         return None if ok(value) else want
 
-    def refuse(self, form) -> None:
+    def refuse(self, form: Formulation) -> None:
         """Raise :class:`InputError` when ``form`` is not least squares (naming the item)."""
         why = self.accepts(form)
         if why is not None:
             raise InputError(why)
 
-    def accepts(self, form) -> str | None:
+    def accepts(self, form: Formulation) -> str | None:
         term = non_least_squares_term(form)
         if term is None:
             return None
@@ -101,19 +103,22 @@ class DirectBackend(_LeastSquaresBackend):
     """
 
     name = "direct"
+    uses_workspace = True
     memory_per_sample = {"acceleration": 1300.0, "load": 2960.0}
     presets = {name: {"refine": refine, "method": "auto", "ldl_accept": accept,
                       "refine_tol": BANDED_TOL[name]}
                for name, refine, accept in (("low", 1, 1e-5), ("default", 3, 1e-7), ("high", 6, 1e-9))}
 
-    def run(self, form, lam: float, options: dict, verbose: bool = False) -> RawSolve:
+    def run(self, form: Formulation, lam: float, options: dict, verbose: bool = False,
+            workspace: Workspace | None = None) -> RawSolve:
         self.refuse(form)
         t0 = time.perf_counter()
         try:
             x, info = solve_least_squares(form, lam, refine=int(options["refine"]),
                                           method=options.get("method", "auto"),
                                           ldl_accept=float(options.get("ldl_accept", 1e-7)),
-                                          banded_tol=float(options.get("refine_tol", BANDED_TOL["default"])))
+                                          banded_tol=float(options.get("refine_tol", BANDED_TOL["default"])),
+                                          workspace=workspace)
         except (RuntimeError, np.linalg.LinAlgError) as exc:  # singular factorization / Schur
             raise SolveError(f"direct: the KKT matrix is singular ({exc}); some unknown is not "
                              "determined by the information",
@@ -155,7 +160,7 @@ class CsneBackend(_LeastSquaresBackend):
                "default": {"max_iter": 20, "tol": 1e-12},
                "high": {"max_iter": 50, "tol": 1e-15}}
 
-    def run(self, form, lam: float, options: dict, verbose: bool = False) -> RawSolve:
+    def run(self, form: Formulation, lam: float, options: dict, verbose: bool = False) -> RawSolve:
         self.refuse(form)
         t0 = time.perf_counter()
         ls = least_squares_form(form, lam)
@@ -165,8 +170,7 @@ class CsneBackend(_LeastSquaresBackend):
         n = D.A.shape[1]
         try:
             # error-model parameters are dense columns (they touch every FEM row): eliminate
-            # them through their Schur complement, or the LU fills in (8.8 GB and counting
-            # for a 3-D nine-parameter problem of 12,000 samples)
+            # them through their Schur complement, or the LU fills in (roughly like N^2)
             lu = BorderedLU(K, form.model.l_index)
         except (RuntimeError, np.linalg.LinAlgError) as exc:
             raise SolveError(f"csne: singular normal matrix ({exc})",

@@ -24,7 +24,6 @@ Two sweeps:
 
 from __future__ import annotations
 
-import copy
 import logging
 import math
 import time
@@ -36,12 +35,10 @@ import pandas as pd
 
 from ..cvx import compiled
 from ..errors import InputError
-from ..formulation import LAM_RANGE, as_formulation
+from ..formulation import LAM_RANGE, Formulation
 from ..linalg.banded import AffineBand, BandedKKT, KeptFactors, NotBanded
 from ..linalg.condensed import CondensedBand, CondensedKKT
 from ..linalg.lsq import (
-    BAND_AFFINE,
-    BAND_FACTORS,
     banded_factor,
     banded_plan,
     factor_form,
@@ -49,6 +46,7 @@ from ..linalg.lsq import (
     least_squares_form,
     non_least_squares_term,
 )
+from ..linalg.workspace import Workspace
 from ..log import once, progress_enabled, sweeping
 from ..log import progress as progress_bar
 from ..log import warn as _warn
@@ -179,10 +177,14 @@ class DirectSweep:
 
     engine = "direct"
 
-    def __init__(self, form, exact_trace_limit: int = 300, need_trace: bool = False, probes: int = 24,
-                 seed: int = 0, tau: float = 1.5, trace: str = "auto", need_derivative: bool = True,
-                 need_quasi: bool = True, condense: bool = True):
-        self.form = as_formulation(form)
+    def __init__(self, form: Formulation, exact_trace_limit: int = 300, need_trace: bool = False,
+                 probes: int = 24, seed: int = 0, tau: float = 1.5, trace: str = "auto",
+                 need_derivative: bool = True, need_quasi: bool = True, condense: bool = True,
+                 workspace: Workspace | None = None):
+        self.form = form
+        #: The solve's workspace: the band plan, the band along lambda and, after
+        #: :meth:`hand_off`, the factors the solve at the chosen lambda takes.
+        self.workspace = Workspace() if workspace is None else workspace
         self.exact_trace_limit = exact_trace_limit
         self.need_trace, self.probes, self.seed, self.tau = need_trace, probes, seed, tau
         self.need_derivative = need_derivative
@@ -213,7 +215,7 @@ class DirectSweep:
         self.factorization = "lu"
         if self.form.residual == "acceleration":  # the load form (condition ~N^4) keeps the pivoted LU
             try:
-                self._plan = banded_plan(self._ls, self.form)
+                self._plan = banded_plan(self._ls, self.form, self.workspace)
                 self.factorization = self._plan.describe()
             except NotBanded as exc:
                 self.factorization = f"lu (not banded: {exc})"
@@ -232,10 +234,11 @@ class DirectSweep:
             if np.any(lam_rows & ~pl.fold):
                 self._parts = False   # a far-reaching lambda row: assemble at every lambda
             else:
-                self._parts = AffineBand(pl.assemble(D, E, fem_rows_by_diagonals(self.form)),
+                diagonal = fem_rows_by_diagonals(self.form, self.workspace)
+                self._parts = AffineBand(pl.assemble(D, E, diagonal),
                                          pl.objective_part(D[lam_rows]), pl.kl)
                 # the solve at the chosen lambda takes its band from here too (lsq.banded_factor)
-                self.form.cache[BAND_AFFINE] = (pl, self._parts)
+                self.workspace.affine_band = self._parts
         return self._parts
 
     def _combined(self, lam: float, buffer: int = 0, h: float = 0.0) -> tuple | None:
@@ -286,7 +289,7 @@ class DirectSweep:
                 plain[n + nu:][rows] = True
         return plain
 
-    def _factor(self, form, lam: float | None = None, condensed: bool = False):
+    def _factor(self, ls, lam: float | None = None, condensed: bool = False):
         """The banded factor with the plan made once (the pattern is the same at every
         lambda), or the pivoted sparse LU when the problem is not banded. The last banded
         factor at a ``lam`` is kept for :meth:`hand_off`. With ``condensed``, a
@@ -294,25 +297,25 @@ class DirectSweep:
         cond = self._condensed() if condensed and lam is not None else False
         if cond:
             try:
-                return CondensedKKT(form.D.A, form.E.A, cond, lam, params=self.model.l_index)
+                return CondensedKKT(ls.D.A, ls.E.A, cond, lam, params=self.model.l_index)
             except (NotBanded, RuntimeError, np.linalg.LinAlgError):
                 pass   # the whole band's factor below
         if self._plan is not None:
             self._kept = None   # its buffer is about to be overwritten
             try:
                 parts = None if lam is None else self._combined(lam)
-                fac = banded_factor(form, self.form, plan=self._plan, parts=parts)
+                fac = banded_factor(ls, self.form, plan=self._plan, parts=parts)
             except (RuntimeError, np.linalg.LinAlgError):
                 pass
             else:
                 if lam is not None:
                     self._kept = (float(lam), fac, 0 if parts is not None else None)
                 return fac
-        return factor_form(form, self.form)
+        return factor_form(ls, self.form)
 
     def hand_off(self) -> None:
         """Hand the last real point's factor and the buffers no factor uses to the solve at
-        the chosen lambda (:data:`bvpnav.linalg.lsq.BAND_FACTORS`, read by
+        the chosen lambda (:attr:`bvpnav.linalg.workspace.Workspace.kept_factors`, read by
         :func:`bvpnav.linalg.lsq.banded_factor`): its band is written into memory the sweep has
         already touched instead of a fresh array, or, when it is the last point's lambda,
         not factored again. The sweep's buffers are then the solve's: the sweep evaluates
@@ -331,7 +334,7 @@ class DirectSweep:
             kept.spare(self._cond.buffer())
             self._cond = None
         self._kept, self._buffers = None, [None] * len(self._buffers)
-        self.form.cache[BAND_FACTORS] = kept
+        self.workspace.kept_factors = kept
 
     def _logdet(self, lam: float) -> float:
         """:meth:`bvpnav.linalg.banded.BandedKKT.logdet` at ``lam``: from the combined parts by
@@ -361,22 +364,22 @@ class DirectSweep:
         if (pt is not None and (not need_trace or "trace" in pt)
                 and (not self.need_derivative or "deta2" in pt)):
             return pt
-        form = self._ls.at_lam(lam)
-        m, n = form.D.A.shape
+        ls = self._ls.at_lam(lam)
+        m, n = ls.D.A.shape
         # GCV's trace by the log-determinant: on a condensed band, the small system's complex
         # step (_trace_logdet); else one complex factorization of the whole band at
         # lambda + ih gives the point, dx/dlambda and the determinant's derivative
         # (_complex_point)
         by_logdet = need_trace and self._complex_applies()
         condensed = not need_trace or (by_logdet and bool(self._condensed()))
-        step = self._complex_point(form, lam) if by_logdet and not condensed else None
+        step = self._complex_point(ls, lam) if by_logdet and not condensed else None
         h = None
         if step is not None:
             fac, x, h = step
             banded = True
         else:
             try:
-                fac = self._factor(form, lam, condensed=condensed)
+                fac = self._factor(ls, lam, condensed=condensed)
             except (RuntimeError, np.linalg.LinAlgError) as exc:
                 raise InputError(f"lambda={lam:g}: the KKT matrix is singular ({exc}); some unknown "
                                  "is not determined by the information") from exc
@@ -385,18 +388,18 @@ class DirectSweep:
             # and verified); the sparse LU of the load form is refined twice
             banded = isinstance(fac, BandedKKT)
             if banded:
-                x = fac.solve_x(form.rhs())
+                x = fac.solve_x(ls.rhs())
             else:
-                x = fac.refined(form.rhs(), 2, 1e-14, window=slice(m, m + n))[0][m:m + n]
+                x = fac.refined(ls.rhs(), 2, 1e-14, window=slice(m, m + n))[0][m:m + n]
         scaled = [t.residual.value(x) / t.sigma for t in self.lam_terms]  # S (A x + c)
         rho2 = float(np.sum(self.data.value(x) ** 2))
         rho2 += sum(float(np.sum((t.residual.value(x) / t.sigma) ** 2)) for t in self.fixed_terms)
         eta2 = sum(float(np.sum(r**2)) for r in scaled)
         pt = {"lam": key, "rho2": rho2, "eta2": eta2, "x": x}
         if self.need_derivative:
-            pt.update(self._derivative(form, fac, banded, x, scaled, lam))
+            pt.update(self._derivative(ls, fac, banded, x, scaled, lam))
         if need_trace:
-            pt["trace"] = self._trace(form, fac, lam, probes, seed, h)
+            pt["trace"] = self._trace(ls, fac, lam, probes, seed, h)
         self.cache[key] = pt
         return pt
 
@@ -409,7 +412,7 @@ class DirectSweep:
             return False
         return self._plan is not None and self._logdet_applies()
 
-    def _complex_point(self, form, lam: float):
+    def _complex_point(self, ls, lam: float):
         r"""``(factor, x, h)`` at ``lam`` from one complex factorization, or None (no affine
         band, or its factor failed: the real path takes over).
 
@@ -430,7 +433,7 @@ class DirectSweep:
         if parts is None:
             return None
         try:
-            fac = banded_factor(form, self.form, plan=self._plan, parts=parts)
+            fac = banded_factor(ls, self.form, plan=self._plan, parts=parts)
         except (RuntimeError, np.linalg.LinAlgError):
             return None
         # a real right-hand side: the real part of the solve is x to O(h^2) (dx/dlambda is
@@ -438,9 +441,9 @@ class DirectSweep:
         # imaginary part of a solve with the right-hand side's derivative would carry
         # dx = K^-1 (b' - K' x) with b' and K' x cancelling inside the factorization,
         # accurate only to |x| eps / lambda; 14 % off at lambda = 1e6 on 2,000 samples)
-        return fac, fac.solve_x_real(form.rhs()), h
+        return fac, fac.solve_x_real(ls.rhs()), h
 
-    def _derivative(self, form, fac, banded: bool, x: np.ndarray, scaled: list, lam: float) -> dict:
+    def _derivative(self, ls, fac, banded: bool, x: np.ndarray, scaled: list, lam: float) -> dict:
         r"""``deta2``, ``d2eta2`` and ``quasi`` from :math:`dx/d\lambda`, one more solve with
         the factor (a complex-step factor's real part, see :meth:`_complex_point`).
 
@@ -458,12 +461,12 @@ class DirectSweep:
 
         the second derivative for the price of a norm (:func:`bvpnav.lam.lcurve.curvature_slope`).
         """
-        m, n = form.D.A.shape
+        m, n = ls.D.A.shape
         # dx/dlam from the same factorization: H x' + E^T mu' = -sum A^T S^2 (A x + c)
         g = np.zeros(n)
         for t, r in zip(self.lam_terms, scaled, strict=True):
             g -= t.residual.A.T @ (r / t.sigma)
-        rhs = np.concatenate([np.zeros(m), g, np.zeros(form.E.m)])
+        rhs = np.concatenate([np.zeros(m), g, np.zeros(ls.E.m)])
         if banded:   # the eliminated unknowns (w) only where a lambda row reads them
             dx = fac.solve_x_real(rhs, eliminated=self._lam_rows_read_eliminated(fac),
                                   interior=self.need_quasi)
@@ -494,27 +497,25 @@ class DirectSweep:
         """Change of the augmented right-hand side (at lambda = 1) when the measured
         accelerations change by ``Z`` (N, d); the form is affine in the data."""
         def rhs_for(acc):
-            f2 = copy.copy(self.form)
-            f2._model, f2._terms, f2.cache = self.model.with_acc(acc), None, {}
-            return least_squares_form(f2, 1.0).rhs()
+            return least_squares_form(self.form.with_acceleration(acc), 1.0).rhs()
 
         if self._rhs_jac is None:
             self._rhs_jac = rhs_for(np.zeros_like(self.form.data.acc))
         return rhs_for(Z) - self._rhs_jac
 
-    def _trace(self, form, fac, lam, probes, seed, h=None) -> float:
+    def _trace(self, ls, fac, lam, probes, seed, h=None) -> float:
         N, d = self.model.N, self.model.d
         exact = self.trace == "exact" or (self.trace == "auto" and N * d <= self.exact_trace_limit)
         why = ""
         if (self.trace in ("auto", "logdet") and not exact and isinstance(fac, BandedKKT)
                 and self._logdet_applies()):
             try:
-                value = self._trace_logdet(form, fac, lam, h)
+                value = self._trace_logdet(ls, fac, lam, h)
                 self.trace_method = "log-determinant"
                 return value
             except _NoLogdet as exc:   # the probes below need no determinant
                 why = f"; no log-determinant: {exc}"
-        m, n = form.D.A.shape
+        m, n = ls.D.A.shape
         widx = np.concatenate([self.model.w_index(a) for a in range(d)])  # axis-major like Z.T
         self.trace_method = ("exact columns" if exact else f"Hutchinson ({probes} probes)") + why
         if exact:
@@ -526,7 +527,7 @@ class DirectSweep:
             self._probe_rhs = ((exact, probes, seed), Zs,
                                np.column_stack([self._rhs_jacobian_apply(Z) for Z in Zs]))
         Zs, R = self._probe_rhs[1], self._probe_rhs[2].copy()
-        R[:m][form.lam_rows] *= math.sqrt(lam)
+        R[:m][ls.lam_rows] *= math.sqrt(lam)
         dW = fac.solve(R)[m:m + n][widx]
         vals = np.array([float(Z.T.ravel() @ dW[:, k]) for k, Z in enumerate(Zs)])
         return float(vals.sum()) if exact else float(vals.mean())
@@ -556,7 +557,7 @@ class DirectSweep:
             self._logdet_ok = bool(np.max(np.abs(R - want)) <= 1e-9 * scale)
         return self._logdet_ok
 
-    def _trace_logdet(self, form, fac, lam, h=None) -> float:
+    def _trace_logdet(self, ls, fac, lam, h=None) -> float:
         r""":math:`\mathrm{tr}(\partial w / \partial \hat a)` from the log-determinant.
 
         Notes
@@ -584,7 +585,6 @@ class DirectSweep:
         """
         model = self.model
         m0 = model.N * model.d
-        ls = form
         m, n = ls.D.A.shape
         fixed = np.flatnonzero(~ls.lam_rows)
         fixed = fixed[fixed >= m0]
@@ -625,8 +625,8 @@ class CvxpySweep:
 
     engine = "cvxpy"
 
-    def __init__(self, form, solve_at: Callable, tau: float = 1.5):
-        self.form = as_formulation(form)
+    def __init__(self, form: Formulation, solve_at: Callable, tau: float = 1.5):
+        self.form = form
         self.model = self.form.model
         self.solve_at = solve_at
         self.tau = tau
@@ -677,7 +677,7 @@ def _check_range(lam_range, points) -> tuple[float, float]:
     return lo, hi
 
 
-def _usable_rules(form, names: list[str], rule: str, engine: str) -> list[str]:
+def _usable_rules(form: Formulation, names: list[str], rule: str, engine: str) -> list[str]:
     """The rules that can run here; the chosen ``rule`` itself must, or InputError."""
     out = []
     for name in names:
@@ -712,14 +712,15 @@ def _sweep(eng, lams, progress):
         return [eng.point(lam) for lam in bar]
 
 
-def sweep_curve(form, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6), points: int | None = None,
-                tau: float = 1.5, probes: int = 24, seed: int = 0, progress=None, engine: str = "auto",
-                solve_at: Callable | None = None, check_memory: Callable | None = None) -> LambdaCurve:
+def sweep_curve(form: Formulation, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6),
+                points: int | None = None, tau: float = 1.5, probes: int = 24, seed: int = 0, progress=None,
+                engine: str = "auto", solve_at: Callable | None = None,
+                check_memory: Callable | None = None, workspace: Workspace | None = None) -> LambdaCurve:
     """Sweep lambda over a formulation and apply the selection rules.
 
     Parameters
     ----------
-    form : Formulation or NavigationProblem
+    form : Formulation
         Must have at least one soft item weighted by lambda.
     rules : sequence of str, optional
         Rules to evaluate (default: every registered rule); ``rule`` is always included.
@@ -749,6 +750,9 @@ def sweep_curve(form, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6), p
         (required for it).
     check_memory : callable, optional
         Called before the ``direct`` engine runs (refuses a sweep that cannot fit).
+    workspace : Workspace, optional
+        The solve's workspace: the ``direct`` engine keeps its band plan, its band along
+        lambda and its last factors there for the solve at the chosen lambda.
 
     Returns
     -------
@@ -762,12 +766,11 @@ def sweep_curve(form, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6), p
     """
     with once():
         return _sweep_curve(form, rules, rule, lam_range, points, tau, probes, seed, progress, engine,
-                            solve_at, check_memory)
+                            solve_at, check_memory, workspace)
 
 
-def _sweep_curve(form, rules, rule, lam_range, points, tau, probes, seed, progress, engine, solve_at,
-                 check_memory) -> LambdaCurve:
-    form = as_formulation(form)
+def _sweep_curve(form: Formulation, rules, rule, lam_range, points, tau, probes, seed, progress, engine,
+                 solve_at, check_memory, workspace) -> LambdaCurve:
     t0 = time.perf_counter()
     asked = set([rule, *(rule_names() if rules is None else rules)])
     for r in asked:
@@ -799,7 +802,7 @@ def _sweep_curve(form, rules, rule, lam_range, points, tau, probes, seed, progre
     progress = progress_enabled(progress)
     need_trace = any("trace" in get_rule(r).needs for r in names)
     if engine == "direct":
-        eng = DirectSweep(form, need_trace=need_trace, probes=probes, seed=seed, tau=tau,
+        eng = DirectSweep(form, need_trace=need_trace, probes=probes, seed=seed, tau=tau, workspace=workspace,
                           need_derivative=any(get_rule(r).uses_derivative for r in names),
                           need_quasi=any(get_rule(r).uses_derivative
                                          and getattr(get_rule(r), "reads_quasi", True) for r in names))

@@ -105,7 +105,7 @@ def residual(S, rhs: np.ndarray, z: np.ndarray, out: np.ndarray | None = None) -
     """``rhs - S z`` for the augmented matrix ``S`` of any factorization: formed in place
     (into ``out`` when given) by :meth:`AugmentedOperator.residual` for one right-hand
     side, else by the product."""
-    if np.ndim(rhs) == 1 and hasattr(S, "residual"):
+    if np.ndim(rhs) == 1 and isinstance(S, AugmentedOperator):
         return S.residual(rhs, z, out=out)
     return rhs - S @ z
 
@@ -132,8 +132,8 @@ class AugmentedOperator:
 
     def residual(self, rhs: np.ndarray, z: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """``rhs - S z`` (one right-hand side), into ``out`` when given: each block's product
-        subtracted in its slice (no concatenated product and no second full-length array:
-        at three axes with N = 1e6, 96 MB of fresh memory each)."""
+        subtracted in its slice (no concatenated product and no second full-length array,
+        each of which is fresh memory of the length of ``z``)."""
         m, n = self.m, self.n
         rho, x, mu = z[:m], z[m:m + n], z[m + n:]
         out = np.empty_like(rhs, dtype=np.result_type(rhs, z)) if out is None else out
@@ -149,8 +149,8 @@ class AugmentedOperator:
     def max_abs(self) -> float:
         """The largest absolute entry of ``S`` (the ``-I`` block's 1 included): a lower bound
         of its infinity norm, larger than it by at most the most entries a row holds, read
-        from the stored values without an absolute-value copy (the infinity norm needed one
-        of ``|E|``, 192 MB for three axes at N = 1e6, and four sparse products)."""
+        from the stored values without an absolute-value copy (the infinity norm needed a
+        copy of ``|E|`` and four sparse products)."""
         return max(1.0 if self.m else 0.0, abs_max(self.D.data), abs_max(self.E.data))
 
 
@@ -237,10 +237,10 @@ def _scale_rows(ab: np.ndarray, sU: np.ndarray, kl: int, rows: np.ndarray | None
     ab[:, kl:] *= factor
 
 
-#: Band rows written at a time by :meth:`BandPlan._scatter` (0.85 MB of a band with
-#: kl = 4: the slice stays in a 1-4 MB L2 cache while every diagonal's entries in it are
-#: written; measured at 2e6 band rows, eleven strided diagonals: 56 ms by slices of 8192
-#: rows, 98 ms by 65536, 213 ms whole).
+#: Band rows written at a time by :meth:`BandPlan._scatter`: the slice of the band stays
+#: in a typical L2 cache while every diagonal's entries in it are written (smaller and
+#: larger slices, and the whole band at once, were slower; see the benchmark
+#: ``examples/benchmarks/speed_memory.py``).
 SCATTER_SLICE = 1 << 13
 
 
@@ -411,9 +411,9 @@ class _Moves:
     Each phase ``c`` of a period ``P`` (band rows ``c, c + P, ...``) is split into runs
     where the reduced index grows by a constant step (:func:`_affine_runs`); a run of
     ``u1 - u0`` rows is the slice pair ``band[c + P u0 : c + P u1 : P]`` and
-    ``reduced[p0 : p0 + s (u1 - u0) : s]``. A slice copy of 2e5 doubles took 0.04 ms where
-    numpy's fancy indexing with the int32 positions took 0.4 ms (gather) and 0.66 ms
-    (scatter): two of each per solve.
+    ``reduced[p0 : p0 + s (u1 - u0) : s]``. A slice copy is about ten times faster than
+    numpy's fancy indexing with the int32 positions (gather or scatter): two of each per
+    solve.
     """
 
     def __init__(self, order: np.ndarray):
@@ -721,7 +721,7 @@ class KeptFactors:
         """A real array of ``shape`` over memory the sweep has already touched (a spare
         buffer, else a kept factor's, which ends that factor), or None. Writing the chosen
         lambda's band there instead of into a fresh array saves the page faults of a first
-        write (about 20 ms at N = 1e5 samples, 200 ms at 1e6)."""
+        write, which grow with N."""
         size = int(np.prod(shape))
         pool = self._spare + [buf for _, buf in self._factors.values() if buf is not None]
         for buf in pool:
@@ -902,8 +902,8 @@ class BandPlan:
         alone = fold[Drow] & (nnz_row == 1)
         if lam_rows is not None:
             alone &= ~np.asarray(lam_rows, dtype=bool)[Drow]
-        # columns with an entry, none of them shared (boolean marks: two counts of the
-        # unknowns' length were 96 MB for three axes at N = 1e6)
+        # columns with an entry, none of them shared (boolean marks: a byte per unknown
+        # where two integer counts of the unknowns' length took sixteen)
         single = np.zeros(n, dtype=bool)
         single[Dcol] = True
         single[Dcol[~alone]] = False
@@ -941,7 +941,7 @@ class BandPlan:
         del onward, pieces
         local = np.flatnonzero(node >= 0)
         # by node, then by reach: one stable sort of a combined key (reach - node is small;
-        # the key's runs are already sorted: 5.2 -> 3.5 ms against lexsort at N = 1e5)
+        # the key's runs are already sorted: faster than lexsort)
         nl = node[local]
         ahead = reach[local] - nl
         ahead -= ahead.min(initial=0)
@@ -1245,7 +1245,7 @@ class BandPlan:
         """The band ``ab[j, 2 kl + i - j] = A[i, j]`` from :class:`_Stride` and index
         entries (see :meth:`_scatter`); long writes go a slice of band rows at a time,
         every one's part in it together: one diagonal at a time would stream the whole band
-        once per diagonal (208 MB at N = 1e6, 3 kl + 1 = 13 values per row). With ``nb``,
+        once per diagonal (3 kl + 1 values per row). With ``nb``,
         the first ``nb`` band rows alone (strided entries are clipped to them; the index
         entries must lie there)."""
         kl, ldab = self.kl, self.ldab
@@ -1300,8 +1300,8 @@ class BandPlan:
         twice as fast as scipy's column-wise one for ``E_z^T mu``), cached together."""
         cached = getattr(self, "_Ez", None)
         if cached is None or cached[0] is not E.data:   # the same arrays under a new wrapper
-            # scipy's column indexing (a slice for one run of unknowns): 2.0 against 3.3 ms
-            # for the product with a selection matrix at N = 1e5
+            # scipy's column indexing (a slice for one run of unknowns): faster than the
+            # product with a selection matrix
             Ez = E[:, self.elim_index]
             cached = (E.data, Ez, Ez.T.tocsr())
             self._Ez = cached
@@ -1475,8 +1475,8 @@ class BandedKKT(Factorization):
         With one run this is the dense ``A^{-1} B``. With several, a border column (an
         error-model parameter of one axis) is nonzero in one run, and so is its solution:
         only those blocks are formed and kept, from ``B``'s own entries (no dense ``(nb,
-        k)`` copy of ``B`` or of ``X``: 288 MB each for three axes with six parameters at
-        N = 1e6, every one of them fresh memory the process must fault in).
+        k)`` copy of ``B`` or of ``X``: each would be fresh memory of the whole band's
+        length times the border that the process must fault in).
         """
         runs, k = self._runs, B.shape[1]
         if runs == 1:
@@ -1492,8 +1492,7 @@ class BandedKKT(Factorization):
         if not blocks:
             return []
         # by run (stable: by column within a run): each run's solutions are adjacent columns,
-        # kept as views of the one solve (no copies: 210 ms of fresh memory for three axes
-        # with six parameters at N = 1e6)
+        # kept as views of the one solve (no copies: each would be fresh memory)
         blocks.sort(key=lambda blk: blk[0])
         Rs = np.zeros((L, len(blocks)), dtype=self._lu.dtype, order="F")
         for c, (_, _, r, v) in enumerate(blocks):
@@ -1622,7 +1621,7 @@ class BandedKKT(Factorization):
         b1f = b1[pl.fold] if nu else b1
         # without unfolded rows the reduced unknowns (x, mu) are z's own tail: the reduced
         # right-hand side is formed there and solved in place (the gather copies it before
-        # anything is written back: 72 MB fewer per solve for three axes at N = 1e6)
+        # anything is written back: one array of the reduced unknowns' length fewer per solve)
         z = None if x_only or nu else np.empty_like(rhs)
         r = (np.empty((n + nu + bmu.shape[0],) + rhs.shape[1:], dtype=rhs.dtype) if z is None
              else z[m:])

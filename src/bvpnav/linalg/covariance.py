@@ -43,7 +43,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import InputError, SolveError
-from ..formulation import as_formulation
+from ..formulation import Formulation
 from ..model import Affine
 from ..sparse import canonical
 from .banded import row_span
@@ -63,7 +63,7 @@ MAX_BORDER_ROWS = 2000
 BORDER_COND_WARN = 1e10
 
 
-def quadratic_model(form, x: np.ndarray, lam: float) -> tuple[LeastSquaresForm, bool]:
+def quadratic_model(form: Formulation, x: np.ndarray, lam: float) -> tuple[LeastSquaresForm, bool]:
     """The least-squares form of the problem, or of its quadratic model at ``x``.
 
     Returns
@@ -72,7 +72,6 @@ def quadratic_model(form, x: np.ndarray, lam: float) -> tuple[LeastSquaresForm, 
     exact : bool
         True when the problem is least squares (``ls`` is the problem itself).
     """
-    form = as_formulation(form)
     ls = least_squares_form(form, lam)
     if ls is not None:
         return ls, True
@@ -405,12 +404,12 @@ class _Posterior:
         return s[:, None] * self.Sinv[np.ix_(pos, pos)] * s[None, :]
 
 
-def posterior(form, x: np.ndarray, lam: float) -> Covariance:
+def posterior(form: Formulation, x: np.ndarray, lam: float) -> Covariance:
     """The covariance of the estimate ``x`` of ``form`` at ``lam`` (see the module Notes).
 
     Parameters
     ----------
-    form : Formulation or NavigationProblem
+    form : Formulation
     x : ndarray
         The solution (stacked unknowns); it chooses the active rows of a quadratic model.
     lam : float
@@ -426,7 +425,6 @@ def posterior(form, x: np.ndarray, lam: float) -> Covariance:
         When the information does not determine every unknown (the KKT matrix is
         singular), naming what to add.
     """
-    form = as_formulation(form)
     model = form.model
     ls, exact = quadratic_model(form, x, lam)
     hard_rows = int(ls.E.m - ls.eq_blocks[0][1].stop)

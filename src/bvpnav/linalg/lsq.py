@@ -35,18 +35,19 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..formulation import as_formulation
+from ..formulation import Formulation
 from ..model import Affine
 from ..sparse import abs_max, canonical, row_scaled
 from .banded import (
+    AugmentedOperator,
     BandedKKT,
     BandPlan,
     DiagonalRows,
     Factorization,
-    KeptFactors,
     NotBanded,
     residual,
 )
+from .workspace import Workspace
 
 __all__ = ["LeastSquaresForm", "least_squares_form", "non_least_squares_term", "forward_error",
            "check_factor", "BorderedLU", "banded_plan", "banded_factor", "fem_rows_by_diagonals",
@@ -123,21 +124,21 @@ class LeastSquaresForm:
         return np.concatenate([-self.D.c, np.zeros(n), -self.E.c])
 
 
-def non_least_squares_term(form):
+def non_least_squares_term(form: Formulation):
     """The first term that makes the problem not least squares (an inequality, a band or
     a robust penalty), or None when the problem is equality-constrained least squares."""
-    for term in as_formulation(form).terms():
+    for term in form.terms():
         if term.least_squares_role() is None:
             return term
     return None
 
 
-def least_squares_form(form, lam: float, surrogate: bool = False) -> LeastSquaresForm | None:
+def least_squares_form(form: Formulation, lam: float, surrogate: bool = False) -> LeastSquaresForm | None:
     r"""The problem as equality-constrained least squares, or None if it is not one.
 
     Parameters
     ----------
-    form : Formulation or NavigationProblem
+    form : Formulation
     lam : float
         Weight of the lambda-scaled soft rows (multiplied by :math:`\sqrt{\lambda}`).
     surrogate : bool
@@ -157,7 +158,6 @@ def least_squares_form(form, lam: float, surrogate: bool = False) -> LeastSquare
     equalities are rows of ``E``, soft ones rows of ``D`` weighted by
     :math:`\sqrt{\lambda}/\sigma` (priors by :math:`1/\sigma`).
     """
-    form = as_formulation(form)
     if not surrogate and non_least_squares_term(form) is not None:
         return None
     model = form.model
@@ -178,7 +178,7 @@ def least_squares_form(form, lam: float, surrogate: bool = False) -> LeastSquare
     # canonical once (sorted, no duplicates or explicit zeros): every factorization and every
     # lambda of a sweep then shares these arrays instead of cleaning a copy of its own. Each
     # part is cleaned before stacking: a hard item's explicit zero would otherwise copy the
-    # whole FEM block (60 ms at N = 1e6), and stacked canonical parts are canonical
+    # whole FEM block, and stacked canonical parts are canonical
     D = Affine.vstack([Affine(canonical(a.A), a.c, a.labels) for a in obj])
     # the FEM rows and the items' below them written once (not the FEM rows, then a copy)
     E = model.fem_rows_and([Affine(canonical(a.A), a.c, a.labels) for a in eq])
@@ -186,13 +186,13 @@ def least_squares_form(form, lam: float, surrogate: bool = False) -> LeastSquare
     return LeastSquaresForm(D, E, blocks, np.concatenate(scaled), float(lam))
 
 
-def forward_error(form, xval: np.ndarray, lam: float, duals: dict | None,
-                  factored: tuple | None = None) -> float | None:
+def forward_error(form: Formulation, xval: np.ndarray, lam: float, duals: dict | None,
+                  factored: Factored | None = None, workspace: Workspace | None = None) -> float | None:
     r"""Relative forward error of ``xval`` estimated by one refinement step.
 
     Parameters
     ----------
-    form : Formulation or NavigationProblem
+    form : Formulation
     xval : ndarray
         The stacked solution to judge.
     lam : float
@@ -207,31 +207,32 @@ def forward_error(form, xval: np.ndarray, lam: float, duals: dict | None,
         :math:`\|\delta x\|_\infty / \|x\|_\infty` for the correction :math:`\delta` of one
         refinement step, or None when the problem is not equality-constrained least
         squares.
-    factored : (LeastSquaresForm, BorderedLU), optional
+    factored : Factored, optional
         A factorization of this problem's augmented matrix at this ``lam`` to reuse (the
         direct back end passes its own; the residual is still computed afresh).
+    workspace : Workspace, optional
+        The solve's workspace (a band plan to reuse when a factor is made here).
     """
-    problem = as_formulation(form)
-    form = factored[0] if factored is not None else least_squares_form(problem, lam)
-    if form is None:
+    ls = factored.ls if factored is not None else least_squares_form(form, lam)
+    if ls is None:
         return None
-    p = form.E.m
+    p = ls.E.m
     y = np.zeros(p)
     if duals:
-        for label, sl in form.eq_blocks:
+        for label, sl in ls.eq_blocks:
             d = duals.get(label)
             if label != "fem":
                 d = d[0] if d else None
             if d is not None:
                 y[sl] = np.asarray(d, dtype=float).ravel()
-    rho = form.D.value(xval)
+    rho = ls.D.value(xval)
     z = np.concatenate([rho, xval, y / 2.0])
-    m = form.D.m
+    m = ls.D.m
     try:
-        fac = factored[1] if factored is not None else check_factor(form, problem)
-        resid = residual(fac.S, form.rhs(), z)
+        fac = factored.factor if factored is not None else check_factor(ls, form, workspace)
+        resid = residual(fac.S, ls.rhs(), z)
         # the banded factor gives the correction's x part alone (no residuals formed)
-        dx = fac.solve_x(resid) if hasattr(fac, "solve_x") else fac.solve(resid)[m:m + xval.size]
+        dx = fac.solve_x(resid) if isinstance(fac, BandedKKT) else fac.solve(resid)[m:m + xval.size]
     except (RuntimeError, np.linalg.LinAlgError):  # singular: the information does not determine x
         return float("inf")
     return float(np.max(np.abs(dx)) / max(np.max(np.abs(xval)), 1e-300))
@@ -239,11 +240,11 @@ def forward_error(form, xval: np.ndarray, lam: float, duals: dict | None,
 
 class Factored(NamedTuple):
     r"""A factorization of the augmented system at one ``lam``, handed by a direct back end
-    to verification (a ``(form, factor)`` pair to code that unpacks two).
+    to verification (a ``(ls, factor)`` pair to code that unpacks two).
 
     Attributes
     ----------
-    form : LeastSquaresForm
+    ls : LeastSquaresForm
     factor : Factorization
     refined : (ndarray, float) or None
         The answer ``x`` the back end refined with this factor and the relative size
@@ -262,7 +263,7 @@ class Factored(NamedTuple):
     and the one that stopped the loop was chosen for being small.
     """
 
-    form: LeastSquaresForm
+    ls: LeastSquaresForm
     factor: Factorization
     refined: tuple | None = None
 
@@ -378,16 +379,17 @@ class BorderedLU(Factorization):
         return z
 
 
-def check_factor(form: LeastSquaresForm, problem):
+def check_factor(ls: LeastSquaresForm, form: Formulation, workspace: Workspace | None = None
+                 ) -> Factorization:
     """The factorization verification judges an answer with (any back end's): the banded
     one on the acceleration form (O(N), several times cheaper than a sparse LU), the
     pivoted LU where that is not banded or on the load form."""
-    if as_formulation(problem).residual == "acceleration":
+    if form.residual == "acceleration":
         try:
-            return banded_factor(form, problem)
+            return banded_factor(ls, form, workspace=workspace)
         except (NotBanded, RuntimeError, np.linalg.LinAlgError, ValueError):
             pass
-    return factor_form(form, problem, "lu")
+    return factor_form(ls, form, "lu")
 
 
 def column_nodes(model, interleave: bool = False) -> np.ndarray:
@@ -410,17 +412,15 @@ def column_nodes(model, interleave: bool = False) -> np.ndarray:
     return colnode
 
 
-def fem_rows_by_diagonals(problem) -> DiagonalRows:
+def fem_rows_by_diagonals(form: Formulation, workspace: Workspace | None = None) -> DiagonalRows:
     """The FEM rows (the first ``N d`` rows of a form's ``E``) of a formulation's model as
     :class:`~bvpnav.linalg.banded.DiagonalRows`: per axis the tridiagonal ``K`` on the positions
     and ``M`` on the acceleration residuals, the dense ``M G`` columns of the error-model
-    parameters, and the end velocities' two entries. Kept in the formulation's cache with
-    the model it describes."""
-    formulation = as_formulation(problem)
-    model = formulation.model
-    cached = formulation.cache.get("fem_diagonals")
-    if cached is not None and cached[0] is model:
-        return cached[1]
+    parameters, and the end velocities' two entries. Kept in ``workspace`` (when given)
+    with the model it describes."""
+    model = form.model
+    if workspace is not None and workspace.fem_diagonals is not None and workspace.model is model:
+        return workspace.fem_diagonals
     N, d = model.N, model.d
     tri, dense, rows, cols, vals = [], [], [], [], []
     for a in range(d):
@@ -441,27 +441,16 @@ def fem_rows_by_diagonals(problem) -> DiagonalRows:
     extra = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                           shape=(N * d, model.size))
     out = DiagonalRows(N * d, tri, dense, extra)
-    formulation.cache["fem_diagonals"] = (model, out)
+    if workspace is not None:
+        workspace.fem_diagonals, workspace.model = out, model
     return out
 
 
-#: The formulation-cache key of a lambda sweep's :class:`~bvpnav.linalg.banded.AffineBand`
-#: (``(plan, band)``): the sweep stores it, :func:`banded_factor` reads it, and the rule
-#: stage drops it once the chosen lambda is solved.
-BAND_AFFINE = "band_affine"
-
-#: The formulation-cache key of a lambda sweep's last factorizations
-#: (:class:`~bvpnav.linalg.banded.KeptFactors`): the solve at the chosen lambda takes the factor
-#: at that lambda when one is kept, else writes its band into a buffer the sweep used; the
-#: rule stage drops them with :data:`BAND_AFFINE`.
-BAND_FACTORS = "band_factors"
-
-
-def banded_plan(form: LeastSquaresForm, problem) -> BandPlan:
+def banded_plan(ls: LeastSquaresForm, form: Formulation, workspace: Workspace | None = None) -> BandPlan:
     """The symbolic analysis of a form's banded factorization (axes end to end, else
     interleaved when rows couple axes), with its first assembly kept for the first factor.
 
-    The plan is kept in the formulation's cache with the pattern it was made for, and
+    With ``workspace``, the plan is kept there with the pattern it was made for, and
     handed out again for a form of the same pattern (the lambda sweep's points and the
     solve at the chosen lambda share one analysis).
 
@@ -471,59 +460,59 @@ def banded_plan(form: LeastSquaresForm, problem) -> BandPlan:
         When rows couple distant instants beyond the banded path's limits (the caller falls
         back to a sparse factorization).
     """
-    formulation = as_formulation(problem)
-    model = formulation.model
-    D, E = canonical(form.D.A), canonical(form.E.A)
-    pattern = (D.indptr, D.indices, E.indptr, E.indices, np.asarray(form.lam_rows, dtype=bool))
-    cached = formulation.cache.get("band_plan")
-    if cached is not None and all(a is b or np.array_equal(a, b) for a, b in zip(cached[1], pattern,
-                                                                               strict=True)):
-        return cached[0]   # the same pattern (another lambda, or the sweep's chosen one)
-    diagonal = fem_rows_by_diagonals(formulation)
+    model = form.model
+    D, E = canonical(ls.D.A), canonical(ls.E.A)
+    pattern = (D.indptr, D.indices, E.indptr, E.indices, np.asarray(ls.lam_rows, dtype=bool))
+    if workspace is not None and workspace.band_plan is not None and all(
+            a is b or np.array_equal(a, b) for a, b in zip(workspace.band_pattern, pattern, strict=True)):
+        return workspace.band_plan   # the same pattern (another lambda, or the sweep's chosen one)
+    diagonal = fem_rows_by_diagonals(form, workspace)
     try:
-        plan = BandPlan.build(D, E, column_nodes(model), lam_rows=form.lam_rows, segments=model.d,
+        plan = BandPlan.build(D, E, column_nodes(model), lam_rows=ls.lam_rows, segments=model.d,
                               diagonal=diagonal)
     except NotBanded:
         if model.d == 1:
             raise
-        plan = BandPlan.build(D, E, column_nodes(model, interleave=True), lam_rows=form.lam_rows,
+        plan = BandPlan.build(D, E, column_nodes(model, interleave=True), lam_rows=ls.lam_rows,
                               diagonal=diagonal)
-    formulation.cache["band_plan"] = (plan, pattern)
+    if workspace is not None:
+        workspace.band_plan, workspace.band_pattern = plan, pattern
     return plan
 
 
-def banded_factor(form: LeastSquaresForm, problem, plan=None, parts=None) -> BandedKKT:
+def banded_factor(ls: LeastSquaresForm, form: Formulation, plan: BandPlan | None = None, parts=None,
+                  workspace: Workspace | None = None) -> BandedKKT:
     """:class:`bvpnav.linalg.banded.BandedKKT` of a form; ``plan`` (:func:`banded_plan`) from an
     earlier factor of the same pattern is reused, and ``parts`` assembled values with it
-    (by default the lambda sweep's :class:`~bvpnav.linalg.banded.AffineBand` at the form's lambda
-    when the formulation has one, else an assembly).
+    (by default the lambda sweep's :class:`~bvpnav.linalg.banded.AffineBand` at the form's
+    lambda when ``workspace`` has one, else an assembly).
 
     Raises
     ------
     bvpnav.linalg.banded.NotBanded
         As :func:`banded_plan`.
     """
-    formulation = as_formulation(problem)
-    plan = banded_plan(form, problem) if plan is None else plan
-    if parts is None and form.lam is not None:
+    workspace = Workspace() if workspace is None else workspace   # the plan and the factor share diagonals
+    plan = banded_plan(ls, form, workspace) if plan is None else plan
+    if parts is None and ls.lam is not None:
         # after a lambda sweep of this formulation: its factor at this lambda when it kept
         # one (its last point's), else its scaled band at any lambda is one copy
         # (bvpnav.linalg.banded.AffineBand) into a buffer the sweep already touched: the solve at
         # the chosen lambda assembles nothing
-        kept = formulation.cache.get(BAND_FACTORS)
-        kept = kept if isinstance(kept, KeptFactors) and kept.plan is plan else None
-        fac = None if kept is None else kept.take(form.lam)
+        kept = workspace.kept_factors
+        kept = kept if kept is not None and kept.plan is plan else None
+        fac = None if kept is None else kept.take(ls.lam)
         if fac is not None:
-            return fac.for_matrices(form.D.A, form.E.A)
-        cached = formulation.cache.get(BAND_AFFINE)
-        if cached is not None and cached[0] is plan:
-            band = cached[1]
-            parts = band.at(form.lam, out=None if kept is None else kept.buffer(band.scaled0.shape))
-    return BandedKKT(form.D.A, form.E.A, params=formulation.model.l_index, plan=plan, parts=parts,
-                     diagonal=None if parts is not None else fem_rows_by_diagonals(formulation))
+            return fac.for_matrices(ls.D.A, ls.E.A)
+        band = workspace.affine_band
+        if band is not None and workspace.band_plan is plan:
+            parts = band.at(ls.lam, out=None if kept is None else kept.buffer(band.scaled0.shape))
+    return BandedKKT(ls.D.A, ls.E.A, params=form.model.l_index, plan=plan, parts=parts,
+                     diagonal=None if parts is not None else fem_rows_by_diagonals(form, workspace))
 
 
-def factor_form(form: LeastSquaresForm, problem, method: str = "lu", delta: float = 1e-12):
+def factor_form(ls: LeastSquaresForm, form: Formulation, method: str = "lu", delta: float = 1e-12,
+                workspace: Workspace | None = None) -> Factorization:
     """A factorization of a form's augmented matrix, error-model columns eliminated last.
 
     ``method="lu"``: SuperLU (COLAMD ordering, partial pivoting); redundant hard rows are
@@ -535,32 +524,32 @@ def factor_form(form: LeastSquaresForm, problem, method: str = "lu", delta: floa
     :class:`~bvpnav.linalg.banded.NotBanded` for rows that are not local).
     """
     if method == "banded":
-        return banded_factor(form, problem)
-    m, n = form.D.A.shape
-    p = form.E.m
-    dense = m + as_formulation(problem).model.l_index
+        return banded_factor(ls, form, workspace=workspace)
+    m, n = ls.D.A.shape
+    p = ls.E.m
+    dense = m + form.model.l_index
     if method == "ldl":
-        return BorderedLU(form.augmented(), dense, upper=form.augmented_upper(delta))
+        return BorderedLU(ls.augmented(), dense, upper=ls.augmented_upper(delta))
     if method != "lu":
         raise ValueError(f"method={method!r}; choose 'lu', 'ldl' or 'banded'")
-    return BorderedLU(form.augmented(), dense, np.arange(m + n, m + n + p))
+    return BorderedLU(ls.augmented(), dense, np.arange(m + n, m + n + p))
 
 
 #: Relative correction below which refinement of a banded answer stops, by accuracy
 #: preset (the direct back end's ``refine_tol``): a hundredth of the preset's forward-error
 #: bound (:data:`FORWARD_RTOL`). The correction measures the error of the answer before
 #: the step, which the step itself removes, so the answer is better than this (one step
-#: usually; at lambda = 0.005 on the benchmark's 1e5 samples the first correction was
-#: 4.2e-10 and a second one, 1.0e-11, only showed the rounding floor).
+#: usually; a second one only shows the rounding floor).
 BANDED_TOL = {name: 1e-2 * v for name, v in FORWARD_RTOL.items()}
 
 #: Largest normwise backward error at which a refined LDL^T answer is accepted.
 LDL_BACKWARD = 1e-12
 
 
-def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14,
+def solve_least_squares(form: Formulation, lam: float, refine: int = 3, tol: float = 1e-14,
                         method: str = "auto", ldl_steps: int = 30, ldl_tol: float = 1e-12,
-                        ldl_accept: float = 1e-7, banded_tol: float = BANDED_TOL["default"]):
+                        ldl_accept: float = 1e-7, banded_tol: float = BANDED_TOL["default"],
+                        workspace: Workspace | None = None):
     r"""Solve the equality-constrained least-squares form directly.
 
     One sparse factorization of the augmented system (error-model parameters eliminated
@@ -568,7 +557,7 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
 
     Parameters
     ----------
-    problem : Formulation or NavigationProblem
+    form : Formulation
     lam : float
     refine : int
         Refinement steps after an LU factorization (stops early below ``tol``).
@@ -585,6 +574,9 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
     banded_tol : float
         Stop refining a banded answer when the relative correction falls below this
         (:data:`BANDED_TOL`).
+    workspace : Workspace, optional
+        The solve's workspace: the band plan, and a lambda sweep's band or factor at this
+        ``lam``, to reuse.
 
     Returns
     -------
@@ -607,21 +599,20 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
     is the factorised (possibly regularized) matrix; it converges when
     :math:`\|I - \tilde S^{-1} S\| < 1`.
     """
-    problem = as_formulation(problem)
-    form = least_squares_form(problem, lam)
-    if form is None:
+    ls = least_squares_form(form, lam)
+    if ls is None:
         raise ValueError("not an equality-constrained least-squares problem")
     if method == "auto":
-        method = "lu" if problem.residual == "load" else "banded"
-    m, n = form.D.A.shape
+        method = "lu" if form.residual == "load" else "banded"
+    m, n = ls.D.A.shape
     window = slice(m, m + n)
-    rhs = form.rhs()
+    rhs = ls.rhs()
     notes = []
     fac = z = None
     k, corr = 0, np.inf
     if method == "banded":
         try:
-            fac = banded_factor(form, problem)
+            fac = banded_factor(ls, form, workspace=workspace)
             # a pivoted LU (exact but for folding the local rows): one refinement step whose
             # correction measures the first solve's error usually settles it
             z, k, corr = _accepted(fac, rhs, window, ldl_steps, banded_tol, ldl_accept, notes, "banded")
@@ -635,7 +626,7 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
             method = "lu"
     if fac is None and method == "ldl":
         try:
-            fac = factor_form(form, problem, "ldl")
+            fac = factor_form(ls, form, "ldl")
             z, k, corr = _accepted(fac, rhs, window, ldl_steps, ldl_tol, ldl_accept, notes, "ldl")
             if z is None:
                 fac = None
@@ -643,18 +634,18 @@ def solve_least_squares(problem, lam: float, refine: int = 3, tol: float = 1e-14
             notes.append(f"ldl failed: {exc}")
             fac = None
     if fac is None:
-        fac = factor_form(form, problem, "lu")
+        fac = factor_form(ls, form, "lu")
         z, k, corr = fac.refined(rhs, refine + (3 if fac.shift else 0), tol, window=window)
     name = fac.plan.describe() if isinstance(fac, BandedKKT) else fac.method
     note = name + (f" ({'; '.join(notes)})" if notes else "")
     x = z[m:m + n]
     mu = z[m + n:]
     duals = {}
-    for label, sl in form.eq_blocks:
+    for label, sl in ls.eq_blocks:
         y = 2.0 * mu[sl]
         duals[label] = y if label == "fem" else [y]
     return x, {"duals": duals, "refinements": k, "correction": corr, "factorization": note,
-               "factor": fac, "form": form, "refined": (x, corr) if k == 1 else None}
+               "factor": fac, "form": ls, "refined": (x, corr) if k == 1 else None}
 
 
 def _accepted(fac, rhs, window, steps, tol, accept, notes, name):
@@ -662,7 +653,8 @@ def _accepted(fac, rhs, window, steps, tol, accept, notes, name):
     its answer only with a small correction and a normwise backward error near rounding;
     ``(None, k, corr)`` with the reason in ``notes`` otherwise."""
     S = fac.S
-    scratch = np.empty_like(rhs) if hasattr(S, "residual") and np.ndim(rhs) == 1 else None
+    operator = isinstance(S, AugmentedOperator)   # else an assembled sparse matrix
+    scratch = np.empty_like(rhs) if operator and np.ndim(rhs) == 1 else None
     z, k, corr = fac.refined(rhs, steps, tol, window=window, stall=0.5, scratch=scratch)
     # a small correction alone can mislead (a wild first solve makes every later
     # correction small relative to z, and the correction is measured on x alone): also
@@ -674,7 +666,7 @@ def _accepted(fac, rhs, window, steps, tol, accept, notes, name):
     # may have moved (found in review)
     eta = np.inf
     if np.all(np.isfinite(z)):
-        norm = S.max_abs() if hasattr(S, "max_abs") else float(abs(S).max())
+        norm = S.max_abs() if operator else float(abs(S).max())
         den = norm * abs_max(z) + abs_max(rhs)
         res = residual(S, rhs, z, out=scratch)
         eta = abs_max(res) / max(den, 1e-300)

@@ -12,7 +12,9 @@ import numpy as np
 import pandas as pd
 
 from ..errors import Inaccurate, InputError
-from ..formulation import as_formulation
+from ..formulation import Formulation
+from ..linalg.lsq import Factored
+from ..linalg.workspace import Workspace
 from ..result import Attempt, Run, Solution, SolveRecords, Verification
 from .verify import verify
 
@@ -28,7 +30,7 @@ def _dual_rms(duals: dict | None, label: str) -> float | None:
     return float(np.sqrt(np.mean(np.concatenate(ds) ** 2))) if ds else None
 
 
-def _items_table(form, xval: np.ndarray, duals: dict | None) -> tuple[pd.DataFrame, dict]:
+def _items_table(form: Formulation, xval: np.ndarray, duals: dict | None) -> tuple[pd.DataFrame, dict]:
     rows, item_res = [], {}
     for term in form.terms():
         r, shown = term.shown(xval)
@@ -44,7 +46,7 @@ def _items_table(form, xval: np.ndarray, duals: dict | None) -> tuple[pd.DataFra
     return pd.DataFrame(rows, columns=cols), item_res
 
 
-def _warnings(form, run: Run | None, check: Verification | None) -> list[str]:
+def _warnings(form: Formulation, run: Run | None, check: Verification | None) -> list[str]:
     warn = [] if run is None else [f"{run.solver}: {w}" for w in run.solver_warnings]
     if run is not None and not run.preset_applied:
         warn.append(f"{run.solver}: bvpnav has no accuracy presets for this solver; it ran with "
@@ -66,10 +68,9 @@ def _warnings(form, run: Run | None, check: Verification | None) -> list[str]:
     return warn
 
 
-def make_solution(form, xval: np.ndarray, lam: float, lam_rule: str, records: SolveRecords,
+def make_solution(form: Formulation, xval: np.ndarray, lam: float, lam_rule: str, records: SolveRecords,
                   duals: dict | None = None) -> Solution:
     """The :class:`~bvpnav.Solution` of a stacked vector with its records."""
-    form = as_formulation(form)
     model = form.model
     idx = pd.Index(model.grid.t, name="t")
     cols = {ax: xval[model.r_index(a)] for a, ax in enumerate(model.axes)}
@@ -84,15 +85,15 @@ def make_solution(form, xval: np.ndarray, lam: float, lam_rule: str, records: So
     sol = Solution(trajectory=pd.DataFrame(cols, index=idx), residuals=resid, items=items_df,
                    item_residuals=item_res, lam=float(lam), lam_rule=lam_rule, error_params=params,
                    stats={}, x=xval, warnings=_warnings(form, records.run, records.verification),
-                   records=records)
+                   records=records, _formulation=form)
     if form.data.is_strapdown:
         sol.attitude = form.data.attitude
-    sol._formulation = form  # for the uncertainty stage; removed by the pipeline
     return sol.record()
 
 
-def finish(form, xval: np.ndarray, lam: float, run: dict, duals, accuracy: str, verify_answer: bool,
-           factored=None) -> Solution:
+def finish(form: Formulation, xval: np.ndarray, lam: float, run: dict, duals, accuracy: str,
+           verify_answer: bool, factored: Factored | None = None, workspace: Workspace | None = None
+           ) -> Solution:
     """Verify a back end's answer and make the solution, or raise.
 
     Parameters
@@ -110,8 +111,7 @@ def finish(form, xval: np.ndarray, lam: float, run: dict, duals, accuracy: str, 
     Inaccurate
         When the answer fails verification and ``verify_answer`` is True.
     """
-    form = as_formulation(form)
-    check = verify(form, xval, lam, accuracy, duals, factored)
+    check = verify(form, xval, lam, accuracy, duals, factored, workspace)
     attempt = Attempt(solver=run["solver"], status=run.get("status"),
                       reason="verified" if check.verified else "failed verification")
     cond = check.conditioning or {}

@@ -151,7 +151,7 @@ def _penalty(term, x: np.ndarray) -> float:
     return float(np.sum(np.where(a <= m, a**2, 2.0 * m * a - m**2) / sig**2))
 
 
-def objective_value(form, x: np.ndarray, lam: float) -> float:
+def objective_value(form: Formulation, x: np.ndarray, lam: float) -> float:
     r"""The convex problem's objective at the stacked solution ``x`` (dimensionless).
 
     Notes
@@ -169,7 +169,7 @@ def objective_value(form, x: np.ndarray, lam: float) -> float:
 
 # ------------------------------------------------------------- the loop
 class _Loop:
-    def __init__(self, form, inner: Stage, opts, lam, o: dict):
+    def __init__(self, form: Formulation, inner: Stage, opts, lam, o: dict):
         self.form, self.inner, self.opts, self.o = form, inner, opts, o
         self.comps = attitude_components(form.error_model)
         rest = [c for c in getattr(form.error_model, "components", (form.error_model,))
@@ -205,7 +205,7 @@ class _Loop:
         out._observable = self.checked.get(id(error_model), False)
         return out
 
-    def _solve(self, form) -> Solution:
+    def _solve(self, form: Formulation) -> Solution:
         sol = self.inner(form, self.lam, self.opts)
         self.solves += 1
         self.checked[id(form.error_model)] = True
@@ -228,7 +228,7 @@ class _Loop:
         """``J(values)``: the convex problem with the attitude fixed at these totals."""
         data = self.data_at(values)
         sol = self._solve(self._form(data, self.rest_model))
-        used = sol.__dict__.get("_formulation")
+        used = sol.formulation
         j = objective_value(used, sol.x, float(sol.lam)) + sum(c.prior_cost(data) for c in self.comps)
         return j + self.item_cost(data, float(sol.lam)), sol
 
@@ -356,7 +356,7 @@ def _at_point(loop: _Loop, values: dict, at_values: Solution) -> Solution:
     from .assemble import make_solution
 
     form = loop._form(loop.data_at(values), loop.form.error_model)
-    used = at_values.__dict__.get("_formulation")
+    used = at_values.formulation
     small, full = used.model, form.model
     x = np.zeros(full.size)
     head = full.d * full.block
@@ -464,7 +464,7 @@ def with_attitude(inner: Stage) -> Stage:
     after, the step (rad), whether it was accepted, the damping.
     """
 
-    def stage(form, lam, opts) -> Solution:
+    def stage(form: Formulation, lam, opts) -> Solution:
         comps = attitude_components(form.error_model)
         if not comps:
             return inner(form, lam, opts)

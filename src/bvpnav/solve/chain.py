@@ -16,6 +16,8 @@ import time
 
 from ..backends import Backend, memory_shortfall
 from ..errors import BvpnavError, Infeasible, InputError, SolveError
+from ..formulation import Formulation
+from ..linalg.workspace import Workspace
 from ..log import in_sweep
 from ..result import Attempt, Solution
 from .assemble import finish
@@ -26,19 +28,26 @@ __all__ = ["solve_fixed", "attempt"]
 log = logging.getLogger(__name__)
 
 
-def attempt(form, backend: Backend, options: dict, lam: float, opts: SolveOptions) -> Solution:
-    """One back end's verified answer at ``lam`` (or an exception)."""
+def attempt(form: Formulation, backend: Backend, options: dict, lam: float, opts: SolveOptions,
+            workspace: Workspace | None = None) -> Solution:
+    """One back end's verified answer at ``lam`` (or an exception); ``workspace`` goes to a
+    back end that declares it uses one (:attr:`~bvpnav.backends.Backend.uses_workspace`)
+    and to verification."""
+    workspace = Workspace() if workspace is None else workspace
     why = backend.accepts(form)  # before solving: e.g. a cone item given to a QP solver
     if why is not None:
         raise InputError(why)
     log.debug("%s at lam=%g: options in force %s (accuracy %r)", backend.name, lam, options, opts.accuracy)
     t_start = time.perf_counter()
-    raw = backend.run(form, lam, options, opts.verbose)
+    if getattr(backend, "uses_workspace", False):   # False for a back end written before it existed
+        raw = backend.run(form, lam, options, opts.verbose, workspace=workspace)
+    else:
+        raw = backend.run(form, lam, options, opts.verbose)
     run = dict(raw.info)
     run["wall_time"] = time.perf_counter() - t_start
     run.update(solver=backend.name, accuracy=opts.accuracy, options=options,
                preset_applied=opts.accuracy in backend.presets)
-    sol = finish(form, raw.x, lam, run, raw.duals, opts.accuracy, opts.verify, raw.factored)
+    sol = finish(form, raw.x, lam, run, raw.duals, opts.accuracy, opts.verify, raw.factored, workspace)
     if log.isEnabledFor(logging.DEBUG):
         log.debug("%s at lam=%g: verification %s", backend.name, lam, sol.stats.get("verification"))
     return sol
@@ -69,8 +78,11 @@ def _failed(backend: Backend, exc: Exception) -> SolveError:
     return err
 
 
-def solve_fixed(form, lam: float, opts: SolveOptions) -> Solution:
-    """Solve ``form`` at a fixed ``lam``, falling back over ``opts.chain``.
+def solve_fixed(form: Formulation, lam: float, opts: SolveOptions, workspace: Workspace | None = None
+                ) -> Solution:
+    """Solve ``form`` at a fixed ``lam``, falling back over ``opts.chain``, with one
+    :class:`~bvpnav.linalg.workspace.Workspace` for every attempt (``workspace``: the rule
+    stage's, holding its sweep's band and factors; else a new one).
 
     Raises
     ------
@@ -84,6 +96,7 @@ def solve_fixed(form, lam: float, opts: SolveOptions) -> Solution:
     """
     form.check_scales(lam)
     form.check_observability()
+    workspace = Workspace() if workspace is None else workspace
     attempts: list[Attempt] = []
     last_exc: SolveError | None = None
     for k, (be, op) in enumerate(opts.chain):
@@ -93,7 +106,7 @@ def solve_fixed(form, lam: float, opts: SolveOptions) -> Solution:
             _fell_back(opts, k, be, "not applicable", short)
             continue
         try:
-            sol = attempt(form, be, op, lam, opts)
+            sol = attempt(form, be, op, lam, opts, workspace)
         except Infeasible as exc:  # a property of the information
             exc.attempts = Attempt.plain(attempts + list(exc.attempts))
             raise

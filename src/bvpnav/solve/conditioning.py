@@ -37,8 +37,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..error_models._base import KEPT_ZERO, SensorCorrection, SensorErrorModel, sensor_axes
-from ..formulation import as_formulation
-from ..linalg.lsq import least_squares_form
+from ..formulation import Formulation
+from ..linalg.lsq import Factored, least_squares_form
 
 __all__ = ["RELATIVE_SV_WARN", "GAIN_LIMIT", "information_matrix", "relative_singular_values",
            "assess_conditioning"]
@@ -73,15 +73,15 @@ def _schur(S: sp.spmatrix, dense: np.ndarray, shift_rows: np.ndarray) -> np.ndar
     return S[dense][:, dense].toarray() - SBL.T @ lu.solve(SBL)
 
 
-def information_matrix(problem, lam: float, factored: tuple | None = None) -> np.ndarray:
+def information_matrix(form: Formulation, lam: float, factored: Factored | None = None) -> np.ndarray:
     """The reduced Hessian of the error-model parameters, shape (q, q).
 
     Parameters
     ----------
-    problem : NavigationProblem
+    form : Formulation
     lam : float
         Regularization weight of the soft items.
-    factored : (LeastSquaresForm, BorderedLU), optional
+    factored : Factored, optional
         A factorization of the problem's augmented matrix at this ``lam`` (its Schur
         complement is reused: no new factorization).
 
@@ -104,15 +104,14 @@ def information_matrix(problem, lam: float, factored: tuple | None = None) -> np
     least-squares part (robust items as soft ones, the others left out); the left-out
     items can only add information, so the estimate errs on the side of a warning.
     """
-    problem = as_formulation(problem)
-    model = problem.model
-    if factored is not None and factored[1].keep is not None:
-        H = np.asarray(factored[1].schur, dtype=float)
+    model = form.model
+    if factored is not None and factored.factor.keep is not None:
+        H = np.asarray(factored.factor.schur, dtype=float)
     else:
-        form = least_squares_form(problem, lam, surrogate=True)
-        m, n = form.D.A.shape
-        p = form.E.m
-        H = _schur(form.augmented(), m + model.l_index, np.arange(m + n, m + n + p))
+        ls = least_squares_form(form, lam, surrogate=True)
+        m, n = ls.D.A.shape
+        p = ls.E.m
+        H = _schur(ls.augmented(), m + model.l_index, np.arange(m + n, m + n + p))
     return 0.5 * (H + H.T)
 
 
@@ -152,11 +151,11 @@ def relative_singular_values(H: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.sqrt(np.clip(w, 0.0, None)), V
 
 
-def _degenerate_axes(problem, l: np.ndarray) -> list[dict[str, Any]]:
+def _degenerate_axes(form: Formulation, l: np.ndarray) -> list[dict[str, Any]]:
     """Sensor axes whose kept fraction of their own signal ``1 + E_ii`` is not finite or
     outside ``[1/GAIN_LIMIT, GAIN_LIMIT]``, or whose finite gain ``1 + s_i = D_ii`` is
     outside that range (built-in sensor models with a scale factor only)."""
-    model = as_formulation(problem).model
+    model = form.model
     em = model.error_model
     comps = getattr(em, "components", (em,))
     params, values, off = [], [], 0
@@ -192,17 +191,17 @@ def _degenerate_axes(problem, l: np.ndarray) -> list[dict[str, Any]]:
     return out
 
 
-def assess_conditioning(problem, xval: np.ndarray, lam: float, factored: tuple | None = None,
+def assess_conditioning(form: Formulation, xval: np.ndarray, lam: float, factored: Factored | None = None,
                         threshold: float = RELATIVE_SV_WARN) -> dict[str, Any] | None:
     """Conditioning of the error-model parameters at a solution, with warnings.
 
     Parameters
     ----------
-    problem : NavigationProblem
+    form : Formulation
     xval : ndarray
         The stacked solution.
     lam : float
-    factored : (LeastSquaresForm, BorderedLU), optional
+    factored : Factored, optional
         Reused for the Schur complement (see :func:`information_matrix`).
     threshold : float
         Relative singular value below which a direction is reported.
@@ -224,13 +223,13 @@ def assess_conditioning(problem, xval: np.ndarray, lam: float, factored: tuple |
     See the module notes for the two criteria. A direction's parameters are those with
     a component of at least 0.2 in the unit direction.
     """
-    model = as_formulation(problem).model
+    model = form.model
     if model.q == 0:
         return None
     names = list(model.param_names)
     warn: list[str] = []
     try:
-        H = information_matrix(problem, lam, factored)
+        H = information_matrix(form, lam, factored)
         sv, V = relative_singular_values(H)
     except (RuntimeError, np.linalg.LinAlgError, ValueError) as exc:
         return {"relative_singular_values": None, "min_relative_sv": None, "condition": None,
@@ -251,7 +250,7 @@ def assess_conditioning(problem, xval: np.ndarray, lam: float, factored: tuple |
                     "one of them (e.g. ScaleFactor(axes=(...)) on the axes that feel varying "
                     "specific force)")
     l = model.split(xval)["l"]
-    degenerate = _degenerate_axes(problem, np.asarray(l, dtype=float))
+    degenerate = _degenerate_axes(form, np.asarray(l, dtype=float))
     for dg in degenerate:
         who = dg["parameters"]
         dg["message"] = (

@@ -40,7 +40,7 @@ What a solve tells you, and where:
 from __future__ import annotations
 
 from ..backends import check_memory
-from ..formulation import as_formulation
+from ..formulation import Formulation, as_formulation
 from ..log import once
 from ..result import Solution
 from .attitude import with_attitude
@@ -58,7 +58,7 @@ __all__ = ["run", "solve", "solve_sequential", "STAGES"]
 STAGES = (with_demotion, with_attitude, with_sequential, with_rule)
 
 
-def run(form, lam, opts: SolveOptions) -> Solution:
+def run(form: Formulation, lam, opts: SolveOptions) -> Solution:
     """Run the pipeline on a formulation with checked options.
 
     Examples
@@ -82,7 +82,7 @@ def run(form, lam, opts: SolveOptions) -> Solution:
         stage = wrap(stage)
     with once():  # each warning once per call, however many stages and iterations raise it
         sol = stage(form, lam, opts)
-    used = sol.__dict__.pop("_formulation", form)  # the formulation the answer solves
+    used = form if sol.formulation is None else sol.formulation  # the formulation the answer solves
     sol = attach_plausibility(sol, used, form.data)  # misfit and implausible estimates, always
     if opts.uncertainty:
         sol = attach_uncertainty(sol, used, opts.uncertainty)

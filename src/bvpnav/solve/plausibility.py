@@ -30,8 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
-from ..formulation import as_formulation
+from ..formulation import Formulation
 from ..imu import STANDARD_GRAVITY
 from ..linalg.lsq import non_least_squares_term
 from ..log import warn
@@ -154,7 +153,7 @@ def _fmt(v: float, unit: str = "") -> str:
 
 
 # ---------------------------------------------------------------- the misfit
-def _variance_factor(sol: Solution, form) -> tuple[float, int, dict[str, float]] | None:
+def _variance_factor(sol: Solution, form: Formulation) -> tuple[float, int, dict[str, float]] | None:
     """Weighted residual sum of squares over its degrees of freedom, with each group's
     share of it; None when the problem is not equality-constrained least squares."""
     if non_least_squares_term(form) is not None:
@@ -178,7 +177,7 @@ def _variance_factor(sol: Solution, form) -> tuple[float, int, dict[str, float]]
     return (rss / dof if dof > 0 else float("nan")), dof, parts
 
 
-def _misfit(sol: Solution, form) -> tuple[dict[str, Any], list[str]]:
+def _misfit(sol: Solution, form: Formulation) -> tuple[dict[str, Any], list[str]]:
     axes = list(form.model.axes)
     sa = np.asarray(form.sigma_a, dtype=float)
     w = sol.residuals[[f"w_{ax}" for ax in axes]].to_numpy(dtype=float)
@@ -240,7 +239,7 @@ def _misfit(sol: Solution, form) -> tuple[dict[str, Any], list[str]]:
 
 
 # -------------------------------------------------------------- plausibility
-def _groups(sol: Solution, form) -> dict[str, list[tuple[Any, list[str]]]]:
+def _groups(sol: Solution, form: Formulation) -> dict[str, list[tuple[Any, list[str]]]]:
     """Error-model components by kind, each with its parameter names in ``error_params``."""
     em = form.error_model
     out: dict[str, list] = {}
@@ -279,7 +278,7 @@ def _knots(name: str, count: int) -> str:
     return f" (the largest of {count} knots)" if count > 1 and "[" in name else ""
 
 
-def _gravity(sol: Solution, form, groups) -> tuple[list[str], list[tuple[str, float]]]:
+def _gravity(sol: Solution, form: Formulation, groups) -> tuple[list[str], list[tuple[str, float]]]:
     """Problems with the gravity estimate, and its components."""
     from ..error_models._base import _nominal_gravity
 
@@ -310,7 +309,7 @@ def _gravity(sol: Solution, form, groups) -> tuple[list[str], list[tuple[str, fl
     return why, comps
 
 
-def _gravity_text(form, comps: list[tuple[str, float]]) -> str:
+def _gravity_text(form: Formulation, comps: list[tuple[str, float]]) -> str:
     """The gravity components that differ from the nominal by more than 0.05 m/s^2 (the
     largest difference when none does)."""
     from ..error_models._base import _nominal_gravity
@@ -323,7 +322,7 @@ def _gravity_text(form, comps: list[tuple[str, float]]) -> str:
     return ", ".join(f"{n} = {_fmt(v, 'm/s^2')} (nominal {_fmt(g0.get(_axis(n), 0.0))})" for n, v, _ in shown)
 
 
-def _acc_checks(sol: Solution, form, groups) -> list[str]:
+def _acc_checks(sol: Solution, form: Formulation, groups) -> list[str]:
     """Accelerometer bias, gravity (and their confusion), scale and misalignment."""
     msgs: list[str] = []
     g_why, g_comps = _gravity(sol, form, groups)
@@ -476,20 +475,20 @@ def _gyro_checks(sol: Solution, groups, data) -> list[str]:
     return msgs
 
 
-def _plausibility(sol: Solution, form, data) -> list[str]:
+def _plausibility(sol: Solution, form: Formulation, data) -> list[str]:
     groups = _groups(sol, form)
     return _acc_checks(sol, form, groups) + _attitude_checks(sol, groups) + _gyro_checks(sol, groups, data)
 
 
 # ---------------------------------------------------------------------- API
-def assess(sol: Solution, form, data=None) -> dict[str, Any]:
+def assess(sol: Solution, form: Formulation, data=None) -> dict[str, Any]:
     r"""The misfit numbers and every plausibility warning of a solution.
 
     Parameters
     ----------
     sol : Solution
         A solved answer (its ``residuals``, ``error_params``, ``x`` and ``lam``).
-    form : Formulation or NavigationProblem
+    form : Formulation
         The formulation ``sol`` solves (the demoted or last linearized one).
     data : ImuData, optional
         Where the measured gyro rates are read (``data.gyro``, rad/s); default
@@ -526,10 +525,6 @@ def assess(sol: Solution, form, data=None) -> dict[str, Any]:
     :data:`GYRO_BIAS_LIMIT` rad/s and against the mean measured rate
     (:data:`GYRO_MEAN_FRACTION`), gyro scale :data:`GYRO_SCALE_LIMIT`).
     """
-    try:
-        form = as_formulation(form)
-    except InputError:  # a stand-in with the formulation's attributes (tests)
-        pass
     data = form.data if data is None else data
     out: dict[str, Any] = {}
     msgs: list[str] = []
@@ -543,13 +538,13 @@ def assess(sol: Solution, form, data=None) -> dict[str, Any]:
     return out
 
 
-def check(sol: Solution, form, data=None) -> list[str]:
+def check(sol: Solution, form: Formulation, data=None) -> list[str]:
     """The plausibility warnings of a solution (see :func:`assess`).
 
     Parameters
     ----------
     sol : Solution
-    form : Formulation or NavigationProblem
+    form : Formulation
         The formulation ``sol`` solves.
     data : ImuData, optional
         Where the measured gyro rates are read; default ``form.data``.
@@ -563,7 +558,7 @@ def check(sol: Solution, form, data=None) -> list[str]:
     return assess(sol, form, data)["warnings"]
 
 
-def attach(sol: Solution, form, data=None) -> Solution:
+def attach(sol: Solution, form: Formulation, data=None) -> Solution:
     """Run :func:`assess` on ``sol``: each message into ``sol.warnings`` and issued once as
     a :class:`bvpnav.log.BvpnavWarning`, the numbers in ``sol.stats["plausibility"]``."""
     rep = assess(sol, form, data)

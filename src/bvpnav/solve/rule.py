@@ -13,10 +13,10 @@ from collections.abc import Callable
 
 from ..backends import check_memory, resolve_solver
 from ..errors import InputError
-from ..formulation import as_formulation
+from ..formulation import Formulation, as_formulation
 from ..lam import rule_names
 from ..lam.sweep import LambdaCurve, sweep_curve
-from ..linalg.lsq import BAND_AFFINE, BAND_FACTORS
+from ..linalg.workspace import Workspace
 from ..result import Solution
 from .chain import solve_fixed
 from .options import SolveOptions, prepare
@@ -28,36 +28,32 @@ Stage = Callable[..., Solution]
 log = logging.getLogger(__name__)
 
 
-def _curve(form, rule: str, opts: SolveOptions, inner: Stage, rules=None, **sweep) -> LambdaCurve:
+def _curve(form: Formulation, rule: str, opts: SolveOptions, inner: Stage, workspace: Workspace,
+           rules=None, **sweep) -> LambdaCurve:
     direct = resolve_solver("direct")
     return sweep_curve(form, rules=(rule,) if rules is None else rules, rule=rule,
-                       solve_at=lambda lam: inner(form, lam, opts),
-                       check_memory=lambda: check_memory(form, direct), **{**opts.rule, **sweep})
-
-
-def _drop_sweep_bands(form) -> None:
-    """Forget a sweep's bands (the band along lambda and the factors kept for the solve at
-    the chosen lambda): bands of the whole problem are not kept alive with the formulation
-    after the sweep."""
-    cache = as_formulation(form).cache
-    cache.pop(BAND_AFFINE, None)
-    cache.pop(BAND_FACTORS, None)
+                       solve_at=lambda lam: inner(form, lam, opts, workspace=workspace),
+                       check_memory=lambda: check_memory(form, direct), workspace=workspace,
+                       **{**opts.rule, **sweep})
 
 
 def with_rule(inner: Stage) -> Stage:
-    """The stage that resolves a rule name in ``lam`` before calling ``inner``."""
+    """The stage that resolves a rule name in ``lam`` before calling ``inner`` (the
+    fixed-lambda stage, :func:`~bvpnav.solve.chain.solve_fixed`), with one workspace for
+    the sweep and the solve at its choice (which takes the sweep's band or factor there)."""
 
-    def stage(form, lam, opts: SolveOptions) -> Solution:
+    def stage(form: Formulation, lam, opts: SolveOptions) -> Solution:
         if not isinstance(lam, str):
             return inner(form, lam, opts)
+        workspace = Workspace()
         try:
-            curve = _curve(form, lam, opts, inner)
+            curve = _curve(form, lam, opts, inner, workspace)
             log.info("rule %s chose lam=%.6g (engine %s, %d evaluations, %.3g s); solving at it", lam,
                      curve.lam_chosen, curve.engine, curve.evaluations, curve.seconds)
-            sol = inner(form, curve.lam_chosen, opts)
+            sol = inner(form, curve.lam_chosen, opts, workspace=workspace)
         finally:
             # the sweep's band along lambda served the solve at the chosen lambda
-            _drop_sweep_bands(form)
+            workspace.drop_sweep_bands()
         sol.lam_rule = lam
         sol.curve = curve
         # already issued by the sweep (once); recorded here for the CLI and the JSON summary
@@ -157,12 +153,9 @@ def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6
                          "takes 'verify', 'fallback' and 'verbose' (and solver, accuracy, options)")
     extra.update(solver=solver, accuracy=accuracy, options=options)  # the explicit ones win
     opts, _ = prepare(1.0, **extra)
-    try:
-        return _curve(form, rule, opts, solve_fixed, rules=rule_names() if rules is None else rules,
-                      lam_range=lam_range, points=points,
-                      tau=tau, probes=probes, seed=seed, progress=progress, engine=engine)
-    finally:
-        _drop_sweep_bands(form)
+    return _curve(form, rule, opts, solve_fixed, Workspace(), rules=rule_names() if rules is None else rules,
+                  lam_range=lam_range, points=points,
+                  tau=tau, probes=probes, seed=seed, progress=progress, engine=engine)
 
 
 def choose_lambda(problem, rule: str = "lcurve", **kwargs) -> float:

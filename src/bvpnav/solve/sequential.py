@@ -42,6 +42,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import InputError
+from ..formulation import Formulation
 from ..items import Linearizable
 from ..log import progress, warn
 from ..result import SequentialReport, Solution
@@ -82,7 +83,8 @@ def check_sequential(options: dict) -> dict:
     return o
 
 
-def _initial_trajectory(form, initial, nonlin, inner: Stage, lam, opts) -> tuple[pd.DataFrame, str]:
+def _initial_trajectory(form: Formulation, initial, nonlin, inner: Stage, lam, opts
+                        ) -> tuple[pd.DataFrame, str]:
     t = form.model.grid.t
     axes = list(form.model.axes)
     if initial is None:
@@ -130,7 +132,7 @@ def _continued(lin, lam_soft: float):
 class _Loop:
     """State of one run of the loop (iterations, phases and what they measured)."""
 
-    def __init__(self, form, nonlin, o: dict, lam):
+    def __init__(self, form: Formulation, nonlin, o: dict, lam):
         self.form, self.o = form, o
         self.nonlin = {id(it) for it in nonlin}
         self.rule = lam if isinstance(lam, str) else None
@@ -287,7 +289,7 @@ def with_sequential(inner: Stage) -> Stage:
     ``soft_tol`` the requested mode is switched on and iterated to ``tol``.
     """
 
-    def stage(form, lam, opts: SolveOptions) -> Solution:
+    def stage(form: Formulation, lam, opts: SolveOptions) -> Solution:
         nonlin = form.nonlinear_items
         if not nonlin:
             return inner(form, lam, opts)

@@ -33,7 +33,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats as _stats
 
-from ..formulation import as_formulation
+from ..formulation import Formulation
 from ..linalg.covariance import BORDER_COND_WARN, posterior
 from ..log import warn
 from ..result import Solution, Uncertainty
@@ -45,10 +45,9 @@ __all__ = ["attach_uncertainty", "param_jacobian", "EXACT_FIT"]
 EXACT_FIT = 1e-12
 
 
-def param_jacobian(form, l: np.ndarray) -> np.ndarray:
+def param_jacobian(form: Formulation, l: np.ndarray) -> np.ndarray:
     """Jacobian of the reported error-model parameters with respect to the internal ones
     (central differences; exact for the linear ones), shape (q_reported, q)."""
-    form = as_formulation(form)
     model = form.model
     l = np.asarray(l, dtype=float)
     cols = []
@@ -96,10 +95,9 @@ def _unscalable(vf: float, dof: int, why: str) -> tuple[str, str] | None:
     return None
 
 
-def attach_uncertainty(sol: Solution, form, how) -> Solution:
+def attach_uncertainty(sol: Solution, form: Formulation, how) -> Solution:
     """Add standard deviations and covariances to ``sol`` (see the module docstring)."""
     t0 = time.perf_counter()
-    form = as_formulation(form)
     model = form.model
     cov = posterior(form, sol.x, sol.lam)
     scale = "scaled" if how == "scaled" or form.residual == "load" else "stated"

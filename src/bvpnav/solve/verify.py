@@ -14,8 +14,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..backends import VERIFY_RTOL
-from ..formulation import as_formulation
-from ..linalg.lsq import FORWARD_RTOL, check_factor, forward_error, least_squares_form
+from ..formulation import Formulation
+from ..linalg.lsq import FORWARD_RTOL, Factored, check_factor, forward_error, least_squares_form
+from ..linalg.workspace import Workspace
 from ..result import Verification
 from ..sparse import abs_max
 from ..terms import transposed_product
@@ -24,7 +25,7 @@ from .conditioning import assess_conditioning
 __all__ = ["verify", "stationarity"]
 
 
-def _worst_violation(form, xval: np.ndarray) -> tuple[float, str | None]:
+def _worst_violation(form: Formulation, xval: np.ndarray) -> tuple[float, str | None]:
     """Largest relative violation over the constraint terms, and its item."""
     worst, worst_item = 0.0, None
     for term in form.terms():
@@ -38,7 +39,7 @@ def _worst_violation(form, xval: np.ndarray) -> tuple[float, str | None]:
     return worst, worst_item
 
 
-def _nonfinite(form, xval: np.ndarray) -> list[str]:
+def _nonfinite(form: Formulation, xval: np.ndarray) -> list[str]:
     """What is NaN or infinite in the solution vector or the reported parameters."""
     out = []
     if not np.all(np.isfinite(xval)):
@@ -53,30 +54,32 @@ def _nonfinite(form, xval: np.ndarray) -> list[str]:
     return out
 
 
-def _forward(form, xval, lam, duals, factored, bound: float) -> tuple[float | None, tuple | None]:
+def _forward(form: Formulation, xval, lam, duals, factored: Factored | None, bound: float,
+             workspace: Workspace | None) -> tuple[float | None, Factored | None]:
     """The forward-error estimate, factoring once (shared with the conditioning); the back
     end's last refinement step on this very ``xval`` when its correction meets ``bound``
     (:class:`bvpnav.linalg.lsq.Factored`: an upper estimate; one more step otherwise)."""
-    last = getattr(factored, "refined", None)
+    last = None if factored is None else factored.refined
     if last is not None and last[0] is xval and np.isfinite(last[1]) and last[1] <= bound:
         return float(last[1]), factored
     if factored is None and form.model.q:
         ls = least_squares_form(form, lam)
         if ls is not None:
             try:
-                factored = (ls, check_factor(ls, form))
+                factored = Factored(ls, check_factor(ls, form, workspace))
             except (RuntimeError, np.linalg.LinAlgError):  # forward_error's verdict too
                 return float("inf"), None
-    return forward_error(form, xval, lam, duals, factored), factored
+    return forward_error(form, xval, lam, duals, factored, workspace), factored
 
 
-def verify(form, xval: np.ndarray, lam: float, accuracy: str = "default", duals: dict | None = None,
-           factored: tuple | None = None) -> Verification:
+def verify(form: Formulation, xval: np.ndarray, lam: float, accuracy: str = "default",
+           duals: dict | None = None, factored: Factored | None = None,
+           workspace: Workspace | None = None) -> Verification:
     r"""Judge a stacked solution by recomputed residuals.
 
     Parameters
     ----------
-    form : Formulation or NavigationProblem
+    form : Formulation
     xval : ndarray
         The stacked solution.
     lam : float
@@ -102,7 +105,6 @@ def verify(form, xval: np.ndarray, lam: float, accuracy: str = "default", duals:
     nothing is NaN or infinite except the parameters of a sensor axis the information
     leaves undetermined (named in the warnings instead).
     """
-    form = as_formulation(form)
     rtol = VERIFY_RTOL[accuracy]
     model = form.model
     fem = model.fem_rows()
@@ -110,7 +112,7 @@ def verify(form, xval: np.ndarray, lam: float, accuracy: str = "default", duals:
     worst, worst_item = _worst_violation(form, xval)
     stat = None if duals is None else stationarity(form, xval, lam, duals)
     nonfinite = _nonfinite(form, xval)
-    fwd, factored = _forward(form, xval, lam, duals, factored, FORWARD_RTOL[accuracy])
+    fwd, factored = _forward(form, xval, lam, duals, factored, FORWARD_RTOL[accuracy], workspace)
     conditioning = None
     if model.q and not np.any(~np.isfinite(xval)):
         conditioning = assess_conditioning(form, xval, lam, factored)
@@ -130,7 +132,7 @@ def verify(form, xval: np.ndarray, lam: float, accuracy: str = "default", duals:
                         undetermined=undetermined, conditioning=conditioning, verified=bool(ok))
 
 
-def _gradient_floor(form, xval: np.ndarray, lam: float, data) -> float:
+def _gradient_floor(form: Formulation, xval: np.ndarray, lam: float, data) -> float:
     """The size the gradient would have if the residuals were as large as the terms that
     cancel in them (see :func:`stationarity`)."""
     model = form.model
@@ -147,7 +149,7 @@ def _gradient_floor(form, xval: np.ndarray, lam: float, data) -> float:
     return floor
 
 
-def stationarity(form, xval: np.ndarray, lam: float, duals: dict) -> float | None:
+def stationarity(form: Formulation, xval: np.ndarray, lam: float, duals: dict) -> float | None:
     r"""Relative norm of the Lagrangian gradient (None for non-smooth objectives).
 
     Notes
@@ -160,7 +162,6 @@ def stationarity(form, xval: np.ndarray, lam: float, duals: dict) -> float | Non
     were as large as the terms that cancel in it (:math:`|A| |x| + |c|`); so exactly
     consistent data is not judged against round-off alone.
     """
-    form = as_formulation(form)
     data = form.data_rows()
     y = duals.get("fem")
     if y is None:
