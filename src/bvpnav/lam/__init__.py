@@ -269,9 +269,13 @@ def edge_warning(curve, name: str, k: int, guard: int, scores=None, best: str = 
     lo, hi = (float(v) for v in curve.lam_range)
     fix = (f"lam_range=({max(lo / 1e3, 1e-12):g}, {hi:g})" if low
            else f"lam_range=({lo:g}, {min(hi * 1e3, 1e12):g})")  # inside formulation.LAM_RANGE
+    edge = lo if low else hi
+    inner = "" if k in (0, n - 1) else (f"; the end samples are not chosen, the best chosen one is "
+                                        f"lam={curve.lam[k]:.3g}")
     curve.warnings.append(
-        f"{name}: the best value lies at the {side} edge of lam_range=({lo:g}, {hi:g}) (best sample "
-        f"lam={curve.lam[k]:.3g}), the optimum may lie beyond it: {WIDEN}, e.g. {fix}")
+        f"{name}: the best value lies at the {side} edge lam={edge:g} of lam_range=({lo:g}, {hi:g}) "
+        f"(the score still improves towards it{inner}), the optimum may lie beyond it: {WIDEN}, "
+        f"e.g. {fix}")
     return True
 
 

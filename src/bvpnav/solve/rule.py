@@ -67,7 +67,7 @@ def with_rule(inner: Stage) -> Stage:
     return stage
 
 
-def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6), points: int = 25,
+def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6), points: int | None = None,
                  solver: str = "clarabel", accuracy: str = "default", options=None, tau: float = 1.5,
                  probes: int = 24, seed: int = 0, progress=None, engine: str = "auto",
                  solve_kw: dict | None = None) -> LambdaCurve:
@@ -84,8 +84,10 @@ def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6
         The rule whose choice is reported as :attr:`LambdaCurve.lam_chosen`.
     lam_range : (float, float)
         Search interval for lambda (dimensionless), log-spaced.
-    points : int
-        Coarse sweep size; every rule is then refined inside its best bracket.
+    points : int, optional
+        Coarse sweep size; every rule is then refined inside its best bracket. Default: the
+        sweep ``solve(lam=rule)`` runs (:func:`bvpnav.lam.sweep.sweep_curve`), so that both
+        choose the same lambda; more points draw a denser curve.
     solver, accuracy, options
         For the ``cvxpy`` engine (non-least-squares problems).
     tau : float
