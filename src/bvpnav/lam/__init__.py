@@ -110,9 +110,10 @@ class LambdaRule:
     #: ``uses_derivative``).
     slopes: bool = False
     #: Whether its refinement evaluates the half-way points beside its best sample when the
-    #: samples lie more than a decade apart (:func:`half_way_points`): then a sweep of such
-    #: rules alone samples every two decades on a range of 12 decades or more
-    #: (:data:`bvpnav.lam.sweep.SLOPE_POINTS`; the neighbourhood of the best sample is
+    #: samples lie more than a decade apart (:func:`half_way_points`): then such a
+    #: rule reads every other sample of the 13-point grid on a range of 12 decades or more
+    #: (:data:`bvpnav.lam.sweep.SLOPE_POINTS`, two decades apart; only those are solved
+    #: when every rule of the sweep is coarse; the neighbourhood of the best sample is
     #: then as fine as one sample per decade).
     coarse: bool = False
 

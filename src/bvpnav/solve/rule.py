@@ -119,10 +119,12 @@ def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6
     Rules that cannot run on this problem are skipped (logged at INFO on
     ``bvpnav.lam.sweep``), e.g. ``gcv`` in the load form or ``discrepancy`` without
     ``sigma_a``; the chosen rule itself must run, or :class:`~bvpnav.InputError` says why.
-    L-curve: maximise the curvature of :math:`(\log\rho, \log\eta)`; the two
-    outermost sweep points on each side (the outermost one where samples lie two decades
-    or more apart, :func:`bvpnav.lam.guard_samples`) are never chosen (a "corner" there is
-    the range ending, and is reported in ``warnings``). GCV: minimise
+    L-curve: maximise the curvature of :math:`(\log\rho, \log\eta)` (the 2011 paper's
+    sign: the convex corner); with the direct sweep every sample may be chosen, the
+    range's ends included (the curvature and its slope are exact there), and a best value
+    at an end whose slope still rises out of the range is reported in ``warnings``; the
+    cvxpy sweep's spline never chooses its two outermost samples on each side (end
+    effects). GCV: minimise
     :math:`G = \hat\rho / \mathrm{tr}(I - A_\lambda)^2`, with
     :math:`\mathrm{tr}(I - A_\lambda) = -\mathrm{tr}(\partial w / \partial \hat a)`.
     Quasi-optimality: minimise :math:`\|\lambda\, dr/d\lambda\|`.
