@@ -92,19 +92,26 @@ def test_solve_and_lcurve_choose_the_same_lambda_at_the_reference_corner(tmp_pat
     the same samples and choose, to 1 %, the maximiser of the reference's curvature within
     its bracket of +-0.01 decade: about 3.89, 2.09e3 and 8.51e5 (the paper's convex corner;
     at 1e4 and 2e5 samples the curve's sharpest bend is concave, not a corner by the
-    paper's sign). The trajectory solved at that lambda is the reference's own (the same
-    problem)."""
+    paper's sign, and at 2e5 the convex one is too faint to see: a warning says so). The
+    trajectory solved at that lambda is the reference's own (the same problem)."""
     rec = tmp_path / "rec"
     assert main(["simulate", "tikhonov2011", "--rate", str(rate), "--out", str(rec), "-q"]) == 0
     files = [str(rec / "recording.csv"), "--spec", str(rec / "spec.toml")]
     assert main(["solve", *files, "--out", str(tmp_path / "sol.csv"), "-q"]) == 0
-    lam_solve = json.loads((tmp_path / "sol.json").read_text())["lam"]
+    summary = json.loads((tmp_path / "sol.json").read_text())
+    lam_solve = summary["lam"]
     capsys.readouterr()
     assert main(["lcurve", *files, "--plot", str(tmp_path / "lc.png")]) == 0
     out = capsys.readouterr().out
     lam_lcurve = float(re.search(r"^lcurve\s+lam = (\S+)", out, re.M).group(1))   # 6 digits
     assert abs(np.log(lam_lcurve / lam_solve)) < 0.01, (lam_solve, lam_lcurve)
     assert "edge" not in out and "no convex corner" not in out, out
+    # at 2e5 the convex corner is faint (curvature 0.0067: a radius of about 150 in log units
+    # on a curve about 19 across), and both commands say so; at 501 and 1e4 it is not (2.3
+    # and 0.13 on curves about 16 across)
+    faint = rate == 20000
+    assert ("lcurve: the corner chosen" in out) == faint, out
+    assert any(w.startswith("lcurve: the corner chosen") for w in summary["warnings"]) == faint
 
     at = _reference(rate)
     best, low, high = _reference_corner(at)

@@ -141,9 +141,12 @@ class LCurve(LambdaRule):
         so every sample may be chosen, the ends included; the corner is refined from values
         and slopes inside the whole range, and an end is an edge only when the curvature
         still rises out of the range there."""
+        seen = [float(v) for v in scores]   # every curvature this rule evaluated
+
         def f(u):
             pt = sweep.point(math.exp(u))
-            return curvature(pt), curvature_slope(pt)
+            seen.append(curvature(pt))
+            return seen[-1], curvature_slope(pt)
 
         n = len(s)
         k = int(np.argmax(scores))
@@ -168,7 +171,40 @@ class LCurve(LambdaRule):
         best = refine_with_slopes(f, u, sc, sl, j, best="max", bounds=(lo, hi))
         if best <= lo or best >= hi:   # the refinement found the curvature rising out of the range
             edge_warning(curve, self.name, 0 if best <= lo else n - 1, 0)
+        _faint_corner(curve, pts, seen, math.exp(best))
         return float(math.exp(best))
+
+
+def _faint_corner(curve, pts: list, kappas: list, lam: float) -> None:
+    r"""Warn when the convex corner chosen is too faint to be seen on the plotted curve.
+
+    Notes
+    -----
+    A corner of curvature :math:`\kappa` turns on a radius :math:`1/\kappa` in the
+    plot's units (natural logarithms on both axes); when that radius exceeds the extent of
+    the curve (the diagonal of the box its samples span in :math:`(\log\rho, \log\eta)`),
+    the curve is straight there on any plot of it, and the criterion's answer rests on
+    nothing the curve shows. Read from the rule's own samples and evaluations only (no new
+    solve), so the same in every sweep that gives the rule the same samples.
+    """
+    kmax = max(kappas)
+    if kmax <= 0:
+        return   # no convex corner at all: warned already
+    z = [0.5 * math.log(p["rho2"]) for p in pts if p["rho2"] > 0 and p["eta2"] > 0]
+    e = [0.5 * math.log(p["eta2"]) for p in pts if p["rho2"] > 0 and p["eta2"] > 0]
+    if len(z) < 2:
+        return
+    extent = math.hypot(max(z) - min(z), max(e) - min(e))
+    if 1.0 / kmax <= extent:
+        return
+    other = (" and the curve bends more sharply the other way (concave, curvature "
+             f"{min(kappas):.2g} at a sample)" if -min(kappas) > kmax else "")
+    curve.warnings.append(
+        f"lcurve: the corner chosen (lam={lam:.3g}) is faint: its curvature {kmax:.2g} turns on a "
+        f"radius of {1.0 / kmax:.3g} (log units), more than the curve's extent ({extent:.3g}), so a "
+        f"plot of the curve shows no corner there{other}; the L-curve's choice is not reliable here: "
+        "judge it against solutions at other lambdas, or state the accelerometer noise "
+        "(residual='acceleration' with sigma_a, where lam=1 needs no choosing)")
 
 
 def _no_corner(curve) -> None:
