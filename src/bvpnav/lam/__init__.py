@@ -252,7 +252,7 @@ def edge_warning(curve, name: str, k: int, guard: int, scores=None, best: str = 
     >>> edge_warning(curve, "gcv", k=1, guard=1, scores=[5.0, 4.0, 3.0, 2.0, 1.0, 0.0, -1.0])
     True
     >>> print(curve.warnings[0])
-    gcv: the best value lies at the low edge of lam_range=(0.001, 1000) (best sample lam=0.01), ...
+    gcv: the best value lies at the low edge lam=0.001 of lam_range=(0.001, 1000) (the score ...
     >>> edge_warning(curve, "gcv", k=3, guard=1)  # an interior sample
     False
     """
