@@ -196,10 +196,10 @@ def _lam_range(args):
     return lo, hi
 
 
-def _points(args) -> int:
-    if not 7 <= args.points <= 1000:
+def _points(args) -> int | None:
+    if args.points is not None and not 7 <= args.points <= 1000:
         raise InputError(f"--points {args.points}: give 7 to 1000 sweep points (each is one solve; the "
-                         "chosen lambda is refined anyway; default 25)")
+                         "chosen lambda is refined anyway; default: the sweep of 'bvpnav solve')")
     return args.points
 
 
@@ -635,7 +635,8 @@ def build_parser() -> argparse.ArgumentParser:
     lc.add_argument("--rules", default=None, help="rules, comma separated (default: lcurve,gcv,quasi "
                     "for the acceleration form, lcurve,quasi for the load form, where GCV's "
                     "independence assumption fails; discrepancy needs sigma_a)")
-    lc.add_argument("--points", type=int, default=25, help="sweep size (default: %(default)s)")
+    lc.add_argument("--points", type=int, default=None, help="sweep size (default: the sweep of "
+                    "'bvpnav solve' with lam = <the first rule>, which then chooses the same lambda)")
     lc.add_argument("--lam-range", nargs=2, metavar=("LO", "HI"), help="sweep lambda from LO to HI "
                     "(log-spaced; default 1e-6 1e6); widen it when a rule's choice is at the edge")
     lc.add_argument("--out", metavar="CSV", help="also write the sweep as a table")

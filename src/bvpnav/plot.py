@@ -59,17 +59,23 @@ def lcurve(curve, ax=None, annotate: bool = True):
 
     Notes
     -----
-    Each rule's choice is marked at its (refined) lambda, interpolated on the sampled
-    curve in log-log coordinates.
+    The curve is drawn through every lambda the sweep solved (its samples and the rules'
+    refinements, :attr:`~bvpnav.lam.sweep.LambdaCurve.evaluated`); each rule's choice is
+    marked at its (refined) lambda, interpolated on that curve in log-log coordinates
+    (exactly on it when the choice was evaluated).
     """
     fig, ax = _axes(ax, figsize=(6, 5))
-    ax.loglog(curve.residual_norm, curve.info_norm, ".-", color="0.4", lw=1, label="sweep")
-    s = np.log(curve.lam)
+    lam_all, rho, eta = curve.lam, curve.residual_norm, curve.info_norm
+    ev = getattr(curve, "evaluated", None)
+    if ev is not None and len(ev) >= len(lam_all):   # the refinements too: the corner drawn densely
+        lam_all, rho, eta = ev[:, 0], ev[:, 1], ev[:, 2]
+    ax.loglog(rho, eta, ".-", color="0.4", lw=1, label="sweep")
+    s = np.log(lam_all)
     for rule, lam in curve.chosen.items():
         m, c = _MARKERS.get(rule, ("x", "k"))
         u = np.log(lam)
-        x = np.exp(np.interp(u, s, np.log(curve.residual_norm)))
-        y = np.exp(np.interp(u, s, np.log(curve.info_norm)))
+        x = np.exp(np.interp(u, s, np.log(rho)))
+        y = np.exp(np.interp(u, s, np.log(eta)))
         ax.loglog([x], [y], m, color=c, ms=9, mfc="none", mew=2,
                   label=f"{rule}: lambda = {lam:.3g}" + (" (used)" if rule == curve.rule else ""))
     ax.set_xlabel("residual norm  rho(lambda)")

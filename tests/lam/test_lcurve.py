@@ -81,19 +81,36 @@ def test_a_range_narrower_than_twelve_decades_keeps_thirteen_samples():
     assert 3.611 / 2 < curve.lam_chosen < 3.611 * 2
 
 
-def test_a_corner_just_beyond_the_allowed_range_warns_with_seven_samples():
-    """The corner (about 6) lies in the excluded first sixth of the range: the sample beyond
-    it (two decades out) scores lower than the first allowed one, but the exact slope there
-    points out of the range, so the bound is returned with an edge warning."""
+def test_a_corner_in_the_first_sixth_of_the_range_is_refined_not_cut_off():
+    """The corner (about 6, the paper's row) lies between the range's first sample and the
+    second, which the rule once never chose (returning the second, 26.8, with an edge
+    warning): the exact curvature needs no guard sample, so the corner is refined there,
+    the lambda of a narrow range around it, with no warning."""
+    import warnings
+
+    from bvpnav.lam import REFINE_XATOL
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        curve = table1()[0].solve(solver="direct", lam="lcurve",
+                                  rule={"lam_range": (0.26801, 2.6801e11)}).curve
+    assert len(curve.lam) == 7 and curve.lam[0] < curve.lam_chosen < curve.lam[1]
+    narrow = lambda_curve(table1()[0], rules=("lcurve",), lam_range=(1e-2, 1e2))
+    assert abs(np.log(curve.lam_chosen / narrow.lam_chosen)) < REFINE_XATOL
+    assert not curve.warnings
+
+
+def test_a_corner_beyond_the_range_warns_naming_the_ranges_own_end():
+    """The corner (about 6) lies below the range: the curvature still rises at the range's
+    first sample, so that sample, the low edge itself, is returned and the warning names it."""
     import warnings
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        curve = table1()[0].solve(solver="direct", lam="lcurve",
-                                  rule={"lam_range": (0.26801, 2.6801e11)}).curve
-    assert len(curve.lam) == 7
-    assert curve.lam_chosen == pytest.approx(26.801, rel=1e-12)
-    assert any("low edge" in w for w in curve.warnings), curve.warnings
+        curve = table1()[0].solve(solver="direct", lam="lcurve", rule={"lam_range": (30.0, 3e13 / 1e2)}).curve
+    assert curve.lam_chosen == pytest.approx(30.0, rel=1e-12)
+    [w] = [w for w in curve.warnings if "edge" in w]
+    assert "low edge lam=30 of lam_range=(30, 3e+11)" in w and "best chosen" not in w, w
 
 
 def test_the_cvxpy_spline_keeps_two_samples_from_each_end_on_a_coarse_grid():

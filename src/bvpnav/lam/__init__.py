@@ -110,9 +110,10 @@ class LambdaRule:
     #: ``uses_derivative``).
     slopes: bool = False
     #: Whether its refinement evaluates the half-way points beside its best sample when the
-    #: samples lie more than a decade apart (:func:`half_way_points`): then a sweep of such
-    #: rules alone samples every two decades on a range of 12 decades or more
-    #: (:data:`bvpnav.lam.sweep.SLOPE_POINTS`; the neighbourhood of the best sample is
+    #: samples lie more than a decade apart (:func:`half_way_points`): then such a
+    #: rule reads every other sample of the 13-point grid on a range of 12 decades or more
+    #: (:data:`bvpnav.lam.sweep.SLOPE_POINTS`, two decades apart; only those are solved
+    #: when every rule of the sweep is coarse; the neighbourhood of the best sample is
     #: then as fine as one sample per decade).
     coarse: bool = False
 
@@ -251,7 +252,7 @@ def edge_warning(curve, name: str, k: int, guard: int, scores=None, best: str = 
     >>> edge_warning(curve, "gcv", k=1, guard=1, scores=[5.0, 4.0, 3.0, 2.0, 1.0, 0.0, -1.0])
     True
     >>> print(curve.warnings[0])
-    gcv: the best value lies at the low edge of lam_range=(0.001, 1000) (best sample lam=0.01), ...
+    gcv: the best value lies at the low edge lam=0.001 of lam_range=(0.001, 1000) (the score ...
     >>> edge_warning(curve, "gcv", k=3, guard=1)  # an interior sample
     False
     """
@@ -269,9 +270,13 @@ def edge_warning(curve, name: str, k: int, guard: int, scores=None, best: str = 
     lo, hi = (float(v) for v in curve.lam_range)
     fix = (f"lam_range=({max(lo / 1e3, 1e-12):g}, {hi:g})" if low
            else f"lam_range=({lo:g}, {min(hi * 1e3, 1e12):g})")  # inside formulation.LAM_RANGE
+    edge = lo if low else hi
+    inner = "" if k in (0, n - 1) else (f"; the end samples are not chosen, the best chosen one is "
+                                        f"lam={curve.lam[k]:.3g}")
     curve.warnings.append(
-        f"{name}: the best value lies at the {side} edge of lam_range=({lo:g}, {hi:g}) (best sample "
-        f"lam={curve.lam[k]:.3g}), the optimum may lie beyond it: {WIDEN}, e.g. {fix}")
+        f"{name}: the best value lies at the {side} edge lam={edge:g} of lam_range=({lo:g}, {hi:g}) "
+        f"(the score still improves towards it{inner}), the optimum may lie beyond it: {WIDEN}, "
+        f"e.g. {fix}")
     return True
 
 

@@ -12,7 +12,6 @@ from . import (
     LambdaRule,
     bracket,
     edge_warning,
-    guard_samples,
     half_way_points,
     refine_with_slopes,
     register_rule,
@@ -95,14 +94,15 @@ class LCurve(LambdaRule):
 
     Notes
     -----
-    The two outermost sweep points on each side (with the direct sweep, the outermost one
-    when samples lie two decades apart, :func:`bvpnav.lam.guard_samples`) are never chosen
-    (a "corner" there is the range ending, reported in the curve's warnings). With the
-    direct sweep the curvature (:func:`curvature`) and its slope (:func:`curvature_slope`)
-    are exact at every point, so the sweep samples every two decades by default and the
-    corner is refined from values and slopes (:func:`bvpnav.lam.refine_with_slopes`); with
-    the cvxpy sweep a spline through the samples (:func:`spline_curvature`), refined by
-    sampling more densely.
+    With the direct sweep the curvature (:func:`curvature`) and its slope
+    (:func:`curvature_slope`) are exact at every point, the range's ends included: every
+    sample may be chosen, the sweep samples every two decades by default and the corner is
+    refined from values and slopes (:func:`bvpnav.lam.refine_with_slopes`) anywhere in the
+    range. The best value is at an edge (a warning naming that end of the range) only when
+    it is an end sample and the exact slope there still rises out of the range. With the
+    cvxpy sweep the curvature is a spline through the samples (:func:`spline_curvature`),
+    refined by sampling more densely; the spline's end effects keep its two outermost
+    samples on each side from being chosen (a best value beside them warns).
     """
 
     name = "lcurve"
@@ -116,43 +116,15 @@ class LCurve(LambdaRule):
         return spline_curvature(s, [p["rho2"] for p in pts], [p["eta2"] for p in pts], s)
 
     def refine(self, sweep, pts, s, scores, curve):
-        # the outermost sample alone on a coarse grid of exact values and slopes; a spline
-        # through the cvxpy sweep's samples keeps two away from its ends (end effects)
-        g = guard_samples(s) if sweep.engine == "direct" else 2
+        if sweep.engine == "direct":
+            return self._refine_exact(sweep, pts, s, scores, curve)
+        # a spline through the cvxpy sweep's samples keeps two away from its ends (end effects)
+        g = 2
         inner = np.arange(g, len(s) - g)
         k = int(inner[np.argmax(scores[inner])])
         edge_warning(curve, self.name, k, g, scores, best="max")
         if scores[k] <= 0:
-            curve.warnings.append("lcurve: the curve has no convex corner in lam_range=("
-                                  f"{curve.lam_range[0]:g}, {curve.lam_range[1]:g}); {WIDEN}, or "
-                                  "choose another rule (e.g. lam='quasi')")
-        if sweep.engine == "direct":   # its points carry d2eta2 with deta2: exact slopes
-            def f(u):
-                pt = sweep.point(math.exp(u))
-                return curvature(pt), curvature_slope(pt)
-
-            lo, hi = s[g], s[-1 - g]
-            u, sc = list(s[max(k - 1, 0):k + 2]), list(scores[max(k - 1, 0):k + 2])
-            sl = [curvature_slope(p) for p in pts[max(k - 1, 0):k + 2]]
-            # samples more than a decade apart: the half-way points beside the best one
-            # (inside the bounds), so that a corner between samples is not missed
-            for mid in half_way_points(s, k, lo, hi):
-                val, slope = f(mid)
-                j = int(np.searchsorted(u, mid))
-                u.insert(j, mid), sc.insert(j, val), sl.insert(j, slope)
-            # the slope says where the corner lies: rising out of the allowed range at its
-            # first or last sample (or a refinement that stops at a bound) is an edge,
-            # whatever the excluded samples score (a corner just beyond a bound)
-            slope_k = sl[u.index(s[k])]
-            if (k == g and slope_k < 0) or (k == len(s) - 1 - g and slope_k > 0):
-                edge_warning(curve, self.name, k, g)
-            u, sc = np.array(u), np.array(sc)
-            allowed = np.flatnonzero((u >= lo) & (u <= hi))
-            j = int(allowed[np.argmax(sc[allowed])])
-            best = refine_with_slopes(f, u, sc, np.array(sl), j, best="max", bounds=(lo, hi))
-            if best <= lo or best >= hi:
-                edge_warning(curve, self.name, g if best <= lo else len(s) - 1 - g, g)
-            return float(math.exp(best))
+            _no_corner(curve)
         a, b = bracket(s, k)
         fine = np.linspace(a, b, 9)[1:-1]
         for u in fine[np.abs(fine - s[k]) > 1e-6]:
@@ -163,6 +135,82 @@ class LCurve(LambdaRule):
         kd = spline_curvature(np.log(keys), [sweep.cache[q]["rho2"] for q in keys],
                               [sweep.cache[q]["eta2"] for q in keys], dense)
         return float(math.exp(dense[np.argmax(kd)]))
+
+    def _refine_exact(self, sweep, pts, s, scores, curve) -> float:
+        """The direct sweep's choice: the curvature and its slope are exact at every point,
+        so every sample may be chosen, the ends included; the corner is refined from values
+        and slopes inside the whole range, and an end is an edge only when the curvature
+        still rises out of the range there."""
+        seen = [float(v) for v in scores]   # every curvature this rule evaluated
+
+        def f(u):
+            pt = sweep.point(math.exp(u))
+            seen.append(curvature(pt))
+            return seen[-1], curvature_slope(pt)
+
+        n = len(s)
+        k = int(np.argmax(scores))
+        lo, hi = s[0], s[-1]
+        u, sc = list(s[max(k - 1, 0):k + 2]), list(scores[max(k - 1, 0):k + 2])
+        sl = [curvature_slope(p) for p in pts[max(k - 1, 0):k + 2]]
+        # samples more than a decade apart: the half-way points beside the best one, so
+        # that a corner between samples is not missed
+        for mid in half_way_points(s, k, lo, hi):
+            val, slope = f(mid)
+            j = int(np.searchsorted(u, mid))
+            u.insert(j, mid), sc.insert(j, val), sl.insert(j, slope)
+        u, sc, sl = np.array(u), np.array(sc), np.array(sl)
+        j = int(np.argmax(sc))
+        if sc[j] <= 0:
+            _no_corner(curve)
+        # an end sample is an edge when the exact slope there points out of the range (the
+        # curvature still rises beyond it); else the corner lies inside and is refined
+        if (u[j] == lo and sl[j] < 0) or (u[j] == hi and sl[j] > 0):
+            edge_warning(curve, self.name, 0 if u[j] == lo else n - 1, 0)
+            return float(curve.lam[0] if u[j] == lo else curve.lam[-1])
+        best = refine_with_slopes(f, u, sc, sl, j, best="max", bounds=(lo, hi))
+        if best <= lo or best >= hi:   # the refinement found the curvature rising out of the range
+            edge_warning(curve, self.name, 0 if best <= lo else n - 1, 0)
+        _faint_corner(curve, pts, seen, math.exp(best))
+        return float(math.exp(best))
+
+
+def _faint_corner(curve, pts: list, kappas: list, lam: float) -> None:
+    r"""Warn when the convex corner chosen is too faint to be seen on the plotted curve.
+
+    Notes
+    -----
+    A corner of curvature :math:`\kappa` turns on a radius :math:`1/\kappa` in the
+    plot's units (natural logarithms on both axes); when that radius exceeds the extent of
+    the curve (the diagonal of the box its samples span in :math:`(\log\rho, \log\eta)`),
+    the curve is straight there on any plot of it, and the criterion's answer rests on
+    nothing the curve shows. Read from the rule's own samples and evaluations only (no new
+    solve), so the same in every sweep that gives the rule the same samples.
+    """
+    kmax = max(kappas)
+    if kmax <= 0:
+        return   # no convex corner at all: warned already
+    z = [0.5 * math.log(p["rho2"]) for p in pts if p["rho2"] > 0 and p["eta2"] > 0]
+    e = [0.5 * math.log(p["eta2"]) for p in pts if p["rho2"] > 0 and p["eta2"] > 0]
+    if len(z) < 2:
+        return
+    extent = math.hypot(max(z) - min(z), max(e) - min(e))
+    if 1.0 / kmax <= extent:
+        return
+    other = (" and the curve bends more sharply the other way (concave, curvature "
+             f"{min(kappas):.2g} at a sample)" if -min(kappas) > kmax else "")
+    curve.warnings.append(
+        f"lcurve: the corner chosen (lam={lam:.3g}) is faint: its curvature {kmax:.2g} turns on a "
+        f"radius of {1.0 / kmax:.3g} (log units), more than the curve's extent ({extent:.3g}), so a "
+        f"plot of the curve shows no corner there{other}; the L-curve's choice is not reliable here: "
+        "judge it against solutions at other lambdas, or state the accelerometer noise "
+        "(residual='acceleration' with sigma_a, where lam=1 needs no choosing)")
+
+
+def _no_corner(curve) -> None:
+    curve.warnings.append("lcurve: the curve has no convex corner in lam_range=("
+                          f"{curve.lam_range[0]:g}, {curve.lam_range[1]:g}); {WIDEN}, or "
+                          "choose another rule (e.g. lam='quasi')")
 
 
 register_rule(LCurve())

@@ -114,6 +114,10 @@ class LambdaCurve:
         ``"Hutchinson (k probes)"``), None when no rule needed it.
     factorization : str or None
         The direct sweep's factorization (e.g. ``"banded (kl=4, ...)"``).
+    evaluated : ndarray or None
+        Every lambda the sweep solved (the samples and the rules' refinements), shape
+        (k, 3): lambda, residual norm and information norm, by increasing lambda (what
+        :meth:`plot` draws).
     """
 
     lam: np.ndarray
@@ -129,6 +133,7 @@ class LambdaCurve:
     lam_range: tuple = (1e-6, 1e6)
     trace_method: str | None = None
     factorization: str | None = None
+    evaluated: np.ndarray | None = None
 
     def __repr__(self) -> str:
         """One line: how many lambdas over which range, each rule's choice, the rule used,
@@ -158,6 +163,17 @@ class LambdaCurve:
     def plot(self, ax=None):
         """L-curve with every rule's choice marked (see :func:`bvpnav.plot.lcurve`)."""
         return lcurve(self, ax=ax)
+
+
+class _Grid:
+    """A rule's view of a curve whose samples it reads every ``step``-th of: ``lam`` is
+    its own samples; ``warnings`` and every other attribute are the curve's."""
+
+    def __init__(self, curve: LambdaCurve, step: int):
+        self._curve, self.lam = curve, curve.lam[::step]
+
+    def __getattr__(self, name):
+        return getattr(self._curve, name)
 
 
 # ----------------------------------------------------------------- sweeps
@@ -731,10 +747,12 @@ def sweep_curve(form: Formulation, rules=None, rule: str = "lcurve", lam_range=(
     points : int, optional
         Coarse sweep size; every rule is then refined inside its best bracket (to 1 % in
         lambda, :func:`bvpnav.lam.refine_extremum`). Default: 13 (one per decade of the default range) with
-        the ``direct`` engine, whose curve is exact at every point; 7 (:data:`SLOPE_POINTS`,
-        two decades apart or more) when every rule asked samples coarsely (the L-curve or
-        GCV alone, e.g. ``solve(lam="gcv")``, :attr:`bvpnav.lam.LambdaRule.coarse`) and the
-        range spans 12 decades or more;
+        the ``direct`` engine, whose curve is exact at every point, of which a rule that
+        samples coarsely (the L-curve or GCV, :attr:`bvpnav.lam.LambdaRule.coarse`) reads
+        every other one (7, :data:`SLOPE_POINTS`, two decades apart) where the range spans
+        12 decades or more; only those 7 are solved when every rule samples coarsely. A
+        rule reads the same samples whichever rules run beside it, so ``solve(lam=rule)``
+        and a sweep of several rules (``bvpnav lcurve``) choose the same lambda;
         25 with the ``cvxpy`` engine, whose curvature is a spline through the samples.
     tau : float
         Discrepancy safety factor.
@@ -787,13 +805,15 @@ def _sweep_curve(form: Formulation, rules, rule, lam_range, points, tau, probes,
                          "inequality items); use engine='cvxpy'")
     names = _usable_rules(form, names, rule, engine)
     lo, hi = _check_range(lam_range, DIRECT_POINTS if points is None else points)
+    # one sample every two decades or more only where the range spans 12 decades or more
+    # (every other sample of the 13-point grid); a rule that samples coarsely
+    # (bvpnav.lam.LambdaRule.coarse) is given those samples whichever rules run beside it,
+    # so that ``solve(lam=rule)`` and a sweep that scores more rules (``bvpnav lcurve``)
+    # choose the same lambda from the same samples and refinements
+    wide = math.log10(hi / lo) >= 2.0 * (SLOPE_POINTS - 1) - 1e-9
+    coarse = points is None and engine == "direct" and wide
     if points is None:
-        # one sample every two decades or more only where the range spans 12 decades or
-        # more: then the outermost sample excludes the same sixth of the range at each end
-        # as the two outermost of 13 (bvpnav.lam.guard_samples)
-        wide = math.log10(hi / lo) >= 2.0 * (SLOPE_POINTS - 1) - 1e-9
-        points = (CVXPY_POINTS if engine != "direct" else SLOPE_POINTS
-                  if wide and all(get_rule(r).coarse for r in names) else DIRECT_POINTS)
+        points = CVXPY_POINTS if engine != "direct" else DIRECT_POINTS
     form.check_scales(lo)  # the sweep's extremes: every weight stays resolvable
     form.check_scales(hi)
     form.check_observability()
@@ -812,6 +832,10 @@ def _sweep_curve(form: Formulation, rules, rule, lam_range, points, tau, probes,
                              "bvpnav.lambda_curve(problem, ...) or problem.solve(lam=<rule>)")
         eng = CvxpySweep(form, solve_at, tau=tau)
     lams = np.geomspace(lo, hi, points)
+    every = 2 if coarse else 1   # DIRECT_POINTS = 2 (SLOPE_POINTS - 1) + 1
+    if coarse and all(get_rule(r).coarse for r in names):
+        lams = lams[::2]   # no rule reads the samples between
+        every = 1
     with sweeping():
         pts = _sweep(eng, lams, progress)
         curve = LambdaCurve(lam=lams, residual_norm=np.sqrt([p["rho2"] for p in pts]),
@@ -821,16 +845,20 @@ def _sweep_curve(form: Formulation, rules, rule, lam_range, points, tau, probes,
         for name in names:
             r = get_rule(name)
             curve.scores[name] = r.scores(eng, pts, s)
-            curve.chosen[name] = float(r.refine(eng, pts, s, curve.scores[name], curve))
+            step = every if r.coarse else 1
+            sub = curve.scores[name] if step == 1 else r.scores(eng, pts[::step], s[::step])
+            curve.chosen[name] = float(r.refine(eng, pts[::step], s[::step], sub, _Grid(curve, step)))
         if isinstance(eng, DirectSweep):
             eng.hand_off()
     curve.evaluations = len(eng.cache)
+    curve.evaluated = np.array([(q, math.sqrt(p["rho2"]), math.sqrt(p["eta2"]))
+                                for q, p in sorted(eng.cache.items())]).reshape(-1, 3)
     curve.trace_method = getattr(eng, "trace_method", None)
     curve.factorization = getattr(eng, "factorization", None)
     curve.seconds = time.perf_counter() - t0
     curve.warnings[:] = list(dict.fromkeys(curve.warnings))  # each once
     log.info("lambda sweep: engine %s, %d points over lam_range=(%g, %g), %d evaluations, %.3g s; %s",
-             eng.engine, points, lo, hi, curve.evaluations, curve.seconds,
+             eng.engine, len(lams), lo, hi, curve.evaluations, curve.seconds,
              ", ".join(f"{n} lam={v:.6g}" + (" (used)" if n == rule else "")
                        for n, v in curve.chosen.items()))
     for w in curve.warnings:

@@ -63,7 +63,7 @@ def with_rule(inner: Stage) -> Stage:
     return stage
 
 
-def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6), points: int = 25,
+def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6), points: int | None = None,
                  solver: str = "clarabel", accuracy: str = "default", options=None, tau: float = 1.5,
                  probes: int = 24, seed: int = 0, progress=None, engine: str = "auto",
                  solve_kw: dict | None = None) -> LambdaCurve:
@@ -80,8 +80,10 @@ def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6
         The rule whose choice is reported as :attr:`LambdaCurve.lam_chosen`.
     lam_range : (float, float)
         Search interval for lambda (dimensionless), log-spaced.
-    points : int
-        Coarse sweep size; every rule is then refined inside its best bracket.
+    points : int, optional
+        Coarse sweep size; every rule is then refined inside its best bracket. Default: the
+        sweep ``solve(lam=rule)`` runs (:func:`bvpnav.lam.sweep.sweep_curve`), so that both
+        choose the same lambda; more points draw a denser curve.
     solver, accuracy, options
         For the ``cvxpy`` engine (non-least-squares problems).
     tau : float
@@ -113,10 +115,12 @@ def lambda_curve(problem, rules=None, rule: str = "lcurve", lam_range=(1e-6, 1e6
     Rules that cannot run on this problem are skipped (logged at INFO on
     ``bvpnav.lam.sweep``), e.g. ``gcv`` in the load form or ``discrepancy`` without
     ``sigma_a``; the chosen rule itself must run, or :class:`~bvpnav.InputError` says why.
-    L-curve: maximise the curvature of :math:`(\log\rho, \log\eta)`; the two
-    outermost sweep points on each side (the outermost one where samples lie two decades
-    or more apart, :func:`bvpnav.lam.guard_samples`) are never chosen (a "corner" there is
-    the range ending, and is reported in ``warnings``). GCV: minimise
+    L-curve: maximise the curvature of :math:`(\log\rho, \log\eta)` (the 2011 paper's
+    sign: the convex corner); with the direct sweep every sample may be chosen, the
+    range's ends included (the curvature and its slope are exact there), and a best value
+    at an end whose slope still rises out of the range is reported in ``warnings``; the
+    cvxpy sweep's spline never chooses its two outermost samples on each side (end
+    effects). GCV: minimise
     :math:`G = \hat\rho / \mathrm{tr}(I - A_\lambda)^2`, with
     :math:`\mathrm{tr}(I - A_\lambda) = -\mathrm{tr}(\partial w / \partial \hat a)`.
     Quasi-optimality: minimise :math:`\|\lambda\, dr/d\lambda\|`.
