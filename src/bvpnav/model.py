@@ -664,8 +664,7 @@ class NavModel:
         Notes
         -----
         :math:`\omega(t) = \sum_i \phi_i(t) \left(\omega_i + \sum_p \partial\omega_i/\partial
-        l_p \; \delta l_p
-ight)`, with :math:`\omega_i` the rates corrected by the current
+        l_p \; \delta l_p \right)`, with :math:`\omega_i` the rates corrected by the current
         totals of the attitude error models (the measured rates when there are none) and
         :math:`\partial\omega_i/\partial l_p` their ``rate_columns``: the gyro bias enters as
         :math:`\omega = \hat\omega - b`. An error model without rate columns contributes
