@@ -365,6 +365,7 @@ def summary(solution, problem) -> dict:
         "solver": {k: st.get(k) for k in keep if k in st},
         "items": solution.items.to_dict(orient="records"),
         "warnings": list(solution.warnings),
+        **({"data_checks": st["data_checks"]} if st.get("data_checks") else {}),
     })
 
 
