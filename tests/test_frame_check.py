@@ -217,3 +217,50 @@ def test_correct_frames_are_quiet(make):
     data = _no_frame_warning(make)
     chk = data.checks["frame"]
     assert chk["verdict"] is None and np.linalg.norm(chk["mean_acc"]) < 0.5 * G0
+
+
+def test_the_command_line_prints_the_frame_warning_with_the_spec_option(walk, tmp_path, capsys):
+    from bvpnav.cli import main
+
+    _, sim, frd = walk
+    _table(tmp_path / "zdown.csv", sim.t, f=frd["f"], w=frd["w"])
+    spec = """\
+[input]
+specific_force = ["f0", "f1", "f2"]
+gyro = ["w0", "w1", "w2"]
+{frame}
+[problem]
+sigma_a = 0.1
+
+[solve]
+solver = "direct"
+lam = 1.0
+
+[[item]]
+type = "position"
+t = 0.0
+value = [0.0, 0.0, 0.0]
+mode = "hard"
+
+[[item]]
+type = "velocity"
+t = 0.0
+value = [0.0, 0.0, 0.0]
+mode = "hard"
+"""
+    (tmp_path / "enu.toml").write_text(spec.format(frame=""))
+    (tmp_path / "ned.toml").write_text(spec.format(frame='frame = "ned"'))
+    assert main(["solve", str(tmp_path / "zdown.csv"), "--spec", str(tmp_path / "enu.toml"), "--out",
+                 str(tmp_path / "a.csv")]) == 0
+    out = capsys.readouterr()
+    text = out.out + out.err
+    assert "frame check of " in text and 'set [input] frame = "ned"' in text and "counted twice" in text
+    import json
+
+    js = json.loads((tmp_path / "a.json").read_text())
+    assert js["data_checks"]["frame"]["verdict"] == "gravity twice"
+    assert main(["solve", str(tmp_path / "zdown.csv"), "--spec", str(tmp_path / "ned.toml"), "--out",
+                 str(tmp_path / "b.csv")]) == 0
+    out = capsys.readouterr()
+    assert "frame check" not in out.out + out.err
+    assert json.loads((tmp_path / "b.json").read_text())["data_checks"]["frame"]["verdict"] is None
