@@ -796,9 +796,9 @@ def frame_check(data: ImuLike, *, fixes: dict | None = None, source: str | None 
                       along_gravity=along, horizontal=horizontal, verdict=verdict, message=msg)
 
 
-#: Consecutive samples at an axis's largest |rate| taken as clipped when no range is stated.
+#: Consecutive samples at an axis's largest absolute rate taken as clipped when no range is stated.
 SATURATION_RUN = 3
-#: The smallest largest-|rate| (rad/s) taken for a gyro's range when none is stated.
+#: The smallest largest absolute rate (rad/s) taken for a gyro's range when none is stated.
 SATURATION_MIN_RATE = 0.5
 
 
