@@ -630,7 +630,7 @@ FRAME_CHECK_GYRO = 0.1
 
 @dataclass(frozen=True, eq=False)
 class FrameCheck:
-    """What :func:`frame_check` measured.
+    r"""What :func:`frame_check` measured.
 
     Attributes
     ----------
@@ -646,14 +646,24 @@ class FrameCheck:
     gravity : ndarray, shape (3,)
         The navigation-frame gravity vector used, m/s^2.
     along_gravity : float
-        :math:`\\bar a \\cdot \\hat g`, m/s^2 (positive: along gravity, i.e. downwards).
+        :math:`\bar a \cdot \hat g`, m/s^2 (positive: along gravity, i.e. downwards).
     horizontal : float
-        :math:`\\|\\bar a - (\\bar a\\cdot\\hat g)\\hat g\\|`, m/s^2.
+        :math:`\|\bar a - (\bar a\cdot\hat g)\hat g\|`, m/s^2.
     verdict : str or None
         None (plausible), ``"gravity twice"``, ``"gravity horizontal"``,
         ``"gravity missing"`` or ``"not zero"``.
     message : str or None
         The warning (None when plausible).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from bvpnav import ImuData, detect
+    >>> t = np.arange(0.0, 10.0, 0.01)
+    >>> f = np.tile([0.0, 0.0, 9.80665], (t.size, 1))  # a level z-up sensor at rest
+    >>> res = detect.frame_check(ImuData.from_gyro(t, f, np.zeros((t.size, 3))), warn=False)
+    >>> res.over, res.samples, res.verdict, res.as_dict()["mean_acc"]
+    ('rest', 1000, None, [0.0, 0.0, 0.0])
     """
 
     over: str
@@ -679,7 +689,16 @@ def _vec(v, digits: int = 3) -> str:
 
 
 def frame_name(gravity) -> str:
-    """The navigation frame a gravity vector implies, in words (``"ENU (z up)"``, ...)."""
+    """The navigation frame a gravity vector implies, in words (``"ENU (z up)"``, ...).
+
+    Examples
+    --------
+    >>> from bvpnav.detect import frame_name
+    >>> frame_name([0.0, 0.0, -9.80665])
+    'ENU (x east, y north, z up)'
+    >>> frame_name([0.0, 0.0, 9.80665])
+    'NED (x north, y east, z down)'
+    """
     g = np.asarray(gravity, dtype=float)
     u = g / np.linalg.norm(g)
     if u[2] < -0.999:
@@ -722,7 +741,7 @@ def _verdict(along: float, horizontal: float, norm: float, g0: float) -> tuple[s
 
 def frame_check(data: ImuLike, *, fixes: dict | None = None, source: str | None = None,
                 warn: bool = True) -> FrameCheck:
-    """Frame and gravity sanity: the mean navigation-frame acceleration at rest against zero.
+    r"""Frame and gravity sanity: the mean navigation-frame acceleration at rest against zero.
 
     Parameters
     ----------
@@ -746,18 +765,34 @@ def frame_check(data: ImuLike, *, fixes: dict | None = None, source: str | None 
     Rest is found by the magnitude detector of :func:`stationary` (window
     :data:`FRAME_CHECK_WINDOW` samples; with gyro rates when there are any, below
     :data:`FRAME_CHECK_GYRO`); with no sample at rest the whole recording is averaged.
-    With :math:`\\hat g = g/\\|g\\|`,
+    With :math:`\hat g = g/\|g\|`,
 
-    .. math:: \\bar a = \\frac{1}{|R|}\\sum_{i \\in R} (C_i f_i + g), \\quad
-              a_\\parallel = \\bar a\\cdot\\hat g, \\quad
-              a_\\perp = \\|\\bar a - a_\\parallel \\hat g\\|,
+    .. math:: \bar a = \frac{1}{|R|}\sum_{i \in R} (C_i f_i + g), \quad
+              a_\parallel = \bar a\cdot\hat g, \quad
+              a_\perp = \|\bar a - a_\parallel \hat g\|,
 
     which is about zero at rest when the frames are right. A mean larger than
-    :data:`FRAME_CHECK_LIMIT` g is reported: :math:`a_\\parallel \\ge` :data:`GRAVITY_TWICE`
+    :data:`FRAME_CHECK_LIMIT` g is reported: :math:`a_\parallel \ge` :data:`GRAVITY_TWICE`
     g is gravity counted twice (a z-down sensor or attitude read as z-up, or the
-    reverse), :math:`a_\\perp \\ge` :data:`FRAME_CHECK_LIMIT` g an up axis turned
-    horizontal, :math:`a_\\parallel \\ge` :data:`FRAME_CHECK_LIMIT` g a specific force
+    reverse), :math:`a_\perp \ge` :data:`FRAME_CHECK_LIMIT` g an up axis turned
+    horizontal, :math:`a_\parallel \ge` :data:`FRAME_CHECK_LIMIT` g a specific force
     without gravity.
+
+    Examples
+    --------
+    A level z-down sensor (forward-right-down axes) at rest, read as ENU, then as NED:
+
+    >>> import numpy as np
+    >>> from bvpnav import ImuData, detect
+    >>> t = np.arange(0.0, 10.0, 0.01)
+    >>> f = np.tile([0.0, 0.0, -9.80665], (t.size, 1))  # +g on the axis that points up: -z
+    >>> enu = ImuData.from_gyro(t, f, np.zeros((t.size, 3)), checks=False)
+    >>> res = detect.frame_check(enu, warn=False)
+    >>> res.verdict, round(res.along_gravity / 9.80665, 2)
+    ('gravity twice', 2.0)
+    >>> ned = ImuData.from_gyro(t, f, np.zeros((t.size, 3)), frame="ned", checks=False)
+    >>> detect.frame_check(ned, warn=False).verdict is None
+    True
     """
     from .log import FrameWarning
     from .log import warn as _warn
@@ -810,7 +845,7 @@ def _runs(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def saturation(t, gyro, *, gyro_range: float | None = None, source: str | None = None,
                warn: bool = True) -> dict:
-    """Gyro samples at the sensor's range: counted, located and reported.
+    r"""Gyro samples at the sensor's range: counted, located and reported.
 
     Parameters
     ----------
@@ -819,9 +854,9 @@ def saturation(t, gyro, *, gyro_range: float | None = None, source: str | None =
     gyro : array_like, shape (N, 3)
         Body rates, rad/s.
     gyro_range : float, optional
-        The gyro's full-scale range, rad/s (> 0): a sample with :math:`|\\omega_k| \\ge`
+        The gyro's full-scale range, rad/s (> 0): a sample with :math:`|\omega_k| \ge`
         the range (to 1e-6 relative) on an axis is saturated. Without it, an axis is
-        saturated where its largest :math:`|\\omega_k|` (at least
+        saturated where its largest :math:`|\omega_k|` (at least
         :data:`SATURATION_MIN_RATE` rad/s) repeats in runs of at least
         :data:`SATURATION_RUN` consecutive samples (a clipped signal is flat at its
         limit; a measured peak is not).
@@ -836,6 +871,21 @@ def saturation(t, gyro, *, gyro_range: float | None = None, source: str | None =
         ``samples`` (samples saturated on some axis), ``of`` (N), ``gyro_range`` (rad/s or
         None), ``axes`` (axis -> ``samples``, ``level`` rad/s, ``runs``, ``intervals``: the
         first 20 ``(t0, t1)`` in s) and ``warning`` (str or None).
+
+    Examples
+    --------
+    A rate of amplitude 6 rad/s on z clipped by a 250 deg/s (4.363 rad/s) gyro:
+
+    >>> import numpy as np
+    >>> from bvpnav import detect
+    >>> t = np.arange(200) * 0.01
+    >>> w = np.zeros((200, 3))
+    >>> w[:, 2] = np.clip(6.0 * np.sin(2 * np.pi * t), -4.363, 4.363)
+    >>> rep = detect.saturation(t, w, warn=False)
+    >>> rep["samples"], rep["axes"]["z"]["runs"], rep["axes"]["z"]["intervals"][0]
+    (100, 4, (0.13, 0.37))
+    >>> detect.saturation(t, w, gyro_range=4.363, warn=False)["samples"]
+    100
     """
     from .log import SaturationWarning
     from .log import warn as _warn
