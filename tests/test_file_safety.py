@@ -244,3 +244,98 @@ def test_reading_parquet_leaves_no_thread_that_aborts_the_process_at_exit(tmp_pa
                                   stderr=subprocess.DEVNULL) for _ in range(2)]
         codes += [p.wait(timeout=120) for p in procs]
     assert codes == [2] * 16, codes
+
+
+# ------------------------------------------------------------- a folder recording (issue 40, case 5)
+_FOLDER_SPEC = """\
+[problem]
+sigma_a = 0.1
+
+[solve]
+solver = "direct"
+lam = 1.0
+
+[[item]]
+type = "position"
+t = 0.0
+value = [0.0, 0.0, 0.0]
+mode = "hard"
+
+[[item]]
+type = "velocity"
+t = 0.0
+value = [0.0, 0.0, 0.0]
+mode = "hard"
+"""
+
+
+@pytest.fixture()
+def export(tmp_path):
+    """A generated phone export folder (TotalAcceleration, Gyroscope, Orientation, Metadata .csv)
+    and a spec that solves it."""
+    from bvpnav.readers.phone import write_example_export
+
+    ex = write_example_export(tmp_path / "export", duration=2.0)
+    (tmp_path / "spec.toml").write_text(_FOLDER_SPEC)
+    return ex.path
+
+
+def _tree(folder):
+    """Every file under ``folder`` -> (SHA-256 of its bytes, mode)."""
+    import hashlib
+
+    return {p.relative_to(folder): (hashlib.sha256(p.read_bytes()).hexdigest(), p.stat().st_mode)
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+@pytest.mark.parametrize("target", [
+    ("--out", "TotalAcceleration.csv"),     # the raw sensor file itself: was replaced, exit 0
+    ("--out", "trajectory.csv"),            # a new file in the recording's folder
+    ("--summary", "Metadata.json"),
+    ("--plot", "figure.png"),
+    ("--geodetic", "Gyroscope.csv"),
+])
+def test_no_output_goes_into_a_folder_recording(export, tmp_path, capsys, target):
+    opt, name = target
+    before = _tree(export)
+    args = ["solve", str(export), "--spec", str(tmp_path / "spec.toml"), "--out", str(tmp_path / "traj.csv")]
+    if opt == "--out":
+        args[-1] = str(export / name)
+    else:
+        args += [opt, str(export / name)]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert f"{opt} '{export / name}' is inside the input INPUT '{export}'" in err
+    assert "never writes into its inputs" in err and "give " + opt + " a path outside" in err
+    assert _tree(export) == before  # every input byte (and mode) unchanged, nothing added
+    assert not (tmp_path / "traj.csv").exists()
+    # and the same run with every output outside the folder solves
+    assert main(["solve", str(export), "--spec", str(tmp_path / "spec.toml"), "--out",
+                 str(tmp_path / "traj.csv")]) == 0
+    assert _tree(export) == before
+
+
+def test_links_into_a_folder_recording_are_inputs_too(export, tmp_path, capsys):
+    """A symlink or a hard link outside the folder to one of its files is that file."""
+    (tmp_path / "sym.csv").symlink_to(export / "TotalAcceleration.csv")
+    os.link(export / "Gyroscope.csv", tmp_path / "hard.csv")
+    before = _tree(export)
+    for path, how in ((tmp_path / "sym.csv", "is inside the input INPUT"),
+                      (tmp_path / "hard.csv", "is a hard link to the input INPUT (a file of the folder")):
+        assert main(["solve", str(export), "--spec", str(tmp_path / "spec.toml"), "--out", str(path)]) == 2
+        assert how in capsys.readouterr().err
+    assert _tree(export) == before
+
+
+def test_check_outputs_protects_every_file_of_an_input_folder(export, tmp_path):
+    from bvpnav.errors import InputError
+
+    sub = export / "more"
+    sub.mkdir()
+    (sub / "x.csv").write_text("t\n0\n")
+    for out in (export / "more" / "x.csv", export / "more" / "new.csv", export / "new.csv"):
+        with pytest.raises(InputError, match="is inside the input recording"):
+            bvpnav.io.check_outputs({"recording": export}, {"out": out})
+    with pytest.raises(InputError, match="the same file as the input recording"):
+        bvpnav.io.check_outputs({"recording": export}, {"out": export})
+    bvpnav.io.check_outputs({"recording": export}, {"out": tmp_path / "elsewhere.csv"})  # outside: fine

@@ -39,16 +39,25 @@ IMU alone:
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
 from .errors import InputError
-from .imu import STANDARD_GRAVITY
+from .geodesy import STANDARD_GRAVITY
 
-if TYPE_CHECKING:
-    from .imu import ImuData
+
+class ImuLike(Protocol):
+    """What the detectors and checks read of a :class:`bvpnav.ImuData` (not imported: it
+    sits above this module and runs :func:`frame_check` and :func:`saturation` itself)."""
+
+    t: np.ndarray
+    n: int
+    acc: np.ndarray
+    specific_force: np.ndarray | None
+    gyro: np.ndarray | None
+    gravity: np.ndarray | None
 
 __all__ = [
     "Detection",
@@ -65,6 +74,16 @@ __all__ = [
     "magnitude_statistic",
     "intervals_from_mask",
     "zero_velocity_items",
+    "FrameCheck",
+    "frame_check",
+    "frame_name",
+    "saturation",
+    "FRAME_CHECK_LIMIT",
+    "GRAVITY_TWICE",
+    "FRAME_CHECK_WINDOW",
+    "FRAME_CHECK_GYRO",
+    "SATURATION_RUN",
+    "SATURATION_MIN_RATE",
 ]
 
 #: The detectors :func:`stationary` knows.
@@ -287,9 +306,8 @@ def _positive(name: str, value, unit: str) -> float:
 
 def _channels(data, method: str) -> tuple[np.ndarray, np.ndarray | None]:
     """The specific force (N, 3) and gyro rates (N, 3) or None of ``data``, checked."""
-    from .imu import ImuData
-
-    if not isinstance(data, ImuData):
+    if not (hasattr(data, "specific_force") and hasattr(data, "grid")):  # an ImuData (not imported: it
+        # sits above this module, whose frame check it runs)
         raise InputError(f"data: got {type(data).__name__}; give a bvpnav.ImuData with body-frame "
                          "specific force and gyro rates, e.g. ImuData.from_gyro(t, specific_force, gyro)")
     if data.specific_force is None:
@@ -367,7 +385,7 @@ def _settings(method: str, threshold, sigma_a, sigma_w, acc_threshold, gyro_thre
 
 
 # ------------------------------------------------------------------ detection
-def stationary_mask(data: ImuData, method: str = "shoe", *, window: int | None = None,
+def stationary_mask(data: ImuLike, method: str = "shoe", *, window: int | None = None,
                     threshold: float | None = None, sigma_a: float | None = None,
                     sigma_w: float | None = None, acc_threshold: float | None = None,
                     gyro_threshold: float | str | None = "auto",
@@ -414,7 +432,7 @@ def _detect(data, method, window, threshold, sigma_a, sigma_w, acc_threshold, gy
     return per_sample < cfg["threshold"], per_sample, W, cfg
 
 
-def stationary(data: ImuData, method: str = "shoe", *, window: int | None = None,
+def stationary(data: ImuLike, method: str = "shoe", *, window: int | None = None,
                threshold: float | None = None, sigma_a: float | None = None, sigma_w: float | None = None,
                acc_threshold: float | None = None, gyro_threshold: float | str | None = "auto",
                gravity: float = STANDARD_GRAVITY, min_duration: float = 0.0,
@@ -596,3 +614,322 @@ def zero_velocity_items(intervals, angular_rate: float | bool | None = None, **i
         kw = {} if name is None else {"name": f"{name} {k} rate"}
         out.append(ZeroAngularRate(t=(float(t0), float(t1)), sigma=sigma, **kw))
     return out
+
+
+# ------------------------------------------------------- frame and gravity sanity
+#: A mean navigation-frame acceleration at rest larger than this fraction of g is reported.
+FRAME_CHECK_LIMIT = 0.5
+#: A mean component along gravity above this fraction of g is gravity counted twice.
+GRAVITY_TWICE = 1.5
+#: The magnitude detector's window (samples) used to find rest for the frame check.
+FRAME_CHECK_WINDOW = 5
+#: The magnitude detector's gyro threshold (rad/s) for the frame check's rest: still, not
+#: merely turning slowly (the detector's default, 0.5 rad/s, accepts a slow turn).
+FRAME_CHECK_GYRO = 0.1
+
+
+@dataclass(frozen=True, eq=False)
+class FrameCheck:
+    r"""What :func:`frame_check` measured.
+
+    Attributes
+    ----------
+    over : {"rest", "all"}
+        Whether the means are over the samples detected at rest or over the whole
+        recording (no rest detected).
+    samples : int
+        Number of samples averaged.
+    mean_acc : ndarray, shape (3,)
+        Mean navigation-frame acceleration :math:`\\bar a` over them, m/s^2.
+    mean_specific_force : ndarray, shape (3,)
+        Mean body-frame specific force over them, m/s^2 (the sensor's own axes).
+    gravity : ndarray, shape (3,)
+        The navigation-frame gravity vector used, m/s^2.
+    along_gravity : float
+        :math:`\bar a \cdot \hat g`, m/s^2 (positive: along gravity, i.e. downwards).
+    horizontal : float
+        :math:`\|\bar a - (\bar a\cdot\hat g)\hat g\|`, m/s^2.
+    verdict : str or None
+        None (plausible), ``"gravity twice"``, ``"gravity horizontal"``,
+        ``"gravity missing"`` or ``"not zero"``.
+    message : str or None
+        The warning (None when plausible).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from bvpnav import ImuData, detect
+    >>> t = np.arange(0.0, 10.0, 0.01)
+    >>> f = np.tile([0.0, 0.0, 9.80665], (t.size, 1))  # a level z-up sensor at rest
+    >>> res = detect.frame_check(ImuData.from_gyro(t, f, np.zeros((t.size, 3))), warn=False)
+    >>> res.over, res.samples, res.verdict, res.as_dict()["mean_acc"]
+    ('rest', 1000, None, [0.0, 0.0, 0.0])
+    """
+
+    over: str
+    samples: int
+    mean_acc: np.ndarray
+    mean_specific_force: np.ndarray
+    gravity: np.ndarray
+    along_gravity: float
+    horizontal: float
+    verdict: str | None
+    message: str | None
+
+    def as_dict(self) -> dict:
+        """Plain numbers (JSON-ready) of the check."""
+        return {"over": self.over, "samples": self.samples, "mean_acc": self.mean_acc.tolist(),
+                "mean_specific_force": self.mean_specific_force.tolist(), "gravity": self.gravity.tolist(),
+                "along_gravity": self.along_gravity, "horizontal": self.horizontal, "verdict": self.verdict,
+                "warning": self.message}
+
+
+def _vec(v, digits: int = 3) -> str:
+    return "(" + ", ".join(f"{float(x):.{digits}g}" for x in v) + ")"
+
+
+def frame_name(gravity) -> str:
+    """The navigation frame a gravity vector implies, in words (``"ENU (z up)"``, ...).
+
+    Examples
+    --------
+    >>> from bvpnav.detect import frame_name
+    >>> frame_name([0.0, 0.0, -9.80665])
+    'ENU (x east, y north, z up)'
+    >>> frame_name([0.0, 0.0, 9.80665])
+    'NED (x north, y east, z down)'
+    """
+    g = np.asarray(gravity, dtype=float)
+    u = g / np.linalg.norm(g)
+    if u[2] < -0.999:
+        return "ENU (x east, y north, z up)"
+    if u[2] > 0.999:
+        return "NED (x north, y east, z down)"
+    return f"a frame with gravity along {_vec(u)}"
+
+
+def _axis_convention(f_mean: np.ndarray, over: str) -> str:
+    """Which sensor axis points up, from the mean specific force at rest (it points up)."""
+    k = int(np.argmax(np.abs(f_mean)))
+    up = f_mean[k] > 0
+    axis = "xyz"[k]
+    reads = "at rest" if over == "rest" else "on average"
+    conv = ("" if k != 2 else " (z-up body axes, e.g. FLU/ENU)" if up else
+            " (z-down body axes, e.g. FRD/NED)")
+    return (f"{reads} the sensor reads a specific force of {_vec(f_mean)} m/s^2 in its own axes, so its "
+            f"{axis} axis points {'up' if up else 'down'}{conv}")
+
+
+def _verdict(along: float, horizontal: float, norm: float, g0: float) -> tuple[str | None, str]:
+    if norm <= FRAME_CHECK_LIMIT * g0:
+        return None, ""
+    if along >= GRAVITY_TWICE * g0:
+        return "gravity twice", (f"{along:.3g} m/s^2 ({along / g0:.2f} g) along gravity: gravity is counted "
+                                 "twice (the attitude turns the specific force, which points up at rest, "
+                                 "to point down: the sensor's axes and the navigation frame disagree on "
+                                 "which way z points)")
+    if horizontal >= FRAME_CHECK_LIMIT * g0:
+        return "gravity horizontal", (f"{horizontal:.3g} m/s^2 ({horizontal / g0:.2f} g) horizontal: the "
+                                      "attitude turns the sensor's up axis towards the horizontal (axis "
+                                      "order, quaternion order or the initial attitude)")
+    if along >= FRAME_CHECK_LIMIT * g0:
+        return "gravity missing", (f"{along:.3g} m/s^2 ({along / g0:.2f} g) along gravity: the specific "
+                                   "force lacks gravity (gravity removed, e.g. a linear or user "
+                                   "acceleration given as specific force)")
+    return "not zero", f"|mean| = {norm:.3g} m/s^2 ({norm / g0:.2f} g)"
+
+
+def frame_check(data: ImuLike, *, fixes: dict | None = None, source: str | None = None,
+                warn: bool = True) -> FrameCheck:
+    r"""Frame and gravity sanity: the mean navigation-frame acceleration at rest against zero.
+
+    Parameters
+    ----------
+    data : ImuData
+        Strapdown data (``specific_force``, ``attitude``, ``gravity``; ``acc = C f + g``).
+    fixes : dict, optional
+        The fix to name per verdict (``"gravity twice"``, ``"gravity horizontal"``,
+        ``"gravity missing"``, ``"not zero"``), in the caller's terms (a Python argument,
+        a spec option); a generic one otherwise.
+    source : str, optional
+        The file the data came from, for the message.
+    warn : bool
+        Issue the message as a :class:`bvpnav.log.FrameWarning`.
+
+    Returns
+    -------
+    FrameCheck
+
+    Notes
+    -----
+    Rest is found by the magnitude detector of :func:`stationary` (window
+    :data:`FRAME_CHECK_WINDOW` samples; with gyro rates when there are any, below
+    :data:`FRAME_CHECK_GYRO`); with no sample at rest the whole recording is averaged.
+    With :math:`\hat g = g/\|g\|`,
+
+    .. math:: \bar a = \frac{1}{|R|}\sum_{i \in R} (C_i f_i + g), \quad
+              a_\parallel = \bar a\cdot\hat g, \quad
+              a_\perp = \|\bar a - a_\parallel \hat g\|,
+
+    which is about zero at rest when the frames are right. A mean larger than
+    :data:`FRAME_CHECK_LIMIT` g is reported: :math:`a_\parallel \ge` :data:`GRAVITY_TWICE`
+    g is gravity counted twice (a z-down sensor or attitude read as z-up, or the
+    reverse), :math:`a_\perp \ge` :data:`FRAME_CHECK_LIMIT` g an up axis turned
+    horizontal, :math:`a_\parallel \ge` :data:`FRAME_CHECK_LIMIT` g a specific force
+    without gravity.
+
+    Examples
+    --------
+    A level z-down sensor (forward-right-down axes) at rest, read as ENU, then as NED:
+
+    >>> import numpy as np
+    >>> from bvpnav import ImuData, detect
+    >>> t = np.arange(0.0, 10.0, 0.01)
+    >>> f = np.tile([0.0, 0.0, -9.80665], (t.size, 1))  # +g on the axis that points up: -z
+    >>> enu = ImuData.from_gyro(t, f, np.zeros((t.size, 3)), checks=False)
+    >>> res = detect.frame_check(enu, warn=False)
+    >>> res.verdict, round(res.along_gravity / 9.80665, 2)
+    ('gravity twice', 2.0)
+    >>> ned = ImuData.from_gyro(t, f, np.zeros((t.size, 3)), frame="ned", checks=False)
+    >>> detect.frame_check(ned, warn=False).verdict is None
+    True
+    """
+    from .log import FrameWarning
+    from .log import warn as _warn
+
+    f = np.asarray(data.specific_force, dtype=float)
+    acc = np.asarray(data.acc, dtype=float)
+    g = np.asarray(data.gravity, dtype=float)
+    g0 = float(np.linalg.norm(g))
+    w = None if data.gyro is None else np.asarray(data.gyro, dtype=float)
+    rest = np.zeros(f.shape[0], dtype=bool)
+    if f.shape[0] >= FRAME_CHECK_WINDOW:
+        stat = magnitude_statistic(f, w, FRAME_CHECK_WINDOW, gyro_threshold=FRAME_CHECK_GYRO, gravity=g0)
+        rest = _per_sample_min(stat, FRAME_CHECK_WINDOW) < 1.0
+    over = "rest" if np.count_nonzero(rest) >= FRAME_CHECK_WINDOW else "all"
+    sel = rest if over == "rest" else slice(None)
+    m, fm = acc[sel].mean(axis=0), f[sel].mean(axis=0)
+    u = g / g0
+    along = float(m @ u)
+    horizontal = float(np.linalg.norm(m - along * u))
+    verdict, diag = _verdict(along, horizontal, float(np.linalg.norm(m)), g0)
+    msg = None
+    if verdict is not None:
+        n = int(np.count_nonzero(rest)) if over == "rest" else f.shape[0]
+        what = (f"the {n} samples at rest (bvpnav.detect.stationary, magnitude test)" if over == "rest"
+                else f"the whole recording ({n} samples; no rest detected)")
+        fix = (fixes or {}).get(verdict) or ("State the navigation frame and the sensor's axes correctly "
+                                             "(frame, gravity, attitude, initial attitude).")
+        where = f" of {source}" if source else ""
+        msg = (f"frame check{where}: the mean navigation-frame acceleration over {what} is {_vec(m)} m/s^2, "
+               f"not about zero: {diag}. Navigation frame {frame_name(g)}, gravity {_vec(g, 6)} m/s^2; "
+               f"{_axis_convention(fm, over)}. {fix}")
+        if warn:
+            _warn(msg, FrameWarning)
+    n_used = int(np.count_nonzero(rest)) if over == "rest" else f.shape[0]
+    return FrameCheck(over=over, samples=n_used, mean_acc=m, mean_specific_force=fm, gravity=g.copy(),
+                      along_gravity=along, horizontal=horizontal, verdict=verdict, message=msg)
+
+
+#: Consecutive samples at an axis's largest absolute rate taken as clipped when no range is stated.
+SATURATION_RUN = 3
+#: The smallest largest absolute rate (rad/s) taken for a gyro's range when none is stated.
+SATURATION_MIN_RATE = 0.5
+
+
+def _runs(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """First and last index of each run of True."""
+    edges = np.diff(np.concatenate([[0], mask.view(np.int8), [0]]))
+    return np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
+
+
+def saturation(t, gyro, *, gyro_range: float | None = None, source: str | None = None,
+               warn: bool = True) -> dict:
+    r"""Gyro samples at the sensor's range: counted, located and reported.
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Sample times, s.
+    gyro : array_like, shape (N, 3)
+        Body rates, rad/s.
+    gyro_range : float, optional
+        The gyro's full-scale range, rad/s (> 0): a sample with :math:`|\omega_k| \ge`
+        the range (to 1e-6 relative) on an axis is saturated. Without it, an axis is
+        saturated where its largest :math:`|\omega_k|` (at least
+        :data:`SATURATION_MIN_RATE` rad/s) repeats in runs of at least
+        :data:`SATURATION_RUN` consecutive samples (a clipped signal is flat at its
+        limit; a measured peak is not).
+    source : str, optional
+        The file, for the message.
+    warn : bool
+        Issue the message as a :class:`bvpnav.log.SaturationWarning`.
+
+    Returns
+    -------
+    dict
+        ``samples`` (samples saturated on some axis), ``of`` (N), ``gyro_range`` (rad/s or
+        None), ``axes`` (axis -> ``samples``, ``level`` rad/s, ``runs``, ``intervals``: the
+        first 20 ``(t0, t1)`` in s) and ``warning`` (str or None).
+
+    Examples
+    --------
+    A rate of amplitude 6 rad/s on z clipped by a 250 deg/s (4.363 rad/s) gyro:
+
+    >>> import numpy as np
+    >>> from bvpnav import detect
+    >>> t = np.arange(200) * 0.01
+    >>> w = np.zeros((200, 3))
+    >>> w[:, 2] = np.clip(6.0 * np.sin(2 * np.pi * t), -4.363, 4.363)
+    >>> rep = detect.saturation(t, w, warn=False)
+    >>> rep["samples"], rep["axes"]["z"]["runs"], rep["axes"]["z"]["intervals"][0]
+    (100, 4, (0.13, 0.37))
+    >>> detect.saturation(t, w, gyro_range=4.363, warn=False)["samples"]
+    100
+    """
+    from .log import SaturationWarning
+    from .log import warn as _warn
+
+    t = np.asarray(t, dtype=float)
+    w = np.asarray(gyro, dtype=float)
+    if gyro_range is not None:
+        gyro_range = _positive("gyro_range", gyro_range, "rad/s")
+    any_axis = np.zeros(w.shape[0], dtype=bool)
+    axes: dict[str, dict] = {}
+    for k, name in enumerate("xyz"):
+        a = np.abs(w[:, k])
+        if gyro_range is not None:
+            level, at = gyro_range, a >= gyro_range * (1.0 - 1e-6)
+            first, last = _runs(at)
+        else:
+            level = float(a.max()) if a.size else 0.0
+            if level < SATURATION_MIN_RATE:
+                continue
+            first, last = _runs(a >= level * (1.0 - 1e-9))
+            long = last - first + 1 >= SATURATION_RUN
+            first, last = first[long], last[long]
+            at = np.zeros(a.size, dtype=bool)
+            for i0, i1 in zip(first, last, strict=True):
+                at[i0:i1 + 1] = True
+        if first.size:
+            any_axis |= at
+            spans = [(float(t[i0]), float(t[i1])) for i0, i1 in zip(first[:20], last[:20], strict=True)]
+            axes[name] = {"samples": int(np.count_nonzero(at)), "level": float(level),
+                          "runs": int(first.size), "intervals": spans}
+    count = int(np.count_nonzero(any_axis))
+    msg = None
+    if count:
+        parts = [f"axis {k} {v['samples']} samples at |rate| {v['level']:.4g} rad/s "
+                 f"({np.rad2deg(v['level']):.4g} deg/s) in {v['runs']} run(s), the first at t = "
+                 f"{v['intervals'][0][0]:.6g}..{v['intervals'][0][1]:.6g} s" for k, v in axes.items()]
+        how = (f"at or beyond the stated gyro_range = {gyro_range:.4g} rad/s" if gyro_range is not None
+               else f"flat at the axis's largest |rate| for {SATURATION_RUN} or more consecutive samples")
+        where = f" of {source}" if source else ""
+        share = 100.0 * count / w.shape[0]
+        msg = (f"gyro saturation{where}: {count} of {w.shape[0]} samples ({share:.3g} %) are {how}: "
+               f"{'; '.join(parts)}. The rates were clipped at the sensor's range there, so the "
+               "attitude integrated through them is wrong (its error grows with every clipped run); record "
+               "with a larger gyro range, or leave those intervals out")
+        if warn:
+            _warn(msg, SaturationWarning)
+    return {"samples": count, "of": int(w.shape[0]), "gyro_range": gyro_range, "axes": axes, "warning": msg}

@@ -32,6 +32,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .constraints import Position
 
 __all__ = [
+    "STANDARD_GRAVITY",
     "WGS84",
     "geodetic_to_local",
     "local_to_geodetic",
@@ -39,6 +40,9 @@ __all__ = [
     "position_items",
     "trajectory_to_geodetic",
 ]
+
+#: Standard gravity, m/s^2 (the conventional value, CGPM 1901).
+STANDARD_GRAVITY = 9.80665
 
 #: WGS-84 defining and derived constants (NIMA TR8350.2, 3rd ed., tables 3.1-3.3).
 WGS84 = {

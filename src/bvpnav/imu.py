@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import InputError
+from .geodesy import STANDARD_GRAVITY
 from .grid import TimeGrid
 from .timebase import as_float_array
 
@@ -18,8 +19,6 @@ if TYPE_CHECKING:
 __all__ = ["ImuData", "STANDARD_GRAVITY", "ACC_UNITS", "DEFAULT_AXES", "RESERVED_NAMES",
            "axis_name_clash"]
 
-#: Standard gravity, m/s^2.
-STANDARD_GRAVITY = 9.80665
 #: m/s^2 per unit of an acceleration value (``[input] unit`` of a spec).
 ACC_UNITS = {"m/s^2": 1.0, "g": STANDARD_GRAVITY, "mg": STANDARD_GRAVITY * 1e-3, "ft/s^2": 0.3048}
 #: Default axis names by number of axes.
@@ -102,6 +101,62 @@ def _axis_names(axes: Sequence[str] | str | None, d: int) -> tuple[str, ...]:
     return axes
 
 
+def _gravity_and_frame(gravity, frame: str | None) -> tuple[np.ndarray, str | None]:
+    """The navigation-frame gravity vector (m/s^2) and the frame (stated, or implied by a
+    gravity along -z (ENU) or +z (NED), else None), checked against each other."""
+    if frame is not None and frame not in ("enu", "ned"):
+        raise InputError(f"frame={frame!r}: valid navigation frames: 'enu' (x east, y north, z up) or 'ned' "
+                         "(x north, y east, z down)")
+    if gravity is None:
+        g = np.array([0.0, 0.0, STANDARD_GRAVITY if frame == "ned" else -STANDARD_GRAVITY])
+    else:
+        g = as_float_array(gravity, "gravity", "m/s^2")
+    if g.shape != (3,) or not np.all(np.isfinite(g)) or not np.any(g):
+        raise InputError(f"gravity: expected 3 finite numbers in m/s^2 (not all zero), got {gravity!r}")
+    up = g[2] < 0  # gravity along -z: z points up
+    if frame is not None and gravity is not None and up != (frame == "enu"):
+        raise InputError(f"gravity={g.tolist()} points along {'-' if up else '+'}z, but frame={frame!r} "
+                         f"has z {'up' if frame == 'enu' else 'down'}: give gravity along "
+                         f"{'-' if frame == 'enu' else '+'}z (or leave gravity out), or the other frame")
+    if frame is None:
+        u = g / np.linalg.norm(g)
+        frame = "enu" if u[2] < -0.999 else "ned" if u[2] > 0.999 else None
+    return g, frame
+
+
+def _other(frame: str | None) -> str:
+    return "enu" if frame == "ned" else "ned"
+
+
+def _z(frame: str | None) -> str:
+    return "z-down (forward-right-down, NED)" if _other(frame) == "ned" else "z-up (ENU, forward-left-up)"
+
+
+#: The fixes of the frame check's verdicts, in Python terms, by constructor and frame.
+_PYTHON_FIXES = {
+    "gyro": lambda frame: {
+        "gravity twice": (f"If the sensor's axes are {_z(frame)}, say so: ImuData.from_gyro(t, "
+                          f"specific_force, gyro, frame='{_other(frame)}'); otherwise give the attitude at "
+                          "the first sample, initial_attitude= (bvpnav.align.roll_pitch_from_stationary, "
+                          "bvpnav.align.initial_attitude)."),
+        "gravity horizontal": ("Give the attitude at the first sample, initial_attitude= (bvpnav.align."
+                               "roll_pitch_from_stationary, bvpnav.align.initial_attitude), and check the "
+                               "order of the specific_force and gyro columns (x, y, z)."),
+        "gravity missing": ("Give the accelerometer's specific force with gravity in it (what the sensor "
+                            "measures: +9.8 m/s^2 on the axis that points up at rest)."),
+    },
+    "attitude": lambda frame: {
+        "gravity twice": (f"If the attitude is relative to {_other(frame).upper()}, say so: ImuData(t, "
+                          f"specific_force=f, attitude=C, frame='{_other(frame)}'); otherwise the attitude "
+                          "or the sensor's z axis is flipped."),
+        "gravity horizontal": ("Check that the attitude maps body to navigation vectors (not its inverse) "
+                               "and the quaternion order (scipy's is scalar-last (x, y, z, w))."),
+        "gravity missing": ("Give the accelerometer's specific force with gravity in it (what the sensor "
+                            "measures: +9.8 m/s^2 on the axis that points up at rest)."),
+    },
+}
+
+
 class ImuData:
     """Sample times with the accelerations that drive r''(t) = a(t).
 
@@ -121,7 +176,18 @@ class ImuData:
         (N, 4) in scipy's scalar-last order ``(x, y, z, w)``, or matrices (N, 3, 3).
     gravity : array_like, shape (3,), optional
         Gravity vector in the navigation frame, m/s^2. Default ``(0, 0, -g0)`` with
-        ``g0 = 9.80665`` (z up).
+        ``g0 = 9.80665`` (z up), or ``(0, 0, +g0)`` with ``frame="ned"``.
+    frame : {"enu", "ned"}, optional
+        The navigation frame of a strapdown triple (the frame ``attitude`` maps body
+        vectors into): ``"enu"`` (x east, y north, z up; the default) or ``"ned"`` (x
+        north, y east, z down). It sets the default gravity; a ``gravity`` whose z
+        component points the other way is refused.
+    checks : bool
+        Run the input checks on strapdown data (default True): the frame and gravity
+        sanity check (:func:`bvpnav.detect.frame_check`: a :class:`bvpnav.log.FrameWarning`
+        when the acceleration at rest is far from zero, e.g. gravity counted twice), and in
+        :meth:`from_gyro` the gyro saturation count. Their numbers are kept in
+        ``data.checks``.
     axes : sequence of str, optional
         Axis names; default ``x``, ``x, y`` or ``x, y, z`` by the number of axes. They
         name the trajectory's columns (``<axis>``, ``v<axis>``, ``<axis>_std``,
@@ -171,6 +237,8 @@ class ImuData:
         gravity=None,
         axes: Sequence[str] | None = None,
         time_origin: str | None = None,
+        frame: str | None = None,
+        checks: bool = True,
     ):
         self.grid = TimeGrid(t)
         if time_origin is not None and not isinstance(time_origin, str):
@@ -188,19 +256,26 @@ class ImuData:
         #: Linearization point of attitude error models (set by :mod:`bvpnav.solve.attitude`;
         #: see :class:`bvpnav.error_models._attitude.AttitudePoint`); None for data as given.
         self.attitude_point = None
+        #: The navigation frame of strapdown data: ``"enu"``, ``"ned"`` (stated, or implied by
+        #: a gravity along -z / +z), or None (navigation-frame data, or another gravity).
+        self.frame: str | None = None
+        #: The input checks run on these data (``"frame"``: :func:`bvpnav.detect.frame_check`,
+        #: ``"saturation"``: :func:`bvpnav.detect.saturation`) as plain numbers, each with its
+        #: ``"warning"`` (str or None); a solve copies the warnings into ``solution.warnings``.
+        self.checks: dict = {}
         if acc is not None and specific_force is not None:
             raise InputError("give either acc (navigation frame) or specific_force, not both")
         if acc is None and specific_force is None:
             raise InputError("no accelerations: give acc=(N, d) in m/s^2 or specific_force=(N, 3)")
         if acc is not None:
-            if attitude is not None or gravity is not None:
+            if attitude is not None or gravity is not None or frame is not None:
                 raise InputError(
-                    "attitude/gravity go with specific_force (body frame); acc is already in "
+                    "attitude/gravity/frame go with specific_force (body frame); acc is already in "
                     "the navigation frame"
                 )
             a = _finite_2d(acc, "acc", axes)
         else:
-            a = self._strapdown(specific_force, attitude, gravity, n)
+            a = self._strapdown(specific_force, attitude, gravity, n, frame)
         if a.shape[0] != n:
             raise InputError(f"acc has {a.shape[0]} samples but t has {n}; lengths must match: give one "
                              "acceleration row per time")
@@ -208,8 +283,33 @@ class ImuData:
         a.setflags(write=False)
         self.acc: np.ndarray = a
         self.axes: tuple[str, ...] = axes
+        if checks and self.is_strapdown:
+            self.check_frame(_PYTHON_FIXES["attitude"](self.frame))
 
-    def _strapdown(self, specific_force, attitude, gravity, n: int) -> np.ndarray:
+    def check_frame(self, fixes: dict | None = None, source: str | None = None):
+        """Run the frame and gravity sanity check (:func:`bvpnav.detect.frame_check`) and keep
+        its numbers in ``checks["frame"]``; a :class:`bvpnav.log.FrameWarning` when the
+        acceleration at rest is far from zero. Returns the
+        :class:`~bvpnav.detect.FrameCheck`."""
+        from .detect import frame_check
+
+        res = frame_check(self, fixes=fixes, source=source)
+        self.checks["frame"] = res.as_dict()
+        return res
+
+    def check_saturation(self, gyro_range: float | None = None, source: str | None = None) -> dict:
+        """Count the gyro samples at the sensor's range (:func:`bvpnav.detect.saturation`),
+        keep the report in ``checks["saturation"]`` and warn
+        (:class:`bvpnav.log.SaturationWarning`) when there are any."""
+        from .detect import saturation
+
+        if self.gyro is None:
+            raise InputError("no gyro rates to check (data.gyro is None)")
+        rep = saturation(self.t, self.gyro, gyro_range=gyro_range, source=source)
+        self.checks["saturation"] = rep
+        return rep
+
+    def _strapdown(self, specific_force, attitude, gravity, n: int, frame: str | None) -> np.ndarray:
         """Check and keep the strapdown triple; return the navigation-frame acceleration C f + g."""
         f = _finite_2d(specific_force, "specific_force", ("f_x", "f_y", "f_z"))
         if f.shape[1] != 3:
@@ -217,11 +317,7 @@ class ImuData:
         if attitude is None:
             raise InputError("specific_force needs attitude (body to navigation) per sample")
         rot = self._as_rotation(attitude, n)
-        g = np.array([0.0, 0.0, -STANDARD_GRAVITY]) if gravity is None else as_float_array(
-            gravity, "gravity", "m/s^2"
-        )
-        if g.shape != (3,) or not np.all(np.isfinite(g)):
-            raise InputError(f"gravity: expected 3 finite numbers in m/s^2, got {gravity!r}")
+        g, self.frame = _gravity_and_frame(gravity, frame)
         if f.shape[0] != n:
             raise InputError(
                 f"specific_force has {f.shape[0]} samples but t has {n}; lengths must match: give "
@@ -239,6 +335,9 @@ class ImuData:
         *,
         initial_attitude: Rotation | None = None,
         gravity=None,
+        frame: str | None = None,
+        gyro_range: float | None = None,
+        checks: bool = True,
     ) -> ImuData:
         r"""Strapdown data whose attitude is integrated from gyro rates.
 
@@ -253,7 +352,19 @@ class ImuData:
         initial_attitude : scipy.spatial.transform.Rotation, optional
             Body-to-navigation attitude at ``t[0]``; default identity.
         gravity : array_like, shape (3,), optional
-            Navigation-frame gravity in m/s^2 (default ``(0, 0, -9.80665)``).
+            Navigation-frame gravity in m/s^2 (default ``(0, 0, -9.80665)``, or
+            ``(0, 0, +9.80665)`` with ``frame="ned"``).
+        frame : {"enu", "ned"}, optional
+            The navigation frame (default ``"enu"``): ``"ned"`` for a z-down sensor
+            (forward-right-down body axes) whose attitude starts at identity in NED.
+        gyro_range : float, optional
+            The gyro's full-scale range, rad/s: samples at it are counted and reported
+            (:func:`bvpnav.detect.saturation`, a :class:`bvpnav.log.SaturationWarning`);
+            without it, runs of samples flat at an axis's largest rate are. The report
+            is ``data.checks["saturation"]``.
+        checks : bool
+            Run the frame and gravity sanity check and the saturation count (see
+            :class:`ImuData`); default True.
 
         Notes
         -----
@@ -296,10 +407,16 @@ class ImuData:
 
         grid = TimeGrid(t)
         rot = integrate_gyro(grid.t, gyro, initial_attitude)
-        out = cls(grid.t, specific_force=specific_force, attitude=rot, gravity=gravity)
+        out = cls(grid.t, specific_force=specific_force, attitude=rot, gravity=gravity, frame=frame,
+                  checks=False)
         w = as_float_array(gyro, "gyro", "rad/s")
         w.setflags(write=False)
         out.gyro = w
+        if checks:
+            out.check_saturation(gyro_range)
+            out.check_frame(_PYTHON_FIXES["gyro"](out.frame))
+        elif gyro_range is not None:
+            raise InputError("gyro_range is for the saturation count, which checks=False skips; drop one")
         return out
 
     @staticmethod

@@ -365,6 +365,7 @@ def summary(solution, problem) -> dict:
         "solver": {k: st.get(k) for k in keep if k in st},
         "items": solution.items.to_dict(orient="records"),
         "warnings": list(solution.warnings),
+        **({"data_checks": st["data_checks"]} if st.get("data_checks") else {}),
     })
 
 
@@ -453,17 +454,43 @@ def _probe_folder(folder: Path) -> OSError | None:
     return None
 
 
-def _input_identities(inputs: dict) -> tuple[dict, dict]:
-    """The given inputs by resolved path and by (device, inode): -> (name, path, True)."""
+def _input_identities(inputs: dict) -> tuple[dict, dict, dict]:
+    """The given inputs by resolved path and by (device, inode): -> (name, path, True), and
+    the input folders by resolved path -> (name, path).
+
+    A folder input (a ROS 2 bag, a phone export) is the input as a whole: every file under
+    it is entered too (by its resolved path, so a symlink's target, and by inode, so a hard
+    link elsewhere), named as the input.
+    """
     by_real: dict[str, tuple[str, object, bool]] = {}  # resolved path -> (name, path, is an input)
     by_key: dict[tuple[int, int], tuple[str, object, bool]] = {}  # (device, inode) -> the same
+    folders: dict[str, tuple[str, object]] = {}
     for k, p in inputs.items():
-        if p is not None:
-            real, key = _ident(p)
-            by_real.setdefault(real, (k, p, True))
-            if key is not None:
-                by_key.setdefault(key, (k, p, True))
-    return by_real, by_key
+        if p is None:
+            continue
+        real, key = _ident(p)
+        by_real.setdefault(real, (k, p, True))
+        if key is not None:
+            by_key.setdefault(key, (k, p, True))
+        if os.path.isdir(p):
+            folders.setdefault(real, (k, p))
+            for root, _dirs, names in os.walk(p):
+                for name in names:
+                    f = os.path.join(root, name)
+                    f_real, f_key = _ident(f)
+                    by_real.setdefault(f_real, (f"{k} (a file of the folder {str(p)!r})", f, True))
+                    if f_key is not None:
+                        by_key.setdefault(f_key, (f"{k} (a file of the folder {str(p)!r})", f, True))
+    return by_real, by_key, folders
+
+
+def _refuse_inside_input_folder(opt: str, p, real: str, folders: dict) -> None:
+    """Refuse output ``opt`` whose resolved path lies inside an input folder."""
+    for folder, (name, fp) in folders.items():
+        if real != folder and os.path.commonpath([real, folder]) == folder:
+            raise InputError(f"{opt} {str(p)!r} is inside the input {name} {str(fp)!r}, a folder read as "
+                             f"one recording (every file in it is the input): bvpnav never writes into its "
+                             f"inputs; give {opt} a path outside {str(fp)!r}")
 
 
 def _refuse_same_file(opt: str, p, real: str, key, by_real: dict, by_key: dict) -> None:
@@ -520,7 +547,8 @@ def check_outputs(inputs: dict, outputs: dict) -> None:
     ----------
     inputs : dict
         How the caller names each input (e.g. ``"INPUT"``, ``"--spec"``) -> its path
-        (None: not given). Inputs are only read.
+        (None: not given). Inputs are only read. A folder (a ROS 2 bag, a phone export) is
+        an input as a whole: nothing is written anywhere inside it.
     outputs : dict
         How the caller names each output (e.g. ``"--out"``, ``"--plot"``) -> its path
         (None: not given).
@@ -530,14 +558,16 @@ def check_outputs(inputs: dict, outputs: dict) -> None:
     InputError
         Naming both paths and the option to change, when an output is an input or another
         output of the same run (same path after resolving symlinks, or the same file
-        through a hard link); when an output exists but is a folder, a FIFO, a device or a
+        through a hard link), or lies inside an input folder, or is a file of one (through
+        a symlink or hard link elsewhere); when an output exists but is a folder, a FIFO, a device or a
         read-only file; when a part of its folder is a file; or when its folder cannot be
         written (permission, read-only file system), checked by creating and removing a
         temporary file there.
     """
-    by_real, by_key = _input_identities(inputs)
+    by_real, by_key, input_folders = _input_identities(inputs)
     outs = [(k, p, *_ident(p)) for k, p in outputs.items() if p is not None]
     for opt, p, real, key in outs:
+        _refuse_inside_input_folder(opt, p, real, input_folders)
         _refuse_same_file(opt, p, real, key, by_real, by_key)
         by_real[real] = (opt, p, False)
         if key is not None:

@@ -35,7 +35,8 @@ import os
 import sys
 import warnings
 
-__all__ = ["BvpnavWarning", "configure", "configured", "warn", "once", "progress", "progress_enabled",
+__all__ = ["BvpnavWarning", "DataWarning", "FrameWarning", "SaturationWarning",
+           "configure", "configured", "warn", "once", "progress", "progress_enabled",
            "logger", "in_sweep", "sweeping", "issued"]
 
 logger = logging.getLogger("bvpnav")
@@ -44,6 +45,20 @@ logger.addHandler(logging.NullHandler())
 
 class BvpnavWarning(RuntimeWarning):
     """A warning about a choice the user can change (the lambda range, the loop's tolerance)."""
+
+
+class DataWarning(BvpnavWarning):
+    """A warning about the input data themselves, issued when they are built
+    (:class:`bvpnav.ImuData`, a reader) and copied into ``solution.warnings`` by the solve."""
+
+
+class FrameWarning(DataWarning):
+    """The navigation-frame acceleration at rest is not about zero: a frame, gravity or
+    axis-convention mistake (:func:`bvpnav.detect.frame_check`)."""
+
+
+class SaturationWarning(DataWarning):
+    """Gyro samples at the sensor's range: clipped rates (:func:`bvpnav.detect.saturation`)."""
 
 
 # ------------------------------------------------------------------------ warnings

@@ -404,6 +404,9 @@ class SolveRecords:
     uncertainty : Uncertainty or None
     plausibility : dict or None
         The misfit numbers and limits of :func:`bvpnav.solve.plausibility.assess`.
+    data_checks : dict or None
+        The input checks of the data solved (``ImuData.checks``: the frame and gravity
+        check, the gyro saturation count), each with its ``warning``.
     """
 
     run: Run | None = None
@@ -414,6 +417,7 @@ class SolveRecords:
     uncertainty: Uncertainty | None = None
     attitude: AttitudeLoopReport | None = None
     plausibility: dict | None = None
+    data_checks: dict | None = None
 
     def stats(self) -> dict[str, Any]:
         """The ``Solution.stats`` dict (plain values: it is written to JSON by batch runs)."""
@@ -434,6 +438,8 @@ class SolveRecords:
             out["uncertainty"] = self.uncertainty.as_dict()
         if self.plausibility is not None:
             out["plausibility"] = dict(self.plausibility)
+        if self.data_checks:
+            out["data_checks"] = dict(self.data_checks)
         return out
 
 

@@ -467,6 +467,10 @@ def _check_frame_values(inp: dict, where) -> None:
         strapdown.gravity_vector(inp, frame)
     except InputError as exc:
         raise InputError(f"{where(keys[0] if keys else 'gravity')}: {exc}") from None
+    r = inp.get("gyro_range", 1.0)
+    if isinstance(r, bool) or not isinstance(r, (int, float)) or not (math.isfinite(r) and r > 0):
+        raise InputError(f"{where('gyro_range')}: gyro_range = {r!r}; the gyro's full-scale range in rad/s "
+                         "(e.g. 34.9 for 2000 deg/s)")
     for key in ("body_to_sensor", "initial_attitude"):
         if key in inp:
             try:

@@ -15,7 +15,14 @@ rates, perhaps an orientation from the device. This module applies what the spec
 - ``initial_attitude``: body-to-navigation attitude at the first sample, when the
   attitude is integrated from gyro rates (same two forms; default identity);
 - ``attitude_frame``: the reference frame of an orientation given in the file
-  (``"enu"`` or ``"ned"``), when the reader cannot know it.
+  (``"enu"`` or ``"ned"``), when the reader cannot know it;
+- ``gyro_range``: the gyro's full-scale range in rad/s; samples at it are counted and
+  reported (:func:`bvpnav.detect.saturation`; without it, runs flat at an axis's largest
+  rate are).
+
+Every recording's navigation-frame acceleration is checked against zero at rest
+(:func:`bvpnav.detect.frame_check`): gravity counted twice, or an up axis turned
+horizontal, is a :class:`bvpnav.log.FrameWarning` naming the option to set.
 
 Conventions are those of :mod:`bvpnav.attitude`: ``C`` rotates body vectors into the
 navigation frame, ``v_nav = C v_body``; rates are body rates relative to the navigation
@@ -50,9 +57,9 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["FRAME_OPTIONS", "FRAMES", "imu_data", "rotation_option", "gravity_vector", "frame_change"]
 
-#: The ``[input]`` keys about frames (read here, not by the readers).
+#: The ``[input]`` keys about frames and the strapdown channels (read here, not by the readers).
 FRAME_OPTIONS = frozenset({"frame", "gravity", "latitude", "height", "body_to_sensor", "initial_attitude",
-                           "attitude_frame"})
+                           "attitude_frame", "gyro_range"})
 
 #: Navigation frames: name -> what its axes are.
 FRAMES = {"enu": "x = east, y = north, z = up", "ned": "x = north, y = east, z = down"}
@@ -261,12 +268,13 @@ def imu_data(rec: Any, options: Mapping[str, Any]) -> ImuData:
                              "attitudes integrated from gyro rates: drop it")
         change = Rotation.from_matrix(frame_change(ref, frame))
         c_nb = change * rec.attitude * mount
-        data = ImuData(t=rec.t, specific_force=f_b, attitude=c_nb, gravity=g, time_origin=rec.time_origin)
+        data = ImuData(t=rec.t, specific_force=f_b, attitude=c_nb, gravity=g, time_origin=rec.time_origin,
+                       checks=False)
         if rec.gyro is not None:
             w = mount.inv().apply(rec.gyro)
             w.setflags(write=False)
             data.gyro = w
-        return data
+        return _checked(data, rec, used, _orientation_fixes(ref, "attitude_frame" in used))
     if "attitude_frame" in used:
         raise InputError(f"{rec.source}: [input] attitude_frame says what a file's orientation is "
                          "relative to, but this recording has no orientation (the attitude is integrated "
@@ -277,6 +285,51 @@ def imu_data(rec: Any, options: Mapping[str, Any]) -> ImuData:
                          "columns ([input] gyro = [...]) or the orientation ([input] attitude = {...})")
     c0 = (rotation_option(used["initial_attitude"], "initial_attitude") if "initial_attitude" in used
           else None)
-    data = ImuData.from_gyro(rec.t, f_b, mount.inv().apply(rec.gyro), initial_attitude=c0, gravity=g)
+    data = ImuData.from_gyro(rec.t, f_b, mount.inv().apply(rec.gyro), initial_attitude=c0, gravity=g,
+                             checks=False)
     data.time_origin = rec.time_origin
+    return _checked(data, rec, used, _integration_fixes(frame))
+
+
+def _checked(data: ImuData, rec: Any, used: Mapping[str, Any], fixes: dict) -> ImuData:
+    """``data`` after the frame check and, with gyro rates, the saturation count (both kept in
+    ``data.checks``, each warning once)."""
+    if "gyro_range" in used:
+        r = used["gyro_range"]
+        if isinstance(r, bool) or not isinstance(r, (int, float)) or not (math.isfinite(r) and r > 0):
+            raise InputError(f"[input] gyro_range = {r!r}: the gyro's full-scale range in rad/s (e.g. 34.9 "
+                             "for 2000 deg/s)")
+        if data.gyro is None:
+            raise InputError(f"{rec.source}: [input] gyro_range is given but the recording has no gyro "
+                             "rates; drop it")
+    if data.gyro is not None:
+        data.check_saturation(used.get("gyro_range"), source=rec.source)
+    data.check_frame(fixes, source=rec.source)
     return data
+
+
+def _orientation_fixes(ref: str, stated: bool) -> dict:
+    other = "enu" if ref == "ned" else "ned"
+    said = "as given by attitude_frame" if stated else "the reader's convention"
+    return {
+        "gravity twice": (f"The file's orientation was read as relative to {ref.upper()} ({said}); if it is "
+                          f"relative to {other.upper()} (e.g. forward-right-down body axes with a NED "
+                          f"orientation, or the reverse), set [input] attitude_frame = \"{other}\"."),
+        "gravity horizontal": ("Check [input] attitude (its column order, scalar = \"first\" or \"last\") "
+                               "and body_to_sensor."),
+        "gravity missing": ("Give the accelerometer's specific force with gravity in it (what the sensor "
+                            "measures), not a linear or user acceleration."),
+    }
+
+
+def _integration_fixes(frame: str) -> dict:
+    other = "enu" if frame == "ned" else "ned"
+    axes = "z-down (forward-right-down)" if other == "ned" else "z-up (forward-left-up)"
+    return {
+        "gravity twice": (f"If the sensor's axes are {axes}, set [input] frame = \"{other}\"; otherwise "
+                          "give the attitude at the first sample, [input] initial_attitude."),
+        "gravity horizontal": ("Give the attitude at the first sample ([input] initial_attitude) and check "
+                               "the gyro and specific_force column order and body_to_sensor."),
+        "gravity missing": ("Give the accelerometer's specific force with gravity in it (what the sensor "
+                            "measures), not a linear or user acceleration."),
+    }

@@ -463,7 +463,7 @@ def _with_acc(data: ImuData, acc: np.ndarray) -> ImuData:
     if data.is_strapdown:
         f = data.attitude.inv().apply(acc - data.gravity)
         out = ImuData(data.t, specific_force=f, attitude=data.attitude, gravity=data.gravity,
-                      axes=data.axes)
+                      axes=data.axes, checks=False)
         out.gyro = data.gyro  # the attitude error models' columns need the rates
         return out
     return ImuData(data.t, acc, axes=data.axes)

@@ -84,18 +84,35 @@ class _Export:
             except (zipfile.BadZipFile, OSError, EOFError, ValueError) as exc:
                 raise InputError(f"{str(path)!r}: not a readable zip archive ({exc}); give the Sensor Logger "
                                  "export folder or its complete .zip") from None
-            self._pick({n.rsplit("/", 1)[-1]: n for n in sorted(entries, key=lambda n: n.count("/"))})
+            groups: dict[str, dict[str, str]] = {}
+            for n in entries:
+                folder, _, base = n.rpartition("/")
+                if base in SENSOR_FILES.values():
+                    groups.setdefault(folder, {})[base] = n
+            self._pick(groups)
 
     def _from_folder(self, path: Path) -> None:
-        here = {p.name: str(p) for p in path.iterdir() if p.is_file()}
-        if not any(v in here for v in SENSOR_FILES.values()):
-            subs = [p for p in path.iterdir() if p.is_dir()]
-            if len(subs) == 1:
-                here = {p.name: str(p) for p in subs[0].iterdir() if p.is_file()}
-        self._pick(here)
+        here = {p.name: str(p) for p in path.iterdir() if p.is_file() and p.name in SENSOR_FILES.values()}
+        if here:
+            self._pick({"": here})
+            return
+        groups = {}
+        for sub in sorted(p for p in path.iterdir() if p.is_dir()):
+            files = {p.name: str(p) for p in sub.iterdir() if p.is_file() and p.name in SENSOR_FILES.values()}
+            if files:
+                groups[sub.name] = files
+        self._pick(groups)
 
-    def _pick(self, names: Mapping[str, str]) -> None:
-        self.names = {k: v for k, v in names.items() if k in SENSOR_FILES.values()}
+    def _pick(self, groups: Mapping[str, Mapping[str, str]]) -> None:
+        """The sensor files of the one export among ``groups`` (folder -> base name -> entry);
+        several exports are refused, naming each (their files would be mixed one by one)."""
+        if len(groups) > 1:
+            listing = "; ".join(f"{(k + '/') if k else '(top level)'!r}: {', '.join(sorted(v))}"
+                                for k, v in sorted(groups.items()))
+            raise InputError(f"{str(self.path)!r} holds {len(groups)} exports ({listing}): read together "
+                             "they would be mixed file by file (one phone's accelerometer with another's "
+                             "orientation). Give one export: its folder, or a .zip of that folder alone")
+        self.names = dict(next(iter(groups.values()))) if groups else {}
 
     def has(self, name: str) -> bool:
         return name in self.names

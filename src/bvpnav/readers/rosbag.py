@@ -240,6 +240,11 @@ def _imu_channels(msgs, topic: str, path: Path, stamp: str):
         return ns, f, w, None, notes
     notes.append("Imu orientation (x, y, z, w) used as the sensor-to-ENU attitude (REP-103/REP-145; "
                  "attitude_frame = \"enu\").")
+    frame_id = str(msgs[0][1].header.frame_id)
+    if frame_id.lower().endswith(("_ned", "_frd")):
+        notes.append(f"frame_id {frame_id!r} names NED/FRD (z-down) axes by its REP-103 suffix, but the "
+                     "orientation is read as ENU (REP-145); if it is relative to NED, set [input] "
+                     "attitude_frame = \"ned\" (the frame check of the acceleration at rest tells).")
     return ns, f, w, Rotation.from_quat(q), notes
 
 

@@ -560,10 +560,14 @@ def check(sol: Solution, form: Formulation, data=None) -> list[str]:
 
 def attach(sol: Solution, form: Formulation, data=None) -> Solution:
     """Run :func:`assess` on ``sol``: each message into ``sol.warnings`` and issued once as
-    a :class:`bvpnav.log.BvpnavWarning`, the numbers in ``sol.stats["plausibility"]``."""
+    a :class:`bvpnav.log.BvpnavWarning`, the numbers in ``sol.stats["plausibility"]``; the
+    data's own checks (``data.checks``: frame and gravity, gyro saturation; warned when the
+    data were built) into ``sol.warnings`` and ``sol.stats["data_checks"]``."""
     rep = assess(sol, form, data)
-    for msg in rep["warnings"]:
-        if msg not in sol.warnings:
+    checks = dict(getattr(data if data is not None else getattr(form, "data", None), "checks", None) or {})
+    for msg in [c.get("warning") for c in checks.values()] + rep["warnings"]:
+        if msg and msg not in sol.warnings:
             sol.warnings.append(msg)
+    for msg in rep["warnings"]:
         warn(msg)
-    return sol.record(plausibility=rep)
+    return sol.record(plausibility=rep, data_checks=checks or None)
