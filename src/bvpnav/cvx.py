@@ -196,12 +196,12 @@ CERTIFICATE_FACTOR = 10.0
 
 @dataclass(frozen=True)
 class Certificate:
-    """A solver's infeasibility certificate, checked against bvpnav's own rows.
+    r"""A solver's infeasibility certificate, checked against bvpnav's own rows.
 
     Attributes
     ----------
     radius : float
-        No stacked answer ``x`` with :math:`\\|x\\|_\\infty <` ``radius`` satisfies the
+        No stacked answer ``x`` with :math:`\|x\|_\infty <` ``radius`` satisfies the
         constraints (FEM equations and the hard, band and cone items checked): proved by
         the multipliers alone, in the units of the unknowns (m, m/s, m/s^2, ...).
     scale : float
@@ -218,12 +218,12 @@ class Certificate:
     ``r <= tol``) and ``(mu, Y)`` in the second-order cone (cones, ``(s + tol, U)`` in
     the cone), every feasible ``x`` has
 
-    .. math:: g^T x + \\gamma \\le 0, \\quad g = \\sum_k A_k^T u_k, \\quad
-              \\gamma = \\sum_k (c_k^T u_k - t_k)
+    .. math:: g^T x + \gamma \le 0, \quad g = \sum_k A_k^T u_k, \quad
+              \gamma = \sum_k (c_k^T u_k - t_k)
 
     (``u = y``, ``nu``, ``nu_+ - nu_-`` or ``-(mu, Y)`` per row, ``t`` the multipliers
-    times the tolerances), so :math:`\\gamma > 0` proves
-    :math:`\\|x\\|_\\infty \\ge \\gamma / \\|g\\|_1`: the :attr:`radius`. The solver's
+    times the tolerances), so :math:`\gamma > 0` proves
+    :math:`\|x\|_\infty \ge \gamma / \|g\|_1`: the :attr:`radius`. The solver's
     duals are taken with either sign, projected onto their cones (which keeps the
     argument valid) and the better radius kept.
     """

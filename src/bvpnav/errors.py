@@ -127,7 +127,8 @@ class SolveError(BvpnavError):
 
 
 class Infeasible(SolveError):
-    """Hard information cannot hold together (or the solver says so).
+    """Hard information cannot hold together, proved (a cvxpy solver's verdict is confirmed by its
+    infeasibility certificate, recomputed with bvpnav's own rows).
 
     Examples
     --------
@@ -141,8 +142,8 @@ class Infeasible(SolveError):
     >>> try:
     ...     prob.solve(solver="clarabel")
     ... except bvpnav.Infeasible as exc:
-    ...     print(exc)
-    clarabel: the hard information cannot hold together (status infeasible). These hard items ...
+    ...     print(str(exc).split("These hard items ")[1])
+    conflict: ['Position (t=[0, 1] s, value=[0, 1] m)', 'gps']. Soften one of them (give sigma=...).
     """
 
 
