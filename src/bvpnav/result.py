@@ -404,6 +404,10 @@ class SolveRecords:
     uncertainty : Uncertainty or None
     plausibility : dict or None
         The misfit numbers and limits of :func:`bvpnav.solve.plausibility.assess`.
+    grade : dict or None
+        The sensor grade whose figures filled in missing error-model priors: ``name``,
+        ``filled`` (one line per prior) and ``figures``
+        (:attr:`bvpnav.formulation.Formulation.grade_report`); None when none were.
     """
 
     run: Run | None = None
@@ -414,6 +418,7 @@ class SolveRecords:
     uncertainty: Uncertainty | None = None
     attitude: AttitudeLoopReport | None = None
     plausibility: dict | None = None
+    grade: dict | None = None
 
     def stats(self) -> dict[str, Any]:
         """The ``Solution.stats`` dict (plain values: it is written to JSON by batch runs)."""
@@ -434,6 +439,9 @@ class SolveRecords:
             out["uncertainty"] = self.uncertainty.as_dict()
         if self.plausibility is not None:
             out["plausibility"] = dict(self.plausibility)
+        if self.grade is not None:
+            out["grade"] = {"name": self.grade["name"], "filled": list(self.grade["filled"]),
+                            "figures": dict(self.grade["figures"])}
         return out
 
 
@@ -654,6 +662,9 @@ class Solution:
                 parts.append(f"{r.item} {r.mode} {rms:.2g} {r.units}")
             more = f", ... {len(self.items) - 4} more" if len(self.items) > 4 else ""
             lines.append("  item residuals (rms): " + ", ".join(parts) + more)
+        if s.get("grade"):
+            lines.append(f"  sensor grade assumed: {s['grade']['name']} (priors filled in: "
+                         + "; ".join(s["grade"]["filled"]) + ")")
         if len(self.error_params):
             ep = self.error_params
             more = f", ... {len(ep) - 4} more" if len(ep) > 4 else ""
