@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import copy
 from collections.abc import Iterable
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -20,6 +21,7 @@ from .errors import BvpnavError, ConvexityError, InputError
 from .imu import ImuData
 from .items import Item, Linearizable, positive_array
 from .model import Affine, NavModel
+from .sensors import DEFAULT_GRADE, resolve_grade
 from .terms import Term
 
 __all__ = ["Formulation", "as_formulation", "RESIDUAL_FORMS", "LAM_RANGE", "WEIGHT_RANGE",
@@ -139,6 +141,25 @@ def _check_acc(data: ImuData) -> None:
         "unit of the acceleration column (m/s^2 expected) or remove the corrupt samples")
 
 
+def _with_grade(error_model, grade, data) -> tuple[Any, dict[str, Any] | None]:
+    """The error model with ``grade``'s priors when it has gyro parameters and states no prior at
+    all, and the report (grade name, figures, the priors filled in); else the model as given and
+    None. A model with any prior stated is the user's own statement and is left alone."""
+    from .error_models._attitude import AttitudeErrorModel
+
+    if error_model is None or grade is None or not data.is_strapdown:
+        return error_model, None
+    parts = getattr(error_model, "components", (error_model,))
+    if not any(isinstance(c, AttitudeErrorModel) for c in parts):
+        return error_model, None
+    if any(getattr(c, k, None) is not None for c in parts for k in ("sigma", "prior", "drift", "bounds")):
+        return error_model, None
+    model, filled = grade.complete(error_model)
+    if not filled:
+        return error_model, None
+    return model, {"name": grade.name, "filled": filled, "figures": grade.table()}
+
+
 class Formulation:
     r"""Data + objective form + error model + items, compiled (once) to terms.
 
@@ -154,6 +175,11 @@ class Formulation:
         Items with unique labels (see :func:`label_items`).
     model : NavModel, optional
         A model of the same data and error model to share (its FEM matrices).
+    grade : str or SensorGrade or None
+        The sensor grade whose figures become the priors of a strapdown error model with
+        gyro parameters (``GyroBias``, ``AttitudeError``) that states no prior at all
+        (:meth:`bvpnav.sensors.SensorGrade.complete`); default ``"consumer"``. None: no
+        priors are assumed. What was filled in is ``grade_report`` (None when nothing was).
 
     Notes
     -----
@@ -163,7 +189,7 @@ class Formulation:
     """
 
     def __init__(self, data: ImuData, residual: str = "acceleration", sigma_a=None, error_model=None,
-                 items: Iterable[Item] = (), model: NavModel | None = None):
+                 items: Iterable[Item] = (), model: NavModel | None = None, grade: Any = DEFAULT_GRADE):
         if not isinstance(data, ImuData):
             raise InputError(f"data must be a bvpnav.ImuData, got {type(data).__name__}")
         if residual not in RESIDUAL_FORMS:
@@ -175,7 +201,10 @@ class Formulation:
         self.sigma_a = _check_sigma_a(sigma_a, data)
         self.sigma_a_given = sigma_a is not None
         _check_acc(data)
-        self.error_model = error_model
+        self.grade = resolve_grade(grade)
+        #: The error model as given (``error_model`` is it with the grade's priors filled in).
+        self.error_model_given = error_model
+        self.error_model, self.grade_report = _with_grade(error_model, self.grade, data)
         self.items: tuple[Item, ...] = tuple(label_items(items))  # unique labels (a no-op when they are)
         self._model = model
         self._terms: list[Term] | None = None
@@ -190,8 +219,8 @@ class Formulation:
         formulation's :class:`NavModel`; without it the copy has no error-model parameters.
         """
         return Formulation(self.data, self.residual, self.sigma_a if self.sigma_a_given else None,
-                           self.error_model if error_model else None, items,
-                           model=self._model if error_model else None)
+                           self.error_model_given if error_model else None, items,
+                           model=self._model if error_model else None, grade=self.grade)
 
     @property
     def labels(self) -> list[str]:
@@ -372,11 +401,19 @@ class Formulation:
             return
         missing = self.unobservable()
         if missing:
+            params = self.error_model is not None and any("parameter " in m for m in missing)
+            hint = ""
+            if params and self.data.is_strapdown:
+                hint = (" Or give the error model priors (sigma=, drift= on Bias / GyroBias, sigma= on "
+                        "AttitudeError), e.g. from a sensor grade: NavigationProblem(..., grade='consumer') "
+                        "fills in the priors a gyro error model does not state"
+                        + ("" if self.grade is None else f" (this problem's grade "
+                           f"{self.grade.name!r} left these undetermined: give priors or more items)") + ".")
             raise InputError(
                 "not enough information: nothing determines " + "; ".join(missing)
                 + ". Add items (e.g. Position at an end for an offset, a second Position or a "
                 "Velocity for a velocity offset, more velocities for error-model parameters) "
-                "or remove error-model parameters."
+                "or remove error-model parameters." + hint
             )
         self._observable = True
 

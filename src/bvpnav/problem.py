@@ -10,7 +10,7 @@ lives in :mod:`bvpnav.solve`; this class hands off to them (imported on first us
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -20,6 +20,7 @@ from .imu import ImuData
 from .items import Item
 from .model import Affine, NavModel
 from .result import Solution, Verification
+from .sensors import DEFAULT_GRADE
 from .terms import Term
 
 if TYPE_CHECKING:
@@ -49,6 +50,16 @@ class NavigationProblem:
         :mod:`bvpnav.error_models`).
     items : iterable of Item, optional
         Initial items; more can be added with :meth:`add`.
+    grade : str or SensorGrade or None
+        The sensor's grade (:mod:`bvpnav.sensors`: ``"consumer"``, ``"tactical"``,
+        ``"navigation"`` or :func:`~bvpnav.sensors.from_datasheet`). On strapdown data
+        whose error model has gyro parameters (``GyroBias``, ``AttitudeError``) and
+        states no prior at all (no ``sigma``, ``prior``, ``drift`` or ``bounds`` on any
+        part), the priors of ``Bias``, ``GyroBias`` and ``AttitudeError`` are this
+        grade's figures (:meth:`~bvpnav.sensors.SensorGrade.complete`); the solution
+        says so (``sol.stats["grade"]`` and its summary). Default ``"consumer"``, the
+        loosest preset; None assumes nothing (a model without priors may then be
+        refused as undetermined when the fixes are sparse).
 
     Notes
     -----
@@ -87,9 +98,11 @@ class NavigationProblem:
         sigma_a=None,
         error_model=None,
         items: Iterable[Item] = (),
+        grade: Any = DEFAULT_GRADE,
     ):
         self.data = data
-        self._base = Formulation(data, residual=residual, sigma_a=sigma_a, error_model=error_model)
+        self._base = Formulation(data, residual=residual, sigma_a=sigma_a, error_model=error_model,
+                                 grade=grade)
         self._items: list[Item] = []
         self._form: Formulation | None = None
         self._model: NavModel | None = None
@@ -99,7 +112,7 @@ class NavigationProblem:
     def _redefine(self, **change) -> None:
         """The definition with ``change`` (checked by :class:`Formulation`); caches dropped."""
         kw = dict(residual=self.residual, sigma_a=self.sigma_a if self.sigma_a_given else None,
-                  error_model=self.error_model)
+                  error_model=self._base.error_model_given, grade=self._base.grade)
         self._base = Formulation(self.data, **{**kw, **change})
         self._form, self._model = None, None
 
@@ -111,6 +124,10 @@ class NavigationProblem:
     error_model = property(lambda self: self._base.error_model,
                            lambda self, v: self._redefine(error_model=v),
                            doc="The sensor error model (None for none); setting it starts a new formulation.")
+    grade = property(lambda self: self._base.grade, lambda self, v: self._redefine(grade=v),
+                     doc="The sensor grade whose figures fill in missing error-model priors (None: none).")
+    grade_report = property(lambda self: self._base.grade_report,
+                            doc="The grade and the priors it filled in, or None when nothing was.")
     sigma_a_given = property(lambda self: self._base.sigma_a_given,
                              doc="Whether ``sigma_a`` was stated (else 1 m/s^2; ``lam`` absorbs the scale).")
 
@@ -155,7 +172,8 @@ class NavigationProblem:
         """
         new = NavigationProblem(self.data, residual=self.residual,
                                 sigma_a=self.sigma_a if self.sigma_a_given else None,
-                                error_model=self.error_model if error_model else None, items=items)
+                                error_model=self.error_model if error_model else None, items=items,
+                                grade=self._base.grade)
         if error_model:
             new._model = self._model
         return new
@@ -165,7 +183,8 @@ class NavigationProblem:
         """What the problem is now: an immutable :class:`Formulation` of its items."""
         if self._form is None:
             self._form = Formulation(self.data, self.residual, self.sigma_a if self.sigma_a_given else None,
-                                     self.error_model, self._items, model=self._model)
+                                     self._base.error_model_given, self._items, model=self._model,
+                                     grade=self._base.grade)
         if self._model is None:
             self._model = self._form.model
         return self._form

@@ -407,6 +407,10 @@ class SolveRecords:
     data_checks : dict or None
         The input checks of the data solved (``ImuData.checks``: the frame and gravity
         check, the gyro saturation count), each with its ``warning``.
+    grade : dict or None
+        The sensor grade whose figures filled in missing error-model priors: ``name``,
+        ``filled`` (one line per prior) and ``figures``
+        (:attr:`bvpnav.formulation.Formulation.grade_report`); None when none were.
     """
 
     run: Run | None = None
@@ -418,6 +422,7 @@ class SolveRecords:
     attitude: AttitudeLoopReport | None = None
     plausibility: dict | None = None
     data_checks: dict | None = None
+    grade: dict | None = None
 
     def stats(self) -> dict[str, Any]:
         """The ``Solution.stats`` dict (plain values: it is written to JSON by batch runs)."""
@@ -440,6 +445,9 @@ class SolveRecords:
             out["plausibility"] = dict(self.plausibility)
         if self.data_checks:
             out["data_checks"] = dict(self.data_checks)
+        if self.grade is not None:
+            out["grade"] = {"name": self.grade["name"], "filled": list(self.grade["filled"]),
+                            "figures": dict(self.grade["figures"])}
         return out
 
 
@@ -671,6 +679,9 @@ class Solution:
                 parts.append(f"{r.item} {r.mode} {rms:.2g} {r.units}")
             more = f", ... {len(self.items) - 4} more" if len(self.items) > 4 else ""
             lines.append("  item residuals (rms): " + ", ".join(parts) + more)
+        if s.get("grade"):
+            lines.append(f"  sensor grade assumed: {s['grade']['name']} (priors filled in: "
+                         + "; ".join(s["grade"]["filled"]) + ")")
         if len(self.error_params):
             ep = self.error_params
             more = f", ... {len(ep) - 4} more" if len(ep) > 4 else ""

@@ -52,7 +52,7 @@ from typing import Any
 from .errors import InputError
 from .imu import STANDARD_GRAVITY
 
-__all__ = ["SensorGrade", "GRADES", "grade", "from_datasheet", "UNITS"]
+__all__ = ["SensorGrade", "GRADES", "DEFAULT_GRADE", "grade", "resolve_grade", "from_datasheet", "UNITS"]
 
 _DEG = math.pi / 180.0
 
@@ -375,6 +375,67 @@ class SensorGrade:
             em = em + AttitudeWalk(arw=arw, interval=walk_interval(self.acc_noise, arw))
         return em
 
+    def complete(self, error_model) -> tuple[Any, list[str]]:
+        r"""``error_model`` with this grade's figures as the priors it does not state.
+
+        Parameters
+        ----------
+        error_model : ErrorModel
+            One model or a sum of them.
+
+        Returns
+        -------
+        (ErrorModel, list of str)
+            The completed model (``error_model`` itself when nothing was missing) and one
+            line per prior filled in, with its value and units.
+
+        Notes
+        -----
+        Filled where absent: ``Bias`` ``sigma`` = ``acc_bias`` (m/s^2) and, with
+        ``interval``, ``drift`` = ``acc_bias_walk`` (m/s^2/sqrt(s)); ``GyroBias`` ``sigma`` =
+        ``gyro_bias`` (rad/s) and, with ``interval``, ``drift`` = ``gyro_bias_walk``
+        (rad/s/sqrt(s)); ``AttitudeError`` ``sigma`` = (``tilt``, ``tilt``, ``heading``)
+        rad (no heading prior when the grade's heading is unknown). A prior the model
+        states is kept, and other models (scale factors, misalignment, ``AttitudeWalk``)
+        are left as they are. Each prior is a Gaussian :math:`p \sim N(0, \sigma^2)`, the
+        random walks :math:`p_{m+1} - p_m \sim N(0, q^2 \Delta t_m)`: the maximum a
+        posteriori estimate for a sensor of this grade.
+        """
+        import dataclasses
+
+        from .error_models import AttitudeError, Bias, GyroBias
+
+        parts = list(getattr(error_model, "components", (error_model,)))
+        filled: list[str] = []
+        out = []
+        for c in parts:
+            change: dict[str, Any] = {}
+            kind = type(c).__name__
+            if isinstance(c, (Bias, GyroBias)):
+                acc = isinstance(c, Bias)
+                sig, walk = ((self.acc_bias, self.acc_bias_walk) if acc
+                             else (self.gyro_bias, self.gyro_bias_walk))
+                units = "m/s^2" if acc else "rad/s"
+                if c.sigma is None and c.prior is None:
+                    change["sigma"] = sig
+                    filled.append(f"{kind}: sigma {sig:g} {units}")
+                if c.interval is not None and c.drift is None:
+                    change["drift"] = walk
+                    filled.append(f"{kind}: drift {walk:g} {units}/sqrt(s)")
+            elif isinstance(c, AttitudeError) and c.sigma is None:
+                sel = list(c._sel())
+                full = [self.tilt, self.tilt, self.heading]
+                change["sigma"] = tuple(full[i] for i in sel)
+                head = "none (unknown)" if self.heading is None else f"{self.heading:g} rad"
+                filled.append(f"AttitudeError: sigma tilt {self.tilt:g} rad, heading {head}")
+            out.append(dataclasses.replace(c, **change) if change else c)
+        if not filled:
+            return error_model, []
+        model = out[0]
+        for c in out[1:]:
+            model = model + c
+        return model, filled
+
     def table(self) -> dict[str, str]:
         """The figures with their SI units, for printing (``{"acc_noise": "0.0005 m/s^2/sqrt(Hz)", ...}``)."""
         out = {f: f"{getattr(self, f):g} {_SI[f]}" for f in _NUMERIC}
@@ -433,6 +494,32 @@ def grade(name: str) -> SensorGrade:
         raise InputError(f"grade {name!r}: unknown sensor grade; valid grades: {', '.join(GRADES)} "
                          "(or build your own with bvpnav.sensors.from_datasheet)")
     return GRADES[key]
+
+
+#: The grade whose priors a strapdown problem with gyro error models gets when it states none.
+DEFAULT_GRADE = "consumer"
+
+
+def resolve_grade(value: Any) -> SensorGrade | None:
+    """A :class:`SensorGrade` from a preset name, a grade, or None (no grade).
+
+    Raises
+    ------
+    InputError
+        For anything else, naming the valid forms.
+
+    Examples
+    --------
+    >>> from bvpnav.sensors import resolve_grade
+    >>> resolve_grade("consumer").name, resolve_grade(None)
+    ('consumer', None)
+    """
+    if value is None or isinstance(value, SensorGrade):
+        return value
+    if isinstance(value, str):
+        return grade(value)
+    raise InputError(f"grade={value!r}: give a preset name ({', '.join(GRADES)}), a SensorGrade "
+                     "(bvpnav.sensors.from_datasheet(...)), or None for no assumed priors")
 
 
 def _norm_unit(unit: str) -> str:

@@ -82,6 +82,8 @@ def make_solution(form: Formulation, xval: np.ndarray, lam: float, lam_rule: str
         params = form.error_model.report(parts["l"], model)
     else:
         params = pd.Series(dtype=float, name="estimate")
+    if getattr(form, "grade_report", None) is not None:
+        records.grade = form.grade_report
     sol = Solution(trajectory=pd.DataFrame(cols, index=idx), residuals=resid, items=items_df,
                    item_residuals=item_res, lam=float(lam), lam_rule=lam_rule, error_params=params,
                    stats={}, x=xval, warnings=_warnings(form, records.run, records.verification),

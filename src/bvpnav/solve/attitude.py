@@ -199,7 +199,9 @@ class _Loop:
         items = f.items
         if error_model is not f.error_model:  # attitude fixed: items on the gyro model alone drop out
             items = [it for it in items if not it.needs_error_model]
-        out = Formulation(data, f.residual, f.sigma_a if f.sigma_a_given else None, error_model, items)
+        out = Formulation(data, f.residual, f.sigma_a if f.sigma_a_given else None, error_model, items,
+                          grade=None)  # the priors were filled in (or not) on the first formulation
+        out.grade_report = f.grade_report
         # the same items and error model at every point: what determines the unknowns was
         # checked on the first formulation of each kind (an SVD, a fifth of a solve)
         out._observable = self.checked.get(id(error_model), False)
@@ -249,7 +251,8 @@ class _Loop:
         if not items:
             return 0.0
         f = self.form
-        form = Formulation(data, f.residual, f.sigma_a if f.sigma_a_given else None, f.error_model, items)
+        form = Formulation(data, f.residual, f.sigma_a if f.sigma_a_given else None, f.error_model, items,
+                           grade=None)
         x = np.zeros(form.model.size)
         cost = 0.0
         for term in form.terms():

@@ -1,0 +1,340 @@
+"""KITTI drive benchmark (issue 42): a real car drive, bvpnav beside GTSAM's batch smoother.
+
+The drive is the OXTS RT3003 recording that ships inside GTSAM's Python package
+(``gtsam/Data/KittiEquivBiasedImu.txt``, ``KittiEquivBiasedImu_metadata.txt``,
+``KittiGps_converted.txt``; ``pip install 'bvpnav[peers]'``), read from the installed package
+(nothing of it is copied into this repository). As GTSAM's own examples do, IMU row 0 and GPS
+fix 0 are dropped (row 0's ``dt`` is its time stamp; fix 0 precedes the next IMU sample by
+1.9 s).
+
+**Development split only**: the fixes with ``t <= t_first + 240 s`` and the IMU samples
+between the first and the last of them. The rest of the drive is held out for verification;
+this script never reads past the split's last fix (``--split`` is not an option).
+
+For every spacing G (10 / 30 / 60 s) the fixes every G s are kept (the first and the last
+always) and the others withheld; each method sees the kept fixes only and is scored by the
+horizontal RMS error (m) against the withheld fixes (there is no other truth on a real
+drive). Methods:
+
+``GTSAM``
+    GTSAM's batch smoother (``_gtsam_peer.py``: IMU preintegration between nodes every 1 s
+    and at every fix, bias random walk, GPS factors, Levenberg-Marquardt), with the
+    metadata's noise densities and bias walks.
+``bvpnav README``
+    the README's strapdown path: ``from_datasheet`` with the metadata's figures,
+    ``g.error_model(30)`` and ``sigma_a = g.sigma_a(rate, 30)``, ``solver="direct"``.
+``bvpnav defaults``
+    ``Bias() + GyroBias(interval=30) + AttitudeError()`` with no priors and no
+    ``sigma_a``: what a new user writes.
+
+The metadata's bias sigmas are per sample, as GTSAM's example applies them
+(``sqrt(count) * sigma`` between fixes): at the mean step of 10.04 ms they are random walks
+of 1.667e-3 m/s^2/sqrt(s) and 2.904e-5 rad/s/sqrt(s). Fix sigma: GTSAM's example's
+``Precisions(1 / 0.07)``, i.e. 0.2646 m per axis, for both. Initial attitude for both:
+roll and pitch from the mean specific force of the first second, heading from the first fixes
+10 m apart; the heading prior is left open (the fixes determine it).
+
+Every method runs in its own child process (peak resident memory, ``VmHWM``, reported per IMU
+sample of the split). Timings are wall times on a shared machine: read the ratios, measured
+side by side in one run.
+
+Run: ``python examples/benchmarks/kitti_drive.py [--gaps 10 30 60] [--methods ...]``.
+
+Measured (2026-12-04, on the 2-core machine shared with other jobs, load average 13-15:
+every wall time is inflated several times, read the ratios to GTSAM of the same run),
+24,003 samples; RMS m, time s, peak MB per sample::
+
+    gap s  GTSAM (example)  GTSAM peer   bvpnav README        defaults before      defaults after
+    10     1.473   0.4 s    1.521  43 s  1.760 298 s (7.6x)   3.210 153 s (*)      0.990 399 s
+    30    15.547   0.7 s   25.202  51 s 15.534 708 s (4.8x)   refused (12 comb.)  19.385 453 s
+    60    53.704   1.1 s   84.609  69 s 55.400 319 s          refused (24 comb.)  79.417 273 s (**)
+    peak   7.8 kB/sample    8.1 kB       52.5-52.8 kB         34.6 kB             33.5-35.2 kB
+
+(7.6x): the misfit warning's ratio; (*) gyro bias 0.58 rad/s, warned implausible; (**) the
+attitude loop stopped at its 30 iterations, warned.
+
+"after" is the same run's defaults column with the default consumer grade
+(``NavigationProblem(grade=...)``, issue 42; the README path states its priors and is
+unchanged by it); its GTSAM column was identical (1.473 / 15.547 / 53.704 m in 2.0 / 1.2 /
+1.1 s). Every bvpnav answer verified. GTSAM's graph error at the end: 1449 / 163 / 1.8: at
+10 s between fixes GTSAM misfits these figures as bvpnav does (see the strapdown guide).
+The peer smoother (``_gtsam_peer.py``, CombinedImuFactor, nodes every 1 s, samples averaged
+in pairs) stops at its 300 LM iterations at every gap.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # _gtsam_peer.py, _memory.py beside this script
+
+from _memory import own_peak_mb, run_case  # noqa: E402
+
+#: Development split: fixes up to this long after the first kept fix, s.
+DEV_SPAN = 240.0
+#: GTSAM example's GPS noise: ``Precisions(1 / 0.07)`` per axis -> sigma sqrt(0.07) m.
+FIX_SIGMA = math.sqrt(0.07)
+#: Prior sigma of the initial roll and pitch, rad: the start is in motion, so the first second's mean
+#: specific force tilts the guess by the horizontal acceleration over g (about 0.08 rad here).
+TILT = 0.1
+METHODS = ("GTSAM", "GTSAM peer", "bvpnav README", "bvpnav defaults")
+
+
+def data_dir() -> Path:
+    """The installed gtsam package's Data folder (raises ImportError without gtsam)."""
+    import gtsam
+
+    return Path(gtsam.__file__).resolve().parent / "Data"
+
+
+def load_dev() -> dict:
+    """The development split: IMU samples and fixes up to ``t_first + 240 s``, and the metadata.
+
+    Returns a dict with ``t`` (N,), ``f`` (N, 3) m/s^2, ``w`` (N, 3) rad/s, ``fix_t`` (M,),
+    ``fix_p`` (M, 3) m, and ``meta`` (the metadata's named figures).
+    """
+    d = data_dir()
+    imu = np.loadtxt(d / "KittiEquivBiasedImu.txt", skiprows=1)[1:]  # row 0: dt = its time stamp
+    gps = np.loadtxt(d / "KittiGps_converted.txt", skiprows=1, delimiter=",")[1:]  # fix 0: before the IMU
+    with open(d / "KittiEquivBiasedImu_metadata.txt") as fh:
+        names = fh.readline().split()
+        meta = dict(zip(names, map(float, fh.readline().split()), strict=True))
+    fix = gps[gps[:, 0] <= gps[0, 0] + DEV_SPAN]
+    keep = (imu[:, 0] >= fix[0, 0]) & (imu[:, 0] <= fix[-1, 0])
+    # the split's IMU samples: from the last one at or before the first fix to the first one at or
+    # after the last fix, so that every fix lies inside the record
+    i0 = max(int(np.argmax(keep)) - 1, 0)
+    i1 = int(len(keep) - np.argmax(keep[::-1]))
+    imu = imu[i0:i1 + 1]
+    fix = fix[(fix[:, 0] >= imu[0, 0]) & (fix[:, 0] <= imu[-1, 0])]
+    return {"t": imu[:, 0].copy(), "f": imu[:, 2:5].copy(), "w": imu[:, 5:8].copy(),
+            "fix_t": fix[:, 0].copy(), "fix_p": fix[:, 1:4].copy(), "meta": meta}
+
+
+def figures(meta: dict, rate: float) -> dict:
+    """The metadata's figures in bvpnav's units (densities; walks per sqrt(s))."""
+    return {"acc_noise": meta["AccelerometerSigma"], "gyro_noise": meta["GyroscopeSigma"],
+            "acc_bias_walk": meta["AccelerometerBiasSigma"] * math.sqrt(rate),
+            "gyro_bias_walk": meta["GyroscopeBiasSigma"] * math.sqrt(rate),
+            # GTSAM example's bias prior (0.1 m/s^2, 5e-5 rad/s)
+            "acc_bias": 0.1, "gyro_bias": 5e-5}
+
+
+def split_fixes(fix_t: np.ndarray, gap: float) -> tuple[np.ndarray, np.ndarray]:
+    """Indices of the fixes kept (one every ``gap`` s, the first and last included) and withheld."""
+    kept = [0]
+    for i in range(1, fix_t.size):
+        if fix_t[i] - fix_t[kept[-1]] >= gap - 0.5:
+            kept.append(i)
+    if kept[-1] != fix_t.size - 1:
+        kept.append(fix_t.size - 1)
+    kept_a = np.asarray(kept)
+    return kept_a, np.setdiff1d(np.arange(fix_t.size), kept_a)
+
+
+def initial_attitude(d: dict):
+    """Roll and pitch from the first second's mean specific force, heading from the first fixes."""
+    from bvpnav.align import heading_from_positions, roll_pitch_from_stationary
+    from bvpnav.align import initial_attitude as c0
+
+    first = d["t"] <= d["t"][0] + 1.0
+    roll, pitch = roll_pitch_from_stationary(d["f"][first], tolerance=0.2)
+    yaw = heading_from_positions(d["fix_t"], d["fix_p"])
+    return c0(roll, pitch, yaw)
+
+
+def hrms(est: np.ndarray, ref: np.ndarray) -> float:
+    """Horizontal RMS error, m."""
+    return float(np.sqrt(np.mean(np.sum((est[:, :2] - ref[:, :2]) ** 2, axis=1))))
+
+
+def gtsam_example_smoother(d: dict, kept, fig: dict, c0, max_iterations: int = 100) -> dict:
+    """GTSAM's KITTI example as a batch smoother: a node at every fix time (1 Hz), an ``ImuFactor``
+    between consecutive nodes integrating each IMU sample held constant over its preceding step
+    (the file's ``dt``, as ``IMUKittiExampleGPS.py`` does), a ``BetweenFactorConstantBias`` with
+    sigma ``sqrt(count) * per-sample bias sigma``, a ``GPSFactor`` at every kept fix, the
+    peer's priors at the first node, Levenberg-Marquardt from the fix-interpolated positions
+    and the gyro-integrated attitudes. Returns the positions at every node (= every fix)."""
+    import gtsam
+    from _gtsam_peer import _priors
+    from gtsam.symbol_shorthand import B, V, X
+
+    start = time.perf_counter()
+    t, f, w = d["t"], d["f"], d["w"]
+    ft, fp = d["fix_t"], d["fix_p"]
+    dt = np.diff(t, prepend=t[0])  # the step each sample closes (the file's dt column)
+    params = gtsam.PreintegrationParams.MakeSharedU(GRAVITY)
+    params.setAccelerometerCovariance(fig["acc_noise"] ** 2 * np.eye(3))
+    params.setGyroscopeCovariance(fig["gyro_noise"] ** 2 * np.eye(3))
+    params.setIntegrationCovariance(1e-8 * np.eye(3))
+    zero = gtsam.imuBias.ConstantBias()
+    graph = gtsam.NonlinearFactorGraph()
+    rate = 1.0 / float(np.mean(np.diff(t)))
+    pos0 = fp.copy()
+    vel0 = np.gradient(fp, ft, axis=0)
+    gr = {**fig, "tilt": TILT, "heading": math.pi}
+    for fac in _priors(c0.as_matrix(), pos0[0], vel0[0], gr, None):
+        graph.add(fac)
+    gps_noise = gtsam.noiseModel.Isotropic.Sigma(3, FIX_SIGMA)
+    keep = set(int(k) for k in kept)
+    att = [gtsam.Rot3(c0.as_matrix())]
+    bounds = np.searchsorted(t, ft, side="right")  # samples with t_j <= fix time
+    for i in range(ft.size):
+        if i in keep:
+            graph.add(gtsam.GPSFactor(X(i), fp[i], gps_noise))
+        if i == 0:
+            continue
+        pim = gtsam.PreintegratedImuMeasurements(params, zero)
+        for j in range(bounds[i - 1], bounds[i]):
+            pim.integrateMeasurement(f[j], w[j], dt[j])
+        count = bounds[i] - bounds[i - 1]
+        graph.add(gtsam.ImuFactor(X(i - 1), V(i - 1), X(i), V(i), B(i - 1), pim))
+        per_s = np.array([fig["acc_bias_walk"]] * 3 + [fig["gyro_bias_walk"]] * 3)
+        walk = per_s * math.sqrt(count / rate)
+        between = gtsam.noiseModel.Diagonal.Sigmas(walk)
+        graph.add(gtsam.BetweenFactorConstantBias(B(i - 1), B(i), zero, between))
+        att.append(att[-1].compose(pim.deltaRij()))
+    values = gtsam.Values()
+    for i in range(ft.size):
+        values.insert(X(i), gtsam.Pose3(att[i], pos0[i]))
+        values.insert(V(i), vel0[i])
+        values.insert(B(i), zero)
+    lm = gtsam.LevenbergMarquardtParams()
+    lm.setMaxIterations(int(max_iterations))
+    lm.setRelativeErrorTol(1e-8)
+    lm.setAbsoluteErrorTol(0.0)
+    opt = gtsam.LevenbergMarquardtOptimizer(graph, values, lm)
+    res = opt.optimize()
+    return {"position": np.array([res.atPose3(X(i)).translation() for i in range(ft.size)]),
+            "gyro_bias": np.array([res.atConstantBias(B(i)).gyroscope() for i in range(ft.size)]),
+            "iterations": int(opt.iterations()), "graph_error": float(graph.error(res)),
+            "seconds": time.perf_counter() - start, "graph": graph, "values": res}
+
+
+def run_gtsam_example(d: dict, kept, withheld, fig: dict, c0) -> dict:
+    g = gtsam_example_smoother(d, kept, fig, c0)
+    return {"rms": hrms(g["position"][withheld], d["fix_p"][withheld]), "seconds": g["seconds"],
+            "verified": None, "iterations": g["iterations"], "graph_error": g["graph_error"],
+            "gyro_bias_mean": np.mean(g["gyro_bias"], 0).tolist()}
+
+
+def run_gtsam(d: dict, kept, withheld, fig: dict, c0) -> dict:
+    from _gtsam_peer import gtsam_smoother
+
+    grade = {**fig, "tilt": TILT, "heading": None}
+    g = gtsam_smoother(d["t"], d["f"], d["w"], np.array([0.0, 0.0, -GRAVITY]), d["fix_t"][kept],
+                       d["fix_p"][kept], FIX_SIGMA, c0, grade, d["fix_t"][withheld])
+    return {"rms": hrms(np.asarray(g["position"]), d["fix_p"][withheld]), "seconds": g["seconds"],
+            "verified": None, "iterations": g["iterations"],
+            "gyro_bias_mean": np.mean(g["gyro_bias"], 0).tolist()}
+
+
+def problem(d: dict, kept, method: str, fig: dict, c0, interval: float):
+    """The bvpnav problem of ``method`` (the data, the error model, the kept fixes)."""
+    from bvpnav import ImuData, NavigationProblem
+    from bvpnav.constraints import Position
+    from bvpnav.error_models import AttitudeError, Bias, GyroBias
+    from bvpnav.sensors import from_datasheet
+
+    data = ImuData.from_gyro(d["t"], d["f"], d["w"], initial_attitude=c0,
+                             gravity=np.array([0.0, 0.0, -GRAVITY]))
+    rate = 1.0 / float(np.mean(np.diff(d["t"])))
+    if method == "bvpnav README":
+        g = from_datasheet(**fig, tilt=TILT, base="tactical", name="KITTI metadata")
+        prob = NavigationProblem(data, error_model=g.error_model(interval), sigma_a=g.sigma_a(rate, interval))
+    else:
+        prob = NavigationProblem(data, error_model=Bias() + GyroBias(interval=interval) + AttitudeError())
+    prob.add(Position(t=d["fix_t"][kept], value=d["fix_p"][kept],
+                      sigma=np.full((kept.size, 3), FIX_SIGMA), name="fixes"))
+    return prob
+
+
+def run_bvpnav(d: dict, kept, withheld, method: str, fig: dict, c0, interval: float) -> dict:
+    prob = problem(d, kept, method, fig, c0, interval)
+    t0 = time.perf_counter()
+    try:
+        sol = prob.solve(solver="direct", attitude={"progress": False})
+    except Exception as exc:  # a refusal is a result here
+        return {"rms": float("nan"), "seconds": time.perf_counter() - t0,
+                "refused": f"{type(exc).__name__}: {str(exc)[:300]}"}
+    sec = time.perf_counter() - t0
+    pos = sol.position()
+    t_w = d["fix_t"][withheld]
+    est = np.column_stack([np.interp(t_w, d["t"], pos[:, k]) for k in range(3)])
+    seq = sol.stats.get("sequential", {}) if isinstance(sol.stats, dict) else {}
+    gb = [v for k, v in sol.error_params.items() if k.startswith("gyro_bias")]
+    return {"rms": hrms(est, d["fix_p"][withheld]), "seconds": sec, "verified": sol.stats.get("verified"),
+            "iterations": len(seq.get("iterations", [])), "warnings": [w[:240] for w in sol.warnings],
+            "misfit": (sol.stats.get("plausibility") or {}).get("noise_ratio"),
+            "grade": (sol.stats.get("grade") or {}).get("name"),
+            "gyro_bias_max": float(np.max(np.abs(gb))) if gb else None}
+
+
+#: Gravity magnitude used by both smoothers, m/s^2 (GTSAM's KITTI example uses 9.8).
+GRAVITY = 9.80665
+
+
+def case(method: str, gap: float, interval: float) -> dict:
+    d = load_dev()
+    kept, withheld = split_fixes(d["fix_t"], gap)
+    fig = figures(d["meta"], 1.0 / float(np.mean(np.diff(d["t"]))))
+    c0 = initial_attitude(d)
+    if method == "GTSAM":
+        out = run_gtsam_example(d, kept, withheld, fig, c0)
+    elif method == "GTSAM peer":
+        out = run_gtsam(d, kept, withheld, fig, c0)
+    else:
+        out = run_bvpnav(d, kept, withheld, method, fig, c0, interval)
+    out.update(method=method, gap=gap, kept=int(kept.size), withheld=int(withheld.size),
+               samples=int(d["t"].size), peak_mb=own_peak_mb())
+    return out
+
+
+def main(argv: list[str] | None = None) -> list[dict]:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--gaps", type=float, nargs="+", default=[10.0, 30.0, 60.0])
+    ap.add_argument("--methods", nargs="+", default=list(METHODS), choices=METHODS)
+    ap.add_argument("--interval", type=float, default=30.0, help="bias knot spacing, s (default 30)")
+    ap.add_argument("--case", nargs=3, metavar=("METHOD", "GAP", "INTERVAL"), help=argparse.SUPPRESS)
+    args = ap.parse_args(argv)
+    if args.case:
+        print(json.dumps(case(args.case[0], float(args.case[1]), float(args.case[2]))))
+        return []
+    d = load_dev()
+    print(f"KITTI development split: {d['t'].size} IMU samples over {d['t'][-1] - d['t'][0]:.1f} s "
+          f"(steps {np.diff(d['t']).min() * 1e3:.1f} to {np.diff(d['t']).max() * 1e3:.1f} ms), "
+          f"{d['fix_t'].size} fixes; fix sigma {FIX_SIGMA:.4f} m")
+    rows = []
+    for gap in args.gaps:
+        for m in args.methods:
+            r = run_case(__file__, [m, str(gap), str(args.interval)])
+            r.setdefault("method", m)
+            r.setdefault("gap", gap)
+            rows.append(r)
+            print(json.dumps(r), flush=True)
+    print("\nhorizontal RMS at the withheld fixes, m; wall time s; peak memory per IMU sample")
+    print(f"{'gap s':>6} {'method':>16} {'RMS m':>9} {'time s':>8} {'x GTSAM':>8} {'B/sample':>9}  note")
+    for gap in args.gaps:
+        ref = next((r for r in rows if r["gap"] == gap and r["method"] == "GTSAM"), None)
+        for r in (r for r in rows if r["gap"] == gap):
+            ok = ref is not None and "seconds" in r and "seconds" in ref
+            ratio = r["seconds"] / ref["seconds"] if ok else float("nan")
+            bps = r["peak_mb"] * 2**20 / r["samples"] if "samples" in r else float("nan")
+            note = r.get("refused") or r.get("error") or (
+                f"verified={r.get('verified')} it={r.get('iterations')} misfit={r.get('misfit')}"
+                + (f" graph error {r['graph_error']:.1f}" if "graph_error" in r else "")
+                + (f" grade={r['grade']}" if r.get("grade") else ""))
+            print(f"{gap:6g} {r['method']:>16} {r.get('rms', float('nan')):9.3f} "
+                  f"{r.get('seconds', float('nan')):8.1f} {ratio:8.1f} {bps:9.0f}  {note}")
+    return rows
+
+
+if __name__ == "__main__":
+    main()
