@@ -1,15 +1,26 @@
 """Shared fixtures. Plain helper functions live in ``_helpers.py`` (import them from there).
 
-The suite runs in parallel (``pytest -n auto``, pytest-xdist, with ``--dist loadgroup`` from
-pyproject's addopts). A module- or class-scoped fixture is made once per worker that runs a test
-using it, so :func:`pytest_collection_modifyitems` puts the tests of a file that share such a
-fixture (one value of it, when it is parametrized) into one ``xdist_group``: the fixture is made
-once, and every other test of the suite is spread over the workers one by one. In a worker, the
-units (groups and single tests) holding a test marked ``slow`` are moved to the front, so that
-the longest work starts first instead of finishing last on one worker while the other idles.
+The suite runs in parallel (``pytest -n auto``: pytest-xdist; ``--dist loadgroup`` in pyproject's
+addopts). A module- or class-scoped fixture is made once per worker that runs a test using it, so
+the tests of a file that share such a fixture (one value of it, when it is parametrized) are one
+unit of work, sent whole to one worker: the fixture is made once, as in a serial run. Tests with
+the same ``xdist_group`` mark are one unit too. Every other test is its own unit, given to
+whichever worker is free. Units holding a test marked ``slow`` are handed out first, so that the
+longest work does not start last and finish on one worker while the other idles.
+
+xdist's own ``loadgroup`` passes a test's group to the controller by appending it to the test's
+node id, which pytest 9.2's structured node ids ignore (pytest-dev/pytest-xdist#1386: the groups
+are silently dropped). Here each worker writes the units it collected (test id -> unit) to a file
+named by the controller, and the controller's scheduler (:class:`_Units`) reads them.
 """
 
 from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+from pathlib import Path
 
 import pytest
 from _helpers import quintic
@@ -17,6 +28,9 @@ from _helpers import quintic
 #: Fixture scopes made once per module (or class) of a worker; "session" fixtures are made once
 #: per worker whatever the grouping, so grouping by them would only cost parallelism.
 SHARED_SCOPES = {"module", "class", "package"}
+#: workerinput key: the folder where the workers write their units
+UNITS_DIR = "bvpnav_units_dir"
+_UNITS_KEY = pytest.StashKey[str]()
 
 
 @pytest.fixture
@@ -24,31 +38,25 @@ def quintic_traj():
     return quintic()
 
 
-def _shared_fixtures(item: pytest.Item) -> list[str]:
-    """The instances of this suite's module/class-scoped fixtures that ``item`` uses, each as
-    ``name`` or ``name[param index]``."""
+def _shared(item: pytest.Item) -> list[str]:
+    """Keys of what ``item`` shares with other tests: this suite's module/class-scoped fixture
+    instances it uses (``file::name`` or ``file::name[param index]``) and its xdist_group marks."""
+    module = item.nodeid.split("::", 1)[0]
+    keys = [f"group:{m.args[0] if m.args else m.kwargs.get('name', 'default')}"
+            for m in item.iter_markers("xdist_group")]
     info = getattr(item, "_fixtureinfo", None)
-    if info is None:
-        return []
     callspec = getattr(item, "callspec", None)
-    out = []
-    for name in info.names_closure:
+    for name in info.names_closure if info is not None else ():
         defs = info.name2fixturedefs.get(name)
-        if not defs:
-            continue
-        fdef = defs[-1]
-        if fdef.scope not in SHARED_SCOPES or not fdef.baseid:  # "": a plugin's (pytest's own)
-            continue
-        if callspec is not None and name in callspec.indices:
-            name = f"{name}[{callspec.indices[name]}]"
-        out.append(name)
-    return out
+        if not defs or defs[-1].scope not in SHARED_SCOPES or not defs[-1].baseid:
+            continue  # baseid "": a plugin's fixture (pytest's own)
+        index = f"[{callspec.indices[name]}]" if callspec is not None and name in callspec.indices else ""
+        keys.append(f"{module}::{name}{index}")
+    return keys
 
 
-@pytest.hookimpl(tryfirst=True)
-def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """Group the tests that share a module/class-scoped fixture instance (within one file) into
-    one ``xdist_group`` (joined transitively: two tests sharing any instance are in one group)."""
+def _units(items: list[pytest.Item]) -> dict[str, str]:
+    """Test id -> unit: tests sharing a key are one unit (joined transitively)."""
     parent: dict[str, str] = {}
 
     def find(x: str) -> str:
@@ -57,17 +65,65 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
             x = parent[x]
         return x
 
-    keyed = []
-    for item in items:
-        module = item.nodeid.split("::", 1)[0]
-        keys = [f"{module}::{name}" for name in _shared_fixtures(item)]
+    keyed = [(item.nodeid, _shared(item)) for item in items]
+    for _, keys in keyed:
         for key in keys[1:]:
             parent[find(key)] = find(keys[0])
-        keyed.append((item, keys))
-    for item, keys in keyed:
-        if keys:
-            item.add_marker(pytest.mark.xdist_group(find(keys[0])))
-    if hasattr(config, "workerinput"):  # a pytest-xdist worker: every worker sorts alike
-        unit = {id(item): find(keys[0]) if keys else item.nodeid for item, keys in keyed}
-        slow = {unit[id(item)] for item in items if item.get_closest_marker("slow")}
-        items.sort(key=lambda item: unit[id(item)] not in slow)  # stable: the order within stays
+    return {nodeid: find(keys[0]) if keys else nodeid for nodeid, keys in keyed}
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """In an xdist worker: units holding a slow test first (the order within kept), and the
+    units written for the controller's scheduler."""
+    workerinput = getattr(config, "workerinput", None)
+    if workerinput is None or UNITS_DIR not in workerinput:
+        return
+    units = _units(items)
+    slow = {units[item.nodeid] for item in items if item.get_closest_marker("slow")}
+    items.sort(key=lambda item: units[item.nodeid] not in slow)  # stable; every worker sorts alike
+    folder = Path(workerinput[UNITS_DIR])
+    tmp = folder / f".{workerinput['workerid']}.tmp"
+    tmp.write_text(json.dumps({item.nodeid: units[item.nodeid] for item in items}))
+    os.replace(tmp, folder / f"{workerinput['workerid']}.json")
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """The controller of a parallel run (-n with --dist loadgroup) makes the units' folder."""
+    if config.pluginmanager.hasplugin("xdist") and config.getoption("dist", "no") == "loadgroup" \
+            and not hasattr(config, "workerinput"):
+        folder = tempfile.mkdtemp(prefix="bvpnav-units-")
+        config.stash[_UNITS_KEY] = folder
+        config.add_cleanup(lambda: shutil.rmtree(folder, ignore_errors=True))
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_configure_node(node) -> None:
+    """Tell each worker where to write its units."""
+    folder = node.config.stash.get(_UNITS_KEY, None)
+    if folder is not None:
+        node.workerinput[UNITS_DIR] = folder
+
+
+@pytest.hookimpl(optionalhook=True, tryfirst=True)
+def pytest_xdist_make_scheduler(config: pytest.Config, log):
+    """For --dist loadgroup: scope scheduling by the workers' units."""
+    folder = config.stash.get(_UNITS_KEY, None)
+    if folder is None:
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class _Units(LoadScopeScheduling):
+        """xdist's scope scheduling with this suite's units as the scopes, in the workers'
+        order (units with a slow test first)."""
+
+        units: dict[str, str] | None = None
+
+        def _split_scope(self, nodeid: str) -> str:
+            if self.units is None:
+                found = sorted(Path(folder).glob("*.json"))
+                self.units = json.loads(found[0].read_text()) if found else {}
+            return self.units.get(nodeid, nodeid)
+
+    config.option.loadscopereorder = False
+    return _Units(config, log)
