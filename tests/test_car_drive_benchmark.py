@@ -15,6 +15,8 @@ import io
 import pytest
 from _helpers import load_benchmark_module
 
+pytestmark = pytest.mark.slow  # the benchmark's quick run
+
 
 @pytest.fixture(scope="module")
 def quick():

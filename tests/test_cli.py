@@ -156,6 +156,7 @@ def test_unit_conversions_g_and_ms(tmp_path):
     np.testing.assert_allclose(data.acc[:, 0], 0.5 * 9.80665, rtol=1e-15)
 
 
+@pytest.mark.slow
 def test_batch_on_a_local_cluster_matches_serial_and_reports_a_bad_recording(tmp_path):
     recs = tmp_path / "recs"
     recs.mkdir()

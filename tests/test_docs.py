@@ -27,6 +27,9 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
+#: the site build (a sphinx run that executes the tutorials) and the wheel builds
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 TUTORIAL = ROOT / "examples" / "tutorial"
@@ -39,7 +42,13 @@ NO_NETWORK = "http://127.0.0.1:9"
 
 
 def _files(root: Path) -> set[Path]:
-    return {p for p in root.rglob("*") if p.is_file()}
+    return {p for p in root.rglob("*") if p.is_file() and "__pycache__" not in p.parts}
+
+
+def _sources(*roots: Path) -> dict:
+    """:func:`snapshot` of the files under ``roots`` but bytecode caches, which tests running
+    beside the build (pytest -n) write when they import an example."""
+    return {p: v for p, v in snapshot(*roots).items() if "__pycache__" not in p.parts}
 
 
 @pytest.fixture(scope="module")
@@ -50,7 +59,7 @@ def site(tmp_path_factory):
     # Symbolic links (the tutorials) are copied as the files they point to.
     shutil.copytree(DOCS, src, ignore=shutil.ignore_patterns(
         "_build", "generated", "jupyter_execute", ".jupyter_cache"))
-    before = snapshot(ROOT / "examples", DOCS)
+    before = _sources(ROOT / "examples", DOCS)
     files_before = _files(ROOT / "examples") | _files(DOCS)
     env = dict(os.environ, BVPNAV_SMALL="1", MPLBACKEND="Agg")
     env.pop("BVPNAV_DOCS_EXECUTE", None)
@@ -151,6 +160,8 @@ def test_changelog_is_grouped_by_issue(site):
     assert "Issue 17: uncertainty" in page and "Issue 15: one solve pipeline" in page
 
 
+# pip builds in the source tree (build/, *.egg-info): one worker for every wheel build (pytest -n)
+@pytest.mark.xdist_group("wheel-build")
 def test_license_and_typing_marker_ship_in_the_wheel(tmp_path):
     meta = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     assert meta["license"] == {"text": "MIT"}
@@ -196,7 +207,7 @@ def test_code_on_the_pages_runs(tmp_path):
              if not p.name.startswith("_")}
     pages = {k: v for k, v in pages.items() if v}
     assert {"getting_started.md", "guide/items.md", "guide/strapdown.md"} <= set(pages)
-    before = snapshot(ROOT / "examples", DOCS)
+    before = _sources(ROOT / "examples", DOCS)
     env = dict(os.environ, BVPNAV_SMALL="1", MPLBACKEND="Agg")
     proc = subprocess.run([sys.executable, "-c", _RUN_BLOCKS], input=json.dumps(pages), cwd=tmp_path,
                           env=env, capture_output=True, text=True, timeout=600)

@@ -18,6 +18,7 @@ def table1_small():
     return mod, mod.run(seeds=4, rows=rows, quiet=True)
 
 
+@pytest.mark.slow
 def test_table1_lcurve_lambda_and_method_ii_match_the_paper(table1_small):
     mod, df = table1_small
     biased = df[df.mu != 0]
@@ -30,6 +31,7 @@ def test_table1_lcurve_lambda_and_method_ii_match_the_paper(table1_small):
     assert np.all(biased["sigma_I(lam_L)"] < biased.sigma_II / 4)
 
 
+@pytest.mark.slow
 def test_table1_beyond_the_paper(table1_small):
     _, df = table1_small
     # the weighted form with a bias model and GCV beats the paper's method I on average
@@ -71,6 +73,7 @@ def test_compare_solvers_table_shows_failures_as_rows():
         bvpnav.compare_solvers(prob, solvers=["clarabel", "direct", "osqp", "no-such-solver"])
 
 
+@pytest.mark.slow
 def test_information_a_smoother_cannot_use():
     res = load("information_smoothers_cannot_use").run(seeds=4, quiet=True)
     rts = res["RTS smoother (4 boundary values)"]

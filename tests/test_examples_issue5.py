@@ -73,6 +73,7 @@ def ski_jump():
     return mod, mod.run(rate=50.0, seeds=4, quiet=True)
 
 
+@pytest.mark.slow
 def test_ski_jump_simulation_is_the_stated_jump(ski_jump):
     mod, res = ski_jump
     sc = res["first"]["scenario"]
@@ -96,6 +97,7 @@ def test_ski_jump_simulation_is_the_stated_jump(ski_jump):
     assert np.allclose(info["points"][-1], 0.0, atol=0.6)  # one sample at 26 m/s
 
 
+@pytest.mark.slow
 def test_ski_jump_landing_hill_line_shrinks_the_landing_error(ski_jump):
     """The landing-hill line makes the landing-point error clearly smaller.
 
@@ -120,6 +122,7 @@ def test_ski_jump_landing_hill_line_shrinks_the_landing_error(ski_jump):
     assert t.loc[mod.WITH, "rms_after"] < t.loc[mod.WITHOUT, "rms_after"] / 2
 
 
+@pytest.mark.slow
 def test_ski_jump_known_numbers(ski_jump):
     """Regression guard for the seeded small run (simulator + TrackLine loop + solver)."""
     mod, res = ski_jump
@@ -128,6 +131,7 @@ def test_ski_jump_known_numbers(ski_jump):
     assert t.loc[mod.WITH, "landing_error"] == pytest.approx(0.053, abs=0.01)
 
 
+@pytest.mark.slow
 def test_ski_jump_sequential_loop_converges_and_honours_the_information(ski_jump):
     mod, res = ski_jump
     for rep in res["sequential"]:
@@ -149,6 +153,7 @@ def test_ski_jump_sequential_loop_converges_and_honours_the_information(ski_jump
     assert np.abs(gap).max() < 3 * mod.SIGMA_HILL / np.cos(np.radians(35.0))
 
 
+@pytest.mark.slow
 def test_ski_jump_prints_table_and_writes_figure_when_asked(ski_jump, tmp_path, capsys, monkeypatch):
     mod, _ = ski_jump
     monkeypatch.setenv("BVPNAV_FIGURES", str(tmp_path))

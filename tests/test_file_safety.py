@@ -225,6 +225,7 @@ def test_the_json_summary_records_what_the_result_depends_on(sample, tmp_path):
     assert run["trajectory"]["sha256"] == hashlib.sha256(out.read_bytes()).hexdigest()
 
 
+@pytest.mark.slow
 def test_reading_parquet_leaves_no_thread_that_aborts_the_process_at_exit(tmp_path):
     # pandas.read_parquet on a file object aborted 48 of 150 processes at interpreter exit
     # (SIGABRT, "terminate called without an active exception"; apache/arrow#34314): the CLI

@@ -20,6 +20,8 @@ import pytest
 
 pytest.importorskip("scipy")
 
+pytestmark = pytest.mark.slow  # the benchmark's quick run
+
 SCRIPT = Path(__file__).resolve().parents[1] / "examples" / "benchmarks" / "foot_walk.py"
 
 

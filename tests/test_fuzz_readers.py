@@ -27,6 +27,8 @@ from bvpnav.items import registry
 from bvpnav.readers import read_recording
 from bvpnav.spec import Spec, _toml_value, dumps_spec, error_model_registry, parse_spec
 
+pytestmark = pytest.mark.slow  # hundreds of examples per reader
+
 ROOT = Path(__file__).resolve().parents[1]
 SPEC_TEXTS = [p.read_text() for p in sorted((ROOT / "examples" / "specs").glob("*.toml"))]
 ITEMS = registry()

@@ -378,6 +378,7 @@ def test_resume_solves_again_what_no_longer_matches(change, which, note, work, c
 
 
 # ------------------------------------------------------------------ signals (real processes)
+@pytest.mark.slow
 @pytest.mark.parametrize("scheduler", ["serial", "dask"])
 def test_ctrl_c_in_a_batch_exits_130_in_one_line_and_resume_finishes_it(work, scheduler):
     recs = many_recordings(work, 24)

@@ -325,6 +325,7 @@ def test_memory_estimate_refuses_before_work_and_names_what_fits(inp, monkeypatc
     assert type(exc) is InputError
 
 
+@pytest.mark.slow
 def test_memory_refusal_on_ten_million_samples_without_allocating(monkeypatch):
     """The estimate needs N only: a 10-million-sample problem is refused in a moment."""
     t = np.arange(10_000_000, dtype=float) * 1e-3

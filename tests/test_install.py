@@ -26,6 +26,9 @@ def test_every_constraints_file_imports_from_the_installed_package():
         assert (installed / name).exists()
 
 
+# pip builds in the source tree (build/, *.egg-info): one worker for every wheel build (pytest -n)
+@pytest.mark.xdist_group("wheel-build")
+@pytest.mark.slow
 def test_wheel_contains_every_constraints_file(tmp_path):
     """What `pip install .` installs: build the wheel and read its file list."""
     proc = subprocess.run(

@@ -20,6 +20,7 @@ def test_the_series_is_complete_and_in_percent_format():
         assert "format_name: percent" in text and text.count("# %%") >= 3, p.name
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("script", SCRIPTS, ids=[p.stem for p in SCRIPTS])
 def test_tutorial_runs_and_asserts_its_number(script, tmp_path):
     """Each tutorial is run in its own interpreter (as a reader would run it), so its

@@ -329,6 +329,7 @@ def test_hard_rows_singular_on_their_own_go_through_the_border_exactly():
     assert err <= 1e-8
 
 
+@pytest.mark.slow
 def test_nearly_repeated_hard_rows_warn_and_no_inaccurate_answer_is_silent():
     """An interval ending 1e-4 s from a sample repeats a hard row to 1e-14: the covariance
     is then ill-determined in double precision. Over 40 random problems, every answer off

@@ -54,6 +54,8 @@ from bvpnav.linalg.lsq import least_squares_form
 from bvpnav.log import BvpnavWarning
 from bvpnav.solve.uncertainty import param_jacobian
 
+pytestmark = pytest.mark.slow  # Monte Carlo runs
+
 P1, P2 = 0.6826894921370859, 0.9544997361036416  # P(|Z| <= 1), P(|Z| <= 2)
 TOL1, TOL2 = 0.03, 0.015  # the tolerances, never looser
 PUBLIC_RUNS = 200
