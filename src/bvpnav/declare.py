@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from .backends import ACCURACIES
-from .errors import InputError
+from .errors import InputError, SolverNotFound
 from .formulation import LAM_RANGE
 from .lam import rule_names
 
@@ -47,11 +47,12 @@ __all__ = ["Rule", "Invalid", "Option", "SOLVE_OPTIONS", "register_option", "unr
 
 class Invalid(ValueError):
     """A value a :class:`Rule` refuses: ``reason`` says what a valid one is; ``nested`` when
-    the reason already names a key inside the value (a table's entry)."""
+    the reason already names a key inside the value (a table's entry); ``shown``: the value
+    as the message shows it (default its repr); ``typed``: name the value's type too."""
 
-    def __init__(self, reason: str, nested: bool = False):
+    def __init__(self, reason: str, nested: bool = False, shown: str | None = None, typed: bool = False):
         super().__init__(reason)
-        self.reason, self.nested = reason, nested
+        self.reason, self.nested, self.shown, self.typed = reason, nested, shown, typed
 
 
 @dataclass(frozen=True)
@@ -87,7 +88,7 @@ def _is_real(v) -> bool:
 
 
 def number(low: float | None = None, high: float | None = None, *, low_open: bool = False,
-           high_open: bool = False, integer: bool = False, unit: str = "") -> Rule:
+           high_open: bool = False, integer: bool = False, unit: str = "", want: str | None = None) -> Rule:
     """A finite number (an integer with ``integer=True``) in ``low..high`` (open ends with
     ``low_open``/``high_open``), as a float (int for integers); ``unit`` is named."""
     kind = "an integer" if integer else "a number"
@@ -98,7 +99,7 @@ def number(low: float | None = None, high: float | None = None, *, low_open: boo
         parts.append(f"{'>' if low_open else '>='} {low:g}")
     elif high is not None:
         parts.append(f"{'<' if high_open else '<='} {high:g}")
-    want = " ".join([kind, *parts]) + (f" ({unit})" if unit else "")
+    want = want or " ".join([kind, *parts]) + (f" ({unit})" if unit else "")
 
     def test(v):
         ok = _is_real(v) and (isinstance(v, numbers.Integral | np.integer) or not integer)
@@ -233,6 +234,8 @@ class Option:
     cli_kwargs : dict
         More :meth:`argparse.ArgumentParser.add_argument` keywords (``nargs``, ``const``,
         ``metavar``).
+    error : type
+        The :class:`InputError` subclass raised (``SolverNotFound`` for ``solver``).
     """
 
     name: str
@@ -247,6 +250,7 @@ class Option:
     cli_help: str = ""
     from_text: Callable[[str], Any] | None = None
     cli_kwargs: dict = field(default_factory=dict)
+    error: type = InputError
 
     def check(self, value, where: str | None = None):
         """``value`` checked and normalised, or :class:`InputError` naming the option, the
@@ -254,11 +258,20 @@ class Option:
         try:
             return self.rule(value)
         except Invalid as exc:
-            head = f"{self.name}: " if exc.nested else f"{self.name}={value!r}: "
-            raise InputError((f"{where}: " if where else "") + head + exc.reason) from None
+            shown = exc.shown if exc.shown is not None else repr(value)
+            typed = f" ({type(value).__name__})" if exc.typed else ""
+            head = f"{self.name} " if exc.nested else f"{self.name}={shown}{typed}: "
+            raise self.error((f"{where}: " if where else "") + head + exc.reason) from None
 
 
 # ------------------------------------------------------------------ the options
+def _solver_test(v):
+    if not isinstance(v, str):
+        raise Invalid(f"must be a name (str), got {v!r}; e.g. solver='direct' (installed: "
+                      "bvpnav.available_solvers())")
+    return v
+
+
 def _lam_test(v):
     rules = list(rule_names())
     if isinstance(v, str):
@@ -266,16 +279,16 @@ def _lam_test(v):
             raise Invalid(f"not a known rule; choose one of {rules} or a number >= 0")
         return v
     if not _is_real(v):
-        raise Invalid(f"give a finite number >= 0 (e.g. lam=1.0) or a rule name from {rules}")
+        raise Invalid(f"give a finite number >= 0 (e.g. lam=1.0) or a rule name from {rules}", typed=True)
     lam = float(v)
     if not math.isfinite(lam) or lam < 0:
-        raise Invalid(f"must be a finite number >= 0 or a rule name from {rules}")
+        raise Invalid(f"must be a finite number >= 0 or a rule name from {rules}", shown=repr(lam))
     if lam != 0 and not LAM_RANGE[0] <= lam <= LAM_RANGE[1]:
         raise Invalid(
-            f"outside {_g(LAM_RANGE[0])}..{_g(LAM_RANGE[1])} (or 0), the range in which double precision "
+            f"outside {LAM_RANGE[0]:g}..{LAM_RANGE[1]:g} (or 0), the range in which double precision "
             "still weighs the soft items against the data term. For items that must hold exactly make "
             "them hard (sigma=None); to ignore them use lam=0; otherwise choose a lam in that range (or "
-            "a rule, e.g. lam='lcurve')")
+            "a rule, e.g. lam='lcurve')", shown=f"{lam:g}")
     return lam
 
 
@@ -308,7 +321,7 @@ def _fallback_test(v):
             raise Invalid(how)
         return v
     if not isinstance(v, list | tuple):
-        raise Invalid(how)
+        raise Invalid(how, typed=True)
     for k, e in enumerate(v):
         if not (isinstance(e, str) or (isinstance(e, list | tuple) and len(e) == 2
                                        and isinstance(e[0], str) and isinstance(e[1], Mapping))):
@@ -329,8 +342,8 @@ _TIME_LIMIT = any_of(number(0, low_open=True, unit="s"), nothing(),
 _PROGRESS = any_of(boolean(), nothing(), want="True, False or None (a bar when stderr is a terminal)")
 #: Any value (checked where it is used: the sweep's range and engine, an initial trajectory).
 _ANY = Rule(lambda v: v, "any value")
-_POSITIVE_M = number(0, low_open=True, unit="m")
-_ITERATIONS = number(1, integer=True)
+_POSITIVE_M = number(0, low_open=True, want="a positive distance in m")
+_ITERATIONS = number(1, integer=True, want="an integer of at least one iteration")
 
 #: The sequential loop's options (``solve(sequential={...})``) and their defaults.
 SEQUENTIAL: dict[str, tuple[Any, Rule]] = {
@@ -339,12 +352,13 @@ SEQUENTIAL: dict[str, tuple[Any, Rule]] = {
     "soft_tol": (None, any_of(_POSITIVE_M, nothing())), "progress": (None, _PROGRESS)}
 #: The damped attitude loop's options (``solve(attitude={...})``) and their defaults.
 ATTITUDE: dict[str, tuple[Any, Rule]] = {
-    "tol": (1e-7, number(0, low_open=True, unit="rad")), "ftol": (1e-12, number(0)),
+    "tol": (1e-7, number(0, low_open=True, want="a positive angle in rad")), "ftol": (1e-12, number(0)),
     "max_iter": (30, _ITERATIONS),
     "heading": ("auto", one_of("auto", "search", "given", want="'auto' (search when the heading has no "
                                                              "prior), 'search' or 'given' (start from "
                                                              "the data's heading)")),
-    "candidates": (12, number(2, integer=True)), "loop": (True, boolean()), "progress": (None, _PROGRESS)}
+    "candidates": (12, number(2, integer=True, want="an integer of at least 2 headings")),
+    "loop": (True, boolean()), "progress": (None, _PROGRESS)}
 #: The lambda sweep's options (``solve(rule={...})``; checked as a whole by the sweep).
 RULE: dict[str, tuple[Any, Rule]] = {
     "lam_range": ((1e-6, 1e6), _ANY), "points": (25, _ANY), "tau": (None, _ANY), "probes": (None, _ANY),
@@ -393,10 +407,10 @@ def _uncertainty_from_text(value: str):
 def _options() -> list[Option]:
     lams = f"{_g(LAM_RANGE[0])}..{_g(LAM_RANGE[1])}"
     return [
-        Option("solver", "clarabel", text("a solver name, e.g. solver='direct'"), "str",
+        Option("solver", "clarabel", Rule(_solver_test, "a solver name (str)"), "str",
                "Case-insensitive solver name (``bvpnav.available_solvers()``).",
                cli="--solver", cli_help="override the spec's solver (e.g. clarabel, osqp, direct, csne)",
-               from_text=str),
+               from_text=str, error=SolverNotFound),
         Option("lam", 1.0, Rule(_lam_test, f"0, a number in {lams} or a rule"),
                "float or str",
                "Weight of the item terms relative to the data term (dimensionless): 0 or "
@@ -432,7 +446,8 @@ def _options() -> list[Option]:
                "(skipped with the reason when not least squares), then SCS. ``None`` (in a spec "
                "``\"none\"`` or ``false``) disables it. Every attempt is in ``stats[\"attempts\"]`` with "
                "its reason."),
-        Option("on_conflict", "raise", one_of("raise", "demote"), '{"raise", "demote"}',
+        Option("on_conflict", "raise", one_of("raise", "demote", want="'raise' or 'demote'"),
+               '{"raise", "demote"}',
                "Hard information that cannot hold together raises :class:`~bvpnav.errors.Infeasible` "
                "naming the conflicting items, or with ``\"demote\"`` the lowest-priority item of each "
                "conflict becomes soft until the rest holds (``stats[\"demoted\"]`` and ``warnings`` say "
