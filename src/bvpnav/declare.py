@@ -193,11 +193,11 @@ def mapping_of(rule: Rule, what: str, example: str) -> Rule:
         out = {}
         for k, x in v.items():
             if not isinstance(k, str):
-                raise Invalid(f"{what} name {k!r} is not a string; {want}", nested=True)
+                raise Invalid(f"{what} name {k!r} is not a string; give {want}")
             try:
                 out[k] = rule(x)
             except Invalid as exc:
-                raise Invalid(f"{k!r}: {x!r}: {exc.reason}", nested=True) from None
+                raise Invalid(f"entry {k!r} = {x!r}: {exc.reason}") from None
         return out
     return Rule(test, want)
 
@@ -304,11 +304,11 @@ def _uncertainty_test(v):
     low = v.strip().lower() if isinstance(v, str) else None
     hint = ""
     if low in ("true", "false", "stated", "yes", "no", "on", "off"):
-        hint = " (a boolean has no quotes: True or False; in a spec uncertainty = true or false)"
+        hint = " (a TOML boolean has no quotes: uncertainty = true or false; True or False in Python)"
     elif low in UNCERTAINTY:
-        hint = f" (in lower case: {low!r})"
-    raise Invalid("give True (standard deviations under the stated noise), 'scaled' (scaled by the "
-                  f"a-posteriori variance factor) or False{hint}")
+        hint = f' (in lower case: uncertainty = "{low}")'
+    raise Invalid('give True (standard deviations under the stated noise), "scaled" (scaled by the '
+                  f"a-posteriori variance factor) or False; in a spec true, \"scaled\" or false{hint}")
 
 
 def _fallback_test(v):
