@@ -50,9 +50,10 @@ class Invalid(ValueError):
     the reason already names a key inside the value (a table's entry); ``shown``: the value
     as the message shows it (default its repr); ``typed``: name the value's type too."""
 
-    def __init__(self, reason: str, nested: bool = False, shown: str | None = None, typed: bool = False):
+    def __init__(self, reason: str, nested: bool = False, shown: str | None = None, typed: bool = False,
+                 sep: str = " "):
         super().__init__(reason)
-        self.reason, self.nested, self.shown, self.typed = reason, nested, shown, typed
+        self.reason, self.nested, self.shown, self.typed, self.sep = reason, nested, shown, typed, sep
 
 
 @dataclass(frozen=True)
@@ -172,7 +173,7 @@ def table(keys: Mapping[str, Rule], what: str, example: str) -> Rule:
             _refuse(want)
         unknown = sorted(str(k) for k in v if k not in keys)
         if unknown:
-            raise Invalid(f"unknown option(s) {unknown}; valid: {list(keys)}", nested=True)
+            raise Invalid(f"unknown option(s) {unknown}; valid: {list(keys)}", nested=True, sep=": ")
         out = {}
         for k, x in v.items():
             try:
@@ -260,7 +261,7 @@ class Option:
         except Invalid as exc:
             shown = exc.shown if exc.shown is not None else repr(value)
             typed = f" ({type(value).__name__})" if exc.typed else ""
-            head = f"{self.name} " if exc.nested else f"{self.name}={shown}{typed}: "
+            head = f"{self.name}{exc.sep}" if exc.nested else f"{self.name}={shown}{typed}: "
             raise self.error((f"{where}: " if where else "") + head + exc.reason) from None
 
 
