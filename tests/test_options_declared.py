@@ -181,3 +181,21 @@ def test_compare_help_states_the_default_time_limit(capsys):
     with pytest.raises(SystemExit):
         main(["compare", "--help"])
     assert "default 60 s per solver run" in " ".join(capsys.readouterr().out.split())
+
+
+def test_what_a_solver_prints_is_captured_and_kept(capfd):
+    """C code prints to file descriptors 1 and 2 (SCS's "ERROR: could not determine problem
+    status."): captured and handed back, nothing reaches the terminal; verbose passes it through."""
+    import os
+
+    from bvpnav.backends.cvxpy_solvers import captured_output
+
+    with captured_output() as said:
+        os.write(1, b"ERROR: could not determine problem status.\n")
+        os.write(2, b"solver warning\n")
+    assert said == ["ERROR: could not determine problem status.\nsolver warning"]
+    out, err = capfd.readouterr()
+    assert out == "" and err == ""
+    with captured_output(enabled=False) as said:
+        os.write(1, b"shown\n")
+    assert said == [] and capfd.readouterr().out == "shown\n"

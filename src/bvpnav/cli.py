@@ -500,8 +500,9 @@ def _cmd_compare(args) -> int:
         from .io import atomic_savefig
 
         atomic_savefig(plot.comparison(table), args.plot, "--plot", dpi=90)
-    cols = ["solver", "preset", "status", "verified", "wall_time", "forward_error", "max_violation", "error"]
-    _say(args, table[cols].to_string(index=False, float_format="{:.3g}".format))
+    cols = ["solver", "preset", "status", "verified", "wall_time", "forward_error", "max_violation"]
+    shown = table[cols].assign(note=table["error"].fillna("").astype(str).str.slice(0, 90))
+    _say(args, shown.to_string(index=False, float_format="{:.3g}".format))
     if not table["verified"].astype(bool).any():
         # a comparison in which nothing was verified has no answer to trust: a failed solve
         print(f"bvpnav: solve failed: none of the {len(table)} runs gave a verified answer (see the "

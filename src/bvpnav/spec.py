@@ -28,6 +28,7 @@ Example::
     lam = "lcurve"                # a number or a rule: lcurve, gcv, discrepancy, quasi
     uncertainty = true            # optional: standard deviations too (true: the stated
                                   # noise; "scaled": by the a-posteriori variance factor)
+    time_limit = 60               # optional: seconds per solver attempt
 
     [[error_model]]
     type = "bias"
@@ -117,9 +118,10 @@ class Spec:
     problem : dict
         Keyword arguments of :class:`bvpnav.NavigationProblem` (``residual``, ``sigma_a``).
     solve : dict
-        Keyword arguments of :meth:`bvpnav.NavigationProblem.solve` (``solver``,
-        ``accuracy``, ``lam``, ``fallback``, ``on_conflict``, ``priority``,
-        ``demote_sigma``, ``uncertainty``).
+        Keyword arguments of :meth:`bvpnav.NavigationProblem.solve`: the declared options
+        with ``spec=True`` (:data:`bvpnav.declare.SOLVE_OPTIONS`: ``solver``, ``accuracy``,
+        ``lam``, ``fallback``, ``on_conflict``, ``priority``, ``demote_sigma``,
+        ``uncertainty``, ``attitude``, ``time_limit``, and any option registered there).
     items : list
         Item instances.
     error_models : list
@@ -429,8 +431,8 @@ def parse_spec(text: str, source: str = "spec") -> Spec:
     InputError
         For TOML syntax errors, unknown sections, keys, item or error-model names, and
         invalid values (of ``[input]``, ``[problem]`` and ``[solve]`` too: residual form,
-        ``sigma_a`` > 0, solver name, accuracy preset, ``lam`` >= 0 or a rule,
-        ``uncertainty`` true, false or ``"scaled"``; and values
+        ``sigma_a`` > 0, and every ``[solve]`` value by its declaration in
+        :data:`bvpnav.declare.SOLVE_OPTIONS`, with ``solve()``'s message; and values
         of the wrong TOML type anywhere), naming the line and listing the valid choices;
         for values nested too deeply to read, and for two items with the same name.
     """
