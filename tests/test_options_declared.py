@@ -199,3 +199,14 @@ def test_what_a_solver_prints_is_captured_and_kept(capfd):
     with captured_output(enabled=False) as said:
         os.write(1, b"shown\n")
     assert said == [] and capfd.readouterr().out == "shown\n"
+
+
+def test_the_constants_the_declaration_writes_out_agree_with_their_sources():
+    """bvpnav.declare spells out the presets and the lam range (so that the command line's
+    parser needs neither numpy nor the formulation): they must be the real ones."""
+    import bvpnav.declare as declare
+    from bvpnav.backends import ACCURACIES
+    from bvpnav.formulation import LAM_RANGE
+
+    assert declare.ACCURACIES == ACCURACIES
+    assert declare._LAMS == f"{LAM_RANGE[0]:g}..{LAM_RANGE[1]:g}".replace("e+", "e")

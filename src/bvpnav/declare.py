@@ -18,189 +18,41 @@ So a bad value gives the same text from ``solve()``, the spec and the command li
 (``time_limit=-1: give a number of seconds > 0, or None for no limit``), and a new solve
 option is one :func:`register_option` call (or one entry below) plus its use in a stage.
 
-The rules (:class:`Rule`) are small composable checks: :func:`boolean`, :func:`number`
-(integers, ranges, units), :func:`one_of`, :func:`text`, :func:`table` (a dict of known
-keys, each with its own rule), :func:`mapping_of` and :func:`any_of`.
+The rules are the small composable checks of :mod:`bvpnav.checks` (:func:`boolean`,
+:func:`number`, :func:`one_of`, :func:`table`, ...). This module imports neither numpy nor
+the formulation (the registries it consults are imported when a value is checked), so the
+command line's parser is built from it in a fresh process without them.
 """
 
 from __future__ import annotations
 
 import inspect
 import math
-import numbers
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
-
-from .backends import ACCURACIES
+from .checks import (
+    ANY,
+    Invalid,
+    Rule,
+    any_of,
+    boolean,
+    is_bool,
+    is_real,
+    mapping_of,
+    nothing,
+    number,
+    one_of,
+    table,
+    text,
+)
 from .errors import InputError, SolverNotFound
-from .formulation import LAM_RANGE
-from .lam import rule_names
 
 __all__ = ["Rule", "Invalid", "Option", "SOLVE_OPTIONS", "register_option", "unregister_option",
            "check_option", "check_options", "boolean", "number", "one_of", "text", "table", "mapping_of",
            "any_of", "nothing", "UNCERTAINTY", "SEQUENTIAL", "ATTITUDE", "RULE", "solve_signature",
            "solve_parameters_doc", "defaults", "cli_options", "value_from_text"]
-
-
-class Invalid(ValueError):
-    """A value a :class:`Rule` refuses: ``reason`` says what a valid one is; ``nested`` when
-    the reason already names a key inside the value (a table's entry); ``shown``: the value
-    as the message shows it (default its repr); ``typed``: name the value's type too."""
-
-    def __init__(self, reason: str, nested: bool = False, shown: str | None = None, typed: bool = False,
-                 sep: str = " "):
-        super().__init__(reason)
-        self.reason, self.nested, self.shown, self.typed, self.sep = reason, nested, shown, typed, sep
-
-
-@dataclass(frozen=True)
-class Rule:
-    """A check of one value: ``test(value)`` returns the value normalised, or raises
-    :class:`Invalid`; ``want`` describes a valid value (``"a number > 0 (s)"``)."""
-
-    test: Callable[[Any], Any]
-    want: str
-
-    def __call__(self, value):
-        return self.test(value)
-
-
-def _refuse(want: str):
-    raise Invalid(f"give {want}")
-
-
-def boolean() -> Rule:
-    """True or False (numpy booleans too), as a Python bool."""
-    def test(v):
-        if isinstance(v, bool | np.bool_):
-            return bool(v)
-        hint = ""
-        if isinstance(v, str) and v.strip().lower() in ("true", "false", "yes", "no", "on", "off"):
-            hint = " (a boolean, not a string: True or False; in a spec true or false without quotes)"
-        raise Invalid(f"give True or False{hint}")
-    return Rule(test, "True or False")
-
-
-def _is_real(v) -> bool:
-    return isinstance(v, numbers.Real) and not isinstance(v, bool | np.bool_)
-
-
-def number(low: float | None = None, high: float | None = None, *, low_open: bool = False,
-           high_open: bool = False, integer: bool = False, unit: str = "", want: str | None = None) -> Rule:
-    """A finite number (an integer with ``integer=True``) in ``low..high`` (open ends with
-    ``low_open``/``high_open``), as a float (int for integers); ``unit`` is named."""
-    kind = "an integer" if integer else "a number"
-    parts = []
-    if low is not None and high is not None:
-        parts.append(f"{'>' if low_open else '>='} {low:g} and {'<' if high_open else '<='} {high:g}")
-    elif low is not None:
-        parts.append(f"{'>' if low_open else '>='} {low:g}")
-    elif high is not None:
-        parts.append(f"{'<' if high_open else '<='} {high:g}")
-    want = want or " ".join([kind, *parts]) + (f" ({unit})" if unit else "")
-
-    def test(v):
-        ok = _is_real(v) and (isinstance(v, numbers.Integral | np.integer) or not integer)
-        if not ok or not math.isfinite(float(v)):
-            _refuse(want)
-        x = float(v)
-        if low is not None and (x <= low if low_open else x < low):
-            _refuse(want)
-        if high is not None and (x >= high if high_open else x > high):
-            _refuse(want)
-        return int(v) if integer else x
-    return Rule(test, want)
-
-
-def one_of(*values, want: str | None = None) -> Rule:
-    """One of ``values`` (compared with ``==``; a bool never stands for 0 or 1)."""
-    shown = want or f"one of {list(values)}"
-
-    def test(v):
-        for c in values:
-            if type(v) is type(c) and v == c or (isinstance(c, str) and isinstance(v, str) and v == c):
-                return c
-        hint = ""
-        if isinstance(v, str) and v.strip().lower() in [str(c).lower() for c in values] and v not in values:
-            hint = f" (in lower case: {v.strip().lower()!r})"
-        raise Invalid(f"choose {shown}{hint}")
-    return Rule(test, shown)
-
-
-def text(want: str = "a string") -> Rule:
-    """Any string."""
-    def test(v):
-        if not isinstance(v, str):
-            _refuse(want)
-        return v
-    return Rule(test, want)
-
-
-def nothing() -> Rule:
-    """None only."""
-    def test(v):
-        if v is not None:
-            _refuse("None")
-        return None
-    return Rule(test, "None")
-
-
-def any_of(*rules: Rule, want: str | None = None) -> Rule:
-    """The first rule that takes the value; else ``want`` (default: the rules' wants joined)."""
-    shown = want or " or ".join(r.want for r in rules)
-
-    def test(v):
-        for r in rules:
-            try:
-                return r(v)
-            except Invalid as exc:
-                if exc.nested:  # a table that took the value's shape: its reason is the precise one
-                    raise
-        _refuse(shown)
-    return Rule(test, shown)
-
-
-def table(keys: Mapping[str, Rule], what: str, example: str) -> Rule:
-    """A dict of options: every key known, every value checked by its rule; returns a new
-    dict of the given keys (defaults are the consumer's: :func:`defaults`)."""
-    want = f"a dict of {what} options, e.g. {example}, with keys from {list(keys)}"
-
-    def test(v):
-        if not isinstance(v, Mapping):
-            _refuse(want)
-        unknown = sorted(str(k) for k in v if k not in keys)
-        if unknown:
-            raise Invalid(f"unknown option(s) {unknown}; valid: {list(keys)}", nested=True, sep=": ")
-        out = {}
-        for k, x in v.items():
-            try:
-                out[k] = keys[k](x)
-            except Invalid as exc:
-                raise Invalid(f"{k}={x!r}: {exc.reason}", nested=True) from None
-        return out
-    return Rule(test, want)
-
-
-def mapping_of(rule: Rule, what: str, example: str) -> Rule:
-    """A dict of item name -> value checked by ``rule``."""
-    want = f"a dict of item name -> {rule.want}, e.g. {example}"
-
-    def test(v):
-        if not isinstance(v, Mapping):
-            _refuse(want)
-        out = {}
-        for k, x in v.items():
-            if not isinstance(k, str):
-                raise Invalid(f"{what} name {k!r} is not a string; give {want}")
-            try:
-                out[k] = rule(x)
-            except Invalid as exc:
-                raise Invalid(f"entry {k!r} = {x!r}: {exc.reason}") from None
-        return out
-    return Rule(test, want)
 
 
 @dataclass(frozen=True)
@@ -266,6 +118,13 @@ class Option:
 
 
 # ------------------------------------------------------------------ the options
+#: :data:`bvpnav.backends.ACCURACIES` and :data:`bvpnav.formulation.LAM_RANGE` as written here, so
+#: that this module (and the command line's parser made from it) imports neither numpy nor the
+#: formulation; ``tests/test_options_declared.py`` checks that they agree.
+ACCURACIES = ("low", "default", "high")
+_LAMS = "1e-12..1e12"
+
+
 def _solver_test(v):
     if not isinstance(v, str):
         raise Invalid(f"must be a name (str), got {v!r}; e.g. solver='direct' (installed: "
@@ -274,12 +133,15 @@ def _solver_test(v):
 
 
 def _lam_test(v):
+    from .formulation import LAM_RANGE
+    from .lam import rule_names
+
     rules = list(rule_names())
     if isinstance(v, str):
         if v not in rules:
             raise Invalid(f"not a known rule; choose one of {rules} or a number >= 0")
         return v
-    if not _is_real(v):
+    if not is_real(v):
         raise Invalid(f"give a finite number >= 0 (e.g. lam=1.0) or a rule name from {rules}", typed=True)
     lam = float(v)
     if not math.isfinite(lam) or lam < 0:
@@ -298,7 +160,7 @@ UNCERTAINTY = ("scaled",)
 
 
 def _uncertainty_test(v):
-    if isinstance(v, bool | np.bool_):
+    if is_bool(v):
         return bool(v)
     if isinstance(v, str) and v in UNCERTAINTY:
         return v
@@ -334,15 +196,15 @@ def _options_test(v):
     if v is None:
         return None
     if not isinstance(v, Mapping):
-        _refuse("a dict of solver options, e.g. options={'max_iter': 500}, or None")
+        raise Invalid("give a dict of solver options, e.g. options={'max_iter': 500}, or None")
     return dict(v)
 
 
 _TIME_LIMIT = any_of(number(0, low_open=True, unit="s"), nothing(),
                      want="a number of seconds > 0, or None for no limit")
 _PROGRESS = any_of(boolean(), nothing(), want="True, False or None (a bar when stderr is a terminal)")
-#: Any value (checked where it is used: the sweep's range and engine, an initial trajectory).
-_ANY = Rule(lambda v: v, "any value")
+#: Checked where they are used: the sweep's range and engine, an initial trajectory.
+_ANY = ANY
 _POSITIVE_M = number(0, low_open=True, want="a positive distance in m")
 _ITERATIONS = number(1, integer=True, want="an integer of at least one iteration")
 
@@ -406,7 +268,7 @@ def _uncertainty_from_text(value: str):
 
 
 def _options() -> list[Option]:
-    lams = f"{_g(LAM_RANGE[0])}..{_g(LAM_RANGE[1])}"
+    lams = _LAMS
     return [
         Option("solver", "clarabel", Rule(_solver_test, "a solver name (str)"), "str",
                "Case-insensitive solver name (``bvpnav.available_solvers()``).",
