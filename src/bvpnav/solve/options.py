@@ -153,7 +153,7 @@ def prepare(lam=1.0, **options) -> tuple[SolveOptions, Any]:
     ...     prepare(accuracy="highest")
     ... except bvpnav.InputError as exc:
     ...     print(exc)
-    accuracy='highest'; choose one of ['low', 'default', 'high']
+    accuracy='highest': choose one of ['low', 'default', 'high']
     """
     values = check_options({"lam": lam, **options})
     lam = values["lam"]
