@@ -40,9 +40,9 @@ def probe(monkeypatch):
     seen = []
     inner = pipeline.solve_fixed
 
-    def recording(form, lam, opts):
+    def recording(form, lam, opts, *args, **kwargs):
         seen.append(opts.probe_weight)
-        return inner(form, lam, opts)
+        return inner(form, lam, opts, *args, **kwargs)
 
     monkeypatch.setattr(pipeline, "solve_fixed", recording)
     return seen
