@@ -233,7 +233,7 @@ CASES = [
                  r"line 3: accuracy='best'", r"choose one of \['low', 'default', 'high'\]",
                  id="spec-accuracy"),
     pytest.param(spec_text('[solve]\nlam = "corner"\n'),
-                 r"line 2: lam='corner'", r"a number >= 0 or a rule: .*lcurve", id="spec-lam"),
+                 r"line 2: lam='corner'", r"choose one of \[.*'lcurve'", id="spec-lam"),
     pytest.param(spec_file('[[item]]\ntype = "zero_velocty"\nt0 = 0.0\nt1 = 1.0\n'),
                  r"bad\.toml, line 2: unknown item 'zero_velocty'", r"valid types: .*'zero_velocity'",
                  id="spec-unknown-item"),

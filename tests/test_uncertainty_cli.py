@@ -132,8 +132,11 @@ def test_a_bad_spec_uncertainty_names_the_line_the_value_and_the_choices(value, 
         parse_spec(text, "spec.toml")
     msg = str(exc.value)
     shown = repr(tomllib.loads(f"v = {value}")["v"])
-    assert msg.startswith(f"spec.toml, line 4: uncertainty={shown}; give true")
+    assert msg.startswith(f"spec.toml, line 4: uncertainty={shown}: give True")
     assert '"scaled"' in msg and "or false" in msg and hint in msg
+    with pytest.raises(bvpnav.InputError) as same:  # the same text from solve() (one declaration)
+        bvpnav.declare.check_option("uncertainty", tomllib.loads(f"v = {value}")["v"])
+    assert msg == f"spec.toml, line 4: {same.value}"
 
 
 def test_to_spec_round_trips_the_uncertainty_key(rec):

@@ -33,6 +33,7 @@ import numpy as np
 import pandas as pd
 
 from . import __version__
+from .declare import SOLVE_OPTIONS
 from .errors import BvpnavError, InputError
 from .io import (
     check_implicit_outputs,
@@ -56,7 +57,7 @@ from .spec import parse_spec, read_spec_text
 
 log = logging.getLogger(__name__)
 
-__all__ = ["solve_kwargs", "solve_recording", "run_batch", "fingerprint", "resume_reason",
+__all__ = ["solve_kwargs", "overrides_of", "solve_recording", "run_batch", "fingerprint", "resume_reason",
            "uncertainty_option", "uncertainty_summary", "RECORDING_SUFFIXES", "SUMMARY_COLUMNS"]
 
 #: File types a batch picks up.
@@ -79,31 +80,26 @@ def display_path(path) -> str:
 
 def uncertainty_option(value, option: str = "uncertainty") -> bool | str | None:
     """An ``uncertainty`` override checked: None (the spec decides), False, True or
-    ``"scaled"``; :class:`InputError` naming ``option`` and the valid values otherwise."""
-    from .solve.options import UNCERTAINTY
-
-    if value is None or isinstance(value, (bool, np.bool_)):
-        return None if value is None else bool(value)
-    if isinstance(value, str) and value in UNCERTAINTY:
-        return value
-    raise InputError(f"{option}={value!r}: give True (standard deviations under the stated noise), "
-                     "'scaled' (scaled by the a-posteriori variance factor), False, or None for the "
-                     "spec's [solve] uncertainty")
+    ``"scaled"``; :class:`InputError` (the declared message) otherwise."""
+    return None if value is None else SOLVE_OPTIONS["uncertainty"].check(value)
 
 
-def solve_kwargs(spec, solver: str | None = None, lam=None, uncertainty=None) -> dict:
+def overrides_of(solver=None, lam=None, uncertainty=None, **more) -> dict:
+    """The overrides of a run (None: not given, the spec decides), each checked by its
+    declaration (:data:`bvpnav.declare.SOLVE_OPTIONS`: the message names the option and the
+    value); an unknown name is refused listing the declared ones."""
+    given = {"solver": solver, "lam": lam, "uncertainty": uncertainty, **more}
+    unknown = [k for k in given if k not in SOLVE_OPTIONS]
+    if unknown:
+        raise InputError(f"unknown solve option(s) {unknown}; valid: {list(SOLVE_OPTIONS)}")
+    return {k: SOLVE_OPTIONS[k].check(v) for k, v in given.items() if v is not None}
+
+
+def solve_kwargs(spec, solver: str | None = None, lam=None, uncertainty=None, **more) -> dict:
     """Keyword arguments of ``solve()`` from the spec's ``[solve]`` table and overrides
-    (``uncertainty``: None keeps the spec's, False/True/``"scaled"`` replace it)."""
-    kw = dict(spec.solve)
-    if solver is not None:
-        kw["solver"] = solver
-    if lam is not None:
-        kw["lam"] = lam
-    if uncertainty is not None:
-        kw["uncertainty"] = uncertainty
-    if "fallback" in kw and kw["fallback"] in ("none", False):
-        kw["fallback"] = None
-    return kw
+    (each None keeps the spec's; any declared solve option may be overridden)."""
+    return {**spec.solve, **{k: v for k, v in dict(solver=solver, lam=lam, uncertainty=uncertainty,
+                                                     **more).items() if v is not None}}
 
 
 def _sha256(text: str) -> str:
@@ -121,7 +117,7 @@ def _recording_fingerprint(path) -> dict:
 
 
 def fingerprint(path, spec_text: str | None, solver=None, lam=None, fmt: str | None = None,
-                recording: dict | None = None, uncertainty=None) -> dict:
+                recording: dict | None = None, uncertainty=None, **more) -> dict:
     """What a result depends on: bvpnav's version, the spec text's SHA-256, the options that
     change results (``solver``, ``lam``, ``format``, ``uncertainty``) and the recording's
     size, mtime (ns) and SHA-256 (``recording``, computed from ``path`` when not given).
@@ -130,10 +126,10 @@ def fingerprint(path, spec_text: str | None, solver=None, lam=None, fmt: str | N
     text's hash; the options are the overrides (None: not overridden). ``uncertainty`` is
     recorded only when it is overridden, so the fingerprints of runs without it are those
     bvpnav wrote before the option existed (a missing key reads as None in
-    :func:`resume_reason`)."""
+    :func:`resume_reason`); so is every other overridden solve option (``more``: e.g.
+    ``time_limit``)."""
     opts = {"solver": solver, "lam": lam, "format": fmt}
-    if uncertainty is not None:
-        opts["uncertainty"] = uncertainty
+    opts.update({k: v for k, v in dict(uncertainty=uncertainty, **more).items() if v is not None})
     opts = json.loads(json.dumps(opts))
     return {"bvpnav": __version__, "spec_sha256": None if spec_text is None else _sha256(spec_text),
             "options": opts, "recording": recording or _recording_fingerprint(path)}
@@ -182,7 +178,7 @@ def _add_uncertainty(summ: dict, sol) -> None:
 
 def solve_recording(path, spec, out, solver: str | None = None, lam=None, summary_path=None,
                     spec_text: str | None = None, uncertainty=None, information=(),
-                    clock_offset: float | None = None, same_clock: bool = False, origin=None):
+                    clock_offset: float | None = None, same_clock: bool = False, origin=None, **more):
     """Solve one recording file with a spec; write the trajectory and its JSON summary.
 
     Parameters
@@ -212,6 +208,9 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
         reader and put on the recording's clock by :func:`bvpnav.readers.align`.
     clock_offset, same_clock : optional
         How those files' clocks relate to the recording's (see :func:`bvpnav.readers.align`).
+    **more
+        Overrides of any other declared solve option (:data:`bvpnav.declare.SOLVE_OPTIONS`,
+        e.g. ``time_limit``; None keeps the spec's), recorded in the fingerprint.
     origin : (float, float, float), optional
         Geodetic origin (latitude, longitude in degrees, height in m, WGS-84) of the local
         frame, for the information files that convert geodetic fixes; default the
@@ -231,7 +230,7 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
         recording changes while it is being solved (nothing is written then).
     """
     t0 = time.perf_counter()
-    uncertainty = uncertainty_option(uncertainty)
+    over = overrides_of(solver=solver, lam=lam, uncertainty=uncertainty, **more)
     out = Path(out)
     implicit = summary_path is None
     summary_path = Path(summary_path) if summary_path is not None else out.with_suffix(".json")
@@ -275,7 +274,7 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     for note in notes:
         log.info("%s: %s", display_path(path), note)
     prob = spec.build(data, info=info)
-    sol = prob.solve(**solve_kwargs(spec, solver, lam, uncertainty))
+    sol = prob.solve(**solve_kwargs(spec, **over))
     now = _recording_fingerprint(path)
     if (now["size"], now["sha256"]) != (rec_fp["size"], rec_fp["sha256"]):
         raise InputError(f"recording {str(path)!r} changed while it was being solved; nothing was written: "
@@ -287,8 +286,8 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     summ["run"] = {"recording": display_path(path), "samples": int(data.grid.n), "notes": notes,
                    "geodetic_origin": geo,
                    "information": [display_path(p) for p in information],
-                   "fingerprint": fingerprint(path, spec_text, solver, lam, fmt, recording=rec_fp,
-                                              uncertainty=uncertainty),
+                   "fingerprint": fingerprint(path, spec_text, fmt=fmt, recording=rec_fp,
+                                              **{"solver": solver, "lam": lam, **over}),
                    "trajectory": {"path": display_path(out), "size": written["size"],
                                   "sha256": written["sha256"]}}
     write_json(summ, summary_path)
@@ -299,13 +298,12 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     return sol, row
 
 
-def _task(path: str, spec_text: str, spec_source: str, out: str, solver, lam, uncertainty=None,
-          note: str = "") -> dict:
+def _task(path: str, spec_text: str, spec_source: str, out: str, over: dict, note: str = "") -> dict:
     """One batch task (runs on a worker): never raises an ``Exception``, returns a summary row."""
     t0 = time.perf_counter()
     try:
         spec = parse_spec(spec_text, spec_source)
-        row = solve_recording(path, spec, out, solver, lam, spec_text=spec_text, uncertainty=uncertainty)[1]
+        row = solve_recording(path, spec, out, spec_text=spec_text, **over)[1]
         row.pop("items", None)  # the problem's items stay on the worker
         row["resume"] = note
         return row
@@ -405,7 +403,7 @@ def _plan_outputs(files: list[Path], out_dir: Path, suffix: str) -> list[Path]:
 
 def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, workers: int = 2,
               solver: str | None = None, lam=None, resume: bool = False, progress: bool | None = None,
-              suffix: str = ".csv", uncertainty=None) -> pd.DataFrame:
+              suffix: str = ".csv", uncertainty=None, **more) -> pd.DataFrame:
     """Solve every recording in a folder with one spec, on Dask.
 
     Parameters
@@ -447,6 +445,9 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
     uncertainty : bool or "scaled", optional
         Override of the spec's ``[solve]`` ``uncertainty`` (None: the spec's); see
         :func:`solve_recording` for the columns and the summary record.
+    **more
+        Overrides of any other declared solve option (e.g. ``time_limit``), checked
+        before any work and part of each fingerprint.
 
     Returns
     -------
@@ -469,7 +470,7 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
                          "the *.csv / *.parquet files")
     if suffix not in (".csv", ".parquet"):
         raise InputError(f"suffix={suffix!r}: the trajectory format is '.csv' or '.parquet'")
-    uncertainty = uncertainty_option(uncertainty)
+    over = overrides_of(solver=solver, lam=lam, uncertainty=uncertainty, **more)
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise InputError(f"--workers {workers!r}: the number of local workers must be an integer >= 1, "
                          "e.g. --workers 2")
@@ -504,8 +505,8 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
     check_implicit_outputs(implicit, "move it out of the --out folder or give --out another folder")
     client = _connect(scheduler) if scheduler not in (None, "serial") else None
     try:
-        return _batch_into(files, outs, out_dir, spec_text, str(spec_path), scheduler, workers, solver,
-                           lam, resume, progress, suffix, client, uncertainty)
+        return _batch_into(files, outs, out_dir, spec_text, str(spec_path), scheduler, workers, over,
+                           resume, progress, suffix, client)
     finally:
         if client is not None:
             client.close()
@@ -543,8 +544,8 @@ def _connect(scheduler: str):
                          "--scheduler out for a local cluster") from None
 
 
-def _batch_into(files, outs, out_dir, spec_text, spec_source, scheduler, workers, solver, lam, resume,
-                progress, suffix, client, uncertainty=None) -> pd.DataFrame:
+def _batch_into(files, outs, out_dir, spec_text, spec_source, scheduler, workers, over: dict, resume,
+                progress, suffix, client) -> pd.DataFrame:
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -552,8 +553,8 @@ def _batch_into(files, outs, out_dir, spec_text, spec_source, scheduler, workers
                          "a folder you can write to") from None
     with output_lock(out_dir, "--out"):
         try:
-            rows = _run(files, outs, spec_text, spec_source, scheduler, workers, solver, lam, resume,
-                        progress, suffix, client, uncertainty)
+            rows = _run(files, outs, spec_text, spec_source, scheduler, workers, over, resume,
+                        progress, suffix, client)
             df = pd.DataFrame(rows, columns=SUMMARY_COLUMNS)
             df = df.sort_values("recording", kind="stable").reset_index(drop=True)
             write_table(df, out_dir / SUMMARY_NAME)
@@ -562,13 +563,13 @@ def _batch_into(files, outs, out_dir, spec_text, spec_source, scheduler, workers
     return df
 
 
-def _run(files, outs, spec_text, spec_source, scheduler, workers, solver, lam, resume, progress,
-         suffix, client=None, uncertainty=None) -> list[dict]:
+def _run(files, outs, spec_text, spec_source, scheduler, workers, over: dict, resume, progress,
+         suffix, client=None) -> list[dict]:
     jobs, rows = [], []
     for p, out in zip(files, outs, strict=True):
         note = ""
         if resume:
-            current = fingerprint(p, spec_text, solver, lam, suffix, uncertainty=uncertainty)
+            current = fingerprint(p, spec_text, fmt=suffix, **{"solver": None, "lam": None, **over})
             reason, js = resume_reason(p, out, out.with_suffix(".json"), current)
             if reason is None:
                 run = js["run"]
@@ -580,7 +581,7 @@ def _run(files, outs, spec_text, spec_source, scheduler, workers, solver, lam, r
                              "output": display_path(out), "resume": "skipped: fingerprint matches"})
                 continue
             note = f"re-solved: {reason}"
-        jobs.append((str(p), spec_text, spec_source, str(out), solver, lam, uncertainty, note))
+        jobs.append((str(p), spec_text, spec_source, str(out), over, note))
     if jobs and scheduler == "serial":
         # once(): a warning shared by many recordings is issued once (each summary records it)
         with once(), progress_bar(total=len(jobs), desc="recordings", unit="rec", enabled=progress) as bar:

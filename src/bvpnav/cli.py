@@ -78,34 +78,36 @@ def _cmd_demo(args) -> int:
     return EXIT_OK
 
 
-def _lam(text: str | None):
-    if text is None:
-        return None
-    try:
-        return float(text)
-    except ValueError:
-        return text  # a rule name, checked by solve()
+#: ``bvpnav compare``'s time limit per solver run when neither ``--time-limit`` nor the spec's
+#: ``[solve] time_limit`` gives one, s.
+COMPARE_TIME_LIMIT = 60.0
+
+#: What a declared flag's help adds on one command.
+_FLAG_NOTES = {("compare", "time_limit"): f" (compare: default {COMPARE_TIME_LIMIT:g} s per solver run)",
+               ("solve", "uncertainty"): "; in OUT, with a +/-2 sigma band on --plot"}
 
 
-#: ``--uncertainty`` values and what they mean to ``solve(uncertainty=...)``.
-UNCERTAINTY_CHOICES = {"stated": True, "scaled": "scaled", "off": False}
+def declared_flags(parser, command: str) -> None:
+    """Add a flag for every declared solve option that has one on ``command``
+    (:func:`bvpnav.declare.cli_options`)."""
+    from .declare import cli_options
+
+    for opt in cli_options(command):
+        kw = {"default": None, "dest": opt.name, **opt.cli_kwargs}
+        parser.add_argument(opt.cli, help=opt.cli_help + _FLAG_NOTES.get((command, opt.name), ""), **kw)
 
 
-def _uncertainty(args) -> bool | str | None:
-    """``--uncertainty [stated|scaled|off]`` as ``solve(uncertainty=...)``'s value (None:
-    not given, the spec decides), or InputError naming the value and the choices."""
-    value = getattr(args, "uncertainty", None)
-    if value is None:
-        return None
-    if value not in UNCERTAINTY_CHOICES:
-        hint = ""
-        if os.path.splitext(str(value))[1].lower() in (".csv", ".parquet", ".pq", ".toml"):
-            hint = ("; it took the file name that followed it: put --uncertainty after the input, or "
-                    "write --uncertainty=stated")
-        raise InputError(f"--uncertainty {value!r}: choose stated (the default when no value is "
-                         "given: standard deviations under the stated noise), scaled (scaled by the "
-                         f"a-posteriori variance factor) or off (none, whatever the spec says){hint}")
-    return UNCERTAINTY_CHOICES[value]
+def overrides(args, command: str) -> dict:
+    """The declared solve options given as flags on ``command``: each text read by its
+    option and checked by its declaration (the message of ``solve()``, after the flag)."""
+    from .declare import cli_options, from_flag
+
+    out = {}
+    for opt in cli_options(command):
+        text = getattr(args, opt.name, None)
+        if text is not None:
+            out[opt.name] = from_flag(opt, text)
+    return out
 
 
 def _uncertainty_report(sol, out, asked=None) -> list[str]:
@@ -267,7 +269,7 @@ def _cmd_solve(args) -> int:
     from .batch import solve_recording
     from .spec import parse_spec, read_spec_text
 
-    uncertainty = _uncertainty(args)
+    over = overrides(args, "solve")
     if not args.info and (args.clock_offset is not None or args.same_clock):
         opt = "--clock-offset" if args.clock_offset is not None else "--same-clock"
         raise InputError(f"{opt} relates the clock of an --info file to INPUT's, but no --info file is "
@@ -301,10 +303,9 @@ def _cmd_solve(args) -> int:
               ", ".join(f"{it.label} {it.mode}" for it in spec.items) or "none",
               " + ".join(type(m).__name__ for m in spec.error_models) or "none")
     t0 = time.perf_counter()
-    sol, row = solve_recording(args.input, spec, args.out, solver=args.solver, lam=_lam(args.lam),
-                               summary_path=summary, spec_text=spec_text, uncertainty=uncertainty,
+    sol, row = solve_recording(args.input, spec, args.out, summary_path=summary, spec_text=spec_text,
                                information=args.info, clock_offset=args.clock_offset,
-                               same_clock=args.same_clock, origin=args.origin)
+                               same_clock=args.same_clock, origin=args.origin, **over)
     _log.info("solved in %.3g s (solver %s, %s); wrote %s and %s", time.perf_counter() - t0,
               row["solver"], row["status"], args.out, summary)
     _log.debug("solver options in force: %s", sol.stats.get("options"))
@@ -326,7 +327,7 @@ def _cmd_solve(args) -> int:
     if truth is not None:
         _say(args, f"RMS position error against the truth ({truth_path}): "
                    f"{sol.rms_error(truth):.4g} m")
-    asked = uncertainty if uncertainty is not None else spec.solve.get("uncertainty")
+    asked = over.get("uncertainty", spec.solve.get("uncertainty"))
     for line in _uncertainty_report(sol, args.out, asked):
         _say(args, line)
     for w in sol.warnings:
@@ -489,9 +490,9 @@ def _cmd_compare(args) -> int:
            figures=("--plot",), tables=("--out",))
     spec, prob = _load(args)
     solvers = [x.strip() for x in args.solvers.split(",")] if args.solvers else None
-    lam = _lam(args.lam) if args.lam is not None else spec.solve.get("lam", 1.0)
+    over = {**spec.solve, **overrides(args, "compare")}
     table = compare_solvers(prob, solvers=solvers, presets=[x.strip() for x in args.presets.split(",")],
-                            lam=lam)
+                            lam=over.get("lam", 1.0), time_limit=over.get("time_limit", COMPARE_TIME_LIMIT))
     if args.out:
         write_table(table, args.out, "--out")
     if args.plot:
@@ -500,7 +501,8 @@ def _cmd_compare(args) -> int:
 
         atomic_savefig(plot.comparison(table), args.plot, "--plot", dpi=90)
     cols = ["solver", "preset", "status", "verified", "wall_time", "forward_error", "max_violation"]
-    _say(args, table[cols].to_string(index=False, float_format="{:.3g}".format))
+    shown = table[cols].assign(note=table["error"].fillna("").astype(str).str.slice(0, 90))
+    _say(args, shown.to_string(index=False, float_format="{:.3g}".format))
     if not table["verified"].astype(bool).any():
         # a comparison in which nothing was verified has no answer to trust: a failed solve
         print(f"bvpnav: solve failed: none of the {len(table)} runs gave a verified answer (see the "
@@ -515,8 +517,8 @@ def _cmd_batch(args) -> int:
     from .batch import run_batch
 
     df = run_batch(args.directory, args.spec, args.out, scheduler=args.scheduler, workers=args.workers,
-                   solver=args.solver, lam=_lam(args.lam), resume=args.resume, progress=verbosity(args) >= 0,
-                   suffix="." + args.format, uncertainty=_uncertainty(args))
+                   resume=args.resume, progress=verbosity(args) >= 0, suffix="." + args.format,
+                   **overrides(args, "batch"))
     bad = df[~df.ok.astype(bool)]
     _say(args, f"{len(df)} recordings, {len(bad)} failed; summary: {Path(args.out) / 'summary.csv'}")
     for _, r in bad.iterrows():  # the full error (an internal error's traceback) is in summary.csv
@@ -557,21 +559,12 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--seed", type=int, default=0, help="noise seed (default: %(default)s)")
     demo.set_defaults(func=_cmd_demo)
 
-    def uncertainty_flag(p, where: str):
-        p.add_argument("--uncertainty", nargs="?", const="stated", default=None, metavar="HOW",
-                       help="also the standard deviations: <axis>_std (m) and v<axis>_std (m/s) columns "
-                            f"{where}, and the summary's uncertainty record and error-model std. HOW: "
-                            "stated (the default: under sigma_a and the items' sigma as given), scaled "
-                            "(times the a-posteriori variance factor: for sigmas that are only "
-                            "relative) or off; overrides the spec's [solve] uncertainty")
-
-    def common(p, lam=True):
+    def common(p, command: str | None = None):
         p.add_argument("input", metavar="INPUT", help="recording: .csv, .parquet, or any format of `bvpnav "
                        "readers` (its [input] format, or the suffix, picks the reader)")
         p.add_argument("--spec", required=True, metavar="SPEC", help="spec file (TOML)")
-        if lam:
-            p.add_argument("--lam", metavar="LAM", help="lambda: a number or a rule (lcurve, gcv, "
-                           "discrepancy, quasi); default from the spec")
+        if command is not None:
+            declared_flags(p, command)
 
     sim = add(
         "simulate", help="write a synthetic recording and its spec",
@@ -596,7 +589,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "residuals). With --uncertainty (or uncertainty = true in the spec's [solve]) also "
                     "their standard deviations. Outputs are written atomically; the input is never "
                     "modified.")
-    common(solve)
+    common(solve, "solve")
     solve.add_argument("--out", required=True, metavar="OUT", help="trajectory file (.csv or .parquet)")
     solve.add_argument("--summary", metavar="JSON", help="summary path (default: OUT with .json)")
     solve.add_argument("--plot", metavar="PNG", help="also draw the solution (format from the suffix: "
@@ -606,8 +599,6 @@ def build_parser() -> argparse.ArgumentParser:
                        "column per axis in m, like the truth.csv `bvpnav simulate` writes): drawn on "
                        "--plot and the RMS error printed. Default with --plot: truth.csv beside an "
                        "INPUT named recording.csv, if there is one")
-    solve.add_argument("--solver", help="override the spec's solver (e.g. clarabel, osqp, direct, csne)")
-    uncertainty_flag(solve, "in OUT, a +/-2 sigma band on --plot")
     solve.add_argument("--info", action="append", default=[], metavar="FILE",
                        help="a file of more information (e.g. an NMEA log: GNSS fixes as position items), "
                             "read by its suffix; repeat for several. Its clock is aligned explicitly: ISO "
@@ -630,7 +621,7 @@ def build_parser() -> argparse.ArgumentParser:
         "lcurve", help="sweep lambda and plot the L-curve",
         description="Sweep lambda, evaluate the selection rules and plot the L-curve with each "
                     "rule's choice marked.")
-    common(lc, lam=False)
+    common(lc)
     lc.add_argument("--plot", required=True, metavar="PNG", help="figure path")
     lc.add_argument("--rules", default=None, help="rules, comma separated (default: lcurve,gcv,quasi "
                     "for the acceleration form, lcurve,quasi for the load form, where GCV's "
@@ -647,7 +638,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="One problem, several solvers and presets: status, times, bvpnav's verification "
                     "and errors, one row each (failures are rows too). Exit code 3 if no row is "
                     "verified.")
-    common(cmp_)
+    common(cmp_, "compare")
     cmp_.add_argument("--solvers", help="comma separated (default: clarabel, osqp and, for least "
                       "squares, direct and csne)")
     cmp_.add_argument("--presets", default="default", help="comma separated: low, default, high")
@@ -661,7 +652,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "[stationary] options) and print the intervals; --plot draws the statistic with its "
                     "threshold and the signals with the intervals shaded, to check the threshold before "
                     "[stationary] adds them to a solve as ZeroVelocity items.")
-    common(st, lam=False)
+    common(st)
     st.add_argument("--method", choices=("shoe", "magnitude"), help="override the spec's [stationary] method")
     st.add_argument("--plot", metavar="PNG", help="draw the detector's statistic and the intervals")
     st.add_argument("--out", metavar="CSV", help="write the intervals (t0, t1 in s)")
@@ -712,9 +703,7 @@ def build_parser() -> argparse.ArgumentParser:
     bt.add_argument("--scheduler", metavar="ADDRESS", help="dask scheduler, e.g. tcp://host:8786, or "
                     "'serial' to solve one by one in this process without Dask")
     bt.add_argument("--workers", type=int, default=2, help="local workers (default: %(default)s)")
-    bt.add_argument("--solver", help="override the spec's solver")
-    bt.add_argument("--lam", metavar="LAM", help="override the spec's lambda")
-    uncertainty_flag(bt, "in each trajectory")
+    declared_flags(bt, "batch")
     bt.add_argument("--format", choices=("csv", "parquet"), default="csv", help="trajectory files")
     bt.add_argument("--resume", action="store_true", help="skip recordings already solved with the same "
                     "spec, options (--solver, --lam, --uncertainty, --format) and recording content "

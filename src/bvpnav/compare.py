@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 
 from .backends import ACCURACIES, available_solvers, check_options, resolve_solver
+from .declare import check_option
 from .errors import BvpnavError, InputError, SolveError
 from .linalg.lsq import least_squares_form, non_least_squares_term
 from .solve import check_lam, choose_lambda
@@ -71,7 +72,8 @@ def _check_names(problem, solvers, presets, options) -> None:
 
 
 def compare_solvers(problem, solvers: Sequence[str] | None = None, presets: Sequence[str] = ("default",),
-                    reference=None, lam: float | str = 1.0, options: dict | None = None) -> pd.DataFrame:
+                    reference=None, lam: float | str = 1.0, options: dict | None = None,
+                    time_limit: float | None = None) -> pd.DataFrame:
     """Solve one problem with several solvers and accuracy presets.
 
     Parameters
@@ -91,6 +93,9 @@ def compare_solvers(problem, solvers: Sequence[str] | None = None, presets: Sequ
         the direct sweep when possible).
     options : dict, optional
         Per-solver extra options: ``{"osqp": {"max_iter": 1000}}``.
+    time_limit : float, optional
+        Seconds each run may take (``solve(time_limit=...)``; None: no limit). A run stopped
+        by it is a row with status ``"time limit"`` and the reason in ``error``.
 
     Returns
     -------
@@ -128,6 +133,7 @@ def compare_solvers(problem, solvers: Sequence[str] | None = None, presets: Sequ
             solvers += ["direct", "csne"]
     _check_names(problem, solvers, presets, options)
     lam = check_lam(lam)
+    time_limit = check_option("time_limit", time_limit)
     if isinstance(lam, str):
         lam = choose_lambda(problem, lam)
     ref = _reference_positions(reference, problem)
@@ -140,7 +146,7 @@ def compare_solvers(problem, solvers: Sequence[str] | None = None, presets: Sequ
             t0 = time.perf_counter()
             try:
                 sol = problem.solve(solver=name, lam=lam, accuracy=preset, verify=False, fallback=None,
-                                    options=(options or {}).get(name))
+                                    options=(options or {}).get(name), time_limit=time_limit)
             except (SolveError, BvpnavError) as exc:
                 att = getattr(exc, "attempts", None) or []
                 row.update(status=att[-1]["status"] if att else type(exc).__name__,

@@ -9,12 +9,13 @@ lives in :mod:`bvpnav.solve`; this class hands off to them (imported on first us
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .cvx import CvxProblem, compiled
+from .declare import solve_parameters_doc, solve_signature
 from .formulation import Formulation, label_items, original
 from .imu import ImuData
 from .items import Item
@@ -277,90 +278,16 @@ class NavigationProblem:
         return self.formulation.unobservable()
 
     # ------------------------------------------------------------ solving
-    def solve(
-        self,
-        solver: str = "clarabel",
-        lam: float | str = 1.0,
-        accuracy: str = "default",
-        verify: bool = True,
-        options: dict | None = None,
-        verbose: bool = False,
-        fallback="auto",
-        on_conflict: str = "raise",
-        priority: Mapping[str, float] | None = None,
-        demote_sigma: float | Mapping[str, float] | None = None,
-        sequential: dict | None = None,
-        rule: dict | None = None,
-        uncertainty: bool | str = False,
-        attitude: dict | None = None,
-    ) -> Solution:
+    def solve(self, *args, **options) -> Solution:
         """Solve and verify, falling back to other back ends when an answer fails.
 
         Every option is checked before any work (a wrong one is named with the valid
         values) and reaches every stage of the pipeline (:mod:`bvpnav.solve.pipeline`).
+        The options are declared once, in :data:`bvpnav.declare.SOLVE_OPTIONS` (the same
+        checks and messages as the spec's ``[solve]`` and the command line): ``solver``
+        and ``lam`` may be given by position, the rest by keyword.
 
-        Parameters
-        ----------
-        solver : str
-            Case-insensitive solver name (``bvpnav.available_solvers()``).
-        lam : float or str
-            Weight of the item terms relative to the data term (dimensionless): 0 or
-            1e-12..1e12 (:data:`bvpnav.formulation.LAM_RANGE`), or a rule that chooses it
-            (``"lcurve"``, ``"gcv"``, ``"discrepancy"``, ``"quasi"``, or a registered one).
-            Its value depends on the objective form: the acceleration form's data term is
-            normalised by ``sigma_a``, the load form's carries the mass matrix (about one
-            step h per row), so a lam chosen for one form (or, in the load form, one rate)
-            is not one for the other: choose it again with a rule.
-        accuracy : {"low", "default", "high"}
-            Preset mapped to the solver's options and to the verification tolerance.
-        verify : bool
-            Refuse answers that fail bvpnav's recomputed residuals (default True; off only
-            to inspect a failure: the result then says ``verified=False``).
-        verbose : bool
-            Pass the solver's own output through (cvxpy's ``verbose=True``; the direct back
-            ends print nothing). bvpnav's own account of the solve (attempts, the chosen
-            lambda, sequential iterations, timings) is on the ``bvpnav`` logger at INFO and
-            DEBUG whatever ``verbose`` is (see :mod:`bvpnav.log`).
-        options : dict, optional
-            Extra solver options on top of the preset. Clarabel's, OSQP's and the direct
-            back ends' are checked before solving; other solvers judge theirs (a refusal is
-            a failed attempt).
-        fallback : "auto", sequence or None
-            Solver names or ``(name, options)`` pairs to try when an answer fails or the
-            solver errs (the primary's ``options`` are not passed on). ``"auto"`` is
-            :data:`bvpnav.solve.DEFAULT_FALLBACK`: Clarabel with static regularization,
-            ``direct`` (skipped with the reason when not least squares), then SCS. ``None``
-            disables it. Every attempt is in ``stats["attempts"]`` with its reason.
-        on_conflict : {"raise", "demote"}
-            Hard information that cannot hold together raises
-            :class:`~bvpnav.errors.Infeasible` naming the conflicting items, or with
-            ``"demote"`` the lowest-priority item of each conflict becomes soft until the
-            rest holds (``stats["demoted"]`` and ``warnings`` say which, with what sigma).
-        priority : mapping of str to float, optional
-            Item label -> priority for demotion (higher is kept hard longer; default 0,
-            among equals the item added last goes first).
-        demote_sigma : float or mapping of str to float, optional
-            Sigma (item units) of a demoted item, one for all or per label; default 1.0.
-        sequential : dict, optional
-            Options of the loop for items that must be linearized (``tol``, ``soft_tol`` in
-            m, ``max_iter``, ...; :func:`bvpnav.solve.sequential.with_sequential`).
-        rule : dict, optional
-            Options of the lambda sweep (``lam_range``, ``points``, ...;
-            :func:`bvpnav.solve.lambda_curve`).
-        uncertainty : bool or "scaled"
-            Add standard deviations: ``<axis>_std`` (m) and ``v<axis>_std`` (m/s) columns
-            to ``trajectory``, ``error_params_std``, ``covariance(...)`` and
-            ``stats["uncertainty"]`` (see :mod:`bvpnav.solve.uncertainty`). True: the
-            covariance of the weights as stated (the posterior covariance when ``lam = 1``
-            and the sigmas are the true noise); ``"scaled"``: multiplied by the
-            a-posteriori variance factor (for sigmas that are only relative, or a ``lam``
-            chosen by a rule). O(N) time and memory.
-        attitude : dict, optional
-            Options of the damped outer loop that error models acting on the attitude
-            (``AttitudeError``, ``GyroBias``, ``GyroScaleFactor``) are solved by: ``tol``
-            (rad), ``max_iter``, ``heading`` (``"auto"``, ``"search"``, ``"given"``),
-            ``candidates``, ``loop``, ``progress``
-            (:func:`bvpnav.solve.attitude.with_attitude`).
+        {parameters}
 
         Returns
         -------
@@ -369,9 +296,9 @@ class NavigationProblem:
         Raises
         ------
         InputError
-            Before solving: a wrong option, a weight double precision cannot resolve,
-            information that leaves unknowns free, or a memory estimate beyond the
-            available memory (naming what would fit).
+            Before solving: a wrong or unknown option, a weight double precision cannot
+            resolve, information that leaves unknowns free, or a memory estimate beyond
+            the available memory (naming what would fit).
         SolveError
             (``Infeasible``, ``Unbounded``, ``Inaccurate``) when every attempt failed;
             ``error.attempts`` lists each. A back end's own exception (``LinAlgError``,
@@ -379,11 +306,17 @@ class NavigationProblem:
         """
         from .solve import pipeline
 
-        return pipeline.solve(self.formulation, lam, solver=solver, accuracy=accuracy, verify=verify,
-                              options=options, verbose=verbose, fallback=fallback,
-                              on_conflict=on_conflict, priority=priority, demote_sigma=demote_sigma,
-                              sequential=sequential, rule=rule, uncertainty=uncertainty,
-                              attitude=attitude)
+        if len(args) > 2:
+            raise TypeError(f"solve() takes solver and lam by position, the rest by keyword; got {len(args)} "
+                            "positional arguments")
+        for name, value in zip(("solver", "lam"), args, strict=False):
+            if name in options:
+                raise TypeError(f"solve() got {name} both by position and by keyword")
+            options[name] = value
+        return pipeline.solve(self.formulation, **options)
+
+    solve.__signature__ = solve_signature()  # type: ignore[attr-defined]
+    solve.__doc__ = solve.__doc__.replace("{parameters}", solve_parameters_doc().lstrip())
 
     def verify(self, xval: np.ndarray, lam: float, accuracy: str = "default", duals: dict | None = None,
                factored: tuple | None = None) -> Verification:

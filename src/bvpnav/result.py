@@ -52,18 +52,24 @@ class Attempt(_Record):
     solver : str
     status : str
         The back end's status word (``optimal``, ``infeasible``, ...), ``error`` for an
-        exception, ``not applicable`` for a back end skipped (memory, problem kind).
+        exception, ``not applicable`` for a back end skipped (memory, problem kind),
+        ``time limit`` for one stopped by ``solve(time_limit=...)``.
     reason : str
-        ``verified``, ``failed verification`` or why it failed or was skipped.
+        ``verified``, ``failed verification`` or why it failed or was skipped
+        (``time limit reached (X s)``).
     conflicts : list of str, optional
         The conflicting hard items, for an infeasible attempt.
+    output : str, optional
+        What the solver itself printed (captured when ``verbose`` is off), for a failed
+        attempt that printed something.
     """
 
     solver: str
     status: Any
     reason: str
     conflicts: list | None = None
-    _optional = ("conflicts",)
+    output: str | None = None
+    _optional = ("conflicts", "output")
 
     @staticmethod
     def plain(records) -> list[dict]:
@@ -76,7 +82,7 @@ class Attempt(_Record):
         if isinstance(rec, Attempt):
             return rec
         return cls(solver=rec["solver"], status=rec.get("status"), reason=rec.get("reason", ""),
-                   conflicts=rec.get("conflicts"))
+                   conflicts=rec.get("conflicts"), output=rec.get("output"))
 
 
 @dataclass(eq=False)

@@ -28,6 +28,7 @@ Example::
     lam = "lcurve"                # a number or a rule: lcurve, gcv, discrepancy, quasi
     uncertainty = true            # optional: standard deviations too (true: the stated
                                   # noise; "scaled": by the a-posteriori variance factor)
+    time_limit = 60               # optional: seconds per solver attempt
 
     [[error_model]]
     type = "bias"
@@ -55,15 +56,13 @@ else:  # Python 3.10: the same parser, packaged as tomli (a dependency there)
     import tomli as tomllib
 
 from . import error_models as em
-from .backends import ACCURACIES
+from .declare import SOLVE_OPTIONS
 from .errors import InputError
 from .formulation import RESIDUAL_FORMS
 from .imu import ACC_UNITS as _ACC_UNITS
 from .io import read_regular_file
 from .items import _snake, positive_array, registry
-from .lam import rule_names
 from .problem import NavigationProblem
-from .solve.options import UNCERTAINTY
 from .timebase import TIME_UNITS as _TIME_UNITS
 
 __all__ = ["Spec", "load_spec", "read_spec_text", "parse_spec", "dumps_spec", "problem_to_spec", "to_spec",
@@ -77,8 +76,7 @@ ACC_UNITS = _ACC_UNITS
 _SECTIONS = {
     "input": None,  # the readers' options and the frame options: see _input_keys()
     "problem": {"residual", "sigma_a"},
-    "solve": {"solver", "accuracy", "lam", "fallback", "on_conflict", "priority", "demote_sigma",
-              "uncertainty", "attitude"},
+    "solve": None,  # the declared solve options the spec takes: see _solve_keys()
     "stationary": None,  # detector options and the items' fields: see _STATIONARY_KEYS
     "error_model": None,  # array of tables, checked per model
     "item": None,  # array of tables, checked per item
@@ -120,9 +118,10 @@ class Spec:
     problem : dict
         Keyword arguments of :class:`bvpnav.NavigationProblem` (``residual``, ``sigma_a``).
     solve : dict
-        Keyword arguments of :meth:`bvpnav.NavigationProblem.solve` (``solver``,
-        ``accuracy``, ``lam``, ``fallback``, ``on_conflict``, ``priority``,
-        ``demote_sigma``, ``uncertainty``).
+        Keyword arguments of :meth:`bvpnav.NavigationProblem.solve`: the declared options
+        with ``spec=True`` (:data:`bvpnav.declare.SOLVE_OPTIONS`: ``solver``, ``accuracy``,
+        ``lam``, ``fallback``, ``on_conflict``, ``priority``, ``demote_sigma``,
+        ``uncertainty``, ``attitude``, ``time_limit``, and any option registered there).
     items : list
         Item instances.
     error_models : list
@@ -288,12 +287,6 @@ def _instantiate(cls, kind: str, fields: dict, text: str, section: str, index: i
                          f"fields' types and values against the {kind}'s documentation") from None
 
 
-def _finite_number(v, positive: bool) -> bool:
-    """Whether ``v`` is a finite int or float (not a bool), and > 0 if ``positive``."""
-    ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-    return ok and (v > 0 if positive else True)
-
-
 def _check_values(plain: dict, text: str, source: str) -> None:
     """Check the values of ``[problem]``, ``[solve]`` and ``[input]`` (not only their keys)."""
     def at(sec: str):
@@ -301,7 +294,6 @@ def _check_values(plain: dict, text: str, source: str) -> None:
 
     _check_problem_values(plain["problem"], at("problem"))
     _check_solve_values(plain["solve"], at("solve"))
-    _check_demotion_values(plain["solve"], at("solve"))
     _check_input_values(plain["input"], at("input"))
     _check_stationary_values(plain["stationary"], at("stationary"))
 
@@ -340,63 +332,18 @@ def _check_problem_values(prob: dict, where) -> None:
                              "one per axis")
 
 
+def _solve_keys() -> set[str]:
+    """The keys ``[solve]`` takes: the declared solve options with ``spec=True``
+    (:data:`bvpnav.declare.SOLVE_OPTIONS`)."""
+    return {name for name, opt in SOLVE_OPTIONS.items() if opt.spec}
+
+
 def _check_solve_values(solve: dict, where) -> None:
-    """Check ``[solve]``'s solver, accuracy, ``lam``, ``on_conflict``, ``uncertainty`` and
-    ``attitude``."""
-    RULES = rule_names()
-
-    if "solver" in solve and not isinstance(solve["solver"], str):
-        raise InputError(f"{where('solver')}: solver={solve['solver']!r}; give a solver name, "
-                         'e.g. solver = "direct"')
-    if "accuracy" in solve and not (isinstance(solve["accuracy"], str) and solve["accuracy"] in ACCURACIES):
-        raise InputError(f"{where('accuracy')}: accuracy={solve['accuracy']!r}; choose one of "
-                         f"{list(ACCURACIES)}")
-    if "lam" in solve:
-        lam = solve["lam"]
-        number = isinstance(lam, (int, float)) and not isinstance(lam, bool)
-        if not ((number and math.isfinite(lam) and lam >= 0) or (isinstance(lam, str) and lam in RULES)):
-            raise InputError(f"{where('lam')}: lam={lam!r}; give a number >= 0 or a rule: "
-                             f"{', '.join(RULES)}")
-    if "on_conflict" in solve and solve["on_conflict"] not in ("raise", "demote"):
-        raise InputError(f"{where('on_conflict')}: on_conflict={solve['on_conflict']!r}; "
-                         'choose "raise" or "demote"')
-    if "uncertainty" in solve:
-        _check_uncertainty(solve["uncertainty"], where)
-    if "attitude" in solve:
-        from .solve.attitude import check_attitude
-
-        opts = solve["attitude"]
-        if not isinstance(opts, dict):
-            raise InputError(f"{where('attitude')}: attitude={opts!r}; give an inline table of the attitude "
-                             'loop\'s options, e.g. attitude = {max_iter = 50, heading = "search"}')
-        try:
-            check_attitude(opts)
-        except InputError as exc:
-            raise InputError(f"{where('attitude')}: {exc}") from None
-
-
-def _check_uncertainty(value, where) -> None:
-    """Check ``[solve]``'s ``uncertainty``: a TOML boolean or one of :data:`UNCERTAINTY`."""
-    if isinstance(value, bool) or (isinstance(value, str) and value in UNCERTAINTY):
-        return
-    hint, low = "", value.strip().lower() if isinstance(value, str) else None
-    if low in ("true", "false", "stated", "yes", "no", "on", "off"):
-        hint = " (a TOML boolean has no quotes: write uncertainty = true or false)"
-    elif low in UNCERTAINTY:
-        hint = f" (in lower case: uncertainty = \"{low}\")"
-    raise InputError(f"{where('uncertainty')}: uncertainty={value!r}; give true (standard deviations "
-                     'under the stated noise), "scaled" (scaled by the a-posteriori variance factor) '
-                     f"or false{hint}")
-
-
-def _check_demotion_values(solve: dict, where) -> None:
-    """Check ``[solve]``'s ``priority`` and ``demote_sigma`` (and that they are not beside an
-    explicit ``on_conflict = "raise"``)."""
-    if "priority" in solve:
-        pr = solve["priority"]
-        if not (isinstance(pr, dict) and all(_finite_number(v, False) for v in pr.values())):
-            raise InputError(f"{where('priority')}: priority={pr!r}; give a table of item "
-                             'name = number, e.g. priority = { "survey point" = 10 }')
+    """Check every ``[solve]`` value by its declaration (the same check and message as
+    ``solve()``'s, after the line), and ``priority``/``demote_sigma`` beside an explicit
+    ``on_conflict = "raise"``."""
+    for key, value in solve.items():
+        SOLVE_OPTIONS[key].check(value, where(key))
     # an explicit on_conflict = "raise" beside them contradicts them; without on_conflict they
     # are kept for a later "demote" (tests/test_cli.py switches a spec between the two)
     for key in ("priority", "demote_sigma"):
@@ -404,13 +351,6 @@ def _check_demotion_values(solve: dict, where) -> None:
             raise InputError(f"{where(key)}: {key} is set but on_conflict is 'raise', so it "
                              "would be ignored; "
                              f'add on_conflict = "demote" to [solve] (or remove {key})')
-    if "demote_sigma" in solve:
-        ds = solve["demote_sigma"]
-        ok = _finite_number(ds, True) or (isinstance(ds, dict) and all(_finite_number(v, True)
-                                                                       for v in ds.values()))
-        if not ok:
-            raise InputError(f"{where('demote_sigma')}: demote_sigma={ds!r}; give a number > 0 "
-                             "(item units) or a table of item name = number > 0")
 
 
 def _check_input_values(inp: dict, where) -> None:
@@ -491,8 +431,8 @@ def parse_spec(text: str, source: str = "spec") -> Spec:
     InputError
         For TOML syntax errors, unknown sections, keys, item or error-model names, and
         invalid values (of ``[input]``, ``[problem]`` and ``[solve]`` too: residual form,
-        ``sigma_a`` > 0, solver name, accuracy preset, ``lam`` >= 0 or a rule,
-        ``uncertainty`` true, false or ``"scaled"``; and values
+        ``sigma_a`` > 0, and every ``[solve]`` value by its declaration in
+        :data:`bvpnav.declare.SOLVE_OPTIONS`, with ``solve()``'s message; and values
         of the wrong TOML type anywhere), naming the line and listing the valid choices;
         for values nested too deeply to read, and for two items with the same name.
     """
@@ -538,7 +478,8 @@ def _plain_table(doc: dict, sec: str, text: str, source: str) -> dict:
     if not isinstance(tab, dict):
         raise InputError(f"{source}: [{sec}] must be a table")
     allowed = (_input_keys(tab.get("format")) if sec == "input" else
-               _STATIONARY_KEYS | _STATIONARY_ITEM_KEYS if sec == "stationary" else _SECTIONS[sec])
+               _STATIONARY_KEYS | _STATIONARY_ITEM_KEYS if sec == "stationary" else
+               _solve_keys() if sec == "solve" else _SECTIONS[sec])
     for key in tab:
         if key not in allowed:
             line = _line_of(text, key, sec)

@@ -99,6 +99,10 @@ class Backend:
         True for back ends whose :meth:`run` takes the solve's
         :class:`~bvpnav.linalg.workspace.Workspace` as the keyword ``workspace`` (the
         direct back end: the band plan and a lambda sweep's band or factor at ``lam``).
+    time_limit_option : str or None
+        The back end's own option that stops it after a number of seconds, set from
+        ``solve(time_limit=...)``; None: the chain enforces the limit by discarding an
+        answer that took longer (:func:`bvpnav.solve.chain.attempt`).
 
     Examples
     --------
@@ -115,6 +119,7 @@ class Backend:
     """
 
     name: str = ""
+    time_limit_option: str | None = None
     presets: dict[str, dict[str, Any]] = {}
     memory_per_sample: dict[str, float] = {"acceleration": 5750.0, "load": 5750.0}
     least_squares_only: bool = False

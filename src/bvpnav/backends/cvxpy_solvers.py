@@ -22,8 +22,10 @@ runs without equilibration (:func:`adapt_options`, recorded in
 
 from __future__ import annotations
 
+import contextlib
 import inspect
 import numbers
+import os
 import time
 import warnings
 from typing import TYPE_CHECKING, Any
@@ -85,6 +87,74 @@ CVXPY_MEMORY = {"acceleration": 4815.0, "load": 5750.0}
 #: re-solve, 2.8 s); 0.79-0.88 against 0.91-1.25 s for three axes at 1e5; no slower at
 #: 2e3 and 1e4 (cvxpy 1.9.3, 2026-12-04).
 CANON_BACKEND = "SCIPY"
+
+
+#: Each cvxpy solver's own time-limit option (seconds), for ``solve(time_limit=...)``: Clarabel
+#: ``time_limit`` (default inf), OSQP ``time_limit`` (0: none), SCS ``time_limit_secs`` (0:
+#: none), HiGHS ``time_limit`` (read from clarabel 0.11, osqp 1.1 and scs 3.3 installed, and
+#: HiGHS's option list). A solver not listed (ECOS has only ``max_iters``) gets none: the
+#: chain discards its answer when it took longer (:func:`bvpnav.solve.chain.attempt`).
+TIME_LIMIT_OPTIONS = {"CLARABEL": "time_limit", "OSQP": "time_limit", "SCS": "time_limit_secs",
+                      "HIGHS": "time_limit"}
+
+#: Words of a solver's own status that mean it stopped at its time limit: SCS "solved
+#: (inaccurate - reached time_limit_secs)", OSQP "run time limit reached", Clarabel "MaxTime".
+_TIME_WORDS = ("time_limit", "time limit", "maxtime", "max_time", "time limit reached")
+
+
+@contextlib.contextmanager
+def captured_output(enabled: bool = True):
+    """Capture what a solver prints to the process's stdout and stderr (file descriptors 1
+    and 2: C code prints there, not to :data:`sys.stdout`); yields a list that holds the
+    text afterwards. SCS prints "ERROR: could not determine problem status." there, HiGHS
+    its banner, whatever ``verbose`` is."""
+    out: list[str] = []
+    if not enabled:
+        yield out
+        return
+    import sys
+    import tempfile
+
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    try:
+        saved = [os.dup(1), os.dup(2)]
+    except OSError:  # no such descriptors (an embedded interpreter): nothing to capture
+        yield out
+        return
+    with tempfile.TemporaryFile(mode="w+b") as tmp:
+        try:
+            os.dup2(tmp.fileno(), 1)
+            os.dup2(tmp.fileno(), 2)
+            yield out
+        finally:
+            for stream in (sys.stdout, sys.stderr):
+                with contextlib.suppress(Exception):
+                    stream.flush()
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            for fd in saved:
+                os.close(fd)
+            tmp.seek(0)
+            out.append(tmp.read(64_000).decode("utf-8", "replace").strip())
+
+
+def _stopped_by_time(prob, limit: float | None, seconds: float) -> bool:
+    """Whether a solve stopped at its time limit: the solver's own status says so, or it
+    failed (no status, user_limit, solver_error) after at least the limit."""
+    if limit is None or not limit > 0 or not np.isfinite(limit):
+        return False
+    extra = getattr(getattr(prob, "solver_stats", None), "extra_stats", None)
+    words = []
+    if isinstance(extra, dict):
+        words.append(str((extra.get("info") or {}).get("status", "")))
+    else:
+        words.append(str(getattr(getattr(extra, "info", None), "status", "")))
+        words.append(str(getattr(extra, "status", "")))
+    if any(w in " ".join(words).lower() for w in _TIME_WORDS):
+        return True
+    return getattr(prob, "status", None) in (None, "user_limit", "solver_error") and seconds >= limit
 
 
 #: Clarabel's settings for equality-constrained least squares (see :func:`adapt_options`).
@@ -181,6 +251,7 @@ class CvxpyBackend(Backend):
         self.cvxpy_name = cvxpy_name
         self.name = cvxpy_name.lower()
         self.presets = PRESETS.get(cvxpy_name, {})
+        self.time_limit_option = TIME_LIMIT_OPTIONS.get(cvxpy_name)
 
     # ------------------------------------------------------------ options
     def valid_options(self) -> list[str] | None:
@@ -240,9 +311,11 @@ class CvxpyBackend(Backend):
         options = {alias.get(k, k): v for k, v in options.items()}
         adapted = adapt_options(self.cvxpy_name, cvx, options)
         canon = {} if "canon_backend" in options else {"canon_backend": CANON_BACKEND}
+        limit = options.get(self.time_limit_option) if self.time_limit_option else None
         t0 = time.perf_counter()
+        printed: list[str] = []
         try:
-            with warnings.catch_warnings(record=True) as caught:
+            with captured_output(not verbose) as printed, warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
                 prob.solve(solver=self.cvxpy_name, verbose=verbose, **options, **adapted, **canon)
             if adapted.get("equilibrate_enable") is False and prob.status != cp.OPTIMAL:
@@ -255,10 +328,17 @@ class CvxpyBackend(Backend):
                 prob.solve(solver=self.cvxpy_name, verbose=verbose, **options, **canon,
                            **{k: v for k, v in adapted.items() if k != "retried" and k not in options})
         except cp.error.SolverError as exc:
+            said = (printed or [""])[0] or None
+            if _stopped_by_time(prob, limit, time.perf_counter() - t0):
+                raise self._timed_out(limit, said) from exc
             raise SolveError(
-                f"{self.name} failed: {exc}",
-                attempts=[{"solver": self.name, "status": "solver_error", "reason": str(exc)}],
+                f"{self.name} failed: {exc}" + (f" (it printed: {said[-300:]})" if said else ""),
+                attempts=[{"solver": self.name, "status": "solver_error", "reason": str(exc),
+                           **({"output": said} if said else {})}],
             ) from exc
+        said = (printed or [""])[0] or None
+        if _stopped_by_time(prob, limit, time.perf_counter() - t0):
+            raise self._timed_out(limit, said)
         status = prob.status
         st = prob.solver_stats
         info = {
@@ -273,8 +353,16 @@ class CvxpyBackend(Backend):
             "adapted_options": adapted,
             "canon_backend": options.get("canon_backend", CANON_BACKEND),
         }
+        if said:
+            info["solver_output"] = said
         self._raise_for(status, form, cvx)
         return RawSolve(np.array(cvx.x.value, dtype=float), info, cvx.duals())
+
+    def _timed_out(self, limit: float, said: str | None) -> SolveError:
+        reason = f"time limit reached ({limit:g} s)"
+        return SolveError(f"{self.name}: {reason}; give a larger time_limit, or another solver",
+                          attempts=[{"solver": self.name, "status": "time limit", "reason": reason,
+                                     **({"output": said} if said else {})}])
 
     def _raise_for(self, status: str, form, cvx) -> None:
         """Raise for an infeasible (naming the conflicting items), unbounded or empty answer."""

@@ -24,14 +24,12 @@ robust or cone items), naming the item.
 
 from __future__ import annotations
 
-import numbers
 import time
-from collections.abc import Callable
-from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
 
+from ..checks import Invalid, Rule, number, one_of
 from ..errors import InputError, SolveError
 from ..formulation import Formulation
 from ..linalg.lsq import (
@@ -49,23 +47,17 @@ from .cvxpy_solvers import use_conic
 __all__ = ["DirectBackend", "CsneBackend"]
 
 
-def _is_int(v) -> bool:
-    return isinstance(v, numbers.Integral) and not isinstance(v, bool | np.bool_)
+_FRACTION = number(0, 1, low_open=True, high_open=True, want="a number between 0 and 1")
 
-
-def _is_real(v) -> bool:
-    return (isinstance(v, numbers.Real) and not isinstance(v, bool | np.bool_)
-            and bool(np.isfinite(float(v))))
-
-
-#: Values of the direct back ends' options: (check, what a valid value is).
-VALUES: dict[str, tuple[Callable[[Any], bool], str]] = {
-    "method": (lambda v: v in ("auto", "banded", "lu", "ldl"), "one of ['auto', 'banded', 'lu', 'ldl']"),
-    "refine": (lambda v: _is_int(v) and 0 <= v <= 100, "an integer from 0 to 100"),
-    "max_iter": (lambda v: _is_int(v) and 1 <= v <= 10_000, "an integer from 1 to 10000"),
-    "ldl_accept": (lambda v: _is_real(v) and 0 < v < 1, "a number between 0 and 1"),
-    "tol": (lambda v: _is_real(v) and 0 < v < 1, "a number between 0 and 1"),
-    "refine_tol": (lambda v: _is_real(v) and 0 < v < 1, "a number between 0 and 1"),
+#: Values of the direct back ends' options (:mod:`bvpnav.checks` rules: a rule's ``want`` says
+#: what a valid value is).
+VALUES: dict[str, Rule] = {
+    "method": one_of("auto", "banded", "lu", "ldl"),
+    "refine": number(0, 100, integer=True, want="an integer from 0 to 100"),
+    "max_iter": number(1, 10_000, integer=True, want="an integer from 1 to 10000"),
+    "ldl_accept": _FRACTION,
+    "tol": _FRACTION,
+    "refine_tol": _FRACTION,
 }
 
 
@@ -75,8 +67,14 @@ class _LeastSquaresBackend(Backend):
     least_squares_only = True
 
     def check_value(self, key: str, value) -> str | None:
-        ok, want = VALUES.get(key, (lambda v: True, ""))
-        return None if ok(value) else want
+        rule = VALUES.get(key)
+        if rule is None:
+            return None
+        try:
+            rule(value)
+        except Invalid:
+            return rule.want
+        return None
 
     def refuse(self, form: Formulation) -> None:
         """Raise :class:`InputError` when ``form`` is not least squares (naming the item)."""

@@ -59,6 +59,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ..declare import ATTITUDE, check_option, defaults
 from ..error_models._attitude import (
     at_point,
     attitude_components,
@@ -79,8 +80,7 @@ log = logging.getLogger(__name__)
 Stage = Callable[..., Solution]
 
 #: Options of the attitude loop and their defaults (``solve(attitude={...})``).
-ATTITUDE_DEFAULTS: dict = {"tol": 1e-7, "ftol": 1e-12, "max_iter": 30, "heading": "auto",
-                           "candidates": 12, "loop": True, "progress": None}
+ATTITUDE_DEFAULTS: dict = defaults(ATTITUDE)
 
 #: Weight of the violation of hard and band rows that act on the attitude models alone
 #: (:meth:`_Loop.item_cost`), per (item unit)^2: a violation of 1e-8 rad/s weighs as much as
@@ -102,32 +102,9 @@ MAX_DAMPING = 1e12
 
 
 def check_attitude(options: dict | None) -> dict:
-    """The loop's options with defaults, or :class:`InputError` naming a wrong one."""
-    options = {} if options is None else dict(options)
-    unknown = sorted(str(k) for k in set(options) - set(ATTITUDE_DEFAULTS))
-    if unknown:
-        raise InputError(f"attitude options {unknown} are not known; valid: {list(ATTITUDE_DEFAULTS)}")
-    o = {**ATTITUDE_DEFAULTS, **options}
-    tol = o["tol"]
-    if isinstance(tol, bool) or not isinstance(tol, int | float) or not (np.isfinite(tol) and tol > 0):
-        raise InputError(f"attitude tol={tol!r}: the tolerance is a positive angle in rad")
-    ftol = o["ftol"]
-    if isinstance(ftol, bool) or not isinstance(ftol, int | float) or not (np.isfinite(ftol) and ftol >= 0):
-        raise InputError(f"attitude ftol={ftol!r}: the relative decrease of the objective below which the "
-                         "loop stops is a number >= 0")
-    mi = o["max_iter"]
-    if isinstance(mi, bool) or not isinstance(mi, int | np.integer) or mi < 1:
-        raise InputError(f"attitude max_iter={mi!r}: need an integer of at least one iteration")
-    if o["heading"] not in ("auto", "search", "given"):
-        raise InputError(f"attitude heading={o['heading']!r}: choose 'auto' (search when the heading has "
-                         "no prior), 'search' or 'given' (start from the data's heading)")
-    c = o["candidates"]
-    if isinstance(c, bool) or not isinstance(c, int | np.integer) or c < 2:
-        raise InputError(f"attitude candidates={c!r}: need an integer of at least 2 headings")
-    if not isinstance(o["loop"], bool | np.bool_):
-        raise InputError(f"attitude loop={o['loop']!r}: True (the damped loop) or False (one linearized "
-                         "solve about the data as given)")
-    return o
+    """The loop's options with defaults, or :class:`InputError` naming a wrong one (the
+    declared table :data:`bvpnav.declare.ATTITUDE`)."""
+    return {**ATTITUDE_DEFAULTS, **(check_option("attitude", options) or {})}
 
 
 # ------------------------------------------------------------- objective

@@ -37,6 +37,10 @@ def attempt(form: Formulation, backend: Backend, options: dict, lam: float, opts
     why = backend.accepts(form)  # before solving: e.g. a cone item given to a QP solver
     if why is not None:
         raise InputError(why)
+    limit = opts.time_limit
+    native = getattr(backend, "time_limit_option", None)
+    if limit is not None and native and native not in options:  # the user's own option wins
+        options = {**options, native: limit}
     log.debug("%s at lam=%g: options in force %s (accuracy %r)", backend.name, lam, options, opts.accuracy)
     t_start = time.perf_counter()
     if getattr(backend, "uses_workspace", False):   # False for a back end written before it existed
@@ -45,6 +49,12 @@ def attempt(form: Formulation, backend: Backend, options: dict, lam: float, opts
         raw = backend.run(form, lam, options, opts.verbose)
     run = dict(raw.info)
     run["wall_time"] = time.perf_counter() - t_start
+    if limit is not None and not native and run["wall_time"] > limit:
+        # no option of its own stops it: run to the end, the answer discarded
+        reason = f"time limit reached ({limit:g} s)"
+        raise SolveError(f"{backend.name}: {reason}: it took {run['wall_time']:.3g} s and has no time "
+                         "limit of its own, so its answer was discarded; give a larger time_limit",
+                         attempts=[{"solver": backend.name, "status": "time limit", "reason": reason}])
     run.update(solver=backend.name, accuracy=opts.accuracy, options=options,
                preset_applied=opts.accuracy in backend.presets)
     sol = finish(form, raw.x, lam, run, raw.duals, opts.accuracy, opts.verify, raw.factored, workspace)

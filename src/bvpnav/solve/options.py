@@ -8,31 +8,23 @@ option given by the user reaches every stage that needs it.
 
 from __future__ import annotations
 
-import numbers
-from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
-
 from ..backends import Backend, resolve_solver, solver_options
-from ..errors import BvpnavError, InputError
-from ..formulation import LAM_RANGE
-from ..lam import rule_names
+from ..declare import RULE, SEQUENTIAL, SOLVE_OPTIONS, UNCERTAINTY, check_option, check_options, defaults
+from ..errors import BvpnavError
 from ..lam.sweep import check_range
 
 __all__ = ["SolveOptions", "prepare", "check_lam", "DEFAULT_FALLBACK", "fallback_chain", "RULE_KEYS",
-           "SEQUENTIAL_KEYS", "SEQUENTIAL_DEFAULTS", "UNCERTAINTY"]
+           "SEQUENTIAL_KEYS", "SEQUENTIAL_DEFAULTS", "UNCERTAINTY", "SEQUENTIAL"]
 
 #: Options of the lambda sweep a solve with a rule name takes (``solve(rule={...})``).
-RULE_KEYS = ("lam_range", "points", "tau", "probes", "seed", "progress", "engine")
+RULE_KEYS = tuple(RULE)
 #: Options of the sequential loop and their defaults (``solve(sequential={...})``; see
 #: :func:`bvpnav.solve.sequential.with_sequential`).
-SEQUENTIAL_DEFAULTS: dict[str, Any] = {"tol": 1e-4, "max_iter": 30, "initial": None, "lam_each": False,
-                                       "continuation": True, "soft_tol": None, "progress": None}
+SEQUENTIAL_DEFAULTS: dict[str, Any] = defaults(SEQUENTIAL)
 SEQUENTIAL_KEYS = tuple(SEQUENTIAL_DEFAULTS)
-#: Values of ``solve(uncertainty=...)`` other than True and False.
-UNCERTAINTY = ("scaled",)
 
 #: The automatic fallback chain (``fallback="auto"``) after a primary Clarabel attempt:
 #: Clarabel again with static regularization, the direct sparse back end (equality-
@@ -43,7 +35,7 @@ DEFAULT_FALLBACK: tuple = (("clarabel", {"static_regularization_enable": True}),
 
 def check_lam(lam):
     """``lam`` as a float (or a rule name), or :class:`InputError` naming the value and
-    the valid ones.
+    the valid ones (the declared rule: :data:`bvpnav.declare.SOLVE_OPTIONS`).
 
     Examples
     --------
@@ -55,66 +47,28 @@ def check_lam(lam):
     ...     check_lam(-1.0)
     ... except bvpnav.InputError as exc:
     ...     print(exc)
-    lam=-1.0: must be a finite number >= 0
+    lam=-1.0: must be a finite number >= 0 or a rule name from ['lcurve', 'gcv', 'discrepancy', 'quasi']
     """
-    rules = list(rule_names())
-    if isinstance(lam, str):
-        if lam not in rules:
-            raise InputError(f"lam={lam!r} is not a known rule; choose one of {rules} or a "
-                             f"number >= 0")
-        return lam
-    if isinstance(lam, bool | np.bool_) or not isinstance(lam, numbers.Real):
-        raise InputError(f"lam={lam!r} ({type(lam).__name__}): give a finite number >= 0 (e.g. "
-                         f"lam=1.0) or a rule name from {rules}")
-    lam = float(lam)
-    if not np.isfinite(lam) or lam < 0:
-        raise InputError(f"lam={lam!r}: must be a finite number >= 0")
-    if lam != 0 and not LAM_RANGE[0] <= lam <= LAM_RANGE[1]:
-        raise InputError(
-            f"lam={lam:g} is outside {LAM_RANGE[0]:g}..{LAM_RANGE[1]:g} (or 0), the range in which "
-            "double precision still weighs the soft items against the data term. For items that "
-            "must hold exactly make them hard (sigma=None); to ignore them use lam=0; otherwise "
-            "choose a lam in that range (or a rule, e.g. lam='lcurve')")
-    return lam
+    return check_option("lam", lam)
 
 
 @dataclass(frozen=True, eq=False)
 class SolveOptions:
     """Every option of a solve, checked (see :meth:`bvpnav.NavigationProblem.solve`).
 
+    Every declared option (:data:`bvpnav.declare.SOLVE_OPTIONS`) is an attribute, checked
+    and normalised: ``opts.accuracy``, ``opts.uncertainty``, ``opts.time_limit``, ... (the
+    nested tables ``sequential``, ``rule`` and ``attitude`` as dicts, ``{}`` when not
+    given), so an option registered there reaches every stage as ``opts.<name>``.
+
     Attributes
     ----------
     backend : Backend
         The primary back end.
-    accuracy : str
-    verify : bool
-    verbose : bool
-        Pass the solver's own output through: cvxpy's ``verbose=True`` (its compilation
-        and the solver's iteration log, printed to stdout by cvxpy and the solver, not
-        through :mod:`logging`); the direct back end has no output of its own. bvpnav's
-        own records (attempts, fallbacks, chosen lambda, iterations, timings) are on the
-        ``bvpnav`` logger (:mod:`bvpnav.log`), independent of this flag.
-    options : dict or None
-        The user's extra options for the primary back end.
-    fallback : Any
-        As given (``"auto"``, a sequence, or None).
     chain : list of (Backend, dict)
         Primary back end with its options in force, then the fallback back ends.
-    on_conflict : str
-    priority, demote_sigma : Any
-        For ``on_conflict="demote"``.
-    sequential : dict
-        Options of the sequential loop (``tol``, ``max_iter``, ``initial``,
-        ``lam_each``, ``continuation``, ``soft_tol``, ``progress``).
-    rule : dict
-        Options of the lambda sweep (``lam_range``, ``points``, ``tau``, ``probes``,
-        ``seed``, ``progress``, ``engine``).
-    attitude : dict
-        Options of the damped attitude loop (``tol``, ``max_iter``, ``heading``,
-        ``candidates``, ``loop``, ``progress``; :func:`bvpnav.solve.attitude.with_attitude`).
-    uncertainty : bool or str
-        False, True (the covariance of the weights as stated) or ``"scaled"`` (times the
-        a-posteriori variance factor); see :mod:`bvpnav.solve.uncertainty`.
+    values : dict
+        The declared options' values by name (read them as attributes).
 
     Examples
     --------
@@ -127,19 +81,16 @@ class SolveOptions:
     """
 
     backend: Backend
-    accuracy: str = "default"
-    verify: bool = True
-    verbose: bool = False
-    options: dict | None = None
-    fallback: Any = "auto"
     chain: list = field(default_factory=list)
-    on_conflict: str = "raise"
-    priority: Any = None
-    demote_sigma: Any = None
-    sequential: dict = field(default_factory=dict)
-    rule: dict = field(default_factory=dict)
-    uncertainty: Any = False
-    attitude: dict = field(default_factory=dict)
+    values: dict = field(default_factory=dict)
+
+    def __getattr__(self, name: str):
+        values = self.__dict__.get("values", {})
+        if name in values:
+            return values[name]
+        if name in SOLVE_OPTIONS:
+            return SOLVE_OPTIONS[name].default
+        raise AttributeError(f"SolveOptions has no option {name!r}; declared: {list(SOLVE_OPTIONS)}")
 
     @property
     def solver(self) -> str:
@@ -148,26 +99,14 @@ class SolveOptions:
 
 
 def _fallback_entries(backend: Backend, fallback) -> list:
-    how = ("use 'auto', None, or a list of solver names or (name, options) pairs, e.g. "
-           "fallback=['direct', ('scs', {'max_iters': 20000})]")
     if fallback is None:
         return []
-    if isinstance(fallback, str):
-        if fallback != "auto":
-            raise InputError(f"fallback={fallback!r}; {how}")
+    if isinstance(fallback, str):  # "auto" (checked by the declaration)
         entries = list(DEFAULT_FALLBACK)
         if backend.name != "clarabel":
             entries[0] = "clarabel"
         return entries
-    if not isinstance(fallback, list | tuple):
-        raise InputError(f"fallback={fallback!r} ({type(fallback).__name__}); {how}")
-    out = []
-    for k, e in enumerate(fallback):
-        if not (isinstance(e, str) or (isinstance(e, list | tuple) and len(e) == 2
-                                       and isinstance(e[0], str) and isinstance(e[1], Mapping))):
-            raise InputError(f"fallback entry {k} = {e!r}: {how}")
-        out.append(e)
-    return out
+    return list(fallback)
 
 
 def fallback_chain(backend: Backend, accuracy: str, options, fallback) -> list:
@@ -188,13 +127,14 @@ def fallback_chain(backend: Backend, accuracy: str, options, fallback) -> list:
     return chain
 
 
-def prepare(lam=1.0, solver: str = "clarabel", accuracy: str = "default", verify: bool = True,
-            options: dict | None = None, verbose: bool = False, fallback="auto",
-            on_conflict: str = "raise", priority=None, demote_sigma=None,
-            sequential: dict | None = None, rule: dict | None = None,
-            uncertainty=False, attitude: dict | None = None) -> tuple[SolveOptions, Any]:
+def prepare(lam=1.0, **options) -> tuple[SolveOptions, Any]:
     """Check every option before any work: ``(SolveOptions, lam)`` (``lam`` as a float or
-    a rule name, see :func:`check_lam`).
+    a rule name).
+
+    Each value is checked by its declaration (:data:`bvpnav.declare.SOLVE_OPTIONS`: the
+    same rule, and the same message, as the spec's ``[solve]`` and the command line), then
+    what needs several options or the installed solvers: the sweep's range with a rule
+    name, the solver's name and its options, the fallback chain.
 
     Raises
     ------
@@ -213,43 +153,18 @@ def prepare(lam=1.0, solver: str = "clarabel", accuracy: str = "default", verify
     ...     prepare(accuracy="highest")
     ... except bvpnav.InputError as exc:
     ...     print(exc)
-    accuracy='highest'; choose one of ['low', 'default', 'high']
+    accuracy='highest': choose one of ['low', 'default', 'high']
     """
-    if on_conflict not in ("raise", "demote"):
-        raise InputError(f"on_conflict={on_conflict!r}; choose 'raise' or 'demote'")
-    lam = check_lam(lam)
-    for name, flag in (("verify", verify), ("verbose", verbose)):
-        if not isinstance(flag, bool | np.bool_):
-            raise InputError(f"{name}={flag!r}: must be True or False")
-    for what, given, valid in (("sequential", sequential, SEQUENTIAL_KEYS), ("rule", rule, RULE_KEYS)):
-        if given is None:
-            continue
-        if not isinstance(given, Mapping):
-            raise InputError(f"{what}={given!r}: give a dict of options, e.g. {what}={{{valid[0]!r}: ...}}, "
-                             f"with keys from {list(valid)}")
-        unknown = sorted(str(k) for k in given if k not in valid)
-        if unknown:
-            raise InputError(f"{what}: unknown option(s) {unknown}; valid: {list(valid)}")
-    if not (isinstance(uncertainty, bool | np.bool_) or uncertainty in UNCERTAINTY):
-        raise InputError(f"uncertainty={uncertainty!r}: give False, True (the covariance of the "
-                         "stated noise) or 'scaled' (scaled by the a-posteriori variance factor)")
-    if isinstance(lam, str) and rule:
-        check_range(rule.get("lam_range", (1e-6, 1e6)), rule.get("points", 25))
-    if attitude is not None:
-        from .attitude import check_attitude
-
-        if not isinstance(attitude, Mapping):
-            raise InputError(f"attitude={attitude!r}: give a dict of options, e.g. "
-                             "attitude={'max_iter': 50}")
-        check_attitude(attitude)
-    backend = resolve_solver(solver)
-    primary = solver_options(backend, accuracy, options)
-    chain = [(backend, primary)] + fallback_chain(backend, accuracy, options, fallback)
-    opts = SolveOptions(backend=backend, accuracy=accuracy, verify=bool(verify), verbose=bool(verbose),
-                        options=None if options is None else dict(options), fallback=fallback,
-                        chain=chain, on_conflict=on_conflict, priority=priority,
-                        demote_sigma=demote_sigma, sequential=dict(sequential or {}),
-                        rule=dict(rule or {}),
-                        uncertainty=uncertainty if isinstance(uncertainty, str) else bool(uncertainty),
-                        attitude=dict(attitude or {}))
-    return opts, lam
+    values = check_options({"lam": lam, **options})
+    lam = values["lam"]
+    for name in ("sequential", "rule", "attitude"):
+        values[name] = dict(values[name] or {})
+    if isinstance(lam, str) and values["rule"]:
+        check_range(values["rule"].get("lam_range", RULE["lam_range"][0]),
+                    values["rule"].get("points", RULE["points"][0]))
+    backend = resolve_solver(values["solver"])
+    values["solver"] = backend.name
+    primary = solver_options(backend, values["accuracy"], values["options"])
+    chain = [(backend, primary)] + fallback_chain(backend, values["accuracy"], values["options"],
+                                                  values["fallback"])
+    return SolveOptions(backend=backend, chain=chain, values=values), lam

@@ -41,6 +41,7 @@ from collections.abc import Callable
 import numpy as np
 import pandas as pd
 
+from ..declare import check_option
 from ..errors import InputError
 from ..formulation import Formulation
 from ..items import Linearizable
@@ -56,30 +57,12 @@ log = logging.getLogger(__name__)
 
 
 
-def _real(v) -> float:
-    try:
-        return float(v) if not isinstance(v, bool | str) else float("nan")
-    except (TypeError, ValueError):
-        return float("nan")
-
-
-def check_sequential(options: dict) -> dict:
-    """The loop's options with defaults, or :class:`InputError` naming a wrong one."""
-    unknown = sorted(set(options) - set(SEQUENTIAL_DEFAULTS))
-    if unknown:
-        raise InputError(f"sequential options {unknown} are not known; valid: {list(SEQUENTIAL_DEFAULTS)}")
-    o = {**SEQUENTIAL_DEFAULTS, **options}
-    tol, max_iter = o["tol"], o["max_iter"]
-    if not (np.isfinite(_real(tol)) and _real(tol) > 0):
-        raise InputError(f"tol={tol!r}: the convergence tolerance must be a positive distance in m")
-    if isinstance(max_iter, bool) or not isinstance(max_iter, int | np.integer) or max_iter < 1:
-        raise InputError(f"max_iter={max_iter!r}: need an integer of at least one iteration")
-    soft_tol = max(float(tol), 0.01) if o["soft_tol"] is None else _real(o["soft_tol"])
-    if not (np.isfinite(soft_tol) and soft_tol > 0):
-        raise InputError(f"soft_tol={soft_tol!r}: must be a positive distance in m")
-    o["soft_tol"] = soft_tol
-    if o["progress"] is not None and not isinstance(o["progress"], bool | np.bool_):
-        raise InputError(f"progress={o['progress']!r}: True, False or None (a bar when stderr is a terminal)")
+def check_sequential(options: dict | None) -> dict:
+    """The loop's options with defaults (``soft_tol`` resolved: ``max(tol, 0.01)`` m when not
+    given), or :class:`InputError` naming a wrong one (the declared table
+    :data:`bvpnav.declare.SEQUENTIAL`)."""
+    o = {**SEQUENTIAL_DEFAULTS, **(check_option("sequential", options) or {})}
+    o["soft_tol"] = max(float(o["tol"]), 0.01) if o["soft_tol"] is None else float(o["soft_tol"])
     return o
 
 
