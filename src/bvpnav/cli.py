@@ -281,8 +281,11 @@ def _cmd_solve(args) -> int:
     inputs = {"INPUT": args.input, "--spec": args.spec, **({"--truth": args.truth} if args.truth else {}),
               **{f"--info {p}": p for p in args.info}}
     _check(args, inputs,
-           {"--out": args.out, opt_summary: summary, "--plot": args.plot, "--geodetic": args.geodetic},
+           {"--out": args.out, opt_summary: summary, "--plot": args.plot, "--geodetic": args.geodetic,
+            "--report": args.report},
            figures=("--plot",), tables=("--out", "--geodetic"))
+    if args.report is not None and Path(args.report).suffix.lower() not in (".html", ".htm"):
+        raise InputError(f"--report {args.report!r}: the report is one HTML file; end its name with .html")
     if args.summary is None:  # a path bvpnav chose: replace only a summary of its own
         from .io import check_implicit_outputs
 
@@ -290,7 +293,7 @@ def _cmd_solve(args) -> int:
                                "move it away, or give --summary PATH to write the summary elsewhere (or to "
                                "replace that file)")
     truth_path, implicit = args.truth, False
-    if truth_path is None and args.plot and Path(args.input).name == "recording.csv":
+    if truth_path is None and (args.plot or args.report) and Path(args.input).name == "recording.csv":
         beside = Path(args.input).with_name("truth.csv")  # what `bvpnav simulate` writes
         if beside.is_file():
             truth_path, implicit = beside, True
@@ -322,6 +325,12 @@ def _cmd_solve(args) -> int:
         fig = plot.solution(sol, items=row.get("items", spec.items), truth=truth)  # the files' items too
         atomic_savefig(fig, args.plot, "--plot", dpi=90)
         _log.info("figure written to %s", args.plot)
+    if args.report:
+        from .report import write_report
+
+        write_report(sol, args.report, items=row.get("items", spec.items), truth=truth,
+                     title=f"bvpnav report: {Path(args.input).name}")
+        _log.info("report written to %s", args.report)
     _say(args, f"{row['samples']} samples; lam = {sol.lam:.6g} ({sol.lam_rule}); solver {row['solver']} "
                f"({row['status']}, verified); wrote {args.out}")
     if truth is not None:
@@ -595,10 +604,14 @@ def build_parser() -> argparse.ArgumentParser:
     solve.add_argument("--plot", metavar="PNG", help="also draw the solution (format from the suffix: "
                        ".png, .pdf, .svg ...): position and velocity per axis with the items where they "
                        "act, the residuals, the path for 2-3 axes, and the truth if known")
+    solve.add_argument("--report", metavar="HTML", help="also write a quality report: one self-contained "
+                       "HTML file (figures embedded) with the map view and uncertainty ellipses, position "
+                       "and velocity with their bands, each item's normalized residuals and the worst ones, "
+                       "the estimated sensor errors, attitude corrections and the solve's record and warnings")
     solve.add_argument("--truth", metavar="FILE", help="true positions (CSV or Parquet: t in s and one "
                        "column per axis in m, like the truth.csv `bvpnav simulate` writes): drawn on "
-                       "--plot and the RMS error printed. Default with --plot: truth.csv beside an "
-                       "INPUT named recording.csv, if there is one")
+                       "--plot and --report and the RMS error printed. Default with --plot or --report: "
+                       "truth.csv beside an INPUT named recording.csv, if there is one")
     solve.add_argument("--info", action="append", default=[], metavar="FILE",
                        help="a file of more information (e.g. an NMEA log: GNSS fixes as position items), "
                             "read by its suffix; repeat for several. Its clock is aligned explicitly: ISO "

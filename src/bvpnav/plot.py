@@ -12,6 +12,8 @@ around its positions and velocities.
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 __all__ = ["lcurve", "solution", "trajectory", "errors", "comparison", "stationary"]
@@ -78,8 +80,8 @@ def lcurve(curve, ax=None, annotate: bool = True):
         y = np.exp(np.interp(u, s, np.log(eta)))
         ax.loglog([x], [y], m, color=c, ms=9, mfc="none", mew=2,
                   label=f"{rule}: lambda = {lam:.3g}" + (" (used)" if rule == curve.rule else ""))
-    ax.set_xlabel("residual norm  rho(lambda)")
-    ax.set_ylabel("information norm  eta(lambda)")
+    ax.set_xlabel("residual norm  rho(lambda) (1)")
+    ax.set_ylabel("information norm  eta(lambda) (1)")
     ax.set_title("L-curve")
     if annotate:
         ax.legend(fontsize=8)
@@ -158,8 +160,34 @@ def _item_values(item, value, k: int, axes_of_item: list) -> np.ndarray:
         k, len(axes_of_item))
 
 
-def _item_name(item) -> str:
-    return f"{item.label} ({item.mode})"
+#: A numbered item name (``"stance 3"``, ``"fix_12"``, ``"Position#2"``): its stem and number.
+_NUMBERED = re.compile(r"^(.*?)[\s_#-]*\d+$")
+
+
+def _item_names(items) -> dict[int, str]:
+    """One legend label per kind of item and mode (``id(item)`` -> label).
+
+    A kind with one item in a mode keeps its own name (``"start (hard)"``); several share
+    one entry, named after their common stem when their names are numbered (``"stance
+    (hard, 11 items)"`` for ``stance 0`` ... ``stance 10``), else after the kind
+    (``"zero velocity (soft, 3 items)"``).
+    """
+    groups: dict[tuple[str, str], list] = {}
+    for item in items:
+        groups.setdefault((type(item).registered_name(), item.mode), []).append(item)
+    out = {}
+    for (kind, mode), its in groups.items():
+        if len(its) == 1:
+            out[id(its[0])] = f"{its[0].label} ({mode})"
+            continue
+        stems = set()
+        for it in its:
+            hit = _NUMBERED.match(it.label)
+            stems.add(hit.group(1).strip() if hit and hit.group(1).strip() else it.label)
+        stem = stems.pop() if len(stems) == 1 else kind.replace("_", " ")
+        for it in its:
+            out[id(it)] = f"{stem} ({mode}, {len(its)} items)"
+    return out
 
 
 def _span(item, t_range) -> tuple[float, float]:
@@ -241,15 +269,13 @@ def _draw_items(items, axes: list, pos_ax: dict, vel_ax: dict, path_ax, t_range)
     a track on the path panel. Other items (half-spaces, linear rows, plug-ins) are not
     drawn; they are in the summary's item table."""
     panels = {"pos": pos_ax, "vel": vel_ax, "path": path_ax, "t_range": t_range}
-    for item in items or ():
-        try:
-            kind = type(item).registered_name()
-        except AttributeError:
-            continue
-        if kind not in _DRAW:
-            continue
+    drawn = [it for it in items or () if getattr(type(it), "registered_name", None) is not None
+             and type(it).registered_name() in _DRAW]
+    names = _item_names(drawn)
+    for item in drawn:
+        kind = type(item).registered_name()
         mk, col = _ITEM_STYLE[kind]
-        _DRAW[kind](item, kind, _item_axes(item, axes), panels, _item_name(item), mk, col,
+        _DRAW[kind](item, kind, _item_axes(item, axes), panels, names[id(item)], mk, col,
                     "none" if item.mode != "hard" else col)
 
 
@@ -283,7 +309,8 @@ def solution(sol, items=None, truth=None, label: str | None = None):
     items : sequence of Item, optional
         The problem's items (``problem.items`` or ``spec.items``), drawn where they act:
         known positions and velocities as markers at their times (filled: hard; hollow:
-        soft, robust or band), average velocities as segments over their intervals,
+        soft, robust or band; one legend entry per kind of item and mode, e.g. one for
+        eleven stances ``stance 0`` ... ``stance 10``), average velocities as segments over their intervals,
         stationary intervals shaded, symmetry centres as dotted lines, speed limits and
         position bounds as dashed limits, a :class:`~bvpnav.constraints.TrackLine` on the
         path panel.
@@ -475,6 +502,7 @@ def comparison(table, ax=None):
                    + ("" if ok else f" ({d.get('status')}, not verified)"), va="center", fontsize=8)
         _decade_axis(a, vals)
     a_t.set_yticks(yk, names, fontsize=9)
+    a_t.set_ylabel("run (solver/preset)")
     a_t.set_xlabel("wall time (s)")
     a_t.set_title("wall time", fontsize=10)
     a_e.set_xlabel(ycol.replace("_", " ") + (" (m)" if ycol == "rms_error" else " (relative)"))

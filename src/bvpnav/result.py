@@ -12,7 +12,7 @@ import pandas as pd
 from .errors import InputError
 
 __all__ = ["Solution", "Attempt", "Verification", "SequentialReport", "Demotion", "Timings", "Run",
-           "SolveRecords", "Uncertainty", "AttitudeLoopReport"]
+           "SolveRecords", "Uncertainty", "AttitudeLoopReport", "ItemRows"]
 
 
 class _Record(Mapping):
@@ -458,6 +458,47 @@ class SolveRecords:
 
 
 @dataclass(eq=False)
+class ItemRows:
+    """What a solution knows about each residual row of one item (or prior), for reports.
+
+    Attributes
+    ----------
+    t : ndarray
+        Time of each row, s (NaN where the row has no single time, e.g. a prior on
+        error-model parameters or a cone's group).
+    labels : sequence of str or None
+        Row labels (``"x(t=12)"``), made on demand.
+    mode : str
+        ``hard``, ``soft``, ``robust`` or ``band``.
+    kind : str
+        ``equality``, ``inequality`` or ``cone``.
+    units : str
+        Units of the residual rows.
+    sigma : ndarray or None
+        Standard deviation per row (soft and robust), item units.
+    huber : float or None
+        Huber threshold (robust), item units; None with an L1 penalty.
+    tol : ndarray or None
+        Band half-width per row (band), item units.
+    """
+
+    t: np.ndarray
+    labels: Any
+    mode: str
+    kind: str
+    units: str
+    sigma: np.ndarray | None = None
+    huber: float | None = None
+    tol: np.ndarray | None = None
+
+    def label(self, i: int) -> str:
+        """The label of row ``i`` (``"row i"`` without labels)."""
+        if self.labels is not None and len(self.labels) == len(self.t):
+            return str(self.labels[i])
+        return f"row {i}"
+
+
+@dataclass(eq=False)
 class Solution:
     """A verified trajectory and everything needed to judge it.
 
@@ -506,6 +547,15 @@ class Solution:
         The :class:`~bvpnav.formulation.Formulation` the answer solves (read-only): the
         problem's own, or the one a solve stage made from it (conflicting items demoted,
         nonlinear items at their last linearization, the attitude at its estimate).
+    attitude_data : scipy.spatial.transform.Rotation or None
+        For strapdown data, the data's own attitude before any correction (see
+        :attr:`attitude_corrections`).
+    item_rows : dict of str to ItemRows
+        Per item (the keys of :attr:`item_residuals`): each row's time, label, mode and
+        sigma (what :mod:`bvpnav.report` needs for normalized residuals).
+    sigma_a : ndarray or None
+        The accelerometer noise per axis, m/s^2, of the acceleration form (None for the
+        load form); ``sigma_a_given`` says whether it was stated or is the default.
 
     Examples
     --------
@@ -541,6 +591,10 @@ class Solution:
     records: SolveRecords = field(default_factory=SolveRecords)
     error_params_std: pd.Series = field(default_factory=lambda: pd.Series(dtype=float, name="std"))
     attitude: Any = None
+    attitude_data: Any = None
+    item_rows: dict = field(default_factory=dict, repr=False)
+    sigma_a: np.ndarray | None = None
+    sigma_a_given: bool = False
     _cov: dict = field(default_factory=dict, repr=False)
     _formulation: Any = field(default=None, repr=False, compare=False)
 
@@ -549,6 +603,29 @@ class Solution:
         """The :class:`~bvpnav.formulation.Formulation` the answer solves (see the class
         Attributes; None for a solution made without one)."""
         return self._formulation
+
+    @property
+    def attitude_corrections(self) -> pd.DataFrame | None:
+        r"""The correction the solve applied to the data's attitude, per sample (None
+        without strapdown data).
+
+        Columns ``x``, ``y``, ``z``: the rotation vector of :math:`C\,C_0^T` (navigation
+        frame, rad), :math:`C` the attitude used (:attr:`attitude`) and :math:`C_0` the
+        data's (:attr:`attitude_data`); ``angle``: its size, rad. All zero when no attitude
+        error model was estimated.
+        """
+        if self.attitude is None or self.attitude_data is None:
+            return None
+        rv = (self.attitude * self.attitude_data.inv()).as_rotvec()
+        return pd.DataFrame({"x": rv[:, 0], "y": rv[:, 1], "z": rv[:, 2],
+                             "angle": np.linalg.norm(rv, axis=1)}, index=self.trajectory.index.copy())
+
+    def report(self, path, items=None, truth=None, title: str | None = None) -> None:
+        """Write a self-contained HTML quality report of this solution (see
+        :func:`bvpnav.report.write_report`)."""
+        from .report import write_report
+
+        write_report(self, path, items=items, truth=truth, title=title)
 
     @property
     def attitude_angles(self) -> pd.DataFrame | None:

@@ -8,6 +8,8 @@ error-model estimates and the warnings a user must see.
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pandas as pd
 
@@ -15,7 +17,8 @@ from ..errors import Inaccurate, InputError
 from ..formulation import Formulation
 from ..linalg.lsq import Factored
 from ..linalg.workspace import Workspace
-from ..result import Attempt, Run, Solution, SolveRecords, Verification
+from ..model import RowLabels, TimeLabels
+from ..result import Attempt, ItemRows, Run, Solution, SolveRecords, Verification
 from .verify import verify
 
 __all__ = ["finish", "make_solution"]
@@ -30,11 +33,77 @@ def _dual_rms(duals: dict | None, label: str) -> float | None:
     return float(np.sqrt(np.mean(np.concatenate(ds) ** 2))) if ds else None
 
 
-def _items_table(form: Formulation, xval: np.ndarray, duals: dict | None) -> tuple[pd.DataFrame, dict]:
-    rows, item_res = [], {}
+_T_LABEL = re.compile(r"\(t=([-+0-9.eE]+)\)")
+
+
+def _label_times(labels, m: int) -> np.ndarray | None:
+    """Row times (s) read from row labels: exact from :class:`TimeLabels`, else parsed from
+    ``"...(t=2.5)"``; None when the labels do not give every row one."""
+    if labels is None or len(labels) != m:
+        return None
+    if isinstance(labels, TimeLabels):
+        return np.repeat(labels.times, len(labels.axes))
+    if isinstance(labels, RowLabels):
+        parts = []
+        for q in labels.parts:
+            if isinstance(q, TimeLabels):
+                parts.append(np.repeat(q.times, len(q.axes)))
+            elif isinstance(q, tuple) and len(q) == 2 and isinstance(q[0], str) and isinstance(q[1], int):
+                return None
+            else:
+                got = _label_times(q, len(q))
+                if got is None:
+                    return None
+                parts.append(got)
+        return np.concatenate(parts) if parts else None
+    out = np.empty(m)
+    for i, lab in enumerate(labels):
+        hit = _T_LABEL.search(str(lab))
+        if hit is None:
+            return None
+        out[i] = float(hit.group(1))
+    return out
+
+
+def _row_times(term, model, m: int) -> np.ndarray:
+    """Time of each shown row (s): from the labels, else the mean time of the nodes the row
+    touches weighted by its coefficients' sizes; NaN for rows on no node (priors, cones)."""
+    res = term.residual
+    got = _label_times(getattr(res, "labels", None), m)
+    if got is not None:
+        return got
+    A = getattr(res, "A", None)
+    if A is None or A.shape[0] != m:
+        return np.full(m, np.nan)
+    tcol = np.full(A.shape[1], np.nan)
+    for a in range(model.d):
+        tcol[model.r_index(a)] = model.grid.t
+    on = np.isfinite(tcol)
+    absA = abs(A)
+    den = np.asarray(absA @ on.astype(float)).ravel()
+    num = np.asarray(absA @ np.where(on, tcol, 0.0)).ravel()
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(den > 0, num / np.where(den > 0, den, 1.0), np.nan)
+
+
+def _per_row(v, m: int) -> np.ndarray | None:
+    return None if v is None or np.size(v) != m else np.asarray(v, float).ravel()
+
+
+def _item_rows(term, model, m: int) -> ItemRows:
+    """The :class:`ItemRows` of a term's ``m`` shown rows."""
+    labels = getattr(term.residual, "labels", None)
+    return ItemRows(t=_row_times(term, model, m), labels=labels if labels is not None and len(labels) == m
+                    else None, mode=term.mode, kind=term.kind, units=term.units,
+                    sigma=_per_row(term.sigma, m), huber=term.huber, tol=_per_row(term.tol, m))
+
+
+def _items_table(form: Formulation, xval: np.ndarray, duals: dict | None) -> tuple[pd.DataFrame, dict, dict]:
+    rows, item_res, item_rows = [], {}, {}
     for term in form.terms():
         r, shown = term.shown(xval)
         item_res[term.label] = r
+        item_rows[term.label] = _item_rows(term, form.model, np.size(shown))
         rows.append({
             "item": term.label,
             "class": type(term.item).__name__ if term.item is not None else "prior",
@@ -43,7 +112,23 @@ def _items_table(form: Formulation, xval: np.ndarray, duals: dict | None) -> tup
             "dual_rms": _dual_rms(duals, term.label),
         })
     cols = ["item", "class", "mode", "kind", "rows", "units", "rms", "max_abs", "dual_rms"]
-    return pd.DataFrame(rows, columns=cols), item_res
+    return pd.DataFrame(rows, columns=cols), item_res, item_rows
+
+
+def _knot_times(form) -> dict:
+    """Time (s) of each time-varying error-model parameter ``name[k]`` (knot ``k``)."""
+    out = {}
+    em, data = form.error_model, form.model.data
+    for c in getattr(em, "components", (em,)) if em is not None else ():
+        knots = getattr(c, "knots", None)
+        kt = knots(data) if callable(knots) else None
+        if kt is None:
+            continue
+        for name in c.names(data):
+            hit = re.search(r"\[(\d+)\]$", name)
+            if hit is not None and int(hit.group(1)) < len(kt):
+                out[name] = float(kt[int(hit.group(1))])
+    return out
 
 
 def _warnings(form: Formulation, run: Run | None, check: Verification | None) -> list[str]:
@@ -77,9 +162,10 @@ def make_solution(form: Formulation, xval: np.ndarray, lam: float, lam_rule: str
     cols.update({"v" + ax: model.node_velocity_values(a, xval) for a, ax in enumerate(model.axes)})
     parts = model.split(xval)
     resid = pd.DataFrame({f"w_{ax}": parts["w"][:, a] for a, ax in enumerate(model.axes)}, index=idx)
-    items_df, item_res = _items_table(form, xval, duals)
+    items_df, item_res, item_rows = _items_table(form, xval, duals)
     if form.error_model is not None and model.q:
         params = form.error_model.report(parts["l"], model)
+        params.attrs["t"] = _knot_times(form)
     else:
         params = pd.Series(dtype=float, name="estimate")
     if getattr(form, "grade_report", None) is not None:
@@ -87,9 +173,12 @@ def make_solution(form: Formulation, xval: np.ndarray, lam: float, lam_rule: str
     sol = Solution(trajectory=pd.DataFrame(cols, index=idx), residuals=resid, items=items_df,
                    item_residuals=item_res, lam=float(lam), lam_rule=lam_rule, error_params=params,
                    stats={}, x=xval, warnings=_warnings(form, records.run, records.verification),
-                   records=records, _formulation=form)
+                   records=records, _formulation=form, item_rows=item_rows,
+                   sigma_a=np.array(form.sigma_a, float) if form.residual == "acceleration" else None,
+                   sigma_a_given=bool(form.sigma_a_given))
     if form.data.is_strapdown:
         sol.attitude = form.data.attitude
+        sol.attitude_data = form.data.attitude
     return sol.record()
 
 

@@ -344,6 +344,7 @@ def _at_point(loop: _Loop, values: dict, at_values: Solution) -> Solution:
     have = dict(zip(small.param_names, at_values.x[head:], strict=True))
     x[head:] = [have.get(n, 0.0) for n in full.param_names]
     sol = make_solution(form, x, at_values.lam, at_values.lam_rule, at_values.records)
+    sol.attitude_data = loop.raw.attitude  # the data's own, before the loop's corrections
     sol.warnings = list(dict.fromkeys(at_values.warnings + sol.warnings))
     sol.curve = at_values.curve
     return sol
