@@ -607,7 +607,7 @@ def build_parser() -> argparse.ArgumentParser:
     solve.add_argument("--report", metavar="HTML", help="also write a quality report: one self-contained "
                        "HTML file (figures embedded) with the map view and uncertainty ellipses, position "
                        "and velocity with their bands, each item's normalized residuals and the worst ones, "
-                       "the estimated sensor errors, attitude corrections and the solve's record and warnings")
+                       "the estimated sensor errors, attitude corrections, the solve's record and warnings")
     solve.add_argument("--truth", metavar="FILE", help="true positions (CSV or Parquet: t in s and one "
                        "column per axis in m, like the truth.csv `bvpnav simulate` writes): drawn on "
                        "--plot and --report and the RMS error printed. Default with --plot or --report: "
