@@ -201,6 +201,10 @@ def _draw_known(item, kind, on, p, name, mk, col, hollow):
     panels = p["pos"] if kind == "position" else p["vel"]
     for j, a in enumerate(on):
         panels[a].plot(tk, vals[:, j], mk, color=col, mfc=hollow, ms=7, mew=1.5, zorder=5, label=name)
+    path = p["path"]
+    if kind == "position" and path is not None and all(a in on for a in path._bvpnav_axes):
+        i, j = (on.index(a) for a in path._bvpnav_axes)
+        path.plot(vals[:, i], vals[:, j], mk, color=col, mfc=hollow, ms=5, mew=1.2, zorder=5, label=name)
 
 
 def _draw_average_velocity(item, kind, on, p, name, mk, col, hollow):
@@ -312,8 +316,8 @@ def solution(sol, items=None, truth=None, label: str | None = None):
         soft, robust or band; one legend entry per kind of item and mode, e.g. one for
         eleven stances ``stance 0`` ... ``stance 10``), average velocities as segments over their intervals,
         stationary intervals shaded, symmetry centres as dotted lines, speed limits and
-        position bounds as dashed limits, a :class:`~bvpnav.constraints.TrackLine` on the
-        path panel.
+        position bounds as dashed limits, a :class:`~bvpnav.constraints.TrackLine` and the
+        positions given on both of its axes (fixes) on the path panel.
     truth : array_like or DataFrame, optional
         True positions (m) at the sample times, shape (N,) or (N, d), or a table with one
         column per axis (e.g. ``truth.csv`` written by ``bvpnav simulate``).

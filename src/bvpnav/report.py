@@ -45,7 +45,11 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-__all__ = ["figures", "normalized_residuals", "render_html", "write_report", "WORST_ROWS"]
+__all__ = ["figures", "normalized_residuals", "render_html", "write_report", "WORST_ROWS", "FIGURES",
+           "map_view", "residual_figure", "sensor_error_figure", "attitude_figure", "loop_figure"]
+
+#: The report's figures, in the order of the page (those that apply to a solution).
+FIGURES = ("map", "solution", "residuals", "sensor_errors", "attitude", "lcurve", "loop")
 
 #: Rows of the worst-normalized-residual table.
 WORST_ROWS = 20
@@ -315,11 +319,12 @@ def sensor_error_figure(sol):
 
 
 def attitude_figure(sol):
-    """The attitude correction (rotation vector of ``C C0^T``, degrees) over time, or None."""
+    """The attitude correction (rotation vector of ``C C0^T``, degrees) over time, or None
+    (navigation-frame data, or no correction)."""
     import matplotlib.pyplot as plt
 
     corr = sol.attitude_corrections
-    if corr is None:
+    if corr is None or not np.any(corr["angle"].to_numpy(float) > 0):
         return None
     fig, ax = plt.subplots(figsize=(9, 3), layout="constrained")
     t = corr.index.to_numpy(float)
@@ -375,7 +380,7 @@ def figures(sol, items=None, truth=None) -> dict[str, Any]:
     -------
     dict of str to matplotlib.figure.Figure
         ``"map"`` (2-3 axes), ``"solution"`` (position and velocity per axis with bands),
-        ``"residuals"``, ``"sensor_errors"``, ``"attitude"`` (strapdown), ``"lcurve"``
+        ``"residuals"``, ``"sensor_errors"``, ``"attitude"`` (attitude corrected), ``"lcurve"``
         (lambda chosen by a rule), ``"loop"`` (an outer loop ran): those that apply.
     """
     from . import plot
@@ -584,10 +589,12 @@ def render_html(sol, items=None, truth=None, title: str | None = None) -> str:
            "<h3>Items</h3>", _table(sol.items.drop(columns=["dual_rms"], errors="ignore"), "items",
                                     left=("item", "class", "mode", "kind", "units")),
            "<h2 id='sensor-errors'>Sensor errors</h2>", imgs.get("sensor_errors", ""), _error_table(sol)]
-    if "attitude" in imgs:
-        corr = sol.attitude_corrections
-        sec += ["<h2 id='attitude'>Attitude corrections</h2>", imgs["attitude"],
-                f"<p>Largest correction {np.degrees(corr['angle'].max()):.4g} deg.</p>"]
+    corr = sol.attitude_corrections
+    if corr is not None:
+        sec += ["<h2 id='attitude'>Attitude corrections</h2>", imgs.get("attitude", ""),
+                f"<p>Largest correction {np.degrees(corr['angle'].max()):.4g} deg"
+                + ("" if "attitude" in imgs else ": the data's attitude is used as it is (no attitude error "
+                   "model)") + ".</p>"]
     sec += ["<h2 id='record'>Solve record</h2>", imgs.get("lcurve", ""), imgs.get("loop", ""), _record(sol)]
     body = "\n".join(x for x in sec if x)
     return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)}'
