@@ -377,3 +377,18 @@ def test_ci_installs_the_browser_before_the_tests():
     install = [k for k, line in enumerate(lines) if "apt-get install" in line and "chromium" in line]
     assert install and install[0] < len(lines) - 1 and lines[install[0]].startswith("command -v chromium")
     assert any(line.startswith("export CI=") for line in lines[:install[0]])
+
+
+def test_readme_report_line_runs_as_written(tmp_path, monkeypatch):
+    import shlex
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    (block,) = [b for b in re.findall(r"```bash\n(.*?)\n```", readme, re.S) if "--report" in b]
+    monkeypatch.chdir(tmp_path)
+    assert main(["simulate", "walking", "--out", "walk"]) == 0  # the line above it in README
+    for line in block.splitlines():
+        args = shlex.split(line.split("#")[0])
+        assert args[0] == "bvpnav" and main([*args[1:], "-q"]) == 0
+    out = tmp_path / "walk" / "report.html"
+    assert _parse(out).tables["worst"][1][2] == "acceleration w"
+    assert (tmp_path / "walk" / "traj.csv").is_file()

@@ -55,6 +55,8 @@ FIGURES = ("map", "solution", "residuals", "sensor_errors", "attitude", "lcurve"
 WORST_ROWS = 20
 #: Ellipses drawn on the map view (at most).
 ELLIPSES = 25
+#: Normalized residual beyond which a fix is marked on the map view.
+OUTLIER = 3.0
 #: Resolution of the embedded PNGs, dots per inch.
 DPI = 80
 
@@ -89,6 +91,23 @@ def normalized_residuals(sol, acceleration: bool = True) -> pd.DataFrame:
         (item units), ``normalized`` (residual / sigma, 1) and ``down_weighted``
         (bool), sorted by ``|normalized|``, largest first. Hard and band rows have no
         sigma and are not listed.
+
+    Examples
+    --------
+    A fix of 0.3 m (sigma 0.1 m) at a time the position is held at 0 m: its residual is
+    -0.3 m, normalized -3:
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> from bvpnav.constraints import Position
+    >>> from bvpnav.report import normalized_residuals
+    >>> t = np.linspace(0.0, 2.0, 21)
+    >>> prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=np.zeros(21)), sigma_a=0.5)
+    >>> prob = prob.add(Position(t=[0.0, 1.0], value=[0.0, 0.0], name="held"),
+    ...                 Position(t=1.0, value=0.3, sigma=0.1, name="fix"))
+    >>> row = normalized_residuals(prob.solve(solver="direct")).iloc[0]
+    >>> row["item"], row["row"], float(row["t"]), round(float(row["normalized"]), 6)
+    ('fix', 'x(t=1)', 1.0, -3.0)
     """
     parts = []
     for label, rows in sol.item_rows.items():
@@ -120,12 +139,13 @@ def normalized_residuals(sol, acceleration: bool = True) -> pd.DataFrame:
 
 
 # --------------------------------------------------------------------------- figures
-def _fixes(sol, axes: list) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+def _fixes(sol, axes: list) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
     """Position fixes on the two map axes, recovered from the items' residuals
-    (value = position at t - residual): (t, xy (K, 2), down-weighted (K,)), or None."""
+    (value = position at t - residual): (t, xy (K, 2), down-weighted (K,), beyond
+    :data:`OUTLIER` sigma on some axis (K,)), or None."""
     from .model import TimeLabels
 
-    ts, xy, bad = [], [], []
+    ts, xy, bad, beyond = [], [], [], []
     classes = dict(zip(sol.items["item"], sol.items["class"], strict=False)) if len(sol.items) else {}
     for label, rows in sol.item_rows.items():
         labs = rows.labels
@@ -135,6 +155,10 @@ def _fixes(sol, axes: list) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
             continue
         r = np.asarray(sol.item_residuals[label], float).reshape(labs.times.size, len(labs.axes))
         down = _down_weighted(rows, r.ravel()).reshape(r.shape).any(axis=1)
+        if rows.sigma is not None:
+            far = (np.abs(r) / rows.sigma.reshape(r.shape) > OUTLIER).any(axis=1)
+        else:
+            far = np.zeros(len(r), bool)
         pts = []
         for a in axes:
             k = labs.axes.index(a)
@@ -142,9 +166,10 @@ def _fixes(sol, axes: list) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         ts.append(labs.times)
         xy.append(np.column_stack(pts))
         bad.append(down)
+        beyond.append(far)
     if not ts:
         return None
-    return np.concatenate(ts), np.vstack(xy), np.concatenate(bad)
+    return np.concatenate(ts), np.vstack(xy), np.concatenate(bad), np.concatenate(beyond)
 
 
 def _ellipse_cov(sol, axes: list) -> np.ndarray | None:
@@ -201,8 +226,11 @@ def map_view(sol, truth=None, ax=None):
                                  color="C0", lw=0.8, alpha=0.7, label="±2σ ellipse" if n == 0 else None))
     fx = _fixes(sol, axes)
     if fx is not None:
-        _, xy, bad = fx
+        _, xy, bad, far = fx
         ax.plot(xy[~bad, 0], xy[~bad, 1], "o", color="C3", ms=4, mfc="none", label="position fixes", zorder=2)
+        if far.any():
+            ax.plot(xy[far, 0], xy[far, 1], "s", color="C1", ms=11, mfc="none", mew=2,
+                    label=f"fixes beyond {OUTLIER:g}σ", zorder=5)
         if bad.any():
             ax.plot(xy[bad, 0], xy[bad, 1], "x", color="C3", ms=9, mew=2, label="down-weighted fixes",
                     zorder=5)
@@ -562,7 +590,8 @@ def _record(sol) -> str:
 
 _CAPTIONS = {
     "map": "Map view (equal scales): the estimate, ±2σ ellipses of the horizontal position where the "
-           "solution has standard deviations, position fixes (x: down-weighted) and the truth when given.",
+           "solution has standard deviations, position fixes (squares: beyond 3σ; x: down-weighted) and the "
+           "truth when given.",
     "solution": "Position and velocity per axis (±2σ bands where known), the items where they act, the "
                 "acceleration residuals.",
     "residuals": "Normalized residuals (residual / sigma) over time; dashed: ±3.",
