@@ -33,7 +33,7 @@ def _dual_rms(duals: dict | None, label: str) -> float | None:
     return float(np.sqrt(np.mean(np.concatenate(ds) ** 2))) if ds else None
 
 
-_T_LABEL = re.compile(r"\(t=([-+0-9.eE]+)\)")
+_T_LABEL = re.compile(r"\(t=([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\)")
 
 
 def _label_times(labels, m: int) -> np.ndarray | None:
