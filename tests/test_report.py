@@ -179,6 +179,7 @@ def test_walking_report_is_one_self_contained_file(walking):
     assert [r[0] for r in items[1:]] == ["start"] + [f"stance {k}" for k in range(11)]
 
 
+@pytest.mark.slow
 def test_car_report_names_the_moved_fix_first(car):
     d, out = car
     page = _check_self_contained(out, {"map", "solution", "residuals", "sensor_errors", "attitude", "loop"})
@@ -197,6 +198,7 @@ def test_car_report_names_the_moved_fix_first(car):
     assert "Attitude loop:" in text and "Attitude corrections" in text
 
 
+@pytest.mark.slow
 def test_car_report_without_the_moved_fix_has_no_outlier(tmp_path):
     rec, spec, _ = _car_files(tmp_path / "rec", moved=False)
     out = tmp_path / "r.html"
@@ -279,10 +281,17 @@ def _chromium(exe: str, tmp: Path, url: str, *extra) -> subprocess.CompletedProc
                            "--v=0", *extra, url], capture_output=True, text=True, timeout=180, check=False)
 
 
-@pytest.mark.parametrize("which", ["walking", "car"])
-def test_report_loads_in_headless_chromium(which, request, tmp_path):
+def test_walking_report_loads_in_headless_chromium(walking, tmp_path):
+    _check_in_chromium(walking[1], tmp_path)
+
+
+@pytest.mark.slow
+def test_car_report_loads_in_headless_chromium(car, tmp_path):
+    _check_in_chromium(car[1], tmp_path)
+
+
+def _check_in_chromium(out: Path, tmp_path: Path) -> None:
     exe = _chromium_or_skip()
-    _, out = request.getfixturevalue(which)
     url = out.resolve().as_uri()
     dom = _chromium(exe, tmp_path, url, "--dump-dom")
     assert dom.returncode == 0, dom.stderr[-2000:]
@@ -349,6 +358,7 @@ def test_walking_plot_has_one_legend_entry_for_the_stances(walking):
     plt.close(fig)
 
 
+@pytest.mark.slow
 def test_report_figures_have_units_and_equal_map_axes(car):
     from bvpnav.readers import read
     from bvpnav.spec import load_spec
