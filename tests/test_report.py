@@ -324,17 +324,17 @@ _UNIT = re.compile(r"\(.+\)\s*$")
 
 
 def _check_units(fig) -> None:
-    """Every axes has a y label with a unit; an x label with a unit, or shares its x axis
-    with one that has it."""
+    """Every axis label has a unit; an axes without an x (y) label shares that axis with
+    one whose label has it."""
     axes = [a for a in fig.axes if a.get_visible() and a.axison]
     for ax in axes:
-        assert _UNIT.search(ax.get_ylabel()), (ax.get_title(), ax.get_ylabel())
-        xl = ax.get_xlabel()
-        if xl:
-            assert _UNIT.search(xl), (ax.get_title(), xl)
-        else:
-            shared = ax.get_shared_x_axes().get_siblings(ax)
-            assert any(_UNIT.search(s.get_xlabel()) for s in shared), ax.get_title()
+        for xy in ("x", "y"):
+            label = getattr(ax, f"get_{xy}label")()
+            if label:
+                assert _UNIT.search(label), (ax.get_title(), label)
+                continue
+            siblings = getattr(ax, f"get_shared_{xy}_axes")().get_siblings(ax)
+            assert any(_UNIT.search(getattr(s, f"get_{xy}label")()) for s in siblings), (ax.get_title(), xy)
 
 
 def test_walking_plot_has_one_legend_entry_for_the_stances(walking):
@@ -402,3 +402,15 @@ def test_readme_report_line_runs_as_written(tmp_path, monkeypatch):
     out = tmp_path / "walk" / "report.html"
     assert _parse(out).tables["worst"][1][2] == "acceleration w"
     assert (tmp_path / "walk" / "traj.csv").is_file()
+
+
+def test_compare_plot_has_units_on_its_axes():
+    from bvpnav.compare import compare_solvers
+
+    t = np.linspace(0.0, 2.0, 21)
+    prob = NavigationProblem(ImuData(t=t, acc=np.ones(21)), sigma_a=0.5)
+    prob.add(Position(t=[0.0, 2.0], value=[0.0, 2.0], name="ends"))
+    fig = plot.comparison(compare_solvers(prob, solvers=["direct"], presets=["default"]))
+    _check_units(fig)
+    assert [a.get_xlabel() for a in fig.axes] == ["wall time (s)", "forward error (relative)"]
+    plt.close(fig)
