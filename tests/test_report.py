@@ -414,3 +414,22 @@ def test_compare_plot_has_units_on_its_axes():
     _check_units(fig)
     assert [a.get_xlabel() for a in fig.axes] == ["wall time (s)", "forward error (relative)"]
     plt.close(fig)
+
+
+def test_one_axis_report_with_a_lambda_rule_and_the_load_form(tmp_path):
+    rng = np.random.default_rng(3)
+    t = np.linspace(0.0, 4.0, 81)
+    acc = np.cos(t) + 0.05 * rng.standard_normal(t.size)
+    prob = NavigationProblem(ImuData(t=t, acc=acc), residual="load")
+    prob.add(Position(t=[0.0, 4.0], value=[0.0, 1.0 - np.cos(4.0)], name="ends"),
+             Position(t=np.arange(0.5, 4.0, 0.5), value=1.0 - np.cos(np.arange(0.5, 4.0, 0.5)), sigma=0.01,
+                      name="fixes"))
+    sol = prob.solve(lam="gcv")
+    assert sol.sigma_a is None and sol.curve is not None
+    sol.report(tmp_path / "r.html", truth=1.0 - np.cos(t))
+    page = _check_self_contained(tmp_path / "r.html", {"solution", "residuals", "lcurve"})
+    # the load form has no sigma_a: only the fixes are normalized, each at its time
+    worst = page.tables["worst"]
+    assert {r[2] for r in worst[1:]} == {"fixes"} and len(worst) == 1 + 7
+    assert sorted(float(r[1]) for r in worst[1:]) == [0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5]
+    assert "lambda chosen by <b>gcv</b>" in (tmp_path / "r.html").read_text(encoding="utf-8")
