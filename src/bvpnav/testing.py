@@ -516,7 +516,7 @@ def _check_recovery(em: ErrorModel | CompositeErrorModel, data: ImuData, q: int,
         integrated = free.solve(accuracy="high")
         pos, vel = integrated.position(), integrated.velocity()
         k = np.unique(np.linspace(0, t.size - 1, 11).round().astype(int))
-        prob = NavigationProblem(meas, error_model=em)
+        prob = NavigationProblem(meas, error_model=em, grade=None)  # the check states no prior: assume none
         prob.add(Position(t=t[k], value=pos[k], name="check positions"),
                  Velocity(t=t[k], value=vel[k], name="check velocities"))
         missing = prob.unobservable()

@@ -289,7 +289,7 @@ def test_attitude_models_need_strapdown_gyro_data():
 
 @pytest.mark.parametrize("opts, match", [({"tol": -1.0}, "positive angle"), ({"max_iter": 0}, "at least one"),
                                          ({"heading": "north"}, "heading"), ({"candidates": 1}, "at least 2"),
-                                         ({"speed": 1}, "not known")])
+                                         ({"speed": 1}, "unknown option")])
 def test_attitude_options_are_checked_before_any_work(opts, match):
     t, w, c0, _, f = _motion(duration=5.0, rate=10.0)
     prob = NavigationProblem(ImuData.from_gyro(t, f, w, initial_attitude=c0), error_model=GyroBias())
