@@ -62,7 +62,12 @@ if TYPE_CHECKING:  # pragma: no cover
     from scipy.spatial.transform import Rotation
 
 __all__ = ["roll_pitch_from_stationary", "heading_from_positions", "heading_from_velocity",
-           "initial_attitude", "attitude_angles", "align"]
+           "initial_attitude", "attitude_angles", "align", "align_recording", "HEADINGS"]
+
+#: The heading sources of :func:`align_recording` (and the spec's ``[align] heading``)
+#: besides a number in degrees.
+HEADINGS = {"fixes": "the direction of travel between the first position fixes min_distance apart",
+            "search": "0 to start from; the solve searches it (needs an attitude_error model)"}
 
 #: Relative departure of the mean specific force's magnitude from g accepted as "at rest".
 GRAVITY_TOLERANCE = 0.05
@@ -562,3 +567,110 @@ def align(t, specific_force, *, stationary, positions=None, position_times=None,
                              "(position_times=...)")
         heading = heading_from_positions(position_times, positions, fr, min_distance=min_distance)
     return initial_attitude(roll, pitch, heading, fr)
+
+
+def align_recording(rec, frame_options: Any = None, *, rest: Any = "first", heading: Any = "search",
+                    fixes=None, min_distance: float = 10.0, min_rest: float = 1.0,
+                    detector: dict | None = None) -> tuple[Rotation, dict]:
+    r"""The initial attitude of a recording's strapdown channels: the spec's ``[align]``.
+
+    Parameters
+    ----------
+    rec : bvpnav.readers.Recording
+        Specific force (m/s^2) and gyro rates (rad/s) in the sensor's axes, no orientation.
+    frame_options : mapping, optional
+        The spec's ``[input]`` frame options (``frame``, ``gravity``, ``body_to_sensor``:
+        :mod:`bvpnav.strapdown`).
+    rest : "first" or (t0, t1)
+        The interval at rest, s; ``"first"``: the first interval of at least ``min_rest`` s
+        that :func:`bvpnav.detect.stationary` finds (with ``detector``'s options).
+    heading : float, "fixes" or "search"
+        The yaw at ``t[0]`` in **degrees** (the frame's convention: counterclockwise from
+        east in ENU, clockwise from north in NED); ``"fixes"``: from ``fixes``
+        (:func:`heading_from_positions`); ``"search"``: 0, for the solve's heading search.
+    fixes : (t, positions), optional
+        Fix times (s) and navigation-frame positions (M, 2 or 3; m), for ``"fixes"``.
+    min_distance : float
+        See :func:`heading_from_positions`, m.
+    min_rest : float
+        Shortest detected interval taken by ``rest="first"``, s.
+    detector : dict, optional
+        Keyword arguments of :func:`bvpnav.detect.stationary` (``gravity`` defaults to the
+        frame options' gravity magnitude).
+
+    Returns
+    -------
+    (Rotation, dict)
+        :math:`C_0` for :func:`bvpnav.strapdown.imu_data` (``initial_attitude=``), and a record:
+        ``rest`` [t0, t1] (s), ``heading_source``, ``roll_deg``, ``pitch_deg``, ``yaw_deg``.
+
+    Notes
+    -----
+    The same numbers as the Python path, bit for bit: with :math:`f_b = R^T f_s`,
+    :math:`\omega_b = R^T \omega_s` (``body_to_sensor`` R),
+    ``align(t, f_b, stationary=(t0, t1), gyro=w_b, yaw=radians(heading) | positions=...,
+    frame=frame, gravity=|g|)``.
+    """
+    import math as _m
+
+    from scipy.spatial.transform import Rotation
+
+    from .strapdown import gravity_vector, rotation_option
+
+    opts = dict(frame_options or {})
+    if getattr(rec, "attitude", None) is not None:
+        raise InputError(f"{rec.source}: the file gives the orientation, so there is nothing to align: drop "
+                         "[align] (it is for attitudes integrated from gyro rates)")
+    if getattr(rec, "specific_force", None) is None or getattr(rec, "gyro", None) is None:
+        raise InputError(f"{rec.source}: [align] needs the strapdown channels, specific force and gyro rates "
+                         "([input] specific_force = [...] and gyro = [...]); drop [align] for "
+                         "navigation-frame accelerations")
+    fr = _frame(opts.get("frame", "enu"))
+    g = gravity_vector(opts, fr)
+    mount = (rotation_option(opts["body_to_sensor"], "body_to_sensor") if "body_to_sensor" in opts
+             else Rotation.identity())
+    t = np.asarray(rec.t, dtype=float)
+    f_b, w_b = mount.inv().apply(rec.specific_force), mount.inv().apply(rec.gyro)
+    if isinstance(rest, str):
+        if rest != "first":
+            raise InputError(f'rest = {rest!r}: give "first" (the first interval the detector finds) or '
+                             "[t0, t1] in s")
+        t0, t1 = _first_rest(t, f_b, w_b, g, min_rest, detector or {}, rec.source)
+    else:
+        t0, t1 = (float(v) for v in rest)
+    kw: dict[str, Any] = {}
+    if isinstance(heading, str):
+        if heading == "fixes":
+            if fixes is None:
+                raise InputError('heading = "fixes" needs position fixes; none given')
+            kw = {"positions": fixes[1], "position_times": fixes[0], "min_distance": min_distance}
+        elif heading == "search":
+            kw = {"yaw": 0.0}
+        else:
+            raise InputError(f"heading = {heading!r}: give a yaw in degrees or one of {sorted(HEADINGS)}")
+    else:
+        kw = {"yaw": _m.radians(float(heading))}
+    c0 = align(t, f_b, stationary=(t0, t1), gyro=w_b, frame=fr, gravity=float(np.linalg.norm(g)), **kw)
+    angles = attitude_angles(c0, fr).iloc[0]
+    record = {"rest": [t0, t1], "heading_source": heading if isinstance(heading, str) else "given",
+              "roll_deg": float(angles["roll_deg"]), "pitch_deg": float(angles["pitch_deg"]),
+              "yaw_deg": float(angles["yaw_deg"])}
+    return c0, record
+
+
+def _first_rest(t, f_b, w_b, g, min_rest: float, detector: dict, source: str) -> tuple[float, float]:
+    """The first interval at rest of at least ``min_rest`` s (:func:`bvpnav.detect.stationary`)."""
+    from . import detect
+    from .imu import ImuData
+
+    data = ImuData.from_gyro(t, f_b, w_b, gravity=g, checks=False)  # the detector needs no attitude
+    opts = {"gravity": float(np.linalg.norm(g)), **detector}
+    found = detect.stationary(data, **opts)
+    long = [(a, b) for a, b in found if b - a >= min_rest]
+    if not long:
+        seen = ", ".join(f"{a:g}..{b:g} s" for a, b in found[:5]) or "none"
+        raise InputError(f"{source}: rest = \"first\": the {opts.get('method', 'shoe')} detector found no "
+                         f"interval at rest of at least min_rest = {min_rest:g} s (found: {seen}); give the "
+                         "interval yourself, rest = [t0, t1] in s, or lower min_rest (check with `bvpnav "
+                         "stationary INPUT --spec SPEC --plot PNG`)")
+    return float(long[0][0]), float(long[0][1])

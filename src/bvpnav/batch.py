@@ -246,7 +246,6 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     # the reader first: it looks at the file's head before reading it whole, so a file that is
     # no recording (a 40 GB preallocated log, a zip) is refused at once, before it is hashed
     rec = read(path, spec.input)
-    data = rec.imu_data(spec.input)
     rec_fp = _recording_fingerprint(path)
     if before is not None and before != (rec_fp["size"], rec_fp["mtime_ns"]):
         raise InputError(f"recording {str(path)!r} changed while it was being solved; nothing was written: "
@@ -273,6 +272,7 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
         notes += list(more.notes) + said
     for note in notes:
         log.info("%s: %s", display_path(path), note)
+    data = spec.imu_data(rec, info)  # after the information files: [align] may take its heading from them
     prob = spec.build(data, info=info)
     sol = prob.solve(**solve_kwargs(spec, **over))
     now = _recording_fingerprint(path)

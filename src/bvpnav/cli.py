@@ -42,9 +42,12 @@ Start here:
   bvpnav compare rec/recording.csv --spec rec/spec.toml
   bvpnav batch recordings/ --spec spec.toml --out results/ --workers 2
 
-A recording is a CSV or Parquet file with a time column and acceleration columns; the
-spec (TOML) says which columns and units, what else is known (items), the error model,
-the solver and how to choose lambda. See `bvpnav simulate --help` for examples.
+A recording is a CSV or Parquet file (or a bag, a phone export: `bvpnav readers`) with a
+time column and navigation-frame acceleration columns, or strapdown channels (specific
+force and gyro rates in the sensor's axes, aligned from an interval at rest by the spec's
+[align]: `bvpnav solve --help`); the spec (TOML) says which columns and units, what else
+is known (items), the error model, the solver and how to choose lambda. See `bvpnav
+simulate --help` for the samples and what each writes.
 """
 
 EPILOG = ("Exit codes: 0 ok, 2 bad input, 3 infeasible or failed solve (compare: nothing verified; "
@@ -167,7 +170,8 @@ def _load(args):
     rec = read(args.input, spec.input)
     for note in rec.notes:
         _log.info("%s: %s", args.input, note)
-    return spec, spec.build(rec.imu_data(spec.input), info=rec.items_in(spec.input.get("frame", "enu")))
+    info = rec.items_in(spec.input.get("frame", "enu"))
+    return spec, spec.build(spec.imu_data(rec, info), info=info)
 
 
 def _say(args, text: str) -> None:
@@ -207,7 +211,8 @@ def _points(args) -> int | None:
 
 def read_truth(path, sol, implicit: bool = False):
     """True positions (N, d) from a truth table (``t`` and one column per axis, m; the
-    ``truth.csv`` that ``bvpnav simulate`` writes), at the solution's sample times.
+    ``truth.csv`` that ``bvpnav simulate`` writes), at the solution's sample times; (N, 2)
+    from a 2-D truth (``t, x, y``: the usual motion-capture case) of an x, y, z solution.
 
     A truth sampled at other times is interpolated linearly when it covers the
     recording's window. Raises InputError naming the file and the fix; with
@@ -227,6 +232,8 @@ def read_truth(path, sol, implicit: bool = False):
         else:
             df = pd.read_csv(path)
         axes = sol._pos_cols
+        if list(axes) == ["x", "y", "z"] and {"t", "x", "y"} <= set(df.columns) and "z" not in df.columns:
+            axes = ["x", "y"]  # a 2-D truth (motion capture): the horizontal positions are scored
         missing = [c for c in ["t", *axes] if c not in df.columns]
         if missing:
             raise InputError(f"{where}: no column(s) {missing}; it has {list(df.columns)}. A truth file has "
@@ -333,15 +340,43 @@ def _cmd_solve(args) -> int:
         _log.info("report written to %s", args.report)
     _say(args, f"{row['samples']} samples; lam = {sol.lam:.6g} ({sol.lam_rule}); solver {row['solver']} "
                f"({row['status']}, verified); wrote {args.out}")
+    for line in _align_lines(sol):
+        _say(args, line)
     if truth is not None:
-        _say(args, f"RMS position error against the truth ({truth_path}): "
-                   f"{sol.rms_error(truth):.4g} m")
+        _say(args, _truth_line(sol, truth, truth_path))
     asked = over.get("uncertainty", spec.solve.get("uncertainty"))
     for line in _uncertainty_report(sol, args.out, asked):
         _say(args, line)
     for w in sol.warnings:
         _say(args, f"warning: {w}")
     return EXIT_OK
+
+
+def _align_lines(sol) -> list[str]:
+    """The printed line about the spec's ``[align]`` (none without it)."""
+    rec = (sol.stats.get("data_checks") or {}).get("align")
+    if not rec:
+        return []
+    src = {"fixes": "from the position fixes", "search": "0, searched by the solve"}.get(
+        rec["heading_source"], "given")
+    return [f"aligned at t[0]: roll {rec['roll_deg']:.4g} deg, pitch {rec['pitch_deg']:.4g} deg from the rest "
+            f"{rec['rest'][0]:g} .. {rec['rest'][1]:g} s; yaw {rec['yaw_deg']:.4g} deg ({src})"]
+
+
+def _truth_line(sol, truth, truth_path) -> str:
+    """The printed RMS against the truth: over every axis, or horizontal for a 2-D truth of a
+    3-axis solution (:func:`bvpnav.evaluate.ape`, no alignment: ``rms_horizontal``)."""
+    import numpy as np
+
+    if truth.shape[1] == len(sol._pos_cols):
+        return f"RMS position error against the truth ({truth_path}): {sol.rms_error(truth):.4g} m"
+    from .evaluate import Trajectory, ape
+
+    pos = sol.position()
+    res = ape(Trajectory(sol.t, pos[:, :2]), Trajectory(sol.t, truth[:, :2]), align="none", max_diff=0.0)
+    return (f"horizontal RMS position error against the 2-D truth ({truth_path}: x, y only, so z is not "
+            f"scored): {res.stats()['rms_horizontal']:.4g} m (sqrt of the mean of dx^2 + dy^2; "
+            f"{np.ptp(sol.t):g} s, {len(sol.t)} samples)")
 
 
 def _cmd_stationary(args) -> int:
@@ -353,7 +388,7 @@ def _cmd_stationary(args) -> int:
            figures=("--plot",), tables=("--out",))
     spec = load_spec(args.spec)
     rec = read(args.input, spec.input)
-    data = rec.imu_data(spec.input)
+    data = spec.imu_data(rec, rec.items_in(spec.input.get("frame", "enu")))
     opts = spec.stationary_options(data)
     if args.method is not None:
         opts["method"] = args.method
@@ -476,8 +511,8 @@ def _cmd_lcurve(args) -> int:
                          progress=False if verbosity(args) < 0 else None, **kw)
     _log.info("sweep: %d lambdas in %g .. %g, %d evaluations, %.3g s (%s engine)", len(curve.lam),
               curve.lam_range[0], curve.lam_range[1], curve.evaluations, curve.seconds, curve.engine)
-    fig = curve.plot()
-    atomic_savefig(fig, args.plot, "--plot", dpi=110)
+    if args.plot:
+        atomic_savefig(curve.plot(), args.plot, "--plot", dpi=110)
     if args.out:
         write_table(curve.to_frame(), args.out, "--out")
     for r, lam in curve.chosen.items():
@@ -535,8 +570,40 @@ def _cmd_batch(args) -> int:
     return EXIT_OK if bad.empty else EXIT_SOLVE
 
 
+def _wrap(text: str, indent: int) -> str:
+    """``text`` wrapped at 88 columns, the lines after the first indented by ``indent``."""
+    import textwrap
+
+    return ("\n" + " " * indent).join(textwrap.wrap(text, 88 - indent))
+
+
+#: What ``solve --help`` says about strapdown recordings (the spec's [input] and [align]).
+STRAPDOWN_HELP = """\
+Strapdown recordings (what an IMU measures in its own axes) are read when the spec's
+[input] names the channels:
+  specific_force = ["f_x", "f_y", "f_z"]  specific force in the sensor's axes (unit =
+                                          "m/s^2", "g", ...); at rest +9.81 m/s^2 on the
+                                          axis pointing up
+  gyro = ["w_x", "w_y", "w_z"]            body rates, gyro_unit = "rad/s" or "deg/s"; the
+                                          attitude is integrated from them
+  attitude = { quaternion = [...], scalar = "first" }  or an orientation from the file
+                                          (attitude_frame = "enu"/"ned": relative to what)
+  frame = "enu"                           navigation frame: enu (x east, y north, z up) or
+                                          ned (x north, y east, z down); gravity follows
+  gravity, body_to_sensor, gyro_range     gravity magnitude or vector, the mounting
+                                          rotation, the gyro's full-scale range (rad/s)
+  initial_attitude = { euler = [...] }    the attitude at the first sample, when known
+The attitude at the first sample can instead come from an interval at rest ([align]):
+  [align]
+  rest = [0.0, 4.5]        (s; or "first": the first interval the detector finds)
+  heading = "fixes"        (from the position fixes; a yaw in degrees; or "search": the
+                            solve searches it, with an attitude_error model)
+bvpnav prints the aligned roll, pitch and yaw; `bvpnav stationary` shows the intervals at
+rest. See docs/guide/readers.md and docs/guide/strapdown.md."""
+
+
 def build_parser() -> argparse.ArgumentParser:
-    from .samples import SAMPLES
+    from .samples import SAMPLES, WRITES
 
     parser = argparse.ArgumentParser(
         prog="bvpnav", description=DESCRIPTION, epilog=EPILOG,
@@ -570,7 +637,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     def common(p, command: str | None = None):
         p.add_argument("input", metavar="INPUT", help="recording: .csv, .parquet, or any format of `bvpnav "
-                       "readers` (its [input] format, or the suffix, picks the reader)")
+                       "readers` (its [input] format, or the suffix, picks the reader): navigation-frame "
+                       "accelerations, or strapdown specific force with gyro rates or an orientation (see "
+                       "`bvpnav solve --help`)")
         p.add_argument("--spec", required=True, metavar="SPEC", help="spec file (TOML)")
         if command is not None:
             declared_flags(p, command)
@@ -578,10 +647,12 @@ def build_parser() -> argparse.ArgumentParser:
     sim = add(
         "simulate", help="write a synthetic recording and its spec",
         formatter_class=argparse.RawDescriptionHelpFormatter,
-        description="Write DIR/recording.csv (t in s, acc_<axis> in m/s^2), DIR/spec.toml (what is "
-                    "known, error model, solver, lambda rule) and DIR/truth.csv (true positions), so "
-                    "every command can be tried without data.\n\nScenarios:\n"
-                    + "\n".join(f"  {k:<14} {v.__doc__.strip().splitlines()[0]}" for k, v in SAMPLES.items()))
+        description=_wrap("Write DIR/recording.csv (the samples), DIR/spec.toml (the [input] that reads "
+                          "them, what is known, error model, solver, lambda rule) and DIR/truth.csv (t and "
+                          "the true positions per axis, m), so every command can be tried without data.", 0)
+                    + "\n\nScenarios:\n"
+                    + "\n".join(f"  {k:<14} {v.__doc__.strip().splitlines()[0]}\n{'':<17}writes "
+                                 + _wrap(WRITES[k], 17) for k, v in SAMPLES.items()))
     sim.add_argument("scenario", choices=sorted(SAMPLES), metavar="SCENARIO", help=", ".join(sorted(SAMPLES)))
     sim.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     sim.add_argument("--seed", type=int, default=0, help="noise seed (default: %(default)s)")
@@ -592,12 +663,13 @@ def build_parser() -> argparse.ArgumentParser:
 
     solve = add(
         "solve", help="solve one recording",
-        description="Solve a recording with a spec; write the trajectory (t, positions in m, "
-                    "velocities in m/s; CSV or Parquet by OUT's suffix) and a JSON summary beside it "
-                    "(lambda and rule, error-model estimates with units, solver statistics, item "
-                    "residuals). With --uncertainty (or uncertainty = true in the spec's [solve]) also "
-                    "their standard deviations. Outputs are written atomically; the input is never "
-                    "modified.")
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description=_wrap("Solve a recording with a spec; write the trajectory (t, positions in m, "
+                          "velocities in m/s; CSV or Parquet by OUT's suffix) and a JSON summary beside it "
+                          "(lambda and rule, error-model estimates with units, solver statistics, item "
+                          "residuals). With --uncertainty (or uncertainty = true in the spec's [solve]) also "
+                          "their standard deviations. Outputs are written atomically; the input is never "
+                          "modified.", 0) + "\n\n" + STRAPDOWN_HELP)
     common(solve, "solve")
     solve.add_argument("--out", required=True, metavar="OUT", help="trajectory file (.csv or .parquet)")
     solve.add_argument("--summary", metavar="JSON", help="summary path (default: OUT with .json)")
@@ -609,9 +681,10 @@ def build_parser() -> argparse.ArgumentParser:
                        "and velocity with their bands, each item's normalized residuals and the worst ones, "
                        "the estimated sensor errors, attitude corrections, the solve's record and warnings")
     solve.add_argument("--truth", metavar="FILE", help="true positions (CSV or Parquet: t in s and one "
-                       "column per axis in m, like the truth.csv `bvpnav simulate` writes): drawn on "
-                       "--plot and --report and the RMS error printed. Default with --plot or --report: "
-                       "truth.csv beside an INPUT named recording.csv, if there is one")
+                       "column per axis in m, like the truth.csv `bvpnav simulate` writes; or t, x, y only, "
+                       "a 2-D motion-capture truth of an x, y, z solution): drawn on --plot and --report "
+                       "and the RMS error printed (the horizontal RMS for a 2-D truth). Default with --plot "
+                       "or --report: truth.csv beside an INPUT named recording.csv, if there is one")
     solve.add_argument("--info", action="append", default=[], metavar="FILE",
                        help="a file of more information (e.g. an NMEA log: GNSS fixes as position items), "
                             "read by its suffix; repeat for several. Its clock is aligned explicitly: ISO "
@@ -631,11 +704,11 @@ def build_parser() -> argparse.ArgumentParser:
     solve.set_defaults(func=_cmd_solve)
 
     lc = add(
-        "lcurve", help="sweep lambda and plot the L-curve",
-        description="Sweep lambda, evaluate the selection rules and plot the L-curve with each "
-                    "rule's choice marked.")
+        "lcurve", help="sweep lambda, print each rule's choice (and plot the L-curve)",
+        description="Sweep lambda, evaluate the selection rules and print each rule's choice; with "
+                    "--plot also draw the L-curve with each choice marked, with --out write the sweep.")
     common(lc)
-    lc.add_argument("--plot", required=True, metavar="PNG", help="figure path")
+    lc.add_argument("--plot", metavar="PNG", help="also draw the L-curve (format from the suffix)")
     lc.add_argument("--rules", default=None, help="rules, comma separated (default: lcurve,gcv,quasi "
                     "for the acceleration form, lcurve,quasi for the load form, where GCV's "
                     "independence assumption fails; discrepancy needs sigma_a)")

@@ -95,13 +95,18 @@ def _truth_array(truth, sol) -> np.ndarray | None:
     from .errors import InputError
 
     if hasattr(truth, "columns"):  # a table with one column per axis (t as column or index)
-        missing = [a for a in sol._pos_cols if a not in truth.columns]
+        cols = list(sol._pos_cols)
+        if cols == ["x", "y", "z"] and {"x", "y"} <= set(truth.columns) and "z" not in truth.columns:
+            cols = ["x", "y"]  # a 2-D truth: drawn on the map and the x, y panels
+        missing = [a for a in cols if a not in truth.columns]
         if missing:
             raise InputError(f"truth: no column for axis/axes {missing}; it has {list(truth.columns)} "
                              f"(give one column per axis {sol._pos_cols}, positions in m)")
-        truth = truth[sol._pos_cols].to_numpy(dtype=float)
+        truth = truth[cols].to_numpy(dtype=float)
     arr = np.asarray(truth, dtype=float)
     n, d = len(sol.t), len(sol._pos_cols)
+    if d == 3 and arr.shape == (n, 2):  # a 2-D truth (x, y) of a 3-axis solution: no z to draw
+        arr = np.column_stack([arr, np.full(n, np.nan)])
     if arr.size != n * d:
         raise InputError(f"truth of shape {arr.shape} does not match the solution's {n} samples x "
                          f"{d} axes {sol._pos_cols}; give true positions in m at the sample times")
@@ -320,7 +325,9 @@ def solution(sol, items=None, truth=None, label: str | None = None):
         positions given on both of its axes (fixes) on the path panel.
     truth : array_like or DataFrame, optional
         True positions (m) at the sample times, shape (N,) or (N, d), or a table with one
-        column per axis (e.g. ``truth.csv`` written by ``bvpnav simulate``).
+        column per axis (e.g. ``truth.csv`` written by ``bvpnav simulate``). For an x, y, z
+        solution a 2-D truth (shape (N, 2) or a table with x and y: motion capture) is drawn
+        on the path and the x and y panels.
     label : str, optional
         Legend label of the estimate (default ``"bvpnav (<solver>)"``).
 
@@ -353,7 +360,7 @@ def solution(sol, items=None, truth=None, label: str | None = None):
             std = _std(sol, col)
             if std is not None:
                 _band(panel, t, centre, std, "C0")
-        if tru is not None:
+        if tru is not None and np.isfinite(tru[:, i]).any():  # a 2-D truth has no z
             pa.plot(t, tru[:, i], color="k", lw=2.5, alpha=0.35, label="truth", zorder=1)
         pa.set_title(f"position {a}", fontsize=10)
         va.set_title(f"velocity {a}", fontsize=10)
@@ -381,7 +388,9 @@ def solution(sol, items=None, truth=None, label: str | None = None):
         path.plot(p[:, 0], p[:, 1], color="C0", lw=1.5, label=label)
         path.plot(p[:1, 0], p[:1, 1], "o", color="C0", ms=5, label="start")
         if tru is not None:
-            path.plot(tru[:, 0], tru[:, 1], color="k", lw=2.5, alpha=0.35, label="truth", zorder=1)
+            flat = d == 3 and not np.isfinite(tru[:, 2]).any()
+            path.plot(tru[:, 0], tru[:, 1], color="k", lw=2.5, alpha=0.35,
+                      label="truth (x, y only)" if flat else "truth", zorder=1)
         path.set_title(f"path {h[0]}-{h[1]}", fontsize=10)
         path.set_xlabel(f"{h[0]} (m)")
         path.set_ylabel(f"{h[1]} (m)")

@@ -156,6 +156,20 @@ def _strapdown3d(seed: int, rate: float | None):
 #: Sample scenarios by name.
 SAMPLES = {"tikhonov2011": _tikhonov2011, "shuttle": _shuttle, "walking": _walking,
            "strapdown3d": _strapdown3d}
+#: What each sample writes: the recording's columns and what its spec holds (``bvpnav simulate
+#: --help``).
+WRITES = {
+    "tikhonov2011": "recording.csv: t (s), acc_x (m/s^2, navigation frame, 1 axis); spec: the two end "
+                    "positions (hard) and a cubic prior (soft, load form), lam = \"lcurve\"",
+    "shuttle": "recording.csv: t, acc_x (m/s^2, navigation frame); spec: end positions and velocities, "
+               "symmetry about 10 s, two stopwatch average velocities, a bias model",
+    "walking": "recording.csv: t, f_x f_y f_z (specific force, m/s^2, sensor axes), w_x w_y w_z (gyro, "
+               "rad/s); spec: [input] specific_force, gyro, frame = \"enu\", initial_attitude (the true "
+               "start), [stationary] (SHOE: a zero-velocity item per stance), the start position",
+    "strapdown3d": "recording.csv: t, f_x f_y f_z (specific force, m/s^2, body axes), qw qx qy qz (the "
+                   "orientation, body to ENU, scalar first); spec: [input] specific_force, attitude, "
+                   "attitude_frame; end positions, three velocities, scale factor + bias + unknown gravity",
+}
 #: Duration of each sample's recording, s.
 DURATIONS = {"tikhonov2011": 10.0, "shuttle": 20.0, "walking": 12.65, "strapdown3d": 20.0}
 #: Fewest samples a sample recording may have (its items need samples near both ends).

@@ -78,6 +78,7 @@ _SECTIONS = {
     "problem": {"residual", "sigma_a"},
     "solve": None,  # the declared solve options the spec takes: see _solve_keys()
     "stationary": None,  # detector options and the items' fields: see _STATIONARY_KEYS
+    "align": None,  # the initial attitude of a strapdown recording: see _ALIGN_KEYS
     "error_model": None,  # array of tables, checked per model
     "item": None,  # array of tables, checked per item
 }
@@ -88,6 +89,11 @@ _SECTIONS = {
 _STATIONARY_KEYS = {"method", "window", "threshold", "sigma_a", "sigma_w", "acc_threshold", "gyro_threshold",
                     "gravity", "min_duration"}
 _STATIONARY_ITEM_KEYS = {"sigma", "mode", "name"}
+
+#: ``[align]``: the attitude at the first sample of a recording whose attitude is integrated
+#: from gyro rates (:func:`bvpnav.align.align_recording`): roll and pitch from the interval at
+#: rest, the heading given (degrees), from the fixes, or searched by the solve.
+_ALIGN_KEYS = {"rest", "heading", "fixes", "min_distance", "min_rest"}
 
 
 def error_model_registry() -> dict[str, type]:
@@ -139,6 +145,48 @@ class Spec:
     #: ``[stationary]``: detect the stationary intervals in the recording and add a
     #: :class:`ZeroVelocity` item for each (empty: no detection). See :meth:`stationary_items`.
     stationary: dict = dataclasses.field(default_factory=dict)
+    #: ``[align]``: roll and pitch from the interval at rest, the heading given, from the fixes
+    #: or searched (empty: the attitude starts at ``[input] initial_attitude``). See :meth:`imu_data`.
+    align: dict = dataclasses.field(default_factory=dict)
+
+    def imu_data(self, rec, info=()):
+        """The recording's :class:`bvpnav.ImuData` under ``[input]``, aligned by ``[align]``.
+
+        Parameters
+        ----------
+        rec : bvpnav.readers.Recording
+        info : sequence of Item, optional
+            Items the recording and its information files hold (GNSS fixes): with the spec's
+            own, the fixes of ``heading = "fixes"``.
+
+        Notes
+        -----
+        With ``[align]``, the attitude at ``t[0]`` is :func:`bvpnav.align.align_recording`'s
+        (the detector of ``rest = "first"`` takes ``[stationary]``'s options) and the record
+        of it is ``data.checks["align"]`` (in the solution's ``stats["data_checks"]`` and the
+        JSON summary): the same numbers as ``bvpnav.align.align`` then
+        ``ImuData.from_gyro(..., initial_attitude=C0)`` in Python.
+        """
+        if not self.align:
+            return rec.imu_data(self.input)
+        from .align import align_recording
+        from .strapdown import imu_data
+
+        at = self.where.get("align", "[align]")
+        al = self.align
+        fixes = _fixes(list(self.items) + list(info), al.get("fixes"), at) if al.get("heading") == "fixes" \
+            else None
+        detector = {k: v for k, v in self.stationary.items() if k in _STATIONARY_KEYS - {"min_duration"}}
+        try:
+            c0, record = align_recording(rec, self.input, rest=al.get("rest", "first"),
+                                         heading=al.get("heading", "search"), fixes=fixes,
+                                         min_distance=al.get("min_distance", 10.0),
+                                         min_rest=al.get("min_rest", 1.0), detector=detector)
+        except InputError as exc:
+            raise InputError(f"{at}: {exc}") from None
+        data = imu_data(rec, self.input, initial_attitude=c0)
+        data.checks["align"] = record
+        return data
 
     def stationary_options(self, data) -> dict:
         """The keyword arguments of :func:`bvpnav.detect.stationary` that ``[stationary]`` gives
@@ -296,6 +344,7 @@ def _check_values(plain: dict, text: str, source: str) -> None:
     _check_solve_values(plain["solve"], at("solve"))
     _check_input_values(plain["input"], at("input"))
     _check_stationary_values(plain["stationary"], at("stationary"))
+    _check_align_values(plain["align"], plain["input"], at("align"), at("input"))
 
 
 def _check_stationary_values(tab: dict, where) -> None:
@@ -311,6 +360,101 @@ def _check_stationary_values(tab: dict, where) -> None:
     for key in ("name", "mode"):
         if key in tab and not isinstance(tab[key], str):
             raise InputError(f"{where(key)}: {key} = {tab[key]!r}; give a string, e.g. {key} = \"...\"")
+
+
+def _align_number(v, positive: bool) -> bool:
+    """Whether ``v`` is a finite real number (not a boolean), and > 0 if ``positive``."""
+    from .checks import is_real
+
+    return is_real(v) and math.isfinite(v) and (v > 0 if positive else True)
+
+
+def _check_align_values(tab: dict, inp: dict, where, where_input) -> None:
+    """Check ``[align]``'s values, and that ``[input]`` does not give the attitude too."""
+    if not tab:
+        return
+    from .align import HEADINGS
+
+    for key in ("initial_attitude", "attitude"):
+        if key in inp:
+            what = ("gives the attitude at the first sample" if key == "initial_attitude" else
+                    "reads the orientation from the file")
+            raise InputError(f"{where_input(key)}: [input] {key} {what}, and [align] computes it from the "
+                             f"interval at rest: keep one (drop {key}, or drop [align])")
+    rest = tab.get("rest", "first")
+    ok = rest == "first" or (isinstance(rest, list) and len(rest) == 2 and all(_align_number(v, False)
+                                                                                for v in rest)
+                             and rest[0] < rest[1])
+    if not ok:
+        raise InputError(f"{where('rest')}: rest = {rest!r}; give the interval at rest in s, rest = [t0, t1] "
+                         'with t0 < t1 (e.g. rest = [0.0, 4.5]), or rest = "first" (the first interval the '
+                         "stationary detector finds)")
+    heading = tab.get("heading", "search")
+    if not (_align_number(heading, False) or heading in HEADINGS):
+        raise InputError(f"{where('heading')}: heading = {heading!r}; give the yaw at the first sample in "
+                         "degrees (counterclockwise from east in ENU, clockwise from north in NED; e.g. "
+                         'heading = 30.0), "fixes" (from the position fixes) or "search" (the solve searches '
+                         "it)")
+    if "fixes" in tab and (heading != "fixes" or not isinstance(tab["fixes"], str)):
+        raise InputError(f"{where('fixes')}: fixes = {tab['fixes']!r} names the position item the heading "
+                         'comes from; it goes with heading = "fixes" and is a name, e.g. fixes = "gnss"')
+    for key, default in (("min_distance", 10.0), ("min_rest", 1.0)):
+        if key in tab and not _align_number(tab[key], True):
+            unit = "m between the fixes" if key == "min_distance" else "s, the shortest interval at rest"
+            raise InputError(f"{where(key)}: {key} = {tab[key]!r}; give a positive number ({unit}; default "
+                             f"{default:g})")
+
+
+def _check_align_models(plain: dict, models: list, text: str, source: str) -> None:
+    """``heading = "search"`` needs a solve that searches: an ``attitude_error`` model estimating
+    the heading, free (no sigma on z) or with ``[solve] attitude = {heading = "search"}``."""
+    if plain["align"].get("heading", "search") != "search":
+        return
+    from .error_models.attitude_error import AttitudeError
+
+    line = _where(source, _line_of(text, "heading", "align"))
+    asked = (plain["solve"].get("attitude") or {}).get("heading", "auto")
+    att = next((m for m in models if isinstance(m, AttitudeError) and "attitude_z" in m.names(None)), None)
+    if att is None:
+        raise InputError(f"{line}: heading = \"search\" (the default) starts from yaw 0 for the solve to search "
+                         "the heading, but no [[error_model]] estimates it: add [[error_model]] type = "
+                         '"attitude_error" (sigma = [tilt, tilt, inf]), or give the heading in degrees or '
+                         'heading = "fixes"')
+    free = not np.isfinite(att.prior_sigma(None)[att.names(None).index("attitude_z")])
+    if asked == "given" or (asked == "auto" and not free):
+        why = ("[solve] attitude has heading = \"given\"" if asked == "given" else
+               "the attitude_error model has a sigma on the heading, so the solve keeps it")
+        raise InputError(f"{line}: heading = \"search\" starts from yaw 0 for the solve to search, but {why}: "
+                         'set [solve] attitude = { heading = "search" }, or give the heading in degrees')
+
+
+def _fixes(items: list, name, at: str):
+    """(t, xy) of the position fixes for ``[align] heading = "fixes"``: the position item named
+    ``name``, or the only one with x and y."""
+    from .items import broadcast_rows
+
+    cands = []
+    for it in items:
+        if type(it).registered_name() != "position":
+            continue
+        axes = list(it.axes) if it.axes is not None else ["x", "y", "z"]
+        if "x" in axes and "y" in axes and (name is None or it.label == name):
+            cands.append((it, axes))
+    names = [it.label for it in items if type(it).registered_name() == "position"]
+    if len(cands) != 1:
+        if not cands:
+            why = (f"no position item named {name!r} with x and y" if name is not None else
+                   "no position item with x and y")
+            fix = (f"the position items are {names}" if names else "add a [[item]] type = \"position\" "
+                   "(or --info FILE with GNSS fixes)")
+        else:
+            why, fix = f"{len(cands)} position items {[c[0].label for c in cands]}", "name one: fixes = \"...\""
+        raise InputError(f'{at}: heading = "fixes": {why}; {fix}, or give the heading in degrees or '
+                         'heading = "search"')
+    it, axes = cands[0]
+    k = it.n_instants()
+    vals = broadcast_rows(it.value, k, len(axes), f"{it.label}: value", "m").reshape(k, len(axes))
+    return np.asarray(it.t, dtype=float), vals[:, [axes.index("x"), axes.index("y")]]
 
 
 def _check_problem_values(prob: dict, where) -> None:
@@ -457,7 +601,8 @@ def _parse_spec(text: str, source: str = "spec") -> Spec:
             line = _line_of(text, None, sec) or _line_of(text, sec)
             raise InputError(f"{_where(source, line)}: unknown section {sec!r}; valid sections: "
                              f"{sorted(_SECTIONS)}")
-    plain = {sec: _plain_table(doc, sec, text, source) for sec in ("input", "problem", "solve", "stationary")}
+    plain = {sec: _plain_table(doc, sec, text, source)
+             for sec in ("input", "problem", "solve", "stationary", "align")}
     _check_values(plain, text, source)
     reg_items = registry()
     reg_models = error_model_registry()
@@ -467,8 +612,11 @@ def _parse_spec(text: str, source: str = "spec") -> Spec:
     where = {k: _where(source, _line_of(text, k, sec)) for sec in ("problem", "solve") for k in plain[sec]}
     if plain["stationary"]:
         where["stationary"] = _where(source, _line_of(text, None, "stationary"))
+    if plain["align"]:
+        where["align"] = _where(source, _line_of(text, None, "align"))
+        _check_align_models(plain, objs["error_model"], text, source)
     return Spec(plain["input"], plain["problem"], plain["solve"], objs["item"], objs["error_model"], where,
-                stationary=plain["stationary"])
+                stationary=plain["stationary"], align=plain["align"])
 
 
 def _plain_table(doc: dict, sec: str, text: str, source: str) -> dict:
@@ -479,7 +627,7 @@ def _plain_table(doc: dict, sec: str, text: str, source: str) -> dict:
         raise InputError(f"{source}: [{sec}] must be a table")
     allowed = (_input_keys(tab.get("format")) if sec == "input" else
                _STATIONARY_KEYS | _STATIONARY_ITEM_KEYS if sec == "stationary" else
-               _solve_keys() if sec == "solve" else _SECTIONS[sec])
+               _solve_keys() if sec == "solve" else _ALIGN_KEYS if sec == "align" else _SECTIONS[sec])
     for key in tab:
         if key not in allowed:
             line = _line_of(text, key, sec)
@@ -633,7 +781,7 @@ def _fields_of(obj, skip=()) -> dict:
 def dumps_spec(spec: Spec) -> str:
     """TOML text for a :class:`Spec` (the inverse of :func:`parse_spec`)."""
     lines = ["# bvpnav spec (written by bvpnav)"]
-    for sec in ("input", "problem", "solve", "stationary"):
+    for sec in ("input", "problem", "solve", "stationary", "align"):
         tab = getattr(spec, sec)
         if tab:
             lines += ["", f"[{sec}]"] + [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in tab.items()]

@@ -196,7 +196,7 @@ def gravity_vector(options: Mapping[str, Any], frame: str) -> np.ndarray:
     return np.asarray(g, dtype=float)
 
 
-def imu_data(rec: Any, options: Mapping[str, Any]) -> ImuData:
+def imu_data(rec: Any, options: Mapping[str, Any], initial_attitude: Rotation | None = None) -> ImuData:
     r""":class:`bvpnav.ImuData` from a :class:`~bvpnav.readers.Recording` and the frame options.
 
     Parameters
@@ -206,6 +206,10 @@ def imu_data(rec: Any, options: Mapping[str, Any]) -> ImuData:
         imported here).
     options : mapping
         The ``[input]`` keys of :data:`FRAME_OPTIONS`; others are ignored.
+    initial_attitude : scipy.spatial.transform.Rotation, optional
+        Body-to-navigation attitude at the first sample for an attitude integrated from
+        gyro rates, instead of ``options["initial_attitude"]`` (the spec's ``[align]``
+        computes it: :func:`bvpnav.align.align_recording`); refused beside that option.
 
     Returns
     -------
@@ -283,8 +287,11 @@ def imu_data(rec: Any, options: Mapping[str, Any]) -> ImuData:
     if rec.gyro is None:
         raise InputError(f"{rec.source}: specific force without an attitude or gyro rates; give the gyro "
                          "columns ([input] gyro = [...]) or the orientation ([input] attitude = {...})")
+    if initial_attitude is not None and "initial_attitude" in used:
+        raise InputError("[input] initial_attitude and [align] both give the attitude at the first sample: "
+                         "keep one (drop initial_attitude to align from the rest interval, or drop [align])")
     c0 = (rotation_option(used["initial_attitude"], "initial_attitude") if "initial_attitude" in used
-          else None)
+          else initial_attitude)
     data = ImuData.from_gyro(rec.t, f_b, mount.inv().apply(rec.gyro), initial_attitude=c0, gravity=g,
                              checks=False)
     data.time_origin = rec.time_origin
