@@ -359,8 +359,8 @@ def _align_lines(sol) -> list[str]:
         return []
     src = {"fixes": "from the position fixes", "search": "0, searched by the solve"}.get(
         rec["heading_source"], "given")
-    return [f"aligned at t[0]: roll {rec['roll_deg']:.4g} deg, pitch {rec['pitch_deg']:.4g} deg from the rest "
-            f"{rec['rest'][0]:g} .. {rec['rest'][1]:g} s; yaw {rec['yaw_deg']:.4g} deg ({src})"]
+    return [f"aligned at t[0]: roll {rec['roll_deg']:.4g} deg, pitch {rec['pitch_deg']:.4g} deg from the "
+            f"rest {rec['rest'][0]:g} .. {rec['rest'][1]:g} s; yaw {rec['yaw_deg']:.4g} deg ({src})"]
 
 
 def _truth_line(sol, truth, truth_path) -> str:

@@ -416,16 +416,17 @@ def _check_align_models(plain: dict, models: list, text: str, source: str) -> No
     asked = (plain["solve"].get("attitude") or {}).get("heading", "auto")
     att = next((m for m in models if isinstance(m, AttitudeError) and "attitude_z" in m.names(None)), None)
     if att is None:
-        raise InputError(f"{line}: heading = \"search\" (the default) starts from yaw 0 for the solve to search "
-                         "the heading, but no [[error_model]] estimates it: add [[error_model]] type = "
-                         '"attitude_error" (sigma = [tilt, tilt, inf]), or give the heading in degrees or '
-                         'heading = "fixes"')
+        raise InputError(f"{line}: heading = \"search\" (the default) starts from yaw 0 for the solve to "
+                         "search the heading, but no [[error_model]] estimates it: add [[error_model]] "
+                         'type = "attitude_error" (sigma = [tilt, tilt, inf]), or give the heading in '
+                         'degrees or heading = "fixes"')
     free = not np.isfinite(att.prior_sigma(None)[att.names(None).index("attitude_z")])
     if asked == "given" or (asked == "auto" and not free):
         why = ("[solve] attitude has heading = \"given\"" if asked == "given" else
                "the attitude_error model has a sigma on the heading, so the solve keeps it")
-        raise InputError(f"{line}: heading = \"search\" starts from yaw 0 for the solve to search, but {why}: "
-                         'set [solve] attitude = { heading = "search" }, or give the heading in degrees')
+        raise InputError(f"{line}: heading = \"search\" starts from yaw 0 for the solve to search, but "
+                         f"{why}: " 'set [solve] attitude = { heading = "search" }, or give the heading in '
+                         "degrees")
 
 
 def _fixes(items: list, name, at: str):
@@ -448,7 +449,8 @@ def _fixes(items: list, name, at: str):
             fix = (f"the position items are {names}" if names else "add a [[item]] type = \"position\" "
                    "(or --info FILE with GNSS fixes)")
         else:
-            why, fix = f"{len(cands)} position items {[c[0].label for c in cands]}", "name one: fixes = \"...\""
+            why = f"{len(cands)} position items {[c[0].label for c in cands]}"
+            fix = 'name one: fixes = "..."'
         raise InputError(f'{at}: heading = "fixes": {why}; {fix}, or give the heading in degrees or '
                          'heading = "search"')
     it, axes = cands[0]
