@@ -18,6 +18,10 @@ Example::
     columns = { x = "acc_x" }     # axis name -> acceleration column
     unit = "m/s^2"                # m/s^2, g, mg or ft/s^2
 
+    [align]                       # optional, strapdown from gyro rates: the attitude at t[0]
+    rest = [0.0, 4.5]             # s at rest: roll and pitch (or "first": the detector's)
+    heading = "fixes"             # from the position fixes; a yaw in degrees; or "search"
+
     [problem]
     residual = "acceleration"     # or "load" (the 2011 paper's form)
     sigma_a = 1.0                 # m/s^2
