@@ -610,6 +610,23 @@ def align_recording(rec, frame_options: Any = None, *, rest: Any = "first", head
     :math:`\omega_b = R^T \omega_s` (``body_to_sensor`` R),
     ``align(t, f_b, stationary=(t0, t1), gyro=w_b, yaw=radians(heading) | positions=...,
     frame=frame, gravity=|g|)``.
+
+    Examples
+    --------
+    A triad rolled by -0.01 rad and pitched by 0.02 rad, at rest for 2 s, the heading given
+    as 30 degrees:
+
+    >>> import numpy as np
+    >>> from scipy.spatial.transform import Rotation
+    >>> from bvpnav.readers import Recording
+    >>> C = Rotation.from_euler("ZYX", [0.3, 0.02, -0.01])  # yaw, pitch, roll (rad)
+    >>> f = np.tile(C.inv().apply([0.0, 0.0, 9.80665]), (21, 1))  # at rest: -C^T g (m/s^2)
+    >>> rec = Recording(t=np.linspace(0.0, 2.0, 21), source="example", specific_force=f,
+    ...                 gyro=np.zeros((21, 3)))
+    >>> from bvpnav.align import align_recording
+    >>> c0, record = align_recording(rec, rest=(0.0, 2.0), heading=30.0)
+    >>> print({k: round(v, 4) for k, v in record.items() if k.endswith("_deg")})
+    {'roll_deg': -0.573, 'pitch_deg': 1.1459, 'yaw_deg': 30.0}
     """
     import math as _m
 
