@@ -87,6 +87,7 @@ def test_align_rest_and_fixes_matches_the_python_path(tmp_path, drive, capsys):
     true_yaw, true_pitch, true_roll = d.attitude[0].as_euler("ZYX", degrees=True)
     assert abs(rec["roll_deg"] - true_roll) < 0.05 and abs(rec["pitch_deg"] - true_pitch) < 0.05
     assert "aligned at t[0]: roll" in printed and "(from the position fixes)" in printed
+    assert rec["warning"] is None and rec["rest_mean_rate"] < 1e-3  # the stand does not turn
     # and it matters: from the identity the same spec (no [align]) is metres away
     plain = bvpnav.ImuData.from_gyro(d.t, d.specific_force, d.gyro)
     off = bvpnav.NavigationProblem(plain, error_model=Bias(), sigma_a=0.05).add(*prob.items).solve(**SOLVE)
@@ -125,6 +126,23 @@ def test_align_first_rest_and_heading_in_degrees(tmp_path, capsys):
     end, true_end = traj[["x", "y"]].to_numpy()[-1], sc.position[-1]
     turned = math.degrees(math.atan2(end[1], end[0]) - math.atan2(true_end[1], true_end[0]))
     assert abs(turned - 30.0) < 0.1 and abs(np.hypot(*end) - np.hypot(*true_end[:2])) < 0.05
+
+
+def test_align_warns_when_the_rest_interval_turns(tmp_path, drive, capsys):
+    """rest = [20, 30] s is a gentle curve (0.019 rad/s): accepted (|f| is within 5 % of g) but warned,
+    in the output and the summary, naming the interval, the rate and the fix; roll 1.3 deg off."""
+    d, fix_t, fix_p = drive
+    c0 = align(d.t, d.specific_force, stationary=(20.0, 30.0), positions=fix_p, position_times=fix_t,
+               gyro=d.gyro)
+    prob, _ = _python_path(d, c0, Bias(), _items(fix_t, fix_p))
+    spec = _spec_file(tmp_path, prob, {"rest": [20.0, 30.0], "heading": "fixes"})
+    _, summary, printed = _solve_cli(tmp_path, _recording(tmp_path, d), spec, capsys)
+    rec = summary["data_checks"]["align"]
+    assert 0.015 < rec["rest_mean_rate"] < 0.025 and "not at rest" in rec["warning"]
+    assert "warning: [align] rest 20 .. 30 s: the gyro's mean rate there is 0.0186 rad/s" in printed
+    assert "bvpnav stationary" in printed
+    true_roll = d.attitude[0].as_euler("ZYX", degrees=True)[2]
+    assert abs(rec["roll_deg"] - true_roll) > 1.0  # what the warning is about
 
 
 def test_align_heading_searched_by_the_solve(tmp_path, drive, capsys):

@@ -71,6 +71,10 @@ HEADINGS = {"fixes": "the direction of travel between the first position fixes m
 
 #: Relative departure of the mean specific force's magnitude from g accepted as "at rest".
 GRAVITY_TOLERANCE = 0.05
+#: Mean gyro rate over a rest interval above which :func:`align_recording` warns that the
+#: sensor turns there, rad/s (0.57 deg/s: above consumer gyro biases, 5e-3 rad/s; a car's
+#: gentle curve at 15 m/s turning this fast pulls about 0.9 deg into the roll).
+REST_RATE = 0.01
 
 
 def _frame(frame: Any) -> str:
@@ -602,7 +606,10 @@ def align_recording(rec, frame_options: Any = None, *, rest: Any = "first", head
     -------
     (Rotation, dict)
         :math:`C_0` for :func:`bvpnav.strapdown.imu_data` (``initial_attitude=``), and a record:
-        ``rest`` [t0, t1] (s), ``heading_source``, ``roll_deg``, ``pitch_deg``, ``yaw_deg``.
+        ``rest`` [t0, t1] (s), ``heading_source``, ``roll_deg``, ``pitch_deg``, ``yaw_deg``,
+        ``rest_mean_rate`` (the norm of the mean gyro rate over the interval, rad/s) and
+        ``warning`` (None, or the message issued when that rate exceeds :data:`REST_RATE`:
+        an interval that turns is not at rest).
 
     Notes
     -----
@@ -625,8 +632,8 @@ def align_recording(rec, frame_options: Any = None, *, rest: Any = "first", head
     ...                 gyro=np.zeros((21, 3)))
     >>> from bvpnav.align import align_recording
     >>> c0, record = align_recording(rec, rest=(0.0, 2.0), heading=30.0)
-    >>> print({k: round(v, 4) for k, v in record.items() if k.endswith("_deg")})
-    {'roll_deg': -0.573, 'pitch_deg': 1.1459, 'yaw_deg': 30.0}
+    >>> print({k: round(v, 4) for k, v in record.items() if k.endswith("_deg")}, record["warning"])
+    {'roll_deg': -0.573, 'pitch_deg': 1.1459, 'yaw_deg': 30.0} None
     """
     import math as _m
 
@@ -669,9 +676,20 @@ def align_recording(rec, frame_options: Any = None, *, rest: Any = "first", head
         kw = {"yaw": _m.radians(float(heading))}
     c0 = align(t, f_b, stationary=(t0, t1), gyro=w_b, frame=fr, gravity=float(np.linalg.norm(g)), **kw)
     angles = attitude_angles(c0, fr).iloc[0]
+    rows = (t >= t0) & (t <= t1)
+    turning = float(np.linalg.norm(w_b[rows].mean(axis=0)))
+    warning = None
+    if turning > REST_RATE:
+        warning = (f"[align] rest {t0:g} .. {t1:g} s: the gyro's mean rate there is {turning:.3g} rad/s, "
+                   f"more than {REST_RATE:g} rad/s (a gyro bias is smaller): the sensor turns, so it is not "
+                   "at rest and the roll and pitch taken from it hold the motion's acceleration; give an "
+                   "interval where it stands still (`bvpnav stationary INPUT --spec SPEC` lists them)")
+        from .log import warn
+
+        warn(warning)
     record = {"rest": [t0, t1], "heading_source": heading if isinstance(heading, str) else "given",
               "roll_deg": float(angles["roll_deg"]), "pitch_deg": float(angles["pitch_deg"]),
-              "yaw_deg": float(angles["yaw_deg"])}
+              "yaw_deg": float(angles["yaw_deg"]), "rest_mean_rate": turning, "warning": warning}
     return c0, record
 
 
