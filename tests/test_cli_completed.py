@@ -210,8 +210,10 @@ def test_truth_2d_for_a_3_axis_solution(tmp_path, drive, capsys):
     pd.DataFrame({"t": d.t, "x": d.position[:, 0], "y": d.position[:, 1]}).to_csv(truth, index=False,
                                                                                  float_format="%.17g")
     png = tmp_path / "traj.png"
+    html = tmp_path / "report.html"
     _, _, printed = _solve_cli(tmp_path, _recording(tmp_path, d), spec, capsys, "--truth", str(truth),
-                               "--plot", str(png))
+                               "--plot", str(png), "--report", str(html))
+    assert html.read_text().count("data:image/png;base64") >= 2  # the report draws with the 2-D truth too
     want = float(np.sqrt(np.mean(np.sum((sol.position()[:, :2] - d.position[:, :2]) ** 2, axis=1))))
     assert 0.1 < want < 20.0
     from bvpnav.evaluate import ape, read_trajectory

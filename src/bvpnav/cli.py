@@ -340,10 +340,8 @@ def _cmd_solve(args) -> int:
         _log.info("report written to %s", args.report)
     _say(args, f"{row['samples']} samples; lam = {sol.lam:.6g} ({sol.lam_rule}); solver {row['solver']} "
                f"({row['status']}, verified); wrote {args.out}")
-    for line in _align_lines(sol):
+    for line in _align_lines(sol) + ([] if truth is None else [_truth_line(sol, truth, truth_path)]):
         _say(args, line)
-    if truth is not None:
-        _say(args, _truth_line(sol, truth, truth_path))
     asked = over.get("uncertainty", spec.solve.get("uncertainty"))
     for line in _uncertainty_report(sol, args.out, asked):
         _say(args, line)
