@@ -20,6 +20,7 @@ import zipfile
 from pathlib import Path
 
 import pytest
+from _docs_only import environment as docs_only_environment
 from _hostile import assert_unchanged, snapshot
 
 try:
@@ -34,6 +35,9 @@ ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 TUTORIAL = ROOT / "examples" / "tutorial"
 SCRIPTS = sorted(TUTORIAL.glob("[0-9][0-9]_*.py"))
+GALLERY = sorted((ROOT / "examples" / "gallery").glob("[a-z]*.py"))
+#: Hand-written pages that myst-nb executes (their code cells show output and a figure).
+EXECUTED_GUIDES = ["getting_started", "guide/strapdown", "guide/readers"]
 GUIDES = ["items", "error_models", "solvers", "lambda", "uncertainty", "files_cli", "batch", "strapdown",
           "readers",
           "safety"]
@@ -63,6 +67,8 @@ def site(tmp_path_factory):
     files_before = _files(ROOT / "examples") | _files(DOCS)
     env = dict(os.environ, BVPNAV_SMALL="1", MPLBACKEND="Agg")
     env.pop("BVPNAV_DOCS_EXECUTE", None)
+    # Only what bvpnav[docs] installs is importable, in the build and in its kernels.
+    env.update(docs_only_environment(base / "docs-only"))
     for var in ("http_proxy", "https_proxy", "HTTP_PROXY", "HTTPS_PROXY", "all_proxy", "ALL_PROXY"):
         env[var] = NO_NETWORK
     env.pop("no_proxy", None)
@@ -90,6 +96,42 @@ def test_every_tutorial_script_is_linked_into_the_gallery():
         assert link.resolve() == script.resolve(), f"docs/tutorials/{script.name} does not point at {script}"
     linked = sorted(p.name for p in (DOCS / "tutorials").glob("[0-9][0-9]_*.py"))
     assert linked == [p.name for p in SCRIPTS], "docs/tutorials links a script that examples/tutorial lacks"
+
+
+def test_every_gallery_script_is_linked_into_the_gallery():
+    """A gallery page per use; each script in examples/gallery has its link in docs/gallery."""
+    assert [p.stem for p in GALLERY] == sorted(
+        ["vehicle_with_fixes", "walker_with_stances", "lambda_study", "solver_comparison"])
+    linked = sorted((DOCS / "gallery").glob("[a-z]*.py"))
+    assert [p.name for p in linked] == [p.name for p in GALLERY]
+    for link in linked:
+        assert link.is_symlink() and link.resolve() == (ROOT / "examples" / "gallery" / link.name).resolve()
+
+
+def _figures(site: Path, page: str) -> list[Path]:
+    html = (site / f"{page}.html").read_text()
+    folder = (site / page).parent
+    return [(folder / src).resolve() for src in re.findall(r'<img[^>]+src="([^"]+\.png)"', html)]
+
+
+@pytest.mark.parametrize("page", EXECUTED_GUIDES + [f"gallery/{p.stem}" for p in GALLERY])
+def test_guides_and_gallery_show_output_and_figures(site, page):
+    """The guides and the gallery pages were executed: printed output, figures, no traceback."""
+    html = (site / f"{page}.html").read_text()
+    assert "cell_output" in html and "Traceback" not in html
+    figures = _figures(site, page)
+    assert figures, f"{page}: no figure on the page"
+    for png in figures:
+        assert png.is_file() and png.stat().st_size > 5000, png
+    if page.startswith("gallery/") and page != "gallery/solver_comparison":
+        assert len(figures) >= 2, f"{page}: its main figures ({len(figures)} shown)"
+
+
+def test_index_routes_a_recording_to_the_readers_and_strapdown_guides(site):
+    html = (site / "index.html").read_text()
+    line = re.search(r"Have a recording.*?</li>", html, re.DOTALL).group(0)
+    assert 'href="guide/readers.html"' in line and 'href="guide/strapdown.html"' in line, line
+    assert 'href="gallery/index.html"' in html
 
 
 def test_key_pages_exist(site):
@@ -124,6 +166,68 @@ def test_api_reference_is_recursive_over_every_public_module(site):
     assert {"bvpnav.problem", "bvpnav.error_models.bias", "bvpnav.constraints.position"} <= names
     missing = sorted(n for n in names if not (site / "api" / "generated" / f"{n}.html").is_file())
     assert not missing, missing
+
+
+def _public_modules() -> list[str]:
+    import bvpnav
+    import bvpnav.constraints
+
+    names = {"bvpnav", "bvpnav.constraints"}
+    for pkg in (bvpnav, bvpnav.constraints):
+        for info in pkgutil.walk_packages(pkg.__path__, prefix=pkg.__name__ + "."):
+            if not any(part.startswith("_") for part in info.name.split(".")):
+                names.add(info.name)
+    return sorted(names)
+
+
+def test_api_index_lists_every_module(site):
+    """The API index links every public module's page (not only the two top packages)."""
+    html = (site / "api" / "index.html").read_text()
+    linked = set(re.findall(r'href="generated/([\w.]+)\.html(?:#[\w.-]*)?"', html))
+    names = _public_modules()
+    assert {"bvpnav.evaluate", "bvpnav.linalg", "bvpnav.solve", "bvpnav.readers", "bvpnav.lam",
+            "bvpnav.backends", "bvpnav.error_models.bias", "bvpnav.constraints.position"} <= set(names)
+    missing = sorted(set(names) - linked)
+    assert not missing, f"modules without a row on the API index: {missing}"
+
+
+def _resolve(dotted: str):
+    import importlib
+
+    parts = dotted.split(".")
+    for k in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:k]))
+        except ImportError:
+            continue
+        for part in parts[k:]:
+            obj = getattr(obj, part)
+        return obj
+    raise ImportError(dotted)
+
+
+@pytest.mark.parametrize("module", _public_modules())
+def test_every_module_page_links_to_the_objects_it_defines(site, module):
+    """Each class and function a module defines (and exports) is a link on the module's page to
+    the one place it is described: an anchor with that object's id, on a page that has it."""
+    import importlib
+    import inspect
+
+    mod = importlib.import_module(module)
+    names = getattr(mod, "__all__", None) or [k for k in vars(mod) if not k.startswith("_")]
+    defined = {k: getattr(mod, k) for k in names if hasattr(mod, k)}
+    defined = {k: v for k, v in defined.items()
+               if (inspect.isclass(v) or inspect.isfunction(v)) and getattr(v, "__module__", "") == module}
+    html = (site / "api" / "generated" / f"{module}.html").read_text()
+    links = re.findall(r'<a class="reference internal" href="([\w.]*)#([\w.]+)"', html)
+    unlinked = []
+    for k, obj in defined.items():
+        targets = [(page or f"{module}.html", anchor) for page, anchor in links if anchor.endswith("." + k)]
+        good = [t for t in targets if _resolve(t[1]) is obj
+                and f'id="{t[1]}"' in (site / "api" / "generated" / t[0]).read_text()]
+        if not good:
+            unlinked.append(k)
+    assert not unlinked, f"{module}: no link to the description of {unlinked}"
 
 
 @pytest.mark.parametrize("script", SCRIPTS, ids=[p.stem for p in SCRIPTS])
@@ -196,7 +300,9 @@ sys.exit(1 if failed else 0)
 
 
 def _python_blocks(page: Path) -> list[str]:
-    return re.findall(r"^```python\n(.*?)^```", page.read_text(), re.MULTILINE | re.DOTALL)
+    """The ``python`` blocks of a page, and the code cells of a page that myst-nb executes."""
+    return re.findall(r"^```(?:python|\{code-cell\} ipython3)\n(.*?)^```", page.read_text(),
+                      re.MULTILINE | re.DOTALL)
 
 
 def test_code_on_the_pages_runs(tmp_path):
@@ -209,7 +315,10 @@ def test_code_on_the_pages_runs(tmp_path):
     assert {"getting_started.md", "guide/items.md", "guide/strapdown.md"} <= set(pages)
     before = _sources(ROOT / "examples", DOCS)
     env = dict(os.environ, BVPNAV_SMALL="1", MPLBACKEND="Agg")
-    proc = subprocess.run([sys.executable, "-c", _RUN_BLOCKS], input=json.dumps(pages), cwd=tmp_path,
+    env.update(docs_only_environment(tmp_path / "docs-only"))  # only what bvpnav[docs] installs
+    run = tmp_path / "run"
+    run.mkdir()
+    proc = subprocess.run([sys.executable, "-c", _RUN_BLOCKS], input=json.dumps(pages), cwd=run,
                           env=env, capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr[-6000:]
     assert_unchanged(before)

@@ -1,0 +1,1 @@
+../../examples/gallery/lambda_study.py

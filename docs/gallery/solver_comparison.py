@@ -1,0 +1,1 @@
+../../examples/gallery/solver_comparison.py

@@ -1,0 +1,1 @@
+../../examples/gallery/vehicle_with_fixes.py

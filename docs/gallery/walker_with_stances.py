@@ -1,0 +1,1 @@
+../../examples/gallery/walker_with_stances.py
