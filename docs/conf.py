@@ -87,7 +87,7 @@ autosummary_ignore_module_all = True
 # Each object is described once, under its shortest public name (the module template
 # passes these to :exclude-members:; see bvpnav_docs.documented_elsewhere).
 autosummary_context = {"documented_elsewhere": bvpnav_docs.documented_elsewhere(),
-                       # each module page's table links every object it defines to its description
+                       # each module page's Summary links every class and function it defines to its description
                        "module_objects": bvpnav_docs.module_objects()}
 autodoc_default_options = {"members": True, "show-inheritance": True}
 autodoc_member_order = "bysource"

@@ -82,17 +82,18 @@ def documented_elsewhere() -> dict[str, list[str]]:
 
 
 def _summarised(obj) -> bool:
-    """Classes and functions get a row (a constant's table row would show its type's docstring)."""
-    return inspect.isclass(obj) or inspect.isroutine(obj)
+    """Classes and functions are listed (constants are described where they are, with their comment)."""
+    return (inspect.isclass(obj) or inspect.isroutine(obj)) and bool(obj.__doc__)  # undocumented: no page
 
 
 def module_objects() -> dict[str, list[str]]:
     """Per module, each object its page lists, as the full name it is described under.
 
-    A module page's table links every class and function the module exports (or defines,
-    without an ``__all__``) to its one description: on the page itself, or under the shortest public
-    name given by :func:`documented_elsewhere` (``bvpnav.constraints.position`` lists
-    ``bvpnav.constraints.Position``). Names are prefixed with ``~`` so the table shows the
+    A module page's "Summary" links every class and function the module exports (or
+    defines, without an ``__all__``) to its one description: on the page itself, or under
+    the shortest public name given by :func:`documented_elsewhere`
+    (``bvpnav.constraints.position`` lists ``bvpnav.constraints.Position``). The module
+    template writes them as cross-references (``:py:obj:`~name```), so the page shows each
     object's own name.
     """
     elsewhere = documented_elsewhere()
@@ -114,10 +115,7 @@ def module_objects() -> dict[str, list[str]]:
 
     out: dict[str, list[str]] = {}
     for name, mod in modules.items():
-        # (a name under the page's own module is given relative to it, as autosummary asks)
-        shown = [k for k in _members(name, mod) if _summarised(getattr(mod, k, None))]
-        rows = [(full[len(name) + 1:] if full.startswith(name + ".") else f"~{full}")
-                for full in (home(name, k) for k in shown)]
+        rows = [home(name, k) for k in _members(name, mod) if _summarised(getattr(mod, k, None))]
         if rows:
             out[name] = rows
     return out
