@@ -123,8 +123,9 @@ def test_guides_and_gallery_show_output_and_figures(site, page):
     assert figures, f"{page}: no figure on the page"
     for png in figures:
         assert png.is_file() and png.stat().st_size > 5000, png
-    if page.startswith("gallery/") and page != "gallery/solver_comparison":
-        assert len(figures) >= 2, f"{page}: its main figures ({len(figures)} shown)"
+    if page.startswith("gallery/"):  # the use's own figure and its report's main figures
+        assert len(figures) >= 3, f"{page}: its main figures ({len(figures)} shown)"
+        assert "report figures: " in html and "solution" in html
 
 
 def test_index_routes_a_recording_to_the_readers_and_strapdown_guides(site):

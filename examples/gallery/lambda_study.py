@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 
 import bvpnav
-from bvpnav import plot
+from bvpnav import plot, report
 from bvpnav.constraints import Position
 from bvpnav.scenarios import tikhonov2011
 
@@ -47,10 +47,18 @@ best = table.set_index("rule")["RMS error (m)"]
 assert best["lcurve"] < 0.5 and best["lcurve"] < best["discrepancy"]
 
 # %% [markdown]
-# The L-curve with each rule's choice marked, and the error of each choice against time:
+# A solve that lets the L-curve choose (`lam="lcurve"`) keeps its curve; the main figures
+# of its quality report ({func}`bvpnav.report.figures`) are the solution with the truth,
+# the normalized residuals and the L-curve with the chosen $\lambda$:
 
 # %%
-fig = plot.lcurve(curve)
+sol = prob.solve(lam="lcurve")
+figures = report.figures(sol, items=prob.items, truth=sc.position)
+print("report figures:", ", ".join(figures))
+assert "lcurve" in figures
+
+# %% [markdown]
+# The error of each rule's choice against time:
 
 # %%
 fig = plot.errors({f"{rule} (λ = {curve.chosen[rule]:.3g})": s for rule, s in solutions.items()},

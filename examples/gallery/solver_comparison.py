@@ -24,7 +24,7 @@ import os
 import numpy as np
 
 import bvpnav
-from bvpnav import detect, plot
+from bvpnav import detect, plot, report
 from bvpnav.constraints import Position
 from bvpnav.scenarios import walking
 
@@ -48,3 +48,11 @@ assert np.ptp(ok.rms_error) < 1e-3
 
 # %%
 fig = plot.comparison(table)
+
+# %% [markdown]
+# The direct back end's answer, in the main figures of its quality report
+# ({func}`bvpnav.report.figures`): the map, the solution and the normalized residuals.
+
+# %%
+figures = report.figures(prob.solve(solver="direct", lam=1.0), items=prob.items, truth=sc.position)
+print("report figures:", ", ".join(figures))

@@ -24,7 +24,7 @@ import os
 import numpy as np
 
 import bvpnav
-from bvpnav import evaluate, plot
+from bvpnav import evaluate, report
 from bvpnav.constraints import Position
 from bvpnav.error_models import Bias
 from bvpnav.scenarios import car_drive
@@ -43,10 +43,16 @@ print(f"{kept.sum()} fixes used, {outage.sum()} withheld from {drive.fix_t[outag
       f"to {drive.fix_t[outage][-1]:.0f} s")
 
 # %% [markdown]
-# The solution, with the fixes drawn where they act and the truth dashed:
+# The main figures of the solution's quality report ({func}`bvpnav.report.figures`, the
+# figures `sol.report("report.html")` embeds): the map with the fixes and the truth, the
+# position and velocity with their ±2σ bands (wider in the outage), each fix's normalized
+# residual, and the estimated sensor errors with their standard deviations.
 
 # %%
-fig = plot.solution(sol, items=prob.items, truth=drive.position)
+figures = report.figures(sol, items=prob.items, truth=drive.position)
+print("report figures:", ", ".join(figures))
+assert {"map", "solution", "residuals"} <= set(figures)
+sol.report("vehicle_report.html", items=prob.items, truth=drive.position)   # the whole report, one file
 
 # %% [markdown]
 # The absolute trajectory error with no alignment (the fixes fix the frame), over the

@@ -25,7 +25,7 @@ import os
 import numpy as np
 
 import bvpnav
-from bvpnav import detect, evaluate, plot
+from bvpnav import detect, evaluate, plot, report
 from bvpnav.constraints import Position
 from bvpnav.scenarios import walking
 
@@ -58,7 +58,16 @@ walked = float(np.sum(np.linalg.norm(np.diff(sc.position, axis=0), axis=1)))
 print(f"{walked:.1f} m walked; RMS position error {rms['stances']:.3f} m with the stances, "
       f"{rms['ends only']:.2f} m with the still ends alone")
 assert rms["stances"] < 0.1 and rms["stances"] < rms["ends only"] / 1.5
-fig = plot.solution(sol, items=[start, *stances], truth=sc.position)
+
+# %% [markdown]
+# The main figures of its quality report ({func}`bvpnav.report.figures`): the map, the
+# solution with one legend entry for all the stances, and each item's normalized
+# residuals.
+
+# %%
+figures = report.figures(sol, items=[start, *stances], truth=sc.position)
+print("report figures:", ", ".join(figures))
+assert {"map", "solution", "residuals"} <= set(figures)
 
 # %% [markdown]
 # The absolute trajectory error after a rigid alignment (as a motion-capture truth would
