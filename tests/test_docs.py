@@ -98,6 +98,21 @@ def test_every_tutorial_script_is_linked_into_the_gallery():
     assert linked == [p.name for p in SCRIPTS], "docs/tutorials links a script that examples/tutorial lacks"
 
 
+def test_docs_only_environment_blocks_exactly_what_the_extra_does_not_install():
+    """The site fixture's guard: with [docs] the readers' packages and Sphinx are importable and the
+    test-only ones are not; an extra without them (parquet) would block rosbags, as a fresh venv
+    with the old [docs] lacked it (tutorial 08 then fails with a ModuleNotFoundError naming it)."""
+    from _docs_only import blocked_modules, docs_closure
+
+    closure = docs_closure("docs")
+    assert {"sphinx", "myst-nb", "rosbags", "pynmea2", "pymap3d", "cvxpy"} <= closure
+    assert not {"pytest", "pyarrow", "evo", "hypothesis"} & closure
+    blocked = set(blocked_modules("docs"))
+    assert {"pytest", "pyarrow", "evo"} <= blocked
+    assert not {"rosbags", "pynmea2", "pymap3d", "sphinx", "myst_nb", "numpy"} & blocked
+    assert {"rosbags", "sphinx", "pynmea2"} <= set(blocked_modules("parquet"))
+
+
 def test_every_gallery_script_is_linked_into_the_gallery():
     """A gallery page per use; each script in examples/gallery has its link in docs/gallery."""
     assert [p.stem for p in GALLERY] == sorted(
