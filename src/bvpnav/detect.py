@@ -68,6 +68,10 @@ __all__ = [
     "MAGNITUDE_ACC_THRESHOLD",
     "MAGNITUDE_GYRO_THRESHOLD",
     "DEFAULT_WINDOW",
+    "ADAPTIVE_SPAN",
+    "ADAPTIVE_ABOVE_MIN",
+    "ADAPTIVE_BELOW_MAX",
+    "adaptive_threshold",
     "stationary",
     "stationary_mask",
     "shoe_statistic",
@@ -101,6 +105,17 @@ MAGNITUDE_GYRO_THRESHOLD = 0.5
 #: Default window length W, samples (OpenShoe's setting).
 DEFAULT_WINDOW = 3
 
+#: Adaptive SHOE threshold (``threshold="adaptive"``): the span of the running minimum
+#: and maximum of the statistic around each sample, s (about one to two strides, so that
+#: every stride's stance and swing lie in it at any sampling rate).
+ADAPTIVE_SPAN = 1.5
+#: Adaptive threshold: decades above the running minimum of the statistic (the stance of
+#: the stride at hand) that still count as stance.
+ADAPTIVE_ABOVE_MIN = 1.0
+#: Adaptive threshold: decades below the running maximum (the swing peak) that the
+#: threshold never exceeds.
+ADAPTIVE_BELOW_MAX = 2.0
+
 #: Window rows computed at once (bounds the temporaries to about 8 MB).
 _BLOCK_VALUES = 1 << 20
 
@@ -119,8 +134,9 @@ class Detection:
         Per-sample statistic: the smallest statistic of the windows holding the sample
         (SHOE: dimensionless :math:`T`; magnitude: the larger of the two ratios
         statistic / threshold). ``mask == (statistic < threshold)``.
-    threshold : float
-        The threshold the statistic was compared with (1 for ``"magnitude"``).
+    threshold : float or ndarray, shape (N,)
+        The threshold the statistic was compared with (1 for ``"magnitude"``; one per
+        sample with ``threshold="adaptive"``).
     method : str
     window : int
         Window length W in samples.
@@ -141,10 +157,65 @@ class Detection:
     intervals: list
     mask: np.ndarray
     statistic: np.ndarray
-    threshold: float
+    threshold: Any
     method: str
     window: int
     params: dict
+
+    def report(self, t=None) -> dict:
+        """What was found, in plain numbers: the intervals, their durations and the share still.
+
+        Parameters
+        ----------
+        t : array_like, shape (N,), optional
+            The sample times, s (for the share of the recording's duration); without
+            them the share is of the samples.
+
+        Returns
+        -------
+        dict
+            ``intervals`` (count), ``still_samples``, ``samples``, ``still_share``
+            (0..1), ``duration_s`` (``min``, ``median``, ``max`` of the intervals, s),
+            ``gap_s`` (longest time between consecutive intervals, s), ``threshold``
+            (``min``, ``median``, ``max`` of the threshold used), ``method``, ``window``,
+            and ``text``: one line saying it.
+
+        Examples
+        --------
+        >>> from bvpnav import detect, scenarios
+        >>> walk = scenarios.walking(rate=100.0, n_strides=2)
+        >>> rep = detect.stationary(walk.data, return_statistic=True).report()
+        >>> rep["intervals"], rep["still_samples"], rep["samples"], round(rep["gap_s"], 2)
+        (3, 345, 462, 0.6)
+        >>> rep["text"][:62]
+        'shoe (W = 3): 3 stationary intervals, 345 of 462 samples (74.7'
+        """
+        d = np.array([b - a for a, b in self.intervals]) if self.intervals else np.zeros(0)
+        gaps = np.array([b[0] - a[1] for a, b in zip(self.intervals[:-1], self.intervals[1:], strict=True)])
+        thr = np.atleast_1d(np.asarray(self.threshold, dtype=float))
+        n, still = int(self.mask.size), int(np.count_nonzero(self.mask))
+        share = still / max(n, 1)
+        if t is not None:
+            tt = np.asarray(t, dtype=float)
+            share = float(np.sum(np.diff(tt)[self.mask[:-1] & self.mask[1:]]) / max(tt[-1] - tt[0], 1e-300))
+        def q(x):
+            if not x.size:
+                return {"min": np.nan, "median": np.nan, "max": np.nan}
+            return {"min": float(x.min()), "median": float(np.median(x)), "max": float(x.max())}
+
+        out = {"intervals": len(self.intervals), "still_samples": still, "samples": n,
+               "still_share": float(share),
+               "duration_s": q(d), "gap_s": float(gaps.max()) if gaps.size else 0.0, "threshold": q(thr),
+               "method": self.method, "window": self.window}
+        tq = out["threshold"]
+        ttxt = (f"{tq['min']:.3g}" if tq["min"] == tq["max"] else
+                f"{tq['min']:.3g}..{tq['max']:.3g} (median {tq['median']:.3g}, adaptive)")
+        dq = out["duration_s"]
+        out["text"] = (f"{self.method} (W = {self.window}): {len(self.intervals)} stationary intervals, "
+                       f"{still} of {n} samples ({100 * still / max(n, 1):.1f} %); "
+                       f"durations {dq['min']:.2g}..{dq['max']:.3g} s "
+                       f"(median {dq['median']:.2g} s); longest gap {out['gap_s']:.2g} s; threshold {ttxt}")
+        return out
 
 
 # ----------------------------------------------------------------- statistics
@@ -357,7 +428,14 @@ def _settings(method: str, threshold, sigma_a, sigma_w, acc_threshold, gyro_thre
         if given:
             raise InputError(f"{', '.join(given)}: settings of method='magnitude'; SHOE takes threshold= "
                              "(gamma), sigma_a= (m/s^2) and sigma_w= (rad/s)")
-        return {"threshold": _positive("threshold", SHOE_THRESHOLD if threshold is None else threshold, "1"),
+        if isinstance(threshold, str):
+            if threshold != "adaptive":
+                raise InputError(f"threshold={threshold!r}: give gamma as a number > 0 (dimensionless), "
+                                 "or 'adaptive' (a threshold from the recording's own statistic)")
+            thr: Any = "adaptive"
+        else:
+            thr = _positive("threshold", SHOE_THRESHOLD if threshold is None else threshold, "1")
+        return {"threshold": thr,
                 "sigma_a": _positive("sigma_a", SHOE_SIGMA_A if sigma_a is None else sigma_a, "m/s^2"),
                 "sigma_w": _positive("sigma_w", SHOE_SIGMA_W if sigma_w is None else sigma_w, "rad/s")}
     given = [k for k, v in {"threshold": threshold, "sigma_a": sigma_a, "sigma_w": sigma_w}.items()
@@ -382,6 +460,84 @@ def _settings(method: str, threshold, sigma_a, sigma_w, acc_threshold, gyro_thre
                              "with ImuData.from_gyro(t, specific_force, gyro), or give gyro_threshold=None "
                              "for the acceleration-only test")
     return {"acc_threshold": acc, "gyro_threshold": gyr, "threshold": 1.0}
+
+
+def _running(x: np.ndarray, n: int, how: str) -> np.ndarray:
+    """Centred running minimum or maximum of ``x`` over ``n`` samples (shorter at the ends)."""
+    half = n // 2
+    fill = np.inf if how == "min" else -np.inf
+    views = sliding_window_view(np.concatenate([np.full(half, fill), x, np.full(n - 1 - half, fill)]), n)
+    out = np.empty(x.size)
+    for sl in _window_blocks(views.shape[0], n):
+        out[sl] = views[sl].min(axis=1) if how == "min" else views[sl].max(axis=1)
+    return out
+
+
+def adaptive_threshold(t, statistic, *, span: float = ADAPTIVE_SPAN, above_min: float = ADAPTIVE_ABOVE_MIN,
+                       below_max: float = ADAPTIVE_BELOW_MAX, floor: float = SHOE_THRESHOLD) -> np.ndarray:
+    r"""A per-sample SHOE threshold from the recording's own statistic (walking and running).
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Sample times, s.
+    statistic : array_like, shape (N,)
+        The per-sample SHOE statistic (:attr:`Detection.statistic`), dimensionless, > 0.
+    span : float
+        Length of the running minimum and maximum around each sample, s.
+    above_min : float
+        Decades above the running minimum that count as stance.
+    below_max : float
+        Decades below the running maximum that the threshold never exceeds.
+    floor : float
+        A statistic below this is stationary anywhere (the fixed threshold).
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        The threshold :math:`\gamma_k` of every sample (dimensionless).
+
+    Notes
+    -----
+    With :math:`s_k = \log_{10} T_k`, its running minimum :math:`m_k` and maximum
+    :math:`M_k` over ``span`` seconds centred on sample :math:`k`,
+
+    .. math:: \log_{10}\gamma_k = \maxigl(\min(m_k + a,\; M_k - b),\; \log_{10}\gamma_0igr),
+
+    :math:`a` = ``above_min``, :math:`b` = ``below_max``, :math:`\gamma_0` = ``floor``.
+    Each stride's stance is the valley of the statistic between two swings, whose depth
+    depends on the gait: walking stances reach :math:`10^{2}..10^{4.5}` with OpenShoe's
+    noise settings, running stances only :math:`10^{5}..10^{5.6}` (heel strike, a short
+    stance), the swings :math:`10^{7}..10^{8}`. A fixed :math:`\gamma` that suits one gait
+    misses the other's stances; relative to the stride at hand (its valley, bounded by its
+    swing peaks) one setting holds for both, and at any rate, since the span is in
+    seconds. Where the foot stands for longer than the span, :math:`\gamma_0` decides.
+
+    Examples
+    --------
+    A valley of :math:`10^{5}` between swings of :math:`10^{7.5}`, above the fixed
+    threshold 3e4, is a stance here:
+
+    >>> import numpy as np
+    >>> from bvpnav.detect import adaptive_threshold
+    >>> t = np.arange(300) * 0.01
+    >>> s = np.full(300, 10**7.5)
+    >>> s[140:160] = 1e5
+    >>> gamma = adaptive_threshold(t, s)
+    >>> int(np.count_nonzero(s < gamma)), float(np.log10(gamma[150]))
+    (20, 5.5)
+    """
+    t = np.asarray(t, dtype=float)
+    stat = np.asarray(statistic, dtype=float)
+    span = _positive("span", span, "s")
+    floor = _positive("floor", floor, "1")
+    if t.size < 2:
+        return np.full(stat.shape, floor)
+    step = float(np.median(np.diff(t)))
+    n = max(1, int(round(span / step)))
+    s = np.log10(np.maximum(stat, np.finfo(float).tiny))
+    lo, hi = _running(s, n, "min"), _running(s, n, "max")
+    return 10.0 ** np.maximum(np.minimum(lo + above_min, hi - below_max), np.log10(floor))
 
 
 # ------------------------------------------------------------------ detection
@@ -429,7 +585,13 @@ def _detect(data, method, window, threshold, sigma_a, sigma_w, acc_threshold, gy
                                    gyro_threshold=cfg["gyro_threshold"], gravity=g)
     per_sample = _per_sample_min(stat, W)
     cfg["gravity"] = g
-    return per_sample < cfg["threshold"], per_sample, W, cfg
+    thr = cfg["threshold"]
+    if isinstance(thr, str):
+        thr = adaptive_threshold(data.t, per_sample)
+        cfg.update(span=ADAPTIVE_SPAN, above_min=ADAPTIVE_ABOVE_MIN, below_max=ADAPTIVE_BELOW_MAX,
+                   floor=SHOE_THRESHOLD)
+        cfg["threshold_array"] = thr
+    return per_sample < thr, per_sample, W, cfg
 
 
 def stationary(data: ImuLike, method: str = "shoe", *, window: int | None = None,
@@ -452,9 +614,13 @@ def stationary(data: ImuLike, method: str = "shoe", *, window: int | None = None
         Window length W in **samples** (2 <= W <= N), default :data:`DEFAULT_WINDOW`
         (3, OpenShoe's). In seconds a window spans W - 1 sample steps, so at r Hz a window
         of s seconds is about ``round(s * r) + 1`` samples.
-    threshold : float, optional
+    threshold : float or "adaptive", optional
         SHOE: the threshold :math:`\gamma` (dimensionless), default
-        :data:`SHOE_THRESHOLD`. Not for ``"magnitude"``.
+        :data:`SHOE_THRESHOLD`; ``"adaptive"``: a threshold per sample from the
+        recording's own statistic, relative to each stride's stance valley and swing
+        peaks (:func:`adaptive_threshold`), which suits walking and running alike with no
+        tuning (with the default ``sigma_a``, ``sigma_w``: its floor is
+        :data:`SHOE_THRESHOLD`). Not for ``"magnitude"``.
     sigma_a, sigma_w : float, optional
         SHOE: accelerometer (m/s^2) and gyro (rad/s) noise standard deviations, default
         :data:`SHOE_SIGMA_A`, :data:`SHOE_SIGMA_W`. Only the products with the threshold
@@ -523,7 +689,10 @@ def stationary(data: ImuLike, method: str = "shoe", *, window: int | None = None
     cfg["min_duration"] = float(min_duration)
     mask.setflags(write=False)
     stat.setflags(write=False)
-    return Detection(intervals=intervals, mask=mask, statistic=stat, threshold=cfg["threshold"],
+    thr = cfg.pop("threshold_array", cfg["threshold"])
+    if isinstance(thr, np.ndarray):
+        thr.setflags(write=False)
+    return Detection(intervals=intervals, mask=mask, statistic=stat, threshold=thr,
                      method=method, window=W, params=cfg)
 
 
