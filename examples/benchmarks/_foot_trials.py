@@ -1,0 +1,223 @@
+"""Real foot-mounted trials for ``foot_walk.py FOLDER`` and ``stationary_detection.py FOLDER``.
+
+The development set of issue 38 (``/work/shared/data/foot/``, its README: 12 trials of a
+200 Hz LORD MicroStrain 3DM-GX3-25 on the shoe with Vicon truth, 8 walking and 4 running;
+Wagstaff, Peretroukhin, Kelly, IEEE Sensors Journal 2020). The data never go into the
+repository: every script takes the folder as an argument.
+"""
+
+from __future__ import annotations
+
+import glob
+import os
+import time
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from bvpnav import ImuData, NavigationProblem, detect
+from bvpnav.align import align
+from bvpnav.constraints import Position, SamePosition
+from bvpnav.error_models import Bias, GyroBias
+from bvpnav.evaluate import Trajectory, ape
+
+#: Trials that are running (the README's table); the rest walk.
+RUNNING = ("2017-11-27-11-13-10", "2017-11-27-11-13-41", "2017-11-27-11-14-52", "2017-12-15-18-01-51")
+#: Truth of "still" for precision/recall: the Vicon foot speed below this, m/s, after a
+#: 5-sample median filter of the speed (the resampled Vicon track has single-sample jumps).
+STILL_SPEED = 0.1
+#: The documented pedestrian path's settings (README): stances held soft at 0.01 m/s with
+#: the accelerometer residual at 0.1 m/s^2 (one setting for every trial).
+ZUPT_SIGMA = 0.01
+SIGMA_A = 0.1
+#: Gyro white noise per sample, rad/s: the 3DM-GX3-25's 0.03 deg/s/sqrt(Hz) at 200 Hz.
+GYRO_SIGMA = float(np.radians(0.03) * np.sqrt(200.0))
+#: The end-near-start item: SamePosition of the first and last sample, horizontal, m.
+SAME_SIGMA = 0.1
+#: Distance walked on which the heading is aligned for the final-point error, m.
+HEADING_DISTANCE = 0.8
+
+
+@dataclass
+class Trial:
+    """One trial: name, kind, times (s), specific force (m/s^2), gyro (rad/s), Vicon x-y (m),
+    the dataset's tuned filter x-y (m), and the strapdown data (NED, levelled on the first stance)."""
+
+    name: str
+    kind: str
+    t: np.ndarray
+    f: np.ndarray
+    w: np.ndarray
+    gt: np.ndarray
+    pyshoe: np.ndarray
+    data: ImuData
+
+    @property
+    def still(self) -> np.ndarray:
+        """The truth of the still samples (:data:`STILL_SPEED`)."""
+        from scipy.signal import medfilt
+
+        spd = np.linalg.norm(np.gradient(self.gt, self.t, axis=0), axis=1)
+        return medfilt(spd, 5) < STILL_SPEED
+
+
+def load(path: str) -> Trial:
+    """Read one ``*_LLIO.mat`` file (fields in the folder's README)."""
+    from scipy.io import loadmat
+
+    m = loadmat(path)
+    t = m["timestamps_all"].ravel().astype(float)
+    t = t - t[0]
+    imu = np.asarray(m["imu_data"], dtype=float)
+    f, w = imu[:, :3], imu[:, 3:]
+    first = detect.stationary(ImuData.from_gyro(t, f, w, frame="ned", checks=False))[0]
+    c0 = align(t, f, stationary=first, yaw=0.0, gyro=w, frame="ned")
+    data = ImuData.from_gyro(t, f, w, initial_attitude=c0, frame="ned", checks=False)
+    name = os.path.basename(path)[:19]
+    return Trial(name, "running" if name in RUNNING else "walking", t, f, w, np.asarray(m["gt"], float),
+                 np.asarray(m["pyshoeTrajectory"], float), data)
+
+
+def trials(folder: str, only: str | None = None) -> list[str]:
+    """The trial files of ``folder`` (sorted), optionally those whose name holds ``only``."""
+    files = sorted(glob.glob(os.path.join(folder, "*_LLIO.mat")))
+    if not files:
+        raise SystemExit(f"no *_LLIO.mat files in {folder!r}: give the folder of the foot trials")
+    return [f for f in files if not only or only in os.path.basename(f)]
+
+
+def rms(t, xy, gt) -> float:
+    """Horizontal RMS after the best 2-D rigid fit onto the Vicon track, m."""
+    return float(ape(Trajectory(t, np.asarray(xy)[:, :2]), Trajectory(t, gt), align="yaw").rmse)
+
+
+def final_error(t, xy, gt) -> float:
+    """Final-point error with the heading (and start) aligned on the first 0.8 m walked, m."""
+    d = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(gt, axis=0), axis=1))])
+    k = int(np.searchsorted(d, HEADING_DISTANCE)) + 1
+    return float(ape(Trajectory(t, np.asarray(xy)[:, :2]), Trajectory(t, gt), align="yaw", first=k).error[-1])
+
+
+def integrate(t, acc, still, dedrift: bool) -> np.ndarray:
+    """Plain ZUPT integration (velocity reset at every still sample), optionally with the
+    velocity de-drifted linearly over each swing (what gait pipelines do); positions (N, 3)."""
+    h = np.diff(t)
+    v = np.zeros_like(acc)
+    for k in range(1, t.size):
+        v[k] = 0.0 if still[k] else v[k - 1] + 0.5 * h[k - 1] * (acc[k - 1] + acc[k])
+    if dedrift:
+        edges = np.diff(np.concatenate([[0], (~still).view(np.int8), [0]]))
+        for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
+            if a == 0 or b >= t.size:
+                continue
+            vend = v[b - 1] + 0.5 * h[b - 1] * (acc[b - 1] + acc[b])
+            s = (t[a - 1:b] - t[a - 1]) / (t[b] - t[a - 1])
+            v[a - 1:b] -= s[:, None] * vend
+    return np.vstack([np.zeros(3), np.cumsum(0.5 * h[:, None] * (v[:-1] + v[1:]), axis=0)])
+
+
+def mask_of(t, intervals) -> np.ndarray:
+    """Per-sample mask of ``(t0, t1)`` intervals."""
+    m = np.zeros(t.size, dtype=bool)
+    for a, b in intervals:
+        m |= (t >= a - 1e-9) & (t <= b + 1e-9)
+    return m
+
+
+def solve(data, intervals, em, *, sigma=None, sigma_a=None, rate_sigma=None, same=None, attitude=None):
+    """bvpnav with the start at the origin, a ZeroVelocity per interval (hard without
+    ``sigma``), optionally ZeroAngularRate (``rate_sigma``) and a horizontal SamePosition of
+    the ends (``same``, m). Returns (solution, warnings' texts)."""
+    prob = NavigationProblem(data, error_model=em, sigma_a=sigma_a)
+    kw = {} if sigma is None else {"sigma": sigma}
+    prob.add(Position(t=float(data.t[0]), value=0.0, name="start"))
+    prob.add(*detect.zero_velocity_items(intervals, angular_rate=rate_sigma, **kw))
+    if same is not None:
+        ends = (float(data.t[0]), float(data.t[-1]))
+        prob.add(SamePosition(t=ends, sigma=same, axes=("x", "y"), name="loop"))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sol = prob.solve(solver="direct", attitude=attitude)
+    return sol, [str(w.message) for w in caught]
+
+
+#: Rows of the real-data table.
+ROWS = ("plain ZUPT (SHOE 1e5, W 5)", "de-drift per swing (same)", "Bias() + same stances",
+        "Bias() + stationary() defaults", "documented path (adaptive)", "+ ZeroAngularRate + GyroBias",
+        "pyshoe filter (tuned on truth)")
+#: Columns of the end-near-start table.
+FINAL = ("documented path", "+ SamePosition 0.1 m", "+ GyroBias + SamePosition")
+
+
+def run_trial(tr: Trial, gyro: bool = True) -> dict:
+    """Every row and the final-point errors of one trial; ``gyro=False`` skips the attitude loop."""
+    t, gt, data = tr.t, tr.gt, tr.data
+    out: dict = {"kind": tr.kind}
+    c0 = time.perf_counter()
+    fixed = detect.stationary(data, threshold=1e5, window=5)
+    still = mask_of(t, fixed)
+    out[ROWS[0]] = rms(t, integrate(t, data.acc, still, False), gt)
+    out[ROWS[1]] = rms(t, integrate(t, data.acc, still, True), gt)
+    out[ROWS[2]] = rms(t, solve(data, fixed, Bias())[0].position().reshape(-1, 3), gt)
+    out[ROWS[3]] = rms(t, solve(data, detect.stationary(data), Bias())[0].position().reshape(-1, 3), gt)
+    det = detect.stationary(data, threshold="adaptive", return_statistic=True)
+    out["stances"] = len(det.intervals)
+    doc = dict(sigma=ZUPT_SIGMA, sigma_a=SIGMA_A)
+    p = solve(data, det, Bias(), **doc)[0].position().reshape(-1, 3)
+    out[ROWS[4]] = rms(t, p, gt)
+    out[FINAL[0]] = final_error(t, p, gt)
+    p = solve(data, det, Bias(), same=SAME_SIGMA, **doc)[0].position().reshape(-1, 3)
+    out[FINAL[1]] = final_error(t, p, gt)
+    if gyro:
+        sol, ws = solve(data, det, Bias() + GyroBias(), rate_sigma=GYRO_SIGMA, attitude={"tol": 1e-4}, **doc)
+        p = sol.position().reshape(-1, 3)
+        out[ROWS[5]] = rms(t, p, gt)
+        out["gyro bias (rad/s)"] = np.array([sol.error_params[f"gyro_bias_{a}"] for a in "xyz"])
+        out["stance gyro mean (rad/s)"] = tr.w[det.mask].mean(axis=0)
+        out["warnings"] = ws
+        sol, _ = solve(data, det, Bias() + GyroBias(), rate_sigma=GYRO_SIGMA, attitude={"tol": 1e-4},
+                       same=SAME_SIGMA, **doc)
+        out[FINAL[2]] = final_error(t, sol.position().reshape(-1, 3), gt)
+    out[ROWS[6]] = rms(t, tr.pyshoe, gt)
+    out["seconds"] = time.perf_counter() - c0
+    return out
+
+
+def _summary(res: dict, cols, fmt: str, width: int = 10) -> None:
+    walk = [r for r in res.values() if r["kind"] == "walking"]
+    for lab, fn in (("walking median", np.median), ("walking worst", np.max)):
+        vals = [fn([r.get(c, np.nan) for r in walk]) if walk else np.nan for c in cols]
+        print(f"{lab:<29} " + " ".join(f"{v:>{width}{fmt}}" for v in vals))
+
+
+def main_real(folder: str, only: str | None = None, gyro: bool = True) -> dict:
+    """Run every trial of ``folder``, print the tables, return the per-trial dicts."""
+    res = {}
+    for path in trials(folder, only):
+        tr = load(path)
+        res[tr.name] = run_trial(tr, gyro)
+    rows = [c for c in ROWS if any(c in r for r in res.values())]
+    print("Horizontal RMS after the best 2-D rigid fit (m), per trial; columns:")
+    for k, c in enumerate(rows):
+        print(f"  ({k + 1}) {c}")
+    heads = " ".join(f"{f'({k + 1})':>10}" for k in range(len(rows)))
+    print(f"{'trial':<19} {'kind':<9} {heads}  stances")
+    for name, r in res.items():
+        print(f"{name:<19} {r['kind']:<9} " + " ".join(f"{r.get(c, np.nan):>10.3f}" for c in rows)
+              + f"  {r['stances']:>7}")
+    _summary(res, rows, ".3f")
+    fin = [c for c in FINAL if any(c in r for r in res.values())]
+    print(f"\nFinal-point error (m), heading aligned on the first {HEADING_DISTANCE} m walked:")
+    print(f"{'trial':<19} {'kind':<9} " + " ".join(f"{c[:26]:>26}" for c in fin))
+    for name, r in res.items():
+        print(f"{name:<19} {r['kind']:<9} " + " ".join(f"{r.get(c, np.nan):>26.3f}" for c in fin))
+    _summary(res, fin, ".3f", 26)
+    if gyro:
+        print("\nGyro bias of (6) against the mean gyro reading in the detected stances (rad/s):")
+        for name, r in res.items():
+            print(f"{name:<19} {np.array2string(r['gyro bias (rad/s)'], precision=4):>30} "
+                  f"{np.array2string(r['stance gyro mean (rad/s)'], precision=4):>30}  warnings: "
+                  f"{len(r['warnings'])}" + "".join(f"\n    {w[:150]}" for w in r["warnings"]))
+    print("\ntime per trial (s): " + ", ".join(f"{r['seconds']:.1f}" for r in res.values()))
+    return res
