@@ -110,19 +110,30 @@ def label_items(items: Iterable[Item], taken: Iterable[str] = ()) -> list[Item]:
 
 
 def _check_sigma_a(sigma_a, data: ImuData) -> np.ndarray:
+    """``sigma_a`` as (d,) (one value or one per axis) or (N, d) (per sample), checked."""
     if sigma_a is None:
         return np.ones(data.ndim)
-    sa = positive_array(sigma_a, "sigma_a (m/s^2)", False).ravel()
-    if sa.size not in (1, data.ndim):
-        raise InputError(f"sigma_a: {sa.size} value(s) for the axes {list(data.axes)}; give one "
-                         "value in m/s^2 or one per axis")
-    sa = np.array(np.broadcast_to(sa, (data.ndim,)), dtype=float)
-    for k in np.flatnonzero((sa < SIGMA_A_RANGE[0]) | (sa > SIGMA_A_RANGE[1])):
+    sa = positive_array(sigma_a, "sigma_a (m/s^2)", False)
+    n, d = data.n, data.ndim
+    if sa.ndim <= 1 and sa.size in (1, d):
+        sa = np.array(np.broadcast_to(sa.ravel(), (d,)), dtype=float)
+    elif sa.ndim == 1 and sa.size == n:
+        sa = np.repeat(sa[:, None], d, axis=1)
+    elif sa.shape == (n, d) or (sa.ndim == 2 and sa.shape == (n, 1)):
+        sa = np.array(np.broadcast_to(sa, (n, d)), dtype=float)
+    else:
+        raise InputError(f"sigma_a: shape {sa.shape} for {n} samples on the axes {list(data.axes)}; give "
+                         f"one value in m/s^2, one per axis ({d}), one per sample ({n},) or one per sample "
+                         f"and axis ({n}, {d})")
+    flat = sa.reshape(-1, d)
+    for i, k in zip(*np.nonzero((flat < SIGMA_A_RANGE[0]) | (flat > SIGMA_A_RANGE[1])), strict=True):
+        where = f"axis {data.axes[k]}" + (f", sample {i}" if sa.ndim == 2 else "")
         raise InputError(
-            f"sigma_a = {sa[k]:g} m/s^2 (axis {data.axes[k]}) is outside "
+            f"sigma_a = {flat[i, k]:g} m/s^2 ({where}) is outside "
             f"{SIGMA_A_RANGE[0]:g}..{SIGMA_A_RANGE[1]:g} m/s^2, where the weights 1/sigma_a^2 "
             "stay resolvable in double precision; give the accelerometer noise in m/s^2 "
             "(typically 1e-4 to 1)")
+    sa.setflags(write=False)
     return sa
 
 
@@ -169,7 +180,9 @@ class Formulation:
     residual : {"acceleration", "load"}
         Objective form (see :class:`bvpnav.NavigationProblem`).
     sigma_a : float or array_like, optional
-        Accelerometer noise standard deviation, m/s^2 (acceleration form only).
+        Accelerometer noise standard deviation, m/s^2 (acceleration form only): one
+        value, one per axis (d,), one per sample (N,) or per sample and axis (N, d);
+        stored as (d,) or (N, d).
     error_model : ErrorModel, optional
     items : iterable of Item
         Items with unique labels (see :func:`label_items`).
@@ -277,7 +290,9 @@ class Formulation:
         if self._data_rows is None:
             m = self.model
             if self.residual == "acceleration":
-                self._data_rows = m.residual_rows() / np.repeat(self.sigma_a, m.N)
+                sa = self.sigma_a
+                per_row = sa.T.ravel() if sa.ndim == 2 else np.repeat(sa, m.N)  # axis-major rows
+                self._data_rows = m.residual_rows() / per_row
             else:
                 self._data_rows = m.load_residual_rows()
         return self._data_rows

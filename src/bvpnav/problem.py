@@ -44,8 +44,10 @@ class NavigationProblem:
         FEM load residual :math:`\|K r - f(\hat a) - F l\|^2`, the 2011 paper's
         Tikhonov form.
     sigma_a : float or array_like, optional
-        Accelerometer noise standard deviation in m/s^2 (scalar or one per axis), for
-        the acceleration form. Default 1 m/s^2 (then ``lam`` absorbs the scale).
+        Accelerometer noise standard deviation in m/s^2, for the acceleration form: a
+        scalar, one per axis (d,), one per sample (N,) or one per sample and axis (N, d)
+        (e.g. a large value at samples clipped at the sensor's range or hit by an impact).
+        Default 1 m/s^2 (then ``lam`` absorbs the scale).
     error_model : ErrorModel, optional
         Sensor error model contributing unknown parameters (see
         :mod:`bvpnav.error_models`).

@@ -805,6 +805,11 @@ def problem_to_spec(problem, solve: dict | None = None, input: dict | None = Non
     prob_kw: dict[str, Any] = {"residual": problem.residual}
     if problem.sigma_a_given:
         sa = problem.sigma_a
+        if sa.ndim == 2 and not np.all(sa == sa.flat[0]):
+            raise InputError("sigma_a is given per sample, which a spec file cannot hold (one number "
+                             "or one per axis); give sigma_a per axis to write the spec, or keep the "
+                             "problem in Python")
+        sa = sa.ravel()
         prob_kw["sigma_a"] = float(sa[0]) if np.all(sa == sa[0]) else sa.tolist()
     em = problem.error_model
     models = [] if em is None else list(getattr(em, "components", (em,)))

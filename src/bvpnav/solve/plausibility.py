@@ -197,8 +197,12 @@ def _misfit(sol: Solution, form: Formulation) -> tuple[dict[str, Any], list[str]
                 top = sorted(vf[2].items(), key=lambda kv: -kv[1])[:3]
                 shares = ", ".join(f"{k} {100 * v / total:.0f} %" for k, v in top)
     out["noise_ratio"] = noise
-    sig = (f"{sa[0]:g} m/s^2" if np.all(sa == sa[0])
-           else ", ".join(f"{ax} {s:g}" for ax, s in zip(axes, sa, strict=True)) + " m/s^2")
+    if sa.ndim == 2 and not np.all(sa == sa.flat[0]):
+        sig = f"{sa.min():g}..{sa.max():g} m/s^2 (per sample, median {np.median(sa):g})"
+    else:
+        sa = sa.reshape(-1, len(axes))[0]
+        sig = (f"{sa[0]:g} m/s^2" if np.all(sa == sa[0])
+               else ", ".join(f"{ax} {s:g}" for ax, s in zip(axes, sa, strict=True)) + " m/s^2")
     lam = f"; lam = {sol.lam:g} weighs each item as if its sigma were sigma/sqrt(lam)" if sol.lam != 1 else ""
     causes = ("likely causes: an unmodelled drifting bias (try Bias(interval=...) or GyroBias(...)), a "
               "wrong attitude (try AttitudeError() + GyroBias()), or a sigma_a far too small (from the "
