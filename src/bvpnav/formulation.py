@@ -137,6 +137,17 @@ def _check_sigma_a(sigma_a, data: ImuData) -> np.ndarray:
     return sa
 
 
+def _clipped(sa: np.ndarray, data: ImuData) -> np.ndarray:
+    """``sigma_a`` with ``max(sigma_a, data.acc_range)`` at the samples marked clipped."""
+    clipped = getattr(data, "acc_clipped", None)
+    if clipped is None or not clipped.any():
+        return sa
+    out = np.array(np.broadcast_to(sa, (data.n, data.ndim)) if sa.ndim == 1 else sa, dtype=float)
+    out[clipped] = np.maximum(out[clipped], float(data.acc_range))
+    out.setflags(write=False)
+    return out
+
+
 def _check_acc(data: ImuData) -> None:
     acc = np.asarray(data.acc, dtype=float)
     with np.errstate(invalid="ignore"):
@@ -212,6 +223,9 @@ class Formulation:
         self.data = data
         self.residual = residual
         self.sigma_a = _check_sigma_a(sigma_a, data)
+        #: ``sigma_a`` as the data rows use it: with ``max(sigma_a, acc_range)`` at the
+        #: samples the data mark clipped (:meth:`bvpnav.ImuData.mark_acc_range`), (d,) or (N, d).
+        self.sigma_a_used = _clipped(self.sigma_a, data)
         self.sigma_a_given = sigma_a is not None
         _check_acc(data)
         self.grade = resolve_grade(grade)
@@ -290,7 +304,7 @@ class Formulation:
         if self._data_rows is None:
             m = self.model
             if self.residual == "acceleration":
-                sa = self.sigma_a
+                sa = self.sigma_a_used
                 per_row = sa.T.ravel() if sa.ndim == 2 else np.repeat(sa, m.N)  # axis-major rows
                 self._data_rows = m.residual_rows() / per_row
             else:

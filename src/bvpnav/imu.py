@@ -157,6 +157,10 @@ _PYTHON_FIXES = {
 }
 
 
+#: A sample within this fraction of ``acc_range`` of it is taken as clipped.
+ACC_RANGE_MARGIN = 0.005
+
+
 class ImuData:
     """Sample times with the accelerations that drive r''(t) = a(t).
 
@@ -188,6 +192,11 @@ class ImuData:
         when the acceleration at rest is far from zero, e.g. gravity counted twice), and in
         :meth:`from_gyro` the gyro saturation count. Their numbers are kept in
         ``data.checks``.
+    acc_range : float, optional
+        The accelerometer's full-scale range, m/s^2 (e.g. 156.9 for 16 g), strapdown data
+        only: the samples at it (clipped, e.g. heel strikes) are marked and the solve
+        weighs them with the noise ``max(sigma_a, acc_range)`` (:meth:`mark_acc_range`;
+        the count is ``data.checks["acc_range"]["samples"]``).
     axes : sequence of str, optional
         Axis names; default ``x``, ``x, y`` or ``x, y, z`` by the number of axes. They
         name the trajectory's columns (``<axis>``, ``v<axis>``, ``<axis>_std``,
@@ -239,6 +248,7 @@ class ImuData:
         time_origin: str | None = None,
         frame: str | None = None,
         checks: bool = True,
+        acc_range: float | None = None,
     ):
         self.grid = TimeGrid(t)
         if time_origin is not None and not isinstance(time_origin, str):
@@ -283,8 +293,81 @@ class ImuData:
         a.setflags(write=False)
         self.acc: np.ndarray = a
         self.axes: tuple[str, ...] = axes
+        #: The accelerometer's full-scale range (m/s^2) when stated, and the samples at it
+        #: (N,) bool: the solve gives them the noise ``max(sigma_a, acc_range)``.
+        self.acc_range: float | None = None
+        self.acc_clipped: np.ndarray | None = None
+        if acc_range is not None:
+            self.mark_acc_range(acc_range)
         if checks and self.is_strapdown:
             self.check_frame(_PYTHON_FIXES["attitude"](self.frame))
+
+    def mark_acc_range(self, acc_range: float, source: str | None = None) -> dict:
+        r"""Mark the samples at the accelerometer's range (clipped, e.g. at heel strike).
+
+        Parameters
+        ----------
+        acc_range : float
+            The accelerometer's full-scale range, m/s^2 (e.g. 156.9 for 16 g).
+        source : str, optional
+            The file, for the message.
+
+        Returns
+        -------
+        dict
+            ``samples`` (clipped samples), ``of`` (N), ``acc_range`` (m/s^2), ``margin``
+            (m/s^2), ``first`` (the first 20 clipped sample indices) and ``warning``; also
+            kept in ``checks["acc_range"]`` (a solve copies it into
+            ``sol.stats["data_checks"]`` and the warning into ``sol.warnings``).
+
+        Notes
+        -----
+        A sample is clipped when :math:`|f_{k,j}| \ge r - m` on any body axis :math:`j`,
+        :math:`r` = ``acc_range``, :math:`m` = :data:`ACC_RANGE_MARGIN` :math:`\cdot r`
+        (a clipped channel reads at or just under its nominal range). Its true value is
+        beyond the range by an unknown amount, so the acceleration form weighs it with
+        the noise :math:`\max(\sigma_a, r)` on every axis instead of :math:`\sigma_a`
+        (:class:`bvpnav.NavigationProblem`); the load form has no per-sample noise and
+        uses the samples as they are.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from bvpnav import ImuData
+        >>> t = np.arange(100) * 0.01
+        >>> f = np.tile([0.0, 0.0, 9.80665], (100, 1))
+        >>> f[50:53, 2] = 156.9  # an impact clipped at 16 g
+        >>> data = ImuData.from_gyro(t, f, np.zeros((100, 3)), acc_range=156.9, checks=False)
+        >>> data.checks["acc_range"]["samples"], np.flatnonzero(data.acc_clipped).tolist()
+        (3, [50, 51, 52])
+        """
+        from .detect import _positive
+        from .log import SaturationWarning
+        from .log import warn as _warn
+
+        r = _positive("acc_range", acc_range, "m/s^2")
+        if self.specific_force is None:
+            raise InputError("acc_range is the accelerometer's range on its own axes: it needs the "
+                             "body-frame specific force (ImuData(t, specific_force=..., attitude=...) or "
+                             "ImuData.from_gyro), not navigation-frame acc")
+        margin = ACC_RANGE_MARGIN * r
+        clipped = np.any(np.abs(self.specific_force) >= r - margin, axis=1)
+        clipped.setflags(write=False)
+        self.acc_range, self.acc_clipped = r, clipped
+        count = int(np.count_nonzero(clipped))
+        msg = None
+        if count:
+            where = f" of {source}" if source else ""
+            k = np.flatnonzero(clipped)
+            msg = (f"accelerometer range{where}: {count} of {self.n} samples ({100 * count / self.n:.3g} %) "
+                   f"are at the stated acc_range = {r:g} m/s^2 (within {margin:.3g}), the first at t = "
+                   f"{self.t[k[0]]:.6g} s: clipped, so the solve weighs them with sigma = "
+                   f"max(sigma_a, {r:g}) m/s^2 (their true value is beyond the range by an unknown amount)")
+            _warn(msg, SaturationWarning)
+        rep = {"samples": count, "of": int(self.n), "acc_range": r, "margin": float(margin),
+               "first": [int(i) for i in np.flatnonzero(clipped)[:20]], "warning": msg}
+        self.checks["acc_range"] = rep
+        return rep
 
     def check_frame(self, fixes: dict | None = None, source: str | None = None):
         """Run the frame and gravity sanity check (:func:`bvpnav.detect.frame_check`) and keep
@@ -338,6 +421,7 @@ class ImuData:
         frame: str | None = None,
         gyro_range: float | None = None,
         checks: bool = True,
+        acc_range: float | None = None,
     ) -> ImuData:
         r"""Strapdown data whose attitude is integrated from gyro rates.
 
@@ -365,6 +449,10 @@ class ImuData:
         checks : bool
             Run the frame and gravity sanity check and the saturation count (see
             :class:`ImuData`); default True.
+        acc_range : float, optional
+            The accelerometer's full-scale range, m/s^2 (156.9 for 16 g): samples at it
+            are marked clipped and weighted with the noise ``max(sigma_a, acc_range)``
+            (:meth:`ImuData.mark_acc_range`).
 
         Notes
         -----
@@ -408,7 +496,7 @@ class ImuData:
         grid = TimeGrid(t)
         rot = integrate_gyro(grid.t, gyro, initial_attitude)
         out = cls(grid.t, specific_force=specific_force, attitude=rot, gravity=gravity, frame=frame,
-                  checks=False)
+                  checks=False, acc_range=acc_range)
         w = as_float_array(gyro, "gyro", "rad/s")
         w.setflags(write=False)
         out.gyro = w

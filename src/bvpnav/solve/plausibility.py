@@ -161,7 +161,7 @@ def _variance_factor(sol: Solution, form: Formulation) -> tuple[float, int, dict
     model = form.model
     x = np.asarray(sol.x, dtype=float)
     w = sol.residuals.to_numpy(dtype=float)
-    data = float(np.sum((w / form.sigma_a) ** 2))
+    data = float(np.sum((w / form.sigma_a_used) ** 2))
     parts = {"acceleration residual": data}
     rows, hard = w.size, model.fem_rows().m
     for term in form.terms():
@@ -179,7 +179,7 @@ def _variance_factor(sol: Solution, form: Formulation) -> tuple[float, int, dict
 
 def _misfit(sol: Solution, form: Formulation) -> tuple[dict[str, Any], list[str]]:
     axes = list(form.model.axes)
-    sa = np.asarray(form.sigma_a, dtype=float)
+    sa = np.asarray(form.sigma_a_used, dtype=float)
     w = sol.residuals[[f"w_{ax}" for ax in axes]].to_numpy(dtype=float)
     per = np.sqrt(np.mean((w / sa) ** 2, axis=0))
     overall = float(np.sqrt(np.mean(per**2)))
