@@ -67,6 +67,9 @@ class ZeroAngularRate(Item):
     t: Any
     units = "rad/s"
     needs_error_model = True
+    #: The body does not turn in ``t``: the solve's plausibility check compares a gyro bias
+    #: estimate with the mean gyro reading there.
+    zero_rate = True
 
     def validate(self) -> None:
         label = self.label

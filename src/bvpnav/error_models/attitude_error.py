@@ -62,6 +62,10 @@ class AttitudeError(AttitudeErrorModel):
     (['attitude_x', 'attitude_y', 'attitude_z'], (11, 3, 3))
     """
 
+    #: What the solve's plausibility check judges its estimates as (the limits are in
+    #: :mod:`bvpnav.solve.plausibility`).
+    plausibility_kind = "attitude"
+
     units = "rad"
     default_step_scale = 0.05
     axis_kind = "attitude"

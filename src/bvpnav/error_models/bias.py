@@ -64,6 +64,10 @@ class Bias(SensorErrorModel):
     bias 0.100 m/s^2
     """
 
+    #: What the solve's plausibility check judges its estimates as (the limits are in
+    #: :mod:`bvpnav.solve.plausibility`).
+    plausibility_kind = "acc_bias"
+
     interval: Any = None
     drift: Any = None
     units = "m/s^2"

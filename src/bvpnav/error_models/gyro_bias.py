@@ -78,6 +78,10 @@ class GyroBias(AttitudeErrorModel):
     ['gyro_bias_x[0]', 'gyro_bias_x[1]', 'gyro_bias_x[2]']
     """
 
+    #: What the solve's plausibility check judges its estimates as (the limits are in
+    #: :mod:`bvpnav.solve.plausibility`).
+    plausibility_kind = "gyro_bias"
+
     interval: Any = None
     drift: Any = None
     units = "rad/s"

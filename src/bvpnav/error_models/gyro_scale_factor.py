@@ -45,6 +45,10 @@ class GyroScaleFactor(AttitudeErrorModel):
     (['gyro_scale_z'], (11, 3, 1))
     """
 
+    #: What the solve's plausibility check judges its estimates as (the limits are in
+    #: :mod:`bvpnav.solve.plausibility`).
+    plausibility_kind = "gyro_scale"
+
     units = ""
     default_step_scale = 1e-2
 

@@ -53,6 +53,10 @@ class Misalignment(SensorErrorModel):
     (11, 3, 1)
     """
 
+    #: What the solve's plausibility check judges its estimates as (the limits are in
+    #: :mod:`bvpnav.solve.plausibility`).
+    plausibility_kind = "misalignment"
+
     pairs: Any = None
     units = "rad"
 

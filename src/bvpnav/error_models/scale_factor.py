@@ -47,6 +47,10 @@ class ScaleFactor(SensorErrorModel):
     scale 0.020, bias 0.100 m/s^2
     """
 
+    #: What the solve's plausibility check judges its estimates as (the limits are in
+    #: :mod:`bvpnav.solve.plausibility`).
+    plausibility_kind = "scale"
+
     units = "1"
 
     def params(self, data) -> list[Param]:

@@ -50,6 +50,10 @@ class UnknownGravity(SensorErrorModel):
     gravity_x 0.050 m/s^2
     """
 
+    #: What the solve's plausibility check judges its estimates as (the limits are in
+    #: :mod:`bvpnav.solve.plausibility`).
+    plausibility_kind = "gravity"
+
     units = "m/s^2"
 
     def params(self, data) -> list[Param]:

@@ -39,7 +39,7 @@ from ..result import Solution
 __all__ = ["check", "assess", "attach", "MISFIT_HIGH", "MISFIT_LOW", "MISFIT_MIN_DOF", "ACC_BIAS_LIMIT",
            "GRAVITY_MAGNITUDE_LIMIT", "GRAVITY_TILT_LIMIT", "SCALE_LIMIT", "MISALIGNMENT_LIMIT",
            "TILT_LIMIT", "GYRO_BIAS_LIMIT", "GYRO_MEAN_FRACTION", "GYRO_TURNING", "GYRO_TURN_RATE",
-           "GYRO_PRIOR_SIGMAS", "GYRO_SCALE_LIMIT"]
+           "GYRO_PRIOR_SIGMAS", "GYRO_SCALE_LIMIT", "GYRO_STANCE_ERRORS"]
 
 # ------------------------------------------------------------------ thresholds
 #: Misfit: warn when the acceleration residual's RMS, ``rms(w / sigma_a)``, on an axis or
@@ -122,6 +122,13 @@ GYRO_TURN_RATE = 0.05
 #: what the user's own datasheet allows: no warning against the mean rate then.
 GYRO_PRIOR_SIGMAS = 3.0
 
+#: A gyro bias within this many standard errors of the mean gyro reading in the stances
+#: (``ZeroAngularRate`` items: the body does not turn there, so the gyro reads its bias)
+#: is what the stances show: no warning against the whole recording's mean rate then. The
+#: standard error is that of the per-interval means (their scatter over the square root of
+#: their number), floored at 1e-6 rad/s.
+GYRO_STANCE_ERRORS = 3.0
+
 #: Gyro scale-factor limit (dimensionless): ``|s| > 0.1``. MEMS gyro scale errors are
 #: below about 1 %.
 GYRO_SCALE_LIMIT = 0.1
@@ -136,6 +143,11 @@ _KINDS = {"Bias": "acc_bias", "ScaleFactor": "scale", "Misalignment": "misalignm
 
 
 def _kind(component) -> str | None:
+    """What a component estimates: its declared ``plausibility_kind`` (one of the values of
+    :data:`_KINDS`), else found by class name (plug-ins written before the declaration)."""
+    declared = getattr(type(component), "plausibility_kind", None)
+    if isinstance(declared, str):
+        return declared
     for cls in type(component).__mro__:
         if cls.__name__ in _KINDS:
             return _KINDS[cls.__name__]
@@ -423,10 +435,40 @@ def _mean_bias(c, sol: Solution, data, ax: str, vals: list[tuple[str, float]]) -
     return float(np.mean([v for _, v in vals]))
 
 
-def _gyro_checks(sol: Solution, groups, data) -> list[str]:
-    """Gyro bias (absolute and against the mean measured rate) and gyro scale."""
+def _stance_rates(items, data) -> dict[str, tuple[float, float, int]] | None:
+    """Per body axis, the mean gyro reading over the intervals of the items that say the body
+    does not turn (``zero_rate = True``: ``ZeroAngularRate``), its standard error (rad/s)
+    and the number of intervals; None without such items or gyro rates."""
+    gyro = getattr(data, "gyro", None)
+    if gyro is None:
+        return None
+    w = np.asarray(gyro, dtype=float)
+    t = np.asarray(data.t, dtype=float)
+    means: dict[str, list[float]] = {}
+    for it in items:
+        if not getattr(type(it), "zero_rate", False):
+            continue
+        t0, t1 = it.t
+        sel = (t >= t0 - 1e-9) & (t <= t1 + 1e-9)
+        if not sel.any():
+            continue
+        for ax in (it.axes or ("x", "y", "z")):
+            means.setdefault(ax, []).append(float(w[sel, "xyz".index(ax)].mean()))
+    if not means:
+        return None
+    out = {}
+    for ax, m in means.items():
+        se = float(np.std(m) / np.sqrt(len(m))) if len(m) > 1 else 0.0
+        out[ax] = (float(np.mean(m)), max(se, 1e-6), len(m))
+    return out
+
+
+def _gyro_checks(sol: Solution, groups, data, items=()) -> list[str]:
+    """Gyro bias (absolute, against the stances and against the mean measured rate) and gyro
+    scale."""
     msgs: list[str] = []
     gyro = getattr(data, "gyro", None)
+    stances = _stance_rates(items, data)
     dur = float(data.t[-1] - data.t[0]) if data.n > 1 else 0.0
     for c, names in groups.get("gyro_bias", []):
         by_axis: dict[str, list[tuple[str, float]]] = {}
@@ -450,6 +492,19 @@ def _gyro_checks(sol: Solution, groups, data) -> list[str]:
             rate = np.asarray(gyro, dtype=float)[:, "xyz".index(ax)]
             mean, rms = float(np.mean(rate)), float(np.sqrt(np.mean(rate**2)))
             b = _mean_bias(c, sol, data, ax, vals)
+            if stances is not None and ax in stances:
+                m_s, se, k_s = stances[ax]
+                if abs(b - m_s) <= GYRO_STANCE_ERRORS * se:
+                    continue  # the bias is what the stances read: not turning mistaken for bias
+                msgs.append(
+                    f"implausible estimate: gyro bias on axis {ax} {_fmt(b, 'rad/s')} differs from the "
+                    f"mean gyro reading in the {k_s} still interval(s) (ZeroAngularRate) "
+                    f"{_fmt(m_s, 'rad/s')} by {_fmt(b - m_s, 'rad/s')}, more than "
+                    f"{GYRO_STANCE_ERRORS:g} standard errors ({_fmt(se, 'rad/s')}): where the body does "
+                    "not turn the gyro reads its bias, so the estimate has absorbed something else (a "
+                    "heading or attitude error, stances that are not still); check the stances and "
+                    "the ZeroAngularRate sigma")
+                continue
             if sig is not None:
                 s = float(np.max(np.asarray(sig, dtype=float)))
                 p0 = 0.0 if prior is None else float(np.mean(np.asarray(prior, dtype=float)))
@@ -481,7 +536,9 @@ def _gyro_checks(sol: Solution, groups, data) -> list[str]:
 
 def _plausibility(sol: Solution, form: Formulation, data) -> list[str]:
     groups = _groups(sol, form)
-    return _acc_checks(sol, form, groups) + _attitude_checks(sol, groups) + _gyro_checks(sol, groups, data)
+    items = getattr(form, "items", ())
+    return (_acc_checks(sol, form, groups) + _attitude_checks(sol, groups)
+            + _gyro_checks(sol, groups, data, items))
 
 
 # ---------------------------------------------------------------------- API
