@@ -81,3 +81,19 @@ def test_adaptive_bad_input():
         detect.stationary(walk.data, threshold="auto")
     with pytest.raises(InputError, match="span"):
         detect.adaptive_threshold(walk.data.t, np.ones(walk.data.n), span=0.0)
+
+
+def test_adaptive_threshold_in_the_plot_and_the_cli_text():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from bvpnav import plot
+    from bvpnav.cli import _threshold_text
+
+    data, _, _ = simulated_run(100.0)
+    det = detect.stationary(data, threshold="adaptive", return_statistic=True)
+    fig = plot.stationary(data, det)
+    assert "adaptive" in fig.texts[0].get_text() if fig.texts else "adaptive" in fig._suptitle.get_text()
+    lo, hi = float(det.threshold.min()), float(det.threshold.max())
+    assert _threshold_text(det.threshold) == f"adaptive, {lo:.4g}..{hi:.4g}"
+    assert _threshold_text(3e4) == "3e+04"

@@ -377,6 +377,14 @@ def _truth_line(sol, truth, truth_path) -> str:
             f"{np.ptp(sol.t):g} s, {len(sol.t)} samples)")
 
 
+def _threshold_text(threshold) -> str:
+    """A detector threshold in words: the number, or the range of an adaptive one."""
+    import numpy as np
+
+    thr = np.asarray(threshold, dtype=float)
+    return f"{float(thr):.4g}" if thr.ndim == 0 else f"adaptive, {thr.min():.4g}..{thr.max():.4g}"
+
+
 def _cmd_stationary(args) -> int:
     from . import detect
     from .readers import read
@@ -394,7 +402,8 @@ def _cmd_stationary(args) -> int:
     still = sum(b - a for a, b in found.intervals)
     span = data.t[-1] - data.t[0]
     _say(args, f"{len(found.intervals)} stationary interval(s), {still:.4g} s of {span:.4g} s "
-               f"({found.method}, window {found.window} samples, threshold {found.threshold:.4g})")
+               f"({found.method}, window {found.window} samples, "
+               f"threshold {_threshold_text(found.threshold)})")
     for a, b in found.intervals[:20]:
         _say(args, f"  {a:.4f} .. {b:.4f} s")
     if len(found.intervals) > 20:

@@ -568,7 +568,12 @@ def stationary(data, result, path=None, *, method: str = "shoe", **detector_kw):
     fig, axs = plt.subplots(rows, 1, figsize=(9, 1.9 * rows + 0.8), sharex=True, layout="constrained")
     stat = np.maximum(np.asarray(det.statistic, float), np.finfo(float).tiny)
     axs[0].semilogy(t, stat, color="C0", lw=1, label=f"{det.method} statistic")
-    axs[0].axhline(det.threshold, color="C3", ls="--", lw=1.2, label=f"threshold {det.threshold:.3g}")
+    thr = np.asarray(det.threshold, dtype=float)
+    thr_txt = f"{float(thr):.3g}" if thr.ndim == 0 else f"adaptive {thr.min():.3g}..{thr.max():.3g}"
+    if thr.ndim == 0:
+        axs[0].axhline(float(thr), color="C3", ls="--", lw=1.2, label=f"threshold {thr_txt}")
+    else:
+        axs[0].semilogy(t, thr, color="C3", ls="--", lw=1.2, label=f"threshold {thr_txt}")
     axs[0].set_ylabel("statistic (1)")
     axs[0].set_title("statistic", fontsize=10)
     fn = np.linalg.norm(data.specific_force, axis=1)
@@ -593,7 +598,7 @@ def stationary(data, result, path=None, *, method: str = "shoe", **detector_kw):
         _legend(a, fontsize=7, loc="upper right")
     axs[-1].set_xlabel("t (s)")
     share = sum(t1 - t0 for t0, t1 in intervals) / max(float(t[-1] - t[0]), np.finfo(float).tiny)
-    fig.suptitle(f"{det.method}: window {det.window} samples, threshold {det.threshold:.3g}; "
+    fig.suptitle(f"{det.method}: window {det.window} samples, threshold {thr_txt}; "
                  f"{len(intervals)} intervals, {100 * share:.0f} % of the time stationary", fontsize=10)
     if path is not None:
         from .io import atomic_savefig
