@@ -708,7 +708,8 @@ def test_from_dataframe_takes_axes_from_the_names():
 
 @pytest.mark.parametrize("edit, culprit, fix", [
     pytest.param(("sigma_a = 1.0", "sigma_a = [1.0, 2.0, 3.0]"),
-                 r"bad\.toml, line 12: sigma_a: 3 value\(s\) for the axes \['x'\]", r"one per axis",
+                 r"bad\.toml, line 12: sigma_a: shape \(3,\) for 101 samples on the axes \['x'\]",
+                 r"one per axis",
                  id="spec-sigma_a-per-axis-count"),
     pytest.param(("lam = 1.0", 'lam = 1.0\non_conflict = "demote"\npriority = { nosuch = 1 }'),
                  r"bad\.toml, line 19: priority names unknown item\(s\) \['nosuch'\]",
