@@ -44,7 +44,7 @@ def test_gyro_bias_recovered_exactly_from_noise_free_stances():
     prob.add(*detect.zero_velocity_items(sc.params["stance_intervals"], angular_rate=1e-5, sigma=0.01))
     prob.add(Position(t=[sc.t[0]], value=sc.position[0]))
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the plausibility check's stance-blind gyro-bias warning
+        warnings.simplefilter("ignore")  # the loop's notes on a 3-stride walk are not what is tested here
         sol = prob.solve(solver="direct")
     est = sol.error_params[["gyro_bias_x", "gyro_bias_y", "gyro_bias_z"]].to_numpy()
     np.testing.assert_allclose(est, true_bias, rtol=0, atol=1e-6)
