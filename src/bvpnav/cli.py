@@ -444,11 +444,8 @@ def _cmd_evaluate(args) -> int:
     if args.out is not None and not str(args.out).lower().endswith(".json"):
         raise InputError(f"--out {args.out!r}: the figures are written as JSON; give a .json path")
     res = ev.evaluate(args.trajectory, args.truth, align=args.align, rpe_delta=args.delta,
-                      rpe_unit=args.delta_unit, max_diff=args.max_diff, method=args.sync, offset=args.offset)
-    if args.all_pairs and args.delta is not None:
-        res["rpe"] = ev.rpe(ev.read_trajectory(args.trajectory), ev.read_trajectory(args.truth), args.delta,
-                            args.delta_unit, align=args.align, all_pairs=True, max_diff=args.max_diff,
-                            method=args.sync, offset=args.offset)
+                      rpe_unit=args.delta_unit, all_pairs=args.all_pairs, max_diff=args.max_diff,
+                      method=args.sync, offset=args.offset)
     for r in res.values():
         _say(args, ev.format_result(r))
     if args.out is not None:

@@ -456,9 +456,7 @@ def associate(est: Trajectory, ref: Trajectory, max_diff: float = 0.01, method: 
         raise InputError(f"max_diff={max_diff!r}: give a time tolerance >= 0 s")
     te = est.t + offset
     if method == "interpolate":
-        keep = (ref.t >= te[0] - max_diff) & (ref.t <= te[-1] + max_diff)
-        keep &= (ref.t >= te[0]) & (ref.t <= te[-1])
-        idx = np.flatnonzero(keep)
+        idx = np.flatnonzero((ref.t >= te[0]) & (ref.t <= te[-1]))  # interpolation never extrapolates
         if idx.size < 2:
             raise _no_pairs(est, ref, max_diff, offset)
         tq = ref.t[idx]
@@ -837,7 +835,7 @@ def plot(results: list[ErrorResult] | ErrorResult, path: str | os.PathLike | Non
 
 
 def evaluate(est, ref, align: str = "rigid", rpe_delta: float | None = None, rpe_unit: str = "m",
-             **kw) -> dict[str, ErrorResult]:
+             all_pairs: bool = False, **kw) -> dict[str, ErrorResult]:
     r"""APE and, when ``rpe_delta`` is given, RPE of an estimate against a reference.
 
     Parameters
@@ -851,6 +849,8 @@ def evaluate(est, ref, align: str = "rigid", rpe_delta: float | None = None, rpe
         depends on the alignment's scale only).
     rpe_delta, rpe_unit :
         The RPE's spacing and its unit ("m", "s" or "frames").
+    all_pairs : bool
+        The RPE over every pair at that spacing, not consecutive ones (see :func:`rpe`).
     **kw :
         ``max_diff``, ``method``, ``offset``: the time association (:func:`associate`).
 
@@ -876,5 +876,5 @@ def evaluate(est, ref, align: str = "rigid", rpe_delta: float | None = None, rpe
         ref = read_trajectory(ref)
     out = {"ape": ape(est, ref, align=align, **kw)}
     if rpe_delta is not None:
-        out["rpe"] = rpe(est, ref, delta=rpe_delta, unit=rpe_unit, align=align, **kw)
+        out["rpe"] = rpe(est, ref, delta=rpe_delta, unit=rpe_unit, align=align, all_pairs=all_pairs, **kw)
     return out
