@@ -648,6 +648,19 @@ class NavModel:
         out = self._interleave(parts, times.size)
         return Affine(out.A, out.c, self._labels("v", times, ax))
 
+    @functools.cached_property
+    def _rate_columns(self) -> np.ndarray:
+        """Change of the corrected body rates per unit parameter on all of the model's
+        parameters, (N, 3, q), rad/s per unit (zero for parameters without rate columns); made
+        once per model, for every stance item that asks."""
+        W = np.zeros((self.N, 3, self.q))
+        for comp in getattr(self.error_model, "components", (self.error_model,)):
+            if comp is None or not hasattr(comp, "rate_columns"):
+                continue
+            idx = [self.param_names.index(n) for n in comp.names(self.data)]
+            W[:, :, idx] += np.asarray(comp.rate_columns(self.data), dtype=float)
+        return W
+
     def body_rate(self, t, axes=None, what: str = "body rate") -> Affine:
         r"""The corrected gyro rates in the body frame at times ``t`` (rad/s), affine in the
         gyro error models' parameters: rows ordered time-major, then body axis.
@@ -683,14 +696,7 @@ class NavModel:
             raise InputError(f"{what}: body axes {list(names)}; give some of {list(body)}")
         ax = tuple(body.index(a) for a in names)
         P = self.grid.interpolation_matrix(times, what)
-        W = np.zeros((self.N, 3, self.q))
-        comps = getattr(self.error_model, "components", (self.error_model,))
-        for comp in comps:
-            if comp is None or not hasattr(comp, "rate_columns"):
-                continue
-            cols = np.asarray(comp.rate_columns(self.data), dtype=float)
-            idx = [self.param_names.index(n) for n in comp.names(self.data)]
-            W[:, :, idx] += cols
+        W = self._rate_columns
         L = self.params().A
         empty = sp.csr_matrix((times.size, self.size))
         parts = [Affine(sp.csr_matrix(P @ W[:, a, :]) @ L if self.q else empty,
