@@ -462,17 +462,6 @@ def _settings(method: str, threshold, sigma_a, sigma_w, acc_threshold, gyro_thre
     return {"acc_threshold": acc, "gyro_threshold": gyr, "threshold": 1.0}
 
 
-def _running(x: np.ndarray, n: int, how: str) -> np.ndarray:
-    """Centred running minimum or maximum of ``x`` over ``n`` samples (shorter at the ends)."""
-    half = n // 2
-    fill = np.inf if how == "min" else -np.inf
-    views = sliding_window_view(np.concatenate([np.full(half, fill), x, np.full(n - 1 - half, fill)]), n)
-    out = np.empty(x.size)
-    for sl in _window_blocks(views.shape[0], n):
-        out[sl] = views[sl].min(axis=1) if how == "min" else views[sl].max(axis=1)
-    return out
-
-
 def adaptive_threshold(t, statistic, *, span: float = ADAPTIVE_SPAN, above_min: float = ADAPTIVE_ABOVE_MIN,
                        below_max: float = ADAPTIVE_BELOW_MAX, floor: float = SHOE_THRESHOLD) -> np.ndarray:
     r"""A per-sample SHOE threshold from the recording's own statistic (walking and running).
@@ -536,7 +525,11 @@ def adaptive_threshold(t, statistic, *, span: float = ADAPTIVE_SPAN, above_min: 
     step = float(np.median(np.diff(t)))
     n = max(1, int(round(span / step)))
     s = np.log10(np.maximum(stat, np.finfo(float).tiny))
-    lo, hi = _running(s, n, "min"), _running(s, n, "max")
+    from scipy.ndimage import maximum_filter1d, minimum_filter1d
+
+    # centred running extremes over n samples, shorter at the ends
+    lo = minimum_filter1d(s, n, mode="constant", cval=np.inf)
+    hi = maximum_filter1d(s, n, mode="constant", cval=-np.inf)
     return 10.0 ** np.maximum(np.minimum(lo + above_min, hi - below_max), np.log10(floor))
 
 
@@ -726,9 +719,7 @@ def intervals_from_mask(t, mask, *, min_duration: float = 0.0) -> list[tuple[flo
     if m.shape != t.shape or t.ndim != 1:
         raise InputError(f"mask of shape {m.shape} for times of shape {t.shape}; give one boolean per "
                          "sample time")
-    edges = np.diff(np.concatenate([[0], m.view(np.int8), [0]]))
-    starts = np.flatnonzero(edges == 1)
-    ends = np.flatnonzero(edges == -1) - 1
+    starts, ends = _runs(m)
     t0, t1 = t[starts], t[ends]
     keep = (t1 > t0) & (t1 - t0 >= min_duration)
     return [(float(a), float(b)) for a, b in zip(t0[keep], t1[keep], strict=True)]
