@@ -35,9 +35,11 @@ class ZeroAngularRate(Item):
     axes : sequence of str, optional
         Body axes among ``"x", "y", "z"`` (default all three).
     sigma, mode, huber, tol, name
-        See :class:`bvpnav.items.Item`; ``sigma`` and ``tol`` in rad/s: the gyro's white
-        noise per sample (its noise density times the square root of the rate) is the
-        natural ``sigma``. Prefer it to hard rows: for a constant bias every sample of a
+        See :class:`bvpnav.items.Item`; ``sigma`` and ``tol`` in rad/s, one value or one
+        per body axis: the gyro's white noise per sample (its noise density times the
+        square root of the rate) is the natural ``sigma`` where the body is truly still
+        (a foot's stance rolls: see :func:`bvpnav.detect.zero_velocity_items`'
+        ``angular_rate="spread"``). Prefer it to hard rows: for a constant bias every sample of a
         stance gives the same row, and hundreds of identical hard rows make the system's
         conditioning estimate (and so the verification) fail where soft rows do not.
 
@@ -95,6 +97,12 @@ class ZeroAngularRate(Item):
             raise InputError(f"{self.identify()}: no sample lies in [{t0:g}, {t1:g}] s; widen the interval "
                              "or drop the item")
         return inside
+
+    def row_layout(self, m: int) -> tuple[int, int]:
+        """``(instants, body axes)`` of the ``m`` rows (time-major, then body axis), so that
+        ``sigma`` may be given per body axis (3 values) or per instant and axis."""
+        a = len(_BODY) if self.axes is None else len(self.axes)
+        return (m // a, a) if m % a == 0 else (m, 1)
 
     @classmethod
     def example(cls) -> ZeroAngularRate:

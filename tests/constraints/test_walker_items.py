@@ -67,6 +67,71 @@ def test_zero_velocity_items_emit_both_kinds():
     assert [type(i).__name__ for i in detect.zero_velocity_items([(0.0, 1.0)])] == ["ZeroVelocity"]
 
 
+def test_zero_angular_rate_sigma_per_body_axis():
+    """sigma per body axis (3 values) or per instant and axis: one row per sample and axis, time-major."""
+    model = ZeroAngularRate.example_model()
+    prob = NavigationProblem(model.data, error_model=error_models.GyroBias())
+    prob.add(ZeroAngularRate(t=(0.0, 2.0), sigma=(1e-3, 2e-3, 3e-3), name="still"))
+    rows = [term for term in prob.formulation.terms() if term.item is not None and term.item.name == "still"]
+    k = int(np.count_nonzero(model.data.t <= 2.0 + 1e-9))
+    np.testing.assert_array_equal(rows[0].sigma, np.tile([1e-3, 2e-3, 3e-3], k))
+    two = ZeroAngularRate(t=(0.0, 2.0), axes=("x", "z"), sigma=np.tile([1e-3, 3e-3], (k, 1)))
+    assert two.weight_rows(2 * k).tolist() == np.tile([1e-3, 3e-3], k).tolist()
+
+
+def _rolling_walk():
+    """A noise-free simulated walk with a constant gyro bias whose every other stance rolls
+    about body x at 0.1 rad/s in the gyro's reading (a foot that rolls while it stands)."""
+    sc = walking(rate=100.0, n_strides=6, accel_noise=0.0, gyro_noise=0.0, accel_bias=0.0, gyro_bias=0.004,
+                 seed=2)
+    intervals = sc.params["stance_intervals"]
+    w = sc.data.gyro.copy()
+    for k, (a, b) in enumerate(intervals):
+        if k % 2 == 1:
+            w[(sc.t >= a - 1e-9) & (sc.t <= b + 1e-9), 0] += 0.1
+    data = ImuData.from_gyro(sc.t, sc.data.specific_force, w, initial_attitude=sc.data.attitude[0],
+                             gravity=sc.data.gravity)
+    return sc, data, intervals, sc.data.gyro[sc.params["stance"]].mean(axis=0)
+
+
+def test_zero_angular_rate_spread_sigma_is_each_stance_rms():
+    sc, data, intervals, bias = _rolling_walk()
+    items = detect.zero_velocity_items(intervals, angular_rate="spread", data=data, sigma=0.01)
+    rate = [it for it in items if isinstance(it, ZeroAngularRate)]
+    assert len(rate) == len(intervals)
+    for k, ((a, b), it) in enumerate(zip(intervals, rate, strict=True)):
+        inside = (data.t >= a - 1e-9) & (data.t <= b + 1e-9)
+        expect = np.sqrt(np.mean(data.gyro[inside] ** 2, axis=0))
+        assert it.sigma.shape == (inside.sum(), 3)
+        np.testing.assert_allclose(it.sigma, np.tile(expect, (inside.sum(), 1)), rtol=1e-12)
+        # a rolling stance weighs by its roll, a still one by the bias it reads
+        assert it.sigma[0, 0] == pytest.approx(abs(0.1 + bias[0]) if k % 2 else abs(bias[0]), rel=1e-6)
+    with pytest.raises(InputError, match=r"data=.*from_gyro"):
+        detect.zero_velocity_items(intervals, angular_rate="spread")
+    with pytest.raises(InputError, match=r"angular_rate='noise'.*'spread'"):
+        detect.zero_velocity_items(intervals, angular_rate="noise", data=data)
+    with pytest.raises(InputError, match=r"interval 0 \(100, 101\) s holds no sample"):
+        detect.zero_velocity_items([(100.0, 101.0)], angular_rate="spread", data=data)
+
+
+def test_zero_angular_rate_spread_keeps_a_rolling_stance_out_of_the_bias():
+    """At the gyro's noise sigma the stances that roll (0.1 rad/s, half of the inner ones) pull
+    the x bias by 2.4e-2 rad/s; with each stance's own spread as its sigma by under 1e-3."""
+    sc, data, intervals, bias = _rolling_walk()
+    errors = {}
+    for rate in (1e-3, "spread"):
+        prob = NavigationProblem(data, error_model=error_models.GyroBias())
+        prob.add(*detect.zero_velocity_items(intervals, angular_rate=rate, data=data, sigma=0.01))
+        prob.add(Position(t=[sc.t[0]], value=sc.position[0]))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the plausibility notes are not what is tested here
+            sol = prob.solve(solver="direct")
+        errors[rate] = sol.error_params[["gyro_bias_x", "gyro_bias_y", "gyro_bias_z"]].to_numpy() - bias
+    assert abs(errors[1e-3][0]) > 0.01
+    assert abs(errors["spread"][0]) < 1e-3
+    assert np.max(np.abs(errors["spread"][1:])) < 1e-4
+
+
 def test_zero_angular_rate_needs_a_gyro_model_and_gyro_rates():
     t = np.linspace(0.0, 2.0, 21)
     f = np.tile([0.0, 0.0, 9.80665], (t.size, 1))
