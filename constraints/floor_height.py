@@ -61,6 +61,11 @@ class FloorHeight(Item):
     axis: str = "z"
     units = "m"
 
+    @property
+    def heading_information(self) -> bool:
+        """A height profile on the vertical axis says nothing about the heading."""
+        return self.axis != "z"
+
     def validate(self) -> None:
         label = self.label
         t = times(self.t, label)

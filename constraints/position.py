@@ -62,6 +62,12 @@ class Position(Item):
         """Number of instants (rows per axis)."""
         return int(self.t.size)
 
+    @property
+    def heading_information(self) -> bool:
+        """Positions at one instant (a start) say nothing about the heading; at two or more
+        they do (a displacement, or a loop that closes)."""
+        return self.t.size > 1
+
     @classmethod
     def example(cls) -> Position:
         """A valid instance for a window of [0, 10] s with axes x, y, z (contract tests)."""

@@ -49,6 +49,9 @@ class ZeroVelocity(Item):
     t0: Any
     t1: Any
     units = "m/s"
+    #: Zero velocity is the same in every horizontal direction: it says nothing about the
+    #: heading (the attitude loop holds the yaw-rate gyro bias when nothing else does).
+    heading_information = False
 
     def validate(self) -> None:
         a, b = interval(self.t0, self.t1, self.label)

@@ -148,6 +148,27 @@ def final_error(t, xy, gt) -> float:
     return float(ape(Trajectory(t, np.asarray(xy)[:, :2]), Trajectory(t, gt), align="yaw", first=k).error[-1])
 
 
+def headings(t, xy, gt, intervals) -> tuple[float, float]:
+    """Heading errors of the strides (stance to stance, the stances' mean positions), deg:
+    the RMS over the strides after the best 2-D rigid fit of the whole track, and the turn
+    error (the last stride's heading error minus the first's: the error of the total turn,
+    free of any alignment). Strides shorter than :data:`MIN_STRIDE` on the truth are left out."""
+    al = ape(Trajectory(t, np.asarray(xy)[:, :2]), Trajectory(t, gt), align="yaw")
+    est = al.estimate.xyz[:, :2]
+    ref = al.reference.xyz[:, :2]
+    ti = al.t
+
+    def strides(p):
+        means = np.array([p[(ti >= a - 1e-9) & (ti <= b + 1e-9)].mean(axis=0) for a, b in intervals])
+        return np.diff(means, axis=0)
+
+    de, dg = strides(est), strides(ref)
+    keep = np.linalg.norm(dg, axis=1) > MIN_STRIDE
+    err = np.degrees(np.angle(np.exp(1j * (np.arctan2(de[:, 1], de[:, 0]) - np.arctan2(dg[:, 1], dg[:, 0])))))
+    err = err[keep]
+    return float(np.sqrt(np.mean(err**2))), float(err[-1] - err[0])
+
+
 def integrate(t, acc, still, dedrift: bool) -> np.ndarray:
     """Plain ZUPT integration (velocity reset at every still sample), optionally with the
     velocity de-drifted linearly over each swing (what gait pipelines do); positions (N, 3)."""
@@ -181,7 +202,7 @@ def solve(data, intervals, em, *, sigma=None, sigma_a=None, rate_sigma=None, sam
     prob = NavigationProblem(data, error_model=em, sigma_a=sigma_a)
     kw = {} if sigma is None else {"sigma": sigma}
     prob.add(Position(t=float(data.t[0]), value=0.0, name="start"))
-    prob.add(*detect.zero_velocity_items(intervals, angular_rate=rate_sigma, **kw))
+    prob.add(*detect.zero_velocity_items(intervals, angular_rate=rate_sigma, data=data, **kw))
     if same is not None:
         ends = (float(data.t[0]), float(data.t[-1]))
         prob.add(SamePosition(t=ends, sigma=same, axes=("x", "y"), name="loop"))
@@ -194,7 +215,11 @@ def solve(data, intervals, em, *, sigma=None, sigma_a=None, rate_sigma=None, sam
 #: Rows of the real-data table.
 ROWS = ("plain ZUPT (SHOE 1e5, W 5)", "de-drift per swing (same)", "Bias() + same stances",
         "Bias() + stationary() defaults", "documented path (adaptive)", "+ ZeroAngularRate + GyroBias",
-        "pyshoe filter (tuned on truth)")
+        "+ ZeroAngularRate('spread') + GyroBias", "pyshoe filter (tuned on truth)")
+#: Heading columns: RMS stride-heading error (deg) and turn error (deg) of (5), (6), (7).
+HEADING = ((ROWS[4], "(5)"), (ROWS[5], "(6)"), (ROWS[6], "(7)"))
+#: A stride shorter than this (m, on the truth) has no heading worth scoring.
+MIN_STRIDE = 0.3
 #: Columns of the end-near-start table.
 FINAL = ("documented path", "+ SamePosition 0.1 m", "+ SamePosition 1 mm", "truth's end to start",
          "gap closed by 0.1 m (%)", "+ GyroBias + SamePosition")
@@ -216,6 +241,7 @@ def run_trial(tr: Trial, gyro: bool = True) -> dict:
     doc = dict(sigma=ZUPT_SIGMA, sigma_a=SIGMA_A)
     p = solve(data, det, Bias(), **doc)[0].position().reshape(-1, 3)
     out[ROWS[4]] = rms(t, p, gt)
+    out["heading " + ROWS[4]] = headings(t, p, gt, det.intervals)
     out[FINAL[0]] = final_error(t, p, gt)
     gap0 = float(np.linalg.norm(p[-1, :2] - p[0, :2]))
     p = solve(data, det, Bias(), same=SAME_SIGMA, **doc)[0].position().reshape(-1, 3)
@@ -228,13 +254,20 @@ def run_trial(tr: Trial, gyro: bool = True) -> dict:
         sol, ws = solve(data, det, Bias() + GyroBias(), rate_sigma=GYRO_SIGMA, attitude={"tol": 1e-4}, **doc)
         p = sol.position().reshape(-1, 3)
         out[ROWS[5]] = rms(t, p, gt)
+        out["heading " + ROWS[5]] = headings(t, p, gt, det.intervals)
         out["gyro bias (rad/s)"] = np.array([sol.error_params[f"gyro_bias_{a}"] for a in "xyz"])
         out["stance gyro mean (rad/s)"] = tr.w[det.mask].mean(axis=0)
         out["warnings"] = ws
+        sol, ws = solve(data, det, Bias() + GyroBias(), rate_sigma="spread", attitude={"tol": 1e-4}, **doc)
+        p = sol.position().reshape(-1, 3)
+        out[ROWS[6]] = rms(t, p, gt)
+        out["heading " + ROWS[6]] = headings(t, p, gt, det.intervals)
+        out["gyro bias spread (rad/s)"] = np.array([sol.error_params[f"gyro_bias_{a}"] for a in "xyz"])
+        out["warnings spread"] = ws
         sol, _ = solve(data, det, Bias() + GyroBias(), rate_sigma=GYRO_SIGMA, attitude={"tol": 1e-4},
                        same=SAME_SIGMA, **doc)
         out[FINAL[5]] = final_error(t, sol.position().reshape(-1, 3), gt)
-    out[ROWS[6]] = rms(t, tr.pyshoe, gt)
+    out[ROWS[7]] = rms(t, tr.pyshoe, gt)
     out["seconds"] = time.perf_counter() - c0
     return out
 
@@ -244,6 +277,27 @@ def _summary(res: dict, cols, fmt: str, width: int = 10) -> None:
     for lab, fn in (("walking median", np.median), ("walking worst", np.max)):
         vals = [fn([r.get(c, np.nan) for r in walk]) if walk else np.nan for c in cols]
         print(f"{lab:<29} " + " ".join(f"{v:>{width}{fmt}}" for v in vals))
+
+
+def _heading_table(res: dict) -> None:
+    """Per trial the stride-heading RMS and the turn error (deg) of (5), (6), (7); a ``!`` marks an
+    attitude-model answer worse than (5) by more than 1 degree on either, ``w`` one that warned."""
+    print("\nHeading errors (deg): RMS over the strides after the rigid fit / turn error (last stride "
+          "minus first); ! = worse than (5) by > 1 deg, w = the solve warned")
+    print(f"{'trial':<19} {'kind':<9} " + " ".join(f"{lab:>16}" for _, lab in HEADING))
+    for name, r in res.items():
+        base = r["heading " + ROWS[4]]
+        cells = []
+        for k, (row, _) in enumerate(HEADING):
+            h = r.get("heading " + row)
+            if h is None:
+                cells.append(f"{'-':>16}")
+                continue
+            worse = k > 0 and (h[0] > base[0] + 1.0 or abs(h[1]) > abs(base[1]) + 1.0)
+            warned = k > 0 and bool(r["warnings" if k == 1 else "warnings spread"])
+            mark = ("!" if worse else " ") + ("w" if warned else " ")
+            cells.append(f"{h[0]:>6.2f} /{h[1]:>+6.2f}{mark}")
+        print(f"{name:<19} {r['kind']:<9} " + " ".join(cells))
 
 
 def main_real(folder: str, only: str | None = None, gyro: bool = True) -> dict:
@@ -271,10 +325,13 @@ def main_real(folder: str, only: str | None = None, gyro: bool = True) -> dict:
         print(f"{name:<19} {r['kind']:<9} " + " ".join(f"{r.get(c, np.nan):>10.3f}" for c in fin))
     _summary(res, fin, ".3f")
     if gyro:
-        print("\nGyro bias of (6) against the mean gyro reading in the detected stances (rad/s):")
+        _heading_table(res)
+        print("\nGyro bias of (6) and (7) against the mean gyro reading in the detected stances (rad/s):")
         for name, r in res.items():
-            print(f"{name:<19} {np.array2string(r['gyro bias (rad/s)'], precision=4):>30} "
-                  f"{np.array2string(r['stance gyro mean (rad/s)'], precision=4):>30}  warnings: "
-                  f"{len(r['warnings'])}" + "".join(f"\n    {w[:150]}" for w in r["warnings"]))
+            print(f"{name:<19} (6) {np.array2string(r['gyro bias (rad/s)'], precision=4):>30} "
+                  f"(7) {np.array2string(r['gyro bias spread (rad/s)'], precision=4):>30} stances "
+                  f"{np.array2string(r['stance gyro mean (rad/s)'], precision=4):>30}")
+            for key in ("warnings", "warnings spread"):
+                print(f"    {key}: {len(r[key])}" + "".join(f"\n      {w[:150]}" for w in r[key]))
     print("\ntime per trial (s): " + ", ".join(f"{r['seconds']:.1f}" for r in res.values()))
     return res

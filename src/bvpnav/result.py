@@ -211,6 +211,14 @@ class AttitudeLoopReport(_Record):
         What the heading search found: ``"searched"`` (the best candidate is the start) or
         ``"unobservable"`` (the candidates cannot differ: the given heading is kept, with
         a warning); None (not a key) without a search.
+    held : list of str or None
+        Gyro-bias parameters the loop held at their prior because nothing carried heading
+        information (the yaw-rate bias; with a warning); None (not a key) when none.
+    objective_parts : dict or None
+        ``initial`` (the start: the attitude as the data give it, after the heading search)
+        and ``answer``: the objective's parts there, ``motion`` (the data rows and the items
+        the fixed-attitude solve fits), ``gyro_items`` (items on the attitude models alone,
+        e.g. ZeroAngularRate) and ``priors``.
     """
 
     kind: str
@@ -226,8 +234,10 @@ class AttitudeLoopReport(_Record):
     seconds: float
     inner: Any = None
     heading: str | None = None
+    held: list | None = None
+    objective_parts: dict | None = None
 
-    _optional = ("inner", "heading")
+    _optional = ("inner", "heading", "held", "objective_parts")
 
     def as_dict(self) -> dict[str, Any]:
         out = super().as_dict()

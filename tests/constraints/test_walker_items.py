@@ -249,3 +249,86 @@ def test_known_distance_determines_a_scale_factor():
         KnownDistance(t=(0.0, 1.0), distance=1.0, direction=(1.0, 1.0, 0.0))
     with pytest.raises(InputError, match="distance > 0"):
         KnownDistance(t=(0.0, 1.0), distance=0.0)
+
+
+def test_yaw_rate_gyro_bias_held_at_its_prior_without_heading_information():
+    """A noise-free simulated walk (constant gyro bias, exact stances) with stances and the start
+    only: nothing tells the yaw-rate bias from the swings' own errors, so the loop holds it at its
+    prior (here 0, then 1e-3 rad/s) to 1e-9 and says so, while x and y (tilt, seen by the stances)
+    are recovered to 15 %; with a ZeroAngularRate on z it is estimated again (no hold)."""
+    sc = walking(rate=100.0, n_strides=8, accel_noise=0.0, gyro_noise=0.0, accel_bias=0.0, gyro_bias=0.004,
+                 seed=2)
+    bias = sc.data.gyro[sc.params["stance"]].mean(axis=0)
+    intervals = sc.params["stance_intervals"]
+    names = ["gyro_bias_x", "gyro_bias_y", "gyro_bias_z"]
+    for prior in (0.0, 1e-3):
+        model = error_models.GyroBias(sigma=0.05, prior=[0.0, 0.0, prior])
+        prob = NavigationProblem(sc.data, error_model=model)
+        prob.add(*detect.zero_velocity_items(intervals, sigma=0.01))
+        prob.add(Position(t=[sc.t[0]], value=sc.position[0]))
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            sol = prob.solve(solver="direct", attitude={"tol": 1e-9})
+        est = sol.error_params[names].to_numpy()
+        assert abs(est[2] - prior) < 1e-9
+        np.testing.assert_allclose(est[:2], bias[:2], rtol=0.15)
+        held = [str(w.message) for w in caught if "heading information" in str(w.message)]
+        assert len(held) == 1 and "gyro_bias_z held at the prior" in held[0]
+        assert "ZeroAngularRate on axis z" in held[0]
+        assert held[0] in sol.warnings
+        assert sol.stats["sequential"]["held"] == ["gyro_bias_z"]
+    prob = NavigationProblem(sc.data, error_model=error_models.GyroBias())
+    prob.add(*detect.zero_velocity_items(intervals, angular_rate=1e-5, sigma=0.01))
+    prob.add(Position(t=[sc.t[0]], value=sc.position[0]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sol = prob.solve(solver="direct")
+    assert "held" not in sol.stats["sequential"]
+    assert abs(sol.error_params["gyro_bias_z"] - bias[2]) < 1e-6
+
+
+def test_gyro_bias_hold_names_the_axes():
+    assert error_models.GyroBias(hold="z").hold == ("z",)
+    with pytest.raises(InputError, match=r"hold='q'.*estimated body axes"):
+        error_models.GyroBias(hold="q")
+    with pytest.raises(InputError, match=r"hold=\('z',\).*\['x', 'y'\]"):
+        error_models.GyroBias(axes=("x", "y"), hold=("z",))
+
+
+def test_parts_warnings_name_which_part_the_attitude_models_traded():
+    """The chi-square limit for 3 parameters at 0.999 is 16.27: a rise of the motion's part
+    beyond it names the stances' gyro readings; a rise of the gyro items' part while the motion's
+    falls names the motion's misfit; both falling (or rises within the limit) say nothing."""
+    from bvpnav.solve.attitude import parts_warnings
+
+    def parts(m0, g0, m1, g1):
+        return {"initial": {"motion": m0, "gyro_items": g0, "priors": 0.0},
+                "answer": {"motion": m1, "gyro_items": g1, "priors": 1.0}}
+
+    (a,) = parts_warnings(parts(5679.5, 985674.1, 28855.9, 917816.0), 3)  # measured on a real walk
+    assert "fitting the motion worse (5679.5 -> 28855.9" in a and "beyond 16.3 for 3 parameters" in a
+    assert "angular_rate='spread'" in a
+    (b,) = parts_warnings(parts(5679.5, 7584.0, 3650.6, 7721.4), 3)  # the same walk, 'spread'
+    assert "contradict (7584 -> 7721.4" in b and "leave GyroBias out" in b
+    assert parts_warnings(parts(19.33, 7984.0, 0.38, 0.0), 3) == []  # a consistent walk: both fall
+    assert parts_warnings(parts(100.0, 50.0, 116.0, 10.0), 3) == []  # a rise within the limit
+    assert parts_warnings(parts(100.0, 50.0, 116.5, 10.0), 3) != []
+    assert parts_warnings(parts(100.0, 50.0, 90.0, 66.0), 3) == []
+    assert parts_warnings(None, 3) == [] and parts_warnings({"initial": None, "answer": None}, 3) == []
+
+
+def test_a_consistent_walk_gives_no_attitude_parts_warning():
+    """Noise-free stances reading the bias alone: the gyro items and the motion both fall."""
+    sc = walking(rate=100.0, n_strides=3, accel_noise=0.0, gyro_noise=0.0, accel_bias=0.0, gyro_bias=0.004,
+                 seed=2)
+    prob = NavigationProblem(sc.data, error_model=error_models.GyroBias())
+    prob.add(*detect.zero_velocity_items(sc.params["stance_intervals"], angular_rate="spread", data=sc.data,
+                                         sigma=0.01))
+    prob.add(Position(t=[sc.t[0]], value=sc.position[0]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sol = prob.solve(solver="direct")
+    parts = sol.stats["sequential"]["objective_parts"]
+    assert parts["answer"]["motion"] < parts["initial"]["motion"]
+    assert parts["answer"]["gyro_items"] < parts["initial"]["gyro_items"]
+    assert not [w for w in sol.warnings if w.startswith("attitude models:")]

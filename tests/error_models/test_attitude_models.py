@@ -334,7 +334,13 @@ def test_attitude_models_round_trip_through_spec_files(motion):
 def test_cli_solves_a_strapdown_recording_with_gyro_bias(tmp_path):
     """simulate walking -> spec with GyroBias + tilt AttitudeError -> solve: the gyro bias's
     horizontal components come back within 3e-4 rad/s of the simulation's 1e-3 (-0.48, 0.64),
-    the loop's report is in the JSON summary, and the trajectory is as good as without."""
+    the loop's report is in the JSON summary, and the trajectory's shape is better than without.
+
+    Stances and the start only: nothing carries heading information, so the yaw-rate bias is
+    held at its prior (0; the truth's 6e-4 rad/s was estimated as 3.8e-4 from the swings before
+    the hold) and the heading is not observable: the trajectory is compared after a rigid fit
+    about the vertical (measured 0.018 m held, 0.0175 m estimated, 0.030 m without the models;
+    without the fit 0.052, 0.039 and 0.064 m: the heading)."""
     import json
 
     import pandas as pd
@@ -355,11 +361,15 @@ def test_cli_solves_a_strapdown_recording_with_gyro_bias(tmp_path):
     assert est["gyro_bias_x"]["units"] == "rad/s"
     assert abs(est["gyro_bias_x"]["estimate"] - (-0.48e-3)) < 3e-4
     assert abs(est["gyro_bias_y"]["estimate"] - 0.64e-3) < 3e-4
+    assert est["gyro_bias_z"]["estimate"] == pytest.approx(0.0, abs=1e-12)
     loop = summary["solver"]["sequential"]
-    assert loop["kind"] == "attitude" and loop["converged"]
+    assert loop["kind"] == "attitude" and loop["converged"] and loop["held"] == ["gyro_bias_z"]
+    from bvpnav.evaluate import Trajectory, ape
+
     got, truth = pd.read_csv(out), pd.read_csv(rec / "truth.csv")
-    rms = float(np.sqrt(np.mean(sum((got[c] - truth[c]) ** 2 for c in "xyz"))))
-    assert rms < 0.05  # without the models: 0.037 m (the heading is not observable here)
+    fit = ape(Trajectory(got["t"].to_numpy(), got[list("xyz")].to_numpy()),
+              Trajectory(truth["t"].to_numpy(), truth[list("xyz")].to_numpy()), align="yaw")
+    assert fit.rmse < 0.02  # without the models: 0.030 m
 
 
 def test_a_loop_stopped_early_answers_with_its_last_accepted_point(motion):

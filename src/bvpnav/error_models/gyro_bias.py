@@ -46,6 +46,11 @@ class GyroBias(AttitudeErrorModel):
         or a factor graph's bias random-walk sigma): a prior
         :math:`(b_{m+1} - b_m) \sim N(0, \sigma_d^2 \Delta t_m)` on successive knots.
         Needs ``interval``.
+    hold : str or sequence of str, optional
+        Body axes whose bias is not estimated but held at its prior value (``prior``, 0 by
+        default) by a hard row on the total, e.g. ``hold="z"`` for the yaw-rate gyro of a
+        level body when nothing carries heading information: the attitude loop does this
+        itself then (and says so in a warning and ``stats["sequential"]["held"]``).
 
     Notes
     -----
@@ -84,6 +89,7 @@ class GyroBias(AttitudeErrorModel):
 
     interval: Any = None
     drift: Any = None
+    hold: Any = None
     units = "rad/s"
     default_step_scale = 1e-3
 
@@ -95,6 +101,13 @@ class GyroBias(AttitudeErrorModel):
                              "bias is constant")
         if self.bounds is not None:
             raise InputError("GyroBias: bounds are not supported; give sigma= (a prior on the total)")
+        if self.hold is not None:
+            held = (self.hold,) if isinstance(self.hold, str) else tuple(self.hold)
+            sel = [self.AXES[i] for i in self._sel()]
+            bad = [a for a in held if a not in sel]
+            if bad or not held:
+                raise InputError(f"GyroBias: hold={self.hold!r}; give some of the estimated body axes {sel}")
+            object.__setattr__(self, "hold", held)
 
     def knots(self, data) -> np.ndarray | None:
         """Knot times in s (None for a constant bias)."""
@@ -175,12 +188,33 @@ class GyroBias(AttitudeErrorModel):
             return 0.0
         return random_walk_cost(self.base(data), self.knots(data), self.drift)
 
+    def held(self, data) -> np.ndarray:
+        """Indices (into :meth:`names`) of the parameters ``hold`` keeps at their prior."""
+        if not self.hold:
+            return np.zeros(0, dtype=int)
+        names = self.names(data)
+        axes = [self.AXES[i] for i in self._sel()]
+        m = len(names) // len(axes)
+        idx = [a * m + k for a, ax in enumerate(axes) if ax in self.hold for k in range(m)]
+        return np.array(idx, dtype=int)
+
     def extra_terms(self, model) -> list:
-        if self.drift is None:
-            return []
+        from ..terms import Term
+        from ._base import _relabel
+
         data = model.data
-        return [random_walk_term(model, self.names(data), self.knots(data), self.drift, self.units,
-                                 "random walk GyroBias", base=self.base(data))]
+        out = []
+        if self.drift is not None:
+            out.append(random_walk_term(model, self.names(data), self.knots(data), self.drift, self.units,
+                                        "random walk GyroBias", base=self.base(data)))
+        idx = self.held(data)
+        if idx.size:
+            names = self.names(data)
+            rows = self.physical_rows(model, self.prior_values(data)).rows(idx)
+            out.append(Term(label=f"held GyroBias[{', '.join(self.hold)}]", item=None,
+                            residual=_relabel(rows, [names[k] for k in idx], "held at its prior"),
+                            mode="hard", kind="equality", scaled_by_lam=False, units=self.units))
+        return out
 
     @classmethod
     def example(cls) -> GyroBias:

@@ -73,7 +73,8 @@ from ..log import progress, warn
 from ..model import Cone
 from ..result import AttitudeLoopReport, Solution
 
-__all__ = ["with_attitude", "check_attitude", "ATTITUDE_DEFAULTS", "objective_value"]
+__all__ = ["with_attitude", "check_attitude", "ATTITUDE_DEFAULTS", "objective_value", "hold_yaw_rate",
+           "parts_warnings"]
 
 log = logging.getLogger(__name__)
 
@@ -99,6 +100,13 @@ HEADING_PROOF = 5
 
 #: Largest damping weight tried before the loop stops at a point no step improves.
 MAX_DAMPING = 1e12
+
+#: A part of the objective (the motion's, or the gyro-only items') that rises from the start
+#: to the answer by more than the chi-square quantile of this probability (degrees of
+#: freedom: the attitude parameters) is a conflict between the two, with a warning: where the
+#: model holds, an attitude correction lowers both or moves either by about its parameter
+#: count.
+PARTS_CONFIDENCE = 0.999
 
 
 def check_attitude(options: dict | None) -> dict:
@@ -160,6 +168,7 @@ class _Loop:
         self.checked: dict = {}
         self.curve = None
         self._data: dict = {}
+        self.parts: dict = {}
 
     def data_at(self, values: dict):
         """The data re-integrated at the totals ``values`` (undamped), kept for the few most
@@ -208,8 +217,18 @@ class _Loop:
         data = self.data_at(values)
         sol = self._solve(self._form(data, self.rest_model))
         used = sol.formulation
-        j = objective_value(used, sol.x, float(sol.lam)) + sum(c.prior_cost(data) for c in self.comps)
-        return j + self.item_cost(data, float(sol.lam)), sol
+        motion = objective_value(used, sol.x, float(sol.lam))
+        priors = sum(c.prior_cost(data) for c in self.comps)
+        gyro_items = self.item_cost(data, float(sol.lam))
+        self.parts[tuple(float(values[n]) for n in self.names)] = {
+            "motion": motion, "gyro_items": gyro_items, "priors": priors}
+        return motion + priors + gyro_items, sol
+
+    def parts_at(self, values: dict) -> dict | None:
+        """The objective's parts at an evaluated point: ``motion`` (the data rows and the items
+        the fixed-attitude solve fits), ``gyro_items`` (items on the attitude models alone, e.g.
+        ZeroAngularRate) and ``priors``; None for a point not evaluated."""
+        return self.parts.get(tuple(float(values[n]) for n in self.names))
 
     def item_cost(self, data, lam: float) -> float:
         r"""The cost, at zero increments, of the items that act on the attitude error models
@@ -350,6 +369,122 @@ def _at_point(loop: _Loop, values: dict, at_values: Solution) -> Solution:
     return sol
 
 
+def _informs_yaw_rate(item, axis: str) -> bool:
+    """Whether ``item`` carries information on the heading or on the gyro along body ``axis``:
+    a ZeroAngularRate on that axis, or any item that does not declare
+    ``heading_information`` False (unknown items count as informing)."""
+    if getattr(item, "zero_rate", False):
+        return item.axes is None or axis in item.axes
+    return bool(getattr(item, "heading_information", True))
+
+
+def hold_yaw_rate(form: Formulation) -> tuple[Formulation, list, str]:
+    """The formulation with the yaw-rate gyro bias held at its prior when nothing informs it.
+
+    Returns ``(formulation, held parameter names, warning)``; the formulation unchanged (and
+    ``[]``, ``""``) when there is no ``GyroBias`` on the vertical body axis or an item informs it.
+
+    Notes
+    -----
+    The vertical body axis is the one along the mean specific force of the recording (the
+    up direction of a body that is, on average, not accelerating). A bias about it turns
+    the horizontal acceleration of the motion only: stances (zero velocity, the same in every
+    direction), a floor height and a start position cannot tell it from the swing's own
+    errors, and an estimate there absorbs them (2.1 deg/s on a real walk whose gyro read
+    under 0.01 deg/s in every stance). Held by a hard row on the total at the prior
+    (:class:`~bvpnav.error_models.GyroBias` ``hold``), it stays there exactly.
+    """
+    from ..error_models.gyro_bias import GyroBias
+
+    comps = list(getattr(form.error_model, "components", (form.error_model,)))
+    sf = getattr(form.data, "specific_force", None)
+    if sf is None or not any(isinstance(c, GyroBias) for c in comps):
+        return form, [], ""
+    axis = "xyz"[int(np.argmax(np.abs(np.mean(np.asarray(sf, dtype=float), axis=0))))]
+    targets = [i for i, c in enumerate(comps) if isinstance(c, GyroBias)
+               and axis in [c.AXES[j] for j in c._sel()] and axis not in (c.hold or ())]
+    if not targets or any(_informs_yaw_rate(it, axis) for it in form.items):
+        return form, [], ""
+    from dataclasses import replace
+
+    for i in targets:
+        comps[i] = replace(comps[i], hold=tuple(comps[i].hold or ()) + (axis,))
+    em = comps[0] if len(comps) == 1 else sum(comps[1:], comps[0])
+    out = Formulation(form.data, form.residual, form.sigma_a if form.sigma_a_given else None, em, form.items,
+                      grade=None)
+    out.grade_report = form.grade_report
+    held = [n for i in targets for n in (comps[i].names(form.data)[k] for k in comps[i].held(form.data))
+            if n.startswith(f"gyro_bias_{axis}")]
+    kinds = sorted({type(it).__name__ for it in form.items}) or ["none"]
+    prior = sorted({float(v) for i in targets
+                    for v in comps[i].prior_values(form.data)[comps[i].held(form.data)]})
+    msg = (f"attitude loop: nothing carries heading information (items: {', '.join(kinds)}), so the "
+           f"yaw-rate gyro bias (body axis {axis}, along the mean specific force) cannot be told from the "
+           f"motion's own errors: {len(held)} parameter(s) gyro_bias_{axis} held at the prior "
+           f"({', '.join(f'{p:g}' for p in prior)} rad/s) instead of estimated. To estimate it, add heading "
+           f"information (positions at other instants, a SamePosition of a loop, a KnownDistance) or a "
+           f"ZeroAngularRate on axis {axis}")
+    return out, held, msg
+
+
+def parts_warnings(parts: dict | None, q: int) -> list[str]:
+    r"""Warnings when the attitude models' answer trades one part of the objective for the other.
+
+    Parameters
+    ----------
+    parts : dict
+        ``{"initial": {...}, "answer": {...}}`` of :meth:`_Loop.parts_at` (``motion``,
+        ``gyro_items``, ``priors``).
+    q : int
+        Number of attitude parameters.
+
+    Returns
+    -------
+    list of str
+
+    Notes
+    -----
+    A rise :math:`\Delta` of a part (in the stated sigmas' chi-square units) beyond
+    :math:`\chi^2_{q}(p)`, :math:`p` = :data:`PARTS_CONFIDENCE`, is more than estimating
+    :math:`q` parameters from consistent information costs it. The motion's part rising: the
+    gyro-only items (stances read by the gyro) turned the attitude against what the
+    accelerations and stances say, e.g. a foot that rolls in its detected stances. The gyro
+    items' part rising while the motion's falls: the gyro bias was set by the motion's misfit
+    (errors the model does not have, e.g. a foot's swing against a white ``sigma_a``), away
+    from what the gyro reads where the body is still; the heading follows it. On 12 real foot
+    trials with ``GyroBias`` and ``ZeroAngularRate``, either made turn and heading worse than
+    ``Bias()`` alone.
+    """
+    if not parts or parts.get("initial") is None or parts.get("answer") is None:
+        return []
+    from scipy.stats import chi2
+
+    a, b = parts["initial"], parts["answer"]
+    limit = float(chi2.ppf(PARTS_CONFIDENCE, max(int(q), 1)))
+    out = []
+    rise_m = b["motion"] - a["motion"]
+    rise_g = b["gyro_items"] - a["gyro_items"]
+    if rise_m > limit:
+        out.append(
+            f"attitude models: the answer fits the gyro-only items (e.g. ZeroAngularRate) better "
+            f"({a['gyro_items']:.6g} -> {b['gyro_items']:.6g}) by fitting the motion worse "
+            f"({a['motion']:.6g} -> {b['motion']:.6g}, a rise beyond {limit:.3g} for {q} parameters): "
+            "what the gyro reads in the intervals said to be still contradicts the accelerations (a foot "
+            "still rolls in a detected stance). Compare with the answer without the attitude models, and "
+            "give ZeroAngularRate a sigma that covers the stances' own rates "
+            "(zero_velocity_items(..., angular_rate='spread', data=data))")
+    elif rise_g > limit and rise_m < 0:
+        out.append(
+            f"attitude models: the answer fits the motion better ({a['motion']:.6g} -> {b['motion']:.6g}) "
+            f"with a gyro correction the gyro-only items (e.g. ZeroAngularRate) contradict "
+            f"({a['gyro_items']:.6g} -> {b['gyro_items']:.6g}, a rise beyond {limit:.3g} for {q} "
+            "parameters): the gyro bias absorbs errors of the motion the model does not have (sigma_a's "
+            "white noise against a swing's), away from what the gyro reads where the body is still, and "
+            "the heading follows it. Compare with the answer without the attitude models; hold the bias "
+            "at the stances' reading (GyroBias(prior=..., sigma=...)) or leave GyroBias out")
+    return out
+
+
 def _warn(sol: Solution, msg: str) -> None:
     sol.warnings.append(msg)
     warn(msg)
@@ -454,6 +589,7 @@ def with_attitude(inner: Stage) -> Stage:
             raise InputError("attitude loop: this data already carries a linearization point; give the "
                              "data as measured")
         t0 = time.perf_counter()
+        form, held, held_why = hold_yaw_rate(form)
         loop = _Loop(form, inner, opts, lam, o)
         values = {n: 0.0 for n in loop.names}
         if not o["loop"]:
@@ -464,6 +600,7 @@ def with_attitude(inner: Stage) -> Stage:
         values, search, best, heading = loop.heading_start(values)
         j, at_values = best if best is not None else loop.evaluate(values)
         j0 = j
+        start = dict(values)
         values, j, at_values, sol, iters, reason = _iterate(loop, values, j, at_values, o)
         converged = reason is not None
         if reason != "step":  # the accepted point itself, not an increment never tested
@@ -478,6 +615,11 @@ def with_attitude(inner: Stage) -> Stage:
             _warn(sol, msg)
         if heading == "unobservable":
             _warn(sol, _heading_warning(search, len(search) < int(o["candidates"])))
+        if held:
+            _warn(sol, held_why)
+        parts = {"initial": loop.parts_at(start), "answer": loop.parts_at(values)}
+        for msg in parts_warnings(parts, len(loop.names)):
+            _warn(sol, msg)
         totals = {n: float(sol.error_params[n]) for n in loop.names}
         sol.attitude = reintegrate(form.data, form.error_model, totals).attitude
         report = AttitudeLoopReport(
@@ -485,7 +627,8 @@ def with_attitude(inner: Stage) -> Stage:
             tol=float(o["tol"]),
             max_iter=int(o["max_iter"]), objective_initial=j0, objective=j, heading_search=search,
             solves=loop.solves, seconds=time.perf_counter() - t0, inner=sol.records.sequential,
-            heading=heading)
+            heading=heading, held=held or None,
+            objective_parts=parts)
         sol.records.attitude = report
         sol.record()
         if loop.rule is not None:
