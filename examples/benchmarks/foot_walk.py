@@ -73,10 +73,14 @@ walking median and worst: plain ZUPT integration and linear de-drift per swing (
 SHOE 1e5, window 5), bvpnav ``Bias()`` with those stances and with
 ``detect.stationary`` defaults, the documented pedestrian path (stances from
 ``detect.stationary(data, threshold="adaptive")``, soft 0.01 m/s, ``sigma_a=0.1``),
-that path with ``ZeroAngularRate`` (the gyro's white noise, 7.4e-3 rad/s) and
-``GyroBias()``, and the dataset's own filter tuned per trial on the truth; then the
-final-point error (heading aligned on the first 0.8 m walked) without and with a soft
-``SamePosition`` of the ends (0.1 m). The code is in ``_foot_trials.py``.
+that path with ``ZeroAngularRate`` (the gyro's white noise, 7.4e-3 rad/s, and each stance's
+own spread, ``angular_rate="spread"``) and ``GyroBias()``, and the dataset's own filter
+tuned per trial on the truth; then the final-point error (heading aligned on the first
+0.8 m walked) without and with a soft ``SamePosition`` of the ends (0.1 m; nearly hard; the
+truth's own end-to-start distance; the share of the gap the soft item closes), and the
+stride-heading and turn errors of ``Bias()`` against the attitude models, marked where
+they are worse by more than a degree and where the solve warned. The code is in
+``_foot_trials.py``.
 """
 
 from __future__ import annotations
