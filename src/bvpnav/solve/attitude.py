@@ -454,6 +454,17 @@ def parts_warnings(parts: dict | None, q: int) -> list[str]:
     from what the gyro reads where the body is still; the heading follows it. On 12 real foot
     trials with ``GyroBias`` and ``ZeroAngularRate``, either made turn and heading worse than
     ``Bias()`` alone.
+
+    Examples
+    --------
+    >>> from bvpnav.solve.attitude import parts_warnings
+    >>> walk = {"initial": {"motion": 5679.5, "gyro_items": 985674.1, "priors": 0.0},
+    ...         "answer": {"motion": 28855.9, "gyro_items": 917816.0, "priors": 5.3}}
+    >>> print(parts_warnings(walk, 3)[0][:101])
+    attitude models: the answer fits the gyro-only items (e.g. ZeroAngularRate) better (985674 -> 917816)
+    >>> walk["answer"]["motion"] = 10.0      # both parts fall: the model holds, nothing to say
+    >>> parts_warnings(walk, 3)
+    []
     """
     if not parts or parts.get("initial") is None or parts.get("answer") is None:
         return []
