@@ -26,6 +26,11 @@ drive). Methods:
 ``bvpnav defaults``
     ``Bias() + GyroBias(interval=30) + AttitudeError()`` with no priors and no
     ``sigma_a``: what a new user writes.
+``bvpnav states``
+    ``ErrorStates`` (issue 42 item 2): the attitude error and both bias random walks as states
+    at every sample, tied by their process noise (the metadata's densities), every unknown in
+    the band (border 0); ``sigma_a`` the accelerometer density times sqrt(rate); GTSAM's
+    example's bias priors, roll and pitch prior ``TILT``, heading open.
 
 The metadata's bias sigmas are per sample, as GTSAM's example applies them
 (``sqrt(count) * sigma`` between fixes): at the mean step of 10.04 ms they are random walks
@@ -84,7 +89,7 @@ FIX_SIGMA = math.sqrt(0.07)
 #: Prior sigma of the initial roll and pitch, rad: the start is in motion, so the first second's mean
 #: specific force tilts the guess by the horizontal acceleration over g (about 0.08 rad here).
 TILT = 0.1
-METHODS = ("GTSAM", "GTSAM peer", "bvpnav README", "bvpnav defaults")
+METHODS = ("GTSAM", "GTSAM peer", "bvpnav README", "bvpnav defaults", "bvpnav states")
 
 
 def data_dir() -> Path:
@@ -240,13 +245,20 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float):
     """The bvpnav problem of ``method`` (the data, the error model, the kept fixes)."""
     from bvpnav import ImuData, NavigationProblem
     from bvpnav.constraints import Position
-    from bvpnav.error_models import AttitudeError, Bias, GyroBias
+    from bvpnav.error_models import AttitudeError, Bias, ErrorStates, GyroBias
     from bvpnav.sensors import from_datasheet
 
     data = ImuData.from_gyro(d["t"], d["f"], d["w"], initial_attitude=c0,
                              gravity=np.array([0.0, 0.0, -GRAVITY]))
     rate = 1.0 / float(np.mean(np.diff(d["t"])))
-    if method == "bvpnav README":
+    if method == "bvpnav states":
+        # node states (issue 42 item 2): attitude error and both bias walks per sample, in the band;
+        # the metadata's densities, GTSAM's example's bias priors, an open heading
+        model = ErrorStates(arw=fig["gyro_noise"], gyro_drift=fig["gyro_bias_walk"],
+                            acc_drift=fig["acc_bias_walk"], attitude_sigma=[TILT, TILT, np.inf],
+                            gyro_sigma=fig["gyro_bias"], acc_sigma=fig["acc_bias"])
+        prob = NavigationProblem(data, error_model=model, sigma_a=fig["acc_noise"] * math.sqrt(rate))
+    elif method == "bvpnav README":
         g = from_datasheet(**fig, tilt=TILT, base="tactical", name="KITTI metadata")
         prob = NavigationProblem(data, error_model=g.error_model(interval), sigma_a=g.sigma_a(rate, interval))
     else:

@@ -5,7 +5,10 @@ All unknowns live in one stacked vector ``x`` (numpy here; one cvxpy Variable in
 
     [ r_a (N nodal positions, m) | w_a (N acceleration residuals, m/s^2) | v0_a, v1_a (m/s) ]
 
-followed by the error-model parameters ``l`` (q entries, units per parameter).
+followed by the error-model parameters ``l`` (q entries, units per parameter) and, when an
+error model declares them, its *node states* ``s`` (a few per time node: e.g. the attitude
+error and the random-walk biases of :class:`~bvpnav.error_models.ErrorStates`), whose
+acceleration columns are local in time (sparse ``G_s``).
 Everything an item needs is an :class:`Affine` map ``A x + c`` built from sparse
 matrices, so the same rows feed cvxpy, the direct back ends, ``describe()`` and
 ``matrices()``.
@@ -26,7 +29,28 @@ from .grid import as_times
 from .imu import ImuData
 from .sparse import as_csr, row_scaled
 
-__all__ = ["Affine", "Cone", "NavModel", "RowLabels"]
+__all__ = ["Affine", "Cone", "NavModel", "RowLabels", "state_component"]
+
+
+def state_component(error_model):
+    """The one component of ``error_model`` that declares node states (``state_size``), or
+    None; :class:`InputError` when several do (one node-state model per problem)."""
+    if error_model is None:
+        return None
+    comps = [c for c in getattr(error_model, "components", (error_model,)) if hasattr(c, "state_size")]
+    if len(comps) > 1:
+        raise InputError(f"error model: {len(comps)} components with node states ({comps}); give one "
+                         "ErrorStates(...) with every state it should carry")
+    return comps[0] if comps else None
+
+
+def canonical_csr(A) -> sp.csr_matrix:
+    """``A`` as canonical CSR (sorted indices, duplicates summed, explicit zeros dropped)."""
+    A = sp.csr_matrix(A)
+    A.sum_duplicates()
+    A.eliminate_zeros()
+    A.sort_indices()
+    return A
 
 
 def _block_csr(blk) -> sp.csr_matrix:
@@ -445,7 +469,17 @@ class NavModel:
             self.param_names = ()
         self.G = G
         self.q = G.shape[2]
-        self.size = d * self.block + self.q
+        self.state_model = state_component(error_model)
+        if self.state_model is not None:
+            self.ns = int(self.state_model.state_size(data))
+            Gs = [as_csr(g) for g in self.state_model.state_columns(data)]
+            if len(Gs) != d or any(g.shape != (n, self.ns) for g in Gs):
+                raise InputError(f"error model {self.state_model!r}: state columns must be {d} sparse "
+                                 f"matrices of shape ({n}, {self.ns}), one per axis")
+            self.Gs = Gs
+        else:
+            self.ns, self.Gs = 0, []
+        self.size = d * self.block + self.q + self.ns
         self.K = fem.stiffness(self.grid)
         self.M = fem.mass(self.grid)
 
@@ -476,15 +510,71 @@ class NavModel:
     @property
     def l_index(self) -> np.ndarray:
         """Indices of the error-model parameters in ``x``."""
-        return np.arange(self.d * self.block, self.size)
+        return np.arange(self.d * self.block, self.d * self.block + self.q)
+
+    @property
+    def s_index(self) -> np.ndarray:
+        """Indices of the error model's node states in ``x`` (empty without them)."""
+        return np.arange(self.d * self.block + self.q, self.size)
+
+    def state_nodes(self) -> np.ndarray:
+        """Time node (sample index) of every node state, (ns,) int."""
+        if not self.ns:
+            return np.zeros(0, dtype=np.int64)
+        return np.asarray(self.state_model.state_nodes(self.data), dtype=np.int64)
+
+    def states(self, kind: str, t=None, axes=None, what: str | None = None) -> Affine:
+        r"""The error model's node state ``kind`` (e.g. ``"attitude_error"``, rad;
+        ``"gyro_bias"``, rad/s; ``"acc_bias"``, m/s^2) at times ``t`` as rows affine in
+        the unknowns: its current total plus the state increment, linear between nodes.
+        Rows ordered time-major, then axis (``axes`` among ``x, y, z``; default all).
+
+        Raises :class:`InputError` naming the fix when the error model has no such state.
+        """
+        what = what or kind.replace("_", " ")
+        sm = self.state_model
+        kinds = [] if sm is None else sm.state_kinds(self.data)
+        if kind not in kinds:
+            raise InputError(f"{what}: the error model has no {kind!r} node state (it has {kinds}); "
+                             "add bvpnav.error_models.ErrorStates(...) with that state to the error model")
+        body = ("x", "y", "z")
+        names = (axes,) if isinstance(axes, str) else (body if axes is None else tuple(axes))
+        bad = [a for a in names if a not in body]
+        if bad or not names:
+            raise InputError(f"{what}: axes {list(names)}; give some of {list(body)}")
+        ax = [body.index(a) for a in names]
+        times = self.grid.t if t is None else as_times(t, what)
+        P = sp.identity(self.N, format="csr") if t is None else self.grid.interpolation_matrix(times, what)
+        cols = np.asarray(sm.state_index(self.data, kind), dtype=np.int64)   # (N, 3)
+        total = np.asarray(sm.state_total(self.data, kind), dtype=float)     # (N, 3)
+        parts = []
+        for a in ax:
+            S = sp.csr_matrix((np.ones(self.N), (np.arange(self.N), self.s_index[cols[:, a]])),
+                              shape=(self.N, self.size))
+            parts.append(Affine(P @ S, P @ total[:, a]))
+        out = self._interleave(parts, times.size)
+        return Affine(out.A, out.c, TimeLabels(f"{kind}_", list(names), times))
+
+    def attitude_error(self, t=None, axes=None) -> Affine:
+        """The navigation-frame attitude error (rad) at times ``t`` (see :meth:`states`)."""
+        return self.states("attitude_error", t, axes, "attitude error")
+
+    def acc_bias(self, t=None, axes=None) -> Affine:
+        """The accelerometer bias (body axes, m/s^2) at times ``t`` (see :meth:`states`)."""
+        return self.states("acc_bias", t, axes, "accelerometer bias")
+
+    def gyro_bias(self, t=None, axes=None) -> Affine:
+        """The gyro bias (body axes, rad/s) at times ``t`` (see :meth:`states`)."""
+        return self.states("gyro_bias", t, axes, "gyro bias")
 
     def _placed(self, blocks: dict[str, sp.spmatrix], axis: int) -> list:
         """Per-axis blocks (keys r, w, vb, l) with the first column of ``x`` each multiplies:
         ``[(block, column)]`` in increasing column order (:func:`rows_side_by_side`)."""
         o = self._offset(axis)
-        starts = (("r", o), ("w", o + self.N), ("vb", o + 2 * self.N), ("l", self.d * self.block))
+        starts = (("r", o), ("w", o + self.N), ("vb", o + 2 * self.N), ("l", self.d * self.block),
+                  ("s", self.d * self.block + self.q))
         return [(blocks[key], start) for key, start in starts
-                if key in blocks and (key != "l" or self.q)]
+                if key in blocks and (key != "l" or self.q) and (key != "s" or self.ns)]
 
     def _place(self, blocks: dict[str, sp.spmatrix], axis: int) -> sp.csr_matrix:
         """Assemble per-axis blocks (keys r, w, vb, l) into rows over the whole ``x``, each
@@ -520,7 +610,17 @@ class NavModel:
         blocks = {"r": self.K, "w": self.M, "vb": fem.boundary_columns(self.grid)}
         if self.q:
             blocks["l"] = columns_csr(*self.mg_columns(axis), self.q)
+        if self.ns:
+            blocks["s"] = self.ms_columns(axis)
         return blocks
+
+    def ms_columns(self, axis: int) -> sp.csr_matrix:
+        """``M G_s`` of one axis (s): the node states' columns of the FEM rows, sparse and
+        local (a state of node ``j`` reaches rows ``j - 1 .. j + 1``); made once per axis."""
+        cache = self.__dict__.setdefault("_ms_cache", {})
+        if axis not in cache:
+            cache[axis] = canonical_csr(self.M @ self.Gs[axis])
+        return cache[axis]
 
     def mg_columns(self, axis: int) -> tuple[np.ndarray, np.ndarray]:
         """``M G`` of one axis (s) by the parameters acting on it: ``(cols, vals)``, the
@@ -644,6 +744,8 @@ class NavModel:
             blocks = {"r": Vr, "w": Va, "vb": Vb}
             if self.q:
                 blocks["l"] = columns_csr(*self._times_g(Va, a), self.q)
+            if self.ns:
+                blocks["s"] = canonical_csr(Va @ self.Gs[a])
             parts.append(Affine(self._place(blocks, a), Va @ self.data.acc[:, a]))
         out = self._interleave(parts, times.size)
         return Affine(out.A, out.c, self._labels("v", times, ax))
@@ -681,7 +783,9 @@ class NavModel:
         totals of the attitude error models (the measured rates when there are none) and
         :math:`\partial\omega_i/\partial l_p` their ``rate_columns``: the gyro bias enters as
         :math:`\omega = \hat\omega - b`. An error model without rate columns contributes
-        nothing, so without a gyro error model the rows are constant.
+        nothing, so without a gyro error model the rows are constant. With a node-state gyro
+        bias (:class:`~bvpnav.error_models.ErrorStates`) its rows :meth:`gyro_bias` are
+        subtracted.
         """
         times = as_times(t, what)
         point = getattr(self.data, "attitude_point", None)
@@ -702,6 +806,8 @@ class NavModel:
         parts = [Affine(sp.csr_matrix(P @ W[:, a, :]) @ L if self.q else empty,
                         P @ np.asarray(rates, dtype=float)[:, a]) for a in ax]
         out = self._interleave(parts, times.size)
+        if self.ns and "gyro_bias" in self.state_model.state_kinds(self.data):
+            out = out - self.gyro_bias(times, names)   # node states: omega = omega_hat - b_g(t)
         return Affine(out.A, out.c, TimeLabels("omega_", list(names), times))
 
     def node_velocity(self, axis: int) -> Affine:
@@ -710,6 +816,8 @@ class NavModel:
         blocks = {"r": Vr, "w": Va, "vb": Vb}
         if self.q:
             blocks["l"] = columns_csr(*self._times_g(Va, axis), self.q)
+        if self.ns:
+            blocks["s"] = canonical_csr(Va @ self.Gs[axis])
         return Affine(self._place(blocks, axis), Va @ self.data.acc[:, axis])
 
     def node_velocity_values(self, axis: int, xval: np.ndarray) -> np.ndarray:
@@ -727,6 +835,8 @@ class NavModel:
         acc = self.data.acc[:, axis] + xval[o + N:o + 2 * N]   # slices of x: views, not copies
         if self.q:
             acc += self.G[:, axis, :] @ xval[self.l_index]
+        if self.ns:
+            acc += self.Gs[axis] @ xval[self.s_index]
         r, hl = xval[o:o + N], self.grid.h[:N - 2]
         v = np.empty(N)
         v[0], v[-1] = xval[o + 2 * N], xval[o + 2 * N + 1]
@@ -756,11 +866,11 @@ class NavModel:
 
     # --------------------------------------------------------- extraction
     def split(self, xval: np.ndarray) -> dict[str, np.ndarray]:
-        """Numeric pieces of a solution vector: r, w (N, d), v_end (2, d), l (q,)."""
+        """Numeric pieces of a solution vector: r, w (N, d), v_end (2, d), l (q,), s (ns,)."""
         r = np.column_stack([xval[self.r_index(a)] for a in range(self.d)])
         w = np.column_stack([xval[self.w_index(a)] for a in range(self.d)])
         vend = np.array([[xval[i] for i in self.v_end_index(a)] for a in range(self.d)]).T
-        return {"r": r, "w": w, "v_end": vend, "l": xval[self.l_index]}
+        return {"r": r, "w": w, "v_end": vend, "l": xval[self.l_index], "s": xval[self.s_index]}
 
     def __repr__(self) -> str:
         return f"NavModel(N={self.N}, axes={self.axes}, q={self.q}, unknowns={self.size})"

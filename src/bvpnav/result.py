@@ -557,6 +557,12 @@ class Solution:
         The :class:`~bvpnav.formulation.Formulation` the answer solves (read-only): the
         problem's own, or the one a solve stage made from it (conflicting items demoted,
         nonlinear items at their last linearization, the attitude at its estimate).
+    error_states : pandas.DataFrame or None
+        With node states (:class:`~bvpnav.error_models.ErrorStates`): their totals per
+        sample (index ``t (s)``; columns ``attitude_error_x (rad)``, ``gyro_bias_x (rad/s)``,
+        ``acc_bias_x (m/s^2)``, ...).
+    error_states_std : pandas.DataFrame or None
+        Their standard deviations (same columns), with ``solve(uncertainty=...)``.
     attitude_data : scipy.spatial.transform.Rotation or None
         For strapdown data, the data's own attitude before any correction (see
         :attr:`attitude_corrections`).
@@ -602,6 +608,8 @@ class Solution:
     error_params_std: pd.Series = field(default_factory=lambda: pd.Series(dtype=float, name="std"))
     attitude: Any = None
     attitude_data: Any = None
+    error_states: Any = None
+    error_states_std: Any = None
     item_rows: dict = field(default_factory=dict, repr=False)
     sigma_a: np.ndarray | None = None
     sigma_a_given: bool = False

@@ -122,6 +122,9 @@ class Covariance:
         non-null part when hard rows repeat each other).
     pivot_condition : float
         The largest equilibrated condition number of the block pivots.
+    states : dict of str to ndarray (N, 3), or None
+        With node states (:class:`~bvpnav.error_models.ErrorStates`): the variance of each
+        state kind per node and axis, in its units squared.
     """
 
     state: np.ndarray
@@ -134,6 +137,7 @@ class Covariance:
     hard_rows_in_border: int = 0
     border_condition: float = 1.0
     pivot_condition: float = 1.0
+    states: dict | None = None
 
     def std(self) -> tuple[np.ndarray, np.ndarray]:
         """Standard deviations of positions (m) and velocities (m/s), each (N, d)."""
@@ -224,14 +228,16 @@ class _Posterior:
         for a in range(d):
             colaxis[model.r_index(a)[1:]] = a
             colaxis[model.w_index(a)] = a
-        coupled = d > 1 and any(bool(np.any((hi >= 0) & (hi != lo)))  # a row on two axes
-                                for lo, hi in (row_span(D, colaxis), row_span(E, colaxis)))
+        coupled = d > 1 and (model.ns > 0 or any(bool(np.any((hi >= 0) & (hi != lo)))  # a row on two axes
+                                                 for lo, hi in (row_span(D, colaxis), row_span(E, colaxis))))
         self.chain = None if coupled or d == 1 else N   # nodes per independent chain
         colnode = np.full(n, -1, dtype=np.int64)
         for a in range(d):
             off = 0 if coupled else a * N
             colnode[model.r_index(a)[1:]] = off + np.arange(1, N)
             colnode[model.w_index(a)] = off + np.arange(N)
+        if model.ns:   # node states at their node (all axes of a node together: coupled)
+            colnode[model.s_index] = model.state_nodes()
         lo, hi = row_span(D, colnode)
         span = hi - lo
         fold = (span <= 1) | (hi < 0)          # into D^T D: couples two neighbouring nodes at most
@@ -459,10 +465,19 @@ def posterior(form: Formulation, x: np.ndarray, lam: float) -> Covariance:
             state[:, i, k] = c
             state[:, k, i] = c
     params = post.params(model.l_index) if model.q else np.zeros((0, 0))
+    states = None
+    if model.ns:
+        states = {}
+        for kind in model.state_model.state_kinds(model.data):
+            cols = []
+            for ax in ("x", "y", "z"):
+                q = post.query(model.states(kind, axes=ax).A)
+                cols.append(post.cross(q, q))
+            states[kind] = np.column_stack(cols)
     resid = ls.D.value(x)
     dof = int(ls.D.m - model.size + ls.E.m - post.redundant)  # independent hard rows only
     vf = float(resid @ resid / dof) if dof > 0 else float("nan")
     return Covariance(state=state, params=params, variance_factor=vf, dof=dof, exact=exact,
                       border=int(post.layout.border.size), block=int(post.layout.b),
                       hard_rows_in_border=moved, border_condition=post.border_cond,
-                      pivot_condition=post.cr.pivot_condition)
+                      pivot_condition=post.cr.pivot_condition, states=states)

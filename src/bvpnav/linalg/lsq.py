@@ -399,7 +399,9 @@ def column_nodes(model, interleave: bool = False) -> np.ndarray:
     Positions and acceleration residuals of sample ``j`` sit at node ``j``, ``v0`` at the
     first node and ``v1`` at the last. Axes are laid end to end (axis ``a`` at nodes
     ``a N .. a N + N - 1``) unless ``interleave``: then every axis of sample ``j`` sits at
-    node ``j`` (for rows that couple axes).
+    node ``j`` (for rows that couple axes). Node states (an error model's per-node
+    unknowns, :meth:`bvpnav.model.NavModel.state_nodes`) sit at their node, so they are in
+    the band, not the border; they couple the axes, so they need ``interleave``.
     """
     N = model.N
     colnode = np.full(model.size, -1, dtype=np.int64)
@@ -409,6 +411,8 @@ def column_nodes(model, interleave: bool = False) -> np.ndarray:
         colnode[model.w_index(a)] = off + np.arange(N)
         v0, v1 = model.v_end_index(a)
         colnode[v0], colnode[v1] = off, off + N - 1
+    if model.ns:
+        colnode[model.s_index] = model.state_nodes()
     return colnode
 
 
@@ -438,6 +442,11 @@ def fem_rows_by_diagonals(form: Formulation, workspace: Workspace | None = None)
             mcols, mg = model.mg_columns(a)
             dense += [(a * N, int(model.l_index[k]), mg[:, i].copy()) for i, k in enumerate(mcols)
                       if mg[:, i].any()]
+        if model.ns:   # the node states' local columns M G_s
+            ms = model.ms_columns(a).tocoo()
+            rows.append(a * N + ms.row)
+            cols.append(model.s_index[ms.col])
+            vals.append(ms.data)
     extra = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                           shape=(N * d, model.size))
     out = DiagonalRows(N * d, tri, dense, extra)
@@ -468,10 +477,12 @@ def banded_plan(ls: LeastSquaresForm, form: Formulation, workspace: Workspace | 
         return workspace.band_plan   # the same pattern (another lambda, or the sweep's chosen one)
     diagonal = fem_rows_by_diagonals(form, workspace)
     try:
+        if model.ns:   # node states couple the axes at every node: interleaved from the start
+            raise NotBanded("node states")
         plan = BandPlan.build(D, E, column_nodes(model), lam_rows=ls.lam_rows, segments=model.d,
                               diagonal=diagonal)
     except NotBanded:
-        if model.d == 1:
+        if model.d == 1 and not model.ns:
             raise
         plan = BandPlan.build(D, E, column_nodes(model, interleave=True), lam_rows=ls.lam_rows,
                               diagonal=diagonal)

@@ -559,6 +559,96 @@ def _iterate(loop: _Loop, values: dict, j: float, at_values: Solution, o: dict):
     return values, j, at_values, sol, iters, reason
 
 
+def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solution:
+    r"""Gauss-Newton on the node states of :class:`~bvpnav.error_models.ErrorStates`.
+
+    At the current totals (attitude errors, biases per node) the data is re-linearized
+    (:func:`~bvpnav.error_models.error_states.states_at`: the attitude rotated, the
+    accelerometer bias removed, the process rows' residuals evaluated there), the convex
+    problem gives the increments, and the totals take them. Each step is one banded
+    factorization (the states are in the band). The loop stops when the step's largest
+    attitude change, :math:`\max_j \|\varepsilon_j\|` plus the attitude the bias steps
+    would make over the window (:math:`T \max|\delta b_g|` and
+    :math:`T^2 \max|\delta b_a| / (2 \cdot 10\,\mathrm{m})`, a tilt's worth of position
+    over 10 m), is below ``tol`` rad; the answer is that step's solve (its increments below
+    ``tol``). ``stats["sequential"]`` holds the report (``kind="states"``).
+    """
+    from ..error_models.error_states import states_at
+
+    if comps:
+        names = ", ".join(type(c).__name__ for c in comps)
+        raise InputError(f"ErrorStates with attitude parameters ({names}): "
+                         "the node states already carry the initial attitude (attitude_sigma=) and the gyro "
+                         "bias (gyro_drift=; 0 for a constant bias); leave those models out")
+    o = check_attitude(getattr(opts, "attitude", None))
+    raw = form.data
+    if getattr(raw, "state_point", None) is not None:
+        raise InputError("node states: this data already carries a linearization point; give the data as "
+                         "measured")
+    sm = form.model.state_model
+    t0 = time.perf_counter()
+    totals = {k: np.zeros((raw.n, 3)) for k in sm.state_kinds(raw)}
+    span = float(raw.t[-1] - raw.t[0])
+    iters: list[dict] = []
+    reason = None
+    lam_now, rule, curve = lam, (lam if isinstance(lam, str) else None), None
+    checked = False
+    sol = data = f = None
+    with progress(desc="state loop", unit="iter", enabled=o["progress"]) as bar:
+        for _ in range(int(o["max_iter"])):
+            data = form.data if not iters else states_at(raw, totals)
+            if iters:
+                f = Formulation(data, form.residual, form.sigma_a if form.sigma_a_given else None,
+                                form.error_model, form.items, grade=None)
+                f.grade_report = form.grade_report
+                f._observable = checked
+            else:
+                f = form
+            sol = inner(f, lam_now, opts)
+            checked = True
+            if rule is not None and not isinstance(lam_now, float):
+                curve, lam_now = sol.curve, float(sol.lam)
+            s = f.model.split(sol.x)["s"]
+            new = sm.updated(data, s)
+            kinds = sm.state_kinds(raw)
+            step = float(np.max(np.linalg.norm(s[sm.state_index(raw, "attitude_error")], axis=1)))
+            if "gyro_bias" in kinds:
+                step += span * float(np.max(np.abs(s[sm.state_index(raw, "gyro_bias")])))
+            if "acc_bias" in kinds:
+                step += span**2 * float(np.max(np.abs(s[sm.state_index(raw, "acc_bias")]))) / 20.0
+            j = objective_value(f, sol.x, float(sol.lam))
+            iters.append({"objective": j, "trial": j, "step": step, "accepted": True, "damping": 0.0})
+            log.info("state iteration %d: objective %.9g, step %.3g rad", len(iters), j, step)
+            bar.update(1)
+            totals = new
+            if not o["loop"]:   # one linearized solve about the data as given
+                reason = "loop off"
+                break
+            if step < o["tol"]:
+                reason = "step"
+                iters[-1]["converged"] = True
+                break
+    if reason is None:
+        _warn(sol, f"node-state loop did not converge in {o['max_iter']} iterations: the last step changed "
+                   f"the attitude by {iters[-1]['step']:.3g} rad > tol={o['tol']:g} rad. Raise max_iter "
+                   f"(solve(..., attitude={{'max_iter': {2 * int(o['max_iter'])}}})) or give priors on the "
+                   "first "
+                   "node (ErrorStates(attitude_sigma=..., gyro_sigma=..., acc_sigma=...))")
+    sol.error_states = sm.frame(raw, totals)
+    sol.attitude = states_at(raw, totals).attitude
+    sol.attitude_data = raw.attitude
+    sol.records.attitude = AttitudeLoopReport(
+        kind="states", iterations=iters, converged=reason is not None, reason=reason or "max_iter",
+        tol=float(o["tol"]), max_iter=int(o["max_iter"]), objective_initial=iters[0]["objective"],
+        objective=iters[-1]["objective"], heading_search=[], solves=len(iters),
+        seconds=time.perf_counter() - t0, inner=sol.records.sequential)
+    sol.record()
+    if rule is not None:
+        sol.lam_rule = f"{rule} (first evaluation)"
+        sol.curve = curve
+    return sol
+
+
 def with_attitude(inner: Stage) -> Stage:
     """The stage that solves formulations with attitude error models by the damped outer
     loop (see the module docstring); others pass straight to ``inner``.
@@ -593,6 +683,8 @@ def with_attitude(inner: Stage) -> Stage:
 
     def stage(form: Formulation, lam, opts) -> Solution:
         comps = attitude_components(form.error_model)
+        if form.model.ns:
+            return _state_loop(form, inner, lam, opts, comps)
         if not comps:
             return inner(form, lam, opts)
         o = check_attitude(getattr(opts, "attitude", None))

@@ -129,6 +129,13 @@ def attach_uncertainty(sol: Solution, form: Formulation, how) -> Solution:
         sol.error_params_std = std
     else:
         sol._cov["error_params"] = pd.DataFrame()
+    if cov.states is not None and sol.error_states is not None:   # node states: std per sample
+        std = {}
+        for kind, var in cov.states.items():
+            for c, ax in enumerate("xyz"):
+                name = next(n for n in sol.error_states.columns if n.startswith(f"{kind}_{ax} "))
+                std[name] = np.sqrt(np.clip(var[:, c] * k, 0.0, None))
+        sol.error_states_std = pd.DataFrame(std, index=sol.error_states.index)
     linearized = sol.records.sequential is not None or bool(form.nonlinear_items)
     what = "last linearization" if linearized else "exact" if cov.exact else "quadratic model"
     msg = _variance_warning(cov.variance_factor, cov.dof, scale)

@@ -1,0 +1,389 @@
+r"""Error states at every node: attitude error and random-walk biases in the band.
+
+Design (issue 42, item 2)
+-------------------------
+The knot models (``GyroBias(interval=..., drift=...)``, ``AttitudeWalk``, ``Bias(interval=...)``)
+put a time-varying quantity into the error-model parameters ``l``: a gyro-bias knot changes
+the attitude from its time to the end, so its column of the FEM rows is dense and it sits in
+the *border* of the banded factorization (:mod:`bvpnav.linalg.banded`), one dense right-hand
+side each. This model instead declares **node states**: at every sample ``j``
+
+* :math:`\psi_j` (3, rad): the navigation-frame attitude error,
+  :math:`C_j = \exp([\psi_j\times])\,\hat C_j` with :math:`\hat C` the attitude of the data
+  (integrated from the raw gyro rates);
+* :math:`b_{g,j}` (3, rad/s, optional): the gyro bias, body axes;
+* :math:`b_{a,j}` (3, m/s^2, optional): the accelerometer bias, body axes (the sensor reads
+  :math:`\hat f = f + b_a`).
+
+They enter the FEM rows only at their own sample (acceleration
+:math:`a_j = C_j(\hat f_j - b_{a,j}) + g`), and they are tied to their neighbours by the
+discrete process model a factor graph writes per epoch, as soft rows (not scaled by
+``lam``):
+
+.. math::
+
+    e_j = \mathrm{Log}\!\left(C_{j+1}\,\exp([\phi_j - h_j b_{g,j}]\times)^T C_j^T\right)
+          \sim N(0, n_g^2 h_j I), \qquad
+    b_{j+1} - b_j \sim N(0, q^2 h_j I),
+
+with :math:`\phi_j` the step rotation vector of the raw rates
+(:func:`bvpnav.attitude.step_rotation_vectors`; the bias held constant over the step, as
+GTSAM's preintegration holds it) and :math:`n_g` the gyro's angle random walk. Every unknown
+is then local in time: :func:`bvpnav.linalg.lsq.column_nodes` puts the states at their
+node (axes interleaved) and the banded factorization has only the constant parameters of
+other components (e.g. a constant ``ScaleFactor``) in its border. A drift of 0 makes a
+bias constant by hard rows :math:`b_{j+1} = b_j` (still local); ``None`` leaves the state
+out.
+
+Linearization. The states are nonlinear (the attitude multiplies the specific force), so a
+problem with them is solved by Gauss-Newton steps (:func:`bvpnav.solve.attitude.with_attitude`
+runs them): at the current totals (a :class:`StatePoint` carried by the data) the convex
+problem's state unknowns are the increments, a left rotation :math:`\varepsilon_j` of the
+attitude (:math:`C_j \to \exp([\varepsilon_j\times]) C_j`) and additive bias increments.
+The linearized rows are the exact first derivatives:
+
+.. math::
+
+    e_j \approx e_j^0 + J_l(e_j^0)^{-1}\varepsilon_{j+1} - J_r(e_j^0)^{-1}\varepsilon_j
+          + J_l(e_j^0)^{-1} C_{j+1} J_r(\phi_j - h_j b_{g,j})\, h_j\, \delta b_{g,j},
+
+and the acceleration changes by :math:`\varepsilon_j \times C_j(\hat f_j - b_{a,j})
+- C_j\,\delta b_{a,j}`. The fixed point is the nonlinear optimum; each step is one banded
+factorization.
+
+Why a new model rather than a switch on ``GyroBias``/``AttitudeWalk``: the states replace
+*three* knot models at once (the gyro bias only enters through the attitude process rows,
+which need the attitude states), and a model that owns all of them can keep their layout
+(node-major, interleaved axes) and their process rows together. The knot models stay for
+data without a gyro and for the published tables that use them.
+
+Items reach the states only through :class:`~bvpnav.model.NavModel` accessors
+(``attitude_error(t)``, ``gyro_bias(t)``, ``acc_bias(t)``, and ``body_rate(t)``, which
+subtracts the gyro-bias states), never by index.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import scipy.sparse as sp
+from scipy.spatial.transform import Rotation
+
+from ..errors import InputError
+from ._attitude import _check_strapdown_gyro, _skew, left_jacobian, right_jacobian
+from ._base import ErrorModel
+
+__all__ = ["ErrorStates", "StatePoint", "states_at", "process_residuals"]
+
+#: The node states in their order within a node, with units.
+KINDS = {"attitude_error": "rad", "gyro_bias": "rad/s", "acc_bias": "m/s^2"}
+
+
+@dataclass(frozen=True, eq=False)
+class StatePoint:
+    """Totals of the node states where the problem is linearized.
+
+    Attributes
+    ----------
+    raw : ImuData
+        The data as measured (its attitude integrated from the raw rates).
+    totals : dict of str to ndarray (N, 3)
+        The current total of each state kind (rad; rad/s; m/s^2).
+    """
+
+    raw: Any
+    totals: dict = field(default_factory=dict)
+
+
+def _raw(data):
+    p = getattr(data, "state_point", None)
+    return data if p is None else p.raw
+
+
+def _totals(data, kind: str) -> np.ndarray:
+    p = getattr(data, "state_point", None)
+    if p is None or kind not in p.totals:
+        return np.zeros((data.n, 3))
+    return p.totals[kind]
+
+
+def states_at(data, totals: dict):
+    """The measured data re-linearized at the node-state ``totals`` (kind -> (N, 3)): attitude
+    :math:`\\exp([\\psi\\times])\\hat C`, specific force :math:`\\hat f - b_a`, ``state_point`` set."""
+    from ..imu import ImuData
+
+    raw = _raw(data)
+    n = raw.n
+    tot = {k: np.asarray(v, dtype=float).reshape(n, 3) for k, v in totals.items()}
+    att = raw.attitude
+    if "attitude_error" in tot:
+        att = Rotation.from_rotvec(tot["attitude_error"]) * att
+    f = raw.specific_force - tot["acc_bias"] if "acc_bias" in tot else raw.specific_force
+    out = ImuData(raw.t, specific_force=f, attitude=att, gravity=raw.gravity, axes=raw.axes,
+                  time_origin=raw.time_origin, checks=False)
+    out.checks = dict(raw.checks)
+    out.gyro = raw.gyro
+    out.state_point = StatePoint(raw=raw, totals=tot)
+    return out
+
+
+def process_residuals(data) -> tuple[np.ndarray, np.ndarray]:
+    r"""The attitude process residuals :math:`e_j` (N - 1, 3), rad, at the data's point, and
+    the step rotations :math:`a_j = \phi_j - h_j b_{g,j}` (N - 1, 3), rad."""
+    from ..attitude import step_rotation_vectors
+
+    raw = _raw(data)
+    phi = step_rotation_vectors(raw.t, np.asarray(raw.gyro, dtype=float))
+    a = phi - data.grid.h[:, None] * _totals(data, "gyro_bias")[:-1]
+    C = data.attitude
+    R = C[1:] * Rotation.from_rotvec(a).inv() * C[:-1].inv()
+    return R.as_rotvec(), a
+
+
+@dataclass(frozen=True, kw_only=True, eq=False, repr=False)
+class ErrorStates(ErrorModel):
+    r"""Attitude error and random-walk biases as states at every node (in the band).
+
+    Parameters
+    ----------
+    arw : float
+        Angle random walk of the gyro, rad/sqrt(s) (its white-noise density): the sigma
+        :math:`n_g\sqrt{h_j}` of the attitude process rows.
+    gyro_drift : float, optional
+        Gyro-bias random walk, rad/s/sqrt(s). None (default): no gyro-bias states; 0: a
+        constant gyro bias (hard rows :math:`b_{j+1} = b_j`).
+    acc_drift : float, optional
+        Accelerometer-bias random walk, m/s^2/sqrt(s); None: no accelerometer-bias states;
+        0: constant.
+    attitude_sigma : float or array_like, optional
+        Prior sigma of the initial attitude error per navigation axis, rad (None: free; inf
+        on an axis: free on that axis, e.g. ``[0.1, 0.1, inf]`` for an open heading).
+    gyro_sigma, acc_sigma : float or array_like, optional
+        Prior sigma of the first node's gyro bias (rad/s) and accelerometer bias (m/s^2),
+        per body axis, about zero (None: free).
+
+    Notes
+    -----
+    The model, its rows and their linearization are in the module docstring
+    (:mod:`bvpnav.error_models.error_states`). It declares no parameters in ``l``; its
+    unknowns are the node states :math:`s` of :class:`~bvpnav.model.NavModel`. Estimates
+    are in ``sol.error_states`` (a DataFrame per sample).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> from bvpnav.error_models import ErrorStates
+    >>> t = np.linspace(0.0, 1.0, 11)
+    >>> data = bvpnav.ImuData.from_gyro(t, np.tile([0.0, 0.0, 9.80665], (11, 1)), np.zeros((11, 3)))
+    >>> m = ErrorStates(arw=1e-3, gyro_drift=1e-4, acc_drift=1e-3)
+    >>> m.state_kinds(data), m.state_size(data)
+    (['attitude_error', 'gyro_bias', 'acc_bias'], 99)
+    """
+
+    arw: Any = None
+    gyro_drift: Any = None
+    acc_drift: Any = None
+    attitude_sigma: Any = None
+    gyro_sigma: Any = None
+    acc_sigma: Any = None
+    units = "rad"
+
+    def validate(self) -> None:
+        from ._attitude import positive_option
+
+        if any(v is not None for v in (self.axes, self.sigma, self.prior, self.bounds)):
+            raise InputError("ErrorStates: axes, sigma, prior and bounds are not options; give "
+                             "attitude_sigma=, gyro_sigma=, acc_sigma= (priors of the first node) and arw=, "
+                             "gyro_drift=, "
+                             "acc_drift= (the process noise)")
+        object.__setattr__(self, "arw", positive_option(self.arw, "ErrorStates: arw (rad/sqrt(s))"))
+        if self.arw is None:
+            raise InputError("ErrorStates: give arw= (the gyro's angle random walk, rad/sqrt(s)): it ties "
+                             "the attitude of each node to the next")
+        for name, unit in (("gyro_drift", "rad/s/sqrt(s)"), ("acc_drift", "m/s^2/sqrt(s)")):
+            v = getattr(self, name)
+            if v is None:
+                continue
+            try:
+                v = float(v)
+            except (TypeError, ValueError):
+                raise InputError(f"ErrorStates: {name}={v!r}; give a number >= 0 ({unit}) or None") from None
+            if not (np.isfinite(v) and v >= 0):
+                raise InputError(f"ErrorStates: {name}={v!r} must be finite and >= 0 ({unit}; 0: constant)")
+            object.__setattr__(self, name, v)
+        for name in ("attitude_sigma", "gyro_sigma", "acc_sigma"):
+            v = getattr(self, name)
+            if v is None:
+                continue
+            s = np.broadcast_to(np.asarray(v, dtype=float), (3,)).copy() if np.size(v) in (1, 3) else None
+            if s is None or not np.all(~np.isnan(s) & (s > 0)):
+                raise InputError(f"ErrorStates: {name}={v!r}; give one positive number or three (per axis; "
+                                 "inf: no prior on that axis)")
+            object.__setattr__(self, name, s)
+
+    # ------------------------------------------------------------ layout
+    def names(self, data) -> list[str]:
+        return []
+
+    def columns(self, data) -> np.ndarray:
+        return np.zeros((data.n, data.ndim, 0))
+
+    def report(self, l, model) -> pd.Series:
+        s = pd.Series([], dtype=float, name="estimate", index=pd.Index([], name="parameter"))
+        s.attrs["units"] = {}
+        return s
+
+    def state_kinds(self, data) -> list[str]:
+        """The node states this model carries, in their order within a node."""
+        out = ["attitude_error"]
+        if self.gyro_drift is not None:
+            out.append("gyro_bias")
+        if self.acc_drift is not None:
+            out.append("acc_bias")
+        return out
+
+    def _per_node(self, data) -> int:
+        return 3 * len(self.state_kinds(data))
+
+    def state_size(self, data) -> int:
+        """Number of node states, ``3 * kinds * N``."""
+        _check_strapdown_gyro(data, "ErrorStates")
+        if data.ndim != 3:
+            raise InputError("ErrorStates: needs three navigation axes")
+        return self._per_node(data) * data.n
+
+    def state_nodes(self, data) -> np.ndarray:
+        """Node (sample) of every state: node-major, ``3 * kinds`` per node."""
+        return np.repeat(np.arange(data.n), self._per_node(data))
+
+    def state_index(self, data, kind: str) -> np.ndarray:
+        """Position in the state block of ``kind`` at every node and axis, (N, 3) int."""
+        k = self.state_kinds(data).index(kind)
+        K = self._per_node(data)
+        return np.arange(data.n)[:, None] * K + 3 * k + np.arange(3)[None, :]
+
+    def state_total(self, data, kind: str) -> np.ndarray:
+        """The current total of ``kind`` at every node, (N, 3) (zero at the data as measured)."""
+        return _totals(data, kind)
+
+    def state_columns(self, data) -> list:
+        r"""Acceleration change per unit state, one sparse (N, ns) matrix per navigation
+        axis, m/s^2 per unit: :math:`\varepsilon_j\times f_{n,j}` and :math:`-C_j\,\delta b_{a,j}`."""
+        n = data.n
+        K = self._per_node(data)
+        kinds = self.state_kinds(data)
+        fn = data.attitude.apply(data.specific_force)
+        S = -_skew(fn)                       # (N, 3, 3): column c = e_c x fn
+        C = data.attitude.as_matrix()
+        out = []
+        for a in range(3):
+            blocks = [(self.state_index(data, "attitude_error"), S[:, a, :])]
+            if "acc_bias" in kinds:
+                blocks.append((self.state_index(data, "acc_bias"), -C[:, a, :]))
+            cols = np.concatenate([b[0] for b in blocks], axis=1)
+            vals = np.concatenate([b[1] for b in blocks], axis=1)
+            rows = np.repeat(np.arange(n), cols.shape[1])
+            out.append(sp.csr_matrix((vals.ravel(), (rows, cols.ravel())), shape=(n, K * n)))
+        return out
+
+    # ------------------------------------------------------------ rows
+    def terms(self, model) -> list:
+        from ..model import Affine, RowLabels
+        from ..terms import Term
+
+        data = model.data
+        n = data.n
+        h = data.grid.h
+        s0 = int(model.s_index[0])
+        kinds = self.state_kinds(data)
+        out = []
+
+        def rows_of(prefix, count, r, c, v, const) -> Affine:
+            A = sp.csr_matrix((v, (r, s0 + c)), shape=(count, model.size))
+            A.sum_duplicates()
+            return Affine(A, const, RowLabels([(prefix, count)]))
+
+        # the attitude process rows
+        e0, a = process_residuals(data)
+        Jli = np.linalg.inv(left_jacobian(e0))
+        Jri = np.linalg.inv(right_jacobian(e0))
+        P = self.state_index(data, "attitude_error")
+        blocks = [(P[1:], Jli), (P[:-1], -Jri)]
+        if "gyro_bias" in kinds:
+            C1 = data.attitude.as_matrix()[1:]
+            Bg = Jli @ C1 @ right_jacobian(a) * h[:, None, None]
+            blocks.append((self.state_index(data, "gyro_bias")[:-1], Bg))
+        m = n - 1
+        r = np.arange(3 * m).reshape(m, 3)
+        rr, cc, vv = [], [], []
+        for cols, J in blocks:        # row (j, i): sum_c J[j, i, c] * state cols[j, c]
+            rr.append(np.repeat(r, 3, axis=1).ravel())
+            cc.append(np.tile(cols, (1, 3)).reshape(m, 3, 3).ravel())
+            vv.append(J.ravel())
+        res = rows_of("process_attitude", 3 * m, np.concatenate(rr), np.concatenate(cc), np.concatenate(vv),
+                      e0.ravel())
+        out.append(Term(label="process ErrorStates[attitude]", item=None, residual=res, mode="soft",
+                        kind="equality", sigma=np.repeat(self.arw * np.sqrt(h), 3), scaled_by_lam=False,
+                        units="rad"))
+        # the bias walks (hard rows when constant)
+        for kind, q in (("gyro_bias", self.gyro_drift), ("acc_bias", self.acc_drift)):
+            if kind not in kinds:
+                continue
+            B = self.state_index(data, kind)
+            tot = _totals(data, kind)
+            r = np.arange(3 * m)
+            res = rows_of(f"process_{kind}", 3 * m, np.r_[r, r], np.r_[B[1:].ravel(), B[:-1].ravel()],
+                          np.r_[np.ones(3 * m), -np.ones(3 * m)], (tot[1:] - tot[:-1]).ravel())
+            if q > 0:
+                out.append(Term(label=f"process ErrorStates[{kind}]", item=None, residual=res, mode="soft",
+                                kind="equality", sigma=np.repeat(q * np.sqrt(h), 3), scaled_by_lam=False,
+                                units=KINDS[kind]))
+            else:
+                out.append(Term(label=f"constant ErrorStates[{kind}]", item=None, residual=res, mode="hard",
+                                kind="equality", scaled_by_lam=False, units=KINDS[kind]))
+        # priors on the first node
+        for kind, sig in (("attitude_error", self.attitude_sigma), ("gyro_bias", self.gyro_sigma),
+                          ("acc_bias", self.acc_sigma)):
+            if sig is None or kind not in kinds:
+                continue
+            cols = self.state_index(data, kind)[0]
+            tot = _totals(data, kind)[0]
+            J = np.linalg.inv(left_jacobian(tot)) if kind == "attitude_error" else np.eye(3)
+            res = rows_of(f"prior_{kind}", 3, np.repeat(np.arange(3), 3), np.tile(cols, 3), J.ravel(), tot)
+            keep = np.flatnonzero(np.isfinite(sig))
+            if keep.size:
+                out.append(Term(label=f"prior ErrorStates[{kind}]", item=None, residual=res.rows(keep),
+                                mode="soft", kind="equality", sigma=np.asarray(sig, dtype=float)[keep],
+                                scaled_by_lam=False, units=KINDS[kind]))
+        return out
+
+    # ------------------------------------------------------------ totals
+    def updated(self, data, s: np.ndarray) -> dict:
+        """The totals after the increments ``s`` (the state block of a solution): attitude by
+        composition, :math:`\\exp([\\psi'\\times]) = \\exp([\\varepsilon\\times])\\exp([\\psi\\times])`,
+        biases by addition."""
+        out = {}
+        for kind in self.state_kinds(data):
+            d = np.asarray(s, dtype=float)[self.state_index(data, kind)]
+            tot = _totals(data, kind)
+            if kind == "attitude_error":
+                out[kind] = (Rotation.from_rotvec(d) * Rotation.from_rotvec(tot)).as_rotvec()
+            else:
+                out[kind] = tot + d
+        return out
+
+    def frame(self, data, totals: dict) -> pd.DataFrame:
+        """The states per sample as a DataFrame (index ``t (s)``; columns ``<kind>_<axis> (<unit>)``)."""
+        cols = {}
+        for kind in self.state_kinds(data):
+            for c, ax in enumerate("xyz"):
+                cols[f"{kind}_{ax} ({KINDS[kind]})"] = totals[kind][:, c]
+        return pd.DataFrame(cols, index=pd.Index(np.asarray(data.t, dtype=float), name="t (s)"))
+
+    @classmethod
+    def example(cls) -> ErrorStates:
+        return cls(arw=1e-3, gyro_drift=1e-4, acc_drift=1e-3)
