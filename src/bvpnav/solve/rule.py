@@ -42,10 +42,11 @@ def with_rule(inner: Stage) -> Stage:
     fixed-lambda stage, :func:`~bvpnav.solve.chain.solve_fixed`), with one workspace for
     the sweep and the solve at its choice (which takes the sweep's band or factor there)."""
 
-    def stage(form: Formulation, lam, opts: SolveOptions) -> Solution:
+    def stage(form: Formulation, lam, opts: SolveOptions, workspace: Workspace | None = None) -> Solution:
         if not isinstance(lam, str):
-            return inner(form, lam, opts)
-        workspace = Workspace()
+            kw = {} if workspace is None else {"workspace": workspace}
+            return inner(form, lam, opts, **kw)
+        workspace = Workspace() if workspace is None else workspace
         try:
             curve = _curve(form, lam, opts, inner, workspace)
             log.info("rule %s chose lam=%.6g (engine %s, %d evaluations, %.3g s); solving at it", lam,

@@ -272,10 +272,11 @@ def with_sequential(inner: Stage) -> Stage:
     ``soft_tol`` the requested mode is switched on and iterated to ``tol``.
     """
 
-    def stage(form: Formulation, lam, opts: SolveOptions) -> Solution:
+    def stage(form: Formulation, lam, opts: SolveOptions, workspace=None) -> Solution:
         nonlin = form.nonlinear_items
-        if not nonlin:
-            return inner(form, lam, opts)
+        if not nonlin:   # a caller's workspace (a loop of same-pattern formulations) goes on down
+            kw = {} if workspace is None else {"workspace": workspace}
+            return inner(form, lam, opts, **kw)
         o = check_sequential(opts.sequential)
         t_start = time.perf_counter()
         traj, origin = _initial_trajectory(form, o["initial"], nonlin, inner, lam, opts)
