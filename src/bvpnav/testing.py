@@ -597,6 +597,14 @@ def check_error_model(model_or_class: ErrorModel | CompositeErrorModel | type[Er
       1e-8 below 0.01); ``report()`` must change with every parameter (rule
       'report'). Parameters that these measurements cannot determine fail the rule;
       pass ``data=`` on which they can.
+
+    A model of node states only (no names, a ``state_size``, e.g.
+    :class:`~bvpnav.error_models.ErrorStates`) is checked by other rules: 'state layout'
+    (``state_index`` of its kinds cover ``0 .. state_size - 1`` once, at the nodes
+    ``state_nodes`` says), 'state columns' (one finite sparse (N, ns) matrix per axis whose
+    state columns are nonzero at their own node only: local, so they go in the band),
+    'pickles' and 'terms' (rows over the model's unknowns, each touching states of at most
+    two neighbouring nodes).
     """
     if isinstance(model_or_class, type):
         cls = model_or_class
@@ -615,6 +623,9 @@ def check_error_model(model_or_class: ErrorModel | CompositeErrorModel | type[Er
 
     with _rule(who, "names"):
         names = em.names(data)
+    if not names and hasattr(em, "state_size"):   # a model of node states only
+        _check_node_states(em, data, who)
+        return
     _require(isinstance(names, list | tuple) and len(names) > 0, who, "names",
              f"names(data) returned {names!r}; give a non-empty list of parameter names")
     _require(all(isinstance(n, str) and n.strip() for n in names), who, "names",
@@ -661,6 +672,53 @@ def check_error_model(model_or_class: ErrorModel | CompositeErrorModel | type[Er
                  f"term {getattr(term, 'label', term)!r} has no residual rows over the {model.size} unknowns")
 
     _check_recovery(em, data, q, who)
+
+
+def _check_node_states(em, data, who: str) -> None:
+    """The rules of a node-state model (see :func:`check_error_model`)."""
+    import scipy.sparse as sp
+
+    with _rule(who, "state layout"):
+        ns = int(em.state_size(data))
+        nodes = np.asarray(em.state_nodes(data))
+        idx = np.concatenate([np.asarray(em.state_index(data, k)).ravel() for k in em.state_kinds(data)])
+        at = np.concatenate([np.repeat(np.arange(data.n), np.asarray(em.state_index(data, k)).shape[1])
+                             for k in em.state_kinds(data)])
+    _require(nodes.shape == (ns,) and np.array_equal(np.sort(idx), np.arange(ns)), who, "state layout",
+             f"state_index of the kinds {em.state_kinds(data)} does not cover 0 .. {ns - 1} once")
+    _require(np.array_equal(nodes[idx], at), who, "state layout",
+             "state_nodes disagrees with the node of state_index")
+    with _rule(who, "state columns"):
+        cols = [sp.csr_matrix(g) for g in em.state_columns(data)]
+    _require(len(cols) == data.ndim and all(g.shape == (data.n, ns) for g in cols), who, "state columns",
+             f"state_columns(data) must be {data.ndim} sparse matrices of shape ({data.n}, {ns})")
+    for g in cols:
+        coo = g.tocoo()
+        _require(np.all(np.isfinite(coo.data)), who, "state columns", "state columns hold NaN or inf")
+        _require(np.array_equal(nodes[coo.col], coo.row), who, "state columns",
+                 "a state's column is nonzero away from its own node (not local)")
+    with _rule(who, "pickles"):
+        copy = pickle.loads(pickle.dumps(em))
+        same = copy.state_size(data) == ns and all(
+            (sp.csr_matrix(a) != b).nnz == 0 for a, b in zip(copy.state_columns(data), cols, strict=True))
+    _require(same, who, "pickles", "a pickled copy has other state columns")
+    with _rule(who, "terms"):
+        model = NavModel(data, em)
+        terms = em.terms(model)
+    s0 = model.size - ns
+    for term in terms:
+        res = getattr(term, "residual", None)
+        _require(isinstance(res, Affine) and res.A.shape[1] == model.size, who, "terms",
+                 f"term {getattr(term, 'label', term)!r} has no residual rows over the {model.size} unknowns")
+        A = res.A.tocoo()
+        st = A.col >= s0
+        node = nodes[A.col[st] - s0]
+        lo = np.full(res.m, np.iinfo(np.int64).max)
+        hi = np.full(res.m, -1)
+        np.minimum.at(lo, A.row[st], node)
+        np.maximum.at(hi, A.row[st], node)
+        _require(np.all((hi < 0) | (hi - lo <= 1)), who, "terms",
+                 f"term {term.label!r} ties states of nodes more than one apart (not local)")
 
 
 # ------------------------------------------------------------------ back ends

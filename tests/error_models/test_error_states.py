@@ -187,3 +187,20 @@ def test_bad_options_are_named():
     prob = problem(d, ErrorStates(arw=1e-4) + GyroBias())
     with pytest.raises(InputError, match="leave those models out"):
         prob.solve(solver="direct")
+
+
+def test_contract_check_catches_a_state_column_away_from_its_node():
+    import scipy.sparse as sp
+    from dataclasses import dataclass
+
+    from bvpnav.testing import check_error_model
+
+    @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
+    class Shifted(ErrorStates):
+        def state_columns(self, data):   # every column one sample late: not local
+            return [sp.csr_matrix(sp.vstack([sp.csr_matrix((1, g.shape[1])), g[:-1]]))
+                    for g in super().state_columns(data)]
+
+    check_error_model(ErrorStates)
+    with pytest.raises(AssertionError, match="rule 'state columns' broken"):
+        check_error_model(Shifted(arw=1e-3, gyro_drift=1e-4))

@@ -384,6 +384,13 @@ class ErrorStates(ErrorModel):
                 cols[f"{kind}_{ax} ({KINDS[kind]})"] = totals[kind][:, c]
         return pd.DataFrame(cols, index=pd.Index(np.asarray(data.t, dtype=float), name="t (s)"))
 
+    @staticmethod
+    def example_data():
+        """Strapdown data with gyro rates (that of the attitude models' contract checks)."""
+        from ._attitude import AttitudeErrorModel
+
+        return AttitudeErrorModel.example_data()
+
     @classmethod
     def example(cls) -> ErrorStates:
         return cls(arw=1e-3, gyro_drift=1e-4, acc_drift=1e-3)
