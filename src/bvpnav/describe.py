@@ -125,7 +125,10 @@ def matrices(problem) -> Matrices:
         layout[f"w_{ax}"] = slice(w[0], w[-1] + 1)
         layout[f"v0_{ax}"] = slice(i0, i0 + 1)
         layout[f"v1_{ax}"] = slice(i1, i1 + 1)
-    layout["l"] = slice(model.size - model.q, model.size)
+    o = model.d * model.block
+    layout["l"] = slice(o, o + model.q)
+    if model.ns:   # node states (ErrorStates): after l
+        layout["s"] = slice(o + model.q, model.size)
     J = form.data_rows().A
     return Matrices(K=K, M=M, f=f, F=F, A_eq=E.A, b_eq=-E.c, J=J, D=D, e=e, sigma=sigma,
                     legend=legend, layout=layout)
@@ -204,10 +207,15 @@ def describe(problem, format: str = "text", lam: float | None = None,
         names = ", ".join(model.param_names)
         math(f"  l  ({model.q})  error-model parameters: {names}",
              rf"l \in \mathbb{{R}}^{{{model.q}}}\ \mathrm{{(error\ model:\ {names.replace('_', ' ')})}}")
+    if model.ns:
+        kinds = ", ".join(model.state_model.state_kinds(model.data))
+        math(f"  s  ({model.ns})  node states at every sample: {kinds}",
+             rf"s \in \mathbb{{R}}^{{{model.ns}}}\ \mathrm{{(node\ states:\ {kinds.replace('_', ' ')})}}")
     head("hard constraints:")
-    gl = " + G l" if model.q else ""
+    gl = (" + G l" if model.q else "") + (" + G_s s" if model.ns else "")
     math(f"  FEM ({g.n * model.d} rows): K r + e_1 v_0 - e_N v_1 + M (a_hat{gl} + w) = 0",
-         r"K r + e_1 v_0 - e_N v_1 + M\,(\hat a" + (r" + G l" if model.q else "") + r" + w) = 0"
+         r"K r + e_1 v_0 - e_N v_1 + M\,(\hat a" + (r" + G l" if model.q else "")
+         + (r" + G_s s" if model.ns else "") + r" + w) = 0"
          + rf"\quad \mathrm{{FEM,\ {g.n * model.d}\ rows}}")
     if model.q:
         math("  G: acceleration change per unit error parameter (columns of F = -M G)",

@@ -130,6 +130,14 @@ def test_linearized_solve_equals_dense_reference():
     rel = np.abs(sol.x - x).max() / np.abs(x).max()
     assert rel < 1e-8, rel
     assert np.abs(sol.x[form.model.s_index]).max() > 1e-3   # the states did move
+    # the cvxpy path (Clarabel) on the same rows
+    other = problem(d, model, every=5, fix_sigma=1e-2, sigma_a=1e-2).solve(
+        solver="clarabel", accuracy="high", attitude={"loop": False})
+    assert np.abs(other.x - x).max() / np.abs(x).max() < 1e-8
+    # the problem's description and matrices name the state block
+    prob = problem(d, model, every=5, fix_sigma=1e-2, sigma_a=1e-2)
+    assert "node states at every sample: attitude_error, gyro_bias, acc_bias" in str(prob.describe())
+    assert prob.matrices().layout["s"] == slice(form.model.s_index[0], form.model.size)
 
 
 def test_uncertainty_matches_dense_inverse():
@@ -190,8 +198,9 @@ def test_bad_options_are_named():
 
 
 def test_contract_check_catches_a_state_column_away_from_its_node():
-    import scipy.sparse as sp
     from dataclasses import dataclass
+
+    import scipy.sparse as sp
 
     from bvpnav.testing import check_error_model
 
