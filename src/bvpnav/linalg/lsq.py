@@ -518,8 +518,14 @@ def banded_factor(ls: LeastSquaresForm, form: Formulation, plan: BandPlan | None
         band = workspace.affine_band
         if band is not None and workspace.band_plan is plan:
             parts = band.at(ls.lam, out=None if kept is None else kept.buffer(band.scaled0.shape))
+    out = None
+    if parts is None and workspace.band_buffer is not None:   # a loop's band memory, reused
+        need = plan.pos_order.size * plan.ldab
+        if workspace.band_buffer.size < need:
+            workspace.band_buffer = np.empty(need)
+        out = workspace.band_buffer
     return BandedKKT(ls.D.A, ls.E.A, params=form.model.l_index, plan=plan, parts=parts,
-                     diagonal=None if parts is not None else fem_rows_by_diagonals(form, workspace))
+                     diagonal=None if parts is not None else fem_rows_by_diagonals(form, workspace), out=out)
 
 
 def factor_form(ls: LeastSquaresForm, form: Formulation, method: str = "lu", delta: float = 1e-12,

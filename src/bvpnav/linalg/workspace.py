@@ -44,6 +44,10 @@ class Workspace:
     kept_factors : KeptFactors or None
         A lambda sweep's last factor and its spare buffers, handed to the solve at the chosen
         lambda (:meth:`bvpnav.lam.sweep.DirectSweep.hand_off`).
+    band_buffer : ndarray or None
+        Memory for the band of the next banded factor, given by a loop whose every factor is
+        dead before the next one is assembled (the node-state loop of
+        :mod:`bvpnav.solve.attitude`); the factor then lives in it. None: fresh memory.
     """
 
     fem_diagonals: DiagonalRows | None = None
@@ -52,6 +56,7 @@ class Workspace:
     band_pattern: tuple[np.ndarray, ...] | None = None
     affine_band: AffineBand | None = None
     kept_factors: KeptFactors | None = None
+    band_buffer: np.ndarray | None = None
 
     def drop_sweep_bands(self) -> None:
         """Forget a sweep's bands (the band along lambda and the kept factors) once the

@@ -598,6 +598,8 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     from ..linalg.workspace import Workspace
 
     workspace = Workspace() if not form.nonlinear_items else None
+    if workspace is not None:   # each step's factor is dead before the next: one band's memory
+        workspace.band_buffer = np.empty(0)
     with progress(desc="state loop", unit="iter", enabled=o["progress"]) as bar:
         for _ in range(int(o["max_iter"])):
             data = form.data if not iters else states_at(raw, totals)
