@@ -213,3 +213,14 @@ def test_contract_check_catches_a_state_column_away_from_its_node():
     check_error_model(ErrorStates)
     with pytest.raises(AssertionError, match="rule 'state columns' broken"):
         check_error_model(Shifted(arw=1e-3, gyro_drift=1e-4))
+
+
+def test_lambda_rule_on_the_state_layout():
+    # the rule's sweep runs on the banded state layout at the first linearization; the later steps
+    # keep its lambda. Noise-free constant biases: whatever lambda, the truth zeroes every row
+    d = simulate(const(BG), const(BA), T=2.0)
+    prob = problem(d, ErrorStates(arw=1e-5, gyro_drift=1e-4, acc_drift=1e-3), fix_sigma=1e-2, sigma_a=1e-3)
+    sol = prob.solve(lam="gcv", solver="direct", attitude={"progress": False})
+    assert sol.lam_rule == "gcv (first evaluation)" and 0 < sol.lam < np.inf
+    assert sol.curve is not None and sol.records.attitude.converged
+    assert np.abs(sol.position() - d["r"]).max() < 1e-9
