@@ -634,8 +634,7 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
         _warn(sol, f"node-state loop did not converge in {o['max_iter']} iterations: the last step changed "
                    f"the attitude by {iters[-1]['step']:.3g} rad > tol={o['tol']:g} rad. Raise max_iter "
                    f"(solve(..., attitude={{'max_iter': {2 * int(o['max_iter'])}}})) or give priors on the "
-                   "first "
-                   "node (ErrorStates(attitude_sigma=..., gyro_sigma=..., acc_sigma=...))")
+                   "first node (ErrorStates(attitude_sigma=..., gyro_sigma=..., acc_sigma=...))")
     sol.error_states = sm.frame(raw, totals)
     sol.attitude = states_at(raw, totals).attitude
     sol.attitude_data = raw.attitude
