@@ -29,7 +29,7 @@ discrete process model a factor graph writes per epoch, as soft rows (not scaled
 with :math:`\phi_j` the step rotation vector of the raw rates
 (:func:`bvpnav.attitude.step_rotation_vectors`; the bias held constant over the step, as
 GTSAM's preintegration holds it) and :math:`n_g` the gyro's angle random walk. Every unknown
-is then local in time: :func:`bvpnav.linalg.lsq.column_nodes` puts the states at their
+is then local in time: ``bvpnav.linalg.lsq.column_nodes`` puts the states at their
 node (axes interleaved) and the banded factorization has only the constant parameters of
 other components (e.g. a constant ``ScaleFactor``) in its border. A drift of 0 makes a
 bias constant by hard rows :math:`b_{j+1} = b_j` (still local); ``None`` leaves the state
@@ -37,7 +37,7 @@ out.
 
 Linearization. The states are nonlinear (the attitude multiplies the specific force), so a
 problem with them is solved by Gauss-Newton steps (:func:`bvpnav.solve.attitude.with_attitude`
-runs them): at the current totals (a :class:`StatePoint` carried by the data) the convex
+runs them): at the current totals (a ``StatePoint`` carried by the data) the convex
 problem's state unknowns are the increments, a left rotation :math:`\varepsilon_j` of the
 attitude (:math:`C_j \to \exp([\varepsilon_j\times]) C_j`) and additive bias increments.
 The linearized rows are the exact first derivatives:
@@ -76,7 +76,7 @@ from ..errors import InputError
 from ._attitude import _check_strapdown_gyro, _skew, left_jacobian, right_jacobian
 from ._base import ErrorModel
 
-__all__ = ["ErrorStates", "StatePoint", "states_at", "process_residuals"]
+__all__ = ["ErrorStates"]
 
 #: The node states in their order within a node, with units.
 KINDS = {"attitude_error": "rad", "gyro_bias": "rad/s", "acc_bias": "m/s^2"}
@@ -111,8 +111,8 @@ def _totals(data, kind: str) -> np.ndarray:
 
 
 def states_at(data, totals: dict):
-    """The measured data re-linearized at the node-state ``totals`` (kind -> (N, 3)): attitude
-    :math:`\\exp([\\psi\\times])\\hat C`, specific force :math:`\\hat f - b_a`, ``state_point`` set."""
+    r"""The measured data re-linearized at the node-state ``totals`` (kind -> (N, 3)): attitude
+    :math:`\exp([\psi\times])\hat C`, specific force :math:`\hat f - b_a`, ``state_point`` set."""
     from ..imu import ImuData
 
     raw = _raw(data)
@@ -363,8 +363,8 @@ class ErrorStates(ErrorModel):
 
     # ------------------------------------------------------------ totals
     def updated(self, data, s: np.ndarray) -> dict:
-        """The totals after the increments ``s`` (the state block of a solution): attitude by
-        composition, :math:`\\exp([\\psi'\\times]) = \\exp([\\varepsilon\\times])\\exp([\\psi\\times])`,
+        r"""The totals after the increments ``s`` (the state block of a solution): attitude by
+        composition, :math:`\exp([\psi'\times]) = \exp([\varepsilon\times])\exp([\psi\times])`,
         biases by addition."""
         out = {}
         for kind in self.state_kinds(data):

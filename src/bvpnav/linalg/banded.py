@@ -889,7 +889,7 @@ class BandPlan:
             :attr:`segments`.
         diagonal : DiagonalRows, optional
     out : ndarray, optional
-        Memory for the band (:meth:`BandPlan._write_band`); the factor then lives in it.
+        Memory for the band (``BandPlan._write_band``); the factor then lives in it.
             ``E``'s first rows by diagonals, for the first assembly (:meth:`assemble`).
         """
         m, n = D.shape

@@ -563,7 +563,7 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     r"""Gauss-Newton on the node states of :class:`~bvpnav.error_models.ErrorStates`.
 
     At the current totals (attitude errors, biases per node) the data is re-linearized
-    (:func:`~bvpnav.error_models.error_states.states_at`: the attitude rotated, the
+    (``bvpnav.error_models.error_states.states_at``: the attitude rotated, the
     accelerometer bias removed, the process rows' residuals evaluated there), the convex
     problem gives the increments, and the totals take them. Each step is one banded
     factorization (the states are in the band; the band plan is made once and reused). The
