@@ -36,7 +36,7 @@ The metadata's bias sigmas are per sample, as GTSAM's example applies them
 (``sqrt(count) * sigma`` between fixes): at the mean step of 10.04 ms they are random walks
 of 1.667e-3 m/s^2/sqrt(s) and 2.904e-5 rad/s/sqrt(s). Fix sigma: GTSAM's example's
 ``Precisions(1 / 0.07)``, i.e. 0.2646 m per axis, for both. Initial attitude for both:
-roll and pitch from the mean specific force of the first second, heading from the first fixes
+roll and pitch from the mean specific force of the first second, heading from the first kept fixes
 10 m apart; the heading prior is left open (the fixes determine it).
 
 Every method runs in its own child process (peak resident memory, ``VmHWM``, reported per IMU
@@ -159,14 +159,15 @@ def split_fixes(fix_t: np.ndarray, gap: float) -> tuple[np.ndarray, np.ndarray]:
     return kept_a, np.setdiff1d(np.arange(fix_t.size), kept_a)
 
 
-def initial_attitude(d: dict):
-    """Roll and pitch from the first second's mean specific force, heading from the first fixes."""
+def initial_attitude(d: dict, kept) -> object:
+    """Roll and pitch from the first second's mean specific force, heading from the first kept
+    fixes (the withheld ones are the score)."""
     from bvpnav.align import heading_from_positions, roll_pitch_from_stationary
     from bvpnav.align import initial_attitude as c0
 
     first = d["t"] <= d["t"][0] + 1.0
     roll, pitch = roll_pitch_from_stationary(d["f"][first], tolerance=0.2)
-    yaw = heading_from_positions(d["fix_t"], d["fix_p"])
+    yaw = heading_from_positions(d["fix_t"][kept], d["fix_p"][kept])
     return c0(roll, pitch, yaw)
 
 
@@ -197,8 +198,11 @@ def gtsam_example_smoother(d: dict, kept, fig: dict, c0, max_iterations: int = 1
     zero = gtsam.imuBias.ConstantBias()
     graph = gtsam.NonlinearFactorGraph()
     rate = 1.0 / float(np.mean(np.diff(t)))
-    pos0 = fp.copy()
-    vel0 = np.gradient(fp, ft, axis=0)
+    kt = np.asarray(sorted(int(k) for k in kept))
+    # initial values from the kept fixes only (interpolated at every node): the withheld fixes
+    # are the score and must not reach the smoother, not even as LM's starting point
+    pos0 = np.column_stack([np.interp(ft, ft[kt], fp[kt, i]) for i in range(3)])
+    vel0 = np.gradient(pos0, ft, axis=0)
     gr = {**fig, "tilt": TILT, "heading": math.pi}
     for fac in _priors(c0.as_matrix(), pos0[0], vel0[0], gr, None):
         graph.add(fac)
@@ -319,7 +323,7 @@ def case(method: str, gap: float, interval: float) -> dict:
     d = load_dev()
     kept, withheld = split_fixes(d["fix_t"], gap)
     fig = figures(d["meta"], 1.0 / float(np.mean(np.diff(d["t"]))))
-    c0 = initial_attitude(d)
+    c0 = initial_attitude(d, kept)
     if method == "GTSAM":
         out = run_gtsam_example(d, kept, withheld, fig, c0)
     elif method == "GTSAM peer":
