@@ -1,0 +1,530 @@
+r"""Bands and inequalities for the direct back end: a primal-dual interior-point method whose
+every Newton step is one banded factorization.
+
+A problem whose items are hard or soft equalities, bands (``|r| <= tol``) and hard or
+band inequalities (``g <= 0``, ``g <= tol``) is the convex quadratic program
+
+.. math::
+
+    \min_x \|A x + c\|^2 \quad \text{s.t.} \quad E x + e = 0, \quad G x + g \le 0,
+
+``A`` the weighted objective rows and ``E`` the equality rows of
+:func:`bvpnav.linalg.lsq.least_squares_form`, ``G`` the inequality rows (a band is two:
+:math:`r - tol \le 0` and :math:`-r - tol \le 0`). With slacks :math:`s = -(G x + g) \ge 0`
+and multipliers :math:`y` (equalities, cvxpy's convention: Lagrangian
+:math:`f + y^T (E x + e) + z^T (G x + g)`) and :math:`z \ge 0`, Mehrotra's
+predictor-corrector method takes Newton steps on
+
+.. math::
+
+    r_d = 2 A^T (A x + c) + E^T y + G^T z = 0, \quad r_e = E x + e = 0, \quad
+    r_g = G x + g + s = 0, \quad s \circ z = \sigma \mu.
+
+Eliminating :math:`ds` and :math:`dz` (:math:`W = \mathrm{diag}(z / s)`) leaves
+
+.. math::
+
+    \big(A^T A + G^T \tfrac{W}{2} G\big)\, dx + E^T \tfrac{dy}{2} = b_x, \qquad E\, dx = -r_e,
+
+which is the least-squares augmented system of :mod:`bvpnav.linalg.banded` with the objective
+rows ``[A; sqrt(W/2) G]``: the inequality rows are objective rows with a weight per row, and
+rows local in time fold into the band like local objective rows. The plan (ordering,
+bandwidth, border) is made once; each step adds :math:`G^T \tfrac{W}{2} G` to the band by
+one sparse product with the weights (:class:`WeightedBand`), scales and factors it.
+
+The first factorization has :math:`W = 0`: the least-squares answer without the inequality
+rows. When it already satisfies them it is the optimum (with :math:`z = 0`) and the method
+stops there.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import SolveError
+from ..formulation import Formulation
+from ..model import Affine
+from ..sparse import abs_max, canonical
+from .banded import BandedKKT, BandPlan, NotBanded, scale_band
+from .lsq import LeastSquaresForm, column_nodes, factor_form, fem_rows_by_diagonals
+from .workspace import Workspace
+
+__all__ = ["QuadraticForm", "quadratic_form", "unsupported_term", "WeightedBand", "solve_qp",
+           "IPM_TOL"]
+
+#: Relative tolerance of the interior-point method's residuals and gap per accuracy preset.
+_DEBUG = False
+_MU0 = 1e6
+IPM_TOL = {"low": 1e-8, "default": 1e-10, "high": 1e-12}
+
+
+def unsupported_term(form: Formulation):
+    """The first term the interior-point path cannot take (robust penalties, cones, soft
+    inequalities), or None."""
+    for term in form.terms():
+        if term.least_squares_role() is not None:
+            continue
+        if term.kind == "inequality" and term.mode in ("hard", "band"):
+            continue
+        if term.kind == "equality" and term.mode == "band":
+            continue
+        return term
+    return None
+
+
+@dataclass(eq=False)
+class QuadraticForm:
+    r"""``min ||A x + c||^2 s.t. E x + e = 0, G x + g <= 0`` with row bookkeeping.
+
+    Attributes
+    ----------
+    ls : LeastSquaresForm
+        The objective and equality rows (:func:`bvpnav.linalg.lsq.least_squares_form`'s).
+    G : Affine
+        The inequality rows ``G x + g`` (each row scaled to a largest coefficient of 1).
+    scale : ndarray
+        The factor each row of ``G`` was divided by (its item's units per unit of ``G``).
+    ineq_blocks : list of (label, list of (slice, sign))
+        For each band or inequality term, its rows of ``G``: one slice (``r - tol``, or
+        ``g - tol``) or two (a band's upper ``r - tol`` and lower ``-r - tol`` sides).
+    """
+
+    ls: LeastSquaresForm
+    G: Affine
+    scale: np.ndarray
+    ineq_blocks: list
+
+
+def quadratic_form(form: Formulation, lam: float) -> QuadraticForm:
+    """The problem as a quadratic program (see the module Notes).
+
+    Raises
+    ------
+    ValueError
+        When a term is a robust penalty, a cone or a soft inequality
+        (:func:`unsupported_term`).
+    """
+    bad = unsupported_term(form)
+    if bad is not None:
+        raise ValueError(f"item {bad.label!r} (kind {bad.kind!r}, mode {bad.mode!r}) is not a "
+                         "quadratic-program row")
+    from .lsq import least_squares_form
+
+    ls = least_squares_form(form, lam, surrogate=True)
+    rows, consts, blocks, start = [], [], [], 0
+    for term in form.terms():
+        if term.least_squares_role() is not None:
+            continue
+        res = term.residual
+        tol = np.zeros(res.m) if term.mode == "hard" else np.broadcast_to(term.tol, (res.m,))
+        sides = [1.0] if term.kind == "inequality" else [1.0, -1.0]
+        pieces = []
+        for sign in sides:
+            rows.append(canonical(res.A * sign) if sign != 1.0 else canonical(res.A))
+            consts.append(sign * res.c - tol)
+            pieces.append((slice(start, start + res.m), sign))
+            start += res.m
+        blocks.append((term.label, pieces))
+    A = sp.vstack(rows, format="csr") if rows else sp.csr_matrix((0, form.model.size))
+    A = canonical(A)
+    c = np.concatenate(consts) if consts else np.zeros(0)
+    big = abs(A).max(axis=1).toarray().ravel() if A.shape[0] else np.zeros(0)
+    big[~(big > 0)] = 1.0
+    k = 1.0 / big
+    A = sp.csr_matrix((A.data * np.repeat(k, np.diff(A.indptr)), A.indices, A.indptr), shape=A.shape)
+    return QuadraticForm(ls, Affine(A, c * k), big, blocks)
+
+
+def _pairs(G: sp.csr_matrix) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Every pair of entries of each row of ``G``: ``(row, col_a, col_b, product)`` (both
+    orders and the diagonal: the entries of the rows' outer products)."""
+    counts = np.diff(G.indptr)
+    per = counts ** 2
+    total = int(per.sum())
+    row = np.repeat(np.arange(G.shape[0]), per)
+    # entry e of its row pairs with every entry of the row: e repeated, partners in order
+    e = np.repeat(np.arange(G.nnz), np.repeat(counts, counts))
+    start = np.repeat(G.indptr[:-1], per)
+    first = np.repeat(np.cumsum(per) - per, per)
+    within = np.arange(total) - first
+    partner = start + within % np.repeat(counts, per)
+    return row, G.indices[e], G.indices[partner], G.data[e] * G.data[partner]
+
+
+class WeightedBand:
+    r"""The reduced banded system of objective rows ``[A; diag(sqrt(w)) G]`` for any
+    positive weights ``w`` from one plan: the parts are affine in ``w``.
+
+    Parameters
+    ----------
+    plan : BandPlan
+        Made for ``D = [A; G]`` with the ``G`` rows among its ``lam_rows`` (no unknown they
+        touch is eliminated), every ``G`` row folded.
+    D0 : scipy.sparse.csr_matrix
+        ``[A; 0 G]``: the objective rows with the inequality rows' values zero (the pattern
+        of the plan).
+    E : scipy.sparse.csr_matrix
+    G : scipy.sparse.csr_matrix
+    diagonal : DiagonalRows, optional
+
+    Notes
+    -----
+    :math:`G^T W G = \sum_i w_i g_i g_i^T`: each entry pair of a row lands at one place of
+    the band, the border coupling or the border block, so the parts at ``w`` are the parts
+    at zero plus one sparse product ``P w`` per part.
+    """
+
+    def __init__(self, plan: BandPlan, D0: sp.csr_matrix, E: sp.csr_matrix, G: sp.csr_matrix,
+                 diagonal=None):
+        self.plan = plan
+        ab, B, C, h = plan._scatter(plan._entries(D0, E, diagonal))
+        self.ab0, self.B0, self.C0, self.h = ab, B, C, h
+        mi = G.shape[0]
+        row, ca, cb, prod = _pairs(G)
+        out: tuple = ([], [], [])
+        plan._place(ca, cb, np.arange(prod.size, dtype=float), False, out)
+        kl, ldab = plan.kl, plan.ldab
+        band, cpl, brd = out
+
+        def cat(parts: list, t: int) -> np.ndarray:
+            return np.concatenate([p[t] for p in parts]) if parts else np.zeros(0, dtype=np.int64)
+
+        pi, pj, v = cat(band, 0).astype(np.int64), cat(band, 1).astype(np.int64), cat(band, 2)
+        if pi.size and np.max(np.abs(pi - pj)) > kl:
+            raise NotBanded("an inequality row reaches beyond the band")
+        flat = pj * (ldab - 1) + pi + 2 * kl
+        self.band_at, self.P_band = self._map(flat, v.astype(np.int64), row, prod, mi)
+        k = plan.border
+        self.k = k
+        if k:
+            ci, ck, cv = cat(cpl, 0).astype(np.int64), cat(cpl, 1).astype(np.int64), cat(cpl, 2)
+            self.cpl_at, self.P_cpl = self._map(ci * k + ck, cv.astype(np.int64), row, prod, mi)
+            bi, bj, bv = cat(brd, 0).astype(np.int64), cat(brd, 1).astype(np.int64), cat(brd, 2)
+            self.brd_at, self.P_brd = self._map(bi * k + bj, bv.astype(np.int64), row, prod, mi)
+
+    @staticmethod
+    def _map(where: np.ndarray, pair: np.ndarray, row: np.ndarray, prod: np.ndarray, mi: int):
+        """The unique places and the sparse map from the weights to the values added there."""
+        at, inv = np.unique(where, return_inverse=True)
+        P = sp.csr_matrix((prod[pair], (inv.ravel(), row[pair])), shape=(at.size, mi))
+        P.sum_duplicates()
+        return at, P
+
+    def parts(self, w: np.ndarray) -> tuple:
+        """``(ab, B, C, h, sU)`` at weights ``w`` (the band scaled, as
+        :meth:`BandPlan.assemble` gives them)."""
+        ab = self.ab0.copy()
+        flat = ab.reshape(-1)
+        flat[self.band_at] += self.P_band @ w
+        B, C = self.B0, self.C0
+        if self.k:
+            nb, k = ab.shape[0], self.k
+            add = self.P_cpl @ w
+            Bw = sp.csc_matrix((add, (self.cpl_at // k, self.cpl_at % k)), shape=(nb, k))
+            B = Bw if B is None else (B + Bw).tocsc()
+            C = C.copy()
+            C.reshape(-1)[self.brd_at] += self.P_brd @ w
+        sU = scale_band(ab, self.plan.kl)
+        return ab, B, C, self.h, sU
+
+
+class _Steps:
+    """Factorizations of the Newton system at given weights: the banded one of a
+    :class:`WeightedBand` when the rows allow, else a pivoted sparse LU per step."""
+
+    def __init__(self, qp: QuadraticForm, form: Formulation, workspace: Workspace | None, banded: bool):
+        self.qp, self.form = qp, form
+        ls, G = qp.ls, qp.G.A
+        A = ls.D.A
+        self.mA = A.shape[0]
+        self.D = canonical(sp.vstack([A, G], format="csr"))
+        # the inequality rows' entries are the tail of D's values (rows stacked below A)
+        self.tail = slice(A.nnz, None)
+        self.Gdata, self.Grows = G.data, np.repeat(np.arange(G.shape[0]), np.diff(G.indptr))
+        self.E = ls.E.A
+        self.band: WeightedBand | None = None
+        self.notes: list[str] = []
+        if banded:
+            try:
+                self.band = self._weighted_band(workspace)
+            except (NotBanded, ValueError, np.linalg.LinAlgError) as exc:
+                self.notes.append(f"not banded: {exc}")
+
+    def _weighted_band(self, workspace) -> WeightedBand:
+        form, ls = self.form, self.qp.ls
+        model = form.model
+        lam_rows = np.concatenate([np.asarray(ls.lam_rows, dtype=bool), np.ones(self.qp.G.m, dtype=bool)])
+        diagonal = fem_rows_by_diagonals(form, workspace)
+        try:
+            plan = BandPlan.build(self.D, self.E, column_nodes(model), lam_rows=lam_rows, diagonal=diagonal)
+        except NotBanded:
+            if model.d == 1:
+                raise
+            plan = BandPlan.build(self.D, self.E, column_nodes(model, interleave=True), lam_rows=lam_rows,
+                                  diagonal=diagonal)
+        if not plan.fold[self.mA:].all():
+            raise NotBanded("an inequality row reaches far in time (not folded)")
+        plan._first = None
+        D0 = self.D.copy()
+        D0.data[self.tail] = 0.0
+        return WeightedBand(plan, D0, self.E, self.qp.G.A, diagonal)
+
+    def describe(self) -> str:
+        return self.band.plan.describe() if self.band is not None else "lu"
+
+    def factor(self, w: np.ndarray):
+        """The factorization of the augmented system with objective rows ``[A; sqrt(w) G]``."""
+        D = self.D.copy() if self.band is None else self.D
+        D.data[self.tail] = self.Gdata * np.sqrt(w)[self.Grows]
+        if self.band is not None:
+            fac = BandedKKT.numeric(self.band.plan, self.band.parts(w))
+            fac.params = self.form.model.l_index
+            fac._bind(D, self.E)
+            return fac
+        ls = LeastSquaresForm(Affine(D, np.zeros(D.shape[0])), self.qp.ls.E, self.qp.ls.eq_blocks)
+        return factor_form(ls, self.form, "lu")
+
+
+class _Newton:
+    r"""Newton steps of the interior-point method: the condensed system solved by one
+    factorization, then refined against the full linearized system (the condensed one
+    loses accuracy in :math:`dz = W (G dx - b_3) + b_4 / s` as :math:`W` spreads).
+
+    Notes
+    -----
+    The full system, for right-hand sides :math:`b_1 .. b_4`:
+
+    .. math::
+
+        2 A^T A\, dx + E^T dy + G^T dz = b_1, \quad E\, dx = b_2, \quad
+        G\, dx + ds = b_3, \quad z \circ ds + s \circ dz = b_4.
+    """
+
+    def __init__(self, qp: QuadraticForm, steps: _Steps):
+        self.qp, self.steps = qp, steps
+        self.A, self.E, self.G = qp.ls.D.A, qp.ls.E.A, qp.G.A
+        self.At, self.Et, self.Gt = self.A.T.tocsr(), self.E.T.tocsr(), self.G.T.tocsr()
+        self.n = self.A.shape[1]
+        self.m_aug = steps.D.shape[0]
+        self.fac = None
+
+    def factor(self, s: np.ndarray, z: np.ndarray) -> None:
+        self.s, self.z, self.w = s, z, z / s
+        self.fac = self.steps.factor(0.5 * self.w)
+
+    def _condensed(self, b1, b2, b3, b4):
+        s, z, w, n, m = self.s, self.z, self.w, self.n, self.m_aug
+        bx = 0.5 * (b1 + self.Gt @ (w * b3 - b4 / s))
+        sol = self.fac.solve(np.concatenate([np.zeros(m), bx, b2]))
+        dx, dy = sol[m:m + n], 2.0 * sol[m + n:]
+        dz = w * (self.G @ dx - b3) + b4 / s
+        ds = (b4 - s * dz) / z
+        return [dx, dy, dz, ds]
+
+    def solve(self, b1, b2, b3, b4, refine: int = 2, rtol: float = 1e-13):
+        """``(dx, dy, dz, ds)``, refined while the full system's residual is above ``rtol``
+        relative to its terms (at most ``refine`` steps)."""
+        d = self._condensed(b1, b2, b3, b4)
+        for _ in range(refine):
+            dx, dy, dz, ds = d
+            g1 = 2.0 * (self.At @ (self.A @ dx))
+            e1, f1 = self.Et @ dy, self.Gt @ dz
+            R1 = b1 - g1 - e1 - f1
+            R2 = b2 - self.E @ dx
+            Gdx = self.G @ dx
+            R3 = b3 - Gdx - ds
+            R4 = b4 - self.z * ds - self.s * dz
+            big = max(abs_max(R1) / max(abs_max(b1), abs_max(g1), abs_max(e1), abs_max(f1), 1e-300),
+                      abs_max(R3) / max(abs_max(b3), abs_max(Gdx), abs_max(ds), 1e-300))
+            if big <= rtol:
+                break
+            c = self._condensed(R1, R2, R3, R4)
+            d = [a + b for a, b in zip(d, c, strict=True)]
+        return d
+
+
+@dataclass
+class _Point:
+    """An iterate and its residuals."""
+
+    x: np.ndarray
+    y: np.ndarray
+    s: np.ndarray
+    z: np.ndarray
+    measures: tuple = ()
+
+    @property
+    def worst(self) -> float:
+        return max(self.measures) if self.measures else np.inf
+
+
+def _start(newton: _Newton, qp: QuadraticForm):
+    """The least-squares answer without the inequality rows (``W = 0``), or, when that is
+    singular (the inequality rows determine some unknown), with every inequality row
+    weighted as an objective row of weight 1 (rows scaled to a largest coefficient of 1)."""
+    ls, mi = qp.ls, qp.G.m
+    for weight in (0.0, 1.0):
+        try:
+            newton.fac = newton.steps.factor(np.full(mi, weight))
+            break
+        except np.linalg.LinAlgError:
+            if weight:
+                raise
+    m, n = newton.m_aug, newton.n
+    rho = np.concatenate([-ls.D.c, -np.sqrt(weight) * qp.G.c])
+    z0, _, _ = newton.fac.refined(np.concatenate([rho, np.zeros(n), -ls.E.c]), 2)
+    return z0[m:m + n], 2.0 * z0[m + n:], weight
+
+
+def _measures(qp: QuadraticForm, pt: _Point, newton: _Newton, fscale: float):
+    """``(equality, inequality violation, stationarity, gap)`` relative measures and the
+    residuals ``(r_d, r_e, r_g)``."""
+    A, E, G = qp.ls.D, qp.ls.E, qp.G
+    res = A.value(pt.x)
+    grad = 2.0 * (newton.At @ res)
+    Ey, Gz = newton.Et @ pt.y, newton.Gt @ pt.z
+    rd = grad + Ey + Gz
+    re = E.value(pt.x)
+    gx = G.value(pt.x)
+    rg = gx + pt.s
+    f = float(res @ res)
+    dscale = max(abs_max(grad), abs_max(Ey), abs_max(Gz), 1e-300)
+    escale = max(float(np.max(E.row_scale(pt.x))), 1e-300)
+    gscale = max(float(np.max(G.row_scale(pt.x))), 1e-300)
+    gap = float(pt.s @ pt.z) / max(f, fscale, 1e-300)
+    pt.measures = (abs_max(re) / escale, abs_max(np.maximum(gx, 0.0)) / gscale, abs_max(rd) / dscale, gap)
+    return rd, re, rg
+
+
+def solve_qp(form: Formulation, lam: float, tol: float = IPM_TOL["default"], max_iter: int = 80,
+             workspace: Workspace | None = None, method: str = "auto"):
+    r"""Solve a problem with band and inequality rows by Mehrotra's predictor-corrector method.
+
+    Parameters
+    ----------
+    form : Formulation
+    lam : float
+    tol : float
+        Relative tolerance on the equality residual, the inequality violation, the
+        stationarity and the complementarity gap (relative to the objective).
+    max_iter : int
+    workspace : Workspace, optional
+    method : {"auto", "banded", "lu"}
+        ``"auto"``: banded for the acceleration form when the rows are local, else the
+        pivoted sparse LU at every step.
+
+    Returns
+    -------
+    x : ndarray
+    info : dict
+        ``duals`` (cvxpy's convention), ``iterations``, ``factorization``, ``gap``,
+        ``residuals`` (the measures of every iterate), ``status`` (``optimal``, or
+        ``inaccurate`` for the best iterate when progress stopped short of ``tol``).
+
+    Raises
+    ------
+    SolveError
+        When the method stalls far from an answer (the usual sign of inequality rows that
+        cannot hold together with the hard rows: a conic solver then proves it and names
+        the items).
+
+    Notes
+    -----
+    See the module Notes. Start: the least-squares answer, slacks and multipliers shifted
+    and balanced as in Mehrotra's heuristic. One step length for the primal and dual
+    variables (fraction to the boundary 0.99, 0.999 near the end); centering
+    :math:`\sigma = (\mu_{aff}/\mu)^3`.
+    """
+    qp = quadratic_form(form, lam)
+    mi = qp.G.m
+    banded = method == "banded" or (method == "auto" and form.residual == "acceleration")
+    steps = _Steps(qp, form, workspace, banded)
+    newton = _Newton(qp, steps)
+    x, y, weight = _start(newton, qp)
+    r = qp.G.value(x)
+    if mi == 0 or (weight == 0.0 and np.all(r <= 0.0)):
+        return x, _info(qp, y, np.zeros(mi), 0, steps, 0.0, [], "optimal")
+    f0 = float(np.sum(qp.ls.D.value(x) ** 2))
+    fscale = 1e-12 * max(f0, 1.0)
+    pt = _Point(x, y, *_initial_slacks(r, f0, mi))
+    best, history, stalls = None, [], 0
+    for it in range(max_iter + 1):
+        rd, re, rg = _measures(qp, pt, newton, fscale)
+        history.append(pt.measures)
+        if _DEBUG:
+            print(it, ["%.1e" % v for v in pt.measures])
+        if best is None or pt.worst < best.worst:
+            best = pt
+        if pt.worst <= tol or it == max_iter or stalls >= 3:
+            break
+        s, z = pt.s, pt.z
+        mu = float(s @ z) / mi
+        try:
+            newton.factor(s, z)
+        except np.linalg.LinAlgError:
+            if best is pt and it == 0:
+                raise
+            break   # the weights have spread beyond what the factorization resolves: the best so far
+        # predictor (affine scaling), then the corrector with Mehrotra's centering
+        dx, dy, dz, ds = newton.solve(-rd, -re, -rg, -s * z)
+        a_aff = _step(s, ds, z, dz, 1.0)
+        mu_aff = float((s + a_aff * ds) @ (z + a_aff * dz)) / mi
+        sigma = min((mu_aff / mu) ** 3, 1.0)
+        dx, dy, dz, ds = newton.solve(-rd, -re, -rg, -s * z + sigma * mu - ds * dz)
+        alpha = _step(s, ds, z, dz, 0.99 if pt.measures[3] > 1e-6 else 0.999)
+        if _DEBUG:
+            print("   a_aff %.2e alpha %.2e sigma %.2e" % (a_aff, alpha, sigma))
+        stalls = stalls + 1 if alpha < 1e-6 else 0
+        pt = _Point(pt.x + alpha * dx, pt.y + alpha * dy, s + alpha * ds, z + alpha * dz)
+    status = "optimal" if best.worst <= tol else "inaccurate"
+    if best.worst > max(1e3 * tol, 1e-6):
+        last = best.measures
+        raise SolveError(
+            f"direct: the interior-point method stopped after {len(history) - 1} steps short of an answer "
+            f"(best relative equality residual {last[0]:.1e}, inequality violation {last[1]:.1e}, "
+            f"stationarity {last[2]:.1e}, gap {last[3]:.1e}); the band and inequality rows may not hold "
+            "together with the hard rows. A conic solver (solver='clarabel') proves infeasibility and "
+            "names the items that conflict.",
+            attempts=[{"solver": "direct", "status": "not converged",
+                       "reason": f"interior point: no answer in {len(history) - 1} steps"}])
+    return best.x, _info(qp, best.y, best.z, len(history) - 1, steps, best.measures[3], history, status)
+
+
+def _initial_slacks(r: np.ndarray, f0: float, mi: int) -> tuple[np.ndarray, np.ndarray]:
+    """Slacks and multipliers to start from at rows ``r = G x + g``: the slacks ``-r``
+    shifted positive, the multipliers at complementarity ``mu0`` (Mehrotra's shift and
+    balance)."""
+    s = -r.copy()
+    s += max(-1.5 * float(np.min(s)), 0.0) + 1e-12 * max(abs_max(r), 1e-300)
+    mu0 = max(f0, 1.0) / mi * _MU0
+    z = mu0 / s
+    return s, z
+
+
+def _step(s, ds, z, dz, frac: float) -> float:
+    """The largest step in (0, 1] keeping ``s`` and ``z`` positive, times ``frac`` when it
+    meets the boundary."""
+    a = 1.0
+    for v, dv in ((s, ds), (z, dz)):
+        neg = dv < 0
+        if neg.any():
+            a = min(a, frac * float(np.min(-v[neg] / dv[neg])))
+    return a
+
+
+def _info(qp: QuadraticForm, y: np.ndarray, z: np.ndarray, iterations: int, steps: _Steps, gap: float,
+          history: list, status: str) -> dict:
+    """The duals in cvxpy's convention per term, and the run's record."""
+    duals = {}
+    for label, sl in qp.ls.eq_blocks:
+        duals[label] = y[sl] if label == "fem" else [y[sl]]
+    zs = z / qp.scale if z.size else z   # back to the items' units
+    for label, pieces in qp.ineq_blocks:
+        duals[label] = [zs[sl] for sl, _ in pieces]
+    name = steps.describe()
+    note = f"interior point on {name}" + (f" ({'; '.join(steps.notes)})" if steps.notes else "")
+    return {"duals": duals, "iterations": iterations, "factorization": note, "gap": gap,
+            "residuals": history, "status": status}
