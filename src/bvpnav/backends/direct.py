@@ -22,7 +22,7 @@ Registered in the back-end table on import (the folder is discovered):
 (``g <= 0``): then a primal-dual interior-point method (:mod:`bvpnav.linalg.ipm`, Mehrotra's
 predictor-corrector) whose every Newton step is one banded factorization of the same KKT
 system with a weight per inequality row (options ``ipm_tol``: the relative tolerance of its
-residuals and gap, 1e-8, 1e-10, 1e-12 for the presets; ``ipm_max_iter``). Robust penalties,
+residuals and gap, 1e-7, 1e-9, 1e-10 for the presets; ``ipm_max_iter``). Robust penalties,
 cones and soft inequalities are refused, naming the item; ``csne`` refuses every item that is
 not a hard or soft equality.
 """
