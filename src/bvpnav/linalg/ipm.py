@@ -48,18 +48,20 @@ from ..errors import SolveError
 from ..formulation import Formulation
 from ..model import Affine
 from ..sparse import abs_max, canonical
-from .banded import BandedKKT, BandPlan, NotBanded, _scale_rows, scale_band
+from .banded import BandedKKT, BandPlan, NotBanded, _scale_rows, _scales
 from .lsq import LeastSquaresForm, column_nodes, factor_form, fem_rows_by_diagonals
 from .workspace import Workspace
 
-__all__ = ["QuadraticForm", "quadratic_form", "unsupported_term", "WeightedBand", "solve_qp",
+__all__ = ["QuadraticForm", "quadratic_form", "unsupported_term", "MultiplierBand", "solve_qp",
            "IPM_TOL"]
 
 #: Relative tolerance of the interior-point method's residuals and gap per accuracy preset.
 _DEBUG = False
+#: The multipliers' diagonal of decoupled inequality rows (the first solve: without them).
+_DECOUPLED = 1e30
 _MU0 = 1e6
 _SIGMA_MIN = 0.0
-_CORRECTORS = 1
+_CORRECTORS = 0
 _INIT = 1
 _FLOOR = 0.1
 IPM_TOL = {"low": 1e-7, "default": 1e-9, "high": 1e-10}
@@ -164,171 +166,152 @@ def quadratic_form(form: Formulation, lam: float) -> QuadraticForm:
     return QuadraticForm(ls, Affine(G, c), scale, B, base_of, sign, blocks)
 
 
-def _pairs(G: sp.csr_matrix) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Every pair of entries of each row of ``G``: ``(row, col_a, col_b, product)`` (both
-    orders and the diagonal: the entries of the rows' outer products), rows grouped by
-    their number of entries."""
-    counts = np.diff(G.indptr)
-    out: list = [[], [], [], []]
-    for k in np.unique(counts[counts > 0]):
-        rows = np.flatnonzero(counts == k)
-        at = G.indptr[rows][:, None] + np.arange(k)[None, :]        # (r, k) entry positions
-        cols, vals = G.indices[at], G.data[at]
-        out[0].append(np.repeat(rows, k * k))
-        out[1].append(np.repeat(cols, k, axis=1).ravel())
-        out[2].append(np.tile(cols, (1, k)).ravel())
-        out[3].append((vals[:, :, None] * vals[:, None, :]).ravel())
-    if not out[0]:
-        return tuple(np.zeros(0, dtype=t) for t in (np.int64, np.int64, np.int64, float))
-    return tuple(np.concatenate(o) for o in out)
-
-
-class WeightedBand:
-    r"""The reduced banded system of objective rows ``[A; diag(sqrt(w)) G]`` for any
-    positive weights ``w`` from one plan: the parts are affine in ``w``.
+class MultiplierBand:
+    r"""The reduced banded system of the Newton steps from one plan: the inequality rows
+    (:attr:`QuadraticForm.base`) are equality rows below ``E`` whose multipliers carry a
+    diagonal :math:`-\Delta` that changes at every step.
 
     Parameters
     ----------
     plan : BandPlan
-        Made for ``D = [A; G]`` with the ``G`` rows among its ``lam_rows`` (no unknown they
-        touch is eliminated), every ``G`` row folded.
+        Made for the objective rows ``A`` and the equality rows ``[E; base]``.
     first : tuple
-        The plan's first assembly ``(ab, B, C, h, sU)``: the parts at weights 1, the band
-        scaled by ``sU``.
-    G : scipy.sparse.csr_matrix
+        The plan's first assembly ``(ab, B, C, h, sU)`` (the band scaled by ``sU``).
+    rows : ndarray of int
+        The reduced unknowns of the ``base`` rows' multipliers.
 
     Notes
     -----
-    :math:`G^T W G = \sum_i w_i g_i g_i^T`: each entry pair of a row lands at one place of
-    the band, the border coupling or the border block, so the parts at ``w`` are the parts
-    at zero plus one sparse product ``P w`` per part (those at zero: the first assembly,
-    unscaled, minus ``P 1``).
+    Only the multipliers' diagonal depends on :math:`\Delta`, so only their rows and
+    columns of the symmetric scaling :math:`s_j = 1/\sqrt{\max_i |a_{ij}|}`
+    (:func:`bvpnav.linalg.banded.scale_band`) change: :math:`s_k = 1/\sqrt{\max(|d_k -
+    \Delta_k|, o_k)}` with :math:`d_k` the diagonal at :math:`\Delta = 0` and :math:`o_k`
+    the largest entry off it. Each step copies the band scaled at :math:`\Delta = 0`,
+    rescales those rows and columns by :math:`s_k / s_k^0` and writes the diagonal: the
+    band the full scaling would give, without a pass over all of it. A multiplier in the
+    border (a row reaching far) has its diagonal in the border block.
     """
 
-    def __init__(self, plan: BandPlan, first: tuple, G: sp.csr_matrix):
+    def __init__(self, plan: BandPlan, first: tuple, rows: np.ndarray):
         self.plan = plan
         ab, B, C, h, sU = first
-        kl, ldab = plan.kl, plan.ldab
-        _scale_rows(ab, 1.0 / sU, kl)
-        mi = G.shape[0]
-        row, ca, cb, prod = _pairs(G)
-        out: tuple = ([], [], [])
-        plan._place(ca, cb, np.arange(prod.size, dtype=float), False, out)
-        band, cpl, brd = out
-
-        def cat(parts: list, t: int) -> np.ndarray:
-            return np.concatenate([p[t] for p in parts]) if parts else np.zeros(0, dtype=np.int64)
-
-        pi, pj, v = cat(band, 0).astype(np.int64), cat(band, 1).astype(np.int64), cat(band, 2)
-        if pi.size and np.max(np.abs(pi - pj)) > kl:
-            raise NotBanded("an inequality row reaches beyond the band")
-        flat = pj * (ldab - 1) + pi + 2 * kl
-        self.band_at, self.P_band = self._map(flat, v.astype(np.int64), row, prod, mi, ab.size)
-        ones = np.ones(mi)
-        ab.reshape(-1)[self.band_at] -= self.P_band @ ones
-        self.k = k = plan.border
-        if k:
-            ci, ck, cv = cat(cpl, 0).astype(np.int64), cat(cpl, 1).astype(np.int64), cat(cpl, 2)
-            self.cpl_at, self.P_cpl = self._map(ci * k + ck, cv.astype(np.int64), row, prod, mi, ab.shape[0] * k)
-            bi, bj, bv = cat(brd, 0).astype(np.int64), cat(brd, 1).astype(np.int64), cat(brd, 2)
-            self.brd_at, self.P_brd = self._map(bi * k + bj, bv.astype(np.int64), row, prod, mi, k * k)
-            B = B - self._coupling(ab.shape[0], ones) if B is not None else None
-            C = C.copy()
-            C.reshape(-1)[self.brd_at] -= self.P_brd @ ones
-        self.ab0, self.B0, self.C0, self.h = ab, B, C, h
+        kl = plan.kl
+        pos, bpos = plan.pos[rows].astype(np.int64), plan.bpos[rows].astype(np.int64)
+        self.in_band = pos >= 0
+        k = pos[self.in_band]
+        self.k = k
+        # back to unscaled values for the multipliers' own diagonal and off-diagonal maxima
+        raw = ab[k] / (sU[k][:, None] * _window(sU, k, kl))
+        self.d0 = raw[:, 2 * kl].copy()
+        raw[:, 2 * kl] = 0.0
+        self.off = np.max(np.abs(raw[:, kl:]), axis=1)
+        # the band at Delta = 0 with the multipliers' scales from their off-diagonal entries
+        s0 = sU.copy()
+        s0[k] = _scales(np.maximum(np.abs(self.d0), self.off))
+        ratio = np.ones_like(sU)
+        ratio[k] = s0[k] / sU[k]
+        _scale_rows(ab, ratio, kl)
+        self.scaled0, self.s0 = ab, s0
+        self.B, self.C0, self.h = B, C, h
+        self.border_at = bpos[~self.in_band]
         self._buffer = np.empty_like(ab)
+        # where row k's entries sit in the band (ab[j, 2 kl + k - j], j = k - kl .. k + kl)
+        nb = ab.shape[0]
+        offs = np.arange(-kl, kl + 1)
+        j = k[:, None] + offs[None, :]
+        ok = (j >= 0) & (j < nb)
+        self.row_at = (j * ab.shape[1] + 2 * kl - offs[None, :])[ok]
+        self.row_of = np.broadcast_to(np.arange(k.size)[:, None], j.shape)[ok]
 
-    def _coupling(self, nb: int, w: np.ndarray) -> sp.csc_matrix:
-        k = self.k
-        return sp.csc_matrix((self.P_cpl @ w, (self.cpl_at // k, self.cpl_at % k)), shape=(nb, k))
-
-    @staticmethod
-    def _map(where: np.ndarray, pair: np.ndarray, row: np.ndarray, prod: np.ndarray, mi: int, size: int):
-        """The places with a value and the sparse map from the weights to the values added
-        there (duplicates summed by the conversion, no sort)."""
-        P = sp.csr_matrix((prod[pair], (where, row[pair])), shape=(size, mi))
-        at = np.flatnonzero(np.diff(P.indptr))
-        return at, P[at]
-
-    def parts(self, w: np.ndarray) -> tuple:
-        """``(ab, B, C, h, sU)`` at weights ``w`` (the band scaled, as
-        :meth:`BandPlan.assemble` gives them), the band written into one buffer reused by
-        every call (a factorization of an earlier call is dead once this one is made)."""
+    def parts(self, delta: np.ndarray) -> tuple:
+        """``(ab, B, C, h, sU)`` at ``delta`` (one per ``base`` row), the band written into one
+        buffer reused by every call (the factor of an earlier call is dead once this one is
+        made)."""
         ab = self._buffer
-        np.copyto(ab, self.ab0)
+        np.copyto(ab, self.scaled0)
+        kl, k = self.plan.kl, self.k
+        dk = self.d0 - delta[self.in_band]
+        sk = _scales(np.maximum(np.abs(dk), self.off))
+        ratio = sk / self.s0[k]
         flat = ab.reshape(-1)
-        flat[self.band_at] += self.P_band @ w
-        B, C = self.B0, self.C0
-        if self.k:
-            Bw = self._coupling(ab.shape[0], w)
-            B = Bw if B is None else (B + Bw).tocsc()
+        flat[self.row_at] *= ratio[self.row_of]      # row k of the matrix
+        ab[k, kl:] *= ratio[:, None]                  # column k (rows and columns share the corner)
+        ab[k, 2 * kl] = dk * sk * sk
+        sU = self.s0.copy()
+        sU[k] = sk
+        C = self.C0
+        if self.border_at.size:
             C = C.copy()
-            C.reshape(-1)[self.brd_at] += self.P_brd @ w
-        sU = scale_band(ab, self.plan.kl)
-        return ab, B, C, self.h, sU
+            C[self.border_at, self.border_at] -= delta[~self.in_band]
+        return ab, self.B, C, self.h, sU
+
+
+def _window(sU: np.ndarray, k: np.ndarray, kl: int) -> np.ndarray:
+    """``sU`` of the rows ``k + s - 2 kl`` met by band row ``k``'s entries ``ab[k, s]``
+    (1 outside the band)."""
+    pad = np.concatenate([np.ones(2 * kl), sU, np.ones(kl)])
+    return pad[k[:, None] + np.arange(3 * kl + 1)[None, :]]
 
 
 class _Steps:
-    """Factorizations of the Newton system at given weights: the banded one of a
-    :class:`WeightedBand` when the rows allow, else a pivoted sparse LU per step."""
+    """Factorizations of the Newton system for a diagonal :math:`\\Delta` of the inequality
+    rows' multipliers: the banded one of a :class:`MultiplierBand` when the rows allow,
+    else a pivoted sparse LU of the augmented matrix per step."""
 
     def __init__(self, qp: QuadraticForm, form: Formulation, workspace: Workspace | None, banded: bool):
         self.qp, self.form = qp, form
-        ls, G = qp.ls, qp.base
-        A = ls.D.A
-        self.mA = A.shape[0]
-        self.D = canonical(sp.vstack([A, G], format="csr"))
-        # the inequality rows' entries are the tail of D's values (rows stacked below A)
-        self.tail = slice(A.nnz, None)
-        self.Gdata, self.Grows = G.data, np.repeat(np.arange(G.shape[0]), np.diff(G.indptr))
-        self.E = ls.E.A
-        self.band: WeightedBand | None = None
+        ls = qp.ls
+        self.A = ls.D.A
+        self.E = canonical(sp.vstack([ls.E.A, qp.base], format="csr"))
+        self.m, self.n = self.A.shape
+        self.pE = ls.E.m
+        self.band: MultiplierBand | None = None
         self.notes: list[str] = []
         if banded:
             try:
-                self.band = self._weighted_band(workspace)
+                self.band = self._multiplier_band(workspace)
             except (NotBanded, ValueError, np.linalg.LinAlgError) as exc:
                 self.notes.append(f"not banded: {exc}")
 
-    def _weighted_band(self, workspace) -> WeightedBand:
+    def _multiplier_band(self, workspace) -> MultiplierBand:
         form, ls = self.form, self.qp.ls
         model = form.model
-        lam_rows = np.concatenate([np.asarray(ls.lam_rows, dtype=bool), np.ones(self.qp.base.shape[0], dtype=bool)])
         diagonal = fem_rows_by_diagonals(form, workspace)
         try:
-            plan = BandPlan.build(self.D, self.E, column_nodes(model), lam_rows=lam_rows, diagonal=diagonal)
+            plan = BandPlan.build(self.A, self.E, column_nodes(model), lam_rows=ls.lam_rows, diagonal=diagonal)
         except NotBanded:
             if model.d == 1:
                 raise
-            plan = BandPlan.build(self.D, self.E, column_nodes(model, interleave=True), lam_rows=lam_rows,
+            plan = BandPlan.build(self.A, self.E, column_nodes(model, interleave=True), lam_rows=ls.lam_rows,
                                   diagonal=diagonal)
-        if not plan.fold[self.mA:].all():
-            raise NotBanded("an inequality row reaches far in time (not folded)")
         first, plan._first = plan._first[2], None
-        return WeightedBand(plan, first, self.qp.base)
+        rows = self.n + plan.unfolded.size + self.pE + np.arange(self.qp.base.shape[0])
+        return MultiplierBand(plan, first, rows)
 
     def describe(self) -> str:
         return self.band.plan.describe() if self.band is not None else "lu"
 
-    def factor(self, w: np.ndarray):
-        """The factorization of the augmented system with objective rows ``[A; sqrt(w) G]``
-        (``w`` per row of ``G``; a band's two sides add on their one row of ``base``)."""
-        wb = self.qp.base_weights(w)
-        D = self.D.copy() if self.band is None else self.D
-        D.data[self.tail] = self.Gdata * np.sqrt(wb)[self.Grows]
+    def factor(self, delta: np.ndarray):
+        """The factorization of the augmented matrix with ``-delta`` on the ``base`` rows'
+        multipliers."""
         if self.band is not None:
-            fac = BandedKKT.numeric(self.band.plan, self.band.parts(wb))
+            fac = BandedKKT.numeric(self.band.plan, self.band.parts(delta))
             fac.params = self.form.model.l_index
-            fac._bind(D, self.E)
+            fac._bind(self.A, self.E)
             return fac
-        ls = LeastSquaresForm(Affine(D, np.zeros(D.shape[0])), self.qp.ls.E, self.qp.ls.eq_blocks)
-        return factor_form(ls, self.form, "lu")
+        m, n, p = self.m, self.n, self.E.shape[0]
+        reg = np.concatenate([np.zeros(self.pE), delta])
+        S = sp.bmat([[-sp.identity(m), self.A, None], [self.A.T, None, self.E.T],
+                     [None, self.E, -sp.diags(reg)]], format="csc")
+        from .lsq import BorderedLU
+
+        return BorderedLU(S, m + self.form.model.l_index, np.arange(m + n, m + n + self.pE))
 
 
 class _Newton:
-    r"""Newton steps of the interior-point method: the condensed system solved by one
-    factorization, then refined against the full linearized system (the condensed one
-    loses accuracy in :math:`dz = W (G dx - b_3) + b_4 / s` as :math:`W` spreads).
+    r"""Newton steps of the interior-point method: one factorization of the augmented system
+    with the inequality rows' multipliers, then refinement against the full linearized
+    system.
 
     Notes
     -----
@@ -338,26 +321,60 @@ class _Newton:
 
         2 A^T A\, dx + E^T dy + G^T dz = b_1, \quad E\, dx = b_2, \quad
         G\, dx + ds = b_3, \quad z \circ ds + s \circ dz = b_4.
+
+    Eliminating :math:`ds = (b_4 - s\, dz)/z` leaves :math:`G_i dx - \Delta_i \nu_i = b_{3i}
+    - b_{4i}/z_i` with :math:`\nu = dz/2`, :math:`\Delta_i = 2 s_i / z_i`. A band's two sides
+    ``+B_k`` and ``-B_k`` share one multiplier :math:`\nu_k = \nu_+ - \nu_-` with
+    :math:`\Delta_k = (1/\Delta_+ + 1/\Delta_-)^{-1}`; each side's multiplier follows from
+    :math:`\nu_k` and the two rows' sum, in which :math:`dx` cancels (no product of a
+    large :math:`1/\Delta` with the error of :math:`dx`).
     """
 
     def __init__(self, qp: QuadraticForm, steps: _Steps):
         self.qp, self.steps = qp, steps
         self.A, self.E, self.G = qp.ls.D.A, qp.ls.E.A, qp.G.A
         self.At, self.Et, self.Gt = self.A.T.tocsr(), self.E.T.tocsr(), self.G.T.tocsr()
-        self.n = self.A.shape[1]
-        self.m_aug = steps.D.shape[0]
+        self.n, self.m = self.A.shape[1], self.A.shape[0]
+        self.pE = self.E.shape[0]
+        self.absE, self.absG = abs(self.E), abs(self.G)
+        # each row of G and the other side of its band (-1: none)
+        of = qp.base_of
+        first = np.full(qp.base.shape[0], -1, dtype=np.int64)
+        order = np.arange(of.size)
+        partner = np.full(of.size, -1, dtype=np.int64)
+        first[of[::-1]] = order[::-1]
+        second = np.full(qp.base.shape[0], -1, dtype=np.int64)
+        later = order != first[of]
+        second[of[later]] = order[later]
+        has = second[of] >= 0
+        partner[has] = np.where(first[of[has]] == order[has], second[of[has]], first[of[has]])
+        self.partner = partner
         self.fac = None
 
     def factor(self, s: np.ndarray, z: np.ndarray) -> None:
-        self.s, self.z, self.w = s, z, z / s
-        self.fac = self.steps.factor(0.5 * self.w)
+        self.s, self.z = s, z
+        self.delta = 2.0 * s / z
+        self.fac = self.steps.factor(self._base_delta(self.delta))
+
+    def _base_delta(self, delta: np.ndarray) -> np.ndarray:
+        inv = self.qp.base_weights(1.0 / delta)
+        return 1.0 / inv
 
     def _condensed(self, b1, b2, b3, b4):
-        s, z, w, n, m = self.s, self.z, self.w, self.n, self.m_aug
-        bx = 0.5 * (b1 + self.Gt @ (w * b3 - b4 / s))
-        sol = self.fac.solve(np.concatenate([np.zeros(m), bx, b2]))
-        dx, dy = sol[m:m + n], 2.0 * sol[m + n:]
-        dz = w * (self.G @ dx - b3) + b4 / s
+        qp, s, z, dl, n, m = self.qp, self.s, self.z, self.delta, self.n, self.m
+        rhs = b3 - b4 / z
+        dk = self._base_delta(dl)
+        rk = dk * qp.base_weights(qp.sign * rhs / dl)
+        sol = self.fac.solve(np.concatenate([np.zeros(m), 0.5 * b1, b2, rk]))
+        dx, dy, nu_k = sol[m:m + n], 2.0 * sol[m + n:m + n + self.pE], sol[m + n + self.pE:]
+        nu = qp.sign * nu_k[qp.base_of]          # one side alone: its multiplier is the row's
+        two = self.partner >= 0
+        if two.any():
+            i, j = np.flatnonzero(two), self.partner[two]
+            # sum of the two rows (their G parts cancel): dl_i nu_i + dl_j nu_j = -(rhs_i + rhs_j),
+            # and nu_i - nu_j = sign_i nu_k
+            nu[i] = (dl[j] * qp.sign[i] * nu_k[qp.base_of[i]] - (rhs[i] + rhs[j])) / (dl[i] + dl[j])
+        dz = 2.0 * nu
         ds = (b4 - s * dz) / z
         return [dx, dy, dz, ds]
 
@@ -399,25 +416,25 @@ class _Point:
 
 
 def _start(newton: _Newton, qp: QuadraticForm):
-    """The least-squares answer without the inequality rows (``W = 0``), or, when that is
-    singular (the inequality rows determine some unknown), with every inequality row
-    weighted as an objective row of weight 1 (rows scaled to a largest coefficient of 1)."""
-    ls, mi = qp.ls, qp.G.m
-    for weight in (0.0, 1.0):
+    """The least-squares answer without the inequality rows (their multipliers' diagonal
+    huge: the rows decoupled), or, when that is singular (the inequality rows determine
+    some unknown), with each inequality row as an objective row ``G_i x + g_i`` of weight 1
+    (rows scaled to a largest coefficient of 1). Returns ``(x, y, weighted)``."""
+    ls, mi, nb = qp.ls, qp.G.m, qp.base.shape[0]
+    m, n, pE = newton.m, newton.n, newton.pE
+    for delta in (_DECOUPLED, 2.0):
         try:
-            newton.fac = newton.steps.factor(np.full(mi, weight))
+            newton.fac = newton.steps.factor(np.full(nb, delta))
             break
         except np.linalg.LinAlgError:
-            if weight:
+            if delta != _DECOUPLED:
                 raise
-    m, n = newton.m_aug, newton.n
-    # sum_i w (sign_i B_k x + g_i)^2 over the rows i of base row k is wb_k (B_k x + c_k)^2 plus
-    # a constant, c_k = sum_i w sign_i g_i / wb_k
-    wb = qp.base_weights(np.full(mi, weight))
-    ck = np.divide(qp.base_weights(weight * qp.sign * qp.G.c), wb, out=np.zeros_like(wb), where=wb > 0)
-    rho = np.concatenate([-ls.D.c, -np.sqrt(wb) * ck])
-    z0, _, _ = newton.fac.refined(np.concatenate([rho, np.zeros(n), -ls.E.c]), 2)
-    return z0[m:m + n], 2.0 * z0[m + n:], weight
+    # G_i x + g_i = delta nu_i for every side: its base row holds B_k x - delta_k nu_k = r_k with
+    # the sides' harmonic delta and r_k = delta_k sum_i sign_i (-g_i) / delta (as _condensed)
+    dk = 1.0 / qp.base_weights(np.full(mi, 1.0 / delta))
+    rk = dk * qp.base_weights(-qp.sign * qp.G.c / delta)
+    z0 = newton.fac.solve(np.concatenate([-ls.D.c, np.zeros(n), -ls.E.c, rk]))
+    return z0[m:m + n], 2.0 * z0[m + n:m + n + pE], delta != _DECOUPLED
 
 
 def _measures(qp: QuadraticForm, pt: _Point, newton: _Newton, fscale: float):
@@ -433,8 +450,9 @@ def _measures(qp: QuadraticForm, pt: _Point, newton: _Newton, fscale: float):
     rg = gx + pt.s
     f = float(res @ res)
     dscale = max(abs_max(grad), abs_max(Ey), abs_max(Gz), 1e-300)
-    escale = max(float(np.max(E.row_scale(pt.x))), 1e-300)
-    gscale = max(float(np.max(G.row_scale(pt.x))), 1e-300)
+    ax = np.abs(pt.x)
+    escale = max(abs_max(newton.absE @ ax) + abs_max(E.c), 1e-300)
+    gscale = max(abs_max(newton.absG @ ax) + abs_max(G.c), 1e-300)
     gap = float(pt.s @ pt.z) / max(f, fscale, 1e-300)
     pt.measures = (abs_max(re) / escale, abs_max(np.maximum(gx, 0.0)) / gscale, abs_max(rd) / dscale, gap)
     return rd, re, rg
@@ -484,9 +502,9 @@ def solve_qp(form: Formulation, lam: float, tol: float = IPM_TOL["default"], max
     banded = method == "banded" or (method == "auto" and form.residual == "acceleration")
     steps = _Steps(qp, form, workspace, banded)
     newton = _Newton(qp, steps)
-    x, y, weight = _start(newton, qp)
+    x, y, weighted = _start(newton, qp)
     r = qp.G.value(x)
-    if mi == 0 or (weight == 0.0 and np.all(r <= 0.0)):
+    if mi == 0 or (not weighted and np.all(r <= 0.0)):
         return x, _info(qp, y, np.zeros(mi), 0, steps, 0.0, [], "optimal")
     f0 = float(np.sum(qp.ls.D.value(x) ** 2))
     fscale = 1e-12 * max(f0, 1.0)
