@@ -215,13 +215,19 @@ class MultiplierBand:
         self.B, self.C0, self.h = B, C, h
         self.border_at = bpos[~self.in_band]
         self._buffer = np.empty_like(ab)
-        # where row k's entries sit in the band (ab[j, 2 kl + k - j], j = k - kl .. k + kl)
+        # where row k's entries sit in the band: A[k, k + e] at ab[k + e, 2 kl - e], |e| <= kl;
+        # evenly spaced runs of multipliers (one per node) as strided slices, the rest by index
         nb = ab.shape[0]
+        self.runs, loose = _stride_runs(k)
         offs = np.arange(-kl, kl + 1)
-        j = k[:, None] + offs[None, :]
+        j = k[loose][:, None] + offs[None, :]
         ok = (j >= 0) & (j < nb)
         self.row_at = (j * ab.shape[1] + 2 * kl - offs[None, :])[ok]
-        self.row_of = np.broadcast_to(np.arange(k.size)[:, None], j.shape)[ok]
+        self.row_of = np.broadcast_to(loose[:, None], j.shape)[ok]
+        self.loose = loose
+
+    def _rescale(self, ab: np.ndarray, ratio: np.ndarray) -> None:
+        _rescale_rows(self, ab, ratio)
 
     def parts(self, delta: np.ndarray) -> tuple:
         """``(ab, B, C, h, sU)`` at ``delta`` (one per ``base`` row), the band written into one
@@ -233,9 +239,7 @@ class MultiplierBand:
         dk = self.d0 - delta[self.in_band]
         sk = _scales(np.maximum(np.abs(dk), self.off))
         ratio = sk / self.s0[k]
-        flat = ab.reshape(-1)
-        flat[self.row_at] *= ratio[self.row_of]      # row k of the matrix
-        ab[k, kl:] *= ratio[:, None]                  # column k (rows and columns share the corner)
+        self._rescale(ab, ratio)
         ab[k, 2 * kl] = dk * sk * sk
         sU = self.s0.copy()
         sU[k] = sk
@@ -244,6 +248,48 @@ class MultiplierBand:
             C = C.copy()
             C[self.border_at, self.border_at] -= delta[~self.in_band]
         return ab, self.B, C, self.h, sU
+
+
+def _stride_runs(k: np.ndarray, shortest: int = 64) -> tuple[list, np.ndarray]:
+    """Runs ``(t0, t1, k0, step)`` of at least ``shortest`` evenly spaced values of ``k``
+    (``k[t] = k0 + step (t - t0)``), and the indices ``t`` in none."""
+    runs, loose, t0, n = [], [], 0, k.size
+    while t0 < n:
+        t1 = t0 + 1
+        if t1 < n:
+            step = int(k[t1] - k[t0])
+            while t1 + 1 < n and k[t1 + 1] - k[t1] == step:
+                t1 += 1
+            t1 += 1
+            if t1 - t0 >= shortest and step > 0:
+                runs.append((t0, t1, int(k[t0]), step))
+                t0 = t1
+                continue
+            t1 = t0 + 1
+        loose.append(t0)
+        t0 = t1
+    return runs, np.array(loose, dtype=np.int64)
+
+
+def _rescale_rows(band: MultiplierBand, ab: np.ndarray, ratio: np.ndarray) -> None:
+    """Multiply row and column ``k`` of the matrix by ``ratio`` for every multiplier ``k``
+    (the corner by its square; the diagonal is written after)."""
+    kl, nb = band.plan.kl, ab.shape[0]
+    if band.loose.size:
+        ab.reshape(-1)[band.row_at] *= ratio[band.row_of]
+        ab[band.k[band.loose], kl:] *= ratio[band.loose][:, None]
+    for t0, t1, k0, step in band.runs:
+        r = ratio[t0:t1]
+        for e in range(-kl, kl + 1):   # row k: ab[k + e, 2 kl - e], inside the band's rows
+            a, b = t0, t1
+            while a < b and k0 + e + step * (a - t0) < 0:
+                a += 1
+            while b > a and k0 + e + step * (b - 1 - t0) >= nb:
+                b -= 1
+            if b > a:
+                first = k0 + e + step * (a - t0)
+                ab[first:first + step * (b - a):step, 2 * kl - e] *= r[a - t0:b - t0]
+        ab[k0:k0 + step * (t1 - t0):step, kl:] *= r[:, None]   # column k
 
 
 def _window(sU: np.ndarray, k: np.ndarray, kl: int) -> np.ndarray:
