@@ -153,3 +153,18 @@ def test_penalised_inequalities_are_refused_by_name(kw, mode):
     with pytest.raises(bvpnav.InputError, match=rf"'direct' cannot take item 'cap' \(kind 'inequality', "
                                                 rf"mode '{mode}'\).*clarabel"):
         prob.solve(solver="direct", fallback=None)
+
+
+def test_a_lambda_sweep_over_a_band_problem_reads_direct_answers():
+    """The sweep of a problem with bands (the cvxpy engine's, which calls the chosen back
+    end at each lambda) measures the penalties at direct's answers, not at cvxpy's last
+    variable values (NaN before: no cvxpy solver had run)."""
+    _, v, _ = quintic()
+    prob, _ = table1_problem(201)
+    t = prob.data.t
+    prob.add(Velocity(t=t[::20], value=v(t[::20]), mode="band", tol=0.05, name="vel"))
+    d = bvpnav.lambda_curve(prob, lam_range=(1e-2, 1e2), points=7, solver="direct")
+    c = bvpnav.lambda_curve(prob, lam_range=(1e-2, 1e2), points=7, solver="clarabel", accuracy="high")
+    assert d.engine == "cvxpy" and np.all(np.isfinite(d.info_norm)) and np.all(d.info_norm > 0)
+    np.testing.assert_allclose(d.info_norm, c.info_norm, rtol=1e-6)
+    np.testing.assert_allclose(d.residual_norm, c.residual_norm, rtol=1e-6)
