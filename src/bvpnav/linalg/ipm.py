@@ -471,6 +471,24 @@ def solve_qp(form: Formulation, lam: float, tol: float = IPM_TOL["default"], max
         cannot hold together with the hard rows: a conic solver then proves it and names
         the items).
 
+    Examples
+    --------
+    A straight line from 0 m that wants to reach 10 m at 10 s (soft, sigma 1 m) under a
+    ceiling of 8 m over its last second: it ends at the ceiling, with multiplier
+    2 (10 - 8) = 4 on the last row:
+
+    >>> import numpy as np
+    >>> import bvpnav
+    >>> from bvpnav.constraints import Position, PositionBound
+    >>> from bvpnav.linalg.ipm import solve_qp
+    >>> t = np.linspace(0.0, 10.0, 101)
+    >>> prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=np.zeros_like(t)))
+    >>> _ = prob.add(Position(t=0.0, value=0.0), Position(t=10.0, value=10.0, sigma=1.0),
+    ...              PositionBound(upper=8.0, t0=9.0, t1=10.0, name="ceiling"))
+    >>> x, info = solve_qp(prob.formulation, lam=1.0)
+    >>> print(f"end {x[100]:.6f} m, multiplier {info['duals']['ceiling'][0][-1]:.6f}, {info['status']}")
+    end 8.000000 m, multiplier 4.000000, optimal
+
     Notes
     -----
     See the module Notes. Start: the least-squares answer, slacks and multipliers shifted
