@@ -21,10 +21,12 @@ Registered in the back-end table on import (the folder is discovered):
 ``direct`` also takes band items (``|r| <= tol``) and hard or band inequality items
 (``g <= 0``): then a primal-dual interior-point method (:mod:`bvpnav.linalg.ipm`, Mehrotra's
 predictor-corrector) whose every Newton step is one banded factorization of the same KKT
-system with a weight per inequality row (options ``ipm_tol``: the relative tolerance of its
-residuals and gap, 1e-7, 1e-9, 1e-10 for the presets; ``ipm_max_iter``). Robust penalties,
-cones and soft inequalities are refused, naming the item; ``csne`` refuses every item that is
-not a hard or soft equality.
+system, the inequality rows held like hard rows whose multipliers carry a diagonal that
+changes from step to step (options ``ipm_tol``: the relative tolerance of its residuals and
+gap, 1e-7, 1e-9, 1e-10 for the presets; ``ipm_max_iter``; ``method="lu"`` or ``"ldl"``:
+a pivoted sparse LU at every step instead of the banded factorization). Robust penalties,
+cones and soft inequalities are refused, naming the item; ``csne`` refuses every item that
+is not a hard or soft equality.
 """
 
 from __future__ import annotations

@@ -53,14 +53,15 @@ __all__ = ["QuadraticForm", "quadratic_form", "unsupported_term", "MultiplierBan
            "IPM_TOL"]
 
 #: Relative tolerance of the interior-point method's residuals and gap per accuracy preset.
+IPM_TOL = {"low": 1e-7, "default": 1e-9, "high": 1e-10}
+
 #: The multipliers' diagonal of decoupled inequality rows (the first solve: without them).
 _DECOUPLED = 1e30
 
 #: The starting complementarity per row, in units of the least-squares objective per row:
-#: large, since an under-estimate stalls Mehrotra's steps (measured on bands and bounds:
-#: 1e6 took 8-16 steps where 1 took 7-80 or failed) while an over-estimate costs a few.
+#: large, since an under-estimate stalls Mehrotra's steps (the multipliers must grow by
+#: orders of magnitude at a centering pace) while an over-estimate costs a few steps.
 MU0 = 1e6
-IPM_TOL = {"low": 1e-7, "default": 1e-9, "high": 1e-10}
 
 
 def unsupported_term(form: Formulation):
@@ -109,8 +110,8 @@ class QuadraticForm:
     ineq_blocks: list
 
     def base_weights(self, w: np.ndarray) -> np.ndarray:
-        r"""Weights of :attr:`base`'s rows for weights ``w`` of ``G``'s rows
-        (:math:`G^T W G = B^T \mathrm{diag}(\sum_{i \to k} w_i) B`)."""
+        r"""``w`` (one value per row of ``G``) summed onto :attr:`base`'s rows
+        (:math:`\sum_{i \to k} w_i`: a band's two sides onto their one row)."""
         return np.bincount(self.base_of, weights=w, minlength=self.base.shape[0])
 
 
@@ -184,8 +185,8 @@ class MultiplierBand:
     :math:`\Delta_k` large against the row's entries makes the row diagonally dominant
     (the LU pivots on it), a small one leaves a hard row; rescaling those rows at every step
     (what a fresh :func:`~bvpnav.linalg.banded.scale_band` would do) changed neither the steps
-    nor the answers on the tests' problems and cost 15 ms per step at N = 1e5. A multiplier
-    in the border (a row reaching far) has its diagonal in the border block.
+    nor the answers on the tests' problems and cost a pass over the band per step. A
+    multiplier in the border (a row reaching far) has its diagonal in the border block.
     """
 
     def __init__(self, plan: BandPlan, first: tuple, rows: np.ndarray):
@@ -562,8 +563,8 @@ def _initial_slacks(r: np.ndarray, f0: float, mi: int) -> tuple[np.ndarray, np.n
 
 
 def _dot(a: np.ndarray, b: np.ndarray) -> float:
-    """``a . b`` by ``einsum``: a BLAS ``ddot`` of 1e4 entries took 5 ms on a loaded machine
-    (its threads waiting for cores), against 0.02 ms here."""
+    """``a . b`` by ``einsum``: no threaded BLAS call (on a machine whose cores are busy, a
+    threaded ``ddot``'s threads wait for them at every call of the loop)."""
     return float(np.einsum("i,i->", a, b))
 
 
