@@ -53,11 +53,15 @@ def test_exact_ends_are_exact():
     np.testing.assert_allclose(sol.velocity()[-1], [np.sin(4.0), 8.0], atol=2e-5)
 
 
-@pytest.mark.parametrize("solver", ["direct", "csne"])
-def test_refuses_non_least_squares_items_by_name(solver):
+@pytest.mark.parametrize("solver,kw,mode", [("csne", {"mode": "band", "tol": 0.1}, "band"),
+                                             ("direct", {"mode": "robust", "sigma": 0.1, "huber": 0.2},
+                                              "robust")])
+def test_refuses_items_it_cannot_take_by_name(solver, kw, mode):
+    """csne takes hard and soft equalities only; direct also bands and inequalities (see
+    test_direct_ipm), not robust penalties or cones."""
     prob, _ = table1_problem(201)
-    prob.add(Velocity(t=[5.0], value=[1.0], mode="band", tol=0.1, name="speed window"))
-    with pytest.raises(bvpnav.InputError, match="speed window.*band"):
+    prob.add(Velocity(t=[5.0], value=[1.0], name="speed window", **kw))
+    with pytest.raises(bvpnav.InputError, match=f"speed window.*{mode}.*clarabel"):
         prob.solve(solver=solver, fallback=None)
     # the default chain skips them and Clarabel solves it
     assert prob.solve().stats["solver"] == "clarabel"

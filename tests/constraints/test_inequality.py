@@ -214,10 +214,16 @@ def test_osqp_refuses_a_cone_before_solving_and_names_it():
 
 
 @pytest.mark.parametrize("solver", ["direct", "csne"])
-def test_direct_back_ends_refuse_inequalities_by_name(solver):
-    with pytest.raises(bvpnav.InputError, match=rf"'{solver}' cannot take item 'cap'.*inequality"):
-        line_problem(PositionBound(upper=8.0, name="cap")).solve(solver=solver)
-    with pytest.raises(bvpnav.InputError, match=rf"'{solver}' cannot take item 'limit'.*cone"):
+def test_direct_back_ends_refuse_what_they_cannot_take_by_name(solver):
+    """csne refuses inequalities; direct takes them (its interior-point path) but refuses
+    cones, naming the item and the solvers that take it."""
+    if solver == "csne":
+        with pytest.raises(bvpnav.InputError, match=rf"'{solver}' cannot take item 'cap'.*inequality"):
+            line_problem(PositionBound(upper=8.0, name="cap")).solve(solver=solver)
+    else:
+        sol = line_problem(PositionBound(upper=8.0, t0=9.0, t1=10.0, name="cap")).solve(solver=solver)
+        np.testing.assert_allclose(x_of(sol), 0.8 * T, atol=1e-7)
+    with pytest.raises(bvpnav.InputError, match=rf"'{solver}' cannot take item 'limit'.*cone.*clarabel"):
         speed_problem(SpeedLimit(v_max=10.0, name="limit")).solve(solver=solver)
 
 

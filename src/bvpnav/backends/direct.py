@@ -18,8 +18,15 @@ Registered in the back-end table on import (the folder is discovered):
   (:math:`x \leftarrow x + \tilde A^{-1} D^T (d - D x)`); equality constraints are handled
   by the same refinement on the KKT system built with the normal matrix.
 
-Both refuse problems that are not equality-constrained least squares (inequality, band,
-robust or cone items), naming the item.
+``direct`` also takes band items (``|r| <= tol``) and hard or band inequality items
+(``g <= 0``): then a primal-dual interior-point method (:mod:`bvpnav.linalg.ipm`, Mehrotra's
+predictor-corrector) whose every Newton step is one banded factorization of the same KKT
+system, the inequality rows held like hard rows whose multipliers carry a diagonal that
+changes from step to step (options ``ipm_tol``: the relative tolerance of its residuals and
+gap, 1e-7, 1e-9, 1e-10 for the presets; ``ipm_max_iter``; ``method="lu"`` or ``"ldl"``:
+a pivoted sparse LU at every step instead of the banded factorization). Robust penalties,
+cones and soft inequalities are refused, naming the item; ``csne`` refuses every item that
+is not a hard or soft equality.
 """
 
 from __future__ import annotations
@@ -32,6 +39,7 @@ import scipy.sparse as sp
 from ..checks import Invalid, Rule, number, one_of
 from ..errors import InputError, SolveError
 from ..formulation import Formulation
+from ..linalg.ipm import IPM_TOL, solve_qp, unsupported_term
 from ..linalg.lsq import (
     BANDED_TOL,
     BorderedLU,
@@ -58,6 +66,8 @@ VALUES: dict[str, Rule] = {
     "ldl_accept": _FRACTION,
     "tol": _FRACTION,
     "refine_tol": _FRACTION,
+    "ipm_tol": _FRACTION,
+    "ipm_max_iter": number(1, 1000, integer=True, want="an integer from 1 to 1000"),
 }
 
 
@@ -104,12 +114,23 @@ class DirectBackend(_LeastSquaresBackend):
     uses_workspace = True
     memory_per_sample = {"acceleration": 1300.0, "load": 2960.0}
     presets = {name: {"refine": refine, "method": "auto", "ldl_accept": accept,
-                      "refine_tol": BANDED_TOL[name]}
+                      "refine_tol": BANDED_TOL[name], "ipm_tol": IPM_TOL[name], "ipm_max_iter": 80}
                for name, refine, accept in (("low", 1, 1e-5), ("default", 3, 1e-7), ("high", 6, 1e-9))}
+
+    def accepts(self, form: Formulation) -> str | None:
+        term = unsupported_term(form)
+        if term is None:
+            return None
+        return (f"solver {self.name!r} cannot take item {term.label!r} (kind {term.kind!r}, mode "
+                f"{term.mode!r}): it solves least squares with hard and band equalities and hard and "
+                f"band inequalities (no robust penalties, cones or soft inequalities). {use_conic()}"
+                + (", or give the item mode='soft' or mode='band'." if term.kind == "equality" else "."))
 
     def run(self, form: Formulation, lam: float, options: dict, verbose: bool = False,
             workspace: Workspace | None = None) -> RawSolve:
         self.refuse(form)
+        if non_least_squares_term(form) is not None:
+            return self._interior_point(form, lam, options, workspace)
         t0 = time.perf_counter()
         try:
             x, info = solve_least_squares(form, lam, refine=int(options["refine"]),
@@ -128,6 +149,26 @@ class DirectBackend(_LeastSquaresBackend):
         info.update(status="optimal", iterations=info["refinements"], solve_time=time.perf_counter() - t0,
                     setup_time=0.0, compile_time=0.0, objective=None)
         return RawSolve(x, info, duals, factored)
+
+    def _interior_point(self, form: Formulation, lam: float, options: dict,
+                        workspace: Workspace | None) -> RawSolve:
+        """Bands and inequalities: :func:`bvpnav.linalg.ipm.solve_qp`."""
+        t0 = time.perf_counter()
+        method = options.get("method", "auto")
+        try:
+            x, info = solve_qp(form, lam, tol=float(options.get("ipm_tol", IPM_TOL["default"])),
+                               max_iter=int(options.get("ipm_max_iter", 80)),
+                               method="lu" if method in ("lu", "ldl") else method, workspace=workspace)
+        except (RuntimeError, np.linalg.LinAlgError) as exc:
+            raise SolveError(f"direct: a Newton step's KKT matrix is singular ({exc}); some unknown is "
+                             "not determined by the information",
+                             attempts=[{"solver": "direct", "status": "singular",
+                                        "reason": str(exc)}]) from exc
+        duals = info.pop("duals")
+        info.pop("residuals")
+        info.update(solve_time=time.perf_counter() - t0, setup_time=0.0,
+                    compile_time=0.0, objective=None)
+        return RawSolve(x, info, duals)
 
 
 class CsneBackend(_LeastSquaresBackend):

@@ -656,7 +656,11 @@ class CvxpySweep:
         x = self.solve_at(key).x
         rho2 = float(np.sum(self.form.data_rows().value(x) ** 2))
         eta2 = 0.0
-        for term, pen in compiled(self.form).penalties:
+        cvx = compiled(self.form)
+        # the penalties at this answer: a back end that is not cvxpy's (direct's interior
+        # point) leaves the variable as it was, so it is set to the answer first
+        cvx.x.value = x
+        for term, pen in cvx.penalties:
             v = float(pen.value) if pen.value is not None else np.nan
             if term.scaled_by_lam:
                 eta2 += v
