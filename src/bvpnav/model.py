@@ -810,6 +810,94 @@ class NavModel:
             out = out - self.gyro_bias(times, names)   # node states: omega = omega_hat - b_g(t)
         return Affine(out.A, out.c, TimeLabels("omega_", list(names), times))
 
+    def body_velocity(self, t, axes=None, lever=(0.0, 0.0, 0.0), what: str = "body velocity") -> Affine:
+        r"""The velocity of a point fixed on the body, in body axes, at times ``t`` (m/s):
+        rows ordered time-major, then body axis.
+
+        Parameters
+        ----------
+        t : array_like of float
+            Times, s, inside the window.
+        axes : str or sequence of str, optional
+            Body axes among ``"x", "y", "z"`` (default all three).
+        lever : array_like (3,)
+            The point's position relative to the IMU in body axes, m (default the IMU itself).
+        what : str
+            What asks (for error messages).
+
+        Notes
+        -----
+        :math:`v_b(t) = C(t)^T v(t) + \omega(t) \times \ell`, with :math:`v(t)` the
+        navigation-frame velocity of :meth:`velocity` (affine in the unknowns), :math:`C(t)`
+        the data's body-to-navigation attitude at the current linearization point (the
+        attitude loop re-integrates it; between samples it is interpolated by slerp) held
+        fixed, and :math:`\omega` the corrected body rates of :meth:`body_rate` (only read
+        when the lever is not zero). The attitude's own increments do not enter the rows.
+        """
+        times = as_times(t, what)
+        att = getattr(self.data, "attitude", None)
+        if att is None or self.d != 3:
+            raise InputError(f"{what}: needs strapdown data with an attitude (body to navigation) on three "
+                             f"navigation axes; this data is navigation-frame on axes {list(self.axes)}. "
+                             "Build it with bvpnav.ImuData(t, specific_force=..., attitude=...) or "
+                             "ImuData.from_gyro, or read a recording with specific force and gyro")
+        body = ("x", "y", "z")
+        names = (axes,) if isinstance(axes, str) else (body if axes is None else tuple(axes))
+        bad = [a for a in names if a not in body]
+        if bad or not names:
+            raise InputError(f"{what}: body axes {list(names)}; give some of {list(body)}")
+        ax = [body.index(a) for a in names]
+        lev = np.asarray(lever, dtype=float).ravel()
+        if lev.shape != (3,) or not np.all(np.isfinite(lev)):
+            raise InputError(f"{what}: lever={lever!r}; give three finite numbers (body x, y, z) in m")
+        C = self._attitude_at(times)   # (m, 3, 3) body to navigation
+        m, nb = times.size, len(ax)
+        vel = self.velocity(times, None, what)   # rows k * 3 + i
+        Ct = np.transpose(C, (0, 2, 1))[:, ax, :]   # (m, nb, 3): rows of C^T
+        rows = np.repeat(np.arange(m * nb), 3)
+        cols = (np.arange(m)[:, None, None] * 3 + np.zeros((1, nb, 1), dtype=int)
+                + np.arange(3)[None, None, :]).ravel()
+        B = sp.csr_matrix((Ct.ravel(), (rows, cols)), shape=(m * nb, m * 3))
+        out = Affine(B @ vel.A, B @ vel.c)
+        if np.any(lev):
+            L = -np.array([[0.0, -lev[2], lev[1]], [lev[2], 0.0, -lev[0]], [-lev[1], lev[0], 0.0]])[ax]
+            W = sp.kron(sp.identity(m), sp.csr_matrix(L), format="csr")   # omega x l = -[l x] omega
+            rate = self.body_rate(times, None, what)
+            out = out + Affine(W @ rate.A, W @ rate.c)
+        return Affine(out.A, out.c, TimeLabels("vb_", list(names), times))
+
+    def _attitude_at(self, times: np.ndarray) -> np.ndarray:
+        """The data's attitude matrices (m, 3, 3) at ``times`` (s): the samples' own where a
+        time is a sample, slerp between samples."""
+        att = self.data.attitude
+        t = self.grid.t
+        k = np.clip(np.searchsorted(t, times), 0, t.size - 1)
+        on = np.abs(t[k] - times) <= 1e-12 * np.maximum(1.0, np.abs(times))
+        out = np.empty((times.size, 3, 3))
+        if np.any(on):
+            out[on] = att[k[on]].as_matrix()
+        if not np.all(on):
+            from scipy.spatial.transform import Slerp
+
+            out[~on] = Slerp(t, att)(np.clip(times[~on], t[0], t[-1])).as_matrix()
+        return out
+
+    def speed_gain(self, what: str = "speed gain") -> Affine:
+        r"""The factor that turns a measured speed into a true one, one row (dimensionless).
+
+        The :class:`~bvpnav.error_models.OdometerScale` component of the error model gives
+        :math:`1 + e` with its internal parameter :math:`e = 1/(1 + k) - 1` (``k`` the
+        odometer's scale-factor error); without one the factor is the constant 1 (a
+        calibrated odometer).
+        """
+        comps = [c for c in getattr(self.error_model, "components", (self.error_model,))
+                 if c is not None and hasattr(c, "speed_gain")]
+        if len(comps) > 1:
+            raise InputError(f"{what}: the error model has {len(comps)} odometer scale models; give one")
+        if not comps:
+            return Affine(sp.csr_matrix((1, self.size)), np.ones(1), ("gain",))
+        return comps[0].speed_gain(self)
+
     def node_velocity(self, axis: int) -> Affine:
         """Velocity at every node of one axis (m/s)."""
         Vr, Va, Vb = self._node_vel

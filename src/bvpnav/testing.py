@@ -519,6 +519,12 @@ def _check_recovery(em: ErrorModel | CompositeErrorModel, data: ImuData, q: int,
         prob = NavigationProblem(meas, error_model=em, grade=None)  # the check states no prior: assume none
         prob.add(Position(t=t[k], value=pos[k], name="check positions"),
                  Velocity(t=t[k], value=vel[k], name="check velocities"))
+        # a model whose parameters act on other information than the accelerations (an
+        # odometer's scale) names the items that observe them
+        values = dict(zip(em.names(meas), l_true, strict=True))
+        for comp in getattr(em, "components", (em,)):
+            if hasattr(comp, "check_items"):
+                prob.add(*comp.check_items(NavModel(meas, em), values, t[k], vel[k]))
         missing = prob.unobservable()
     _require(not missing, who, rule, f"on the check data the parameters are not determined by positions "
              f"and velocities at 11 instants ({'; '.join(missing)}); pass data= on which they are")
@@ -592,7 +598,9 @@ def check_error_model(model_or_class: ErrorModel | CompositeErrorModel | type[Er
       parameters ``l`` (about 0.01, both signs) by solving
       ``a_hat = a_true - G(a_hat) l`` by fixed-point iteration (the columns may depend
       on the measurement), positions and velocities at 11 instants are taken from the
-      FEM's integration of ``a_true``, and the solve (priors and bounds dropped) must
+      FEM's integration of ``a_true`` (with the items a component's
+      ``check_items(model, values, t, velocities)`` returns, for parameters that act on
+      other information, e.g. an odometer's scale), and the solve (priors and bounds dropped) must
       find ``l`` to 1e-6 relative and report ``report(l)`` (1e-6 relative, absolute
       1e-8 below 0.01); ``report()`` must change with every parameter (rule
       'report'). Parameters that these measurements cannot determine fail the rule;
