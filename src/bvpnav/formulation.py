@@ -166,7 +166,8 @@ def _check_acc(data: ImuData) -> None:
 def _with_grade(error_model, grade, data) -> tuple[Any, dict[str, Any] | None]:
     """The error model with ``grade``'s priors when it has gyro parameters and states no prior at
     all, and the report (grade name, figures, the priors filled in); else the model as given and
-    None. A model with any prior stated is the user's own statement and is left alone."""
+    None. A model with any prior stated is the user's own statement and is left alone (priors of
+    models of other sensors, ``other_sensor = True`` such as an odometer's scale, do not count)."""
     from .error_models._attitude import AttitudeErrorModel
 
     if error_model is None or grade is None or not data.is_strapdown:
@@ -174,7 +175,9 @@ def _with_grade(error_model, grade, data) -> tuple[Any, dict[str, Any] | None]:
     parts = getattr(error_model, "components", (error_model,))
     if not any(isinstance(c, AttitudeErrorModel) for c in parts):
         return error_model, None
-    if any(getattr(c, k, None) is not None for c in parts for k in ("sigma", "prior", "drift", "bounds")):
+    # a prior of a model of another sensor (an odometer's scale) says nothing about the IMU's
+    imu = [c for c in parts if not getattr(c, "other_sensor", False)]
+    if any(getattr(c, k, None) is not None for c in imu for k in ("sigma", "prior", "drift", "bounds")):
         return error_model, None
     model, filled = grade.complete(error_model)
     if not filled:

@@ -58,6 +58,9 @@ class OdometerScale(ErrorModel):
     """
 
     units = "1"
+    #: A model of another sensor than the IMU: its prior does not stop a sensor grade from
+    #: filling in the IMU models' priors (:class:`bvpnav.NavigationProblem`'s ``grade``).
+    other_sensor = True
     #: What the solve's plausibility check judges the estimate as.
     plausibility_kind = "odometer_scale"
 

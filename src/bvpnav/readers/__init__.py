@@ -552,7 +552,7 @@ def _inside(item, lo: float, hi: float):
     if not keep.any():
         return None, int(t.size)
     changes = {"t": t[keep]}
-    for f in ("value", "sigma"):
+    for f in ("value", "speed", "sigma"):   # speed: an Odometer's readings
         v = getattr(item, f, None)
         if v is not None and np.ndim(v) >= 1 and np.shape(v)[0] == t.size:
             changes[f] = np.asarray(v)[keep]

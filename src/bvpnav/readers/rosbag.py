@@ -24,7 +24,19 @@ What is read:
   velocity, given in ``child_frame_id`` (nav_msgs documentation), is rotated by the
   message's pose orientation into ``header.frame_id``, which is *assumed* to be the
   navigation frame (ENU); one :class:`~bvpnav.constraints.Velocity` item, sigma from
-  the rotated twist covariance or ``odometry_sigma``.
+  the rotated twist covariance or ``odometry_sigma``. With ``odometry_as = "odometer"``
+  the twist's forward component ``twist.twist.linear.x`` (the child frame's x, the
+  vehicle's forward axis by REP-103) becomes one :class:`~bvpnav.constraints.Odometer`
+  item instead (no pose orientation needed), sigma from the twist covariance's first
+  entry or ``odometry_sigma``: a wheel odometry whose scale
+  :class:`~bvpnav.error_models.OdometerScale` can estimate.
+- ``geometry_msgs/msg/TwistStamped`` (option ``speed_topic``; default none): a wheel-speed
+  topic, ``twist.linear.x`` in m/s, one :class:`~bvpnav.constraints.Odometer` item with
+  sigma ``speed_sigma`` (m/s; required: the message has no covariance).
+
+Odometer items measure along body x at the point ``odometer_lever`` ([x, y, z] in m, body
+axes, default the IMU itself): the reader does not read ``/tf``, so state the offset of the
+odometry frame from the IMU there.
 
 Time: ``stamp = "header"`` (default: ``header.stamp``, the sensor's clock) or
 ``"receive"`` (the bag's record time). Stamps are integer nanoseconds, converted by
@@ -53,11 +65,13 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from ..simulate import Simulation
 
-__all__ = ["RosbagReader", "ExampleBag", "write_example_bag", "IMU_TYPE", "NAVSATFIX_TYPE", "ODOMETRY_TYPE"]
+__all__ = ["RosbagReader", "ExampleBag", "write_example_bag", "IMU_TYPE", "NAVSATFIX_TYPE", "ODOMETRY_TYPE",
+           "TWIST_STAMPED_TYPE"]
 
 IMU_TYPE = "sensor_msgs/msg/Imu"
 NAVSATFIX_TYPE = "sensor_msgs/msg/NavSatFix"
 ODOMETRY_TYPE = "nav_msgs/msg/Odometry"
+TWIST_STAMPED_TYPE = "geometry_msgs/msg/TwistStamped"
 
 _ROS1_MAGIC = b"#ROSBAG V2.0"
 _MCAP_MAGIC = b"\x89MCAP0\r\n"
@@ -361,19 +375,76 @@ def _odometry_item(msgs, topic: str, path: Path, stamp: str, window: tuple[int, 
                     name=f"Odometry {topic}")
 
 
+def _lever_option(value: Any) -> np.ndarray:
+    if value is None:
+        return np.zeros(3)
+    v = np.asarray(value, dtype=float) if isinstance(value, (list, tuple)) else np.array([np.nan])
+    if v.shape != (3,) or not np.all(np.isfinite(v)):
+        raise InputError(f"[input] odometer_lever = {value!r}: give [x, y, z], the odometry point's position "
+                         "relative to the IMU in body axes, m")
+    return v
+
+
+def _odometer_item(msgs, topic: str, path: Path, stamp: str, window: tuple[int, int],
+                   opts: Mapping[str, Any], notes: list[str], twist_stamped: bool):
+    """One Odometer item (m/s along body x) of an Odometry topic's forward twist or of a
+    TwistStamped wheel-speed topic, or None."""
+    from bvpnav.constraints import Odometer
+
+    ns = np.array([_stamp_ns(r, m, stamp) for r, m in msgs], dtype=np.int64)
+    what = "TwistStamped" if twist_stamped else "Odometry"
+    inside = _window(ns, window[0], window[1], f"{what} messages of {topic}", notes)
+    k = np.flatnonzero(inside)
+    if not k.size:
+        notes.append(f"{what} topic {topic}: no message inside the IMU window; no Odometer item.")
+        return None
+    _check_increasing(ns[k], topic, path, stamp, index=k)
+    sel = [msgs[i][1] for i in k]
+    tw = [m.twist if twist_stamped else m.twist.twist for m in sel]
+    speed = np.array([float(w.linear.x) for w in tw])
+    bad = np.flatnonzero(~np.isfinite(speed))
+    if bad.size:
+        raise InputError(f"{str(path)!r}: topic {topic}: message {int(k[bad[0]])} has a non-finite forward speed "
+                         f"twist.linear.x = {speed[bad[0]]!r} ({bad.size} such message(s)); repair or drop them")
+    option = "speed_sigma" if twist_stamped else "odometry_sigma"
+    given = _sigma_option(opts.get(option), option)
+    if given is not None:
+        sig = np.full(k.size, float(given[0]))
+        src = f"[input] {option} = {float(given[0]):g} m/s"
+    elif twist_stamped:
+        raise InputError(f"{str(path)!r}: topic {topic} ({TWIST_STAMPED_TYPE}) carries no covariance; set "
+                         "[input] speed_sigma = <m/s> (the wheel speed's noise)")
+    else:
+        var = np.array([float(np.asarray(m.twist.covariance, float)[0]) for m in sel])
+        if not np.all(np.isfinite(var) & (var > 0)):
+            i = int(k[np.flatnonzero(~(np.isfinite(var) & (var > 0)))[0]])
+            raise InputError(f"{str(path)!r}: topic {topic}: message {i} has twist covariance[0] = "
+                             f"{float(np.asarray(msgs[i][1].twist.covariance, float)[0])!r}, no usable variance "
+                             "of the forward speed; set [input] odometry_sigma = <m/s>")
+        sig = np.sqrt(var)
+        src = "the twist covariance's first entry"
+    lever = _lever_option(opts.get("odometer_lever"))
+    notes.append(f"{what} topic {topic}: {k.size} forward speeds (twist.linear.x, m/s) as an Odometer item "
+                 f"along body x at the lever {lever.tolist()} m, sigma from {src}; add "
+                 "[[error_model]] type = \"odometer_scale\" to estimate its scale factor.")
+    return Odometer(t=_rel_seconds(ns[k], window[0]), speed=speed, lever=lever, sigma=sig,
+                    name=f"{'wheel speed' if twist_stamped else 'Odometry'} {topic}")
+
+
 # ---------------------------------------------------------------------------- reader
 class RosbagReader(Reader):
     """ROS 1 / ROS 2 bags: an Imu topic, optional NavSatFix and Odometry topics.
 
-    Options: ``topic``, ``gnss_topic``, ``odometry_topic``, ``stamp`` (``"header"`` or
-    ``"receive"``), ``origin`` ([lat deg, lon deg, h m]), ``gnss_sigma`` (m),
-    ``odometry_sigma`` (m/s). See the module documentation.
+    Options: ``topic``, ``gnss_topic``, ``odometry_topic``, ``odometry_as`` (``"velocity"`` or
+    ``"odometer"``), ``speed_topic``, ``stamp`` (``"header"`` or ``"receive"``), ``origin``
+    ([lat deg, lon deg, h m]), ``gnss_sigma`` (m), ``odometry_sigma`` and ``speed_sigma``
+    (m/s), ``odometer_lever`` ([x, y, z] m). See the module documentation.
     """
 
     name = "rosbag"
     suffixes = (".bag", ".mcap", ".db3", "/")
     options = frozenset({"topic", "gnss_topic", "odometry_topic", "stamp", "origin", "gnss_sigma",
-                         "odometry_sigma"})
+                         "odometry_sigma", "odometry_as", "speed_topic", "speed_sigma", "odometer_lever"})
     modules = ("rosbags", "pymap3d")
     extra = "ros"
     description = "ROS 1 .bag / ROS 2 bag (folder, .db3, .mcap): Imu, NavSatFix and Odometry topics"
@@ -391,8 +462,14 @@ class RosbagReader(Reader):
         if stamp not in ("header", "receive"):
             raise InputError(f"[input] stamp = {stamp!r}: \"header\" (header.stamp, the sensor's clock) or "
                              "\"receive\" (the bag's record time)")
-        opts = {k: _topic_option(options.get(k), k) for k in ("topic", "gnss_topic", "odometry_topic")}
+        opts = {k: _topic_option(options.get(k), k) for k in ("topic", "gnss_topic", "odometry_topic",
+                                                              "speed_topic")}
         _origin_option(options.get("origin"))
+        if options.get("odometry_as", "velocity") not in ("velocity", "odometer"):
+            raise InputError(f"[input] odometry_as = {options.get('odometry_as')!r}: \"velocity\" (the twist "
+                             "rotated into the navigation frame) or \"odometer\" (its forward speed, with a "
+                             "scale factor to estimate)")
+        _lever_option(options.get("odometer_lever"))
         target = _bag_target(path)
         try:
             with AnyReader([target], default_typestore=_typestore()) as reader:
@@ -403,7 +480,9 @@ class RosbagReader(Reader):
                 gnss = _pick(topics, NAVSATFIX_TYPE, opts["gnss_topic"], "gnss_topic", path, auto=True)
                 odom = _pick(topics, ODOMETRY_TYPE, opts["odometry_topic"], "odometry_topic", path,
                              auto=False)
-                wanted = {t: topics[t] for t in (imu, gnss, odom) if t is not None}
+                speed = _pick(topics, TWIST_STAMPED_TYPE, opts["speed_topic"], "speed_topic", path,
+                              auto=False)
+                wanted = {t: topics[t] for t in (imu, gnss, odom, speed) if t is not None}
                 msgs = _read_messages(reader, wanted, path)
         except InputError:
             raise
@@ -411,16 +490,18 @@ class RosbagReader(Reader):
             raise InputError(f"{str(path)!r}: cannot open the bag ({type(exc).__name__}: "
                              f"{_first_line(exc)}); is it a complete ROS 1 .bag, ROS 2 bag folder, .db3 or "
                              ".mcap file?") from None
-        return self._recording(path, msgs, imu, gnss, odom, stamp, options, topics)
+        return self._recording(path, msgs, imu, gnss, (odom, speed), stamp, options, topics)
 
-    def _recording(self, path, msgs, imu, gnss, odom, stamp, options, topics) -> Recording:
+    def _recording(self, path, msgs, imu, gnss, odometry, stamp, options, topics) -> Recording:
         from ..timebase import to_seconds
 
         ns, f, w, att, notes = _imu_channels(msgs[imu], imu, path, stamp)
         t, origin = to_seconds(ns, "ns")
         notes.insert(0, f"Times: {stamp} stamps in integer ns; t = 0 at the first Imu stamp ({origin} since "
                         "the Unix epoch, ROS time); every item is on this clock.")
+        odom, speed = odometry
         meta: dict = {"topics": dict(topics), "imu_topic": imu, "gnss_topic": gnss, "odometry_topic": odom,
+                      "speed_topic": speed,
                       "stamp": stamp, "frame_id": msgs[imu][0][1].header.frame_id,
                       "first_stamp_ns": int(ns[0]), "frame": "enu"}
         window = (int(ns[0]), int(ns[-1]))
@@ -429,7 +510,13 @@ class RosbagReader(Reader):
             item = _gnss_item(msgs[gnss], gnss, path, stamp, window, options, notes, meta)
             items += [item] if item is not None else []
         if odom is not None:
-            item = _odometry_item(msgs[odom], odom, path, stamp, window, options, notes)
+            if options.get("odometry_as", "velocity") == "odometer":
+                item = _odometer_item(msgs[odom], odom, path, stamp, window, options, notes, False)
+            else:
+                item = _odometry_item(msgs[odom], odom, path, stamp, window, options, notes)
+            items += [item] if item is not None else []
+        if speed is not None:
+            item = _odometer_item(msgs[speed], speed, path, stamp, window, options, notes, True)
             items += [item] if item is not None else []
         return Recording(t=t, source=f"{path} (topic {imu})", time_origin=origin, specific_force=f, gyro=w,
                          attitude=att, attitude_frame="enu" if att is not None else None, items=tuple(items),
