@@ -43,6 +43,10 @@ class Odometer(Item):
     lever : array_like (3,)
         Position of the measured point (the wheel's contact, the axle's middle) relative to
         the IMU in body axes, m (default the IMU itself).
+    scaled : bool
+        Whether the problem's :class:`~bvpnav.error_models.OdometerScale` applies to these
+        readings (default True); False for speeds without a scale error (a GNSS receiver's
+        speed over ground beside a wheel odometer whose scale is estimated).
     sigma, mode, huber, tol, name
         See :class:`bvpnav.items.Item`; ``sigma``, ``huber`` and ``tol`` in m/s. The item
         needs ``sigma`` (soft, the usual case: the speed's noise), or ``mode="robust"``
@@ -93,6 +97,7 @@ class Odometer(Item):
     speed: Any
     axis: str = "x"
     lever: Any = (0.0, 0.0, 0.0)
+    scaled: bool = True
     units = "m/s"
 
     def __post_init__(self):
@@ -115,6 +120,9 @@ class Odometer(Item):
         if not isinstance(self.axis, str) or self.axis not in _BODY:
             raise InputError(f"{label}: axis={self.axis!r}; give one body axis among {list(_BODY)} "
                              "(\"x\": forward)")
+        if not isinstance(self.scaled, bool | np.bool_):
+            raise InputError(f"{label}: scaled={self.scaled!r}; give True (the problem's OdometerScale applies) "
+                             "or False")
         lev = finite(self.lever, label, "lever").ravel()
         if lev.size != 3:
             raise InputError(f"{label}: lever={self.lever!r}; give three numbers (body x, y, z) in m")
@@ -144,6 +152,8 @@ class Odometer(Item):
     def compile(self, model):
         what = f"{self.identify()}(t=...)"
         vb = model.body_velocity(self.t, self.axis, self.lever, what)
+        if not self.scaled:
+            return Affine(vb.A, vb.c - self.speed, TimeLabels(f"speed_{self.axis}", [""], self.t))
         gain = model.speed_gain(what)
         S = sp.csr_matrix(self.speed.reshape(-1, 1))
         A = (vb.A - S @ gain.A).tocsr()

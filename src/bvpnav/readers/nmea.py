@@ -1,4 +1,4 @@
-r"""NMEA 0183 logs (GGA, RMC, GST sentences of any talker): GNSS fixes as information.
+r"""NMEA 0183 logs (GGA, RMC, GST, VTG sentences of any talker): GNSS fixes as information.
 
 A GNSS receiver's log holds no IMU samples: the reader returns an *information-only*
 :class:`~bvpnav.readers.Recording` (``acc`` and ``specific_force`` both None,
@@ -7,7 +7,9 @@ A GNSS receiver's log holds no IMU samples: the reader returns an *information-o
 - one soft :class:`~bvpnav.constraints.Position` item with the GGA fixes, converted to a
   local ENU or NED frame about a geodetic origin (:func:`bvpnav.geodesy.geodetic_to_local`);
 - one soft horizontal :class:`~bvpnav.constraints.Velocity` item from the RMC speed and
-  course over ground, when the log has RMC sentences.
+  course over ground, when the log has RMC sentences; or, with ``speed_as = "odometer"``,
+  one soft :class:`~bvpnav.constraints.Odometer` item from the speed over ground of the RMC
+  and VTG sentences (no course needed).
 
 Options (the spec's ``[input]``):
 
@@ -28,7 +30,19 @@ Options (the spec's ``[input]``):
 ``velocity``
     Whether RMC speed/course become a Velocity item (default true).
 ``velocity_sigma``
-    Sigma of each horizontal velocity component in m/s, default 0.2.
+    Sigma of each horizontal velocity component in m/s, default 0.2 (also the sigma of the
+    speeds over ground with ``speed_as = "odometer"``).
+``speed_as``
+    ``"velocity"`` (default: RMC speed and course as a horizontal Velocity item) or
+    ``"odometer"``: the speed over ground of RMC and VTG sentences (VTG on the time of the
+    epoch's GGA/RMC sentence before it; an RMC at the same time wins) as an
+    :class:`~bvpnav.constraints.Odometer` item along body x with ``scaled = False`` (a GNSS
+    speed has no scale error), at the point ``odometer_lever`` ([x, y, z] in m, body axes:
+    the antenna's offset from the IMU; default the IMU). The speed over ground is the
+    antenna's horizontal speed, unsigned: taken as the forward speed it neglects sideslip,
+    the slope (a factor cos(climb): 0.2 % on a 6 % grade) and reversing.
+``odometer_lever``
+    See ``speed_as``.
 ``date``
     ``"YYYY-MM-DD"``, the UTC date of the first fix, for logs without RMC dates (or a
     check of them). Without any date ``t = 0`` is the first fix's time of day and
@@ -157,7 +171,7 @@ class _Line:
 
 
 #: Fields a sentence needs (GGA up to the geoid separation, RMC up to the date, GST all).
-_FIELDS = {"GGA": 11, "RMC": 9, "GST": 8}
+_FIELDS = {"GGA": 11, "RMC": 9, "GST": 8, "VTG": 7}
 _LATLON = {"GGA": 1, "RMC": 2}  # index of the latitude field
 
 
@@ -212,8 +226,10 @@ class _Scan:
     bad: list
 
 
-def _scan(path: Path, text: str, skip_bad: bool) -> _Scan:
-    """Every GGA/RMC/GST sentence, checksum verified; other sentences counted."""
+def _scan(path: Path, text: str, skip_bad: bool, vtg: bool = False) -> _Scan:
+    """Every GGA/RMC/GST sentence (and VTG when ``vtg``), checksum verified; other sentences
+    counted. A VTG (no time field) takes the time of the sentence before it; one before any
+    timed sentence is counted among the ignored."""
     import pynmea2
 
     out = _Scan([], Counter(), [])
@@ -233,15 +249,16 @@ def _scan(path: Path, text: str, skip_bad: bool) -> _Scan:
                 out.ignored[body.split(",")[0][2:] or "?"] += 1
                 continue
             kind = getattr(msg, "sentence_type", None)
-            if kind not in ("GGA", "RMC", "GST"):
-                out.ignored[kind or type(msg).__name__] += 1
+            if kind not in _FIELDS or (kind == "VTG" and not (vtg and out.lines)):
+                late = kind == "VTG" and vtg
+                out.ignored[(kind or type(msg).__name__) + (" before any timed sentence" if late else "")] += 1
                 continue
             data = tuple(str(d) for d in msg.data)
             if len(data) < _FIELDS[kind]:
                 raise ValueError(f"a {kind} sentence has at least {_FIELDS[kind]} fields, this one "
                                  f"{len(data)}")
-            out.lines.append(_Line(no, kind, _tod_ns(data[0]), data, _position(kind, data),
-                                   msg.talker))
+            tod = out.lines[-1].tod_ns if kind == "VTG" else _tod_ns(data[0])
+            out.lines.append(_Line(no, kind, tod, data, _position(kind, data), msg.talker))
         except (pynmea2.ParseError, ValueError, IndexError) as exc:
             reason = exc.args[0] if exc.args and isinstance(exc.args[0], str) else str(exc)
             reason = "bad checksum (" + reason + ")" if isinstance(exc, pynmea2.ChecksumError) else reason
@@ -350,6 +367,32 @@ def _velocity(ln: _Line, drops: Counter, times: list[int], n: int) -> tuple[floa
     return speed * math.sin(c), speed * math.cos(c)
 
 
+def _ground_speed(ln: _Line, drops: Counter, times: list[int], n: int) -> float | None:
+    """The speed over ground in m/s of a valid RMC or VTG at ``n`` ns after ``times``, or None
+    (counted in ``drops``; a malformed speed field is refused naming the line)."""
+    d = ln.data
+    if times and n <= times[-1]:
+        drops["repeated time"] += 1
+        return None
+    if ln.kind == "RMC":
+        void = d[1] != "A" or (len(d) > 11 and d[11] == "N")
+        field, unit = d[6], KNOT
+    else:   # VTG: km/h (field 7) if given, else knots (field 5); mode N: not valid
+        void = len(d) > 8 and d[8] == "N"
+        field, unit = (d[6], 1.0 / 3.6) if d[6] else (d[4], KNOT)
+    if void:
+        drops["status void"] += 1
+        return None
+    if not field:
+        drops["no speed"] += 1
+        return None
+    v = _float(field)
+    if v is None or v < 0:
+        raise ValueError(f"line {ln.no}: the {ln.kind} speed over ground {field!r} is not a speed (a number "
+                         ">= 0)")
+    return v * unit
+
+
 def _choice(options: Mapping[str, Any], key: str, default: Any, valid: tuple, path: Path) -> Any:
     v = options.get(key, default)
     if v not in valid or isinstance(v, bool) != isinstance(default, bool):
@@ -373,6 +416,8 @@ class _Settings:
     velocity: bool
     velocity_sigma: float
     skip_bad: bool
+    speed_as: str = "velocity"
+    lever: tuple = (0.0, 0.0, 0.0)
 
 
 def _settings(options: Mapping[str, Any], path: Path) -> _Settings:
@@ -384,7 +429,19 @@ def _settings(options: Mapping[str, Any], path: Path) -> _Settings:
         velocity=_choice(options, "velocity", True, (True, False), path),
         velocity_sigma=_positive(options, "velocity_sigma", 0.2, "m/s", path),
         skip_bad=_choice(options, "skip_bad_lines", False, (True, False), path),
+        speed_as=_choice(options, "speed_as", "velocity", ("velocity", "odometer"), path),
+        lever=_lever(options, path),
     )
+
+
+def _lever(options: Mapping[str, Any], path: Path) -> tuple:
+    v = options.get("odometer_lever", [0.0, 0.0, 0.0])
+    ok = (isinstance(v, (list, tuple)) and len(v) == 3
+          and all(isinstance(a, (int, float)) and not isinstance(a, bool) and math.isfinite(a) for a in v))
+    if not ok:
+        raise InputError(f"{path}: [input] odometer_lever = {v!r}: give [x, y, z], the antenna's position "
+                         "relative to the IMU in body axes, m")
+    return tuple(float(a) for a in v)
 
 
 def _origin_option(options: Mapping[str, Any], first: tuple[float, float, float], path: Path):
@@ -420,7 +477,7 @@ class NmeaReader(Reader):
     name = "nmea"
     suffixes = (".nmea", ".nma", ".gps")
     options = frozenset({"origin", "local_frame", "uere", "vertical_factor", "sigma_source", "velocity",
-                         "velocity_sigma", "date", "skip_bad_lines"})
+                         "velocity_sigma", "date", "skip_bad_lines", "speed_as", "odometer_lever"})
     modules = ("pynmea2", "pymap3d")
     extra = "gnss"
     description = ("NMEA 0183 GNSS log (GGA fixes, RMC speed/course): Position and Velocity items, "
@@ -447,7 +504,7 @@ class NmeaReader(Reader):
             text = path.read_bytes().decode("ascii", errors="replace")
         except OSError as exc:
             raise InputError(f"{path}: cannot read the file ({exc.strerror})") from None
-        scan = _scan(path, text, cfg.skip_bad)
+        scan = _scan(path, text, cfg.skip_bad, vtg=cfg.speed_as == "odometer" and cfg.velocity)
         lines = scan.lines
         days, rollovers = _day_index(path, lines)
         base = _base_date(path, lines, days, options.get("date"))
@@ -467,6 +524,14 @@ class NmeaReader(Reader):
                 fixes.append((*f[:3], f[3], sig))
                 ft.append(n)
                 last = (ln.no, n)
+            elif cfg.speed_as == "odometer" and ln.kind in ("RMC", "VTG") and cfg.velocity:
+                try:
+                    v = _ground_speed(ln, vdrops, vt, n)
+                except ValueError as exc:
+                    raise InputError(f"{path}: {exc}; repair or delete the line") from None
+                if v is not None:
+                    vel.append(v)
+                    vt.append(n)
             elif ln.kind == "RMC" and cfg.velocity and (v := _velocity(ln, vdrops, vt, n)) is not None:
                 vel.append(v)
                 vt.append(n)
@@ -483,9 +548,12 @@ class NmeaReader(Reader):
         keep = [i for i, n in enumerate(vt) if n >= n0]
         if keep:
             vv = np.array([vel[i] for i in keep])
-            vv = vv if cfg.frame == "enu" else vv[:, ::-1]
             t_vel = (np.asarray([vt[i] for i in keep], dtype=np.int64) - n0) * 1e-9
-            items.append(self._velocity_item(t_vel, vv, cfg.velocity_sigma, path))
+            if cfg.speed_as == "odometer":
+                items.append(self._speed_item(t_vel, vv, cfg, path))
+            else:
+                vv = vv if cfg.frame == "enu" else vv[:, ::-1]
+                items.append(self._velocity_item(t_vel, vv, cfg.velocity_sigma, path))
         t = np.union1d(t_fix, t_vel) if keep else t_fix
         origin_iso = (str(np.datetime64(int(n0), "ns")) + "Z") if base is not None else None
         notes = self._notes(path, cfg, scan, drops, vdrops, len(fixes), len(keep), len(vt) - len(keep),
@@ -517,6 +585,13 @@ class NmeaReader(Reader):
         return Velocity(t=t, value=v, axes=("x", "y"), sigma=sigma, name=f"{path.name} velocity")
 
     @staticmethod
+    def _speed_item(t, speed, cfg: _Settings, path: Path):
+        from ..constraints import Odometer
+
+        return Odometer(t=t, speed=speed, sigma=cfg.velocity_sigma, lever=cfg.lever, scaled=False,
+                        name=f"{path.name} speed over ground")
+
+    @staticmethod
     def _notes(path, cfg, scan, drops, vdrops, n_fix, n_vel, n_vel_before, origin, origin_from, n_gst,
                origin_iso, first_clock, rollovers) -> list[str]:
         no_geoid = drops.pop("__no_geoid", 0)
@@ -537,16 +612,22 @@ class NmeaReader(Reader):
                          "mean sea level, not above the ellipsoid.")
         if drops:
             notes.append(f"Dropped GGA sentences: {_count(drops)}.")
-        if n_vel:
+        odo = cfg.speed_as == "odometer"
+        if n_vel and odo:
+            notes.append(f"{n_vel} RMC/VTG speeds over ground as a soft Odometer item along body x at the lever "
+                         f"{list(cfg.lever)} m (scaled = false), sigma {cfg.velocity_sigma:g} m/s: taken as the "
+                         "forward speed, neglecting sideslip, the slope and reversing.")
+        elif n_vel:
             notes.append(f"{n_vel} RMC speeds and courses over ground as a soft horizontal Velocity item "
                          f"(axes x, y of {cfg.frame.upper()}), sigma {cfg.velocity_sigma:g} m/s per axis.")
         if vdrops or n_vel_before:
             extra = dict(vdrops)
             if n_vel_before:
                 extra["before the first fix"] = n_vel_before
-            notes.append(f"Dropped RMC velocities: {_count(Counter(extra))}.")
+            notes.append(f"Dropped {'RMC/VTG speeds' if odo else 'RMC velocities'}: {_count(Counter(extra))}.")
         if scan.ignored:
-            notes.append(f"Ignored sentences (only GGA, RMC and GST are read): {_count(scan.ignored)}.")
+            read = "GGA, RMC, GST and VTG" if odo and cfg.velocity else "GGA, RMC and GST"
+            notes.append(f"Ignored sentences (only {read} are read): {_count(scan.ignored)}.")
         if scan.bad:
             shown = "; ".join(f"line {no}: {why}" for no, why in scan.bad[:5])
             more = f" and {len(scan.bad) - 5} more" if len(scan.bad) > 5 else ""

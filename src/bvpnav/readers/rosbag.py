@@ -404,8 +404,9 @@ def _odometer_item(msgs, topic: str, path: Path, stamp: str, window: tuple[int, 
     speed = np.array([float(w.linear.x) for w in tw])
     bad = np.flatnonzero(~np.isfinite(speed))
     if bad.size:
-        raise InputError(f"{str(path)!r}: topic {topic}: message {int(k[bad[0]])} has a non-finite forward speed "
-                         f"twist.linear.x = {speed[bad[0]]!r} ({bad.size} such message(s)); repair or drop them")
+        raise InputError(f"{str(path)!r}: topic {topic}: message {int(k[bad[0]])} has a non-finite forward "
+                         f"speed twist.linear.x = {speed[bad[0]]!r} ({bad.size} such message(s)); repair or "
+                         "drop them")
     option = "speed_sigma" if twist_stamped else "odometry_sigma"
     given = _sigma_option(opts.get(option), option)
     if given is not None:
@@ -418,9 +419,9 @@ def _odometer_item(msgs, topic: str, path: Path, stamp: str, window: tuple[int, 
         var = np.array([float(np.asarray(m.twist.covariance, float)[0]) for m in sel])
         if not np.all(np.isfinite(var) & (var > 0)):
             i = int(k[np.flatnonzero(~(np.isfinite(var) & (var > 0)))[0]])
-            raise InputError(f"{str(path)!r}: topic {topic}: message {i} has twist covariance[0] = "
-                             f"{float(np.asarray(msgs[i][1].twist.covariance, float)[0])!r}, no usable variance "
-                             "of the forward speed; set [input] odometry_sigma = <m/s>")
+            cov0 = float(np.asarray(msgs[i][1].twist.covariance, float)[0])
+            raise InputError(f"{str(path)!r}: topic {topic}: message {i} has twist covariance[0] = {cov0!r}, "
+                             "no usable variance of the forward speed; set [input] odometry_sigma = <m/s>")
         sig = np.sqrt(var)
         src = "the twist covariance's first entry"
     lever = _lever_option(opts.get("odometer_lever"))

@@ -1,0 +1,217 @@
+"""Odometer readings from the readers (issue 39 item 7): ROS Odometry / TwistStamped topics and
+NMEA speed over ground, on small synthetic files written here."""
+
+from __future__ import annotations
+
+import datetime as dt
+
+import numpy as np
+import pytest
+
+from bvpnav.constraints import Odometer, Position, Velocity
+from bvpnav.errors import InputError
+
+START = 1_700_000_000_123_456_789
+
+
+# ------------------------------------------------------------------ ROS bags
+@pytest.fixture(scope="module")
+def ros():
+    pytest.importorskip("rosbags")
+    from bvpnav.readers.rosbag import _typestore
+
+    return _typestore().types
+
+
+def _header(types, ns: int, frame: str):
+    from bvpnav.readers.rosbag import _msg_header
+
+    return _msg_header(types, ns, frame)
+
+
+def _write(path, topics):
+    from rosbags.rosbag2 import Writer
+
+    from bvpnav.readers.rosbag import _typestore
+
+    store = _typestore()
+    with Writer(path, version=9) as writer:
+        conns = {t: writer.add_connection(t, msgs[0][2], typestore=store) for t, msgs in topics.items()}
+        for recv, topic, msg, typ in sorted((r, t, m, typ) for t, msgs in topics.items() for r, m, typ in msgs):
+            writer.write(conns[topic], recv, store.serialize_cdr(msg, typ))
+    return path
+
+
+def _imu(types, n: int = 11):
+    from bvpnav.readers.rosbag import IMU_TYPE
+
+    vec, quat = types["geometry_msgs/msg/Vector3"], types["geometry_msgs/msg/Quaternion"]
+    out = []
+    for k in range(n):
+        ns = START + k * 10_000_000
+        msg = types[IMU_TYPE](header=_header(types, ns, "imu"), orientation=quat(0.0, 0.0, 0.0, 1.0),
+                              orientation_covariance=np.r_[-1.0, np.zeros(8)], angular_velocity=vec(0, 0, 0),
+                              angular_velocity_covariance=np.zeros(9), linear_acceleration=vec(0, 0, 9.80665),
+                              linear_acceleration_covariance=np.zeros(9))
+        out.append((ns + 1000, msg, IMU_TYPE))
+    return out
+
+
+def _odometry(types, speeds, cov0: float = 0.01):
+    from scipy.spatial.transform import Rotation
+
+    from bvpnav.readers.rosbag import ODOMETRY_TYPE
+
+    qx, qy, qz, qw = Rotation.from_euler("z", 90, degrees=True).as_quat()
+    v3 = types["geometry_msgs/msg/Vector3"]
+    cov = np.zeros(36)
+    cov[[0, 7, 14]] = [cov0, 0.04, 0.09]
+    out = []
+    for k, (t, s) in enumerate(zip([START - 5_000_000, START + 20_000_000, START + 60_000_000], speeds,
+                                   strict=True)):
+        msg = types[ODOMETRY_TYPE](
+            header=_header(types, t, "odom"), child_frame_id="base_link",
+            pose=types["geometry_msgs/msg/PoseWithCovariance"](
+                pose=types["geometry_msgs/msg/Pose"](position=types["geometry_msgs/msg/Point"](0.0, 0.0, 0.0),
+                                                     orientation=types["geometry_msgs/msg/Quaternion"](
+                                                         qx, qy, qz, qw)),
+                covariance=np.zeros(36)),
+            twist=types["geometry_msgs/msg/TwistWithCovariance"](
+                twist=types["geometry_msgs/msg/Twist"](linear=v3(s, 0.3 * k, 0), angular=v3(0, 0, 0)),
+                covariance=cov))
+        out.append((t + 2000, msg, ODOMETRY_TYPE))
+    return out
+
+
+def _twist_stamped(types, speeds):
+    from bvpnav.readers.rosbag import TWIST_STAMPED_TYPE
+
+    v3 = types["geometry_msgs/msg/Vector3"]
+    out = []
+    for k, s in enumerate(speeds):
+        ns = START + 15_000_000 + k * 20_000_000
+        msg = types[TWIST_STAMPED_TYPE](header=_header(types, ns, "base_link"),
+                                        twist=types["geometry_msgs/msg/Twist"](linear=v3(s, 0, 0),
+                                                                               angular=v3(0, 0, 0)))
+        out.append((ns + 500, msg, TWIST_STAMPED_TYPE))
+    return out
+
+
+def test_odometry_topic_as_an_odometer(tmp_path, ros):
+    from bvpnav.readers import read
+
+    path = _write(tmp_path / "odom", {"/imu": _imu(ros), "/odom": _odometry(ros, [1.0, 2.0, 3.0])})
+    # default: the twist rotated into the odometry frame, a Velocity item (unchanged)
+    (vel,) = read(path, {"format": "rosbag", "odometry_topic": "/odom"}).items
+    assert isinstance(vel, Velocity)
+    rec = read(path, {"format": "rosbag", "odometry_topic": "/odom", "odometry_as": "odometer",
+                      "odometer_lever": [-1.0, 0.0, -0.3]})
+    (odo,) = rec.items
+    assert isinstance(odo, Odometer) and odo.label == "Odometry /odom"
+    np.testing.assert_allclose(odo.t, [0.02, 0.06], atol=1e-15)   # the one before the IMU dropped
+    np.testing.assert_allclose(odo.speed, [2.0, 3.0])             # twist.linear.x, not rotated
+    np.testing.assert_allclose(odo.sigma, [0.1, 0.1])             # sqrt(covariance[0])
+    np.testing.assert_allclose(odo.lever, [-1.0, 0.0, -0.3])
+    assert odo.axis == "x" and odo.mode == "soft"
+    assert any("Odometer item along body x" in n and "odometer_scale" in n for n in rec.notes)
+    # a stated sigma wins over the covariance
+    (odo,) = read(path, {"format": "rosbag", "odometry_topic": "/odom", "odometry_as": "odometer",
+                         "odometry_sigma": 0.05}).items
+    np.testing.assert_allclose(odo.sigma, [0.05, 0.05])
+
+
+def test_wheel_speed_topic(tmp_path, ros):
+    from bvpnav.readers import read
+
+    path = _write(tmp_path / "ws", {"/imu": _imu(ros), "/wheel_speed": _twist_stamped(ros, [4.0, 4.5, 5.0])})
+    with pytest.raises(InputError, match=r"/wheel_speed .*no covariance; set \[input\] speed_sigma"):
+        read(path, {"format": "rosbag", "speed_topic": "/wheel_speed"})
+    rec = read(path, {"format": "rosbag", "speed_topic": "/wheel_speed", "speed_sigma": 0.02})
+    (odo,) = rec.items
+    assert odo.label == "wheel speed /wheel_speed"
+    np.testing.assert_allclose(odo.t, [0.015, 0.035, 0.055], atol=1e-15)
+    np.testing.assert_allclose(odo.speed, [4.0, 4.5, 5.0])
+    np.testing.assert_allclose(odo.sigma, 0.02)
+    assert rec.meta["speed_topic"] == "/wheel_speed"
+
+
+def test_odometer_topics_refuse_bad_data_naming_topic_and_message(tmp_path, ros):
+    from bvpnav.readers import read
+
+    path = _write(tmp_path / "nan", {"/imu": _imu(ros), "/odom": _odometry(ros, [1.0, np.nan, 3.0])})
+    with pytest.raises(InputError, match=r"topic /odom: message 1 has a non-finite forward speed"):
+        read(path, {"format": "rosbag", "odometry_topic": "/odom", "odometry_as": "odometer"})
+    path = _write(tmp_path / "cov", {"/imu": _imu(ros), "/odom": _odometry(ros, [1.0, 2.0, 3.0], cov0=0.0)})
+    with pytest.raises(InputError, match=r"topic /odom: message 1 has twist covariance\[0\] = 0.0.*odometry_sigma"):
+        read(path, {"format": "rosbag", "odometry_topic": "/odom", "odometry_as": "odometer"})
+    with pytest.raises(InputError, match=r"odometry_as = 'wheel'"):
+        read(path, {"format": "rosbag", "odometry_topic": "/odom", "odometry_as": "wheel"})
+    with pytest.raises(InputError, match=r"odometer_lever = \[1.0, 2.0\]"):
+        read(path, {"format": "rosbag", "odometry_topic": "/odom", "odometry_as": "odometer",
+                    "odometer_lever": [1.0, 2.0]})
+    with pytest.raises(InputError, match=r"'/odom' is nav_msgs/msg/Odometry, not geometry_msgs/msg/TwistStamped"):
+        read(path, {"format": "rosbag", "speed_topic": "/odom"})
+
+
+# ------------------------------------------------------------------ NMEA
+def _nmea_log(tmp_path, vtg_speed: str = "036.0", name: str = "drive.nmea"):
+    """Five 1 Hz epochs: GGA + RMC (10 m/s) at 0-1 s, GGA + VTG at 2-4 s (at 2 s with mode N,
+    not valid; at 3 s in km/h; at 4 s in knots only), and a VTG after the RMC of 1 s (a
+    repeated time)."""
+    from bvpnav.readers.nmea import KNOT, format_gga, format_rmc, sentence
+
+    date = dt.date(2026, 5, 1)
+    t0 = 12 * 3600.0
+    lines = []
+    for k in range(5):
+        lat, lon = 48.1 + 1e-5 * k, 11.5
+        lines.append(format_gga(t0 + k, lat, lon, 520.0))
+        if k < 2:
+            lines.append(format_rmc(t0 + k, date, lat, lon, 10.0, 0.0))
+        if k == 1:
+            lines.append(sentence("GPVTG,000.0,T,,M,019.4,N,036.0,K,A"))   # same time as the RMC
+        if k == 2:
+            lines.append(sentence("GPVTG,000.0,T,,M,019.4,N,036.0,K,N"))
+        if k == 3:
+            lines.append(sentence(f"GPVTG,000.0,T,,M,019.4,N,{vtg_speed},K,A"))
+        if k == 4:
+            lines.append(sentence(f"GPVTG,000.0,T,,M,{10.5 / KNOT:.4f},N,,K,D"))
+    path = tmp_path / name
+    path.write_text("".join(line + "\r\n" for line in lines))
+    return path
+
+
+def test_nmea_speed_over_ground_as_an_odometer(tmp_path):
+    pytest.importorskip("pynmea2")
+    pytest.importorskip("pymap3d")
+    from bvpnav.readers import read
+
+    path = _nmea_log(tmp_path)
+    rec = read(path, {"format": "nmea", "speed_as": "odometer", "velocity_sigma": 0.1,
+                      "odometer_lever": [0.5, 0.0, 1.2]})
+    pos, odo = rec.items
+    assert isinstance(pos, Position) and isinstance(odo, Odometer)
+    assert odo.label == "drive.nmea speed over ground" and odo.scaled is False
+    np.testing.assert_allclose(odo.t, [0.0, 1.0, 3.0, 4.0])
+    np.testing.assert_allclose(odo.speed, [10.0, 10.0, 10.0, 10.5], rtol=1e-5)  # 4 decimals of knots
+    np.testing.assert_allclose(odo.sigma, 0.1)
+    np.testing.assert_allclose(odo.lever, [0.5, 0.0, 1.2])
+    assert any("4 RMC/VTG speeds over ground as a soft Odometer item" in n for n in rec.notes)
+    assert any("Dropped RMC/VTG speeds: 1 repeated time, 1 status void" in n for n in rec.notes)
+    # the default reads RMC speed and course as a Velocity item and ignores VTG, saying so
+    rec = read(path, {"format": "nmea"})
+    assert isinstance(rec.items[1], Velocity) and rec.items[1].t.size == 2
+    assert any("Ignored sentences (only GGA, RMC and GST are read): 4 VTG" in n for n in rec.notes)
+
+
+def test_nmea_bad_speed_is_refused_naming_the_line(tmp_path):
+    pytest.importorskip("pynmea2")
+    from bvpnav.readers import read
+
+    path = _nmea_log(tmp_path, vtg_speed="-3.0")
+    with pytest.raises(InputError, match=r"line 9: the VTG speed over ground '-3.0' is not a speed"):
+        read(path, {"format": "nmea", "speed_as": "odometer"})
+    with pytest.raises(InputError, match=r"speed_as = 'wheel'"):
+        read(path, {"format": "nmea", "speed_as": "wheel"})
+    with pytest.raises(InputError, match=r"odometer_lever = \[1, 2\]"):
+        read(path, {"format": "nmea", "speed_as": "odometer", "odometer_lever": [1, 2]})
