@@ -193,3 +193,46 @@ def test_docs_example_runs():
     assert bvpnav.constraints.Odometer is Odometer
     assert bvpnav.error_models.OdometerScale is OdometerScale
     assert Velocity is bvpnav.constraints.Velocity
+
+
+def test_unscaled_readings_do_not_touch_the_scale(drive):
+    data = ImuData(drive.t, specific_force=drive.specific_force_true, attitude=drive.attitude,
+                   gravity=drive.gravity, frame="enu")
+    model = NavModel(data, OdometerScale())
+    scaled = Odometer(t=[10.0, 20.0], speed=[5.0, 6.0], sigma=0.1).compile(model)
+    plain = Odometer(t=[10.0, 20.0], speed=[5.0, 6.0], sigma=0.1, scaled=False).compile(model)
+    col = model.l_index[0]
+    np.testing.assert_allclose(scaled.A[:, col].toarray().ravel(), [-5.0, -6.0])   # -s_k * de
+    assert plain.A[:, col].nnz == 0
+    np.testing.assert_allclose((scaled.A - plain.A).toarray()[:, :col], 0.0)
+    with pytest.raises(InputError, match="scaled='yes'"):
+        Odometer(t=[1.0], speed=[1.0], sigma=0.1, scaled="yes")
+
+
+def test_spec_states_odometer_and_scale():
+    from bvpnav.spec import dumps_spec, parse_spec
+
+    text = """
+[[error_model]]
+type = "odometer_scale"
+sigma = 0.05
+
+[[item]]
+type = "odometer"
+name = "rear wheel"
+t = [1.0, 2.0, 3.0]
+speed = [4.0, 4.5, 5.0]
+sigma = 0.05
+lever = [-1.2, 0.8, -0.4]
+"""
+    spec = parse_spec(text)
+    (odo,) = spec.items
+    assert isinstance(odo, Odometer) and odo.label == "rear wheel"
+    np.testing.assert_allclose(odo.speed, [4.0, 4.5, 5.0])
+    np.testing.assert_allclose(odo.lever, [-1.2, 0.8, -0.4])
+    assert isinstance(spec.error_model(), OdometerScale)
+    again = parse_spec(dumps_spec(spec))
+    np.testing.assert_allclose(again.items[0].speed, odo.speed)
+    assert again.items[0].scaled is True
+    with pytest.raises(InputError, match=r"spec, line 6: rear wheel: axis='forward'; give one body axis"):
+        parse_spec(text.replace('name = "rear wheel"', 'name = "rear wheel"\naxis = "forward"'))
