@@ -121,8 +121,8 @@ class Odometer(Item):
             raise InputError(f"{label}: axis={self.axis!r}; give one body axis among {list(_BODY)} "
                              "(\"x\": forward)")
         if not isinstance(self.scaled, bool | np.bool_):
-            raise InputError(f"{label}: scaled={self.scaled!r}; give True (the problem's OdometerScale applies) "
-                             "or False")
+            raise InputError(f"{label}: scaled={self.scaled!r}; give True (the problem's OdometerScale "
+                             "applies) or False")
         lev = finite(self.lever, label, "lever").ravel()
         if lev.size != 3:
             raise InputError(f"{label}: lever={self.lever!r}; give three numbers (body x, y, z) in m")

@@ -250,8 +250,8 @@ def _scan(path: Path, text: str, skip_bad: bool, vtg: bool = False) -> _Scan:
                 continue
             kind = getattr(msg, "sentence_type", None)
             if kind not in _FIELDS or (kind == "VTG" and not (vtg and out.lines)):
-                late = kind == "VTG" and vtg
-                out.ignored[(kind or type(msg).__name__) + (" before any timed sentence" if late else "")] += 1
+                late = " before any timed sentence" if kind == "VTG" and vtg else ""
+                out.ignored[(kind or type(msg).__name__) + late] += 1
                 continue
             data = tuple(str(d) for d in msg.data)
             if len(data) < _FIELDS[kind]:
@@ -614,9 +614,9 @@ class NmeaReader(Reader):
             notes.append(f"Dropped GGA sentences: {_count(drops)}.")
         odo = cfg.speed_as == "odometer"
         if n_vel and odo:
-            notes.append(f"{n_vel} RMC/VTG speeds over ground as a soft Odometer item along body x at the lever "
-                         f"{list(cfg.lever)} m (scaled = false), sigma {cfg.velocity_sigma:g} m/s: taken as the "
-                         "forward speed, neglecting sideslip, the slope and reversing.")
+            notes.append(f"{n_vel} RMC/VTG speeds over ground as a soft Odometer item along body x at the "
+                         f"lever {list(cfg.lever)} m (scaled = false), sigma {cfg.velocity_sigma:g} m/s: "
+                         "taken as the forward speed, neglecting sideslip, the slope and reversing.")
         elif n_vel:
             notes.append(f"{n_vel} RMC speeds and courses over ground as a soft horizontal Velocity item "
                          f"(axes x, y of {cfg.frame.upper()}), sigma {cfg.velocity_sigma:g} m/s per axis.")
@@ -624,7 +624,8 @@ class NmeaReader(Reader):
             extra = dict(vdrops)
             if n_vel_before:
                 extra["before the first fix"] = n_vel_before
-            notes.append(f"Dropped {'RMC/VTG speeds' if odo else 'RMC velocities'}: {_count(Counter(extra))}.")
+            what = "RMC/VTG speeds" if odo else "RMC velocities"
+            notes.append(f"Dropped {what}: {_count(Counter(extra))}.")
         if scan.ignored:
             read = "GGA, RMC, GST and VTG" if odo and cfg.velocity else "GGA, RMC and GST"
             notes.append(f"Ignored sentences (only {read} are read): {_count(scan.ignored)}.")
