@@ -178,7 +178,8 @@ def _add_uncertainty(summ: dict, sol) -> None:
 
 def solve_recording(path, spec, out, solver: str | None = None, lam=None, summary_path=None,
                     spec_text: str | None = None, uncertainty=None, information=(),
-                    clock_offset: float | None = None, same_clock: bool = False, origin=None, **more):
+                    clock_offset: float | None = None, same_clock: bool = False, origin=None,
+                    info_options=None, **more):
     """Solve one recording file with a spec; write the trajectory and its JSON summary.
 
     Parameters
@@ -208,6 +209,10 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
         reader and put on the recording's clock by :func:`bvpnav.readers.align`.
     clock_offset, same_clock : optional
         How those files' clocks relate to the recording's (see :func:`bvpnav.readers.align`).
+    info_options : dict, optional
+        Reader options for the information files (e.g. ``{"speed_as": "odometer"}`` for an
+        NMEA log's speed over ground as an Odometer item), each given to the files whose
+        reader takes it; a key no information file's reader takes is refused.
     **more
         Overrides of any other declared solve option (:data:`bvpnav.declare.SOLVE_OPTIONS`,
         e.g. ``time_limit``; None keeps the spec's), recorded in the fingerprint.
@@ -260,9 +265,17 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
                          "[input] origin = [lat, lon, h] instead, so that every item and the geodetic output "
                          "share one frame")
     geo = list(origin) if origin is not None else own
+    info_options = dict(info_options or {})
+    takes_any = set().union(*(reader_for(p).options for p in information)) if information else set()
+    unknown = sorted(set(info_options) - takes_any)
+    if unknown:
+        raise InputError(f"information option(s) {unknown} (--info-option): no information file's reader "
+                         f"takes them; the readers of {[display_path(p) for p in information]} take "
+                         f"{sorted(takes_any)}")
     for extra in information:  # fixes in the recording's local frame: its frame, one origin
         takes = reader_for(extra).options
-        opts = {"local_frame": frame} if "local_frame" in takes else {}
+        opts = {k: v for k, v in info_options.items() if k in takes}
+        opts.update({"local_frame": frame} if "local_frame" in takes else {})
         if geo is not None and "origin" in takes:
             opts["origin"] = [float(v) for v in geo]
         more = read(extra, opts)
@@ -286,6 +299,7 @@ def solve_recording(path, spec, out, solver: str | None = None, lam=None, summar
     summ["run"] = {"recording": display_path(path), "samples": int(data.grid.n), "notes": notes,
                    "geodetic_origin": geo,
                    "information": [display_path(p) for p in information],
+                   "information_options": info_options,
                    "fingerprint": fingerprint(path, spec_text, fmt=fmt, recording=rec_fp,
                                               **{"solver": solver, "lam": lam, **over}),
                    "trajectory": {"path": display_path(out), "size": written["size"],

@@ -270,6 +270,30 @@ def _cmd_simulate(args) -> int:
     return EXIT_OK
 
 
+def _info_options(pairs: list[str]) -> dict:
+    """``--info-option KEY=VALUE`` pairs as a dict; a value is read as a TOML value (a number,
+    ``true``, ``[0.5, 0, 1.2]``, a quoted string) or else taken as the text itself."""
+    import datetime as _dt
+
+    out = {}
+    for pair in pairs:
+        key, sep, text = str(pair).partition("=")
+        key = key.strip()
+        if not sep or not key or not text.strip():
+            raise InputError(f"--info-option {pair!r}: give KEY=VALUE, e.g. --info-option speed_as=odometer")
+        if key in out:
+            raise InputError(f"--info-option {key}: given twice; give each reader option once")
+        from .spec import tomllib
+
+        try:
+            value = tomllib.loads(f"v = {text.strip()}")["v"]
+        except tomllib.TOMLDecodeError:
+            value = text.strip()
+        # a date or time stays its text (date=2026-05-01), as the readers and the JSON summary take it
+        out[key] = text.strip() if isinstance(value, _dt.date | _dt.time) else value
+    return out
+
+
 def _cmd_solve(args) -> int:
     from pathlib import Path
 
@@ -277,6 +301,10 @@ def _cmd_solve(args) -> int:
     from .spec import parse_spec, read_spec_text
 
     over = overrides(args, "solve")
+    if args.info_option and not args.info:
+        raise InputError("--info-option sets a reader option of the --info files, but no --info file is "
+                         "given: add --info FILE or drop the option")
+    info_options = _info_options(args.info_option)
     if not args.info and (args.clock_offset is not None or args.same_clock):
         opt = "--clock-offset" if args.clock_offset is not None else "--same-clock"
         raise InputError(f"{opt} relates the clock of an --info file to INPUT's, but no --info file is "
@@ -315,7 +343,8 @@ def _cmd_solve(args) -> int:
     t0 = time.perf_counter()
     sol, row = solve_recording(args.input, spec, args.out, summary_path=summary, spec_text=spec_text,
                                information=args.info, clock_offset=args.clock_offset,
-                               same_clock=args.same_clock, origin=args.origin, **over)
+                               same_clock=args.same_clock, origin=args.origin, info_options=info_options,
+                               **over)
     _log.info("solved in %.3g s (solver %s, %s); wrote %s and %s", time.perf_counter() - t0,
               row["solver"], row["status"], args.out, summary)
     _log.debug("solver options in force: %s", sol.stats.get("options"))
@@ -694,6 +723,11 @@ def build_parser() -> argparse.ArgumentParser:
                             "read by its suffix; repeat for several. Its clock is aligned explicitly: ISO "
                             "timestamps with a time zone by themselves, otherwise --clock-offset or "
                             "--same-clock")
+    solve.add_argument("--info-option", action="append", default=[], metavar="KEY=VALUE",
+                       help="a reader option for the --info files that take it (repeat for several), e.g. "
+                            "speed_as=odometer (an NMEA log's speed over ground as an Odometer item), "
+                            "velocity_sigma=0.1; VALUE is read as TOML (numbers, true, [0.5, 0, 1.2]) or "
+                            "else as text")
     solve.add_argument("--clock-offset", type=float, metavar="SECONDS",
                        help="seconds to add to the --info files' times to put them on INPUT's clock")
     solve.add_argument("--geodetic", metavar="OUT", help="also write the trajectory in geodetic coordinates: "

@@ -236,3 +236,19 @@ lever = [-1.2, 0.8, -0.4]
     assert again.items[0].scaled is True
     with pytest.raises(InputError, match=r"spec, line 6: rear wheel: axis='forward'; give one body axis"):
         parse_spec(text.replace('name = "rear wheel"', 'name = "rear wheel"\naxis = "forward"'))
+
+
+def test_an_absurd_scale_is_returned_with_a_warning(drive):
+    # speeds in km/h given as m/s: the scale comes out at +260 %, and the solution says so
+    data = ImuData(drive.t, specific_force=drive.specific_force_true, attitude=drive.attitude,
+                   gravity=drive.gravity, frame="enu")
+    prob, _, _ = _exact_problem(data, drive)
+    kmh = [it if it.label != "wheel" else Odometer(t=it.t, speed=3.6 / 1.02 * it.speed, sigma=0.05,
+                                                   name="wheel") for it in prob.items]
+    with pytest.warns(bvpnav.log.BvpnavWarning, match=r"implausible estimate: odometer_scale = .*\+260 %"):
+        sol = NavigationProblem(data, error_model=OdometerScale(), items=kmh).solve(solver="direct")
+    assert float(sol.error_params["odometer_scale"]) == pytest.approx(2.6, rel=1e-6)
+    assert any("km/h" in w for w in sol.warnings)
+    # a plausible one gives no such warning
+    sol = prob.solve(solver="direct")
+    assert not any("odometer_scale" in w for w in sol.warnings)

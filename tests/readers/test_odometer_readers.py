@@ -216,3 +216,67 @@ def test_nmea_bad_speed_is_refused_naming_the_line(tmp_path):
         read(path, {"format": "nmea", "speed_as": "wheel"})
     with pytest.raises(InputError, match=r"odometer_lever = \[1, 2\]"):
         read(path, {"format": "nmea", "speed_as": "odometer", "odometer_lever": [1, 2]})
+
+
+# ------------------------------------------------------------------ command line
+def test_cli_states_an_nmea_speed_over_ground_as_an_odometer(tmp_path):
+    """`bvpnav solve imu.csv --spec spec.toml --info log.nmea --info-option speed_as=odometer`: the
+    log's VTG speeds become an Odometer item beside its fixes; a key no reader takes is refused."""
+    pytest.importorskip("pynmea2")
+    pymap3d = pytest.importorskip("pymap3d")
+    import json
+
+    import pandas as pd
+    from _hostile import EXIT_INPUT, EXIT_OK, assert_clean_failure, run_cli
+
+    from bvpnav.readers.nmea import format_gga, sentence
+    from bvpnav.scenarios import car_drive
+
+    origin, start = (48.1173, 11.5167, 520.0), dt.datetime(2026, 5, 1, 10, 0, 0, tzinfo=dt.timezone.utc)
+    d = car_drive(duration=60.0, rate=10.0, seed=2, heading_error=0.0, tilt_error=0.0)
+    stamps = [(start + dt.timedelta(seconds=float(s))).isoformat().replace("+00:00", "Z") for s in d.t]
+    q = d.attitude.as_quat()
+    pd.DataFrame({"time": stamps, **{f"f_{a}": d.specific_force_true[:, k] for k, a in enumerate("xyz")},
+                  **{f"q{a}": q[:, k] for k, a in enumerate("xyzw")}}).to_csv(
+        tmp_path / "imu.csv", index=False, float_format="%.17g")
+    lat, lon, h = pymap3d.enu2geodetic(d.position[::10, 0], d.position[::10, 1], d.position[::10, 2], *origin)
+    ground = np.linalg.norm(d.velocity[::10, :2], axis=1)   # horizontal speed, m/s
+    lines = []
+    for k, s in enumerate(d.t[::10]):
+        lines.append(format_gga(36000.0 + s, lat[k], lon[k], h[k], hdop=0.2))
+        lines.append(sentence(f"GPVTG,0.0,T,,M,,N,{ground[k] * 3.6:.4f},K,A"))
+    (tmp_path / "log.nmea").write_text("".join(ln + "\r\n" for ln in lines))
+    (tmp_path / "spec.toml").write_text("""\
+[input]
+time = "time"
+time_unit = "iso8601"
+specific_force = ["f_x", "f_y", "f_z"]
+attitude = { quaternion = ["qx", "qy", "qz", "qw"], scalar = "last" }
+attitude_frame = "enu"
+
+[problem]
+sigma_a = 0.01
+
+[solve]
+solver = "direct"
+lam = 1.0
+""")
+    out = tmp_path / "traj.csv"
+    base = ["solve", tmp_path / "imu.csv", "--spec", tmp_path / "spec.toml", "--info", tmp_path / "log.nmea",
+            "--origin", *origin, "--out", out]
+    proc = run_cli([*base, "--info-option", "speed_as=odometer", "--info-option", "velocity_sigma=0.05",
+                    "--info-option", "date=2026-05-01"])   # no RMC: the date puts the log on UTC
+    assert proc.returncode == EXIT_OK, proc.stderr
+    summ = json.loads(out.with_suffix(".json").read_text())
+    assert summ["run"]["information_options"] == {"speed_as": "odometer", "velocity_sigma": 0.05,
+                                                  "date": "2026-05-01"}
+    labels = {row["item"] for row in summ["items"]} if isinstance(summ.get("items"), list) else set(summ["items"])
+    assert "log.nmea speed over ground" in labels, summ["items"]
+    traj = pd.read_csv(out)
+    err = traj[["x", "y", "z"]].to_numpy() - d.truth_at(traj.t.to_numpy())
+    assert float(np.sqrt(np.mean(np.sum(err**2, axis=1)))) < 0.05   # m: exact fixes, noise-free IMU
+    proc = run_cli([*base, "--info-option", "speed_as=odometer", "--info-option", "odometry_as=odometer",
+                    "--info-option", "date=2026-05-01", "--out", tmp_path / "t2.csv"])
+    assert_clean_failure(proc, EXIT_INPUT, r"information option\(s\) \['odometry_as'\]", r"speed_as")
+    proc = run_cli([*base, "--info-option", "speed_as"])
+    assert_clean_failure(proc, EXIT_INPUT, r"--info-option 'speed_as': give KEY=VALUE")

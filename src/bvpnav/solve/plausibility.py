@@ -88,6 +88,11 @@ GRAVITY_TILT_LIMIT = 0.1
 #: acceleration proportional to the signal (gravity on a tilted axis, a unit mistake).
 SCALE_LIMIT = 0.2
 
+#: Odometer scale-factor limit (dimensionless): ``|k| > 0.2`` (20 %). A worn or soft tyre
+#: changes the rolling radius by a few percent; beyond 20 % the speeds are in other units or
+#: along another axis (:class:`~bvpnav.error_models.OdometerScale`).
+ODOMETER_SCALE_LIMIT = 0.2
+
 #: Misalignment limit, rad: ``|Theta_ij| > 0.05`` (2.9 degrees). Triads are orthogonal to
 #: a few mrad; a rotation of the whole triad shows as antisymmetric misalignment pairs, so
 #: a larger value is an attitude error.
@@ -534,11 +539,26 @@ def _gyro_checks(sol: Solution, groups, data, items=()) -> list[str]:
     return msgs
 
 
+def _odometer_checks(sol: Solution, groups) -> list[str]:
+    msgs = []
+    for _, names in groups.get("odometer_scale", []):
+        for n, v in zip(names, _values(sol, names), strict=True):
+            if not abs(v) <= ODOMETER_SCALE_LIMIT:
+                msgs.append(
+                    f"implausible estimate: {n} = {_fmt(v)} ({100 * v:+.3g} %) is beyond the limit "
+                    f"+-{ODOMETER_SCALE_LIMIT:g} of an odometer's scale error: the speeds are in other "
+                    "units (km/h, knots, wheel revolutions), measured along another axis than the "
+                    "Odometer item's axis= (or signed the other way), or the fixes do not fix the "
+                    "distance travelled; check the speeds' units and axis, or give OdometerScale a prior "
+                    "(sigma=0.05)")
+    return msgs
+
+
 def _plausibility(sol: Solution, form: Formulation, data) -> list[str]:
     groups = _groups(sol, form)
     items = getattr(form, "items", ())
     return (_acc_checks(sol, form, groups) + _attitude_checks(sol, groups)
-            + _gyro_checks(sol, groups, data, items))
+            + _gyro_checks(sol, groups, data, items) + _odometer_checks(sol, groups))
 
 
 # ---------------------------------------------------------------------- API
