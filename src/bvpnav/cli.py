@@ -270,10 +270,14 @@ def _cmd_simulate(args) -> int:
     return EXIT_OK
 
 
-def _info_options(pairs: list[str]) -> dict:
+def _info_options(pairs: list[str], has_info: bool) -> dict:
     """``--info-option KEY=VALUE`` pairs as a dict; a value is read as a TOML value (a number,
     ``true``, ``[0.5, 0, 1.2]``, a quoted string) or else taken as the text itself."""
     import datetime as _dt
+
+    if pairs and not has_info:
+        raise InputError("--info-option sets a reader option of the --info files, but no --info file is "
+                         "given: add --info FILE or drop the option")
 
     out = {}
     for pair in pairs:
@@ -301,10 +305,7 @@ def _cmd_solve(args) -> int:
     from .spec import parse_spec, read_spec_text
 
     over = overrides(args, "solve")
-    if args.info_option and not args.info:
-        raise InputError("--info-option sets a reader option of the --info files, but no --info file is "
-                         "given: add --info FILE or drop the option")
-    info_options = _info_options(args.info_option)
+    info_options = _info_options(args.info_option, bool(args.info))
     if not args.info and (args.clock_offset is not None or args.same_clock):
         opt = "--clock-offset" if args.clock_offset is not None else "--same-clock"
         raise InputError(f"{opt} relates the clock of an --info file to INPUT's, but no --info file is "
