@@ -129,8 +129,10 @@ class OdometerScale(ErrorModel):
         (:func:`bvpnav.testing.check_error_model`): an odometer along body x at the instants
         ``t`` (s) of the true navigation-frame ``velocities`` (m/s), read by a sensor whose
         internal parameter is ``values["odometer_scale"]``."""
-        from ..constraints import Odometer
+        # by its registered name: the constraints sit above the error models
+        from ..items import item_class
 
+        Odometer = item_class("odometer")
         t = np.asarray(t, dtype=float)
         C = model._attitude_at(t)
         forward = np.einsum("kij,ki->kj", C, np.asarray(velocities, dtype=float))[:, 0]
