@@ -280,3 +280,94 @@ lam = 1.0
     assert_clean_failure(proc, EXIT_INPUT, r"information option\(s\) \['odometry_as'\]", r"speed_as")
     proc = run_cli([*base, "--info-option", "speed_as"])
     assert_clean_failure(proc, EXIT_INPUT, r"--info-option 'speed_as': give KEY=VALUE")
+
+
+# ------------------------------------------------------------------ a column of the recording
+def test_a_speed_column_of_a_strapdown_table_to_the_scale_on_the_command_line(tmp_path):
+    """A strapdown CSV with a forward-speed column reading 2 % high (`[input] odometer`), fixes
+    every 10 s in the spec and `[[error_model]] type = "odometer_scale"`: `bvpnav solve` reports
+    the scale, exactly on noise-free data consistent with the FEM."""
+    import json
+    import sys
+
+    import pandas as pd
+    from _hostile import EXIT_INPUT, EXIT_OK, assert_clean_failure, run_cli
+
+    from bvpnav import ImuData
+    from bvpnav.readers import read
+    from bvpnav.scenarios import car_drive
+
+    sys.path.insert(0, str(__import__("pathlib").Path(__file__).parents[1] / "constraints"))
+    from test_odometer import _integrate
+
+    d = car_drive(duration=60.0, rate=10.0, seed=5)
+    data = ImuData(d.t, specific_force=d.specific_force_true, attitude=d.attitude, gravity=d.gravity,
+                   frame="enu")
+    r, v = _integrate(data.t, data.acc, d.position[0], d.velocity[0])
+    forward = np.einsum("kij,ki->kj", data.attitude.as_matrix(), v)[:, 0]
+    q = d.attitude.as_quat()
+    pd.DataFrame({"t": d.t, **{f"f_{a}": d.specific_force_true[:, k] for k, a in enumerate("xyz")},
+                  **{f"q{a}": q[:, k] for k, a in enumerate("xyzw")}, "speed": 1.02 * forward}).to_csv(
+        tmp_path / "drive.csv", index=False, float_format="%.17g")
+    k = np.arange(0, d.t.size, 100)
+    fixes = "\n".join(f"[[item]]\ntype = \"position\"\nname = \"fix {j}\"\nt = {float(d.t[j])!r}\nvalue = "
+                      f"{[float(x) for x in r[j]]!r}\nsigma = 1.0\n" for j in k)
+    spec = f"""\
+[input]
+time = "t"
+specific_force = ["f_x", "f_y", "f_z"]
+attitude = {{ quaternion = ["qx", "qy", "qz", "qw"], scalar = "last" }}
+attitude_frame = "enu"
+odometer = "speed"
+odometer_sigma = 0.05
+
+[solve]
+solver = "direct"
+lam = 1.0
+
+[[error_model]]
+type = "odometer_scale"
+
+{fixes}"""
+    (tmp_path / "spec.toml").write_text(spec)
+    rec = read(tmp_path / "drive.csv", {"time": "t", "specific_force": ["f_x", "f_y", "f_z"],
+                                        "attitude": {"quaternion": ["qx", "qy", "qz", "qw"], "scalar": "last"},
+                                        "attitude_frame": "enu", "odometer": "speed", "odometer_sigma": 0.05})
+    (odo,) = rec.items
+    assert odo.label == "drive.csv column speed" and odo.t.size == d.t.size
+    np.testing.assert_allclose(odo.sigma, 0.05)
+    out = tmp_path / "traj.csv"
+    proc = run_cli(["solve", tmp_path / "drive.csv", "--spec", tmp_path / "spec.toml", "--out", out])
+    assert proc.returncode == EXIT_OK, proc.stderr
+    summ = json.loads(out.with_suffix(".json").read_text())
+    scale = summ["error_model"]["odometer_scale"]
+    assert scale["units"] == "1" and abs(scale["estimate"] - 0.02) <= 1e-6 * 0.02, scale
+    # the column must be there, and needs its sigma
+    (tmp_path / "nosig.toml").write_text(spec.replace("odometer_sigma = 0.05\n", ""))
+    proc = run_cli(["solve", tmp_path / "drive.csv", "--spec", tmp_path / "nosig.toml", "--out",
+                    tmp_path / "t2.csv"])
+    assert_clean_failure(proc, EXIT_INPUT, r"odometer_sigma = None; give the speed's noise")
+    (tmp_path / "nocol.toml").write_text(spec.replace('odometer = "speed"', 'odometer = "wheel"'))
+    proc = run_cli(["solve", tmp_path / "drive.csv", "--spec", tmp_path / "nocol.toml", "--out",
+                    tmp_path / "t3.csv"])
+    assert_clean_failure(proc, EXIT_INPUT, r"wheel")
+
+
+def test_table_odometer_options_are_checked(tmp_path):
+    from bvpnav.readers import read
+
+    t = [0.0, 0.1, 0.2, 0.3, 0.4]
+    path = tmp_path / "nav.csv"
+    path.write_text("t,acc_x,speed\n" + "".join(f"{a!r},0.0,1.0\n" for a in t))
+    with pytest.raises(InputError, match=r"odometer needs strapdown columns"):
+        read(path, {"odometer": "speed", "odometer_sigma": 0.1})
+    strap = {"specific_force": ["acc_x", "acc_x", "acc_x"], "gyro": ["acc_x", "acc_x", "acc_x"]}
+    with pytest.raises(InputError, match=r"\['odometer_sigma'\] without odometer = \"<column>\""):
+        read(path, {**strap, "odometer_sigma": 0.1})
+    with pytest.raises(InputError, match=r"odometer_lever = \[1, 2\]; give \[x, y, z\]"):
+        read(path, {**strap, "odometer": "speed", "odometer_sigma": 0.1, "odometer_lever": [1, 2]})
+    path.write_text("t,f_x,f_y,f_z,w_x,w_y,w_z,speed\n" + "".join(
+        f"{a!r},0.0,0.0,9.80665,0.0,0.0,0.0,{'x' if k == 3 else '1.0'}\n" for k, a in enumerate(t)))
+    strap = {"specific_force": ["f_x", "f_y", "f_z"], "gyro": ["w_x", "w_y", "w_z"]}
+    with pytest.raises(InputError, match=r"row 3 \(line 5\), column 'speed' is not a number \('x'\)"):
+        read(path, {**strap, "odometer": "speed", "odometer_sigma": 0.1})

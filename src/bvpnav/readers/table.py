@@ -12,6 +12,9 @@ axes, and perhaps an orientation (quaternion or Euler-angle columns), named in t
     attitude = { quaternion = ["qw", "qx", "qy", "qz"], scalar = "first" }   # optional
     attitude_frame = "enu"                   # what the orientation is relative to
     frame = "enu"                            # the navigation frame (or "ned")
+    odometer = "speed"                       # optional: a forward-speed column (m/s) ...
+    odometer_sigma = 0.05                    # ... its noise (m/s): an Odometer item
+    odometer_lever = [-1.2, 0.8, -0.4]       # ... measured at this point (body axes, m)
 
 Every check of the classic table is kept (see :meth:`TableReader.read`).
 """
@@ -37,6 +40,9 @@ GYRO_UNITS = {"rad/s": 1.0, "deg/s": 3.141592653589793 / 180.0}
 
 #: The strapdown keys of a table's ``[input]``.
 STRAPDOWN_KEYS = ("specific_force", "gyro", "gyro_unit", "attitude")
+
+#: The keys of an odometer column (strapdown tables only).
+ODOMETER_KEYS = ("odometer", "odometer_sigma", "odometer_lever")
 
 #: Leading bytes of file types that are sometimes renamed to .csv / .parquet.
 _MAGIC = (
@@ -481,7 +487,8 @@ def _numeric_column(df, col: str, tcol: str, tunit: str, unit: str, name: str, r
                                                  or pd.api.types.is_string_dtype(dtype)):
         raise InputError(f"{name}: column {col!r} holds {dtype} values; store "
                          + ("times as numbers in " + tunit if col == tcol else
-                            f"accelerations as numbers in {unit}") + " in that column")
+                            f"{'speeds' if unit == 'm/s' else 'accelerations'} as numbers in {unit}")
+                         + " in that column")
     if pd.api.types.is_complex_dtype(dtype):
         raise InputError(f"{name}: column {col!r} holds complex values; store real accelerations in "
                          f"{unit} in that column")
@@ -600,6 +607,42 @@ def _strapdown_roles(inp: Mapping[str, Any], name: str) -> tuple[dict, dict]:
     return roles, parsed
 
 
+def _odometer_option(inp: Mapping[str, Any], name: str, strap: bool):
+    """(column, sigma m/s, lever m) of an odometer column, or None when none is named."""
+    import math
+
+    given = [k for k in ODOMETER_KEYS if k in inp]
+    if not given:
+        return None
+    if "odometer" not in inp:
+        raise InputError(f"{name}: [input] {given} without odometer = \"<column>\"; name the forward-speed "
+                         "column (m/s) or drop them")
+    if not strap:
+        raise InputError(f"{name}: [input] odometer needs strapdown columns (specific_force with gyro or "
+                         "attitude): an odometer measures along the body axis, which navigation-frame "
+                         "accelerations do not know")
+    col, sigma = inp["odometer"], inp.get("odometer_sigma")
+    if not isinstance(col, str) or not col:
+        raise InputError(f"{name}: [input] odometer = {col!r}; give the forward-speed column's name")
+    if isinstance(sigma, bool) or not isinstance(sigma, int | float) or not (
+            math.isfinite(sigma) and sigma > 0):
+        raise InputError(f"{name}: [input] odometer_sigma = {sigma!r}; give the speed's noise, a positive "
+                         "number in m/s (the odometer column needs it)")
+    lever = inp.get("odometer_lever", [0.0, 0.0, 0.0])
+    if not (isinstance(lever, list | tuple) and len(lever) == 3 and all(
+            isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in lever)):
+        raise InputError(f"{name}: [input] odometer_lever = {lever!r}; give [x, y, z], the measured point "
+                         "relative to the IMU in body axes, m")
+    return col, float(sigma), tuple(float(v) for v in lever)
+
+
+def _odometer_item(odo, t, speed, path: Path):
+    from ..constraints import Odometer
+
+    col, sigma, lever = odo
+    return Odometer(t=t, speed=speed, sigma=sigma, lever=lever, name=f"{path.name} column {col}")
+
+
 def _attitude_from_columns(arrays: dict, spec: tuple, name: str, row_ref):
     """scipy Rotation per row from quaternion or Euler-angle columns, unit norms checked."""
     import numpy as np
@@ -639,7 +682,10 @@ def read_table(path: str | os.PathLike, input: Mapping[str, Any] | None = None) 
         navigation-frame acceleration; default every ``acc_<axis>`` column) or the strapdown
         columns ``specific_force`` (three columns, ``unit``), ``gyro`` (three columns,
         ``gyro_unit`` ``rad/s`` or ``deg/s``) and ``attitude`` (quaternion or Euler-angle
-        columns with their convention stated, see the module docstring).
+        columns with their convention stated, see the module docstring); with strapdown
+        columns, ``odometer`` names a forward-speed column (m/s, every row) that becomes an
+        :class:`~bvpnav.constraints.Odometer` item with ``odometer_sigma`` (m/s, required)
+        and ``odometer_lever`` ([x, y, z] m, body axes; default the IMU).
 
     Returns
     -------
@@ -676,6 +722,9 @@ def read_table(path: str | os.PathLike, input: Mapping[str, Any] | None = None) 
                          "specific-force columns: add specific_force = [\"f_x\", \"f_y\", \"f_z\"]")
     if strap:
         roles, parsed = _strapdown_roles(inp, name)
+    odo = _odometer_option(inp, name, strap)
+    if odo is not None:
+        roles["odometer"] = odo[0]
     df = _time_as_column(_read_table(p), tcol, name)
     _check_separator(df, name)
     if not strap:
@@ -687,6 +736,8 @@ def read_table(path: str | os.PathLike, input: Mapping[str, Any] | None = None) 
     row_ref = _row_ref(2 if p.suffix.lower() == ".csv" else None)  # header is line 1
     t_conv, zero = _time_seconds(df, tcol, tunit, origin, name, row_ref)
     units = {c: unit for c in roles.values()}
+    if odo is not None:
+        units[odo[0]] = "m/s"
     if strap:
         units.update({c: parsed["gyro_unit"] for c in parsed.get("gyro", ())})
         units.update({c: "(attitude)" for c in parsed.get("attitude", (None, ()))[1]})
@@ -706,7 +757,14 @@ def read_table(path: str | os.PathLike, input: Mapping[str, Any] | None = None) 
          if "gyro" in parsed else None)
     att = (_attitude_from_columns(arrays, parsed["attitude"], name, row_ref) if "attitude" in parsed
            else None)
-    return Recording(t=t, source=name, time_origin=zero, specific_force=f, gyro=w, attitude=att)
+    items, notes = (), ()
+    if odo is not None:
+        items = (_odometer_item(odo, t, arrays[odo[0]], p),)
+        notes = (f"Column {odo[0]!r}: {t.size} forward speeds (m/s) as an Odometer item along body x at the "
+                 f"lever {list(odo[2])} m, sigma {odo[1]:g} m/s; add [[error_model]] type = "
+                 "\"odometer_scale\" to estimate its scale factor.",)
+    return Recording(t=t, source=name, time_origin=zero, specific_force=f, gyro=w, attitude=att, items=items,
+                     notes=notes)
 
 
 class TableReader(Reader):
@@ -714,7 +772,8 @@ class TableReader(Reader):
 
     name = "table"
     suffixes = (".csv", ".parquet", ".pq")
-    options = frozenset({"time", "time_unit", "time_origin", "columns", "unit", *STRAPDOWN_KEYS})
+    options = frozenset({"time", "time_unit", "time_origin", "columns", "unit", *STRAPDOWN_KEYS,
+                         *ODOMETER_KEYS})
     description = "CSV or Parquet, one row per sample (time, acceleration or strapdown columns)"
 
     def sniff(self, head: bytes) -> bool:
