@@ -330,8 +330,8 @@ type = "odometer_scale"
 
 {fixes}"""
     (tmp_path / "spec.toml").write_text(spec)
-    rec = read(tmp_path / "drive.csv", {"time": "t", "specific_force": ["f_x", "f_y", "f_z"],
-                                        "attitude": {"quaternion": ["qx", "qy", "qz", "qw"], "scalar": "last"},
+    quat = {"quaternion": ["qx", "qy", "qz", "qw"], "scalar": "last"}
+    rec = read(tmp_path / "drive.csv", {"time": "t", "specific_force": ["f_x", "f_y", "f_z"], "attitude": quat,
                                         "attitude_frame": "enu", "odometer": "speed", "odometer_sigma": 0.05})
     (odo,) = rec.items
     assert odo.label == "drive.csv column speed" and odo.t.size == d.t.size
