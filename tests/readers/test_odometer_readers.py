@@ -331,8 +331,9 @@ type = "odometer_scale"
 {fixes}"""
     (tmp_path / "spec.toml").write_text(spec)
     quat = {"quaternion": ["qx", "qy", "qz", "qw"], "scalar": "last"}
-    rec = read(tmp_path / "drive.csv", {"time": "t", "specific_force": ["f_x", "f_y", "f_z"], "attitude": quat,
-                                        "attitude_frame": "enu", "odometer": "speed", "odometer_sigma": 0.05})
+    rec = read(tmp_path / "drive.csv", {"time": "t", "specific_force": ["f_x", "f_y", "f_z"],
+                                        "attitude": quat, "attitude_frame": "enu", "odometer": "speed",
+                                        "odometer_sigma": 0.05})
     (odo,) = rec.items
     assert odo.label == "drive.csv column speed" and odo.t.size == d.t.size
     np.testing.assert_allclose(odo.sigma, 0.05)
