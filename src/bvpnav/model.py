@@ -850,7 +850,7 @@ class NavModel:
         lev = np.asarray(lever, dtype=float).ravel()
         if lev.shape != (3,) or not np.all(np.isfinite(lev)):
             raise InputError(f"{what}: lever={lever!r}; give three finite numbers (body x, y, z) in m")
-        C = self._attitude_at(times)   # (m, 3, 3) body to navigation
+        C = self._attitude_at(times, what)   # (m, 3, 3) body to navigation
         m, nb = times.size, len(ax)
         vel = self.velocity(times, None, what)   # rows k * 3 + i
         Ct = np.transpose(C, (0, 2, 1))[:, ax, :]   # (m, nb, 3): rows of C^T
@@ -866,7 +866,7 @@ class NavModel:
             out = out + Affine(W @ rate.A, W @ rate.c)
         return Affine(out.A, out.c, TimeLabels("vb_", list(names), times))
 
-    def _attitude_at(self, times: np.ndarray) -> np.ndarray:
+    def _attitude_at(self, times: np.ndarray, what: str = "attitude") -> np.ndarray:
         """The data's attitude matrices (m, 3, 3) at ``times`` (s): the samples' own where a
         time is a sample, slerp between samples."""
         att = self.data.attitude

@@ -133,7 +133,8 @@ class OdometerScale(ErrorModel):
         from ..items import item_class
 
         Odometer = item_class("odometer")
-        t = np.asarray(t, dtype=float)
-        C = model._attitude_at(t)
+        t = np.asarray(t, dtype=float)   # sample times of the check data
+        k = np.clip(np.searchsorted(model.grid.t, t), 0, model.N - 1)
+        C = model.data.attitude[k].as_matrix()
         forward = np.einsum("kij,ki->kj", C, np.asarray(velocities, dtype=float))[:, 0]
         return [Odometer(t=t, speed=forward / (1.0 + values[NAME]), mode="hard", name="check odometer")]
