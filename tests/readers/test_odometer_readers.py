@@ -212,6 +212,13 @@ def test_nmea_bad_speed_is_refused_naming_the_line(tmp_path):
     path = _nmea_log(tmp_path, vtg_speed="-3.0")
     with pytest.raises(InputError, match=r"line 9: the VTG speed over ground '-3.0' is not a speed"):
         read(path, {"format": "nmea", "speed_as": "odometer"})
+    from bvpnav.readers.nmea import format_gga
+
+    bare = tmp_path / "bare.nmea"
+    bare.write_text("".join(format_gga(43200.0 + k, 48.1, 11.5, 520.0) + "\r\n" for k in range(3)))
+    with pytest.raises(InputError, match=r"bare.nmea: \[input\] speed_as = \"odometer\", but the log has no "
+                       r"usable speed over ground in RMC or VTG sentences .*\(no RMC or VTG sentence\)"):
+        read(bare, {"format": "nmea", "speed_as": "odometer"})
     with pytest.raises(InputError, match=r"speed_as = 'wheel'"):
         read(path, {"format": "nmea", "speed_as": "wheel"})
     with pytest.raises(InputError, match=r"odometer_lever = \[1, 2\]"):

@@ -546,6 +546,11 @@ class NmeaReader(Reader):
         t_fix = (np.asarray(ft, dtype=np.int64) - n0) * 1e-9
         items = [self._position(t_fix, xyz, sigma, path)]
         keep = [i for i, n in enumerate(vt) if n >= n0]
+        if cfg.speed_as == "odometer" and cfg.velocity and not keep:
+            why = _count(vdrops) or "no RMC or VTG sentence"
+            raise InputError(f"{path}: [input] speed_as = \"odometer\", but the log has no usable speed over "
+                             f"ground in RMC or VTG sentences at or after the first fix ({why}); drop "
+                             "speed_as or give a log with them")
         if keep:
             vv = np.array([vel[i] for i in keep])
             t_vel = (np.asarray([vt[i] for i in keep], dtype=np.int64) - n0) * 1e-9
