@@ -441,6 +441,12 @@ class Formulation:
                         "fills in the priors a gyro error model does not state"
                         + ("" if self.grade is None else f" (this problem's grade "
                            f"{self.grade.name!r} left these undetermined: give priors or more items)") + ".")
+            # a model observed by its own kind of item says which (OdometerScale: Odometer items)
+            comps = getattr(self.error_model, "components", (self.error_model,)) if params else ()
+            for c in comps:
+                own = getattr(c, "observability_hint", None)
+                if own and any(f"parameter {n}" in m for n in c.names(self.data) for m in missing):
+                    hint += " " + own
             raise InputError(
                 "not enough information: nothing determines " + "; ".join(missing)
                 + ". Add items (e.g. Position at an end for an offset, a second Position or a "

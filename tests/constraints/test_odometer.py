@@ -281,3 +281,16 @@ def test_the_reported_standard_deviation_covers_the_error():
     z = np.array(z)
     assert 0.57 < np.sqrt(np.mean(z**2)) < 1.43, z
     assert abs(z.mean()) < 0.82, z
+
+
+def test_a_scale_without_odometer_items_is_refused_saying_what_observes_it():
+    t = np.linspace(0.0, 10.0, 101)
+    data = ImuData.from_gyro(t, np.tile([0.5, 0.0, 9.80665], (t.size, 1)), np.zeros((t.size, 3)))
+    prob = NavigationProblem(data, error_model=OdometerScale()).add(Position(t=[0.0, 10.0], value=0.0))
+    with pytest.raises(InputError, match=r"nothing determines parameter odometer_scale.*observed only by "
+                                         r"Odometer items"):
+        prob.solve(solver="direct")
+    # unscaled readings do not observe it either
+    prob.add(Odometer(t=[5.0], speed=[2.5], sigma=0.1, scaled=False))
+    with pytest.raises(InputError, match=r"nothing determines parameter odometer_scale"):
+        prob.solve(solver="direct")

@@ -61,6 +61,10 @@ class OdometerScale(ErrorModel):
     #: A model of another sensor than the IMU: its prior does not stop a sensor grade from
     #: filling in the IMU models' priors (:class:`bvpnav.NavigationProblem`'s ``grade``).
     other_sensor = True
+    #: Added to the error when nothing determines the scale.
+    observability_hint = ("The odometer scale is observed only by Odometer items (scaled=True), beside "
+                          "information that fixes the distance travelled (position fixes): add them, or "
+                          "drop OdometerScale.")
     #: What the solve's plausibility check judges the estimate as.
     plausibility_kind = "odometer_scale"
 
