@@ -379,3 +379,56 @@ def test_table_odometer_options_are_checked(tmp_path):
     strap = {"specific_force": ["f_x", "f_y", "f_z"], "gyro": ["w_x", "w_y", "w_z"]}
     with pytest.raises(InputError, match=r"row 3 \(line 5\), column 'speed' is not a number \('x'\)"):
         read(path, {**strap, "odometer": "speed", "odometer_sigma": 0.1})
+
+
+def test_a_bag_with_wheel_odometry_to_the_scale(tmp_path, ros):
+    """A ROS 2 bag of a noise-free car: Imu (specific force, gyro, orientation), NavSatFix every
+    5 s and nav_msgs/Odometry at 10 Hz whose forward twist reads 2 % high; read with
+    odometry_as = "odometer", solved with OdometerScale: the scale within 1e-6 (the readings are the
+    car's true speeds, not the FEM's own at 10 Hz; measured 8.7e-8)."""
+    pytest.importorskip("pymap3d")
+    from bvpnav import NavigationProblem
+    from bvpnav.error_models import OdometerScale
+    from bvpnav.readers import read
+    from bvpnav.readers.rosbag import IMU_TYPE, NAVSATFIX_TYPE, ODOMETRY_TYPE, _enu_to_geodetic
+    from bvpnav.scenarios import car_drive
+
+    d = car_drive(duration=60.0, rate=10.0, seed=6)
+    origin = (48.1, 11.5, 500.0)
+    vec, quat = ros["geometry_msgs/msg/Vector3"], ros["geometry_msgs/msg/Quaternion"]
+    q = d.attitude.as_quat()
+    ns = START + np.round(d.t * 1e9).astype(np.int64)
+    imu = [(int(n) + 1000, ros[IMU_TYPE](
+        header=_header(ros, int(n), "imu"), orientation=quat(*q[k]), orientation_covariance=np.zeros(9),
+        angular_velocity=vec(*d.body_rate_true[k]), angular_velocity_covariance=np.zeros(9),
+        linear_acceleration=vec(*d.specific_force_true[k]), linear_acceleration_covariance=np.zeros(9)),
+        IMU_TYPE) for k, n in enumerate(ns)]
+    fk = np.arange(0, d.t.size, 50)
+    lat, lon, h = _enu_to_geodetic(d.position[fk], origin)
+    status = ros["sensor_msgs/msg/NavSatStatus"]
+    fix = [(int(ns[k]) + 2000, ros[NAVSATFIX_TYPE](
+        header=_header(ros, int(ns[k]), "gnss"), status=status(status=0, service=1), latitude=float(lat[j]),
+        longitude=float(lon[j]), altitude=float(h[j]), position_covariance=np.diag([0.01] * 3).ravel(),
+        position_covariance_type=2), NAVSATFIX_TYPE) for j, k in enumerate(fk)]
+    forward = np.einsum("kij,ki->kj", d.attitude.as_matrix(), d.velocity)[:, 0]
+    cov = np.zeros(36)
+    cov[0] = 0.05**2
+    odom = [(int(ns[k]) + 3000, ros[ODOMETRY_TYPE](
+        header=_header(ros, int(ns[k]), "odom"), child_frame_id="base_link",
+        pose=ros["geometry_msgs/msg/PoseWithCovariance"](
+            pose=ros["geometry_msgs/msg/Pose"](position=ros["geometry_msgs/msg/Point"](0.0, 0.0, 0.0),
+                                               orientation=quat(0.0, 0.0, 0.0, 1.0)),
+            covariance=np.zeros(36)),
+        twist=ros["geometry_msgs/msg/TwistWithCovariance"](
+            twist=ros["geometry_msgs/msg/Twist"](linear=vec(1.02 * forward[k], 0.0, 0.0),
+                                                 angular=vec(0, 0, 0)),
+            covariance=cov)), ODOMETRY_TYPE) for k in range(d.t.size)]
+    path = _write(tmp_path / "car", {"/imu": imu, "/fix": fix, "/odom": odom})
+    rec = read(path, {"format": "rosbag", "odometry_topic": "/odom", "odometry_as": "odometer",
+                      "origin": list(origin)})
+    fixes, odo = rec.items
+    assert isinstance(odo, Odometer) and odo.t.size == d.t.size
+    np.testing.assert_allclose(odo.sigma, 0.05)
+    prob = NavigationProblem(rec.imu_data(), error_model=OdometerScale(), items=rec.items)
+    sol = prob.solve(solver="direct")
+    assert abs(float(sol.error_params["odometer_scale"]) - 0.02) < 1e-6
