@@ -399,8 +399,10 @@ def _repr_value(v) -> str:
 
 def _short(v, n: int = 4) -> str:
     """A value shortened for a message: numbers with ``%g``, long arrays elided."""
-    if isinstance(v, str | bool | np.bool_):
-        return repr(bool(v)) if not isinstance(v, str) else repr(v)
+    if isinstance(v, str):
+        return repr(v)
+    if isinstance(v, bool | np.bool_):
+        return repr(bool(v))
     try:
         arr = np.asarray(v, dtype=float)
     except Exception:  # anything not numeric (it is only shown)
