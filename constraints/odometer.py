@@ -129,6 +129,7 @@ class Odometer(Item):
         object.__setattr__(self, "t", tt)
         object.__setattr__(self, "speed", s)
         object.__setattr__(self, "lever", lev)
+        object.__setattr__(self, "scaled", bool(self.scaled))
 
     def n_instants(self) -> int:
         return int(np.size(self.t))
@@ -149,7 +150,7 @@ class Odometer(Item):
         w = np.column_stack([0.01 * np.sin(t), 0.02 * np.cos(t), 0.1 + 0.05 * np.sin(0.5 * t)])
         return NavModel(ImuData.from_gyro(t, f, w))
 
-    def compile(self, model):
+    def compile(self, model) -> Affine:
         what = f"{self.identify()}(t=...)"
         vb = model.body_velocity(self.t, self.axis, self.lever, what)
         if not self.scaled:
