@@ -134,6 +134,15 @@ class Odometer(Item):
     def n_instants(self) -> int:
         return int(np.size(self.t))
 
+    @property
+    def heading_information(self) -> bool:
+        r"""A speed says nothing about the heading or the yaw rate: False, unless the lever puts
+        a body rate into the reading (:math:`(\omega \times \ell) \cdot u = \omega \cdot (\ell
+        \times u)`, e.g. a wheel beside the IMU feels the yaw rate), which the attitude loop's hold
+        of the yaw-rate gyro bias then leaves free."""
+        u = np.eye(3)[_BODY.index(self.axis)]
+        return bool(np.any(np.cross(self.lever, u)))
+
     @classmethod
     def example(cls) -> Odometer:
         """A valid instance for the window of :meth:`example_model`."""

@@ -318,3 +318,12 @@ def test_robust_mode_resists_a_wheel_spin(drive):
         assert sol.stats["verified"] is True
         err[mode] = abs(float(sol.error_params["odometer_scale"]) - SCALE)
     assert err["soft"] > 0.02 and err["robust"] < 0.005 and err["robust"] < 0.1 * err["soft"], err
+
+
+def test_heading_information_only_through_the_lever():
+    # a speed does not inform the yaw-rate gyro bias (the attitude loop may hold it); a wheel
+    # beside the IMU reads omega_z * lever_y and does
+    assert Odometer(t=[1.0], speed=[1.0], sigma=0.1).heading_information is False
+    assert Odometer(t=[1.0], speed=[1.0], sigma=0.1, lever=(-1.5, 0.0, -0.3)).heading_information is True
+    assert Odometer(t=[1.0], speed=[1.0], sigma=0.1, lever=(2.0, 0.0, 0.0)).heading_information is False
+    assert Odometer(t=[1.0], speed=[1.0], sigma=0.1, lever=(0.0, 0.8, 0.0)).heading_information is True
