@@ -235,7 +235,7 @@ def _window(sU: np.ndarray, k: np.ndarray, kl: int) -> np.ndarray:
 
 
 class _Steps:
-    """Factorizations of the Newton system for a diagonal :math:`\\Delta` of the inequality
+    r"""Factorizations of the Newton system for a diagonal :math:`\Delta` of the inequality
     rows' multipliers: the banded one of a :class:`MultiplierBand` when the rows allow,
     else a pivoted sparse LU of the augmented matrix per step."""
 
