@@ -74,7 +74,7 @@ from ..model import Cone
 from ..result import AttitudeLoopReport, Solution
 
 __all__ = ["with_attitude", "check_attitude", "ATTITUDE_DEFAULTS", "objective_value", "hold_yaw_rate",
-           "stance_turn_warnings", "TURN_CONFIRM_SIGMAS", "TURN_NEGLIGIBLE",
+           "stance_turn", "stance_turn_warnings", "TURN_CONFIRM_SIGMAS", "TURN_NEGLIGIBLE",
            "parts_warnings"]
 
 log = logging.getLogger(__name__)
@@ -507,8 +507,8 @@ def parts_warnings(parts: dict | None, q: int) -> list[str]:
     return out
 
 
-def stance_turn_warnings(form: Formulation, sol: Solution) -> list[str]:
-    r"""A warning when the heading change the gyro bias makes rests on the motion alone.
+def stance_turn(form: Formulation, sol: Solution) -> tuple[float, float, int, str] | None:
+    r"""The heading change the gyro bias makes and its uncertainty under what the stances state.
 
     Parameters
     ----------
@@ -519,8 +519,11 @@ def stance_turn_warnings(form: Formulation, sol: Solution) -> list[str]:
 
     Returns
     -------
-    list of str
-        Empty, or one message with the change and its uncertainty (deg).
+    (float, float, int, str) or None
+        The turn :math:`\Delta\psi` and its standard error :math:`\sigma_\psi` (deg), the number
+        of still intervals and the yaw-rate body axis; None without a ``GyroBias``, without
+        ``ZeroAngularRate`` items on every body axis, or when another item carries heading
+        information (:func:`hold_yaw_rate`'s rule).
 
     Notes
     -----
@@ -546,13 +549,13 @@ def stance_turn_warnings(form: Formulation, sol: Solution) -> list[str]:
     gyros = [c for c in getattr(form.error_model, "components", (form.error_model,))
              if _kind(c) == "gyro_bias" and callable(getattr(c, "bias", None))]
     if att is None or not gyros or getattr(data, "gravity", None) is None or data.n < 2:
-        return []
+        return None
     axis = "xyz"[int(np.argmax(np.abs(np.mean(np.asarray(data.specific_force, dtype=float), axis=0))))]
     if any(_informs_yaw_rate(it, axis) and not getattr(it, "zero_rate", False) for it in form.items):
-        return []  # other heading information: the motion's correction is not on its own
+        return None  # other heading information: the motion's correction is not on its own
     stated = _stance_rates(form.items, data)
     if stated is None or any(ax not in stated for ax in "xyz"):
-        return []
+        return None
     se = np.array([stated[ax][1] for ax in "xyz"])
     up = np.asarray(data.gravity, dtype=float).ravel()[:3]
     up = up / np.linalg.norm(up)
@@ -564,15 +567,27 @@ def stance_turn_warnings(form: Formulation, sol: Solution) -> list[str]:
         db += c.bias(sol, data) - c.bias(dict(zip(names, c.prior_values(data), strict=True)), data)
     turn = float(np.degrees(np.sum(rows * db)))
     sigma = float(np.degrees(np.linalg.norm(rows.sum(axis=0) * se)))
+    return turn, sigma, stated[axis][2], axis
+
+
+def stance_turn_warnings(form: Formulation, sol: Solution) -> list[str]:
+    """A warning when the heading change the gyro bias makes rests on the motion alone: the
+    turn of :func:`stance_turn` above :data:`TURN_NEGLIGIBLE` deg and within
+    :data:`TURN_CONFIRM_SIGMAS` of its standard error. Returns the messages (empty or one)."""
+    found = stance_turn(form, sol)
+    if found is None:
+        return []
+    turn, sigma, k, axis = found
     if abs(turn) <= TURN_NEGLIGIBLE or abs(turn) > TURN_CONFIRM_SIGMAS * sigma:
         return []
+    data = form.data
     span = float(data.t[-1] - data.t[0])
     return [f"attitude models: the still intervals do not confirm the heading the gyro bias gives: it turns "
             f"the heading by {turn:+.3g} deg over the {span:.4g} s against the bias at its prior, and what "
-            f"the {stated[axis][2]} still interval(s) state (ZeroAngularRate, their readings weighted by "
+            f"the {k} still interval(s) state (ZeroAngularRate, their readings weighted by "
             f"1/sigma^2) fixes that turn only to +-{sigma:.3g} deg ({abs(turn) / sigma:.2g} "
             f"standard errors, at most {TURN_CONFIRM_SIGMAS:g} is no evidence). With no other heading "
-            f"information the correction was set by the motion, which cannot tell a yaw-rate bias from its "
+            f"information nothing confirms the correction: the motion cannot tell a yaw-rate bias from its "
             f"own unmodelled errors (a foot's swing against a white sigma_a), so the heading may be worse "
             f"than without GyroBias by as much. Compare with the answer without the attitude models; hold "
             f"the yaw-rate bias (GyroBias(hold='{axis}')) or add heading information (a SamePosition of a "
