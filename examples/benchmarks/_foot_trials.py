@@ -58,7 +58,15 @@ objective parts show the gyro items rising while the motion's misfit falls (the 
 absorbs the swing's unmodelled errors: 6 walks incl. 11-35-59, where (7) is not worse; e.g.
 7584 -> 7721 against 5679 -> 3651 on 11-26-05), or the stance-reading check fires
 (11-50-42). 11-28-39 is worse by 1.06 deg of
-turn (within its stride-heading scatter of 0.7 deg) without a warning.
+turn (within its stride-heading scatter of 0.7 deg) without either; the attitude loop's
+unconfirmed-heading check (``bvpnav.solve.attitude.stance_turn``) names it: the bias turns
+the heading by +4.82 deg where the stances, weighted by their own spread, state that turn
+only to +-5.97 deg (0.81 standard errors). Measured again with that check (load 5-14): all 7
+walks where (7) is worse than (5) warn; the check fires for (7) on 6 of the 8 walks, turn /
+its standard error (deg): 11-28-39 +4.82/5.97, 11-35-59 -1.28/4.62 (where (7) is better by
+0.95 deg of turn), 11-50-42 -3.12/5.88, 11-51-23 +8.27/5.78, 11-52-02 -5.37/2.72 (1.98, at
+the limit of 2), 11-32-01 -8.21/14.04; not on 11-26-05 (-10.22/3.36) and 11-26-46
+(-9.14/3.66), which the parts check names.
 
 Column (6) is worse than (5)
 on 6 of 8 walks: a foot's detected stance still rolls (the mean gyro reading over the

@@ -74,6 +74,7 @@ from ..model import Cone
 from ..result import AttitudeLoopReport, Solution
 
 __all__ = ["with_attitude", "check_attitude", "ATTITUDE_DEFAULTS", "objective_value", "hold_yaw_rate",
+           "stance_turn", "stance_turn_warnings", "TURN_CONFIRM_SIGMAS", "TURN_NEGLIGIBLE",
            "parts_warnings"]
 
 log = logging.getLogger(__name__)
@@ -107,6 +108,16 @@ MAX_DAMPING = 1e12
 #: model holds, an attitude correction lowers both or moves either by about its parameter
 #: count.
 PARTS_CONFIDENCE = 0.999
+
+#: The heading change the gyro-bias correction makes over the recording is confirmed by the
+#: still intervals when it exceeds this many of its standard errors under what they state
+#: (see :func:`stance_turn_warnings`; 2: about 95 %).
+TURN_CONFIRM_SIGMAS = 2.0
+
+#: A heading change below this, deg, is not reported unconfirmed: half a degree is below the
+#: heading any pedestrian reference resolves (a magnetometer's 1-2 degrees, the scatter of a
+#: walker's stride headings), so it cannot make an answer noticeably worse.
+TURN_NEGLIGIBLE = 0.5
 
 
 def check_attitude(options: dict | None) -> dict:
@@ -496,6 +507,93 @@ def parts_warnings(parts: dict | None, q: int) -> list[str]:
     return out
 
 
+def stance_turn(form: Formulation, sol: Solution) -> tuple[float, float, int, str] | None:
+    r"""The heading change the gyro bias makes and its uncertainty under what the stances state.
+
+    Parameters
+    ----------
+    form : Formulation
+        The formulation the attitude loop solved (its items, data and error model).
+    sol : Solution
+        Its answer, with ``attitude`` (the attitude used) and the gyro bias totals.
+
+    Returns
+    -------
+    (float, float, int, str) or None
+        The turn :math:`\Delta\psi` and its standard error :math:`\sigma_\psi` (deg), the number
+        of still intervals and the yaw-rate body axis; None without a ``GyroBias``, without
+        ``ZeroAngularRate`` items on every body axis, or when another item carries heading
+        information (:func:`hold_yaw_rate`'s rule).
+
+    Notes
+    -----
+    The correction turns the heading, against the gyro bias at its prior, by
+
+    .. math:: \Delta\psi = \sum_k u^T C_k\,(b_k - b^0_k)\,\Delta t_k,
+
+    :math:`u` the vertical (along gravity), :math:`C_k` the attitude, :math:`b_k` the bias.
+    Where the still intervals (``ZeroAngularRate``) are the only items that carry heading
+    information (:func:`hold_yaw_rate`'s rule), they state the bias per body axis with a
+    standard error :math:`s_j` (:func:`bvpnav.solve.plausibility._stance_rates`: the readings
+    weighted by the items' own :math:`1/\sigma^2`, scaled by their scatter), so the turn with
+    :math:`\sigma_\psi = \sqrt{\sum_j (g_j s_j)^2}`, :math:`g = \sum_k C_k^T u\,\Delta t_k`.
+    When :math:`|\Delta\psi| \le` :data:`TURN_CONFIRM_SIGMAS` :math:`\sigma_\psi` (and above
+    :data:`TURN_NEGLIGIBLE`), the stances cannot tell the correction from none: it was set by
+    the motion, which cannot tell a yaw-rate bias from its own unmodelled errors (a foot's
+    swing against a white ``sigma_a``), and the heading may be worse than without the model.
+    """
+    from .plausibility import _kind, _stance_rates
+
+    data = form.data
+    att = getattr(sol, "attitude", None)
+    gyros = [c for c in getattr(form.error_model, "components", (form.error_model,))
+             if _kind(c) == "gyro_bias" and callable(getattr(c, "bias", None))]
+    if att is None or not gyros or getattr(data, "gravity", None) is None or data.n < 2:
+        return None
+    axis = "xyz"[int(np.argmax(np.abs(np.mean(np.asarray(data.specific_force, dtype=float), axis=0))))]
+    if any(_informs_yaw_rate(it, axis) and not getattr(it, "zero_rate", False) for it in form.items):
+        return None  # other heading information: the motion's correction is not on its own
+    stated = _stance_rates(form.items, data)
+    if stated is None or any(ax not in stated for ax in "xyz"):
+        return None
+    se = np.array([stated[ax][1] for ax in "xyz"])
+    up = np.asarray(data.gravity, dtype=float).ravel()[:3]
+    up = up / np.linalg.norm(up)
+    dt = np.gradient(np.asarray(data.t, dtype=float))
+    rows = np.einsum("nij,i->nj", att.as_matrix(), up) * dt[:, None]  # u^T C_k dt_k, per sample
+    db = np.zeros((data.n, 3))
+    for c in gyros:
+        names = c.names(data)
+        db += c.bias(sol, data) - c.bias(dict(zip(names, c.prior_values(data), strict=True)), data)
+    turn = float(np.degrees(np.sum(rows * db)))
+    sigma = float(np.degrees(np.linalg.norm(rows.sum(axis=0) * se)))
+    return turn, sigma, stated[axis][2], axis
+
+
+def stance_turn_warnings(form: Formulation, sol: Solution) -> list[str]:
+    """A warning when the heading change the gyro bias makes rests on the motion alone: the
+    turn of :func:`stance_turn` above :data:`TURN_NEGLIGIBLE` deg and within
+    :data:`TURN_CONFIRM_SIGMAS` of its standard error. Returns the messages (empty or one)."""
+    found = stance_turn(form, sol)
+    if found is None:
+        return []
+    turn, sigma, k, axis = found
+    if abs(turn) <= TURN_NEGLIGIBLE or abs(turn) > TURN_CONFIRM_SIGMAS * sigma:
+        return []
+    data = form.data
+    span = float(data.t[-1] - data.t[0])
+    return [f"attitude models: the still intervals do not confirm the heading the gyro bias gives: it turns "
+            f"the heading by {turn:+.3g} deg over the {span:.4g} s against the bias at its prior, and what "
+            f"the {k} still interval(s) state (ZeroAngularRate, their readings weighted by "
+            f"1/sigma^2) fixes that turn only to +-{sigma:.3g} deg ({abs(turn) / sigma:.2g} "
+            f"standard errors, at most {TURN_CONFIRM_SIGMAS:g} is no evidence). With no other heading "
+            f"information nothing confirms the correction: the motion cannot tell a yaw-rate bias from its "
+            f"own unmodelled errors (a foot's swing against a white sigma_a), so the heading may be worse "
+            f"than without GyroBias by as much. Compare with the answer without the attitude models; hold "
+            f"the yaw-rate bias (GyroBias(hold='{axis}')) or add heading information (a SamePosition of a "
+            f"loop, positions at other instants)"]
+
+
 def _warn(sol: Solution, msg: str) -> None:
     sol.warnings.append(msg)
     warn(msg)
@@ -726,6 +824,8 @@ def with_attitude(inner: Stage) -> Stage:
             _warn(sol, msg)
         totals = {n: float(sol.error_params[n]) for n in loop.names}
         sol.attitude = reintegrate(form.data, form.error_model, totals).attitude
+        for msg in stance_turn_warnings(form, sol):
+            _warn(sol, msg)
         report = AttitudeLoopReport(
             kind="attitude", iterations=iters, converged=converged, reason=reason or "max_iter",
             tol=float(o["tol"]),

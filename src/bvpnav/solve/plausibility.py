@@ -127,11 +127,15 @@ GYRO_TURN_RATE = 0.05
 #: what the user's own datasheet allows: no warning against the mean rate then.
 GYRO_PRIOR_SIGMAS = 3.0
 
-#: A gyro bias within this many standard errors of the mean gyro reading in the stances
-#: (``ZeroAngularRate`` items: the body does not turn there, so the gyro reads its bias)
-#: is what the stances show: no warning against the whole recording's mean rate then. The
-#: standard error is that of the per-interval means (their scatter over the square root of
-#: their number), floored at 1e-6 rad/s.
+#: A gyro bias within this many standard errors of the bias the still intervals state
+#: (``ZeroAngularRate`` items: the body does not turn there, so the gyro reads its bias) is
+#: what the stances show: no warning against the whole recording's mean rate then; beyond,
+#: a warning. The stated bias is the mean of the readings weighted by the items' own
+#: ``1 / sigma^2`` (per sample and axis, e.g. ``angular_rate="spread"``), its standard error
+#: ``sqrt(1 / sum(1 / sigma^2))``, scaled up when the intervals scatter more than that
+#: (see :func:`_stance_rates`), floored at 1e-6 rad/s. Under the items' noise the
+#: difference to the solve's estimate has at most that standard error (the estimate uses
+#: the same rows and more), so 3 of them are exceeded with probability below 0.3 %.
 GYRO_STANCE_ERRORS = 3.0
 
 #: Gyro scale-factor limit (dimensionless): ``|s| > 0.1``. MEMS gyro scale errors are
@@ -440,32 +444,70 @@ def _mean_bias(c, sol: Solution, data, ax: str, vals: list[tuple[str, float]]) -
     return float(np.mean([v for _, v in vals]))
 
 
+def _stance_weights(it, k: int) -> np.ndarray | None:
+    """An item's per-row weights ``1 / sigma^2`` (rad/s)^-2 as ``(k, axes)``; None for hard rows.
+    A band's half-width ``tol`` stands for its sigma (the rows allow that much)."""
+    a = 3 if it.axes is None else len(it.axes)
+    try:
+        sig = it.weight_rows(k * a) if it.sigma is not None else it.tol_rows(k * a)
+    except Exception:  # noqa: BLE001 - the item's own compile names a bad sigma; weigh it equally here
+        sig = None
+    if sig is None:
+        return None
+    return 1.0 / np.square(np.asarray(sig, dtype=float).reshape(k, a))
+
+
 def _stance_rates(items, data) -> dict[str, tuple[float, float, int]] | None:
-    """Per body axis, the mean gyro reading over the intervals of the items that say the body
-    does not turn (``zero_rate = True``: ``ZeroAngularRate``), its standard error (rad/s)
-    and the number of intervals; None without such items or gyro rates."""
+    r"""Per body axis, the bias the still intervals state, its standard error (rad/s) and the
+    number of intervals; None without such intervals or gyro rates.
+
+    The intervals are those of the items that say the body does not turn (``zero_rate =
+    True``: ``ZeroAngularRate``). Each of their rows states ``omega_hat_i = b + e_i`` with
+    ``e_i`` of the row's sigma, so the bias they state is the weighted mean
+    ``m = sum(w_i omega_hat_i) / sum(w_i)``, ``w_i = 1 / sigma_i^2``, with the standard
+    error ``sqrt(1 / sum(w_i))``; when the intervals' own weighted means scatter more than
+    that allows (a foot rolls differently in each stance), the error is scaled by the
+    Birge ratio ``sqrt(chi2 / (K - 1))`` of the K interval means about ``m``
+    (``chi2 = sum_k W_k (m_k - m)^2``, ``W_k`` an interval's summed weight). Hard rows
+    outweigh any soft row: with hard items only those count, with equal weights, and the
+    error is the scatter alone. Floored at 1e-6 rad/s.
+    """
     gyro = getattr(data, "gyro", None)
     if gyro is None:
         return None
     w = np.asarray(gyro, dtype=float)
     t = np.asarray(data.t, dtype=float)
-    means: dict[str, list[float]] = {}
+    hard: dict[str, list[tuple[float, float]]] = {}
+    soft: dict[str, list[tuple[float, float]]] = {}
     for it in items:
         if not getattr(type(it), "zero_rate", False):
             continue
         t0, t1 = it.t
-        sel = (t >= t0 - 1e-9) & (t <= t1 + 1e-9)
-        if not sel.any():
+        tol = 1e-9 * max(1.0, abs(t0), abs(t1))
+        sel = (t >= t0 - tol) & (t <= t1 + tol)
+        k = int(sel.sum())
+        if not k:
             continue
-        for ax in (it.axes or ("x", "y", "z")):
-            means.setdefault(ax, []).append(float(w[sel, "xyz".index(ax)].mean()))
-    if not means:
-        return None
+        weights = _stance_weights(it, k)
+        for j, ax in enumerate(it.axes or ("x", "y", "z")):
+            rate = w[sel, "xyz".index(ax)]
+            if weights is None:  # (interval mean, its weight: the count of its rows)
+                hard.setdefault(ax, []).append((float(rate.mean()), float(k)))
+            else:
+                wk = weights[:, j]
+                soft.setdefault(ax, []).append((float(wk @ rate / wk.sum()), float(wk.sum())))
     out = {}
-    for ax, m in means.items():
-        se = float(np.std(m) / np.sqrt(len(m))) if len(m) > 1 else 0.0
-        out[ax] = (float(np.mean(m)), max(se, 1e-6), len(m))
-    return out
+    for ax in set(hard) | set(soft):
+        stated = ax not in hard
+        m_k, w_k = np.array(hard.get(ax) or soft[ax]).T
+        mean = float(w_k @ m_k / w_k.sum())
+        se = float(np.sqrt(1.0 / w_k.sum())) if stated else 0.0
+        if m_k.size > 1:
+            chi2 = float(w_k @ (m_k - mean) ** 2)
+            scatter = np.sqrt(chi2 / (m_k.size - 1) / w_k.sum())  # Birge-scaled error of the mean
+            se = max(se, float(scatter) if stated else float(np.std(m_k) / np.sqrt(m_k.size)))
+        out[ax] = (mean, max(se, 1e-6), int(m_k.size))
+    return out or None
 
 
 def _gyro_checks(sol: Solution, groups, data, items=()) -> list[str]:
@@ -503,7 +545,8 @@ def _gyro_checks(sol: Solution, groups, data, items=()) -> list[str]:
                     continue  # the bias is what the stances read: not turning mistaken for bias
                 msgs.append(
                     f"implausible estimate: gyro bias on axis {ax} {_fmt(b, 'rad/s')} differs from the "
-                    f"mean gyro reading in the {k_s} still interval(s) (ZeroAngularRate) "
+                    f"bias the {k_s} still interval(s) state (ZeroAngularRate: their gyro readings "
+                    f"weighted by 1/sigma^2) "
                     f"{_fmt(m_s, 'rad/s')} by {_fmt(b - m_s, 'rad/s')}, more than "
                     f"{GYRO_STANCE_ERRORS:g} standard errors ({_fmt(se, 'rad/s')}): where the body does "
                     "not turn the gyro reads its bias, so the estimate has absorbed something else (a "
