@@ -40,7 +40,18 @@ def _reference(rate: float):
     C g\rVert^2` has :math:`g = -\lambda C^T (I + \lambda C C^T)^{-1} d`: a 20 x 20 solve
     per lambda, so a dense sweep costs nothing. :math:`\rho = \lVert g \rVert`,
     :math:`\eta = \lVert d + C g \rVert` (bvpnav's :math:`\rho = \lVert M w\rVert` over all
-    rows, the end rows zero).
+    rows, the end rows zero). With the thin SVD :math:`C^T = U \Sigma V^T` and
+    :math:`z = V^T d`, :math:`V^T y = z / (1 + \lambda \sigma^2)`, so every sample of the curve
+    is a sum over the 20 singular values: :math:`\rho = \lambda \lVert \sigma z / (1 +
+    \lambda\sigma^2)\rVert`, :math:`\eta = \lVert z / (1 + \lambda\sigma^2)\rVert`.
+
+    Returns
+    -------
+    curve : callable
+        ``lams (L,) -> (rho (L,), eta (L,))``, vectorized over lambda.
+    at : callable
+        ``lam -> (rho, eta)`` or, with ``trajectory=True``, ``(rho, eta, r)``: the 20 x 20
+        solve and the trajectory at one lambda.
     """
     sc = tikhonov2011(rate=rate, seed=0)
     t, a = sc.t, sc.data.acc[:, 0]
@@ -66,15 +77,22 @@ def _reference(rate: float):
             return rho, eta
         return rho, eta, np.concatenate([[0.0], r0 + solve_banded((1, 1), band, g), [10.0]])
 
-    return at
+    _, s, vt = np.linalg.svd(C.T, full_matrices=False)
+    z = vt @ d
+
+    def curve(lams: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        q = 1.0 / (1.0 + np.multiply.outer(lams, s**2))   # (L, 20)
+        return lams * np.linalg.norm(s * z * q, axis=1), np.linalg.norm(z * q, axis=1)
+
+    return curve, at
 
 
-def _reference_corner(at, lo: float = 1e-6, hi: float = 1e6) -> tuple[float, float, float]:
+def _reference_corner(curve, lo: float = 1e-6, hi: float = 1e6) -> tuple[float, float, float]:
     """The maximiser of the reference's curvature of ``(log rho, log eta)`` (second-order
     differences on :data:`REFERENCE_PER_DECADE` samples per decade) and its two neighbours."""
     lams = np.geomspace(lo, hi, int(round(np.log10(hi / lo) * REFERENCE_PER_DECADE)) + 1)
     u = np.log(lams)
-    z, e = np.log(np.array([at(v) for v in lams])).T
+    z, e = np.log(curve(lams))
     z1, e1 = np.gradient(z, u, edge_order=2), np.gradient(e, u, edge_order=2)
     z2, e2 = np.gradient(z1, u, edge_order=2), np.gradient(e1, u, edge_order=2)
     kappa = (z1 * e2 - z2 * e1) / (z1**2 + e1**2) ** 1.5
@@ -113,11 +131,13 @@ def test_solve_and_lcurve_choose_the_same_lambda_at_the_reference_corner(tmp_pat
     assert ("lcurve: the corner chosen" in out) == faint, out
     assert any(w.startswith("lcurve: the corner chosen") for w in summary["warnings"]) == faint
 
-    at = _reference(rate)
-    best, low, high = _reference_corner(at)
+    curve, at = _reference(rate)
+    best, low, high = _reference_corner(curve)
     assert low <= lam_solve <= high, (lam_solve, best, low, high)
-    # the reference is the problem the CLI solved: its trajectory at the chosen lambda
-    _, _, r = at(lam_solve, trajectory=True)
+    # the reference is the problem the CLI solved: its trajectory at the chosen lambda, where
+    # the 20 x 20 solve and the SVD form of the curve agree
+    rho, eta, r = at(lam_solve, trajectory=True)
+    np.testing.assert_allclose(np.ravel(curve(np.array([lam_solve]))), [rho, eta], rtol=1e-8)
     x = pd.read_csv(tmp_path / "sol.csv")["x"].to_numpy()
     assert np.max(np.abs(x - r)) < 1e-6 * np.max(np.abs(r))
 
