@@ -160,9 +160,11 @@ def test_unit_conversions_g_and_ms(tmp_path):
 def test_batch_on_a_local_cluster_matches_serial_and_reports_a_bad_recording(tmp_path):
     recs = tmp_path / "recs"
     recs.mkdir()
-    for seed in range(8):
-        proc = run("simulate", "shuttle", "--out", tmp_path / f"s{seed}", "--seed", seed, "--quiet")
-        assert proc.returncode == 0, proc.stderr
+    from bvpnav.cli import main
+
+    for seed in range(8):  # the recordings (in this process: the batch below is the subject)
+        assert main(["simulate", "shuttle", "--out", str(tmp_path / f"s{seed}"), "--seed", str(seed),
+                     "--quiet"]) == 0
         (tmp_path / f"s{seed}" / "recording.csv").rename(recs / f"run{seed}.csv")
     (recs / "broken.csv").write_text("t,acc_x\n0,1\n0.1,nan\n0.2,3\n0.3,1\n")
     spec_path = tmp_path / "s0" / "spec.toml"
