@@ -67,12 +67,14 @@ def check_sequential(options: dict | None) -> dict:
 
 
 def _initial_trajectory(form: Formulation, initial, nonlin, inner: Stage, lam, opts
-                        ) -> tuple[pd.DataFrame, str]:
+                        ) -> tuple[pd.DataFrame, str, Solution | None]:
     t = form.model.grid.t
     axes = list(form.model.axes)
     if initial is None:
         skip = {id(it) for it in nonlin}
-        rest = [it for it in form.items if id(it) not in skip]
+        # an item may offer a stand-in for this phase (a delayed fix: the fix at its stamp)
+        rest = [it if id(it) not in skip else it.first_phase() for it in form.items]
+        rest = [it for it in rest if it is not None]
         sub = form.with_items(rest)
         missing = sub.unobservable()
         note = ""
@@ -90,16 +92,16 @@ def _initial_trajectory(form: Formulation, initial, nonlin, inner: Stage, lam, o
         if isinstance(lam, str) and not sub.has_soft_terms:
             lam = 1.0
         sol0 = inner(sub, lam, opts)
-        return sol0.trajectory[axes], "first phase: every item except the ones to linearize" + note
+        return sol0.trajectory[axes], "first phase: every item except the ones to linearize" + note, sol0
     if isinstance(initial, Solution):
-        return initial.trajectory[axes], "given Solution"
+        return initial.trajectory[axes], "given Solution", initial
     if isinstance(initial, pd.DataFrame):
-        return initial[axes], "given DataFrame"
+        return initial[axes], "given DataFrame", None
     p = np.asarray(initial, dtype=float)
     if p.shape != (t.size, len(axes)) or not np.all(np.isfinite(p)):
         raise InputError(f"initial: expected finite positions of shape ({t.size}, {len(axes)}) in m "
                          f"(one row per sample, columns {axes}), got shape {p.shape}")
-    return pd.DataFrame(p, index=pd.Index(t, name="t"), columns=axes), "given array"
+    return pd.DataFrame(p, index=pd.Index(t, name="t"), columns=axes), "given array", None
 
 
 def _continued(lin, lam_soft: float):
@@ -128,13 +130,13 @@ class _Loop:
         self.phases, self.counts, self.curve = [], {}, None
         self.soft = bool(self.cont)
 
-    def linearized_form(self, t, traj):
+    def linearized_form(self, t, traj, sol: Solution | None = None):
         items, sig = [], {}
         for it in self.form.items:
             if id(it) not in self.nonlin:
                 items.append(it)
                 continue
-            lin = it.linearized(t, traj)
+            lin = it.linearized_from(sol, t, traj)
             counts = lin.linearization_counts() if isinstance(lin, Linearizable) else None
             if counts is not None:
                 self.counts[it.label] = counts
@@ -181,7 +183,8 @@ def _not_converged(loop: _Loop) -> str:
             "or loosen tol (tol=, in m)")
 
 
-def _iterate(loop: _Loop, inner: Stage, opts: SolveOptions, traj: pd.DataFrame) -> tuple[Solution, bool]:
+def _iterate(loop: _Loop, inner: Stage, opts: SolveOptions, traj: pd.DataFrame,
+             sol: Solution | None = None) -> tuple[Solution, bool]:
     """Linearize and solve until the final phase converges or runs out of iterations."""
     t = loop.form.model.grid.t
     axes = list(loop.form.model.axes)
@@ -189,7 +192,7 @@ def _iterate(loop: _Loop, inner: Stage, opts: SolveOptions, traj: pd.DataFrame) 
     n_phase = 0
     with progress(desc="sequential loop", unit="iter", enabled=loop.o["progress"]) as bar:
         while True:
-            sub = loop.linearized_form(t, traj)
+            sub = loop.linearized_form(t, traj, sol)
             sol = inner(sub, loop.lam_soft if loop.soft else loop.lam_now, opts)
             prev = loop.note(sol, prev)
             traj = sol.trajectory[axes]
@@ -279,11 +282,11 @@ def with_sequential(inner: Stage) -> Stage:
             return inner(form, lam, opts, **kw)
         o = check_sequential(opts.sequential)
         t_start = time.perf_counter()
-        traj, origin = _initial_trajectory(form, o["initial"], nonlin, inner, lam, opts)
+        traj, origin, sol0 = _initial_trajectory(form, o["initial"], nonlin, inner, lam, opts)
         loop = _Loop(form, nonlin, o, lam)
         log.info("sequential loop over %s: initial estimate from %s; continuation for %s",
                  [it.label for it in nonlin], origin, sorted(loop.cont) or "none")
-        sol, converged = _iterate(loop, inner, opts, traj)
+        sol, converged = _iterate(loop, inner, opts, traj, sol0)
         seconds = time.perf_counter() - t_start
         sol.record(sequential=loop.report(converged, origin, seconds))
         log.info("sequential loop %s after %d iteration(s), %.3g s", "converged" if converged else
