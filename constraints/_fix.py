@@ -25,6 +25,7 @@ class _About(NamedTuple):
 
     delay: float
     rate: np.ndarray
+    outside: int = 0
 
 
 class GnssFix(Linearizable):
@@ -108,7 +109,8 @@ class GnssFix(Linearizable):
         out = copy.copy(self)
         tt = self.t - delay
         rate = np.column_stack([np.interp(tt, t, rate_nodes[:, a]) for a in axes_idx])
-        object.__setattr__(out, "_about", _About(float(delay), rate))
+        outside = int(np.sum((tt < t[0]) | (tt > t[-1])))
+        object.__setattr__(out, "_about", _About(float(delay), rate, outside))
         return out
 
     def _axes_idx(self, columns) -> list[int]:
@@ -118,6 +120,24 @@ class GnssFix(Linearizable):
         if bad:
             raise InputError(f"{self.identify()}: axes {bad} not in the trajectory's {cols}")
         return [cols.index(a) for a in names]
+
+    def linearization_counts(self) -> dict[str, int] | None:
+        """Fixes whose delayed time falls outside the window at this linearization (they are
+        linearized at the window's end), or None without an estimated delay."""
+        about = self.__dict__.get("_about")
+        if about is None:
+            return None
+        return {"outside the window": int(about.outside)}
+
+    def linearization_change(self, previous) -> float | None:
+        r"""The largest move of a fix's linearized rows between ``previous`` and this
+        linearization, item units: :math:`|\hat\delta - \hat\delta_{prev}|\,\max_k |\dot{\hat q}_k|`
+        (None when either has no linearization point or they hold other instants)."""
+        a, b = self.__dict__.get("_about"), getattr(previous, "__dict__", {}).get("_about")
+        if a is None or b is None or a.rate.shape != b.rate.shape:
+            return None
+        scale = max(float(np.max(np.abs(a.rate), initial=0.0)), float(np.max(np.abs(b.rate), initial=0.0)))
+        return abs(a.delay - b.delay) * scale
 
     def linearized(self, t, positions):
         """A copy linearized about positions (N, d) or a trajectory DataFrame (m): the rate
@@ -159,6 +179,10 @@ class GnssFix(Linearizable):
                              "linearize it first (item.linearized(t, positions))")
         shift = self.delay if isinstance(self.delay, float) else (about.delay if about is not None else 0.0)
         tt = self.t - shift
+        if about is not None:
+            # a linearization point may put a fix outside the window (an early estimate of the
+            # delay): it is linearized at the window's end, and counted (linearization_counts)
+            tt = np.clip(tt, model.grid.t[0], model.grid.t[-1])
         what = f"{ident}(t=...)" + (f" shifted by the delay {shift:g} s" if shift else "")
         if self.quantity == "position":
             rows = model.position(tt, self.axes, what=what)
@@ -187,7 +211,7 @@ class GnssFix(Linearizable):
         out = dataclasses.replace(self, t=self.t[keep], value=vals, sigma=sig, name=self.label)
         about = self.__dict__.get("_about")
         if about is not None:
-            object.__setattr__(out, "_about", _About(about.delay, about.rate[keep]))
+            object.__setattr__(out, "_about", _About(about.delay, about.rate[keep], about.outside))
         return out
 
     def _fix_math(self) -> str:

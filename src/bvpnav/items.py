@@ -391,6 +391,14 @@ class Linearizable:
         velocities)."""
         return self.linearized(t, trajectory)
 
+    def linearization_change(self, previous) -> float | None:
+        """How far this linearization moved from ``previous`` (the same item's previous
+        linearization), in the item's units: when every linearized item of the loop says less
+        than ``tol``, the last solve already answers the new linearization and the loop stops
+        without another solve. None (default): not measured (the loop judges by the change of
+        the positions)."""
+        return None
+
     def first_phase(self) -> Item | None:
         """The stand-in of this item in the loop's first phase (the solve that makes the
         initial estimate), or None (default) to leave it out of that phase."""

@@ -6,8 +6,11 @@ while it has no linearization point) and ``linearized(t, trajectory) -> Item`` (
 linearized about a trajectory estimate). The pipeline's sequential stage
 (:func:`with_sequential`) handles formulations with such items; it
 
-1. solves a first phase without those items (every other item kept) for the initial
-   estimate, unless ``initial`` is given;
+1. solves a first phase without those items (every other item kept, or the stand-in an
+   item offers with ``first_phase()``: a delayed fix at its stamp) for the initial
+   estimate, unless ``initial`` is given; called again within one solve on the same items
+   (by the attitude loop or the gating passes around it) it starts from its previous
+   answer instead;
 2. repeatedly linearizes every such item about the current estimate, solves the
    resulting convex problem, and stops when the largest position change between two
    iterations is below ``tol`` (m) or after ``max_iter`` solves;
@@ -129,6 +132,7 @@ class _Loop:
         self.max_change, self.rms_change, self.lams, self.modes, self.sigmas = [], [], [], [], []
         self.phases, self.counts, self.curve = [], {}, None
         self.soft = bool(self.cont)
+        self.current: dict = {}   # the latest linearization of each item, by label
 
     def linearized_form(self, t, traj, sol: Solution | None = None):
         items, sig = [], {}
@@ -137,6 +141,7 @@ class _Loop:
                 items.append(it)
                 continue
             lin = it.linearized_from(sol, t, traj)
+            self.current[it.label] = lin
             counts = lin.linearization_counts() if isinstance(lin, Linearizable) else None
             if counts is not None:
                 self.counts[it.label] = counts
@@ -183,6 +188,18 @@ def _not_converged(loop: _Loop) -> str:
             "or loosen tol (tol=, in m)")
 
 
+def _settled(before: dict, now: dict, tol: float) -> bool:
+    """Whether every item measures its linearization's move (``linearization_change``) and
+    each moved by less than ``tol`` (item units)."""
+    if set(before) != set(now):
+        return False
+    for label, lin in now.items():
+        change = lin.linearization_change(before[label]) if isinstance(lin, Linearizable) else None
+        if change is None or not change < tol:
+            return False
+    return True
+
+
 def _iterate(loop: _Loop, inner: Stage, opts: SolveOptions, traj: pd.DataFrame,
              sol: Solution | None = None) -> tuple[Solution, bool]:
     """Linearize and solve until the final phase converges or runs out of iterations."""
@@ -191,8 +208,15 @@ def _iterate(loop: _Loop, inner: Stage, opts: SolveOptions, traj: pd.DataFrame,
     prev = traj[axes].to_numpy()
     n_phase = 0
     with progress(desc="sequential loop", unit="iter", enabled=loop.o["progress"]) as bar:
+        before: dict | None = None
         while True:
             sub = loop.linearized_form(t, traj, sol)
+            if before is not None and not loop.soft and _settled(before, loop.current, loop.o["tol"]):
+                # every item's linearization moved by less than tol: the last solve answers it
+                loop.phases.append({"mode": "final", "iterations": n_phase, "tol": loop.o["tol"],
+                                    "converged": True, "by": "linearization change"})
+                return sol, True
+            before = dict(loop.current) if n_phase or not loop.soft else None
             sol = inner(sub, loop.lam_soft if loop.soft else loop.lam_now, opts)
             prev = loop.note(sol, prev)
             traj = sol.trajectory[axes]
@@ -275,6 +299,8 @@ def with_sequential(inner: Stage) -> Stage:
     ``soft_tol`` the requested mode is switched on and iterated to ``tol``.
     """
 
+    last: dict = {}   # the previous answer per set of items (the outer loops call this stage often)
+
     def stage(form: Formulation, lam, opts: SolveOptions, workspace=None) -> Solution:
         nonlin = form.nonlinear_items
         if not nonlin:   # a caller's workspace (a loop of same-pattern formulations) goes on down
@@ -282,13 +308,21 @@ def with_sequential(inner: Stage) -> Stage:
             return inner(form, lam, opts, **kw)
         o = check_sequential(opts.sequential)
         t_start = time.perf_counter()
-        traj, origin, sol0 = _initial_trajectory(form, o["initial"], nonlin, inner, lam, opts)
+        key = (form.model.N, tuple(it.label for it in nonlin))
+        if o["initial"] is None and key in last:
+            # called again by an outer loop (attitude steps, gating passes) on the same items:
+            # start from the previous answer instead of a first phase
+            sol0 = last[key]
+            traj, origin = sol0.trajectory[list(form.model.axes)], "the previous answer of this stage"
+        else:
+            traj, origin, sol0 = _initial_trajectory(form, o["initial"], nonlin, inner, lam, opts)
         loop = _Loop(form, nonlin, o, lam)
         log.info("sequential loop over %s: initial estimate from %s; continuation for %s",
                  [it.label for it in nonlin], origin, sorted(loop.cont) or "none")
         sol, converged = _iterate(loop, inner, opts, traj, sol0)
         seconds = time.perf_counter() - t_start
         sol.record(sequential=loop.report(converged, origin, seconds))
+        last[key] = sol
         log.info("sequential loop %s after %d iteration(s), %.3g s", "converged" if converged else
                  "did not converge", len(loop.max_change), seconds)
         if loop.rule is not None:
