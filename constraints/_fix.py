@@ -94,11 +94,17 @@ class GnssFix(Linearizable):
         return self.delay == ESTIMATED and "_about" not in self.__dict__
 
     def first_phase(self):
-        """The stand-in of the sequential loop's first phase: the fixes at their stamps (no
-        delay)."""
+        """The stand-in of the sequential loop's first phase: linearized at zero delay with the
+        rate of the fixes' own values (their differences in time), so that the delay is an
+        unknown of that phase too; with fewer than two fixes or values not given per fix,
+        the fixes at their stamps (no delay)."""
         out = copy.copy(self)
-        object.__setattr__(out, "delay", None)
         out.__dict__.pop("_about", None)
+        v = np.asarray(self.value, dtype=float)
+        if self.t.size >= 2 and v.ndim == 2 and v.shape[0] == self.t.size and np.all(np.diff(self.t) > 0):
+            object.__setattr__(out, "_about", _About(0.0, np.gradient(v, self.t, axis=0)))
+            return out
+        object.__setattr__(out, "delay", None)
         return out
 
     def _delay0(self) -> float:

@@ -37,6 +37,7 @@ import numpy as np
 import pandas as pd
 
 from ..items import Linearizable
+from ..log import warn
 from ..result import Solution
 from .options import SolveOptions
 
@@ -164,9 +165,13 @@ def _attach(sol: Solution, gated_items, kept, when, z, passes: int, settled: boo
     if rows:
         shown = ", ".join(f"{r['item']} t={r['t']:g} s (z={r['normalized']:.3g})" for r in rows[:20])
         more = f", ... {len(rows) - 20} more" if len(rows) > 20 else ""
-        sol.warnings.append(f"gating rejected {len(rows)} of {n_judged} fix(es) whose normalized residual "
-                            f"exceeds the gate: {shown}{more}; see Solution.rejected")
+        msg = (f"gating rejected {len(rows)} of {n_judged} fix(es) whose normalized residual exceeds the "
+               f"gate: {shown}{more}; see Solution.rejected")
+        sol.warnings.append(msg)
+        warn(msg)
     if not settled:
-        sol.warnings.append(f"gating did not settle in {passes} solves (MAX_PASSES): the rejected list is "
-                            "that of the last pass; check the fixes' sigma and the gate")
+        msg = (f"gating did not settle in {passes} solves (MAX_PASSES): the rejected list is that of the "
+               "last pass; check the fixes' sigma and the gate")
+        sol.warnings.append(msg)
+        warn(msg)
     return sol
