@@ -219,7 +219,8 @@ def test_clean_fixes_are_all_kept():
     prob, *_ = _gated_problem(n_bad=0)
     sol = prob.solve(solver="direct")
     assert sol.rejected is not None and len(sol.rejected) == 0
-    assert sol.stats["gating"] == {"passes": 1, "settled": True, "judged": 61, "rejected": 0, "items": ["gnss"]}
+    assert sol.stats["gating"] == {"passes": 1, "settled": True, "judged": 61, "rejected": 0,
+                                   "items": ["gnss"]}
     assert not any("gating" in w for w in sol.warnings)
 
 
