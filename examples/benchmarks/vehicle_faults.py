@@ -126,17 +126,26 @@ def run(grade: str, quality: str, duration: float, rate: float, seed: int = 0) -
     return out
 
 
-def print_table(results: list[dict]) -> None:
-    """The table of every configuration, then the acceptance checks."""
+def print_header() -> None:
     print(f"{'grade':>9} {'fixes':>15} {'lever x, y, z (std) m':>44} {'delay ms (std)':>15} "
           f"{'bad caught':>10} {'good rej.':>9} {'RMS clean':>9} {'RMS faults':>10} {'ratio':>6} "
           f"{'horiz. ratio':>12} {'time s':>13}")
+
+
+def print_row(r: dict) -> None:
+    """One configuration's row of the table (printed as soon as it is measured)."""
+    lev = ", ".join(f"{v:.3f} ({s:.3f})" for v, s in zip(r["lever"], r["lever_std"], strict=True))
+    delay = f"{1e3 * r['delay']:7.2f} ({1e3 * r['delay_std']:.2f})"
+    print(f"{r['grade']:>9} {r['quality']:>15} {lev:>44} {delay:>15} {r['caught']:>4}/{r['bad']:<5} "
+          f"{len(r['false']):>9} {r['rms_clean']:9.4f} {r['rms_faults']:10.4f} {r['ratio']:6.2f} "
+          f"{r['ratio_h']:12.2f} {r['seconds']['clean']:5.0f} +{r['seconds']['faults']:5.0f}", flush=True)
+
+
+def print_table(results: list[dict]) -> None:
+    """The table of every configuration, then the acceptance checks."""
+    print_header()
     for r in results:
-        lev = ", ".join(f"{v:.3f} ({s:.3f})" for v, s in zip(r["lever"], r["lever_std"], strict=True))
-        delay = f"{1e3 * r['delay']:7.2f} ({1e3 * r['delay_std']:.2f})"
-        print(f"{r['grade']:>9} {r['quality']:>15} {lev:>44} {delay:>15} {r['caught']:>4}/{r['bad']:<5} "
-              f"{len(r['false']):>9} {r['rms_clean']:9.4f} {r['rms_faults']:10.4f} {r['ratio']:6.2f} "
-              f"{r['ratio_h']:12.2f} {r['seconds']['clean']:5.0f} +{r['seconds']['faults']:5.0f}")
+        print_row(r)
     print("\nacceptance (issue 39): lever within 5 cm, delay within 5 ms, every outlier rejected and no good "
           "fix, RMS within 10 % of the clean run")
     for r in results:
@@ -158,14 +167,14 @@ def main(argv=None) -> list[dict]:
     print(f"car drive {a.duration:g} s at {a.rate:g} Hz, seed {a.seed}; lever {LEVER} m, delay "
           f"{1e3 * DELAY:g} ms, {100 * OUTLIERS:g} % outliers of 20-50 m, gate {GATE:g}")
     results = []
+    print_header()
     for grade in a.grade:
         for quality in a.quality:
             r = run(grade, quality, a.duration, a.rate, a.seed)
             results.append(r)
-            total = r["seconds"]["clean"] + r["seconds"]["faults"]
-            print(f"  done {grade} {quality}: {total:.0f} s", flush=True)
+            print_row(r)
     print()
-    print_table(results)
+    print_table(results)   # again, with the acceptance checks
     return results
 
 

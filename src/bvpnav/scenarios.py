@@ -759,6 +759,19 @@ class FaultyFixes:
     delay : float
         Delay of the stamps against the IMU clock, s (a fix stamped ``t`` is the antenna at
         ``t - delay``).
+
+    Examples
+    --------
+    Outliers are the fixes whose value differs from the clean one, by 20-50 m:
+
+    >>> import numpy as np
+    >>> from bvpnav.scenarios import car_drive, faulty_fixes
+    >>> fx = faulty_fixes(car_drive(duration=60.0, rate=10.0))
+    >>> off = np.linalg.norm(fx.position - fx.clean, axis=1)
+    >>> np.flatnonzero(off > 0).tolist() == fx.bad.tolist()
+    True
+    >>> bool(np.all((off[fx.bad] >= 20) & (off[fx.bad] <= 50)))
+    True
     """
 
     t: np.ndarray
