@@ -31,7 +31,7 @@ Run: ``python examples/benchmarks/vehicle_faults.py [--grade tactical consumer] 
 Measured (2026-12-04, seed 0, under load; the table with the 120 s runs is in
 ``docs/guide/strapdown.md``, section "Vehicles"), ``--duration 300 --rate 20 --grade tactical``::
 
-    fixes           lever x, y, z (std) m                        delay ms (std) caught good clean  faults ratio
+    fixes           lever x, y, z (std) m                        delay ms (std) caught good clean faults ratio
     RTK 0.05/0.1 m  0.976 (0.022), 0.035 (0.016), 0.034 (0.049)  49.38 (1.21)   15/15  0    0.0296 0.0527 1.78
     code 1/2 m      0.695 (0.285), 0.414 (0.199), 0.030 (0.050)  53.43 (16.11)  15/15  0    0.3692 0.6272 1.70
 
