@@ -5,15 +5,16 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from bvpnav.items import Item, as_values
+from bvpnav.items import Item
 
 from ._common import finite, times
+from ._fix import GnssFix
 
 __all__ = ["Position"]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class Position(Item):
+class Position(GnssFix, Item):
     r"""The position is known at one or many instants.
 
     Parameters
@@ -27,6 +28,20 @@ class Position(Item):
         len(t) == n_axes > 1 values is refused (write shape (len(t), n_axes)).
     axes, sigma, mode, huber, tol, name
         See :class:`bvpnav.items.Item`; ``sigma`` in m.
+    lever : (float, float, float) or "estimated", optional
+        The GNSS antenna's position relative to the IMU in the body frame, m: known, or
+        ``"estimated"`` (the :class:`~bvpnav.error_models.LeverArm` error model's unknowns).
+        Needs strapdown data (the attitude).
+    delay : float or "estimated", optional
+        The fixes' delay against the IMU clock, s: a fix stamped ``t_k`` holds the value at
+        ``t_k - delay``. Known, or ``"estimated"`` (the
+        :class:`~bvpnav.error_models.TimeOffset` error model's unknown, linearized by the
+        sequential loop).
+    gate : float, optional
+        Outlier gate: after a solve, a fix whose normalized residual (see
+        :func:`bvpnav.solve.gating.with_gating`) exceeds ``gate`` is rejected and the
+        problem solved again without it; every rejection is listed in
+        ``Solution.rejected`` and warned. Needs ``sigma``.
 
     Notes
     -----
@@ -52,11 +67,16 @@ class Position(Item):
 
     t: Any
     value: Any = 0.0
+    lever: Any = None
+    delay: Any = None
+    gate: Any = None
+    quantity = "position"
     units = "m"
 
     def validate(self) -> None:
         object.__setattr__(self, "t", times(self.t, self.label))
         object.__setattr__(self, "value", finite(self.value, self.label))
+        self._check_fix()
 
     def n_instants(self) -> int:
         """Number of instants (rows per axis)."""
@@ -74,13 +94,12 @@ class Position(Item):
         return cls(t=[0.0, 2.5, 6.0, 10.0], value=[0.0, 1.0, 2.0, 3.0])  # one per instant, any axes
 
     def compile(self, model):
-        ax = model.axes_of(self.axes, self.identify())
-        rows = model.position(self.t, self.axes, what=f"{self.identify()}(t=...)")
-        return rows - as_values(self.value, self.t.size, len(ax), f"{self.identify()}: value")
+        return self._fix_rows(model)
 
     def latex(self) -> str:
         """The residual's equation for ``describe(format="latex")`` (mathtext)."""
         return r"r(t_k) - p_k = 0"
 
     def math(self) -> str:
-        return f"r(t_k) - p_k = 0 at {self.t.size} instant(s)"
+        extra = self._fix_math()
+        return f"r(t_k){' ' + extra if extra else ''} - p_k = 0 at {self.t.size} instant(s)"

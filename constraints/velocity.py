@@ -5,15 +5,16 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from bvpnav.items import Item, as_values
+from bvpnav.items import Item
 
 from ._common import finite, times
+from ._fix import GnssFix
 
 __all__ = ["Velocity"]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class Velocity(Item):
+class Velocity(GnssFix, Item):
     r"""The velocity is known at one or many instants.
 
     Parameters
@@ -26,6 +27,20 @@ class Velocity(Item):
         len(t) == n_axes > 1 values is refused (write shape (len(t), n_axes)).
     axes, sigma, mode, huber, tol, name
         See :class:`bvpnav.items.Item`; ``sigma`` in m/s.
+    lever : (float, float, float) or "estimated", optional
+        The GNSS antenna's position relative to the IMU in the body frame, m: known, or
+        ``"estimated"`` (the :class:`~bvpnav.error_models.LeverArm` error model's unknowns).
+        Needs strapdown data (the attitude).
+    delay : float or "estimated", optional
+        The fixes' delay against the IMU clock, s: a fix stamped ``t_k`` holds the value at
+        ``t_k - delay``. Known, or ``"estimated"`` (the
+        :class:`~bvpnav.error_models.TimeOffset` error model's unknown, linearized by the
+        sequential loop).
+    gate : float, optional
+        Outlier gate: after a solve, a fix whose normalized residual (see
+        :func:`bvpnav.solve.gating.with_gating`) exceeds ``gate`` is rejected and the
+        problem solved again without it; every rejection is listed in
+        ``Solution.rejected`` and warned. Needs ``sigma``.
 
     Notes
     -----
@@ -52,11 +67,16 @@ class Velocity(Item):
 
     t: Any
     value: Any = 0.0
+    lever: Any = None
+    delay: Any = None
+    gate: Any = None
+    quantity = "velocity"
     units = "m/s"
 
     def validate(self) -> None:
         object.__setattr__(self, "t", times(self.t, self.label))
         object.__setattr__(self, "value", finite(self.value, self.label))
+        self._check_fix()
 
     def n_instants(self) -> int:
         """Number of instants (rows per axis)."""
@@ -68,13 +88,12 @@ class Velocity(Item):
         return cls(t=[0.0, 4.2, 10.0], value=0.5)
 
     def compile(self, model):
-        ax = model.axes_of(self.axes, self.identify())
-        rows = model.velocity(self.t, self.axes, what=f"{self.identify()}(t=...)")
-        return rows - as_values(self.value, self.t.size, len(ax), f"{self.identify()}: value")
+        return self._fix_rows(model)
 
     def latex(self) -> str:
         """The residual's equation for ``describe(format="latex")`` (mathtext)."""
         return r"v(t_k) - u_k = 0"
 
     def math(self) -> str:
-        return f"v(t_k) - u_k = 0 at {self.t.size} instant(s)"
+        extra = self._fix_math()
+        return f"v(t_k){' ' + extra if extra else ''} - u_k = 0 at {self.t.size} instant(s)"

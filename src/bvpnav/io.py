@@ -346,8 +346,9 @@ def plain_json(v):
 
 
 def summary(solution, problem) -> dict:
-    """A JSON-ready summary: lambda and rule, error-model estimates with units, solver
-    statistics and item residuals."""
+    """A JSON-ready summary: lambda and rule, error-model estimates with units (and standard
+    deviations with ``uncertainty``), solver statistics, item residuals and, with gated fixes,
+    the gating counts and every rejected fix."""
 
 
     units = {}
@@ -356,16 +357,21 @@ def summary(solution, problem) -> dict:
         for n in comp.names(problem.data):
             units[n] = getattr(comp, "units", "")
     st = solution.stats
+    std = solution.error_params_std
+    rejected = getattr(solution, "rejected", None)   # fixes gating rejected (Solution.rejected)
     keep = ("solver", "status", "verified", "accuracy", "iterations", "compile_time", "solve_time",
             "wall_time", "factorization", "verification", "attempts", "demoted", "sequential")
     return plain_json({
         "lam": solution.lam, "lam_rule": solution.lam_rule,
-        "error_model": {k: {"estimate": float(v), "units": units.get(k, "")}
+        "error_model": {k: {"estimate": float(v), "units": units.get(k, ""),
+                            **({"std": float(std[k])} if k in std.index else {})}
                         for k, v in solution.error_params.items()},
         "solver": {k: st.get(k) for k in keep if k in st},
         "items": solution.items.to_dict(orient="records"),
         "warnings": list(solution.warnings),
         **({"data_checks": st["data_checks"]} if st.get("data_checks") else {}),
+        **({"gating": st["gating"], "rejected": rejected.to_dict(orient="records")}
+           if rejected is not None else {}),
     })
 
 

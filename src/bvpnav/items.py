@@ -384,6 +384,26 @@ class Linearizable:
         """Per-row status counts of the linearization (e.g. rows kept or dropped), or None."""
         return None
 
+    def linearized_from(self, solution, t, trajectory) -> Item:
+        """A copy linearized about a solution (the previous iterate; None when the loop
+        starts from a given trajectory): by default :meth:`linearized` about its
+        positions. Override it to read more of the estimate (error-model parameters,
+        velocities)."""
+        return self.linearized(t, trajectory)
+
+    def linearization_change(self, previous) -> float | None:
+        """How far this linearization moved from ``previous`` (the same item's previous
+        linearization), in the item's units: when every linearized item of the loop says less
+        than ``tol``, the last solve already answers the new linearization and the loop stops
+        without another solve. None (default): not measured (the loop judges by the change of
+        the positions)."""
+        return None
+
+    def first_phase(self) -> Item | None:
+        """The stand-in of this item in the loop's first phase (the solve that makes the
+        initial estimate), or None (default) to leave it out of that phase."""
+        return None
+
 
 def _repr_value(v) -> str:
     """A field for a repr: up to 4 numbers as they are, more as ``<N values, lo .. hi>``."""

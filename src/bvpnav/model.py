@@ -898,6 +898,79 @@ class NavModel:
             return Affine(sp.csr_matrix((1, self.size)), np.ones(1), ("gain",))
         return comps[0].speed_gain(self)
 
+    # ------------------------------------------------ GNSS antenna and clock
+    def _provided(self, role: str, what: str, fix: str) -> list[str]:
+        """Names of the parameters of the error-model component that declares ``provides ==
+        role`` (:class:`~bvpnav.error_models.LeverArm`, :class:`~bvpnav.error_models.TimeOffset`),
+        or :class:`InputError` naming ``what`` and the fix."""
+        for comp in getattr(self.error_model, "components", (self.error_model,)):
+            if comp is not None and getattr(type(comp), "provides", None) == role:
+                return list(comp.names(self.data))
+        raise InputError(f"{what}: needs the error model {fix} (it holds the unknown); add it, e.g. "
+                         f"NavigationProblem(data, error_model=... + {fix}), or give the value as known")
+
+    def antenna_offset(self, t, lever, axes=None, *, rate: bool = False, what: str = "lever arm") -> Affine:
+        r"""Where the antenna is relative to the IMU, in the navigation frame: :math:`C(t)\,l`
+        (m) or, with ``rate``, its velocity :math:`C(t)\,(\omega(t) \times l)` (m/s); rows
+        time-major, then axis.
+
+        Parameters
+        ----------
+        t : array_like of float
+            Times, s, inside the window.
+        lever : array_like of 3 floats or ``"estimated"``
+            The lever arm in the body frame, m (known), or ``"estimated"``: the parameters
+            of the :class:`~bvpnav.error_models.LeverArm` error model (affine in them).
+        axes : str or sequence of str, optional
+            Navigation axes (default all).
+        rate : bool
+            The antenna's velocity relative to the IMU instead of its offset.
+        what : str
+            What asks (for error messages).
+
+        Notes
+        -----
+        :math:`C(t)` is the current attitude (the data's, or the attitude loop's estimate:
+        the rows are linear in :math:`l` for a given attitude and re-made at every step of
+        the loop); :math:`\omega(t)` the current corrected body rates, linear between samples.
+        """
+        times = as_times(t, what)
+        ax = self.axes_of(axes, what)
+        if not self.data.is_strapdown or self.d != 3:
+            raise InputError(f"{what}: a lever arm is in the body frame and needs the attitude; this data is "
+                             f"navigation-frame with axes {list(self.axes)} (no attitude). Build the data "
+                             "with bvpnav.ImuData.from_gyro (or with attitude=), or drop lever=")
+        R = self._attitude_at(times, what)
+        if rate:
+            point = getattr(self.data, "attitude_point", None)
+            rates = point.rates if point is not None else getattr(self.data, "gyro", None)
+            if rates is None:
+                raise InputError(f"{what}: the antenna's velocity needs the gyro rates; build the data with "
+                                 "bvpnav.ImuData.from_gyro")
+            P = self.grid.interpolation_matrix(times, what)
+            w = P @ np.asarray(rates, dtype=float)
+            skew = np.zeros((times.size, 3, 3))
+            skew[:, 0, 1], skew[:, 0, 2], skew[:, 1, 2] = -w[:, 2], w[:, 1], -w[:, 0]
+            skew[:, 1, 0], skew[:, 2, 0], skew[:, 2, 1] = w[:, 2], -w[:, 1], w[:, 0]
+            R = R @ skew
+        R = R[:, list(ax), :]                                   # (K, nax, 3): rows per time and axis
+        labels = TimeLabels("lever_" if not rate else "lever_v", [self.axes[a] for a in ax], times)
+        if isinstance(lever, str):
+            idx = self.l_index[[self.param_names.index(n) for n in self._provided("lever_arm", what,
+                                                                                   "LeverArm(sigma=...)")]]
+            A = sp.csr_matrix((R.ravel(), (np.repeat(np.arange(R.shape[0] * R.shape[1]), 3),
+                                           np.tile(idx, R.shape[0] * R.shape[1]))),
+                              shape=(R.shape[0] * R.shape[1], self.size))
+            return Affine(A, np.zeros(A.shape[0]), labels)
+        lv = np.asarray(lever, dtype=float).reshape(3)
+        return Affine(sp.csr_matrix((R.shape[0] * R.shape[1], self.size)), (R @ lv).ravel(), labels)
+
+    def time_offset(self, what: str = "time offset") -> Affine:
+        """The delay of the GNSS fixes against the IMU clock as one row (s): the parameter of
+        the :class:`~bvpnav.error_models.TimeOffset` error model, or :class:`InputError`
+        naming ``what`` when the problem has none."""
+        return self.params(self._provided("time_offset", what, "TimeOffset(sigma=...)"))
+
     def node_velocity(self, axis: int) -> Affine:
         """Velocity at every node of one axis (m/s)."""
         Vr, Va, Vb = self._node_vel

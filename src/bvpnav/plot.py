@@ -288,6 +288,34 @@ def _draw_items(items, axes: list, pos_ax: dict, vel_ax: dict, path_ax, t_range)
                     "none" if item.mode != "hard" else col)
 
 
+def _draw_rejected(sol, axes: list, pos_ax: dict, vel_ax: dict, path_ax) -> None:
+    """The fixes gating rejected (``sol.rejected``) as red crosses where their values are:
+    on the position (m) or velocity (m/s) panels, and on the path when both of its axes are
+    given."""
+    rej = getattr(sol, "rejected", None)
+    if rej is None or not len(rej):
+        return
+    label = f"rejected by gating ({len(rej)})"
+    for a in axes:
+        col = f"value_{a}"
+        if col not in rej:
+            continue
+        for units, panels in (("m", pos_ax), ("m/s", vel_ax)):
+            sel = (rej["units"] == units).to_numpy() & np.isfinite(rej[col].to_numpy(dtype=float))
+            if sel.any():
+                panels[a].plot(rej["t"].to_numpy()[sel], rej[col].to_numpy(dtype=float)[sel], "x",
+                               color="red", ms=7, mew=1.5, label=label, zorder=5)
+    if path_ax is not None:
+        h = getattr(path_ax, "_bvpnav_axes", axes[:2])
+        cols = [f"value_{a}" for a in h]
+        if all(c in rej for c in cols):
+            sel = (rej["units"] == "m").to_numpy()
+            xy = rej[cols].to_numpy(dtype=float)[sel]
+            ok = np.all(np.isfinite(xy), axis=1)
+            if ok.any():
+                path_ax.plot(xy[ok, 0], xy[ok, 1], "x", color="red", ms=7, mew=1.5, label=label, zorder=5)
+
+
 def _legend(ax, **kw) -> None:
     """A legend with one entry per label (items draw one artist per instant or axis)."""
     handles, labels = ax.get_legend_handles_labels()
@@ -322,7 +350,9 @@ def solution(sol, items=None, truth=None, label: str | None = None):
         eleven stances ``stance 0`` ... ``stance 10``), average velocities as segments over their intervals,
         stationary intervals shaded, symmetry centres as dotted lines, speed limits and
         position bounds as dashed limits, a :class:`~bvpnav.constraints.TrackLine` and the
-        positions given on both of its axes (fixes) on the path panel.
+        positions given on both of its axes (fixes) on the path panel. Fixes rejected by
+        gating (``sol.rejected``) are red crosses at their values, whether or not
+        ``items`` is given.
     truth : array_like or DataFrame, optional
         True positions (m) at the sample times, shape (N,) or (N, d), or a table with one
         column per axis (e.g. ``truth.csv`` written by ``bvpnav simulate``). For an x, y, z
@@ -408,6 +438,7 @@ def solution(sol, items=None, truth=None, label: str | None = None):
         err.set_xlabel("t (s)")
         err.legend(fontsize=7)
     _draw_items(items, axes, pos_ax, vel_ax, path, (float(t[0]), float(t[-1])))
+    _draw_rejected(sol, axes, pos_ax, vel_ax, path)
     for a in axes:
         _legend(pos_ax[a], fontsize=7)
         if len(vel_ax[a].get_legend_handles_labels()[1]) > 1:

@@ -544,6 +544,22 @@ def _error_table(sol) -> str:
     return _table(df, "error-params", left=("parameter", "units"))
 
 
+def _rejected(sol) -> str:
+    """The fixes gating rejected (:attr:`Solution.rejected`), one row each, or ''."""
+    rej = getattr(sol, "rejected", None)
+    if rej is None:
+        return ""
+    g = sol.stats.get("gating") or {}
+    if not len(rej):
+        return (f"<h3>Rejected fixes</h3><p>Gating kept every one of the {g.get('judged', '?')} fixes "
+                "judged.</p>")
+    head = (f"<p>Gating rejected {len(rej)} of {g.get('judged', '?')} fixes (normalized residual above the "
+            f"gate; {g.get('passes', '?')} solves{'' if g.get('settled', True) else ', NOT settled'}); "
+            "they are left out of the answer:</p>")
+    return "<h3>Rejected fixes</h3>" + head + _table(rej.rename(columns={"t": "t (s)"}), "rejected",
+                                                     left=("item", "units"))
+
+
 def _record(sol) -> str:
     s = sol.stats
     out = []
@@ -614,7 +630,7 @@ def render_html(sol, items=None, truth=None, title: str | None = None) -> str:
     sec = [f"<h1>{html.escape(title)}</h1>", "<h2 id='summary'>Summary</h2>", _summary(sol),
            "<h2 id='trajectory'>Trajectory</h2>", imgs.get("map", ""), imgs["solution"],
            "<h2 id='residuals'>Residuals</h2>", imgs.get("residuals", ""),
-           "<h3>Worst normalized residuals</h3>", _worst(sol, table),
+           "<h3>Worst normalized residuals</h3>", _worst(sol, table), _rejected(sol),
            "<h3>Items</h3>", _table(sol.items.drop(columns=["dual_rms"], errors="ignore"), "items",
                                     left=("item", "class", "mode", "kind", "units")),
            "<h2 id='sensor-errors'>Sensor errors</h2>", imgs.get("sensor_errors", ""), _error_table(sol)]

@@ -427,6 +427,9 @@ class SolveRecords:
         The sensor grade whose figures filled in missing error-model priors: ``name``,
         ``filled`` (one line per prior) and ``figures``
         (:attr:`bvpnav.formulation.Formulation.grade_report`); None when none were.
+    gating : dict or None
+        The gating stage's counts (passes, fixes judged and rejected, settled); None when
+        no item has a gate.
     """
 
     run: Run | None = None
@@ -439,6 +442,7 @@ class SolveRecords:
     plausibility: dict | None = None
     data_checks: dict | None = None
     grade: dict | None = None
+    gating: dict | None = None
 
     def stats(self) -> dict[str, Any]:
         """The ``Solution.stats`` dict (plain values: it is written to JSON by batch runs)."""
@@ -461,6 +465,8 @@ class SolveRecords:
             out["plausibility"] = dict(self.plausibility)
         if self.data_checks:
             out["data_checks"] = dict(self.data_checks)
+        if self.gating is not None:
+            out["gating"] = dict(self.gating)
         if self.grade is not None:
             out["grade"] = {"name": self.grade["name"], "filled": list(self.grade["filled"]),
                             "figures": dict(self.grade["figures"])}
@@ -572,6 +578,11 @@ class Solution:
     sigma_a : ndarray or None
         The accelerometer noise per axis, m/s^2, of the acceleration form (None for the
         load form); ``sigma_a_given`` says whether it was stated or is the default.
+    rejected : pandas.DataFrame or None
+        The fixes rejected by gating (items with ``gate``, :mod:`bvpnav.solve.gating`): one
+        row per fix with the item, ``t`` (s), ``value_<axis>``, ``residual_<axis>`` (item
+        units), ``normalized`` (the normalized residual), ``gate`` and ``pass``; empty when
+        every fix was kept, None when no item has a gate.
 
     Examples
     --------
@@ -613,6 +624,7 @@ class Solution:
     item_rows: dict = field(default_factory=dict, repr=False)
     sigma_a: np.ndarray | None = None
     sigma_a_given: bool = False
+    rejected: pd.DataFrame | None = None
     _cov: dict = field(default_factory=dict, repr=False)
     _formulation: Any = field(default=None, repr=False, compare=False)
 
@@ -788,6 +800,8 @@ class Solution:
             more = f", ... {len(ep) - 4} more" if len(ep) > 4 else ""
             est = ", ".join(f"{k} = {v:.4g}" for k, v in ep.head(4).items())
             lines.append(f"  error model: {est}{more}")
+        if self.rejected is not None and len(self.rejected):
+            lines.append(f"  {len(self.rejected)} fix(es) rejected by gating: see .rejected")
         if self.warnings:
             lines.append(f"  {len(self.warnings)} warning(s): see .warnings")
         return "\n".join(lines)

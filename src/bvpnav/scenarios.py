@@ -733,3 +733,127 @@ def car_drive(duration: float = 600.0, rate: float = 100.0, grade: str = "tactic
                     accel_bias=b_a, gyro_bias=b_g, initial_attitude_guess=guess,
                     attitude_correction=correction, fix_t=fix_t, fix_position=fix_pos,
                     fix_sigma=fix_sigma, grade=grade, params=params, _path=path)
+
+
+@dataclass(frozen=True, eq=False)
+class FaultyFixes:
+    """GNSS fixes of a :class:`CarDrive` with the faults of a real receiver (see
+    :func:`faulty_fixes`).
+
+    Attributes
+    ----------
+    t : ndarray (M,)
+        Fix stamps, s: the drive's fix times whose ``t - delay`` is inside the drive
+        (with a positive delay the fix at the start is left out).
+    position : ndarray (M, 3)
+        Antenna positions, m: the truth at ``t - delay`` moved by the lever arm, noise and
+        the outliers' offsets.
+    clean : ndarray (M, 3)
+        The same without the outliers' offsets, m.
+    bad : ndarray of int
+        Indices of the outlier fixes (sorted).
+    offset : ndarray (len(bad), 3)
+        The outliers' offsets, m.
+    lever : ndarray (3,)
+        Antenna position in the body frame, m.
+    delay : float
+        Delay of the stamps against the IMU clock, s (a fix stamped ``t`` is the antenna at
+        ``t - delay``).
+
+    Examples
+    --------
+    Outliers are the fixes whose value differs from the clean one, by 20-50 m:
+
+    >>> import numpy as np
+    >>> from bvpnav.scenarios import car_drive, faulty_fixes
+    >>> fx = faulty_fixes(car_drive(duration=60.0, rate=10.0))
+    >>> off = np.linalg.norm(fx.position - fx.clean, axis=1)
+    >>> np.flatnonzero(off > 0).tolist() == fx.bad.tolist()
+    True
+    >>> bool(np.all((off[fx.bad] >= 20) & (off[fx.bad] <= 50)))
+    True
+    """
+
+    t: np.ndarray
+    position: np.ndarray
+    clean: np.ndarray
+    bad: np.ndarray
+    offset: np.ndarray
+    lever: np.ndarray
+    delay: float
+
+
+def faulty_fixes(drive: CarDrive, lever=(1.0, 0.0, 0.0), delay: float = 0.05, outliers: float = 0.05,
+                 outlier_range=(20.0, 50.0), seed: int = 0) -> FaultyFixes:
+    r"""The drive's GNSS fixes as a receiver with an offset antenna, latency and outliers gives them.
+
+    Parameters
+    ----------
+    drive : CarDrive
+    lever : array_like (3,)
+        Antenna position relative to the IMU, body frame (x forward, y left, z up), m.
+    delay : float
+        Latency, s: the fix stamped :math:`t_k` is the antenna at :math:`t_k - \delta`
+        (with the drive's fix noise). Fixes whose :math:`t_k - \delta` is outside the
+        drive are left out.
+    outliers : float
+        Fraction of the fixes moved by 20-50 m (at least one when positive), drawn among
+        all but the first and last fix.
+    outlier_range : (float, float)
+        Size of the outliers' offsets, m (uniform; direction uniform on the sphere).
+    seed : int
+        Seed of the outliers' draw (the fix noise is the drive's own).
+
+    Returns
+    -------
+    FaultyFixes
+
+    Notes
+    -----
+    :math:`p_k = r(t_k - \delta) + C(t_k - \delta)\, l + n_k + o_k`, with the drive's
+    fix noise :math:`n_k` and the outlier offset :math:`o_k` (zero for good fixes). The
+    truth at a time between samples is :meth:`CarDrive.truth_at` and the attitude is
+    interpolated on the great circle.
+
+    Examples
+    --------
+    >>> from bvpnav.scenarios import car_drive, faulty_fixes
+    >>> fx = faulty_fixes(car_drive(duration=60.0, rate=10.0), delay=0.1)
+    >>> fx.bad.size, fx.lever.tolist(), fx.delay
+    (3, [1.0, 0.0, 0.0], 0.1)
+    >>> fx.t[:2].tolist()  # the fix at 0 s would hold the antenna before the drive
+    [1.0, 2.0]
+    """
+    from scipy.spatial.transform import Slerp
+
+    from .errors import InputError
+
+    lv = np.asarray(lever, dtype=float).ravel()
+    if lv.shape != (3,) or not np.all(np.isfinite(lv)):
+        raise InputError(f"lever={lever!r}: give (x, y, z) in m, body frame")
+    shifted = drive.fix_t - float(delay)
+    inside = (shifted >= drive.t[0] - 1e-12) & (shifted <= drive.t[-1] + 1e-12)
+    t = np.asarray(drive.fix_t, dtype=float)[inside]
+    if t.size < 3:
+        raise InputError(f"delay={delay!r} s leaves {t.size} fix(es) inside the drive; give a smaller delay")
+    if not 0.0 <= outliers < 1.0:
+        raise InputError(f"outliers={outliers!r}: a fraction in [0, 1)")
+    at = np.clip(t - float(delay), drive.t[0], drive.t[-1])
+    truth = drive.truth_at(at)
+    rot = Slerp(drive.t, drive.attitude)(at)
+    noise = drive.fix_position[inside] - drive.truth_at(t)   # the drive's own fix noise
+    clean = truth + rot.apply(lv) + noise
+    rng = np.random.default_rng(seed)
+    m = t.size
+    n_bad = 0 if outliers == 0 else max(1, int(round(outliers * m)))
+    bad = np.sort(rng.choice(np.arange(1, m - 1), size=n_bad, replace=False)) if n_bad else np.zeros(0, int)
+    dirs = rng.standard_normal((n_bad, 3))
+    dirs /= np.linalg.norm(dirs, axis=1)[:, None]
+    offset = dirs * rng.uniform(*outlier_range, n_bad)[:, None]
+    pos = clean.copy()
+    pos[bad] += offset
+    return FaultyFixes(t=t.copy(), position=pos, clean=clean, bad=bad, offset=offset, lever=lv.copy(),
+                       delay=float(delay))
+
+
+__all__ += ["FaultyFixes", "faulty_fixes"]

@@ -120,15 +120,17 @@ def test_the_fallback_chain_of_a_rule_is_the_users(spy, fallback, expected):
 
 
 def test_the_stages_compose_in_one_place():
-    """pipeline.run builds demote(attitude(sequential(rule(chain)))); no stage imports the problem."""
-    assert [s.__name__ for s in pipeline.STAGES] == ["with_demotion", "with_attitude", "with_sequential",
-                                                     "with_rule"]
+    """pipeline.run builds gate(demote(attitude(sequential(rule(chain))))); no stage imports the
+    problem."""
+    assert [s.__name__ for s in pipeline.STAGES] == ["with_gating", "with_demotion", "with_attitude",
+                                                     "with_sequential", "with_rule"]
     import bvpnav.solve.attitude as a
     import bvpnav.solve.conflicts as c
+    import bvpnav.solve.gating as g
     import bvpnav.solve.rule as r
     import bvpnav.solve.sequential as s
 
-    for mod in (a, c, r, s, chain):
+    for mod in (a, c, g, r, s, chain):
         assert "NavigationProblem" not in vars(mod), mod.__name__
 
 

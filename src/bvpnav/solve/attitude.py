@@ -69,6 +69,7 @@ from ..error_models._attitude import (
 )
 from ..errors import InputError
 from ..formulation import Formulation
+from ..items import Linearizable
 from ..log import progress, warn
 from ..model import Cone
 from ..result import AttitudeLoopReport, Solution
@@ -367,6 +368,12 @@ def _at_point(loop: _Loop, values: dict, at_values: Solution) -> Solution:
 
     form = loop._form(loop.data_at(values), loop.form.error_model)
     used = at_values.formulation
+    # items the sequential loop linearized (a delayed fix, a track) at their last linearization
+    lin = {it.label: it for it in used.items}
+    waiting = [isinstance(it, Linearizable) and it.needs_linearization for it in form.items]
+    if any(waiting):
+        form = form.with_items([lin.get(it.label, it) if w else it for it, w in zip(form.items, waiting,
+                                                                                  strict=True)])
     small, full = used.model, form.model
     x = np.zeros(full.size)
     head = full.d * full.block

@@ -1,7 +1,9 @@
 """The one place that knows the order of the solve stages.
 
-A solve is ``demote(attitude(sequential(rule(chain))))``:
+A solve is ``gate(demote(attitude(sequential(rule(chain)))))``:
 
+0. :func:`~bvpnav.solve.gating.with_gating` — fixes with a ``gate`` whose normalized
+   residual exceeds it are rejected (listed in ``Solution.rejected``) and the rest solved again;
 1. :func:`~bvpnav.solve.conflicts.with_demotion` — ``on_conflict="demote"``: conflicting
    hard items are made soft by priority until the rest holds;
 2. :func:`~bvpnav.solve.attitude.with_attitude` — error models acting on the attitude
@@ -46,6 +48,7 @@ from ..result import Solution
 from .attitude import with_attitude
 from .chain import solve_fixed
 from .conflicts import with_demotion
+from .gating import with_gating
 from .options import SolveOptions, prepare
 from .plausibility import attach as attach_plausibility
 from .rule import with_rule
@@ -55,7 +58,7 @@ from .uncertainty import attach_uncertainty
 __all__ = ["run", "solve", "solve_sequential", "STAGES"]
 
 #: The stages from the outside in (each wraps the next); the last is the innermost.
-STAGES = (with_demotion, with_attitude, with_sequential, with_rule)
+STAGES = (with_gating, with_demotion, with_attitude, with_sequential, with_rule)
 
 
 def run(form: Formulation, lam, opts: SolveOptions) -> Solution:

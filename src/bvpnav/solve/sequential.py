@@ -6,8 +6,11 @@ while it has no linearization point) and ``linearized(t, trajectory) -> Item`` (
 linearized about a trajectory estimate). The pipeline's sequential stage
 (:func:`with_sequential`) handles formulations with such items; it
 
-1. solves a first phase without those items (every other item kept) for the initial
-   estimate, unless ``initial`` is given;
+1. solves a first phase without those items (every other item kept, or the stand-in an
+   item offers with ``first_phase()``: a delayed fix at its stamp) for the initial
+   estimate, unless ``initial`` is given; called again within one solve on the same items
+   (by the attitude loop or the gating passes around it) it starts from its previous
+   answer instead;
 2. repeatedly linearizes every such item about the current estimate, solves the
    resulting convex problem, and stops when the largest position change between two
    iterations is below ``tol`` (m) or after ``max_iter`` solves;
@@ -67,12 +70,14 @@ def check_sequential(options: dict | None) -> dict:
 
 
 def _initial_trajectory(form: Formulation, initial, nonlin, inner: Stage, lam, opts
-                        ) -> tuple[pd.DataFrame, str]:
+                        ) -> tuple[pd.DataFrame, str, Solution | None]:
     t = form.model.grid.t
     axes = list(form.model.axes)
     if initial is None:
         skip = {id(it) for it in nonlin}
-        rest = [it for it in form.items if id(it) not in skip]
+        # an item may offer a stand-in for this phase (a delayed fix: the fix at its stamp)
+        rest = [it if id(it) not in skip else it.first_phase() for it in form.items]
+        rest = [it for it in rest if it is not None]
         sub = form.with_items(rest)
         missing = sub.unobservable()
         note = ""
@@ -90,16 +95,16 @@ def _initial_trajectory(form: Formulation, initial, nonlin, inner: Stage, lam, o
         if isinstance(lam, str) and not sub.has_soft_terms:
             lam = 1.0
         sol0 = inner(sub, lam, opts)
-        return sol0.trajectory[axes], "first phase: every item except the ones to linearize" + note
+        return sol0.trajectory[axes], "first phase: every item except the ones to linearize" + note, sol0
     if isinstance(initial, Solution):
-        return initial.trajectory[axes], "given Solution"
+        return initial.trajectory[axes], "given Solution", initial
     if isinstance(initial, pd.DataFrame):
-        return initial[axes], "given DataFrame"
+        return initial[axes], "given DataFrame", None
     p = np.asarray(initial, dtype=float)
     if p.shape != (t.size, len(axes)) or not np.all(np.isfinite(p)):
         raise InputError(f"initial: expected finite positions of shape ({t.size}, {len(axes)}) in m "
                          f"(one row per sample, columns {axes}), got shape {p.shape}")
-    return pd.DataFrame(p, index=pd.Index(t, name="t"), columns=axes), "given array"
+    return pd.DataFrame(p, index=pd.Index(t, name="t"), columns=axes), "given array", None
 
 
 def _continued(lin, lam_soft: float):
@@ -127,14 +132,16 @@ class _Loop:
         self.max_change, self.rms_change, self.lams, self.modes, self.sigmas = [], [], [], [], []
         self.phases, self.counts, self.curve = [], {}, None
         self.soft = bool(self.cont)
+        self.current: dict = {}   # the latest linearization of each item, by label
 
-    def linearized_form(self, t, traj):
+    def linearized_form(self, t, traj, sol: Solution | None = None):
         items, sig = [], {}
         for it in self.form.items:
             if id(it) not in self.nonlin:
                 items.append(it)
                 continue
-            lin = it.linearized(t, traj)
+            lin = it.linearized_from(sol, t, traj)
+            self.current[it.label] = lin
             counts = lin.linearization_counts() if isinstance(lin, Linearizable) else None
             if counts is not None:
                 self.counts[it.label] = counts
@@ -181,15 +188,35 @@ def _not_converged(loop: _Loop) -> str:
             "or loosen tol (tol=, in m)")
 
 
-def _iterate(loop: _Loop, inner: Stage, opts: SolveOptions, traj: pd.DataFrame) -> tuple[Solution, bool]:
+def _settled(before: dict, now: dict, tol: float) -> bool:
+    """Whether every item measures its linearization's move (``linearization_change``) and
+    each moved by less than ``tol`` (item units)."""
+    if set(before) != set(now):
+        return False
+    for label, lin in now.items():
+        change = lin.linearization_change(before[label]) if isinstance(lin, Linearizable) else None
+        if change is None or not change < tol:
+            return False
+    return True
+
+
+def _iterate(loop: _Loop, inner: Stage, opts: SolveOptions, traj: pd.DataFrame,
+             sol: Solution | None = None) -> tuple[Solution, bool]:
     """Linearize and solve until the final phase converges or runs out of iterations."""
     t = loop.form.model.grid.t
     axes = list(loop.form.model.axes)
     prev = traj[axes].to_numpy()
     n_phase = 0
     with progress(desc="sequential loop", unit="iter", enabled=loop.o["progress"]) as bar:
+        before: dict | None = None
         while True:
-            sub = loop.linearized_form(t, traj)
+            sub = loop.linearized_form(t, traj, sol)
+            if before is not None and not loop.soft and _settled(before, loop.current, loop.o["tol"]):
+                # every item's linearization moved by less than tol: the last solve answers it
+                loop.phases.append({"mode": "final", "iterations": n_phase, "tol": loop.o["tol"],
+                                    "converged": True, "by": "linearization change"})
+                return sol, True
+            before = dict(loop.current) if n_phase or not loop.soft else None
             sol = inner(sub, loop.lam_soft if loop.soft else loop.lam_now, opts)
             prev = loop.note(sol, prev)
             traj = sol.trajectory[axes]
@@ -272,6 +299,8 @@ def with_sequential(inner: Stage) -> Stage:
     ``soft_tol`` the requested mode is switched on and iterated to ``tol``.
     """
 
+    last: dict = {}   # the previous answer per set of items (the outer loops call this stage often)
+
     def stage(form: Formulation, lam, opts: SolveOptions, workspace=None) -> Solution:
         nonlin = form.nonlinear_items
         if not nonlin:   # a caller's workspace (a loop of same-pattern formulations) goes on down
@@ -279,13 +308,21 @@ def with_sequential(inner: Stage) -> Stage:
             return inner(form, lam, opts, **kw)
         o = check_sequential(opts.sequential)
         t_start = time.perf_counter()
-        traj, origin = _initial_trajectory(form, o["initial"], nonlin, inner, lam, opts)
+        key = (form.model.N, tuple(it.label for it in nonlin))
+        if o["initial"] is None and key in last:
+            # called again by an outer loop (attitude steps, gating passes) on the same items:
+            # start from the previous answer instead of a first phase
+            sol0 = last[key]
+            traj, origin = sol0.trajectory[list(form.model.axes)], "the previous answer of this stage"
+        else:
+            traj, origin, sol0 = _initial_trajectory(form, o["initial"], nonlin, inner, lam, opts)
         loop = _Loop(form, nonlin, o, lam)
         log.info("sequential loop over %s: initial estimate from %s; continuation for %s",
                  [it.label for it in nonlin], origin, sorted(loop.cont) or "none")
-        sol, converged = _iterate(loop, inner, opts, traj)
+        sol, converged = _iterate(loop, inner, opts, traj, sol0)
         seconds = time.perf_counter() - t_start
         sol.record(sequential=loop.report(converged, origin, seconds))
+        last[key] = sol
         log.info("sequential loop %s after %d iteration(s), %.3g s", "converged" if converged else
                  "did not converge", len(loop.max_change), seconds)
         if loop.rule is not None:
