@@ -104,7 +104,15 @@ FIX_SIGMA = math.sqrt(0.07)
 #: Prior sigma of the initial roll and pitch, rad: the start is in motion, so the first second's mean
 #: specific force tilts the guess by the horizontal acceleration over g (about 0.08 rad here).
 TILT = 0.1
-METHODS = ("GTSAM", "GTSAM peer", "bvpnav README", "bvpnav defaults", "bvpnav states")
+#: The vehicle information added to the README path (issue 39): the IMU point itself (the OXTS
+#: unit's offset from the rear axle is not in the data files, so none is assumed), rows at 10 Hz,
+#: lateral and vertical body velocity ~0 within 0.1 m/s (NonHolonomic's default band; soft with
+#: that sigma where the back end takes no band yet), forward speed >= 0.
+NHC_RATE = 10.0
+NHC_WIDTH = 0.1
+VEHICLE = {"bvpnav NHC soft": ("soft", False), "bvpnav NHC band": ("band", False),
+           "bvpnav NHC+FM soft": ("soft", True), "bvpnav NHC+FM band": ("band", True)}
+METHODS = ("GTSAM", "GTSAM peer", "bvpnav README", "bvpnav defaults", "bvpnav states", *VEHICLE)
 
 
 def data_dir() -> Path:
@@ -279,13 +287,22 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float):
                             acc_drift=fig["acc_bias_walk"], attitude_sigma=[TILT, TILT, np.inf],
                             gyro_sigma=fig["gyro_bias"], acc_sigma=fig["acc_bias"])
         prob = NavigationProblem(data, error_model=model, sigma_a=fig["acc_noise"] * math.sqrt(rate))
-    elif method == "bvpnav README":
+    elif method == "bvpnav README" or method in VEHICLE:
         g = from_datasheet(**fig, tilt=TILT, base="tactical", name="KITTI metadata")
         prob = NavigationProblem(data, error_model=g.error_model(interval), sigma_a=g.sigma_a(rate, interval))
     else:
         prob = NavigationProblem(data, error_model=Bias() + GyroBias(interval=interval) + AttitudeError())
     prob.add(Position(t=d["fix_t"][kept], value=d["fix_p"][kept],
                       sigma=np.full((kept.size, 3), FIX_SIGMA), name="fixes"))
+    if method in VEHICLE:
+        from bvpnav.constraints import ForwardMotion, NonHolonomic
+
+        mode, forward = VEHICLE[method]
+        width = {"sigma": NHC_WIDTH} if mode == "soft" else {"tol": NHC_WIDTH}
+        prob.add(NonHolonomic(axes=("y", "z"), lever=(0.0, 0.0, 0.0), rate=NHC_RATE, mode=mode, **width,
+                              name="non-holonomic"))
+        if forward:
+            prob.add(ForwardMotion(min_speed=0.0, rate=NHC_RATE, name="forward"))
     return prob
 
 

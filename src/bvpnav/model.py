@@ -810,9 +810,32 @@ class NavModel:
             out = out - self.gyro_bias(times, names)   # node states: omega = omega_hat - b_g(t)
         return Affine(out.A, out.c, TimeLabels("omega_", list(names), times))
 
+    @functools.cached_property
+    def _attitude_columns(self) -> np.ndarray:
+        """Navigation-frame attitude change per unit parameter on all of the model's parameters,
+        (N, 3, q), rad per unit (zero for parameters that do not act on the attitude); made once
+        per model, for every body-frame item that asks."""
+        Psi = np.zeros((self.N, 3, self.q))
+        comps = [c for c in getattr(self.error_model, "components", (self.error_model,))
+                 if c is not None and hasattr(c, "initial_columns")]
+        if not comps:
+            return Psi
+        # the attitude error models' shared propagation (imported here: model.py sits below the
+        # plug-in family, which is found only when a problem has such a model)
+        from .error_models._attitude import propagate
+
+        for comp in comps:
+            idx = [self.param_names.index(n) for n in comp.names(self.data)]
+            psi = propagate(self.data, np.asarray(comp.rate_columns(self.data), dtype=float),
+                            np.asarray(comp.initial_columns(self.data), dtype=float))
+            if hasattr(comp, "direct_columns"):
+                psi = psi + np.asarray(comp.direct_columns(self.data), dtype=float)
+            Psi[:, :, idx] += psi
+        return Psi
+
     def body_velocity(self, t, axes=None, lever=(0.0, 0.0, 0.0), what: str = "body velocity") -> Affine:
-        r"""The velocity of a point fixed on the body, in body axes, at times ``t`` (m/s):
-        rows ordered time-major, then body axis.
+        r"""The velocity of a point of the body in body axes at times ``t`` (m/s), affine in the
+        unknowns: rows ordered time-major, then body axis.
 
         Parameters
         ----------
@@ -821,65 +844,98 @@ class NavModel:
         axes : str or sequence of str, optional
             Body axes among ``"x", "y", "z"`` (default all three).
         lever : array_like (3,)
-            The point's position relative to the IMU in body axes, m (default the IMU itself).
+            The point, m, in body axes from the IMU (the origin of the navigation solution).
         what : str
             What asks (for error messages).
 
         Notes
         -----
-        :math:`v_b(t) = C(t)^T v(t) + \omega(t) \times \ell`, with :math:`v(t)` the
-        navigation-frame velocity of :meth:`velocity` (affine in the unknowns), :math:`C(t)`
-        the data's body-to-navigation attitude at the current linearization point (the
-        attitude loop re-integrates it; between samples it is interpolated by slerp) held
-        fixed, and :math:`\omega` the corrected body rates of :meth:`body_rate` (only read
-        when the lever is not zero). The attitude's own increments do not enter the rows.
+        .. math:: v_b(t) = C(t)^T v_n(t) + \omega(t) \times \ell
+                  + C(t)^T [v_n^0(t)\times]\,\psi(t) - [\ell\times]\,\delta\omega(t),
+
+        with :math:`C` the body-to-navigation attitude of the data (the current attitude
+        point of the attitude loop; between samples by spherical interpolation),
+        :math:`v_n` the FEM velocity (:meth:`velocity`), :math:`\omega` the corrected body
+        rates (:meth:`body_rate`, needed when :math:`\ell \ne 0`) and :math:`\ell` the lever.
+        The last two terms are the first-order effect of the increments of the attitude
+        error models: a navigation-frame attitude change :math:`\psi = \Psi\,\delta l`
+        (:math:`C \to \exp([\psi\times]) C`, so :math:`C^T v \to C^T v - C^T(\psi\times v)`)
+        taken about the velocity :math:`v_n^0` of the loop's last evaluation
+        (``data.velocity_point``, set by :mod:`bvpnav.solve.attitude`; without one the term
+        is left out, and the rows are exact at zero increments either way), and the rate
+        change :math:`\delta\omega` of the gyro models. The outer attitude loop re-integrates
+        and re-linearizes, so at its answer the rows are exact.
         """
-        times = as_times(t, what)
-        att = getattr(self.data, "attitude", None)
-        if att is None or self.d != 3:
-            raise InputError(f"{what}: needs strapdown data with an attitude (body to navigation) on three "
-                             f"navigation axes; this data is navigation-frame on axes {list(self.axes)}. "
-                             "Build it with bvpnav.ImuData(t, specific_force=..., attitude=...) or "
-                             "ImuData.from_gyro, or read a recording with specific force and gyro")
+        data = self.data
+        if not getattr(data, "is_strapdown", False) or getattr(data, "attitude", None) is None:
+            raise InputError(f"{what}: needs strapdown data with an attitude (body-frame velocities); build "
+                             "the data with bvpnav.ImuData.from_gyro (specific force and gyro rates)")
+        if self.d != 3:
+            raise InputError(f"{what}: needs the three navigation axes; the data has {list(self.axes)}")
         body = ("x", "y", "z")
         names = (axes,) if isinstance(axes, str) else (body if axes is None else tuple(axes))
         bad = [a for a in names if a not in body]
         if bad or not names:
             raise InputError(f"{what}: body axes {list(names)}; give some of {list(body)}")
-        ax = [body.index(a) for a in names]
-        lev = np.asarray(lever, dtype=float).ravel()
-        if lev.shape != (3,) or not np.all(np.isfinite(lev)):
-            raise InputError(f"{what}: lever={lever!r}; give three finite numbers (body x, y, z) in m")
-        C = self._attitude_at(times, what)   # (m, 3, 3) body to navigation
-        m, nb = times.size, len(ax)
-        vel = self.velocity(times, None, what)   # rows k * 3 + i
-        Ct = np.transpose(C, (0, 2, 1))[:, ax, :]   # (m, nb, 3): rows of C^T
-        rows = np.repeat(np.arange(m * nb), 3)
-        cols = (np.arange(m)[:, None, None] * 3 + np.zeros((1, nb, 1), dtype=int)
-                + np.arange(3)[None, None, :]).ravel()
-        B = sp.csr_matrix((Ct.ravel(), (rows, cols)), shape=(m * nb, m * 3))
-        out = Affine(B @ vel.A, B @ vel.c)
-        if np.any(lev):
-            L = -np.array([[0.0, -lev[2], lev[1]], [lev[2], 0.0, -lev[0]], [-lev[1], lev[0], 0.0]])[ax]
-            W = sp.kron(sp.identity(m), sp.csr_matrix(L), format="csr")   # omega x l = -[l x] omega
-            rate = self.body_rate(times, None, what)
-            out = out + Affine(W @ rate.A, W @ rate.c)
-        return Affine(out.A, out.c, TimeLabels("vb_", list(names), times))
+        try:
+            ell = np.asarray(lever, dtype=float).reshape(3)
+        except (TypeError, ValueError):
+            raise InputError(f"{what}: lever={lever!r}; give the point as three body-frame coordinates in m, "
+                             "e.g. lever=(-1.4, 0.0, -0.3)") from None
+        if not np.all(np.isfinite(ell)):
+            raise InputError(f"{what}: lever={lever!r} must be finite (m)")
+        times = as_times(t, what)
+        jb = np.array([body.index(a) for a in names])
+        K, nb = times.size, jb.size
+        C = self._attitude_at(times, what)                       # (K, 3, 3) body to navigation
+        V = self.velocity(times, None, what)                     # rows k * 3 + a
+        Ct = np.swapaxes(C, 1, 2)[:, jb, :]                      # (K, nb, 3): rows of C^T
+        rows = np.repeat(np.arange(K * nb), 3)
+        cols = (np.arange(K)[:, None, None] * 3 + np.arange(3)[None, None, :]).repeat(nb, axis=1).ravel()
+        R = sp.csr_matrix((Ct.ravel(), (rows, cols)), shape=(K * nb, 3 * K))
+        A, c = R @ V.A, R @ V.c
+        P = self.grid.interpolation_matrix(times, what)
+        if np.any(ell):
+            point = getattr(data, "attitude_point", None)
+            rates = point.rates if point is not None else getattr(data, "gyro", None)
+            if rates is None:
+                raise InputError(f"{what}: a lever of {ell.tolist()} m needs the gyro rates (omega x lever); "
+                                 "build the data with bvpnav.ImuData.from_gyro")
+            w = P @ np.asarray(rates, dtype=float)
+            c = c + np.cross(w, ell)[:, jb].ravel()
+        if self.q:
+            L = np.zeros((K, nb, self.q))
+            v0 = getattr(data, "velocity_point", None)
+            Psi = self._attitude_columns
+            if v0 is not None and np.any(Psi):
+                psi = np.stack([P @ Psi[:, a, :] for a in range(3)], axis=1)          # (K, 3, q)
+                vk = P @ np.asarray(v0, dtype=float)                                   # (K, 3)
+                cross = np.cross(vk[:, :, None], psi, axis=1)                         # v0 x psi
+                L += np.einsum("kbn,knq->kbq", Ct, cross)
+            if np.any(ell):
+                W = self._rate_columns
+                if np.any(W):
+                    dw = np.stack([P @ W[:, a, :] for a in range(3)], axis=1)         # (K, 3, q)
+                    L += np.cross(dw, ell[None, :, None], axis=1)[:, jb, :]
+            if np.any(L):
+                A = A + sp.csr_matrix(L.reshape(K * nb, self.q)) @ self.params().A
+        return Affine(A, c, TimeLabels("vb_", list(names), times))
 
-    def _attitude_at(self, times: np.ndarray, what: str = "attitude") -> np.ndarray:
-        """The data's attitude matrices (m, 3, 3) at ``times`` (s): the samples' own where a
-        time is a sample, slerp between samples."""
+    def _attitude_at(self, times: np.ndarray, what: str) -> np.ndarray:
+        """The data's body-to-navigation attitude matrices at ``times`` (K, 3, 3): the samples'
+        where a time is a sample, spherical interpolation between them."""
+        from scipy.spatial.transform import Slerp
+
         att = self.data.attitude
+        times = self.grid.check_inside(times, what)
         t = self.grid.t
         k = np.clip(np.searchsorted(t, times), 0, t.size - 1)
-        on = np.abs(t[k] - times) <= 1e-12 * np.maximum(1.0, np.abs(times))
+        on = np.isclose(t[k], times, rtol=0.0, atol=1e-12 * max(1.0, float(np.max(np.abs(t)))))
         out = np.empty((times.size, 3, 3))
         if np.any(on):
             out[on] = att[k[on]].as_matrix()
         if not np.all(on):
-            from scipy.spatial.transform import Slerp
-
-            out[~on] = Slerp(t, att)(np.clip(times[~on], t[0], t[-1])).as_matrix()
+            out[~on] = Slerp(t, att)(times[~on]).as_matrix()
         return out
 
     def speed_gain(self, what: str = "speed gain") -> Affine:

@@ -193,8 +193,29 @@ def _check_other_model(item: Item, model: NavModel, res: Affine, who: str) -> No
              "after compiling for another model the rows for the first one changed")
 
 
+def _check_body_axes(item: Item, model: NavModel, who: str) -> None:
+    """An item on body axes (``body_frame``): restricted to one of its axes, its rows are those
+    of that axis among the rows of all of them (a body axis mixes every navigation axis)."""
+    axes = tuple(item.axes or ())
+    if len(axes) < 2:
+        return
+    with _rule(who, "axes"):
+        full = item.compile(model)
+        one = dataclasses.replace(item, axes=(axes[1],))
+        rows = one.compile(model)
+    a = len(axes)
+    _require(full.m % a == 0 and rows.m * a == full.m, who, "axes",
+             f"with axes={[axes[1]]} the item has {rows.m} rows, with axes={list(axes)} {full.m}")
+    pick = np.arange(1, full.m, a)
+    _require(_same_rows(full.rows(pick), Affine(rows.A, rows.c)), who, "axes",
+             f"with axes={[axes[1]]} the rows differ from that axis's rows with axes={list(axes)}")
+
+
 def _check_axes(item: Item, model: NavModel, who: str) -> None:
     """Restricted to one axis, the rows touch that axis's unknowns (and ``l``) only."""
+    if getattr(type(item), "body_frame", False):
+        _check_body_axes(item, model, who)
+        return
     candidates = [item]
     if item.axes is None and not type(item).__name__.startswith("_"):
         with _rule(who, "example"):

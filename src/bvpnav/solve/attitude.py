@@ -35,6 +35,13 @@ best. With position information that makes the heading observable, this brings t
 within half a spacing (15 degrees for 12 candidates) of the answer, from where the damped
 loop converges; without such information the heading stays what the priors make it.
 
+The candidates are scored without the items whose rows turn with the attitude (body-frame
+items such as :class:`~bvpnav.constraints.NonHolonomic`): with the attitude held fixed, such an
+item scores a heading 5 degrees off nearly as badly as one 120 degrees off (a simulated car
+drive's search picked 120 degrees with them and ended 129 m off; without them it starts within
+5 degrees and converges in 6 steps), while the position information it leaves alone is what
+tells the headings apart. The loop then starts from the best candidate with every item.
+
 An unobservable heading is detected, not rounded: when nothing constrains the horizontal
 direction (position fixes at one place only, or a walk with stances only) every candidate
 scores the same, and picking the smallest would pick by rounding. The candidates are
@@ -192,9 +199,11 @@ class _Loop:
             self._data[key] = reintegrate(self.raw, self.form.error_model, values)
         return self._data[key]
 
-    def _form(self, data, error_model) -> Formulation:
+    def _form(self, data, error_model, search: bool = False) -> Formulation:
         f = self.form
         items = f.items
+        if search:  # the heading search scores candidates without the items that turn with the attitude
+            items = [it for it in items if not getattr(it, "body_frame", False)]
         if error_model is not f.error_model:  # attitude fixed: items on the gyro model alone drop out
             items = [it for it in items if not it.needs_error_model]
         out = Formulation(data, f.residual, f.sigma_a if f.sigma_a_given else None, error_model, items,
@@ -224,10 +233,11 @@ class _Loop:
             self.lam = float(sol.lam)
         return sol
 
-    def evaluate(self, values: dict) -> tuple[float, Solution]:
-        """``J(values)``: the convex problem with the attitude fixed at these totals."""
+    def evaluate(self, values: dict, search: bool = False) -> tuple[float, Solution]:
+        """``J(values)``: the convex problem with the attitude fixed at these totals (``search``:
+        without body-frame items, for the heading search)."""
         data = self.data_at(values)
-        sol = self._solve(self._form(data, self.rest_model))
+        sol = self._solve(self._form(data, self.rest_model, search))
         used = sol.formulation
         motion = objective_value(used, sol.x, float(sol.lam))
         priors = sum(c.prior_cost(data) for c in self.comps)
@@ -274,11 +284,22 @@ class _Loop:
                 cost += MERIT_WEIGHT * float(v @ v)
         return cost
 
-    def step(self, values: dict, damping: float) -> tuple[dict, float, Solution]:
-        """One damped linearized solve at ``values``: new totals, attitude change (rad), solution."""
+    def step(self, values: dict, damping: float, at_values: Solution | None = None
+             ) -> tuple[dict, float, Solution]:
+        """One damped linearized solve at ``values``: new totals, attitude change (rad), solution.
+        ``at_values``, the evaluation at ``values``, gives the velocity about which body-frame
+        items linearize their attitude terms (``data.velocity_point``, see
+        :meth:`bvpnav.NavModel.body_velocity`)."""
         data = self.data_at(values)
         if damping:
             data = with_damping(data, damping)
+        if at_values is not None:
+            import copy
+
+            m = at_values.formulation.model
+            data = copy.copy(data)
+            data.velocity_point = np.column_stack([m.node_velocity_values(a, at_values.x)
+                                                   for a in range(m.d)])
         form = self._form(data, self.form.error_model)
         sol = self._solve(form)
         model = form.model
@@ -324,7 +345,7 @@ class _Loop:
         for m, k in enumerate(order):
             yaw = float(np.angle(np.exp(1j * 2.0 * np.pi * k / n)))
             trial = {**values, "attitude_z": yaw}
-            j, sol = self.evaluate(trial)
+            j, sol = self.evaluate(trial, search=True)
             found.append({"heading": yaw, "objective": j})
             sols.append((j, trial, sol))
             log.info("attitude loop: heading %.1f deg -> objective %.6g", np.degrees(yaw), j)
@@ -616,7 +637,7 @@ def _iterate(loop: _Loop, values: dict, j: float, at_values: Solution, o: dict):
     last_full = None  # the last accepted undamped step (rad), to detect linear convergence
     with progress(desc="attitude loop", unit="iter", enabled=o["progress"]) as bar:
         for _ in range(int(o["max_iter"])):
-            new, change, sol = loop.step(values, damping)
+            new, change, sol = loop.step(values, damping, at_values)
             if change < o["tol"]:
                 # undamped: the Gauss-Newton step itself is below tol (converged); damped:
                 # the undamped step raised J and so do the damped ones down to tol, so no
@@ -807,7 +828,8 @@ def with_attitude(inner: Stage) -> Stage:
                 n: float(sol.error_params[n]) for n in loop.names}).attitude
             return sol
         values, search, best, heading = loop.heading_start(values)
-        j, at_values = best if best is not None else loop.evaluate(values)
+        body = any(getattr(it, "body_frame", False) for it in form.items)
+        j, at_values = best if best is not None and not body else loop.evaluate(values)
         j0 = j
         start = dict(values)
         values, j, at_values, sol, iters, reason = _iterate(loop, values, j, at_values, o)

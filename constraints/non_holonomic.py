@@ -1,0 +1,265 @@
+r"""A land vehicle does not slide sideways or jump: its body-frame lateral and vertical velocity is ~0."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from bvpnav.errors import InputError
+from bvpnav.items import Item
+
+from ._common import finite, interval
+
+__all__ = ["NonHolonomic"]
+
+#: Default half-width of the band, m/s: what a car's wheels allow sideways and vertically
+#: (tyre slip in ordinary driving, suspension travel, a residual mounting misalignment of a few
+#: tenths of a degree at 15 m/s) without being tuned to any recording.
+DEFAULT_TOL = 0.1
+
+_BODY = ("x", "y", "z")
+
+
+def intervals(t, label: str) -> tuple[tuple[float, float], ...] | None:
+    """``None`` (the whole window), one ``(t0, t1)`` or a list of them, validated (s)."""
+    if t is None:
+        return None
+    arr = finite(t, label, "t")
+    if arr.ndim == 1 and arr.size == 2:
+        arr = arr.reshape(1, 2)
+    if arr.ndim != 2 or arr.shape[1] != 2 or arr.shape[0] == 0:
+        raise InputError(f"{label}: t={t!r}; give an interval t=(t0, t1) in s, a list of them "
+                         "[(t0, t1), ...], or omit t for the whole recording")
+    out = tuple(interval(a, b, label) for a, b in arr)
+    order = sorted(out)
+    for (a0, a1), (b0, b1) in zip(order[:-1], order[1:], strict=True):
+        if b0 < a1:
+            raise InputError(f"{label}: intervals ({a0:g}, {a1:g}) and ({b0:g}, {b1:g}) s overlap; give "
+                             "disjoint intervals (the rows would be counted twice)")
+    return tuple(order)
+
+
+def lever_arm(lever, label: str) -> tuple[float, float, float]:
+    """The lever as three body-frame coordinates, m."""
+    v = finite(lever, label, "lever").ravel()
+    if v.size != 3:
+        raise InputError(f"{label}: lever={lever!r} has {v.size} component(s); give the point as three "
+                         "body-frame coordinates in m (x forward, y left, z up), e.g. lever=(-1.4, 0, -0.3)")
+    return tuple(float(a) for a in v)
+
+
+def positive_rate(rate, label: str) -> float | None:
+    """``None`` (every sample) or a rate in Hz > 0."""
+    if rate is None:
+        return None
+    r = finite(rate, label, "rate")
+    if r.size != 1 or not float(r.ravel()[0]) > 0:
+        raise InputError(f"{label}: rate={rate!r}; give the rows' rate in Hz (> 0), or None for every sample")
+    return float(r.ravel()[0])
+
+
+def check_body_data(model, who: str) -> None:
+    """Refuse, naming the item, data that have no body frame (navigation-frame accelerations)."""
+    data = model.data
+    if not getattr(data, "is_strapdown", False) or getattr(data, "attitude", None) is None:
+        raise InputError(f"{who}: acts on the body-frame velocity, but these data are navigation-frame "
+                         f"accelerations on axes {list(model.axes)} with no attitude; build the data with "
+                         "bvpnav.ImuData.from_gyro(t, specific_force, gyro) (body-frame specific force and "
+                         "gyro rates)")
+
+
+def body_instants(model, spans, rate: float | None, who: str) -> np.ndarray:
+    """The samples inside ``spans`` (the whole window when None), thinned to at most ``rate`` Hz:
+    per interval, the first sample at or after each of ``t0, t0 + 1/rate, ...`` (s)."""
+    g = model.grid
+    t = g.t
+    eps = 1e-9 * max(1.0, abs(float(t[0])), abs(float(t[-1])))
+    spans = ((float(t[0]), float(t[-1])),) if spans is None else spans
+    out = []
+    for a, b in spans:
+        if a < t[0] - eps or b > t[-1] + eps:
+            raise InputError(f"{who}: interval ({a:g}, {b:g}) s reaches outside the recording window "
+                             f"[{t[0]:g}, {t[-1]:g}] s; give intervals inside it (or omit t for all of it)")
+        inside = np.flatnonzero((t >= a - eps) & (t <= b + eps))
+        if inside.size == 0:
+            raise InputError(f"{who}: no sample lies in ({a:g}, {b:g}) s; widen the interval or drop it")
+        if rate is not None:
+            ts = t[inside]
+            marks = ts[0] + np.arange(int(np.floor((ts[-1] - ts[0]) * rate + 1e-9)) + 1) / rate
+            pick = np.unique(np.clip(np.searchsorted(ts, marks - eps), 0, ts.size - 1))
+            inside = inside[pick]
+        out.append(inside)
+    return t[np.unique(np.concatenate(out))]
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class NonHolonomic(Item):
+    r"""The body-frame lateral and vertical velocity of a point of a land vehicle is ~0.
+
+    A car's wheels roll: the point above the rear axle moves along the car's own forward axis,
+    neither sideways nor up. Between GNSS fixes this is what keeps a strapdown solution from
+    drifting sideways. The rows are the body-frame velocity of the point ``lever``
+    (:meth:`bvpnav.NavModel.body_velocity`): linear in the navigation velocity for the
+    current attitude, and re-linearized with it by the attitude loop when the problem
+    estimates attitude errors (:class:`~bvpnav.error_models.GyroBias`,
+    :class:`~bvpnav.error_models.AttitudeError`, ...), so the constraint turns with the
+    corrected heading instead of dragging the path along a wrong one.
+
+    Parameters
+    ----------
+    axes : sequence of str
+        Body axes whose velocity is ~0, among ``"x", "y", "z"`` (default ``("y", "z")``:
+        lateral and vertical). The body frame is the IMU's (x forward, y left, z up on a car).
+    lever : array_like (3,)
+        The point, m, in body axes from the IMU; default ``(0, 0, 0)`` (the IMU itself).
+        Ideally the middle of the rear axle (the point of a car that does not slide when it
+        turns; a point ``d`` m ahead of it moves sideways at ``d`` times the yaw rate).
+    t : (float, float) or list of them, optional
+        Interval(s) in s where the vehicle rolls on the ground; default the whole recording.
+    rate : float or None
+        Rate of the rows, Hz (default 10): the samples nearest at or after ``t0 + k / rate``
+        per interval; ``None`` for every sample. The errors of this information (tyre slip,
+        misalignment) are correlated over many samples, so rows much denser than they
+        decorrelate add weight, not information.
+    tol : float or array_like, optional
+        Half-width of the band, m/s (per axis allowed). Default :data:`DEFAULT_TOL` = 0.1
+        m/s in ``mode="band"`` (the default mode): the velocity may be anywhere within
+        ``tol``, so a car that skids a little does not drag the solution, and where it
+        skids more the band's edge is reached and reported (:meth:`active`).
+    sigma, mode, huber, name
+        See :class:`bvpnav.items.Item`. ``sigma`` alone (m/s) makes the rows soft; ``mode=
+        "hard"`` makes them exact.
+
+    Notes
+    -----
+    Rows at the chosen samples :math:`t_k`, per body axis :math:`j` (time-major):
+
+    .. math:: \rho_{k,j} = e_j^T \left( C_k^T v_n(t_k) + \omega_k \times \ell \right)
+
+    with :math:`C_k` the body-to-navigation attitude (the attitude loop's current point),
+    :math:`v_n` the FEM velocity, :math:`\omega_k` the corrected body rate and :math:`\ell`
+    the lever; band: :math:`|\rho_{k,j}| \le tol_j`. With attitude error models the rows
+    also carry the first-order change :math:`C_k^T [v^0\times] \psi_k` of the attitude
+    increments (see :meth:`bvpnav.NavModel.body_velocity`).
+
+    Examples
+    --------
+    >>> from bvpnav.constraints import NonHolonomic
+    >>> item = NonHolonomic()
+    >>> item.mode, item.axes, float(item.tol), item.units
+    ('band', ('y', 'z'), 0.1, 'm/s')
+    >>> NonHolonomic(sigma=0.05, rate=2.0, t=[(0.0, 50.0), (70.0, 120.0)]).mode
+    'soft'
+    """
+
+    lever: Any = (0.0, 0.0, 0.0)
+    t: Any = None
+    rate: Any = 10.0
+    units = "m/s"
+    #: The item's axes are body axes (the contract check compares one body axis's rows with
+    #: the rows of all of them instead of looking for navigation axes).
+    body_frame: ClassVar[bool] = True
+
+    def __post_init__(self):
+        if self.mode is None and self.sigma is None and self.tol is None:
+            object.__setattr__(self, "mode", "band")
+            object.__setattr__(self, "tol", DEFAULT_TOL)
+        elif self.mode is None and self.tol is not None and self.sigma is None:
+            object.__setattr__(self, "mode", "band")
+        super().__post_init__()
+
+    def validate(self) -> None:
+        label = self.label
+        axes = ("y", "z") if self.axes is None else self.axes
+        bad = [a for a in axes if a not in _BODY]
+        if bad:
+            raise InputError(f"{label}: axes={list(axes)}; give body axes among {list(_BODY)} (x forward, "
+                             "y left, z up), e.g. axes=('y', 'z')")
+        if len(set(axes)) != len(axes):
+            raise InputError(f"{label}: axes={list(axes)} names an axis twice")
+        object.__setattr__(self, "axes", tuple(axes))
+        object.__setattr__(self, "lever", lever_arm(self.lever, label))
+        object.__setattr__(self, "t", intervals(self.t, label))
+        object.__setattr__(self, "rate", positive_rate(self.rate, label))
+
+    def row_layout(self, m: int) -> tuple[int, int]:
+        """``(instants, body axes)``: sigma and tol may be given per axis."""
+        a = len(self.axes)
+        return (m // a, a) if m % a == 0 else (m, 1)
+
+    def instants(self, model) -> np.ndarray:
+        """The rows' times (s): the samples in the intervals at :attr:`rate`."""
+        return body_instants(model, self.t, self.rate, self.identify())
+
+    @classmethod
+    def example(cls) -> NonHolonomic:
+        """A valid instance for :meth:`example_model` (band, the default)."""
+        return cls(lever=(-0.5, 0.0, -0.3), t=[(0.0, 4.0), (6.0, 10.0)], rate=5.0)
+
+    @classmethod
+    def example_model(cls):
+        """Strapdown data on [0, 10] s (101 samples) of a car-like motion: forward acceleration,
+        a turn, pitch and roll changing (the contract check compiles :meth:`example` for it)."""
+        return vehicle_example_model()
+
+    def compile(self, model):
+        who = self.identify()
+        check_body_data(model, who)
+        return model.body_velocity(self.instants(model), self.axes, self.lever, what=who)
+
+    def active(self, solution, rtol: float = 1e-3):
+        """The rows at the band's edge in a solution: where the vehicle slid by at least ``tol``.
+
+        Parameters
+        ----------
+        solution : Solution
+            A solution of a problem holding this item (found by its label).
+        rtol : float
+            A row is at the edge when ``|rho| >= tol (1 - rtol)``.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``t`` (s), ``axis`` (body axis) and ``velocity`` (m/s), one row per active
+            row, in time order; empty for an item that is not a band.
+        """
+        import pandas as pd
+
+        r = solution.item_residuals.get(self.label)
+        if r is None:
+            raise InputError(f"{self.identify()}: not in this solution (its items: "
+                             f"{sorted(solution.item_residuals)})")
+        if self.mode != "band" or self.tol is None:
+            return pd.DataFrame({"t": [], "axis": [], "velocity": []})
+        r = np.asarray(r, dtype=float)
+        tol = self.tol_rows(r.size)
+        a = len(self.axes)
+        k = np.flatnonzero(np.abs(r) >= tol * (1.0 - rtol))
+        times = np.asarray(solution.item_rows[self.label].t, dtype=float) if self.label in getattr(
+            solution, "item_rows", {}) else np.full(r.size, np.nan)
+        return pd.DataFrame({"t": times[k], "axis": [self.axes[i % a] for i in k], "velocity": r[k]})
+
+    def latex(self) -> str:
+        """The residual's equation for ``describe(format="latex")`` (mathtext)."""
+        return r"e_j^T (C_k^T v_n(t_k) + \omega_k \times \ell) = 0"
+
+    def math(self) -> str:
+        lev = ", ".join(f"{v:g}" for v in self.lever)
+        return f"e_j^T (C^T v_n(t_k) + omega x ({lev}) m) = 0 for body axes {list(self.axes)}"
+
+
+def vehicle_example_model():
+    """Strapdown data on [0, 10] s (101 samples): a car-like motion (speeding up, turning, pitch
+    and roll changing), the attitude integrated from the rates."""
+    from scipy.spatial.transform import Rotation
+
+    from bvpnav import ImuData, NavModel
+
+    t = np.linspace(0.0, 10.0, 101)
+    w = np.column_stack([0.02 * np.sin(t), 0.03 * np.cos(0.7 * t), 0.2 * np.sin(0.4 * t)])
+    f = np.column_stack([0.8 + 0.3 * np.sin(t), 0.5 * np.sin(0.4 * t), np.full(t.size, 9.80665)])
+    data = ImuData.from_gyro(t, f, w, initial_attitude=Rotation.from_euler("ZYX", [0.4, 0.02, -0.01]),
+                             checks=False)
+    return NavModel(data)
