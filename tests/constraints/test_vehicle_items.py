@@ -7,6 +7,7 @@ skid caught by the band, forward motion as an inequality, and the errors that na
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 
 import numpy as np
@@ -302,3 +303,19 @@ def test_interval_outside_the_window_and_lever_without_gyro():
     assert NonHolonomic().compile(model).m > 0  # no lever: the attitude alone is enough
     with pytest.raises(InputError, match=r"NonHolonomic.*lever.*gyro rates.*from_gyro"):
         NonHolonomic(lever=(-1.0, 0.0, 0.0)).compile(model)
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True, eq=False)
+class _OtherAxis(NonHolonomic):
+    """Broken on purpose: restricted to one body axis, it compiles the rows of another."""
+
+    def compile(self, model):
+        body = ("x", "y", "z")
+        axes = self.axes if len(self.axes) > 1 else (body[body.index(self.axes[0]) - 1],)
+        return model.body_velocity(self.instants(model), axes, self.lever, what=self.identify())
+
+
+def test_contract_body_axes_rule():
+    """The contract check's rule for body-frame items: one axis's rows are that axis's rows of all."""
+    with pytest.raises(AssertionError, match=r"_OtherAxis: rule 'axes' broken"):
+        check_item(_OtherAxis(), NonHolonomic.example_model())
