@@ -29,7 +29,7 @@ from .grid import as_times
 from .imu import ImuData
 from .sparse import as_csr, row_scaled
 
-__all__ = ["Affine", "Cone", "NavModel", "RowLabels", "state_component"]
+__all__ = ["Affine", "Cone", "LinearizationPoint", "NavModel", "RowLabels", "state_component"]
 
 
 def state_component(error_model):
@@ -413,6 +413,30 @@ class Cone(Affine):
         """``||u_k|| - s_k`` per group at a numeric ``x`` (<= 0 where the cone holds)."""
         v = self.value(x).reshape(self.groups, self.size)
         return np.linalg.norm(v[:, 1:], axis=1) - v[:, 0]
+
+
+@dataclass(frozen=True, eq=False)
+class LinearizationPoint:
+    r"""Where body-frame rows linearize the attitude (``data.body_point``).
+
+    The attitude loop (:mod:`bvpnav.solve.attitude`) sets it on the data of each linearized
+    step; :meth:`NavModel.body_velocity` reads it.
+
+    Attributes
+    ----------
+    velocity : ndarray (N, 3)
+        Navigation-frame velocity at every sample, m/s: the loop's evaluation at the current
+        attitude.
+    names : tuple of str
+        The attitude parameters whose columns ``psi`` holds.
+    psi : ndarray (N, 3, len(names))
+        Navigation-frame attitude change per unit of each parameter, rad per unit
+        (:math:`C \to \exp([\psi\times]) C`).
+    """
+
+    velocity: np.ndarray
+    names: tuple
+    psi: np.ndarray
 
 
 class NavModel:
@@ -810,27 +834,16 @@ class NavModel:
             out = out - self.gyro_bias(times, names)   # node states: omega = omega_hat - b_g(t)
         return Affine(out.A, out.c, TimeLabels("omega_", list(names), times))
 
-    @functools.cached_property
-    def _attitude_columns(self) -> np.ndarray:
-        """Navigation-frame attitude change per unit parameter on all of the model's parameters,
-        (N, 3, q), rad per unit (zero for parameters that do not act on the attitude); made once
-        per model, for every body-frame item that asks."""
+    def _attitude_columns(self) -> np.ndarray | None:
+        """Navigation-frame attitude change per unit parameter on the model's parameters, (N, 3,
+        q), rad per unit, from the data's :class:`LinearizationPoint` (None without one)."""
+        point = getattr(self.data, "body_point", None)
+        if point is None or not self.q:
+            return None
         Psi = np.zeros((self.N, 3, self.q))
-        comps = [c for c in getattr(self.error_model, "components", (self.error_model,))
-                 if c is not None and hasattr(c, "initial_columns")]
-        if not comps:
-            return Psi
-        # the attitude error models' shared propagation (imported here: model.py sits below the
-        # plug-in family, which is found only when a problem has such a model)
-        from .error_models._attitude import propagate
-
-        for comp in comps:
-            idx = [self.param_names.index(n) for n in comp.names(self.data)]
-            psi = propagate(self.data, np.asarray(comp.rate_columns(self.data), dtype=float),
-                            np.asarray(comp.initial_columns(self.data), dtype=float))
-            if hasattr(comp, "direct_columns"):
-                psi = psi + np.asarray(comp.direct_columns(self.data), dtype=float)
-            Psi[:, :, idx] += psi
+        for k, name in enumerate(point.names):
+            if name in self.param_names:
+                Psi[:, :, self.param_names.index(name)] = point.psi[:, :, k]
         return Psi
 
     def body_velocity(self, t, axes=None, lever=(0.0, 0.0, 0.0), what: str = "body velocity") -> Affine:
@@ -860,9 +873,10 @@ class NavModel:
         The last two terms are the first-order effect of the increments of the attitude
         error models: a navigation-frame attitude change :math:`\psi = \Psi\,\delta l`
         (:math:`C \to \exp([\psi\times]) C`, so :math:`C^T v \to C^T v - C^T(\psi\times v)`)
-        taken about the velocity :math:`v_n^0` of the loop's last evaluation
-        (``data.velocity_point``, set by :mod:`bvpnav.solve.attitude`; without one the term
-        is left out, and the rows are exact at zero increments either way), and the rate
+        taken about the velocity :math:`v_n^0` of the loop's last evaluation, both from the
+        data's :class:`LinearizationPoint` (``data.body_point``, set by
+        :mod:`bvpnav.solve.attitude`, which knows the attitude error models; without one the
+        term is left out, and the rows are exact at zero increments either way), and the rate
         change :math:`\delta\omega` of the gyro models. The outer attitude loop re-integrates
         and re-linearizes, so at its answer the rows are exact.
         """
@@ -905,11 +919,10 @@ class NavModel:
             c = c + np.cross(w, ell)[:, jb].ravel()
         if self.q:
             L = np.zeros((K, nb, self.q))
-            v0 = getattr(data, "velocity_point", None)
-            Psi = self._attitude_columns
-            if v0 is not None and np.any(Psi):
+            Psi = self._attitude_columns()
+            if Psi is not None and np.any(Psi):
                 psi = np.stack([P @ Psi[:, a, :] for a in range(3)], axis=1)          # (K, 3, q)
-                vk = P @ np.asarray(v0, dtype=float)                                   # (K, 3)
+                vk = P @ data.body_point.velocity                                 # (K, 3)
                 cross = np.cross(vk[:, :, None], psi, axis=1)                         # v0 x psi
                 L += np.einsum("kbn,knq->kbq", Ct, cross)
             if np.any(ell):

@@ -16,7 +16,8 @@ import pytest
 from bvpnav import ImuData, InputError, NavigationProblem, NavModel
 from bvpnav.constraints import ForwardMotion, NonHolonomic, Position, Velocity
 from bvpnav.error_models import AttitudeError, AttitudeWalk, GyroBias
-from bvpnav.error_models._attitude import reintegrate
+from bvpnav.error_models._attitude import propagate, reintegrate
+from bvpnav.model import LinearizationPoint
 from bvpnav.scenarios import car_drive
 from bvpnav.sensors import grade
 from bvpnav.testing import check_item
@@ -115,8 +116,12 @@ def test_attitude_term_is_first_order():
     base = dict(zip(names, 1e-3 * scale * rng.standard_normal(len(names)), strict=True))
     at = reintegrate(raw, em, base)
     v0 = drive.velocity + 0.3 * rng.standard_normal(drive.velocity.shape)
-    at.velocity_point = v0
+    # what the attitude loop hands a step: the velocity and each attitude model's attitude change
+    psi = [propagate(at, c.rate_columns(at), c.initial_columns(at))
+           + (c.direct_columns(at) if hasattr(c, "direct_columns") else 0.0) for c in em.components]
+    at.body_point = LinearizationPoint(velocity=v0, names=tuple(names), psi=np.concatenate(psi, axis=2))
     model = NavModel(at, em)
+    assert model.body_velocity(drive.t[[0, -1]]).A[:, model.l_index].nnz  # the attitude term is there
     lever = np.array([-1.2, 0.2, -0.5])
     ends = np.array([drive.t[0], drive.t[-1]])  # the velocity rows there are the end unknowns alone
     rows = model.body_velocity(ends, None, lever)

@@ -78,7 +78,7 @@ from ..errors import InputError
 from ..formulation import Formulation
 from ..items import Linearizable
 from ..log import progress, warn
-from ..model import Cone
+from ..model import Cone, LinearizationPoint
 from ..result import AttitudeLoopReport, Solution
 
 __all__ = ["with_attitude", "check_attitude", "ATTITUDE_DEFAULTS", "objective_value", "hold_yaw_rate",
@@ -288,18 +288,13 @@ class _Loop:
              ) -> tuple[dict, float, Solution]:
         """One damped linearized solve at ``values``: new totals, attitude change (rad), solution.
         ``at_values``, the evaluation at ``values``, gives the velocity about which body-frame
-        items linearize their attitude terms (``data.velocity_point``, see
+        items linearize their attitude terms (``data.body_point``, see
         :meth:`bvpnav.NavModel.body_velocity`)."""
         data = self.data_at(values)
         if damping:
             data = with_damping(data, damping)
-        if at_values is not None:
-            import copy
-
-            m = at_values.formulation.model
-            data = copy.copy(data)
-            data.velocity_point = np.column_stack([m.node_velocity_values(a, at_values.x)
-                                                   for a in range(m.d)])
+        if at_values is not None and any(getattr(it, "body_frame", False) for it in self.form.items):
+            data = self.body_point(data, at_values)
         form = self._form(data, self.form.error_model)
         sol = self._solve(form)
         model = form.model
@@ -318,6 +313,28 @@ class _Loop:
         psi = propagate(data, rate[:, :, None], init[:, None])[:, :, 0] + direct
         change = float(np.max(np.linalg.norm(psi, axis=1)))
         return new, change, sol
+
+    def body_point(self, data, at_values: Solution):
+        """A shallow copy of ``data`` carrying the :class:`~bvpnav.model.LinearizationPoint` of
+        body-frame items: the velocity of the evaluation ``at_values`` and every attitude
+        parameter's navigation-frame attitude change per unit (its propagated rate and initial
+        columns, plus its direct columns for a walk)."""
+        import copy
+
+        m = at_values.formulation.model
+        vel = np.column_stack([m.node_velocity_values(a, at_values.x) for a in range(m.d)])
+        names, cols = [], []
+        for c in self.comps:
+            psi = propagate(data, np.asarray(c.rate_columns(data), dtype=float),
+                            np.asarray(c.initial_columns(data), dtype=float))
+            if hasattr(c, "direct_columns"):
+                psi = psi + c.direct_columns(data)
+            names += list(c.names(data))
+            cols.append(psi)
+        out = copy.copy(data)
+        out.body_point = LinearizationPoint(velocity=vel, names=tuple(names),
+                                                psi=np.concatenate(cols, axis=2))
+        return out
 
     def heading_start(self, values: dict) -> tuple[dict, list, tuple | None, str | None]:
         """The start: ``values`` with the best candidate heading, the candidates' objectives,
