@@ -168,6 +168,8 @@ class NonHolonomic(Item):
             object.__setattr__(self, "tol", DEFAULT_TOL)
         elif self.mode is None and self.tol is not None and self.sigma is None:
             object.__setattr__(self, "mode", "band")
+        elif str(self.mode).lower() == "band" and self.tol is None:
+            object.__setattr__(self, "tol", DEFAULT_TOL)
         super().__post_init__()
 
     def validate(self) -> None:

@@ -40,6 +40,7 @@ def test_defaults():
     assert NonHolonomic(sigma=0.2).mode == "soft"
     assert NonHolonomic(mode="hard").tol is None
     assert NonHolonomic(tol=(0.2, 0.05)).mode == "band"
+    assert float(NonHolonomic(mode="band").tol) == 0.1
     fm = ForwardMotion()
     assert (fm.mode, fm.kind, fm.min_speed, fm.max_speed) == ("hard", "inequality", 0.0, None)
 

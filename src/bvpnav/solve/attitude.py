@@ -404,7 +404,10 @@ def _at_point(loop: _Loop, values: dict, at_values: Solution) -> Solution:
     """
     from .assemble import make_solution
 
-    form = loop._form(loop.data_at(values), loop.form.error_model)
+    data = loop.data_at(values)
+    if any(getattr(it, "body_frame", False) for it in loop.form.items):  # their attitude terms too
+        data = loop.body_point(data, at_values)
+    form = loop._form(data, loop.form.error_model)
     used = at_values.formulation
     # items the sequential loop linearized (a delayed fix, a track) at their last linearization
     lin = {it.label: it for it in used.items}
