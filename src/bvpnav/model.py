@@ -922,7 +922,7 @@ class NavModel:
             Psi = self._attitude_columns()
             if Psi is not None and np.any(Psi):
                 psi = np.stack([P @ Psi[:, a, :] for a in range(3)], axis=1)          # (K, 3, q)
-                vk = P @ data.body_point.velocity                                 # (K, 3)
+                vk = P @ data.body_point.velocity                                     # (K, 3)
                 cross = np.cross(vk[:, :, None], psi, axis=1)                         # v0 x psi
                 L += np.einsum("kbn,knq->kbq", Ct, cross)
             if np.any(ell):

@@ -333,7 +333,7 @@ class _Loop:
             cols.append(psi)
         out = copy.copy(data)
         out.body_point = LinearizationPoint(velocity=vel, names=tuple(names),
-                                                psi=np.concatenate(cols, axis=2))
+                                            psi=np.concatenate(cols, axis=2))
         return out
 
     def heading_start(self, values: dict) -> tuple[dict, list, tuple | None, str | None]:
