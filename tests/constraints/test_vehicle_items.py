@@ -325,3 +325,25 @@ def test_contract_body_axes_rule():
     """The contract check's rule for body-frame items: one axis's rows are that axis's rows of all."""
     with pytest.raises(AssertionError, match=r"_OtherAxis: rule 'axes' broken"):
         check_item(_OtherAxis(), NonHolonomic.example_model())
+
+
+def test_band_through_the_attitude_loop():
+    """The default band with attitude error models (clarabel): the loop converges, the answer is
+    verified, every row is inside the band and the rows at its edge are reported. Measured on this
+    tactical drive (60 s, fixes every 20 s): 3-D RMS 1.657 m with the band, 1.824 m without, 1.087 m
+    with soft rows of sigma 0.1 m/s (a band does not pull inside it)."""
+    drive = car_drive(duration=60.0, rate=10.0, grade="tactical", seed=1)
+    g = grade("tactical")
+    keep = np.arange(0, drive.fix_t.size, 20)
+    band = NonHolonomic(name="nhc")
+    prob = NavigationProblem(drive.data(), error_model=g.error_model(30), sigma_a=g.sigma_a(10.0, 30))
+    prob.add(Position(t=drive.fix_t[keep], value=drive.fix_position[keep],
+                      sigma=np.tile(drive.fix_sigma, (keep.size, 1))), band)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sol = prob.solve(solver="clarabel", attitude={"progress": False})
+    assert sol.stats["verified"] and sol.stats["sequential"]["converged"]
+    assert np.max(np.abs(sol.item_residuals["nhc"])) <= 0.1 * (1 + 1e-6)
+    assert len(band.active(sol)) >= 1
+    rms = float(np.sqrt(np.mean(np.sum((sol.position() - drive.position) ** 2, axis=1))))
+    assert rms < 1.8
