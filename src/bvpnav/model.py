@@ -439,6 +439,13 @@ class LinearizationPoint:
     psi: np.ndarray
 
 
+def _skew(v: np.ndarray) -> np.ndarray:
+    """``[v x]`` for an array of vectors (K, 3) -> (K, 3, 3)."""
+    z = np.zeros(v.shape[0])
+    x, y, w = v[:, 0], v[:, 1], v[:, 2]
+    return np.stack([np.stack([z, -w, y], -1), np.stack([w, z, -x], -1), np.stack([-y, x, z], -1)], -2)
+
+
 class NavModel:
     r"""Typed context handed to every item's ``compile``: the unknowns and their maps.
 
@@ -877,8 +884,11 @@ class NavModel:
         data's :class:`LinearizationPoint` (``data.body_point``, set by
         :mod:`bvpnav.solve.attitude`, which knows the attitude error models; without one the
         term is left out, and the rows are exact at zero increments either way), and the rate
-        change :math:`\delta\omega` of the gyro models. The outer attitude loop re-integrates
-        and re-linearizes, so at its answer the rows are exact.
+        change :math:`\delta\omega` of the gyro models. With node states
+        (:class:`~bvpnav.error_models.ErrorStates`) the attitude change is the state increment
+        of :meth:`attitude_error` at the instants, about the velocity of the node-state loop's
+        last step. The outer loop re-integrates and re-linearizes, so at its answer the rows
+        are exact.
         """
         data = self.data
         if not getattr(data, "is_strapdown", False) or getattr(data, "attitude", None) is None:
@@ -932,6 +942,14 @@ class NavModel:
                     L += np.cross(dw, ell[None, :, None], axis=1)[:, jb, :]
             if np.any(L):
                 A = A + sp.csr_matrix(L.reshape(K * nb, self.q)) @ self.params().A
+        point = getattr(data, "body_point", None)
+        if point is not None and self.ns and "attitude_error" in self.state_model.state_kinds(data):
+            # node states: the attitude error increments at the instants, C^T [v0 x] delta psi(t)
+            vk = P @ point.velocity
+            Mk = np.einsum("kbn,knm->kbm", Ct, _skew(vk))                                # (K, nb, 3)
+            rows_m = np.repeat(np.arange(K * nb), 3)
+            B = sp.csr_matrix((Mk.ravel(), (rows_m, cols)), shape=(K * nb, 3 * K))
+            A = A + B @ self.attitude_error(times).A
         return Affine(A, c, TimeLabels("vb_", list(names), times))
 
     def _attitude_at(self, times: np.ndarray, what: str) -> np.ndarray:

@@ -347,3 +347,29 @@ def test_band_through_the_attitude_loop():
     assert len(band.active(sol)) >= 1
     rms = float(np.sqrt(np.mean(np.sum((sol.position() - drive.position) ** 2, axis=1))))
     assert rms < 1.8
+
+
+def test_with_node_states():
+    """With ErrorStates (the attitude error a state at every sample) the rows carry the states'
+    increments, C^T [v0 x] delta psi(t), about the last step's velocity: the node-state loop
+    converges (5 steps, measured; 30 without the term, not converged, 14.6 m) and the 3-D RMS
+    falls from 1.854 m without the item to 1.093 m (measured)."""
+    from bvpnav.error_models import ErrorStates
+
+    drive = car_drive(duration=60.0, rate=10.0, grade="tactical", seed=1)
+    g = grade("tactical")
+    keep = np.arange(0, drive.fix_t.size, 20)
+    rms = []
+    for extra in ([], [NonHolonomic(mode="soft", sigma=0.1)]):
+        em = ErrorStates(arw=g.gyro_noise, gyro_drift=g.gyro_bias_walk, acc_drift=g.acc_bias_walk,
+                         attitude_sigma=[0.02, 0.02, 0.2], gyro_sigma=g.gyro_bias, acc_sigma=g.acc_bias)
+        prob = NavigationProblem(drive.data(), error_model=em, sigma_a=g.acc_noise * np.sqrt(10.0))
+        prob.add(Position(t=drive.fix_t[keep], value=drive.fix_position[keep],
+                          sigma=np.tile(drive.fix_sigma, (keep.size, 1))), *extra)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            sol = prob.solve(solver="direct", attitude={"progress": False})
+        assert sol.stats["verified"] and sol.stats["sequential"]["converged"]
+        assert len(sol.stats["sequential"]["iterations"]) <= 10
+        rms.append(float(np.sqrt(np.mean(np.sum((sol.position() - drive.position) ** 2, axis=1)))))
+    assert rms[1] < 0.7 * rms[0]

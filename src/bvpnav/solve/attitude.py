@@ -749,6 +749,11 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     with progress(desc="state loop", unit="iter", enabled=o["progress"]) as bar:
         for _ in range(int(o["max_iter"])):
             data = form.data if not iters else states_at(raw, totals)
+            if iters and any(getattr(it, "body_frame", False) for it in form.items):
+                # body-frame items: their attitude term about the last step's velocity
+                m = f.model
+                vel = np.column_stack([m.node_velocity_values(a, sol.x) for a in range(m.d)])
+                data.body_point = LinearizationPoint(velocity=vel, names=(), psi=np.zeros((raw.n, 3, 0)))
             if iters:
                 f = Formulation(data, form.residual, form.sigma_a if form.sigma_a_given else None,
                                 form.error_model, form.items, grade=None)
