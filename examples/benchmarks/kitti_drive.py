@@ -40,6 +40,8 @@ drive). Methods:
     row says ``solver=clarabel``.
 ``bvpnav NHC+FM soft`` / ``bvpnav NHC+FM band``
     the same plus ``ForwardMotion(min_speed=0)`` (an inequality).
+``bvpnav states NHC soft`` / ``bvpnav states NHC band``
+    ``bvpnav states`` plus the same ``NonHolonomic``.
 
 The metadata's bias sigmas are per sample, as GTSAM's example applies them
 (``sqrt(count) * sigma`` between fixes): at the mean step of 10.04 ms they are random walks
@@ -132,7 +134,8 @@ TILT = 0.1
 NHC_RATE = 10.0
 NHC_WIDTH = 0.1
 VEHICLE = {"bvpnav NHC soft": ("soft", False), "bvpnav NHC band": ("band", False),
-           "bvpnav NHC+FM soft": ("soft", True), "bvpnav NHC+FM band": ("band", True)}
+           "bvpnav NHC+FM soft": ("soft", True), "bvpnav NHC+FM band": ("band", True),
+           "bvpnav states NHC soft": ("soft", False), "bvpnav states NHC band": ("band", False)}
 METHODS = ("GTSAM", "GTSAM peer", "bvpnav README", "bvpnav defaults", "bvpnav states", *VEHICLE)
 
 
@@ -301,7 +304,7 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float):
     data = ImuData.from_gyro(d["t"], d["f"], d["w"], initial_attitude=c0,
                              gravity=np.array([0.0, 0.0, -GRAVITY]))
     rate = 1.0 / float(np.mean(np.diff(d["t"])))
-    if method == "bvpnav states":
+    if method in ("bvpnav states", "bvpnav states NHC soft", "bvpnav states NHC band"):
         # node states (issue 42 item 2): attitude error and both bias walks per sample, in the band;
         # the metadata's densities, GTSAM's example's bias priors, an open heading
         model = ErrorStates(arw=fig["gyro_noise"], gyro_drift=fig["gyro_bias_walk"],
