@@ -79,7 +79,16 @@ same loaded machine, load average about 10)::
     peak  7.9 kB/sample    46.3-47.2 kB         54.2-56.7 kB
 
 (the misfit warning's ratio in brackets). Development-split variants of the rows (not the
-benchmark's setting): sigma 0.05 m/s at 10 Hz 1.693 m at 10 s; 0.1 m/s at 2 Hz 1.610 m.
+benchmark's setting): sigma 0.05 m/s at 10 Hz 1.693 m at 10 s; 0.1 m/s at 2 Hz 1.610 m at 10 s,
+3.761 m at 30 s, 6.707 m at 60 s.
+
+With node states (after issue 42 item 2 was merged; ``--methods "bvpnav states" "bvpnav states
+NHC soft"``, load average about 14)::
+
+    gap s  bvpnav states          bvpnav states NHC soft   / GTSAM
+    10      1.472  47 s (6.5x)     1.538  54 s (1.30x)      1.04
+    30     15.529  34 s (4.0x)     2.696  61 s (1.21x)      0.17
+    60     55.389  69 s            3.892  31 s (1.19x)      0.072
 
 "after" is the same run's defaults column with the default consumer grade
 (``NavigationProblem(grade=...)``, issue 42; the README path states its priors and is
