@@ -925,8 +925,12 @@ class NavModel:
             if rates is None:
                 raise InputError(f"{what}: a lever of {ell.tolist()} m needs the gyro rates (omega x lever); "
                                  "build the data with bvpnav.ImuData.from_gyro")
-            w = P @ np.asarray(rates, dtype=float)
-            c = c + np.cross(w, ell)[:, jb].ravel()
+            # omega x l = -[l x] omega, with the corrected rates of body_rate (affine in the gyro
+            # models' parameters or node states)
+            Lx = -np.array([[0.0, -ell[2], ell[1]], [ell[2], 0.0, -ell[0]], [-ell[1], ell[0], 0.0]])[jb]
+            Wl = sp.kron(sp.identity(K), sp.csr_matrix(Lx), format="csr")
+            rate = self.body_rate(times, None, what)
+            A, c = A + Wl @ rate.A, c + Wl @ rate.c
         if self.q:
             L = np.zeros((K, nb, self.q))
             Psi = self._attitude_columns()
@@ -935,11 +939,6 @@ class NavModel:
                 vk = P @ data.body_point.velocity                                     # (K, 3)
                 cross = np.cross(vk[:, :, None], psi, axis=1)                         # v0 x psi
                 L += np.einsum("kbn,knq->kbq", Ct, cross)
-            if np.any(ell):
-                W = self._rate_columns
-                if np.any(W):
-                    dw = np.stack([P @ W[:, a, :] for a in range(3)], axis=1)         # (K, 3, q)
-                    L += np.cross(dw, ell[None, :, None], axis=1)[:, jb, :]
             if np.any(L):
                 A = A + sp.csr_matrix(L.reshape(K * nb, self.q)) @ self.params().A
         point = getattr(data, "body_point", None)
