@@ -80,7 +80,9 @@ same loaded machine, load average about 10)::
 
 (the misfit warning's ratio in brackets). Development-split variants of the rows (not the
 benchmark's setting): sigma 0.05 m/s at 10 Hz 1.693 m at 10 s; 0.1 m/s at 2 Hz 1.610 m at 10 s,
-3.761 m at 30 s, 6.707 m at 60 s.
+3.761 m at 30 s, 6.707 m at 60 s. ``bvpnav NHC band`` at 30 s (direct's interior-point loop,
+after the ipm merge; same run as ``NHC soft``, load about 14): 3.067 m, 690 s wall, 329 s CPU
+against soft 2.921 m, 169 s, 54 s CPU.
 
 With node states (after issue 42 item 2 was merged; ``--methods "bvpnav states" "bvpnav states
 NHC soft"``, load average about 14)::
