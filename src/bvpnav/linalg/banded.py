@@ -888,8 +888,6 @@ class BandPlan:
             The nodes are this many equal runs laid end to end (axes no row couples), see
             :attr:`segments`.
         diagonal : DiagonalRows, optional
-    out : ndarray, optional
-        Memory for the band (``BandPlan._write_band``); the factor then lives in it.
             ``E``'s first rows by diagonals, for the first assembly (:meth:`assemble`).
         """
         m, n = D.shape
@@ -1357,6 +1355,8 @@ class BandedKKT(Factorization):
         Passed to :meth:`BandPlan.build`.
     diagonal : DiagonalRows, optional
         ``E``'s first rows by diagonals (placed by formula, see :class:`DiagonalRows`).
+    out : ndarray, optional
+        Memory for the band (``BandPlan._write_band``); the factor then lives in it.
 
     Raises
     ------
