@@ -257,7 +257,8 @@ def vehicle_example_model():
     and roll changing), the attitude integrated from the rates."""
     from scipy.spatial.transform import Rotation
 
-    from bvpnav import ImuData, NavModel
+    from bvpnav.imu import ImuData
+    from bvpnav.model import NavModel
 
     t = np.linspace(0.0, 10.0, 101)
     w = np.column_stack([0.02 * np.sin(t), 0.03 * np.cos(0.7 * t), 0.2 * np.sin(0.4 * t)])

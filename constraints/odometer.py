@@ -152,7 +152,8 @@ class Odometer(Item):
     def example_model(cls):
         """Strapdown data on [0, 10] s (101 samples) with gyro rates, turning about z: the
         model the contract check compiles :meth:`example` for."""
-        from bvpnav import ImuData, NavModel
+        from bvpnav.imu import ImuData
+        from bvpnav.model import NavModel
 
         t = np.linspace(0.0, 10.0, 101)
         f = np.column_stack([0.5 * np.cos(0.3 * t), 0.2 * np.sin(t), np.full(t.size, 9.80665)])

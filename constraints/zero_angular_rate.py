@@ -114,7 +114,9 @@ class ZeroAngularRate(Item):
         """Strapdown data on [0, 10] s (101 samples) at rest for the first 2 s with a constant
         gyro bias, turning afterwards, and a :class:`~bvpnav.error_models.GyroBias`: the model
         the contract check (:func:`bvpnav.testing.check_item`) compiles :meth:`example` for."""
-        from bvpnav import ImuData, NavModel, error_models
+        from bvpnav import error_models
+        from bvpnav.imu import ImuData
+        from bvpnav.model import NavModel
 
         t = np.linspace(0.0, 10.0, 101)
         moving = t > 2.0

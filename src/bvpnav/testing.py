@@ -717,9 +717,12 @@ def _check_item_recovery(em: ErrorModel, who: str) -> None:
     rule = "recovers its parameters"
     _require(hasattr(type(em), "example_recovery"), who, rule,
              "a model whose parameters act through items (provides=...) needs a classmethod "
-             "example_recovery() -> (problem, {name: true value}, solve options)")
+             "example_recovery(problem) -> (problem, {name: true value}, solve options), given the "
+             "problem class")
     with _rule(who, rule):
-        prob, truth, opts = type(em).example_recovery()
+        from .problem import NavigationProblem
+
+        prob, truth, opts = type(em).example_recovery(NavigationProblem)
         sol = prob.solve(**opts)
     _require(sol.stats.get("verified"), who, rule, "the solve was not verified")
     bad = {n: float(sol.error_params[n]) for n, v in truth.items()

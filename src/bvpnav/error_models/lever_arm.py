@@ -80,20 +80,23 @@ class LeverArm(ErrorModel):
         return strapdown_3d_2010(rate=10.0).imu_data()
 
     @classmethod
-    def example_recovery(cls):
-        """``(problem, truth, solve options)``: hard fixes of an antenna at ``(1, -0.3, 0.2)`` m
+    def example_recovery(cls, problem):
+        """``(problem, truth, solve options)`` built with ``problem`` (the problem class, given
+        by the contract check :func:`bvpnav.testing.check_error_model`, so that this layer imports
+        nothing above it): hard fixes of an antenna at ``(1, -0.3, 0.2)`` m
         in the body frame on a turning motion (positions: the FEM's own integration of the
         data, so the answer is exact); the solve must find ``truth`` (m) to 1e-6."""
-        from ..constraints import Position, Velocity
-        from ..problem import NavigationProblem
+        from ..items import item_class
+
+        Position, Velocity = item_class("position"), item_class("velocity")
 
         data = cls.example_data()
-        free = NavigationProblem(data).add(Position(t=data.t[0], value=0.0), Velocity(t=data.t[0], value=0.0))
+        free = problem(data).add(Position(t=data.t[0], value=0.0), Velocity(t=data.t[0], value=0.0))
         pos = free.solve(solver="direct").position()
         lever = np.array([1.0, -0.3, 0.2])
         k = np.arange(0, data.n, max(1, data.n // 12))
         ant = pos[k] + data.attitude[k].apply(lever)
-        prob = NavigationProblem(data, error_model=cls(), grade=None)
+        prob = problem(data, error_model=cls(), grade=None)
         prob.add(Position(t=data.t[k], value=ant, lever="estimated", name="antenna fixes"),
                  Velocity(t=data.t[0], value=0.0, name="start velocity"))
         return prob, dict(zip(cls().names(data), lever.tolist(), strict=True)), {"solver": "direct"}

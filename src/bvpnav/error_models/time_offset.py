@@ -80,19 +80,22 @@ class TimeOffset(ErrorModel):
         return ImuData(t=t, acc=acc)
 
     @classmethod
-    def example_recovery(cls):
-        """``(problem, truth, solve options)``: hard fixes stamped 0.2 s after the samples whose
+    def example_recovery(cls, problem):
+        """``(problem, truth, solve options)`` built with ``problem`` (the problem class, given
+        by the contract check :func:`bvpnav.testing.check_error_model`, so that this layer imports
+        nothing above it): hard fixes stamped 0.2 s after the samples whose
         position they hold (positions: the FEM's own integration of the data, so the answer
         is exact); the solve must find ``time_offset = 0.2`` s to 1e-6."""
-        from ..constraints import Position, Velocity
-        from ..problem import NavigationProblem
+        from ..items import item_class
+
+        Position, Velocity = item_class("position"), item_class("velocity")
 
         data = cls.example_data()
-        free = NavigationProblem(data).add(Position(t=data.t[0], value=0.0), Velocity(t=data.t[0], value=1.0))
+        free = problem(data).add(Position(t=data.t[0], value=0.0), Velocity(t=data.t[0], value=1.0))
         pos = free.solve(solver="direct").position()
         k = np.arange(5, data.n - 5, 10)
         delay = 0.2
-        prob = NavigationProblem(data, error_model=cls(), grade=None)
+        prob = problem(data, error_model=cls(), grade=None)
         prob.add(Position(t=data.t[k] + delay, value=pos[k], delay="estimated", name="late fixes"),
                  Velocity(t=data.t[0], value=1.0, name="start velocity"))
         return prob, {"time_offset": delay}, {"solver": "direct", "sequential": {"tol": 1e-12}}
