@@ -446,6 +446,17 @@ def _skew(v: np.ndarray) -> np.ndarray:
     return np.stack([np.stack([z, -w, y], -1), np.stack([w, z, -x], -1), np.stack([-y, x, z], -1)], -2)
 
 
+def _body_axes(axes, what: str, word: str = "body axes") -> tuple[tuple[str, ...], list[int]]:
+    """Names and indices of body axes given as a name, a sequence of names or ``None`` (all
+    three), or :class:`InputError` naming ``what`` and the valid names."""
+    body = ("x", "y", "z")
+    names = (axes,) if isinstance(axes, str) else (body if axes is None else tuple(axes))
+    bad = [a for a in names if a not in body]
+    if bad or not names:
+        raise InputError(f"{what}: {word} {list(names)}; give some of {list(body)}")
+    return names, [body.index(a) for a in names]
+
+
 class NavModel:
     r"""Typed context handed to every item's ``compile``: the unknowns and their maps.
 
@@ -568,12 +579,7 @@ class NavModel:
         if kind not in kinds:
             raise InputError(f"{what}: the error model has no {kind!r} node state (it has {kinds}); "
                              "add bvpnav.error_models.ErrorStates(...) with that state to the error model")
-        body = ("x", "y", "z")
-        names = (axes,) if isinstance(axes, str) else (body if axes is None else tuple(axes))
-        bad = [a for a in names if a not in body]
-        if bad or not names:
-            raise InputError(f"{what}: axes {list(names)}; give some of {list(body)}")
-        ax = [body.index(a) for a in names]
+        names, ax = _body_axes(axes, what, "axes")
         times = self.grid.t if t is None else as_times(t, what)
         P = sp.identity(self.N, format="csr") if t is None else self.grid.interpolation_matrix(times, what)
         cols = np.asarray(sm.state_index(self.data, kind), dtype=np.int64)   # (N, 3)
@@ -824,12 +830,7 @@ class NavModel:
         if rates is None:
             raise InputError(f"{what}: needs the gyro rates; build the data with bvpnav.ImuData.from_gyro "
                              "(or a reader given a gyro column)")
-        body = ("x", "y", "z")
-        names = (axes,) if isinstance(axes, str) else (body if axes is None else tuple(axes))
-        bad = [a for a in names if a not in body]
-        if bad or not names:
-            raise InputError(f"{what}: body axes {list(names)}; give some of {list(body)}")
-        ax = tuple(body.index(a) for a in names)
+        names, ax = _body_axes(axes, what)
         P = self.grid.interpolation_matrix(times, what)
         W = self._rate_columns
         L = self.params().A
@@ -896,11 +897,7 @@ class NavModel:
                              "the data with bvpnav.ImuData.from_gyro (specific force and gyro rates)")
         if self.d != 3:
             raise InputError(f"{what}: needs the three navigation axes; the data has {list(self.axes)}")
-        body = ("x", "y", "z")
-        names = (axes,) if isinstance(axes, str) else (body if axes is None else tuple(axes))
-        bad = [a for a in names if a not in body]
-        if bad or not names:
-            raise InputError(f"{what}: body axes {list(names)}; give some of {list(body)}")
+        names, jb = _body_axes(axes, what)
         try:
             ell = np.asarray(lever, dtype=float).reshape(3)
         except (TypeError, ValueError):
@@ -909,7 +906,7 @@ class NavModel:
         if not np.all(np.isfinite(ell)):
             raise InputError(f"{what}: lever={lever!r} must be finite (m)")
         times = as_times(t, what)
-        jb = np.array([body.index(a) for a in names])
+        jb = np.array(jb)
         K, nb = times.size, jb.size
         C = self._attitude_at(times, what)                       # (K, 3, 3) body to navigation
         V = self.velocity(times, None, what)                     # rows k * 3 + a
