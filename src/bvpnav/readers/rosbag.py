@@ -330,6 +330,20 @@ def _gnss_item(msgs, topic: str, path: Path, stamp: str, window: tuple[int, int]
                     name=f"NavSatFix {topic}")
 
 
+def _inside_window(msgs, topic: str, path: Path, stamp: str, window: tuple[int, int], notes: list[str],
+                   kind: str, item: str):
+    """``(ns, k, messages)``: every message's stamp (ns), the indices of those inside the IMU
+    window (checked increasing) and those messages; None, with a note that no ``item`` is made,
+    when none is inside."""
+    ns = np.array([_stamp_ns(r, m, stamp) for r, m in msgs], dtype=np.int64)
+    k = np.flatnonzero(_window(ns, window[0], window[1], f"{kind} messages of {topic}", notes))
+    if not k.size:
+        notes.append(f"{kind} topic {topic}: no message inside the IMU window; no {item} item.")
+        return None
+    _check_increasing(ns[k], topic, path, stamp, index=k)
+    return ns, k, [msgs[i][1] for i in k]
+
+
 def _odometry_item(msgs, topic: str, path: Path, stamp: str, window: tuple[int, int],
                    opts: Mapping[str, Any], notes: list[str]):
     """One Velocity item (m/s) of the odometry twists rotated into header.frame_id, or None."""
@@ -337,14 +351,10 @@ def _odometry_item(msgs, topic: str, path: Path, stamp: str, window: tuple[int, 
 
     from bvpnav.constraints import Velocity
 
-    ns = np.array([_stamp_ns(r, m, stamp) for r, m in msgs], dtype=np.int64)
-    inside = _window(ns, window[0], window[1], f"Odometry messages of {topic}", notes)
-    k = np.flatnonzero(inside)
-    if not k.size:
-        notes.append(f"Odometry topic {topic}: no message inside the IMU window; no Velocity item.")
+    picked = _inside_window(msgs, topic, path, stamp, window, notes, "Odometry", "Velocity")
+    if picked is None:
         return None
-    _check_increasing(ns[k], topic, path, stamp, index=k)
-    sel = [msgs[i][1] for i in k]
+    ns, k, sel = picked
     q = np.array([[m.pose.pose.orientation.x, m.pose.pose.orientation.y, m.pose.pose.orientation.z,
                    m.pose.pose.orientation.w] for m in sel])
     norm = np.linalg.norm(q, axis=1)
@@ -391,15 +401,11 @@ def _odometer_item(msgs, topic: str, path: Path, stamp: str, window: tuple[int, 
     TwistStamped wheel-speed topic, or None."""
     from bvpnav.constraints import Odometer
 
-    ns = np.array([_stamp_ns(r, m, stamp) for r, m in msgs], dtype=np.int64)
     what = "TwistStamped" if twist_stamped else "Odometry"
-    inside = _window(ns, window[0], window[1], f"{what} messages of {topic}", notes)
-    k = np.flatnonzero(inside)
-    if not k.size:
-        notes.append(f"{what} topic {topic}: no message inside the IMU window; no Odometer item.")
+    picked = _inside_window(msgs, topic, path, stamp, window, notes, what, "Odometer")
+    if picked is None:
         return None
-    _check_increasing(ns[k], topic, path, stamp, index=k)
-    sel = [msgs[i][1] for i in k]
+    ns, k, sel = picked
     tw = [m.twist if twist_stamped else m.twist.twist for m in sel]
     speed = np.array([float(w.linear.x) for w in tw])
     bad = np.flatnonzero(~np.isfinite(speed))
