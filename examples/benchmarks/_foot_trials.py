@@ -93,7 +93,7 @@ import numpy as np
 from bvpnav import ImuData, NavigationProblem, detect
 from bvpnav.align import align
 from bvpnav.constraints import Position, SamePosition
-from bvpnav.error_models import Bias, GyroBias
+from bvpnav.error_models import Bias, GyroBias, StrideDrift
 from bvpnav.evaluate import Trajectory, ape
 
 #: Trials that are running (the README's table); the rest walk.
@@ -222,10 +222,11 @@ def mask_of(t, intervals) -> np.ndarray:
     return m
 
 
-def solve(data, intervals, em, *, sigma=None, sigma_a=None, rate_sigma=None, same=None, attitude=None):
+def solve(data, intervals, em, *, sigma=None, sigma_a=None, rate_sigma=None, same=None, attitude=None,
+          uncertainty=False):
     """bvpnav with the start at the origin, a ZeroVelocity per interval (hard without
     ``sigma``), optionally ZeroAngularRate (``rate_sigma``) and a horizontal SamePosition of
-    the ends (``same``, m). Returns (solution, warnings' texts)."""
+    the ends (``same``, m); ``uncertainty`` as in ``solve``. Returns (solution, warnings' texts)."""
     prob = NavigationProblem(data, error_model=em, sigma_a=sigma_a)
     kw = {} if sigma is None else {"sigma": sigma}
     prob.add(Position(t=float(data.t[0]), value=0.0, name="start"))
@@ -235,8 +236,14 @@ def solve(data, intervals, em, *, sigma=None, sigma_a=None, rate_sigma=None, sam
         prob.add(SamePosition(t=ends, sigma=same, axes=("x", "y"), name="loop"))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        sol = prob.solve(solver="direct", attitude=attitude)
+        sol = prob.solve(solver="direct", attitude=attitude, uncertainty=uncertainty)
     return sol, [str(w.message) for w in caught]
+
+
+def end_std(sol) -> float:
+    """The solution's claimed standard deviation of the end per horizontal axis (the RMS of x and y), m."""
+    tr = sol.trajectory
+    return float(np.hypot(tr["x_std"].iloc[-1], tr["y_std"].iloc[-1]) / np.sqrt(2.0))
 
 
 #: Rows of the real-data table.
@@ -249,7 +256,8 @@ HEADING = ((ROWS[4], "(5)"), (ROWS[5], "(6)"), (ROWS[6], "(7)"))
 MIN_STRIDE = 0.3
 #: Columns of the end-near-start table.
 FINAL = ("documented path", "+ SamePosition 0.1 m", "+ SamePosition 1 mm", "truth's end to start",
-         "gap closed by 0.1 m (%)", "+ GyroBias + SamePosition")
+         "gap closed by 0.1 m (%)", "claimed end std (per axis)", "+ StrideDrift + SamePosition 0.1 m",
+         "gap closed with StrideDrift (%)", "claimed end std with StrideDrift", "+ GyroBias + SamePosition")
 
 
 def run_trial(tr: Trial, gyro: bool = True) -> dict:
@@ -266,7 +274,9 @@ def run_trial(tr: Trial, gyro: bool = True) -> dict:
     det = detect.stationary(data, threshold="adaptive", return_statistic=True)
     out["stances"] = len(det.intervals)
     doc = dict(sigma=ZUPT_SIGMA, sigma_a=SIGMA_A)
-    p = solve(data, det, Bias(), **doc)[0].position().reshape(-1, 3)
+    sol = solve(data, det, Bias(), uncertainty=True, **doc)[0]
+    p = sol.position().reshape(-1, 3)
+    out[FINAL[5]] = end_std(sol)
     out[ROWS[4]] = rms(t, p, gt)
     out["heading " + ROWS[4]] = headings(t, p, gt, det.intervals)
     out[FINAL[0]] = final_error(t, p, gt)
@@ -277,6 +287,11 @@ def run_trial(tr: Trial, gyro: bool = True) -> dict:
     p = solve(data, det, Bias(), same=SAME_HARD, **doc)[0].position().reshape(-1, 3)
     out[FINAL[2]] = final_error(t, p, gt)
     out[FINAL[3]] = float(np.linalg.norm(gt[-1] - gt[0]))
+    drift = StrideDrift.from_stances(data, det)   # each stride's drift from the recording
+    out[FINAL[8]] = end_std(solve(data, det, Bias() + drift, uncertainty=True, **doc)[0])
+    p = solve(data, det, Bias() + drift, same=SAME_SIGMA, **doc)[0].position().reshape(-1, 3)
+    out[FINAL[6]] = final_error(t, p, gt)
+    out[FINAL[7]] = 100.0 * (1.0 - float(np.linalg.norm(p[-1, :2] - p[0, :2])) / gap0)
     if gyro:
         sol, ws = solve(data, det, Bias() + GyroBias(), rate_sigma=GYRO_SIGMA, attitude={"tol": 1e-4}, **doc)
         p = sol.position().reshape(-1, 3)
@@ -293,7 +308,7 @@ def run_trial(tr: Trial, gyro: bool = True) -> dict:
         out["warnings spread"] = ws
         sol, _ = solve(data, det, Bias() + GyroBias(), rate_sigma=GYRO_SIGMA, attitude={"tol": 1e-4},
                        same=SAME_SIGMA, **doc)
-        out[FINAL[5]] = final_error(t, sol.position().reshape(-1, 3), gt)
+        out[FINAL[9]] = final_error(t, sol.position().reshape(-1, 3), gt)
     out[ROWS[7]] = rms(t, tr.pyshoe, gt)
     out["seconds"] = time.perf_counter() - c0
     return out
