@@ -288,7 +288,9 @@ def run_trial(tr: Trial, gyro: bool = True) -> dict:
     out[FINAL[2]] = final_error(t, p, gt)
     out[FINAL[3]] = float(np.linalg.norm(gt[-1] - gt[0]))
     drift = StrideDrift.from_stances(data, det)   # each stride's drift from the recording
-    out[FINAL[8]] = end_std(solve(data, det, Bias() + drift, uncertainty=True, **doc)[0])
+    sol = solve(data, det, Bias() + drift, uncertainty=True, **doc)[0]
+    out[FINAL[8]] = end_std(sol)
+    out["final with StrideDrift"] = final_error(t, sol.position().reshape(-1, 3), gt)
     p = solve(data, det, Bias() + drift, same=SAME_SIGMA, **doc)[0].position().reshape(-1, 3)
     out[FINAL[6]] = final_error(t, p, gt)
     out[FINAL[7]] = 100.0 * (1.0 - float(np.linalg.norm(p[-1, :2] - p[0, :2])) / gap0)
@@ -342,6 +344,19 @@ def _heading_table(res: dict) -> None:
         print(f"{name:<19} {r['kind']:<9} " + " ".join(cells))
 
 
+def _honesty(res: dict) -> None:
+    """Is the claimed end std honest? The walks' final-point errors (2-D) over the claimed std per
+    axis: for an honest Gaussian claim their RMS is sqrt(2) = 1.41 (a chi-square of 2 degrees)."""
+    walk = [r for r in res.values() if r["kind"] == "walking" and FINAL[8] in r]
+    if not walk:
+        return
+    for lab, err, col in (("documented path", FINAL[0], FINAL[5]),
+                          ("with StrideDrift", "final with StrideDrift", FINAL[8])):
+        z = np.array([r[err] / r[col] for r in walk])
+        print(f"final-point error / claimed end std over the {len(walk)} walks, {lab}: RMS "
+              f"{np.sqrt(np.mean(z**2)):.2f} (min {z.min():.2f}, max {z.max():.2f}; 1.41 if honest)")
+
+
 def main_real(folder: str, only: str | None = None, gyro: bool = True) -> dict:
     """Run every trial of ``folder``, print the tables, return the per-trial dicts."""
     res = {}
@@ -366,6 +381,7 @@ def main_real(folder: str, only: str | None = None, gyro: bool = True) -> dict:
     for name, r in res.items():
         print(f"{name:<19} {r['kind']:<9} " + " ".join(f"{r.get(c, np.nan):>10.3f}" for c in fin))
     _summary(res, fin, ".3f")
+    _honesty(res)
     if gyro:
         _heading_table(res)
         print("\nGyro bias of (6) and (7) against the mean gyro reading in the detected stances (rad/s):")

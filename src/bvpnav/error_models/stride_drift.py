@@ -136,11 +136,13 @@ class StrideDrift(ErrorModel):
     model (``sigma_a``, the stances' sigma) claims for the path's end is far less than the
     real drift, which comes from each stride's systematic errors (its heading, the foot's
     roll in the stance, the detector's edges) that no stance row sees. This model states
-    that drift: each stride's displacement is uncertain by ``sigma`` per axis. With
-    stances alone it is invisible (the estimate does not change, only its standard
-    deviations grow by :math:`\sigma\sqrt{n}` after :math:`n` strides); information on
-    the position, such as :class:`~bvpnav.constraints.SamePosition` of a walk's ends,
-    then spreads its correction over the strides in proportion to their variance.
+    that drift: each stride's displacement is uncertain by ``sigma`` per axis. The stances
+    do not see it (zero in every stance, no velocity change over the swing): the estimate
+    moves only by what the acceleration residuals share with its step (nothing on a
+    noise-free walk), and the standard deviations grow by :math:`\sigma\sqrt{n}` after
+    :math:`n` strides. Information on the position, such as
+    :class:`~bvpnav.constraints.SamePosition` of a walk's ends, then spreads its
+    correction over the strides in proportion to their variance.
 
     Parameters
     ----------
