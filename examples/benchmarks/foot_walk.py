@@ -77,7 +77,10 @@ that path with ``ZeroAngularRate`` (the gyro's white noise, 7.4e-3 rad/s, and ea
 own spread, ``angular_rate="spread"``) and ``GyroBias()``, and the dataset's own filter
 tuned per trial on the truth; then the final-point error (heading aligned on the first
 0.8 m walked) without and with a soft ``SamePosition`` of the ends (0.1 m; nearly hard; the
-truth's own end-to-start distance; the share of the gap the soft item closes), and the
+truth's own end-to-start distance; the share of the gap the soft item closes; the end's
+claimed std), the same with ``StrideDrift.from_stances`` (each stride's displacement an
+unknown with the sigma the recording shows) and how honest each claim is (the walks'
+final-point errors over their claimed std), and the
 stride-heading and turn errors of ``Bias()`` against the attitude models, marked where
 they are worse by more than a degree and where the solve warned. The code is in
 ``_foot_trials.py``.
