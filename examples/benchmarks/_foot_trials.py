@@ -53,7 +53,7 @@ count) leave the path loose: walking RMS 0.17, 0.27, 2.1 m on 11-26-05, 11-26-46
 11-35-59. A variance-component estimate (acceleration rows against stance rows, iterated)
 finds the acceleration rows 193 times their variance and the stances 0.57 times, and
 drives the stance sigma to 0 and ``sigma_a`` to 0.43: end claimed to 0.037 m, 11-35-59
-with the 0.1 m item 0.098 m (a knife edge). The Vicon marker moves 2-9 mm (median) in a
+with the 0.1 m item 0.098 m (a knife edge). The Vicon marker moves 1.5-9 mm (median) in a
 detected stance, with the gyro's roll (correlation 0.53-0.95): 2-3 cm over a walk. The
 drift is each stride's: ``StrideDrift.from_stances`` (each stride's displacement an
 unknown, sigma the stance-to-stance tilt change times the stride's length, invisible to the
