@@ -9,6 +9,7 @@ import numpy as np
 
 from bvpnav.errors import InputError
 from bvpnav.items import Item
+from bvpnav.model import Affine
 
 from ._common import finite, interval
 
@@ -118,6 +119,11 @@ class NonHolonomic(Item):
         turns; a point ``d`` m ahead of it moves sideways at ``d`` times the yaw rate).
     t : (float, float) or list of them, optional
         Interval(s) in s where the vehicle rolls on the ground; default the whole recording.
+    mounting : {None, "estimated"}
+        ``"estimated"``: the IMU is not aligned with the vehicle, and the rows constrain the
+        velocity across the *vehicle's* forward axis, whose yaw and pitch in the body frame are
+        the parameters of :class:`~bvpnav.error_models.Mounting` (add it to the error model,
+        with a prior). Default None: the body axes are the vehicle's.
     rate : float or None
         Rate of the rows, Hz (default 10): the samples nearest at or after ``t0 + k / rate``
         per interval; ``None`` for every sample. The errors of this information (tyre slip,
@@ -142,7 +148,10 @@ class NonHolonomic(Item):
     :math:`v_n` the FEM velocity, :math:`\omega_k` the corrected body rate and :math:`\ell`
     the lever; band: :math:`|\rho_{k,j}| \le tol_j`. With attitude error models the rows
     also carry the first-order change :math:`C_k^T [v^0\times] \psi_k` of the attitude
-    increments (see :meth:`bvpnav.NavModel.body_velocity`).
+    increments (see :meth:`bvpnav.NavModel.body_velocity`). With ``mounting="estimated"``
+    the rows are :math:`\rho_{k,y} - s_y v^0_{x,k}` and :math:`\rho_{k,z} + s_z v^0_{x,k}`
+    (:meth:`bvpnav.NavModel.mounting_velocity`): zero when the point moves along the
+    vehicle's forward axis :math:`(1, s_y, -s_z)` in body axes.
 
     Examples
     --------
@@ -157,6 +166,7 @@ class NonHolonomic(Item):
     lever: Any = (0.0, 0.0, 0.0)
     t: Any = None
     rate: Any = 10.0
+    mounting: Any = None
     units = "m/s"
     #: The item's axes are body axes (the contract check compares one body axis's rows with
     #: the rows of all of them instead of looking for navigation axes).
@@ -182,9 +192,21 @@ class NonHolonomic(Item):
         if len(set(axes)) != len(axes):
             raise InputError(f"{label}: axes={list(axes)} names an axis twice")
         object.__setattr__(self, "axes", tuple(axes))
+        if self.mounting not in (None, "estimated"):
+            raise InputError(f"{label}: mounting={self.mounting!r}; give 'estimated' (the yaw and pitch of "
+                             "the error model's Mounting) or None (the body axes are the vehicle's)")
+        if self.mounting is not None and "x" in axes:
+            raise InputError(f"{label}: mounting='estimated' with axes={list(axes)}; the mounting turns the "
+                             "lateral and vertical rows: give axes among ('y', 'z')")
         object.__setattr__(self, "lever", lever_arm(self.lever, label))
         object.__setattr__(self, "t", intervals(self.t, label))
         object.__setattr__(self, "rate", positive_rate(self.rate, label))
+
+    @property
+    def reads_error_model(self) -> bool:
+        """Whether the rows read a parameter of the error model (the :class:`~bvpnav.error_models.
+        Mounting` with ``mounting="estimated"``): the contract check then solves with it."""
+        return self.mounting is not None
 
     def row_layout(self, m: int) -> tuple[int, int]:
         """``(instants, body axes)``: sigma and tol may be given per axis."""
@@ -209,7 +231,11 @@ class NonHolonomic(Item):
     def compile(self, model):
         who = self.identify()
         check_body_data(model, who)
-        return model.body_velocity(self.instants(model), self.axes, self.lever, what=who)
+        t = self.instants(model)
+        rows = model.body_velocity(t, self.axes, self.lever, what=who)
+        if self.mounting is None:
+            return rows
+        return Affine(rows.A + model.mounting_velocity(t, self.axes, what=who).A, rows.c, rows.labels)
 
     def active(self, solution, rtol: float = 1e-3):
         """The rows at the band's edge in a solution: where the vehicle slid by at least ``tol``.

@@ -160,7 +160,14 @@ NHC_RATE = 10.0
 NHC_WIDTH = 0.1
 VEHICLE = {"bvpnav NHC soft": ("soft", False), "bvpnav NHC band": ("band", False),
            "bvpnav NHC+FM soft": ("soft", True), "bvpnav NHC+FM band": ("band", True),
-           "bvpnav states NHC soft": ("soft", False), "bvpnav states NHC band": ("band", False)}
+           "bvpnav states NHC soft": ("soft", False), "bvpnav states NHC band": ("band", False),
+           "bvpnav states NHC mount": ("soft", False), "bvpnav NHC+FM mount": ("soft", True)}
+#: The methods that estimate the IMU's mounting (yaw and pitch boresight) with the non-holonomic
+#: rows (``NonHolonomic(mounting="estimated")``), prior sigma :data:`MOUNT_SIGMA`.
+MOUNTED = ("bvpnav states NHC mount", "bvpnav NHC+FM mount")
+#: Prior sigma of the mounting angles, rad (about 1 deg: an IMU mounted by eye).
+MOUNT_SIGMA = 0.02
+MOUNT_NAMES = ("mounting_yaw", "mounting_pitch")
 METHODS = ("GTSAM", "GTSAM peer", "bvpnav README", "bvpnav defaults", "bvpnav states", *VEHICLE)
 
 
@@ -323,22 +330,27 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float):
     """The bvpnav problem of ``method`` (the data, the error model, the kept fixes)."""
     from bvpnav import ImuData, NavigationProblem
     from bvpnav.constraints import Position
-    from bvpnav.error_models import AttitudeError, Bias, ErrorStates, GyroBias
+    from bvpnav.error_models import AttitudeError, Bias, ErrorStates, GyroBias, Mounting
     from bvpnav.sensors import from_datasheet
 
     data = ImuData.from_gyro(d["t"], d["f"], d["w"], initial_attitude=c0,
                              gravity=np.array([0.0, 0.0, -GRAVITY]))
     rate = 1.0 / float(np.mean(np.diff(d["t"])))
-    if method in ("bvpnav states", "bvpnav states NHC soft", "bvpnav states NHC band"):
+    if method.startswith("bvpnav states"):
         # node states (issue 42 item 2): attitude error and both bias walks per sample, in the band;
         # the metadata's densities, GTSAM's example's bias priors, an open heading
         model = ErrorStates(arw=fig["gyro_noise"], gyro_drift=fig["gyro_bias_walk"],
                             acc_drift=fig["acc_bias_walk"], attitude_sigma=[TILT, TILT, np.inf],
                             gyro_sigma=fig["gyro_bias"], acc_sigma=fig["acc_bias"])
+        if method in MOUNTED:
+            model = model + Mounting(sigma=MOUNT_SIGMA)
         prob = NavigationProblem(data, error_model=model, sigma_a=fig["acc_noise"] * math.sqrt(rate))
     elif method == "bvpnav README" or method in VEHICLE:
         g = from_datasheet(**fig, tilt=TILT, base="tactical", name="KITTI metadata")
-        prob = NavigationProblem(data, error_model=g.error_model(interval), sigma_a=g.sigma_a(rate, interval))
+        em = g.error_model(interval)
+        if method in MOUNTED:
+            em = em + Mounting(sigma=MOUNT_SIGMA)
+        prob = NavigationProblem(data, error_model=em, sigma_a=g.sigma_a(rate, interval))
     else:
         prob = NavigationProblem(data, error_model=Bias() + GyroBias(interval=interval) + AttitudeError())
     prob.add(Position(t=d["fix_t"][kept], value=d["fix_p"][kept],
@@ -349,7 +361,7 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float):
         mode, forward = VEHICLE[method]
         width = {"sigma": NHC_WIDTH} if mode == "soft" else {"tol": NHC_WIDTH}
         prob.add(NonHolonomic(axes=("y", "z"), lever=(0.0, 0.0, 0.0), rate=NHC_RATE, mode=mode, **width,
-                              name="non-holonomic"))
+                              mounting="estimated" if method in MOUNTED else None, name="non-holonomic"))
         if forward:
             prob.add(ForwardMotion(min_speed=0.0, rate=NHC_RATE, name="forward"))
     return prob
@@ -390,7 +402,9 @@ def run_bvpnav(d: dict, kept, withheld, method: str, fig: dict, c0, interval: fl
             "iterations": len(seq.get("iterations", [])), "warnings": [w[:240] for w in sol.warnings],
             "misfit": (sol.stats.get("plausibility") or {}).get("noise_ratio"),
             "grade": (sol.stats.get("grade") or {}).get("name"),
-            "gyro_bias_max": float(np.max(np.abs(gb))) if gb else None}
+            "gyro_bias_max": float(np.max(np.abs(gb))) if gb else None,
+            "mounting_deg": [math.degrees(float(sol.error_params[n])) for n in MOUNT_NAMES]
+            if "mounting_yaw" in sol.error_params else None}
 
 
 #: Gravity magnitude used by both smoothers, m/s^2 (GTSAM's KITTI example uses 9.8).
@@ -450,7 +464,9 @@ def main(argv: list[str] | None = None) -> list[dict]:
                 f"verified={r.get('verified')} it={r.get('iterations')} misfit={r.get('misfit')}"
                 + (f" graph error {r['graph_error']:.1f}" if "graph_error" in r else "")
                 + (f" grade={r['grade']}" if r.get("grade") else "")
-                + (f" solver={r['solver']}" if r.get("solver") not in (None, "direct") else ""))
+                + (f" solver={r['solver']}" if r.get("solver") not in (None, "direct") else "")
+                + (" mounting yaw {:.3f} pitch {:.3f} deg".format(*r["mounting_deg"]) if r.get("mounting_deg")
+                   else ""))
             print(f"{gap:6g} {r['method']:>16} {r.get('rms', float('nan')):9.3f} "
                   f"{r.get('seconds', float('nan')):8.1f} {ratio:8.1f} {bps:9.0f}  {note}")
     return rows

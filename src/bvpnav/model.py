@@ -1054,6 +1054,63 @@ class NavModel:
         naming ``what`` when the problem has none."""
         return self.params(self._provided("time_offset", what, "TimeOffset(sigma=...)"))
 
+    def mounting_velocity(self, t, axes, what: str = "mounting") -> Affine:
+        r"""The change of the lateral and vertical body velocity rows of a vehicle item made by
+        the IMU's mounting (:class:`~bvpnav.error_models.Mounting`), m/s; rows time-major, then
+        axis, to be added to :meth:`body_velocity`'s rows of the same ``t`` and ``axes``.
+
+        Parameters
+        ----------
+        t : array_like of float
+            Times, s, inside the window.
+        axes : str or sequence of str
+            Body axes among ``"y"`` and ``"z"`` (the forward axis carries no mounting term).
+        what : str
+            What asks (for error messages).
+
+        Notes
+        -----
+        With the slopes :math:`(s_y, s_z)` of the mounting the rows are
+        :math:`-s_y\, v^0_x(t)` (axis y) and :math:`+s_z\, v^0_x(t)` (axis z), so that
+        :math:`v_y - s_y v_x = 0` and :math:`v_z + s_z v_x = 0` say the point moves along the
+        vehicle's forward axis :math:`(1, s_y, -s_z)`. :math:`v^0_x = e_x^T C^T v^0` is the
+        forward body velocity of the loop's linearization point (``data.body_point``, set by
+        the attitude loop, as for :meth:`body_velocity`'s attitude terms), so the rows are exact
+        at the loop's answer. Without a point (a loop's first solve) the rows are zero and the
+        slopes stay at their prior for that solve; without an attitude loop at all (no
+        attitude error model, no node states) nothing would iterate them, and this refuses.
+        """
+        names, jb = _body_axes(axes, what)
+        if 0 in jb:
+            raise InputError(f"{what}: mounting='estimated' acts on the lateral and vertical rows (axes 'y', "
+                             f"'z'), not on {list(names)}; the forward speed changes by the misalignment's "
+                             "cosine only (4e-5 at 0.5 deg)")
+        idx = self.l_index[[self.param_names.index(n) for n in self._provided("mounting", what,
+                                                                               "Mounting(sigma=...)")]]
+        comps = [c for c in getattr(self.error_model, "components", (self.error_model,)) if c is not None]
+        looped = (any(hasattr(c, "rate_columns") or hasattr(c, "initial_columns") for c in comps)
+                  or getattr(self.data, "attitude_point", None) is not None        # the loop's data
+                  or getattr(self.data, "body_point", None) is not None
+                  or (self.ns and "attitude_error" in self.state_model.state_kinds(self.data)))
+        if not looped:
+            raise InputError(f"{what}: mounting='estimated' is linearized about the velocity of the attitude "
+                             "loop, and this problem has none (no attitude error model, no node states); add "
+                             "one (e.g. AttitudeError(sigma=...) or GyroBias), or give the data in vehicle "
+                             "axes (rotate the IMU samples by the known mounting)")
+        times = as_times(t, what)
+        K, nb = times.size, len(jb)
+        point = getattr(self.data, "body_point", None)
+        if point is None:
+            return Affine(sp.csr_matrix((K * nb, self.size)), np.zeros(K * nb),
+                          TimeLabels("mount_", list(names), times))
+        C = self._attitude_at(times, what)
+        vx = np.einsum("kn,kn->k", C[:, :, 0], self.grid.interpolation_matrix(times, what) @ point.velocity)
+        sign = np.array([{1: -1.0, 2: 1.0}[j] for j in jb])
+        col = np.array([idx[j - 1] for j in jb])
+        A = sp.csr_matrix(((vx[:, None] * sign[None, :]).ravel(), (np.arange(K * nb), np.tile(col, K))),
+                          shape=(K * nb, self.size))
+        return Affine(A, np.zeros(K * nb), TimeLabels("mount_", list(names), times))
+
     def node_velocity(self, axis: int) -> Affine:
         """Velocity at every node of one axis (m/s)."""
         Vr, Va, Vb = self._node_vel

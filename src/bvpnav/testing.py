@@ -258,7 +258,9 @@ def _solve_with(item: Item, model: NavModel, mode: str, who: str) -> None:
             base = Position(t=ends, value=0.0, name="check_item ends (hard)")
         checked = _switch(item, mode, sigma=1.0)
         # no error model (its parameters would need more items) unless the item acts on it alone
-        em = model.error_model if item.needs_error_model else None
+        # or reads a parameter of it (``reads_error_model``: NonHolonomic(mounting="estimated"))
+        reads = item.needs_error_model or getattr(item, "reads_error_model", False)
+        em = model.error_model if reads else None
         prob = NavigationProblem(model.data, error_model=em)
         prob.add(base, checked)
         sol = prob.solve(lam=1.0)

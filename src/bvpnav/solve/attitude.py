@@ -188,6 +188,9 @@ class _Loop:
         self.curve = None
         self._data: dict = {}
         self.parts: dict = {}
+        #: The last evaluation, about whose velocity the next one linearizes rows bilinear in a
+        #: parameter and the velocity (None until the first; see :meth:`evaluate`).
+        self.velocity_point: Solution | None = None
 
     def data_at(self, values: dict):
         """The data re-integrated at the totals ``values`` (undamped), kept for the few most
@@ -237,7 +240,20 @@ class _Loop:
         """``J(values)``: the convex problem with the attitude fixed at these totals (``search``:
         without body-frame items, for the heading search)."""
         data = self.data_at(values)
+        if not search and self.velocity_point is None and self.mounted:
+            self.velocity_point = self._unmounted(data)
+        if not search and self.velocity_point is not None:
+            # rows bilinear in a parameter and the velocity (NonHolonomic(mounting="estimated")):
+            # about the last evaluation's velocity, as a step's are about its evaluation's
+            import copy
+
+            data = copy.copy(data)
+            m = self.velocity_point.formulation.model
+            vel = np.column_stack([m.node_velocity_values(a, self.velocity_point.x) for a in range(m.d)])
+            data.body_point = LinearizationPoint(velocity=vel, names=(), psi=np.zeros((data.n, 3, 0)))
         sol = self._solve(self._form(data, self.rest_model, search))
+        if not search and self.mounted:
+            self.velocity_point = sol
         used = sol.formulation
         motion = objective_value(used, sol.x, float(sol.lam))
         priors = sum(c.prior_cost(data) for c in self.comps)
@@ -245,6 +261,34 @@ class _Loop:
         self.parts[tuple(float(values[n]) for n in self.names)] = {
             "motion": motion, "gyro_items": gyro_items, "priors": priors}
         return motion + priors + gyro_items, sol
+
+    @property
+    def mounted(self) -> bool:
+        """Whether an item's rows are bilinear in a parameter and the velocity
+        (``NonHolonomic(mounting="estimated")``)."""
+        return any(getattr(it, "mounting", None) for it in self.form.items)
+
+    def _unmounted(self, data) -> Solution:
+        """The first velocity point of mounted items: the fixed-attitude solve with the vehicle
+        axes taken as the body's (the items without ``mounting`` and soft, the error model
+        without the component that provides it)."""
+        from dataclasses import replace
+
+        rest = [c for c in getattr(self.rest_model, "components", (self.rest_model,))
+                if c is not None and getattr(type(c), "provides", None) != "mounting"]
+        model = None if not rest else (rest[0] if len(rest) == 1 else sum(rest[1:], rest[0]))
+        # soft (0.1 m/s where the item gives no sigma): hard rows about the body's axes could
+        # conflict with the other hard information, which holds about the vehicle's
+        items = [replace(it, mounting=None, mode="soft", tol=None, huber=None,
+                         sigma=0.1 if it.sigma is None else it.sigma)
+                 if getattr(it, "mounting", None) else it
+                 for it in self.form.items if not it.needs_error_model]
+        f = self.form
+        form = Formulation(data, f.residual, f.sigma_a if f.sigma_a_given else None, model, items, grade=None)
+        form.grade_report = f.grade_report
+        sol = self.inner(form, self.lam if isinstance(self.lam, float) else 1.0, self.opts)
+        self.solves += 1
+        return sol
 
     def parts_at(self, values: dict) -> dict | None:
         """The objective's parts at an evaluated point: ``motion`` (the data rows and the items
