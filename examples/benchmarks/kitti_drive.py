@@ -240,6 +240,21 @@ def hrms(est: np.ndarray, ref: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.sum((est[:, :2] - ref[:, :2]) ** 2, axis=1))))
 
 
+def track_rms(est: np.ndarray, d: dict, withheld) -> dict:
+    """The horizontal error at the withheld fixes split along and across the track (the fixes'
+    own direction of travel, central differences), RMS m, with the split's last 50 s apart
+    (``late``: where the drive's sharp low-speed turns are)."""
+    vel = np.gradient(d["fix_p"][:, :2], d["fix_t"], axis=0)[withheld]
+    u = vel / np.linalg.norm(vel, axis=1, keepdims=True)
+    err = est[:, :2] - d["fix_p"][withheld, :2]
+    along = np.sum(err * u, axis=1)
+    cross = err[:, 1] * u[:, 0] - err[:, 0] * u[:, 1]
+    late = d["fix_t"][withheld] >= d["fix_t"][0] + DEV_SPAN - 50.0
+    rms = lambda x: float(np.sqrt(np.mean(x ** 2))) if x.size else float("nan")  # noqa: E731
+    return {"along": rms(along), "cross": rms(cross), "early": rms(np.hypot(along, cross)[~late]),
+            "late": rms(np.hypot(along, cross)[late])}
+
+
 def gtsam_example_smoother(d: dict, kept, fig: dict, c0, max_iterations: int = 100) -> dict:
     """GTSAM's KITTI example as a batch smoother: a node at every fix time (1 Hz), an ``ImuFactor``
     between consecutive nodes integrating each IMU sample held constant over its preceding step
@@ -310,6 +325,7 @@ def gtsam_example_smoother(d: dict, kept, fig: dict, c0, max_iterations: int = 1
 def run_gtsam_example(d: dict, kept, withheld, fig: dict, c0) -> dict:
     g = gtsam_example_smoother(d, kept, fig, c0)
     return {"rms": hrms(g["position"][withheld], d["fix_p"][withheld]), "seconds": g["seconds"],
+            "track": track_rms(g["position"][withheld], d, withheld),
             "cpu_seconds": g["cpu_seconds"], "verified": None, "iterations": g["iterations"],
             "graph_error": g["graph_error"],
             "gyro_bias_mean": np.mean(g["gyro_bias"], 0).tolist()}
@@ -398,6 +414,7 @@ def run_bvpnav(d: dict, kept, withheld, method: str, fig: dict, c0, interval: fl
     seq = sol.stats.get("sequential", {}) if isinstance(sol.stats, dict) else {}
     gb = [v for k, v in sol.error_params.items() if k.startswith("gyro_bias")]
     return {"rms": hrms(est, d["fix_p"][withheld]), "seconds": sec, "cpu_seconds": cpu,
+            "track": track_rms(est, d, withheld),
             "verified": sol.stats.get("verified"), "solver": solver,
             "iterations": len(seq.get("iterations", [])), "warnings": [w[:240] for w in sol.warnings],
             "misfit": (sol.stats.get("plausibility") or {}).get("noise_ratio"),
@@ -466,7 +483,9 @@ def main(argv: list[str] | None = None) -> list[dict]:
                 + (f" grade={r['grade']}" if r.get("grade") else "")
                 + (f" solver={r['solver']}" if r.get("solver") not in (None, "direct") else "")
                 + (" mounting yaw {:.3f} pitch {:.3f} deg".format(*r["mounting_deg"]) if r.get("mounting_deg")
-                   else ""))
+                   else "")
+                + (" along {along:.3f} cross {cross:.3f} first {early:.3f} last 50 s {late:.3f} m".format(
+                    **r["track"]) if r.get("track") else ""))
             print(f"{gap:6g} {r['method']:>16} {r.get('rms', float('nan')):9.3f} "
                   f"{r.get('seconds', float('nan')):8.1f} {ratio:8.1f} {bps:9.0f}  {note}")
     return rows
