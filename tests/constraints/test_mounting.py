@@ -74,7 +74,7 @@ def test_without_the_mounting_the_constraint_turns_the_attitude_by_the_boresight
 
 
 # exact rows: the residuals are below the stated sigmas, and the check says so
-@pytest.mark.filterwarnings("ignore:uncertainty: the a-posteriori variance")
+@pytest.mark.filterwarnings("ignore:uncertainty. the a-posteriori variance")
 def test_uncertainty_reports_the_angles_std():
     data, pos, vel = _straight_drive(mounting_slopes(YAW, PITCH))
     rng = np.random.default_rng(3)
