@@ -221,7 +221,7 @@ ATTITUDE: dict[str, tuple[Any, Rule]] = {
                                                              "prior), 'search' or 'given' (start from "
                                                              "the data's heading)")),
     "candidates": (12, number(2, integer=True, want="an integer of at least 2 headings")),
-    "loop": (True, boolean()), "progress": (None, _PROGRESS)}
+    "loop": (True, boolean()), "progress": (None, _PROGRESS), "quick": (True, boolean())}
 #: The lambda sweep's options (``solve(rule={...})``; checked as a whole by the sweep).
 RULE: dict[str, tuple[Any, Rule]] = {
     "lam_range": ((1e-6, 1e6), _ANY), "points": (25, _ANY), "tau": (None, _ANY), "probes": (None, _ANY),

@@ -110,6 +110,32 @@ def test_drifting_biases_recovered_within_their_posterior():
     assert sol.records.attitude.converged
 
 
+def test_quick_intermediate_steps_give_the_staged_answer():
+    # noisy rates, forces and fixes (residuals left at the optimum): Gauss-Newton converges
+    # linearly over several steps, the middle ones one banded solve each (no refinement, no
+    # verification); every step through the stage gives the same answer to rounding, verified
+    rng = np.random.default_rng(5)
+    d = simulate(const(BG), const(BA), T=20.0, turn=8.0)
+    n, data = d["t"].size, d["data"]
+    noisy = bvpnav.ImuData.from_gyro(d["t"], data.specific_force + 2e-2 * rng.standard_normal((n, 3)),
+                                     data.gyro + 2e-3 * rng.standard_normal((n, 3)),
+                                     initial_attitude=d["C"][0], gravity=GRAV)
+    drive = {**d, "data": noisy, "r": d["r"] + 1e-2 * rng.standard_normal((n, 3))}
+    model = ErrorStates(arw=2e-3 / np.sqrt(20.0), gyro_drift=1e-4, acc_drift=1e-3)
+    sols = {}
+    for quick in (True, False):
+        prob = problem(drive, model, every=20, fix_sigma=1e-2, sigma_a=2e-2)
+        sols[quick] = prob.solve(solver="direct", attitude={"progress": False, "quick": quick})
+    fast, slow = sols[True].records.attitude, sols[False].records.attitude
+    kinds = [it["solve"] for it in fast.iterations]
+    assert kinds[0] == kinds[-1] == "stage" and "banded" in kinds, kinds
+    assert {it["solve"] for it in slow.iterations} == {"stage"}
+    assert fast.converged and slow.converged and len(fast.iterations) == len(slow.iterations) >= 4
+    x, y = sols[True].x, sols[False].x
+    assert np.abs(x - y).max() <= 1e-9 * np.abs(y).max(), np.abs(x - y).max() / np.abs(y).max()
+    assert sols[True].stats["verified"] and sols[False].stats["verified"]
+
+
 def test_linearized_solve_equals_dense_reference():
     from bvpnav.linalg.lsq import banded_plan, least_squares_form
 

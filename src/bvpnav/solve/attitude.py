@@ -749,6 +749,42 @@ def _iterate(loop: _Loop, values: dict, j: float, at_values: Solution, o: dict):
     return values, j, at_values, sol, iters, reason
 
 
+def _direct_first(opts) -> bool:
+    """Whether the solve's first back end is ``direct`` (the one whose banded factor an
+    intermediate node-state step uses alone)."""
+    chain = getattr(opts, "chain", None)
+    return bool(chain) and getattr(chain[0][0], "name", None) == "direct"
+
+
+def _expected(iters: list) -> float:
+    """The next step's size (rad) expected from the last two (Gauss-Newton converges
+    linearly here: the ratio of successive steps carries on), or the last one's."""
+    last = iters[-1]["step"]
+    if len(iters) < 2 or not iters[-2]["step"] > 0:
+        return last
+    return last * min(1.0, last / iters[-2]["step"])
+
+
+def _quick_step(f: Formulation, lam: float, workspace) -> np.ndarray | None:
+    """The unknowns ``x`` of one banded solve of ``f`` at ``lam``, without refinement or
+    verification (an intermediate Gauss-Newton step, whose answer only moves the
+    linearization point), or None when ``f`` is not banded equality-constrained least
+    squares or the solve fails (the stage then solves it)."""
+    from ..linalg.banded import NotBanded
+    from ..linalg.lsq import banded_factor, least_squares_form
+
+    if f.residual != "acceleration":
+        return None
+    ls = least_squares_form(f, lam)
+    if ls is None:
+        return None
+    try:
+        x = banded_factor(ls, f, workspace=workspace).solve_x(ls.rhs())
+    except (NotBanded, RuntimeError, np.linalg.LinAlgError, ValueError):
+        return None
+    return x if np.all(np.isfinite(x)) else None
+
+
 def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solution:
     r"""Gauss-Newton on the node states of :class:`~bvpnav.error_models.ErrorStates`.
 
@@ -762,6 +798,16 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     so they are in it; the accelerometer bias is linear given the attitude); the answer is
     that step's solve (its increments below ``tol``). ``stats["sequential"]`` holds the
     report (``kind="states"``).
+
+    With ``direct`` as the first back end (and ``quick``, the default), the steps between
+    the first and the one expected to converge (the ratio of the last two steps carried on
+    below ``tol``) are one banded solve each (:func:`bvpnav.linalg.lsq.banded_factor`, no
+    refinement, no verification): they only move the linearization point, which the next
+    step re-linearizes about (``iterations[k]["solve"]``: ``"banded"``; ``"stage"``
+    otherwise). The first step (which checks the problem and resolves a lambda rule) and
+    the answer go through the stage (refined and verified); a quick step whose change is
+    below ``tol`` is solved again by the stage, and so is a form the banded path does not
+    take.
     """
     from ..error_models.error_states import states_at
 
@@ -782,7 +828,7 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     reason = None
     lam_now, rule, curve = lam, (lam if isinstance(lam, str) else None), None
     checked = False
-    sol = data = f = None
+    sol = data = f = x = None
     # every step's formulation has the same sparsity pattern: one workspace keeps the band
     # plan (reused when the pattern matches, bvpnav.linalg.lsq.banded_plan)
     from ..linalg.workspace import Workspace
@@ -790,13 +836,14 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     workspace = Workspace() if not form.nonlinear_items else None
     if workspace is not None:   # each step's factor is dead before the next: one band's memory
         workspace.band_buffer = np.empty(0)
+    quick = bool(o["quick"]) and workspace is not None and _direct_first(opts)
     with progress(desc="state loop", unit="iter", enabled=o["progress"]) as bar:
-        for _ in range(int(o["max_iter"])):
+        for k in range(int(o["max_iter"])):
             data = form.data if not iters else states_at(raw, totals)
             if iters and any(getattr(it, "body_frame", False) for it in form.items):
                 # body-frame items: their attitude term about the last step's velocity
                 m = f.model
-                vel = np.column_stack([m.node_velocity_values(a, sol.x) for a in range(m.d)])
+                vel = np.column_stack([m.node_velocity_values(a, x) for a in range(m.d)])
                 data.body_point = LinearizationPoint(velocity=vel, names=(), psi=np.zeros((raw.n, 3, 0)))
             if iters:
                 f = Formulation(data, form.residual, form.sigma_a if form.sigma_a_given else None,
@@ -805,17 +852,34 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
                 f._observable = checked
             else:
                 f = form
-            kw = {} if workspace is None else {"workspace": workspace}
-            sol = inner(f, lam_now, opts, **kw)
-            checked = True
-            if rule is not None and not isinstance(lam_now, float):
-                curve, lam_now = sol.curve, float(sol.lam)
-            s = f.model.split(sol.x)["s"]
-            new = sm.updated(data, s)
+            # an intermediate step only moves the linearization point: one banded solve, no
+            # refinement or verification; the step expected to be the last (and the first,
+            # which checks the problem and resolves a lambda rule) goes through the stage
+            x, staged = None, True
+            if quick and iters and o["loop"] and k + 1 < int(o["max_iter"]) and _expected(iters) >= o["tol"]:
+                x = _quick_step(f, float(lam_now), workspace)
+                staged = x is None
+            if staged:
+                kw = {} if workspace is None else {"workspace": workspace}
+                sol = inner(f, lam_now, opts, **kw)
+                x = sol.x
+                checked = True
+                if rule is not None and not isinstance(lam_now, float):
+                    curve, lam_now = sol.curve, float(sol.lam)
+            s = f.model.split(x)["s"]
             step = float(np.max(np.linalg.norm(s[sm.state_index(raw, "attitude_error")], axis=1)))
-            j = objective_value(f, sol.x, float(sol.lam))
-            iters.append({"objective": j, "trial": j, "step": step, "accepted": True, "damping": 0.0})
-            log.info("state iteration %d: objective %.9g, step %.3g rad", len(iters), j, step)
+            if not staged and step < o["tol"]:
+                # a quick step that converged: the answer is this step's solve by the stage
+                sol = inner(f, lam_now, opts, workspace=workspace)
+                x, staged = sol.x, True
+                s = f.model.split(x)["s"]
+                step = float(np.max(np.linalg.norm(s[sm.state_index(raw, "attitude_error")], axis=1)))
+            new = sm.updated(data, s)
+            j = objective_value(f, x, float(sol.lam if staged else lam_now))
+            iters.append({"objective": j, "trial": j, "step": step, "accepted": True, "damping": 0.0,
+                          "solve": "stage" if staged else "banded"})
+            log.info("state iteration %d: objective %.9g, step %.3g rad%s", len(iters), j, step,
+                     "" if staged else " (intermediate: one banded solve)")
             bar.update(1)
             totals = new
             if not o["loop"]:   # one linearized solve about the data as given
@@ -869,6 +933,10 @@ def with_attitude(inner: Stage) -> Stage:
         linear model of the columns, e.g. for contract checks and teaching).
     progress : bool, optional
         A tqdm bar of the iterations (None: when stderr is a terminal).
+    quick : bool
+        Node states (:class:`~bvpnav.error_models.ErrorStates`) with ``direct``: the
+        intermediate Gauss-Newton steps are one banded solve each, without refinement or
+        verification (default True); False: every step through the stage.
 
     The answer is the last linearized solve at the accepted totals (its increments are
     below ``tol``), so ``error_params`` holds the totals and ``solve(uncertainty=...)``
