@@ -136,6 +136,52 @@ def test_quick_intermediate_steps_give_the_staged_answer():
     assert sols[True].stats["verified"] and sols[False].stats["verified"]
 
 
+def test_a_plan_made_where_rows_had_exact_zeros_serves_the_filled_rows():
+    # the first Gauss-Newton step's process rows have exact zeros (zero residual: identity
+    # Jacobians) that later steps fill: the first plan serves them (same answer as a fresh
+    # plan), and refuses rows that reach beyond its band or change what is eliminated
+    from bvpnav.linalg.banded import BandedKKT, BandPlan
+    from bvpnav.linalg.lsq import column_nodes, least_squares_form
+
+    d = simulate(const(BG), const(BA), T=2.0)
+    model = ErrorStates(arw=1e-4, gyro_drift=1e-4, acc_drift=1e-3, attitude_sigma=0.1)
+    form = problem(d, model, every=5).formulation
+    ls = least_squares_form(form, 1.0)
+    D, E = ls.D.A.tocsr(), ls.E.A.tocsr()
+    colnode = column_nodes(form.model, interleave=True)
+    process = np.flatnonzero(np.diff(D.indptr) == 9)   # the attitude process rows: 3 x 3 blocks
+    rows = process[15:27]                                  # nodes 5 to 8
+    s0 = form.model.s_index[0]
+    D0 = D.copy()
+    for r in rows:   # each block's diagonal alone: the rows as at a zero residual (identity Jacobians)
+        seg = np.arange(D0.indptr[r], D0.indptr[r + 1])
+        D0.data[seg[(D0.indices[seg] - s0) % 3 != (r - process[0]) % 3]] = 0.0
+    D0.eliminate_zeros()
+    assert D0.nnz == D.nnz - 12 * 6
+    plan = BandPlan.build(D0, E, colnode, lam_rows=ls.lam_rows)
+    served = plan.admitting(D, E, colnode, ls.lam_rows)
+    assert served is not None and served.nnz_D == D.nnz and plan.nnz_D == D0.nnz
+    rhs = ls.rhs()
+    m, n = D.shape
+    x = BandedKKT(D, E, params=form.model.l_index, plan=served).refined(rhs, 3)[0][m:m + n]
+    ref = BandedKKT(D, E, colnode, params=form.model.l_index).refined(rhs, 3)[0][m:m + n]
+    dense = np.linalg.solve(ls.augmented().toarray(), rhs)[m:m + n]
+    for y in (x, ref):
+        assert np.abs(y - dense).max() <= 1e-9 * np.abs(dense).max(), np.abs(y - dense).max()
+    # a row coupling states three nodes apart: still folded, but beyond the plan's band
+    far = D.tolil()
+    r = int(rows[0])
+    far[r, form.model.s_index[9 * 3 + 1]] = 1.0
+    assert plan.admitting(far.tocsr(), E, colnode, ls.lam_rows) is None
+    # a second entry in a row alone on an eliminated unknown: the unknown is kept
+    lone = np.flatnonzero(np.diff(D.indptr) == 1)
+    el = int(D.indices[D.indptr[lone[0]]])
+    assert el in set(plan.elim)
+    other = D.tolil()
+    other[int(lone[0]), int(form.model.s_index[0])] = 1.0
+    assert plan.admitting(other.tocsr(), E, colnode, ls.lam_rows) is None
+
+
 def test_linearized_solve_equals_dense_reference():
     from bvpnav.linalg.lsq import banded_plan, least_squares_form
 

@@ -1327,6 +1327,50 @@ class BandPlan:
         ab, B, C, _ = self._scatter((*out, None))
         return ab, B, C
 
+    def admitting(self, D: sp.csr_matrix, E: sp.csr_matrix, colnode: np.ndarray,
+                  lam_rows: np.ndarray | None = None, span: int = FOLD_SPAN) -> BandPlan | None:
+        """This plan for objective rows ``D`` of another pattern (``E``'s pattern the plan's,
+        which the caller checks), or None when it does not serve them.
+
+        It serves them when the rows fold and the unknowns are eliminated as in the plan
+        and every folded row's banded unknowns lie within ``kl`` band positions of each
+        other (their products :math:`D_f^T D_f` stay in the band): e.g. a Gauss-Newton
+        step's rows whose first linearization had exact zeros that later ones fill. The
+        answer is a copy with ``D``'s entry count (:meth:`same_pattern`), without the first
+        assembly.
+        """
+        m, n = D.shape
+        if (m, n) != (self.m, self.n) or E.shape != (self.p, self.n) or E.nnz != self.nnz_E:
+            return None
+        lo, hi = row_span(D, colnode)
+        fold = (hi < 0) | (hi - lo <= span)
+        if not np.array_equal(fold, self.fold):
+            return None
+        Drow = np.repeat(np.arange(m), np.diff(D.indptr))
+        Dcol = D.indices.astype(np.int64)
+        alone = fold[Drow] & (np.diff(D.indptr)[Drow] == 1)
+        if lam_rows is not None:
+            alone &= ~np.asarray(lam_rows, dtype=bool)[Drow]
+        single = np.zeros(n, dtype=bool)
+        single[Dcol] = True
+        single[Dcol[~alone]] = False
+        single &= colnode >= 0
+        if not np.array_equal(np.flatnonzero(single), self.elim):
+            return None
+        rows = np.flatnonzero(np.diff(D.indptr))
+        if rows.size:   # the band positions each row spans (rows with entries: whole segments)
+            pc = self.pos[Dcol].astype(np.int64)
+            banded = pc >= 0
+            starts = D.indptr[:-1][rows]
+            hi_p = np.maximum.reduceat(np.where(banded, pc, -1), starts)
+            lo_p = np.minimum.reduceat(np.where(banded, pc, np.iinfo(np.int64).max), starts)
+            if np.any(fold[rows] & (hi_p >= 0) & (hi_p - lo_p > self.kl)):
+                return None
+        out = copy.copy(self)
+        out.nnz_D = D.nnz
+        out._first = None
+        return out
+
     def same_pattern(self, D: sp.csr_matrix, E: sp.csr_matrix) -> bool:
         """Whether ``D`` and ``E`` have the shapes and entry counts this plan was made for."""
         return (D.shape == (self.m, self.n) and E.shape == (self.p, self.n)

@@ -475,6 +475,15 @@ def banded_plan(ls: LeastSquaresForm, form: Formulation, workspace: Workspace | 
     if workspace is not None and workspace.band_plan is not None and all(
             a is b or np.array_equal(a, b) for a, b in zip(workspace.band_pattern, pattern, strict=True)):
         return workspace.band_plan   # the same pattern (another lambda, or the sweep's chosen one)
+    if (workspace is not None and workspace.band_plan is not None and model.ns
+            and all(a is b or np.array_equal(a, b) for a, b in zip(workspace.band_pattern[2:], pattern[2:],
+                                                                   strict=True))):
+        # node states (always interleaved): a Gauss-Newton step's objective rows may fill
+        # exact zeros of the first step's; the plan serves them when they stay in its band
+        plan = workspace.band_plan.admitting(D, E, column_nodes(model, interleave=True), ls.lam_rows)
+        if plan is not None:
+            workspace.band_plan, workspace.band_pattern = plan, pattern
+            return plan
     diagonal = fem_rows_by_diagonals(form, workspace)
     try:
         if model.ns:   # node states couple the axes at every node: interleaved from the start
