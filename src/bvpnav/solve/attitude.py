@@ -760,9 +760,71 @@ def _expected(iters: list) -> float:
     """The next step's size (rad) expected from the last two (Gauss-Newton converges
     linearly here: the ratio of successive steps carries on), or the last one's."""
     last = iters[-1]["step"]
-    if len(iters) < 2 or not iters[-2]["step"] > 0:
-        return last
+    if len(iters) < 2 or not iters[-2]["step"] > 0 or iters[-2].get("extrapolated"):
+        return last   # (after an extrapolated step the ratio says nothing of the next)
     return last * min(1.0, last / iters[-2]["step"])
+
+
+#: The node-state loop extrapolates a step (:func:`_extrapolation`) when the last two ratios of
+#: successive steps differ by at most this fraction of the larger...
+STEADY_RATIO = 0.2
+
+#: ... the ratio is at most this when the steps keep their direction (the step is then
+#: lengthened by at most 1 / (1 - r) = 2) and at least its negative ``-OSCILLATING_RATIO``
+#: when they alternate (shortened, by at least 1 / 1.9)...
+MAX_RATIO = 0.5
+OSCILLATING_RATIO = 0.9
+
+#: ... and the last three steps lie along one line: the cosines between successive attitude
+#: steps at least this in size, of one sign (one mode shrinking, not several).
+MIN_COSINE = 0.95
+
+
+def _extrapolation(iters: list, tol: float) -> float:
+    r"""The length factor :math:`\alpha = 1/(1 - r)` for the last node-state step when the loop
+    converges linearly along one line, else 1.
+
+    :math:`r` is the signed ratio of successive steps: their size ratio, negative when they
+    alternate (``turn``, the cosine between successive attitude steps, near -1). It applies
+    when the last two ratios are steady within :data:`STEADY_RATIO`, the cosines are at least
+    :data:`MIN_COSINE` in size and of one sign, :math:`-`:data:`OSCILLATING_RATIO`
+    :math:`\le r \le` :data:`MAX_RATIO`, the step is not below ``tol`` (the loop goes on), and neither of the
+    two steps before was itself extrapolated.
+
+    Notes
+    -----
+    A fixed-point iteration whose error shrinks by a steady factor :math:`r` along one line
+    is :math:`(x_{k+1} - x_k)/(1 - r)` from its limit (Aitken): a step lengthened when the
+    steps keep their direction, shortened (damped) when they alternate. The answer does not
+    depend on it: the loop still stops at a Gauss-Newton step below ``tol``, solved by the
+    stage.
+    """
+    if len(iters) < 3 or iters[-2].get("extrapolated") or iters[-3].get("extrapolated"):
+        return 1.0
+    s0, s1, s2 = (it["step"] for it in iters[-3:])
+    c1, c2 = iters[-2].get("turn", 0.0), iters[-1].get("turn", 0.0)
+    if not (s0 > 0 and s1 > 0 and s2 >= tol and min(abs(c1), abs(c2)) >= MIN_COSINE and c1 * c2 > 0):
+        return 1.0
+    sign = np.sign(c2)
+    r1, r2 = sign * s1 / s0, sign * s2 / s1
+    if not (-OSCILLATING_RATIO <= r2 <= MAX_RATIO) or abs(r1 - r2) > STEADY_RATIO * max(abs(r1), abs(r2)):
+        return 1.0
+    return float(1.0 / (1.0 - r2))
+
+
+def _next_totals(sm, data, s: np.ndarray, iters: list, prev_att: np.ndarray | None, o: dict
+                 ) -> tuple[dict, np.ndarray]:
+    """The totals after the step ``s`` (extrapolated by :func:`_extrapolation` when the loop
+    converges linearly along one direction; ``iters[-1]`` records ``turn``, the cosine
+    between this attitude step and the last, and ``extrapolated``) and this attitude step."""
+    att = s[sm.state_index(data, "attitude_error")].ravel()
+    if prev_att is not None:
+        den = max(float(np.linalg.norm(att) * np.linalg.norm(prev_att)), 1e-300)
+        iters[-1]["turn"] = float(att @ prev_att) / den
+    alpha = _extrapolation(iters, o["tol"]) if o["loop"] else 1.0
+    if alpha != 1.0:
+        iters[-1]["extrapolated"] = alpha
+    return sm.updated(data, alpha * s), att
 
 
 def _quick_step(f: Formulation, lam: float, workspace) -> np.ndarray | None:
@@ -807,7 +869,10 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     otherwise). The first step (which checks the problem and resolves a lambda rule) and
     the answer go through the stage (refined and verified); a quick step whose change is
     below ``tol`` is solved again by the stage, and so is a form the banded path does not
-    take.
+    take. When the steps shrink by a steady ratio along one line (Gauss-Newton converges
+    linearly where the data misfit their sigmas), a step is lengthened or, when they
+    alternate, damped to the limit the ratio predicts (:func:`_extrapolation`,
+    ``iterations[k]["extrapolated"]``).
     """
     from ..error_models.error_states import states_at
 
@@ -828,7 +893,7 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     reason = None
     lam_now, rule, curve = lam, (lam if isinstance(lam, str) else None), None
     checked = False
-    sol = data = f = x = None
+    sol = data = f = x = prev_att = None
     # every step's formulation has the same sparsity pattern: one workspace keeps the band
     # plan (reused when the pattern matches, bvpnav.linalg.lsq.banded_plan)
     from ..linalg.workspace import Workspace
@@ -874,10 +939,10 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
                 x, staged = sol.x, True
                 s = f.model.split(x)["s"]
                 step = float(np.max(np.linalg.norm(s[sm.state_index(raw, "attitude_error")], axis=1)))
-            new = sm.updated(data, s)
             j = objective_value(f, x, float(sol.lam if staged else lam_now))
             iters.append({"objective": j, "trial": j, "step": step, "accepted": True, "damping": 0.0,
                           "solve": "stage" if staged else "banded"})
+            new, prev_att = _next_totals(sm, data, s, iters, prev_att, o)
             log.info("state iteration %d: objective %.9g, step %.3g rad%s", len(iters), j, step,
                      "" if staged else " (intermediate: one banded solve)")
             bar.update(1)
