@@ -770,9 +770,10 @@ def _expected(iters: list) -> float:
 STEADY_RATIO = 0.2
 
 #: ... the ratio is at most this when the steps keep their direction (the step is then
-#: lengthened by at most 1 / (1 - r) = 2) and at least its negative ``-OSCILLATING_RATIO``
-#: when they alternate (shortened, by at least 1 / 1.9)...
+#: lengthened by at most 1 / (1 - r) = 2)...
 MAX_RATIO = 0.5
+
+#: ... and at least minus this when they alternate (the step shortened to at least 1 / 1.9)...
 OSCILLATING_RATIO = 0.9
 
 #: ... and the last three steps lie along one line: the cosines between successive attitude
