@@ -484,16 +484,25 @@ class SensorCorrection:
         ``1 / (1 + E_ii)`` is infinite) and its bias and misalignments are NaN
         (undetermined), whatever rounding left in the internal values.
         """
-        D = self.D
-        if p.role in ("scale", "misalignment", "bias") and p.i in self.zero_axes:
-            return float(np.inf) if p.role == "scale" else float("nan")
-        if p.role == "scale":
-            return float(D[p.i, p.i] - 1.0)
-        if p.role == "misalignment":
-            return float(D[p.i, p.j] / D[p.i, p.i])
-        if p.role == "bias":
-            return float(-(D[p.i] @ self.beta))
-        return float(self.g_nominal[p.i] + self.dg[p.i])
+        return float(self.values([p])[0])
+
+    def values(self, params: list[Param]) -> np.ndarray:
+        """Physical values of several parameters, each as :meth:`value` gives it, with
+        :attr:`D` and the zero axes found once for all of them."""
+        D, zero = self.D, set(self.zero_axes.tolist())
+        out = np.empty(len(params))
+        for k, p in enumerate(params):
+            if p.role in ("scale", "misalignment", "bias") and p.i in zero:
+                out[k] = np.inf if p.role == "scale" else np.nan
+            elif p.role == "scale":
+                out[k] = D[p.i, p.i] - 1.0
+            elif p.role == "misalignment":
+                out[k] = D[p.i, p.j] / D[p.i, p.i]
+            elif p.role == "bias":
+                out[k] = -(D[p.i] @ self.beta)
+            else:
+                out[k] = self.g_nominal[p.i] + self.dg[p.i]
+        return out
 
     @classmethod
     def from_values(cls, params: list[Param], values: np.ndarray, data) -> SensorCorrection:
@@ -588,7 +597,7 @@ class SensorErrorModel(ErrorModel):
 
     def physical(self, corr: SensorCorrection, data) -> np.ndarray:
         """Physical values of this model's parameters given the full correction."""
-        return np.array([corr.value(p) for p in self.params(data)])
+        return corr.values(self.params(data))
 
     def report(self, l, model) -> pd.Series:
         ps = self.params(model.data)
@@ -706,19 +715,29 @@ class CompositeErrorModel(_Combinable):
                 sens_p.extend(c.params(data))
                 sens_v.extend(l[o:o + q])
         corr = SensorCorrection.from_values(sens_p, np.array(sens_v), data)
+        # (values, names, units) per component, one Series made at the end (not one per component
+        # joined by pd.concat: param_jacobian calls this twice per parameter)
         parts = []
-        units = {}
         for c, o, q in zip(self._components, offs[:-1], sizes, strict=True):
-            if getattr(c, "time_varying", False):
-                s = _series(c.knot_values(l[o:o + q], corr, data), c.names(data), c.units)
-            elif isinstance(c, SensorErrorModel):
-                s = _series(c.physical(corr, data), c.names(data), c.units)
+            if getattr(c, "time_varying", False) or isinstance(c, SensorErrorModel):
+                names = c.names(data)
+                values = c.knot_values(l[o:o + q], corr, data) if getattr(c, "time_varying", False) \
+                    else c.physical(corr, data)
+                parts.append((np.asarray(values, dtype=float), names,
+                              dict(c.units) if isinstance(c.units, dict) else {n: c.units for n in names}))
             else:
                 s = c.report(l[o:o + q], model)
-            parts.append(s)
-            units.update(s.attrs.get("units", {n: getattr(c, "units", "") for n in s.index}))
-        out = pd.concat(parts)
-        out.name = "estimate"
+                own = s.attrs.get("units", {n: getattr(c, "units", "") for n in s.index})
+                parts.append((s, list(s.index), own))
+        units = {}
+        for _, _, u in parts:
+            units.update(u)
+        if all(isinstance(v, np.ndarray) or v.dtype == np.float64 for v, _, _ in parts):
+            out = pd.Series(np.concatenate([np.asarray(v, dtype=float) for v, _, _ in parts]),
+                            index=pd.Index([n for _, names, _ in parts for n in names]), name="estimate")
+        else:   # a component reports something other than floats: pandas combines the types
+            out = pd.concat([v if isinstance(v, pd.Series) else _series(v, n, u) for v, n, u in parts])
+            out.name = "estimate"
         out.index.name = "parameter"
         out.attrs["units"] = units
         return out
