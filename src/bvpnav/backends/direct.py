@@ -39,7 +39,8 @@ import scipy.sparse as sp
 from ..checks import Invalid, Rule, number, one_of
 from ..errors import InputError, SolveError
 from ..formulation import Formulation
-from ..linalg.ipm import IPM_TOL, solve_qp, unsupported_term
+from ..linalg.active_set import QP_METHODS, solve_bands
+from ..linalg.ipm import IPM_TOL, unsupported_term
 from ..linalg.lsq import (
     BANDED_TOL,
     BorderedLU,
@@ -68,6 +69,7 @@ VALUES: dict[str, Rule] = {
     "refine_tol": _FRACTION,
     "ipm_tol": _FRACTION,
     "ipm_max_iter": number(1, 1000, integer=True, want="an integer from 1 to 1000"),
+    "qp": one_of(*QP_METHODS),
 }
 
 
@@ -114,7 +116,8 @@ class DirectBackend(_LeastSquaresBackend):
     uses_workspace = True
     memory_per_sample = {"acceleration": 1300.0, "load": 2960.0}
     presets = {name: {"refine": refine, "method": "auto", "ldl_accept": accept,
-                      "refine_tol": BANDED_TOL[name], "ipm_tol": IPM_TOL[name], "ipm_max_iter": 80}
+                      "refine_tol": BANDED_TOL[name], "ipm_tol": IPM_TOL[name], "ipm_max_iter": 80,
+                      "qp": "auto"}
                for name, refine, accept in (("low", 1, 1e-5), ("default", 3, 1e-7), ("high", 6, 1e-9))}
 
     def accepts(self, form: Formulation) -> str | None:
@@ -152,13 +155,14 @@ class DirectBackend(_LeastSquaresBackend):
 
     def _interior_point(self, form: Formulation, lam: float, options: dict,
                         workspace: Workspace | None) -> RawSolve:
-        """Bands and inequalities: :func:`bvpnav.linalg.ipm.solve_qp`."""
+        """Bands and inequalities: :func:`bvpnav.linalg.active_set.solve_bands`."""
         t0 = time.perf_counter()
         method = options.get("method", "auto")
         try:
-            x, info = solve_qp(form, lam, tol=float(options.get("ipm_tol", IPM_TOL["default"])),
-                               max_iter=int(options.get("ipm_max_iter", 80)),
-                               method="lu" if method in ("lu", "ldl") else method, workspace=workspace)
+            x, info = solve_bands(form, lam, tol=float(options.get("ipm_tol", IPM_TOL["default"])),
+                                  max_iter=int(options.get("ipm_max_iter", 80)),
+                                  method="lu" if method in ("lu", "ldl") else method, workspace=workspace,
+                                  qp_method=options.get("qp", "auto"))
         except (RuntimeError, np.linalg.LinAlgError) as exc:
             raise SolveError(f"direct: a Newton step's KKT matrix is singular ({exc}); some unknown is "
                              "not determined by the information",

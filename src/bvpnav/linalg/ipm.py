@@ -50,7 +50,7 @@ from .lsq import BorderedLU, LeastSquaresForm, column_nodes, fem_rows_by_diagona
 from .workspace import Workspace
 
 __all__ = ["QuadraticForm", "quadratic_form", "unsupported_term", "MultiplierBand", "solve_qp",
-           "IPM_TOL"]
+           "interior_point", "IPM_TOL"]
 
 #: Relative tolerance of the interior-point method's residuals and gap per accuracy preset.
 IPM_TOL = {"low": 1e-7, "default": 1e-9, "high": 1e-10}
@@ -498,10 +498,15 @@ def solve_qp(form: Formulation, lam: float, tol: float = IPM_TOL["default"], max
     :math:`\sigma = (\mu_{aff}/\mu)^3`.
     """
     qp = quadratic_form(form, lam)
-    mi = qp.G.m
     banded = method == "banded" or (method == "auto" and form.residual == "acceleration")
     steps = _Steps(qp, form, workspace, banded)
-    newton = _Newton(qp, steps)
+    return interior_point(qp, steps, _Newton(qp, steps), tol, max_iter)
+
+
+def interior_point(qp: QuadraticForm, steps: _Steps, newton: _Newton, tol: float, max_iter: int):
+    """:func:`solve_qp`'s method on a quadratic program whose Newton systems ``steps``
+    factorize (made once: a caller that tried another method first passes its own)."""
+    mi = qp.G.m
     x, y, weighted = _start(newton, qp)
     r = qp.G.value(x)
     if mi == 0 or (not weighted and np.all(r <= 0.0)):
@@ -580,7 +585,7 @@ def _step(s, ds, z, dz, frac: float) -> float:
 
 
 def _info(qp: QuadraticForm, y: np.ndarray, z: np.ndarray, iterations: int, steps: _Steps, gap: float,
-          history: list, status: str) -> dict:
+          history: list, status: str, method: str = "interior point") -> dict:
     """The duals in cvxpy's convention per term, and the run's record."""
     duals = {}
     for label, sl in qp.ls.eq_blocks:
@@ -589,6 +594,6 @@ def _info(qp: QuadraticForm, y: np.ndarray, z: np.ndarray, iterations: int, step
     for label, pieces in qp.ineq_blocks:
         duals[label] = [zs[sl] for sl in pieces]
     name = steps.describe()
-    note = f"interior point on {name}" + (f" ({'; '.join(steps.notes)})" if steps.notes else "")
+    note = f"{method} on {name}" + (f" ({'; '.join(steps.notes)})" if steps.notes else "")
     return {"duals": duals, "iterations": iterations, "factorization": note, "gap": gap,
-            "residuals": history, "status": status}
+            "residuals": history, "status": status, "qp_method": method}

@@ -48,6 +48,10 @@ class Workspace:
         Memory for the band of the next banded factor, given by a loop whose every factor is
         dead before the next one is assembled (the node-state loop of
         :mod:`bvpnav.solve.attitude`); the factor then lives in it. None: fresh memory.
+    active_hint : ActiveHint or None
+        The band and inequality rows at their bounds in the last answer
+        (:mod:`bvpnav.linalg.active_set`): a loop that solves the same items again (the
+        attitude loop) hands them to the next solve's workspace, whose active set starts there.
     """
 
     fem_diagonals: DiagonalRows | None = None
@@ -57,6 +61,7 @@ class Workspace:
     affine_band: AffineBand | None = None
     kept_factors: KeptFactors | None = None
     band_buffer: np.ndarray | None = None
+    active_hint: object | None = None
 
     def drop_sweep_bands(self) -> None:
         """Forget a sweep's bands (the band along lambda and the kept factors) once the

@@ -191,6 +191,7 @@ class _Loop:
         #: The last evaluation, about whose velocity the next one linearizes rows bilinear in a
         #: parameter and the velocity (None until the first; see :meth:`evaluate`).
         self.velocity_point: Solution | None = None
+        self.active_hints: dict = {}
 
     def data_at(self, values: dict):
         """The data re-integrated at the totals ``values`` (undamped), kept for the few most
@@ -218,7 +219,14 @@ class _Loop:
         return out
 
     def _solve(self, form: Formulation) -> Solution:
-        sol = self.inner(form, self.lam, self.opts)
+        # the band and inequality rows at their bounds in the last answer start the next
+        # solve's active set (bvpnav.linalg.active_set); nothing else of a workspace is shared
+        from ..linalg.workspace import Workspace
+
+        key = id(form.error_model)   # the evaluations' and the steps' problems differ: one hint each
+        workspace = Workspace(active_hint=self.active_hints.get(key))
+        sol = self.inner(form, self.lam, self.opts, workspace=workspace)
+        self.active_hints[key] = workspace.active_hint
         self.solves += 1
         self.checked[id(form.error_model)] = True
         note = str(sol.stats.get("factorization", ""))
