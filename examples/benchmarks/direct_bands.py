@@ -8,7 +8,11 @@ accelerometer bias drives the path against it at many samples). Side by side, in
 - ``plain``: the same problem without the band, ``direct`` (one banded factorization);
 - ``soft``: the band's rows as soft rows (sigma = 0.05 m/s), ``direct``: the least-squares
   problem of the same size and bandwidth;
-- ``band direct``: the band, ``direct`` (Mehrotra steps, each one banded factorization);
+- ``band direct``: the band, ``direct``'s default: the active set (:mod:`bvpnav.linalg.active_set`,
+  updates of the rows held at their bounds, each one banded factorization), the interior point
+  where it gives way (the ``qp`` column says which answered, ``steps`` its updates or steps);
+- ``band ipm``: the band, ``direct`` with ``qp="interior point"`` (Mehrotra steps, each one
+  banded factorization);
 - ``band clarabel``: the band, Clarabel through cvxpy (up to ``--clarabel-up-to`` samples);
 - ``wide band``: a band of +-10 m/s that the least-squares answer already satisfies,
   ``direct``: the interior-point path's cost when no row presses (one factorization).
@@ -55,10 +59,12 @@ def problem(n: int, band: str | None, seed: int = 1) -> bvpnav.NavigationProblem
     return prob
 
 
-def timed(n: int, band: str | None, solver: str) -> tuple[float, float, bvpnav.Solution]:
+def timed(n: int, band: str | None, solver: str,
+          qp: str | None = None) -> tuple[float, float, bvpnav.Solution]:
     prob = problem(n, band)
+    opts = {} if qp is None else {"options": {"qp": qp}}
     w0, c0 = time.perf_counter(), time.process_time()
-    sol = prob.solve(solver=solver, lam=1.0, fallback=None)
+    sol = prob.solve(solver=solver, lam=1.0, fallback=None, **opts)
     return time.perf_counter() - w0, time.process_time() - c0, sol
 
 
@@ -69,20 +75,21 @@ def main(argv=None):
     args = ap.parse_args(argv)
     for band, solver in ((None, "direct"), ("band", "direct"), ("band", "clarabel")):
         timed(200, band, solver)   # warm-up: imports and first calls
+    timed(200, "band", "direct", "interior point")
     print(f"velocity band +-{TOL} m/s at every sample; times of problem.solve (compile, solve, verify)")
     head = (f"{'N':>8} {'case':<14} {'wall (s)':>9} {'CPU (s)':>8} {'x plain':>8} {'x soft':>7} "
-            f"{'steps':>6} {'active':>7} {'verified':>9}")
+            f"{'steps':>6} {'active':>7} {'verified':>9}  qp")
     print(head)
     print("-" * len(head))
     for n in args.n:
         rows = [("plain", None, "direct"), ("soft", "soft", "direct"), ("wide band", "wide", "direct"),
-                ("band direct", "band", "direct")]
+                ("band direct", "band", "direct"), ("band ipm", "band", "direct")]
         if n <= args.clarabel_up_to:
             rows.append(("band clarabel", "band", "clarabel"))
         base = {}
         ref = None
         for name, band, solver in rows:
-            wall, cpu, sol = timed(n, band, solver)
+            wall, cpu, sol = timed(n, band, solver, "interior point" if name == "band ipm" else None)
             base.setdefault(name, cpu)
             active = ""
             if band == "band":
@@ -93,7 +100,8 @@ def main(argv=None):
             steps = sol.stats.get("iterations") if band in ("band", "wide") else ""
             ok = sol.stats["verified"]
             print(f"{n:>8} {name:<14} {wall:>9.2f} {cpu:>8.2f} {cpu / base['plain']:>8.1f} "
-                  f"{cpu / base.get('soft', cpu):>7.1f} {steps!s:>6} {active:>7} {ok!s:>9}")
+                  f"{cpu / base.get('soft', cpu):>7.1f} {steps!s:>6} {active:>7} {ok!s:>9}  "
+                  f"{sol.stats.get('qp_method', '')}")
             if name == "band clarabel":
                 print(f"{'':>8} {'':<14} band: largest |x_direct - x_clarabel| / |x| = "
                       f"{np.max(np.abs(ref - sol.x)) / np.max(np.abs(sol.x)):.1e}")

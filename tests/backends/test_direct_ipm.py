@@ -15,6 +15,9 @@ from bvpnav.error_models import Bias
 from bvpnav.linalg.ipm import quadratic_form
 
 T = np.linspace(0.0, 10.0, 101)
+#: The interior-point method itself (the default tries the active set first,
+#: tests/backends/test_direct_active_set.py).
+IPM = {"qp": "interior point"}
 
 
 def line_problem(*extra, end=10.0):
@@ -84,7 +87,7 @@ def active_rows(prob, x) -> int:
 @pytest.mark.parametrize("case", list(CASES))
 def test_matches_clarabel_on_objective_and_solution(case):
     prob = CASES[case]()
-    d = prob.solve(solver="direct", lam=1.0, accuracy="high", fallback=None)
+    d = prob.solve(solver="direct", lam=1.0, accuracy="high", fallback=None, options=IPM)
     c = prob.solve(solver="clarabel", lam=1.0, accuracy="high", fallback=None)
     assert d.stats["solver"] == "direct" and d.stats["verified"]
     assert d.stats["factorization"].startswith("interior point on banded (")
@@ -98,7 +101,7 @@ def test_matches_clarabel_on_objective_and_solution(case):
 
 def test_active_at_many_samples():
     prob = velocity_band(noise=0.05)
-    sol = prob.solve(solver="direct", lam=1.0, fallback=None)
+    sol = prob.solve(solver="direct", lam=1.0, fallback=None, options=IPM)
     n_active = active_rows(prob, sol.x)
     assert n_active >= 100   # of 802 band sides
     assert sol.stats["verification"]["max_violation"] < 1e-9
@@ -133,8 +136,8 @@ def test_least_squares_problems_keep_the_plain_path():
 
 def test_pivoted_lu_steps_agree_with_banded_steps():
     prob = velocity_band(n=201)
-    b = prob.solve(solver="direct", lam=1.0, accuracy="high", fallback=None)
-    u = prob.solve(solver="direct", lam=1.0, accuracy="high", fallback=None, options={"method": "lu"})
+    b = prob.solve(solver="direct", lam=1.0, accuracy="high", fallback=None, options=IPM)
+    u = prob.solve(solver="direct", lam=1.0, accuracy="high", fallback=None, options={"method": "lu", **IPM})
     assert u.stats["factorization"] == "interior point on lu" and u.stats["verified"]
     np.testing.assert_allclose(u.x, b.x, rtol=0, atol=1e-7 * np.max(np.abs(b.x)))
 

@@ -10,10 +10,11 @@ For the quadratic program of :func:`bvpnav.linalg.ipm.quadratic_form`,
 
 a guess :math:`W` of the rows at their bounds turns it into an equality-constrained least
 squares problem: the rows of :math:`W` as hard rows :math:`G_i x + g_i = 0`, the others
-left out. Its KKT system is the interior-point method's Newton system (:class:`~bvpnav.linalg.ipm.MultiplierBand`)
-with the multipliers' diagonal :math:`\Delta_k = 0` on the rows of :math:`W` and huge on
-the others: one banded factorization from the same plan. Its answer :math:`(x, y, z)`
-(:math:`z_i = 0` off :math:`W`) is the optimum when
+left out. Its KKT system is the interior-point method's Newton system
+(:class:`~bvpnav.linalg.ipm.MultiplierBand`) with the multipliers' diagonal
+:math:`\Delta_k = 0` on the rows of :math:`W` and huge on the others: one banded
+factorization from the same plan. Its answer :math:`(x, y, z)` (:math:`z_i = 0` off
+:math:`W`) is the optimum when
 
 .. math::
 
@@ -259,7 +260,7 @@ def solve_bands(form, lam: float, tol: float, max_iter: int = 80, workspace: Wor
     if skip:
         why = "not tried: it gave way in an earlier solve of these rows"
     if qp_method != "interior point" and qp.G.m and not skip:
-        ans, why = active_set(qp, newton, tol, start=start)
+        ans, why = active_set(qp, newton, tol, max_iter=MAX_UPDATES, start=start)
         if ans is not None:
             info = _info(qp, ans.y, ans.z, ans.updates, steps, 0.0, [], "optimal", method="active set")
             info.update(active_rows=int(ans.active.sum()), warm_start=start is not None,

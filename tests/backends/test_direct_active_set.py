@@ -1,0 +1,171 @@
+"""The direct back end's active-set path (bvpnav.linalg.active_set): band and inequality rows
+solved by updates of the rows held at their bounds, each one banded factorization; checked
+against Clarabel, against hand-computed optima and multipliers, by the KKT conditions, and for
+the warm start and the interior-point fallback."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from _helpers import quintic, table1_problem
+
+import bvpnav
+from bvpnav.constraints import HalfSpace, Position, PositionBound, Velocity
+from bvpnav.linalg import active_set as AS
+from bvpnav.linalg.ipm import quadratic_form
+from bvpnav.linalg.workspace import Workspace
+
+T = np.linspace(0.0, 10.0, 101)
+ACTIVE = {"qp": "active set"}
+
+
+def line_problem(*extra):
+    """1-D, zero acceleration, r(0) = 0 hard, r(10 s) = 10 m soft (sigma 1 m): without other
+    rows the answer is r(t) = t with zero residual."""
+    prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=T, acc=np.zeros_like(T)))
+    return prob.add(Position(t=0.0, value=0.0, name="start"),
+                    Position(t=10.0, value=10.0, sigma=1.0, name="fix"), *extra)
+
+
+def velocity_band(n=401, noise=0.0, tol=0.05, seed=3):
+    """The biased quintic with a velocity band at every sample around the true velocity (plus
+    ``noise``): the unmodelled bias presses the path against the band at some samples."""
+    _, v, _ = quintic()
+    prob, _ = table1_problem(n)
+    t = prob.data.t
+    vm = v(t) + np.random.default_rng(seed).normal(0.0, noise, t.size) if noise else v(t)
+    return prob.add(Velocity(t=t, value=vm, mode="band", tol=tol, name="vel"))
+
+
+def plane_problem():
+    t = np.linspace(0.0, 10.0, 101)
+    prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=np.zeros((t.size, 2)), axes=("x", "z")))
+    return prob.add(Position(t=0.0, value=[[0.0, 0.0]], name="start"),
+                    Position(t=10.0, value=[[30.0, 0.0]], sigma=1.0, name="end"),
+                    HalfSpace(axes=("x", "z"), normal=[0.3, -1.0], b=5.0, name="ground"))
+
+
+def kkt(prob, x, duals):
+    """Relative KKT residuals of the quadratic program at ``x`` with the back end's duals:
+    (stationarity, equality residual, inequality violation, most negative multiplier,
+    complementarity), each against the size of its terms; and the number of rows at their
+    bounds with a positive multiplier."""
+    qp = quadratic_form(prob.formulation, 1.0)
+    ls, G = qp.ls, qp.G
+    y = np.zeros(ls.E.m)
+    for label, sl in ls.eq_blocks:
+        y[sl] = duals[label] if label == "fem" else duals[label][0]
+    z = np.zeros(G.m)
+    for label, pieces in qp.ineq_blocks:
+        for sl, zi in zip(pieces, duals[label], strict=True):
+            z[sl] = np.asarray(zi) * qp.scale[sl]
+    grad = 2.0 * (ls.D.A.T @ ls.D.value(x))
+    Ey, Gz = ls.E.A.T @ y, G.A.T @ z
+    dscale = max(np.max(np.abs(grad)), np.max(np.abs(Ey)), np.max(np.abs(Gz)))
+    g = G.value(x)
+    gscale = np.max(abs(G.A) @ np.abs(x)) + np.max(np.abs(G.c))
+    escale = np.max(abs(ls.E.A) @ np.abs(x)) + np.max(np.abs(ls.E.c))
+    zmax = max(np.max(z), 1e-300)
+    return (np.max(np.abs(grad + Ey + Gz)) / dscale, np.max(np.abs(ls.E.value(x))) / escale,
+            max(np.max(g), 0.0) / gscale, min(np.min(z), 0.0) / zmax,
+            np.max(np.abs(z * g)) / (zmax * gscale), int(np.sum(z > 0.0)))
+
+
+CASES = {
+    # few rows at their bounds
+    "one bound": (lambda: line_problem(PositionBound(upper=8.0, t0=9.0, t1=10.0, name="cap")), 1, 1),
+    "band bound": (lambda: line_problem(PositionBound(upper=8.0, t0=9.0, t1=10.0, mode="band", tol=0.5,
+                                                      name="cap")), 1, 1),
+    "half space": (plane_problem, 1, 1),
+    "velocity band, few active": (lambda: velocity_band(), 10, 40),
+    # many (173 of 802 band sides, measured)
+    "velocity band, many active": (lambda: velocity_band(noise=0.05), 100, 300),
+}
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_active_set_matches_clarabel_and_meets_kkt(case):
+    make, lo, hi = CASES[case]
+    prob = make()
+    d = prob.solve(solver="direct", lam=1.0, accuracy="high", fallback=None, options=ACTIVE)
+    c = prob.solve(solver="clarabel", lam=1.0, accuracy="high", fallback=None)
+    assert d.stats["verified"] and d.stats["qp_method"] == "active set"
+    assert d.stats["factorization"].startswith("active set on banded (")
+    assert lo <= d.stats["active_rows"] <= hi
+    np.testing.assert_allclose(d.x, c.x, rtol=0, atol=1e-8 * np.max(np.abs(c.x)))
+    x, info = AS.solve_bands(prob.formulation, 1.0, tol=1e-10, qp_method="active set")
+    np.testing.assert_array_equal(x, d.x)
+    stat, eq, viol, neg, comp, pressed = kkt(prob, x, info["duals"])
+    assert stat < 1e-12 and eq < 1e-12 and viol < 1e-10 and neg == 0.0 and comp < 1e-10
+    assert pressed == info["active_rows"]
+
+
+def test_default_takes_the_active_set_and_agrees_with_the_interior_point():
+    prob = velocity_band(noise=0.05)
+    a = prob.solve(solver="direct", lam=1.0, accuracy="high", fallback=None)
+    i = prob.solve(solver="direct", lam=1.0, accuracy="high", fallback=None, options={"qp": "interior point"})
+    assert a.stats["qp_method"] == "active set" and i.stats["qp_method"] == "interior point"
+    assert i.stats["factorization"].startswith("interior point on banded (")
+    np.testing.assert_allclose(a.x, i.x, rtol=0, atol=1e-8 * np.max(np.abs(i.x)))
+
+
+@pytest.mark.parametrize("margin", [1e-6, -1e-6])
+def test_row_at_the_bound_with_a_margin(margin):
+    """A cap 1e-6 m above the unconstrained end (10 m at 10 s): inactive, the least-squares
+    line, no update; 1e-6 m below it: the end held at the cap with multiplier 2e-6 on the last
+    row (the gradient of (r(10) - 10)^2), every other multiplier 0, one update."""
+    cap = 10.0 + margin
+    prob = line_problem(PositionBound(upper=cap, t0=9.0, t1=10.0, name="cap"))
+    sol = prob.solve(solver="direct", lam=1.0, accuracy="high", fallback=None, options=ACTIVE)
+    end = min(cap, 10.0)
+    np.testing.assert_allclose(sol.trajectory["x"].to_numpy(), end * T / 10.0, rtol=0, atol=1e-12)
+    x, info = AS.solve_bands(prob.formulation, 1.0, tol=1e-10, qp_method="active set")
+    np.testing.assert_array_equal(x, sol.x)
+    z = info["duals"]["cap"][0]
+    if margin > 0:
+        assert sol.stats["iterations"] == 0 and sol.stats["active_rows"] == 0 and np.all(z == 0.0)
+    else:
+        assert sol.stats["iterations"] == 1 and sol.stats["active_rows"] == 1
+        np.testing.assert_allclose(z[-1], 2e-6, rtol=1e-6)
+        assert np.all(z[:-1] == 0.0)
+
+
+def test_warm_start_from_the_last_rows_costs_no_update():
+    prob = velocity_band(noise=0.05)
+    form = prob.formulation
+    ws = Workspace()
+    x1, i1 = AS.solve_bands(form, 1.0, tol=1e-10, workspace=ws, qp_method="active set")
+    assert i1["iterations"] >= 3 and not i1["warm_start"]
+    ws2 = Workspace(active_hint=ws.active_hint)
+    x2, i2 = AS.solve_bands(form, 1.0, tol=1e-10, workspace=ws2, qp_method="active set")
+    assert i2["iterations"] == 0 and i2["warm_start"] and i2["active_rows"] == i1["active_rows"]
+    np.testing.assert_allclose(x2, x1, rtol=0, atol=1e-10 * np.max(np.abs(x1)))
+    # a hint for other rows is not used
+    other = line_problem(PositionBound(upper=8.0, t0=9.0, t1=10.0, name="cap")).formulation
+    _, i3 = AS.solve_bands(other, 1.0, tol=1e-10, workspace=Workspace(active_hint=ws.active_hint))
+    assert not i3["warm_start"] and i3["qp_method"] == "active set"
+
+
+def test_interior_point_takes_over_when_the_active_set_gives_way(monkeypatch):
+    """Two updates are not enough for the many-active band (it needs about ten): the active
+    set gives way, the interior-point method answers, says why, and the next solve with the
+    same workspace hint goes straight to it."""
+    monkeypatch.setattr(AS, "MAX_UPDATES", 2)
+    prob = velocity_band(noise=0.05)
+    c = prob.solve(solver="clarabel", lam=1.0, accuracy="high", fallback=None)
+    ws = Workspace()
+    x, info = AS.solve_bands(prob.formulation, 1.0, tol=1e-10, workspace=ws)
+    assert info["qp_method"] == "interior point"
+    assert "the active set gave way: no answer in 2 updates" in info["factorization"]
+    np.testing.assert_allclose(x, c.x, rtol=0, atol=1e-6 * np.max(np.abs(c.x)))
+    assert ws.active_hint.gave_way and ws.active_hint.active.sum() == info["active_rows"] >= 100
+    again_ws = Workspace(active_hint=ws.active_hint)
+    _, again = AS.solve_bands(prob.formulation, 1.0, tol=1e-10, workspace=again_ws)
+    assert again["qp_method"] == "interior point" and again["active_set"].startswith("not tried")
+    with pytest.raises(bvpnav.SolveError, match=r"active-set method gave way: no answer in 2 updates"):
+        prob.solve(solver="direct", lam=1.0, fallback=None, options=ACTIVE)
+
+
+def test_bad_qp_option_refused():
+    with pytest.raises(bvpnav.InputError, match="qp"):
+        line_problem().solve(solver="direct", options={"qp": "simplex"})
