@@ -19,12 +19,20 @@ Registered in the back-end table on import (the folder is discovered):
   by the same refinement on the KKT system built with the normal matrix.
 
 ``direct`` also takes band items (``|r| <= tol``) and hard or band inequality items
-(``g <= 0``): then a primal-dual interior-point method (:mod:`bvpnav.linalg.ipm`, Mehrotra's
-predictor-corrector) whose every Newton step is one banded factorization of the same KKT
-system, the inequality rows held like hard rows whose multipliers carry a diagonal that
-changes from step to step (options ``ipm_tol``: the relative tolerance of its residuals and
-gap, 1e-7, 1e-9, 1e-10 for the presets; ``ipm_max_iter``; ``method="lu"`` or ``"ldl"``:
-a pivoted sparse LU at every step instead of the banded factorization). Robust penalties,
+(``g <= 0``): first a primal-dual active-set method (:mod:`bvpnav.linalg.active_set`: the
+rows guessed at their bounds held as hard rows, the guess updated from the violations and
+the multipliers' signs, each update one banded factorization; an outer loop's next solve
+starts from the last answer's rows), then, where it gives way (a repeated or stalled guess,
+a singular KKT matrix), a primal-dual interior-point method (:mod:`bvpnav.linalg.ipm`,
+Mehrotra's predictor-corrector) whose every Newton step is one banded factorization of the
+same KKT system, the inequality rows held like hard rows whose multipliers carry a diagonal
+that changes from step to step. Option ``qp``: ``"auto"`` (that order), ``"active set"``
+(no fallback: fails saying why) or ``"interior point"``; ``stats["qp_method"]`` says which
+answered, ``stats["active_rows"]`` how many rows are at their bounds and
+``stats["active_set"]`` the active set's updates or why it gave way (options ``ipm_tol``: the
+relative tolerance of both methods' residuals and gap, 1e-7, 1e-9, 1e-10 for the presets;
+``ipm_max_iter``; ``method="lu"`` or ``"ldl"``: a pivoted sparse LU at every step instead of
+the banded factorization). Robust penalties,
 cones and soft inequalities are refused, naming the item; ``csne`` refuses every item that
 is not a hard or soft equality.
 """

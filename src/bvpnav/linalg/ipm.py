@@ -29,9 +29,11 @@ bandwidth, border) is made once; each step changes only that diagonal and the sc
 those rows (:class:`MultiplierBand`), then ``dgbtrf`` factors the band. Steps are refined
 against the full linearized system.
 
-The first factorization leaves the inequality rows out (their diagonal huge): the
-least-squares answer. When it already satisfies them it is the optimum, with :math:`z = 0`,
-and the method stops there.
+The direct back end tries :mod:`bvpnav.linalg.active_set` first (the same factorizations
+with the diagonal 0 or huge) and comes here where it gives way (:func:`interior_point`
+then reuses its plan). The first factorization leaves the inequality rows out (their
+diagonal huge): the least-squares answer. When it already satisfies them it is the
+optimum, with :math:`z = 0`, and the method stops there.
 """
 
 from __future__ import annotations
