@@ -116,7 +116,7 @@ OPTION_CASES = [
                  r"'direct' option refine=-1", r"an integer from 0 to 100", id="direct-refine"),
     pytest.param(lambda p: p.solve(solver="direct", options={"pivot": True}), InputError,
                  r"'direct' has no option 'pivot'", r"valid options: \['ipm_max_iter', 'ipm_tol', "
-                 r"'ldl_accept', 'method', 'refine', 'refine_tol'\]", id="direct-unknown-option"),
+                 r"'ldl_accept', 'method', 'qp', 'refine', 'refine_tol'\]", id="direct-unknown-option"),
     pytest.param(lambda p: p.solve(solver="direct", options={"refine_tol": 1.0}), InputError,
                  r"'direct' option refine_tol=1\.0", r"between 0 and 1", id="direct-refine-tol"),
     pytest.param(lambda p: p.solve(solver="csne", options={"tol": 0.0}), InputError,
