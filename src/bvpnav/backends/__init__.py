@@ -115,7 +115,7 @@ class Backend:
     >>> direct.least_squares_only, sorted(direct.presets)
     (True, ['default', 'high', 'low'])
     >>> direct.valid_options()
-    ['ipm_max_iter', 'ipm_tol', 'ldl_accept', 'method', 'refine', 'refine_tol']
+    ['ipm_max_iter', 'ipm_tol', 'ldl_accept', 'method', 'qp', 'refine', 'refine_tol']
     """
 
     name: str = ""
