@@ -169,3 +169,69 @@ def test_interior_point_takes_over_when_the_active_set_gives_way(monkeypatch):
 def test_bad_qp_option_refused():
     with pytest.raises(bvpnav.InputError, match="qp"):
         line_problem().solve(solver="direct", options={"qp": "simplex"})
+
+
+def test_attitude_loop_warm_starts_the_active_set():
+    """Noise-free turning body (30 s at 20 Hz), a constant gyro bias and a wrong initial
+    attitude (the model's own form), hard fixes every 2.5 s, and a velocity band of +-0.02 m/s
+    around the true velocity (the solver's own discretization of it) at every second: at the
+    wrong attitude of the first linearization the band presses (3 updates, measured), at the
+    truth it does not. Each solve of the loop after the first of its kind starts from the rows
+    of the last one (1, then 0 updates, measured); the answer is the truth to 1e-8 and equals
+    the interior point's."""
+
+    from scipy.spatial.transform import Rotation
+
+    from bvpnav.attitude import integrate_gyro
+    from bvpnav.error_models import AttitudeError, GyroBias
+
+    g = np.array([0.0, 0.0, -9.80665])
+    t = np.linspace(0.0, 30.0, 601)
+    w = np.column_stack([0.05 * np.sin(0.5 * t), 0.04 * np.cos(0.3 * t), 0.2 * np.sin(0.1 * t) + 0.05])
+    c0 = Rotation.from_euler("ZYX", [0.7, 0.02, -0.03])
+    att = integrate_gyro(t, w, c0)
+    a = np.column_stack([np.sin(0.2 * t), 0.5 * np.cos(0.15 * t), 0.1 * np.sin(0.3 * t)])
+    f = att.inv().apply(a - g)
+    # the truth in the solver's own discretization: the exact attitude, start position and velocity
+    exact = bvpnav.NavigationProblem(bvpnav.ImuData(t, specific_force=f, attitude=att, gravity=g)).add(
+        Position(t=0.0, value=[0.0, 0.0, 0.0]), Velocity(t=0.0, value=[1.0, 0.0, 0.0])).solve(solver="direct")
+    pos, vel = exact.position().reshape(-1, 3), exact.velocity().reshape(-1, 3)
+    bg = np.array([1e-3, -2e-3, 1.5e-3])
+    guess = Rotation.from_rotvec([0.004, -0.003, 0.02]) * c0
+
+    def solve(qp):
+        data = ImuData_from_gyro(t, f, w + bg, guess, g)
+        prob = bvpnav.NavigationProblem(data, error_model=GyroBias() + AttitudeError(), grade=None)
+        k = np.arange(0, t.size, 50)
+        s = np.arange(0, t.size, 20)
+        prob.add(Position(t=t[k], value=pos[k]),
+                 Velocity(t=t[s], value=vel[s], mode="band", tol=0.02, name="vel band"))
+        return prob.solve(solver="direct", attitude={"tol": 1e-11, "heading": "given"},
+                          options={"qp": qp}, accuracy="high")
+
+    calls = []
+    inner = AS.active_set
+
+    def counted(*args, **kw):
+        ans, why = inner(*args, **kw)
+        calls.append((kw.get("start") is not None, None if ans is None else ans.updates))
+        return ans, why
+
+    AS.active_set = counted
+    try:
+        sol = solve("auto")
+    finally:
+        AS.active_set = inner
+    ipm = solve("interior point")
+    assert sol.stats["qp_method"] == "active set" and sol.stats["warm_start"]
+    assert len(calls) >= 4 and all(c[1] is not None for c in calls)   # every solve by the active set
+    assert all(warm for warm, _ in calls[2:])
+    assert max(calls[0][1], calls[1][1]) >= 1   # the band pressed at the first linearizations
+    est = np.array([sol.error_params[f"gyro_bias_{ax}"] for ax in "xyz"])
+    np.testing.assert_allclose(est, bg, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(sol.position().reshape(-1, 3), pos, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(sol.x, ipm.x, rtol=0, atol=1e-8 * np.max(np.abs(ipm.x)))
+
+
+def ImuData_from_gyro(t, f, w, guess, g):
+    return bvpnav.ImuData.from_gyro(t, f, w, initial_attitude=guess, gravity=g)
