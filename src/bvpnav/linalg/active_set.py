@@ -119,8 +119,10 @@ class _Refined:
         return np.concatenate([nw.A @ x - u, nw.At @ u + nw.Et @ yh + self.Bt @ nu, nw.E @ x,
                                self.B @ x - delta * nu])
 
-    def solve(self, fac, rhs: np.ndarray, delta: np.ndarray, steps: int = 3) -> np.ndarray:
-        z = fac.solve(rhs)
+    def solve(self, fac, rhs: np.ndarray, delta: np.ndarray, steps: int = 3,
+              z: np.ndarray | None = None) -> np.ndarray:
+        """The solution refined by up to ``steps`` steps (``z``: continue from it)."""
+        z = fac.solve(rhs) if z is None else z
         n0 = max(abs_max(rhs), 1e-300)
         for _ in range(steps):
             res = rhs - self.apply(z, delta)
@@ -163,18 +165,25 @@ def active_set(qp: QuadraticForm, newton: _Newton, tol: float, max_iter: int = M
             fac = newton.steps.factor(delta)
         except np.linalg.LinAlgError:
             return None, f"the KKT matrix with {ia.size} rows at their bounds is singular"
-        sol = kkt.solve(fac, np.concatenate([-ls.D.c, np.zeros(n), -ls.E.c, rk]), delta)
-        x, y, w = sol[m:m + n], 2.0 * sol[m + n:m + n + pE], 2.0 * sol[m + n + pE:]
-        z = np.zeros(mi)
-        z[ia] = qp.sign[ia] * w[kb]
-        r = G.value(x)
-        eps_g = tol * max(abs_max(newton.absG @ np.abs(x)) + abs_max(G.c), 1e-300)
-        grad = 2.0 * (newton.At @ ls.D.value(x))
-        eps_z = tol * max(abs_max(grad), abs_max(newton.Et @ y), abs_max(newton.Gt @ z), 1e-300)
-        violated = ~act & (r > eps_g)
-        wrong = act & (z < -eps_z)
-        if not violated.any() and not wrong.any():
-            return _Answer(x, y, np.maximum(z, 0.0), act, it), None
+        rhs = np.concatenate([-ls.D.c, np.zeros(n), -ls.E.c, rk])
+        # one refinement step while the guess may change; the rest once it holds
+        sol = kkt.solve(fac, rhs, delta, steps=1)
+        for final in (False, True):
+            if final:
+                sol = kkt.solve(fac, rhs, delta, steps=2, z=sol)
+            x, y, w = sol[m:m + n], 2.0 * sol[m + n:m + n + pE], 2.0 * sol[m + n + pE:]
+            z = np.zeros(mi)
+            z[ia] = qp.sign[ia] * w[kb]
+            r = G.value(x)
+            eps_g = tol * max(abs_max(newton.absG @ np.abs(x)) + abs_max(G.c), 1e-300)
+            grad = 2.0 * (newton.At @ ls.D.value(x))
+            eps_z = tol * max(abs_max(grad), abs_max(newton.Et @ y), abs_max(newton.Gt @ z), 1e-300)
+            violated = ~act & (r > eps_g)
+            wrong = act & (z < -eps_z)
+            if violated.any() or wrong.any():
+                break
+            if final:
+                return _Answer(x, y, np.maximum(z, 0.0), act, it), None
         changes = int(violated.sum() + wrong.sum())
         if changes < fewest:
             fewest, since = changes, it
