@@ -312,17 +312,24 @@ def track_rms(est: np.ndarray, d: dict, withheld) -> dict:
             "late": rms(np.hypot(along, cross)[late])}
 
 
-def gtsam_example_smoother(d: dict, kept, fig: dict, c0, max_iterations: int = 100) -> dict:
+def gtsam_example_smoother(d: dict, kept, fig: dict, c0, max_iterations: int = 100, *,
+                           fix_sigma=None, tilt: float | None = None) -> dict:
     """GTSAM's KITTI example as a batch smoother: a node at every fix time (1 Hz), an ``ImuFactor``
     between consecutive nodes integrating each IMU sample held constant over its preceding step
     (the file's ``dt``, as ``IMUKittiExampleGPS.py`` does), a ``BetweenFactorConstantBias`` with
     sigma ``sqrt(count) * per-sample bias sigma``, a ``GPSFactor`` at every kept fix, the
     peer's priors at the first node, Levenberg-Marquardt from the fix-interpolated positions
-    and the gyro-integrated attitudes. Returns the positions at every node (= every fix)."""
+    and the gyro-integrated attitudes. Returns the positions at every node (= every fix).
+
+    ``fix_sigma`` (m, one or per navigation axis) and ``tilt`` (rad, the roll and pitch prior) default
+    to this drive's (:data:`FIX_SIGMA`, :data:`TILT`); the simulated car drive (``car_drive.py``)
+    passes its own."""
     import gtsam
     from _gtsam_peer import _priors
     from gtsam.symbol_shorthand import B, V, X
 
+    fix_sigma = FIX_SIGMA if fix_sigma is None else fix_sigma
+    tilt = TILT if tilt is None else tilt
     start, cpu = time.perf_counter(), time.process_time()
     t, f, w = d["t"], d["f"], d["w"]
     ft, fp = d["fix_t"], d["fix_p"]
@@ -339,10 +346,10 @@ def gtsam_example_smoother(d: dict, kept, fig: dict, c0, max_iterations: int = 1
     # are the score and must not reach the smoother, not even as LM's starting point
     pos0 = np.column_stack([np.interp(ft, ft[kt], fp[kt, i]) for i in range(3)])
     vel0 = np.gradient(pos0, ft, axis=0)
-    gr = {**fig, "tilt": TILT, "heading": math.pi}
+    gr = {**fig, "tilt": tilt, "heading": math.pi}
     for fac in _priors(c0.as_matrix(), pos0[0], vel0[0], gr, None):
         graph.add(fac)
-    gps_noise = gtsam.noiseModel.Isotropic.Sigma(3, FIX_SIGMA)
+    gps_noise = gtsam.noiseModel.Diagonal.Sigmas(np.broadcast_to(np.asarray(fix_sigma, float), (3,)).copy())
     keep = set(int(k) for k in kept)
     att = [gtsam.Rot3(c0.as_matrix())]
     bounds = np.searchsorted(t, ft, side="right")  # samples with t_j <= fix time
@@ -399,8 +406,13 @@ def run_gtsam(d: dict, kept, withheld, fig: dict, c0) -> dict:
             "gyro_bias_mean": np.mean(g["gyro_bias"], 0).tolist()}
 
 
-def problem(d: dict, kept, method: str, fig: dict, c0, interval: float):
-    """The bvpnav problem of ``method`` (the data, the error model, the kept fixes)."""
+def problem(d: dict, kept, method: str, fig: dict, c0, interval: float, *, fix_sigma=None,
+            tilt: float | None = None):
+    """The bvpnav problem of ``method`` (the data, the error model, the kept fixes); ``fix_sigma`` (m,
+    one or per navigation axis) and ``tilt`` (rad) default to this drive's (:data:`FIX_SIGMA`,
+    :data:`TILT`)."""
+    fix_sigma = FIX_SIGMA if fix_sigma is None else fix_sigma
+    tilt = TILT if tilt is None else tilt
     from bvpnav import ImuData, NavigationProblem
     from bvpnav.constraints import Position
     from bvpnav.error_models import AttitudeError, Bias, ErrorStates, GyroBias, Mounting
@@ -413,13 +425,13 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float):
         # node states (issue 42 item 2): attitude error and both bias walks per sample, in the band;
         # the metadata's densities, GTSAM's example's bias priors, an open heading
         model = ErrorStates(arw=fig["gyro_noise"], gyro_drift=fig["gyro_bias_walk"],
-                            acc_drift=fig["acc_bias_walk"], attitude_sigma=[TILT, TILT, np.inf],
+                            acc_drift=fig["acc_bias_walk"], attitude_sigma=[tilt, tilt, np.inf],
                             gyro_sigma=fig["gyro_bias"], acc_sigma=fig["acc_bias"])
         if method in MOUNTED:
             model = model + Mounting(sigma=MOUNT_SIGMA)
         prob = NavigationProblem(data, error_model=model, sigma_a=fig["acc_noise"] * math.sqrt(rate))
     elif method == "bvpnav README" or method in VEHICLE:
-        g = from_datasheet(**fig, tilt=TILT, base="tactical", name="KITTI metadata")
+        g = from_datasheet(**fig, tilt=tilt, base="tactical", name="KITTI metadata")
         em = g.error_model(interval)
         if method in MOUNTED:
             em = em + Mounting(sigma=MOUNT_SIGMA)
@@ -427,7 +439,8 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float):
     else:
         prob = NavigationProblem(data, error_model=Bias() + GyroBias(interval=interval) + AttitudeError())
     prob.add(Position(t=d["fix_t"][kept], value=d["fix_p"][kept],
-                      sigma=np.full((kept.size, 3), FIX_SIGMA), name="fixes"))
+                      sigma=np.broadcast_to(np.asarray(fix_sigma, dtype=float), (kept.size, 3)).copy(),
+                      name="fixes"))
     if method in VEHICLE:
         from bvpnav.constraints import ForwardMotion, NonHolonomic
 
@@ -440,10 +453,13 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float):
     return prob
 
 
-def run_bvpnav(d: dict, kept, withheld, method: str, fig: dict, c0, interval: float) -> dict:
+def run_bvpnav(d: dict, kept, withheld, method: str, fig: dict, c0, interval: float, *, ref=None,
+               score=None, **options) -> dict:
+    """Solve ``method`` and score it at the withheld fixes: ``score(est, ref)`` (default
+    :func:`hrms` against the withheld fixes); ``options`` go to :func:`problem`."""
     from bvpnav import InputError
 
-    prob = problem(d, kept, method, fig, c0, interval)
+    prob = problem(d, kept, method, fig, c0, interval, **options)
     # the solve's modules (imported on first use, 1.6 s of CPU with scipy.stats) load before the
     # clock starts, as gtsam is imported before GTSAM's
     import bvpnav.solve.pipeline  # noqa: F401
@@ -470,8 +486,10 @@ def run_bvpnav(d: dict, kept, withheld, method: str, fig: dict, c0, interval: fl
     est = np.column_stack([np.interp(t_w, d["t"], pos[:, k]) for k in range(3)])
     seq = sol.stats.get("sequential", {}) if isinstance(sol.stats, dict) else {}
     gb = [v for k, v in sol.error_params.items() if k.startswith("gyro_bias")]
-    return {"rms": hrms(est, d["fix_p"][withheld]), "seconds": sec, "cpu_seconds": cpu,
-            "track": track_rms(est, d, withheld),
+    score = hrms if score is None else score
+    track = track_rms(est, d, withheld) if ref is None else None  # against the withheld fixes
+    ref = d["fix_p"][withheld] if ref is None else ref
+    return {"rms": score(est, ref), "seconds": sec, "cpu_seconds": cpu, "track": track,
             "verified": sol.stats.get("verified"), "solver": solver,
             "iterations": len(seq.get("iterations", [])), "warnings": [w[:240] for w in sol.warnings],
             "misfit": (sol.stats.get("plausibility") or {}).get("noise_ratio"),
