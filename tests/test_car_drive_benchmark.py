@@ -71,6 +71,7 @@ def test_summary_mean_worst_ratios_and_counts():
     assert s["rms_mean"] == pytest.approx(4.1 / 3) and s["rms_worst"] == pytest.approx(2.2)
     assert s["x_rms_worst"] == pytest.approx(1.1) and s["x_seconds_worst"] == pytest.approx(5.0)
     assert s["seconds"] == pytest.approx(5.0) and s["cpu_seconds"] == pytest.approx(2.5)
+    assert s["x_cpu_worst"] == pytest.approx(5.0)  # CPU is half the wall time for both here
     assert (s["wins"], s["runs"], s["verified"], s["failed"]) == (2, 3, 2, 0)  # ties count as no worse
     assert s["peak_b"] == pytest.approx(2**20 / 2**10)
     r = got["bvpnav README"]

@@ -287,6 +287,8 @@ def summary(rows: list[dict], ref: str) -> list[dict]:
                                 else np.nan),
                 "x_rms_worst": max((r["rms"] / b["rms"] for r, b in pairs), default=np.nan),
                 "x_seconds_worst": max((r["seconds"] / b["seconds"] for r, b in pairs), default=np.nan),
+                "x_cpu_worst": max((r.get("cpu_seconds", np.nan) / b.get("cpu_seconds", np.nan)
+                                    for r, b in pairs), default=np.nan),
                 "wins": sum(r["rms"] <= b["rms"] for r, b in pairs),
                 "peak_b": max((_per_sample(r) for r in mine), default=np.nan),
                 "verified": sum(bool(r.get("verified")) for r in mine),
@@ -299,13 +301,13 @@ def print_summary(rows: list[dict], ref: str, seeds: list[int]) -> None:
           f"worst ratios to {ref} on the same drive; drives where the method's RMS <= {ref}'s; "
           "peak memory per IMU sample, bytes")
     print(f"{'grade':>9} {'gap s':>5} {'method':>22} {'mean m':>8} {'worst m':>8} {'wall s':>7} {'CPU s':>7} "
-          f"{'RMS x':>6} {'wall x':>7} {'<=ref':>5} {'B/smp':>6} {'verified':>8}")
+          f"{'RMS x':>6} {'wall x':>7} {'CPU x':>6} {'<=ref':>5} {'B/smp':>6} {'verified':>8}")
     for s in summary(rows, ref):
         ver = f"{s['verified']}/{s['runs']}" if s["method"].startswith("bvpnav") else "-"
         fail = f"  {s['failed']} failed" if s["failed"] else ""
         print(f"{s['grade']:>9} {s['gap']:5g} {s['method']:>22} {s['rms_mean']:8.4f} {s['rms_worst']:8.4f} "
               f"{s['seconds']:7.1f} {s['cpu_seconds']:7.1f} {s['x_rms_worst']:6.3f} "
-              f"{s['x_seconds_worst']:7.1f} "
+              f"{s['x_seconds_worst']:7.1f} {s['x_cpu_worst']:6.0f} "
               f"{s['wins']:2d}/{s['runs']:<2d} {s['peak_b']:6.0f} {ver:>8}{fail}")
 
 
