@@ -60,8 +60,8 @@ seed 2 did not finish in the session; the 2-core machine at load average 15-25, 
 
     tactical  GTSAM (example)          bvpnav README     bvpnav states             states NHC soft
     10 s      0.8144 / 0.6982  0.2 s   0.8275  150 s     0.8165 / 0.6981  12-16 s  0.5107 / 0.4485  20 s
-    30 s      1.1920 / 1.0940  1.7 s   (not finished)    1.2006 / 1.0838  12-17 s  0.6364 / 0.6832  19-21 s
-    60 s      1.4506 / 1.3034  3.7 s                     1.4580 / 1.2801  15-16 s  0.9812 / 0.8297  20 s
+    30 s      1.1920 / 1.0940  1.7 s   1.1956  143 s     1.2006 / 1.0838  12-17 s  0.6364 / 0.6832  19-21 s
+    60 s      1.4506 / 1.3034  3.7 s   (not finished)    1.4580 / 1.2801  15-16 s  0.9812 / 0.8297  20 s
     peak      3.7 kB/sample            73 kB             33 kB                     36-38 kB
 
 ``GTSAM peer`` 0.8165 / 0.6981, 1.2006 / 1.0840, 1.4576 / 1.2803 (bvpnav states / peer within 3e-4
