@@ -55,12 +55,15 @@ Run: ``python examples/benchmarks/car_drive.py [--grade tactical consumer] [--se
 [--gaps 10 30 60] [--methods ...] [--quick]``.
 
 Measured (2026-12-04, ``--grade tactical consumer --seeds 0 1 2`` plus the course-start and truth rows;
-seed 2 did not finish in the session; the 2-core machine at load average 15-25, so wall times are
-5-15x the CPU seconds given here). 3-D RMS m per drive, seed 0 / seed 1; CPU s of the solve::
+not every case finished in the session; the 2-core machine at load average 15-25, so wall times are
+5-15x the CPU seconds given here). 3-D RMS m per drive, seed 0 / seed 1 (/ seed 2); CPU s of the
+solve::
 
     tactical  GTSAM (example)          bvpnav README     bvpnav states             states NHC soft
     10 s      0.8144 / 0.6982  0.2 s   0.8275  150 s     0.8165 / 0.6981  12-16 s  0.5107 / 0.4485  20 s
+              / 0.8136                                   / 0.8117                  / 0.4965
     30 s      1.1920 / 1.0940  1.7 s   1.1956  143 s     1.2006 / 1.0838  12-17 s  0.6364 / 0.6832  19-21 s
+              / 1.3488                                   / 1.3428                  / 0.7377
     60 s      1.4506 / 1.3034  3.7 s   (not finished)    1.4580 / 1.2801  15-16 s  0.9812 / 0.8297  20 s
     peak      3.7 kB/sample            73 kB             33 kB                     36-38 kB
 
@@ -77,7 +80,9 @@ Consumer, seed 0 (seed 1), 3-D RMS m::
     10   19.19 (18.09)   19.19 (18.09)   19.19, 30 steps,       0.992 / 0.991          0.992 (1.036)
                                          warned                 (1.036 / 1.036)
     30   1.987 (33.62)   1.970 (33.64)   1.966, 13 steps        1.557 / 1.966          1.987 (2.079)
-    60   101.7 (103.7)   104.2 (103.7)   -                      91.2 / -               7.62 (5.43)
+                                                                (1.866 / 2.072)
+    60   101.7 (103.7)   104.2 (103.7)   -                      91.2 / 7.73            7.62 (5.43)
+                                                                (91.2 / 5.20)
 
 (graph error at 10 s, seed 0: 23,789 from the raw-gyro start, 87.7 from the truth or the course.)
 ``bvpnav states NHC soft`` from the raw-gyro start at 10 s: 94.8 m, not converged, warned.
