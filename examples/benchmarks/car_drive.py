@@ -55,7 +55,7 @@ Run: ``python examples/benchmarks/car_drive.py [--grade tactical consumer] [--se
 [--gaps 10 30 60] [--methods ...] [--quick]``.
 
 Measured (2026-12-04, ``--grade tactical consumer --seeds 0 1 2`` plus the course-start and truth rows;
-not every case finished in the session; the 2-core machine at load average 15-25, so wall times are
+consumer cases not all finished in the session; the 2-core machine at load average 15-25, so wall times are
 5-15x the CPU seconds given here). 3-D RMS m per drive, seed 0 / seed 1 (/ seed 2); CPU s of the
 solve::
 
@@ -64,7 +64,8 @@ solve::
               / 0.8136                                   / 0.8117                  / 0.4965
     30 s      1.1920 / 1.0940  1.7 s   1.1956  143 s     1.2006 / 1.0838  12-17 s  0.6364 / 0.6832  19-21 s
               / 1.3488                                   / 1.3428                  / 0.7377
-    60 s      1.4506 / 1.3034  3.7 s   (not finished)    1.4580 / 1.2801  15-16 s  0.9812 / 0.8297  20 s
+    60 s      1.4506 / 1.3034  3.7 s   1.4550  144 s     1.4580 / 1.2801  15-16 s  0.9812 / 0.8297  20 s
+              / 1.5520                                   / 1.5527                  / 0.5981
     peak      3.7 kB/sample            73 kB             33 kB                     36-38 kB
 
 ``GTSAM peer`` 0.8165 / 0.6981, 1.2006 / 1.0840, 1.4576 / 1.2803 (bvpnav states / peer within 3e-4
