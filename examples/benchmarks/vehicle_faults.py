@@ -211,6 +211,7 @@ def summary(results: list[dict]) -> list[dict]:
     for key in dict.fromkeys((r["grade"], r["quality"]) for r in results):
         rs = [r for r in results if (r["grade"], r["quality"]) == key]
         cols = {"lever_cm": [1e2 * r["lever_err_norm"] for r in rs],
+                "lever_h_cm": [1e2 * float(np.hypot(*r["lever_err"][:2])) for r in rs],
                 "scale_pct": [1e2 * abs(r["scale_err"]) for r in rs],
                 "delay_ms": [1e3 * abs(r["delay_err"]) for r in rs],
                 "ratio": [r["ratio"] for r in rs], "ratio_h": [r["ratio_h"] for r in rs]}
@@ -226,20 +227,21 @@ def summary(results: list[dict]) -> list[dict]:
 
 def print_summary(rows: list[dict]) -> None:
     """The mean and worst over seeds, as a Markdown table (the one in README and the guide)."""
-    print("| drive | grade | fixes (sigma h/v) | seeds | lever arm error, cm | scale error, % "
-          "| delay error, ms | outliers caught / missed / good rejected | RMS faults / fault-free, 3-D "
-          "| horizontal |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    print("| drive | grade | fixes (sigma h/v) | seeds | lever arm error 3-D, cm | horizontal "
+          "| scale error, % | delay error, ms | outliers caught / missed / good rejected "
+          "| RMS faults / fault-free, 3-D | horizontal |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+
     def mw(s, name, fmt):
         return f"{s[name][0]:{fmt}} / {s[name][1]:{fmt}}"
 
     for s in rows:
         print(f"| {s['duration']:g} s, {s['rate']:g} Hz | {s['grade']} | {s['quality']} | {len(s['seeds'])} "
-              f"| {mw(s, 'lever_cm', '.1f')} | {mw(s, 'scale_pct', '.3f')} | {mw(s, 'delay_ms', '.2f')} "
-              f"| {s['caught']}/{s['bad']} / {s['missed']} / {s['false']} | {mw(s, 'ratio', '.2f')} "
-              f"| {mw(s, 'ratio_h', '.2f')} |")
+              f"| {mw(s, 'lever_cm', '.1f')} | {mw(s, 'lever_h_cm', '.1f')} | {mw(s, 'scale_pct', '.3f')} "
+              f"| {mw(s, 'delay_ms', '.2f')} | {s['caught']}/{s['bad']} / {s['missed']} / {s['false']} "
+              f"| {mw(s, 'ratio', '.2f')} | {mw(s, 'ratio_h', '.2f')} |")
     print("(each cell: mean / worst over the seeds; errors in absolute value, the lever arm's as the "
-          "length of its 3-D error)")
+          "length of its error vector)")
 
 
 def print_table(results: list[dict]) -> None:
