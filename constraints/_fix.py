@@ -93,6 +93,12 @@ class GnssFix(Linearizable):
 
     # ------------------------------------------------------- linearization
     @property
+    def turns_with_attitude(self) -> bool:
+        """With a lever arm the fixed point :math:`C l` turns with the attitude: the attitude loop
+        hands the rows its linearization point (see :meth:`bvpnav.NavModel.antenna_offset`)."""
+        return self.lever is not None
+
+    @property
     def needs_linearization(self) -> bool:  # type: ignore[override]
         return self.delay == ESTIMATED and "_about" not in self.__dict__
 
