@@ -29,6 +29,21 @@ their ratio, the same ratio horizontally, and the wall times; then per grade and
 mean and worst over the seeds, and the acceptance of issue 39: lever arm within 5 cm, scale
 within 0.2 %, delay within 5 ms, every bad fix rejected and no good one, RMS within 10 % of (a).
 
+Measured (2026-12-04, on a shared machine under heavy load, so the wall times say little; the
+table over seeds is in ``docs/guide/strapdown.md``, section "Vehicles"), default options,
+tactical grade::
+
+    seed  lever error x, y, z (std) cm   delay ms (std)  scale % (std)   caught false ratio horiz. calib. out
+       0  -2.3 (2.0), 1.5 (1.4), 4.0 (2.0) -1.04 (1.10)  -0.011 (0.008)  15/15  0     2.03  1.15   1.05
+       1  -2.3 (2.1), -1.2 (1.5), -1.7 (2.0) -0.38 (1.10) +0.008 (0.008) 15/15  0     1.40  1.38   1.01
+       2  2.3 (2.1), -1.9 (1.5), -1.8 (2.0)  +2.99 (1.09)  +0.004 (0.008) 15/15  0     1.67  1.80   1.04
+
+Every outlier rejected and no good fix; lever arm (the vertical is the tape's), scale and delay
+within 5 cm, 0.2 % and 5 ms. The RMS criterion (10 %) is not met, and "calib. out" (the faults
+run's RMS with what the calibration's own errors move every position by taken out, over the
+fault-free run's: 1.01-1.05) says why: the rest of the pipeline costs nothing; the lever arm's
+error, known to 1-3 cm after 300 s, is what a longer drive or a measured lever arm removes.
+
 Run: ``python examples/benchmarks/vehicle_faults.py [--grade tactical consumer] [--quality ...]
 [--duration 300] [--rate 10] [--seeds 0 1 2] [--explain] [--no-odometer] [--quick]``.
 """
