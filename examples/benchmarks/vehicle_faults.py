@@ -38,11 +38,18 @@ tactical grade::
        1  -2.3 (2.1), -1.2 (1.5), -1.7 (2.0) -0.38 (1.10) +0.008 (0.008) 15/15  0     1.40  1.38   1.01
        2  2.3 (2.1), -1.9 (1.5), -1.8 (2.0)  +2.99 (1.09)  +0.004 (0.008) 15/15  0     1.67  1.80   1.04
 
-Every outlier rejected and no good fix; lever arm (the vertical is the tape's), scale and delay
-within 5 cm, 0.2 % and 5 ms. The RMS criterion (10 %) is not met, and "calib. out" (the faults
-run's RMS with what the calibration's own errors move every position by taken out, over the
-fault-free run's: 1.01-1.05) says why: the rest of the pipeline costs nothing; the lever arm's
-error, known to 1-3 cm after 300 s, is what a longer drive or a measured lever arm removes.
+and consumer grade (seed 0 did not finish under the load)::
+
+       1  5.2 (3.5), 0.3 (1.8), -1.5 (2.0)   +1.36 (1.46)  +0.008 (0.009) 15/15  0     1.45  1.58   1.03
+       2  -0.6 (3.4), 0.9 (1.8), -1.2 (2.0)  +5.54 (1.46)  +0.007 (0.009) 15/15  0     2.31  2.63   1.07
+
+Every outlier rejected and no good fix; the scale within 0.2 %; lever arm (the vertical is the
+tape's) and delay within 5 cm and 5 ms for the tactical grade, not always for the consumer one
+(5.4 cm on seed 1, 5.5 ms on seed 2, 3.8 of its reported std). The RMS criterion (10 %) is not
+met, and "calib. out" (the faults run's RMS with what the calibration's own errors move every
+position by taken out, over the fault-free run's: 1.01-1.07) says why: the rest of the pipeline
+costs little; the lever arm's error, 1-5 cm after 300 s, is what a longer drive or a measured
+lever arm removes.
 
 Run: ``python examples/benchmarks/vehicle_faults.py [--grade tactical consumer] [--quality ...]
 [--duration 300] [--rate 10] [--seeds 0 1 2] [--explain] [--no-odometer] [--quick]``.
