@@ -20,12 +20,14 @@ ESTIMATED = "estimated"
 
 
 class _About(NamedTuple):
-    """A delayed fix's linearization point: the delay (s) and the rate of the fixed quantity
-    (velocity for positions, acceleration for velocities) at ``t - delay``, (K, n_axes)."""
+    """A delayed fix's linearization point: the delay (s), the rate of the IMU's fixed quantity
+    (velocity for positions, acceleration for velocities) at ``t - delay``, (K, n_axes), and
+    the lever arm (m, body frame) whose own motion the rows add to that rate (None: none)."""
 
     delay: float
     rate: np.ndarray
     outside: int = 0
+    lever: tuple | None = None
 
 
 class GnssFix(Linearizable):
@@ -40,7 +42,8 @@ class GnssFix(Linearizable):
     :class:`~bvpnav.error_models.LeverArm` unknowns) and :math:`\delta` the delay (known, or
     the :class:`~bvpnav.error_models.TimeOffset` unknown, linearized about the current
     estimate: :math:`q(t_k - \delta) \approx q(t_k - \hat\delta) - \dot{\hat q}(t_k - \hat\delta)
-    (\delta - \hat\delta)`).
+    (\delta - \hat\delta)`, with the antenna's own motion: :math:`\dot{\hat q}` holds
+    :math:`\frac{d}{dt} C\ell` at the lever arm's current estimate as well as the IMU's rate).
     """
 
     #: ``"position"`` or ``"velocity"`` (set by the item class).
@@ -90,6 +93,12 @@ class GnssFix(Linearizable):
 
     # ------------------------------------------------------- linearization
     @property
+    def turns_with_attitude(self) -> bool:
+        """With a lever arm the fixed point :math:`C l` turns with the attitude: the attitude loop
+        hands the rows its linearization point (see :meth:`bvpnav.NavModel.antenna_offset`)."""
+        return self.lever is not None
+
+    @property
     def needs_linearization(self) -> bool:  # type: ignore[override]
         return self.delay == ESTIMATED and "_about" not in self.__dict__
 
@@ -111,12 +120,15 @@ class GnssFix(Linearizable):
         about = self.__dict__.get("_about")
         return float(about.delay) if about is not None else 0.0
 
-    def _at(self, rate_nodes: np.ndarray, t: np.ndarray, delay: float, axes_idx) -> Linearizable:
+    def _at(self, rate_nodes: np.ndarray, t: np.ndarray, delay: float, axes_idx, lever=None) -> Linearizable:
         out = copy.copy(self)
         tt = self.t - delay
         rate = np.column_stack([np.interp(tt, t, rate_nodes[:, a]) for a in axes_idx])
         outside = int(np.sum((tt < t[0]) | (tt > t[-1])))
-        object.__setattr__(out, "_about", _About(float(delay), rate, outside))
+        if lever is None and self.lever is not None and not isinstance(self.lever, str):
+            lever = self.lever
+        object.__setattr__(out, "_about", _About(float(delay), rate, outside,
+                                                 None if lever is None else tuple(float(v) for v in lever)))
         return out
 
     def _axes_idx(self, columns) -> list[int]:
@@ -165,14 +177,38 @@ class GnssFix(Linearizable):
 
     def linearized_from(self, solution, t, trajectory):
         """A copy linearized about a solution: its delay estimate (``time_offset``, 0 when it
-        has none) and its nodal velocities (their differences for a velocity fix)."""
+        has none), its nodal velocities (their differences for a velocity fix) and, for an
+        estimated lever arm, its estimate (``lever_x``, ``lever_y``, ``lever_z``)."""
         if solution is None:
             return self.linearized(t, trajectory)
         t = np.asarray(solution.t, dtype=float)
         delay = float(solution.error_params.get("time_offset", self._delay0()))
         vel = solution.velocity().reshape(t.size, -1)
         rate = vel if self.quantity == "position" else np.gradient(vel, t, axis=0)
-        return self._at(rate, t, delay, self._axes_idx(solution._pos_cols))
+        lever = None
+        names = [f"lever_{a}" for a in "xyz"]
+        if self.lever == ESTIMATED and all(n in solution.error_params.index for n in names):
+            lever = [float(solution.error_params[n]) for n in names]
+        return self._at(rate, t, delay, self._axes_idx(solution._pos_cols), lever)
+
+    def _antenna_rate(self, model, tt: np.ndarray, about: _About, what: str):
+        r"""The rate of the antenna's offset from the IMU at the delayed times ``tt``, (K, n_axes):
+        the time derivative of :math:`C\ell` for a position fix (:math:`C(\omega \times \ell)`,
+        or differences at the samples for data without gyro rates), of
+        :math:`C(\omega \times \ell)` for a velocity fix (by differences at the samples, as the
+        IMU's own rate), at the linearization's lever arm; 0 without one (a first phase, whose
+        rate is the fixes' own)."""
+        if about.lever is None:
+            return 0.0
+        data = model.data
+        rates = getattr(data, "attitude_point", None) is not None or getattr(data, "gyro", None) is not None
+        if self.quantity == "position" and rates:   # C (omega x l), the derivative of C l
+            rel = model.antenna_offset(tt, about.lever, self.axes, rate=True, what=what)
+            return rel.c.reshape(tt.size, -1)
+        g = model.grid.t
+        rel = model.antenna_offset(g, about.lever, self.axes, rate=self.quantity == "velocity", what=what)
+        d = np.gradient(rel.c.reshape(g.size, -1), g, axis=0)
+        return np.column_stack([np.interp(tt, g, d[:, a]) for a in range(d.shape[1])])
 
     # ------------------------------------------------------------ the rows
     def _fix_rows(self, model) -> Affine:
@@ -199,7 +235,8 @@ class GnssFix(Linearizable):
                                                what=f"{ident}: lever={self.lever!r}")
         if self.delay == ESTIMATED:
             T = model.time_offset(f"{ident}: delay='estimated'")
-            rate = about.rate.ravel()
+            rate = about.rate + self._antenna_rate(model, tt, about, f"{ident}: lever={self.lever!r}")
+            rate = rate.ravel()
             rows = rows - Affine(sp.csr_matrix(rate[:, None]) @ T.A, rate * (T.c[0] - about.delay))
         res = rows - as_values(self.value, self.t.size, len(ax), f"{ident}: value")
         prefix = "" if self.quantity == "position" else "v"
@@ -217,7 +254,7 @@ class GnssFix(Linearizable):
         out = dataclasses.replace(self, t=self.t[keep], value=vals, sigma=sig, name=self.label)
         about = self.__dict__.get("_about")
         if about is not None:
-            object.__setattr__(out, "_about", _About(about.delay, about.rate[keep], about.outside))
+            object.__setattr__(out, "_about", about._replace(rate=about.rate[keep]))
         return out
 
     def _fix_math(self) -> str:

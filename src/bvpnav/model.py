@@ -437,6 +437,9 @@ class LinearizationPoint:
     velocity: np.ndarray
     names: tuple
     psi: np.ndarray
+    #: The GNSS antenna's estimated lever arm at the evaluation, m, body axes (None: not
+    #: estimated): the point :meth:`NavModel.antenna_offset` linearizes :math:`C l` about.
+    lever: tuple | None = None
 
 
 def _skew(v: np.ndarray) -> np.ndarray:
@@ -1016,6 +1019,17 @@ class NavModel:
         :math:`C(t)` is the current attitude (the data's, or the attitude loop's estimate:
         the rows are linear in :math:`l` for a given attitude and re-made at every step of
         the loop); :math:`\omega(t)` the current corrected body rates, linear between samples.
+        With the attitude loop's :class:`LinearizationPoint` (``data.body_point``) the rows
+        also carry the first-order effect of the attitude increments :math:`\psi`
+        (:math:`C \to \exp([\psi\times]) C`):
+
+        .. math:: C\,\ell \to C\,\ell - [(C\,\hat\ell)\times]\,\psi ,
+
+        with :math:`\ell = l` or :math:`\omega \times l` and :math:`\hat\ell` at the known
+        lever arm or the point's estimate (``body_point.lever``), :math:`\psi` the attitude
+        parameters' columns or the node states' attitude error, as in :meth:`body_velocity`;
+        so the loop sees that a heading change moves the antenna. (The change of
+        :math:`\omega` by the gyro models is left out of the velocity rows.)
         """
         times = as_times(t, what)
         ax = self.axes_of(axes, what)
@@ -1036,6 +1050,7 @@ class NavModel:
             skew[:, 0, 1], skew[:, 0, 2], skew[:, 1, 2] = -w[:, 2], w[:, 1], -w[:, 0]
             skew[:, 1, 0], skew[:, 2, 0], skew[:, 2, 1] = w[:, 2], -w[:, 1], w[:, 0]
             R = R @ skew
+        turn = self._antenna_turn(times, R, lever, ax, what)     # the attitude increments' term
         R = R[:, list(ax), :]                                   # (K, nax, 3): rows per time and axis
         labels = TimeLabels("lever_" if not rate else "lever_v", [self.axes[a] for a in ax], times)
         if isinstance(lever, str):
@@ -1044,9 +1059,41 @@ class NavModel:
             A = sp.csr_matrix((R.ravel(), (np.repeat(np.arange(R.shape[0] * R.shape[1]), 3),
                                            np.tile(idx, R.shape[0] * R.shape[1]))),
                               shape=(R.shape[0] * R.shape[1], self.size))
-            return Affine(A, np.zeros(A.shape[0]), labels)
+            return Affine(A if turn is None else A + turn, np.zeros(A.shape[0]), labels)
         lv = np.asarray(lever, dtype=float).reshape(3)
-        return Affine(sp.csr_matrix((R.shape[0] * R.shape[1], self.size)), (R @ lv).ravel(), labels)
+        A = sp.csr_matrix((R.shape[0] * R.shape[1], self.size)) if turn is None else turn
+        return Affine(A, (R @ lv).ravel(), labels)
+
+    def _antenna_turn(self, times: np.ndarray, R: np.ndarray, lever, ax, what: str) -> sp.csr_matrix | None:
+        r"""The rows :math:`-[(R\hat l)\times]\,\psi(t)` of :meth:`antenna_offset` on the navigation
+        axes ``ax`` ((K * len(ax), size)), or None without a linearization point or a lever arm
+        to linearize about."""
+        point = getattr(self.data, "body_point", None)
+        if point is None:
+            return None
+        if isinstance(lever, str):
+            if point.lever is None:
+                return None
+            lv = np.asarray(point.lever, dtype=float).reshape(3)
+        else:
+            lv = np.asarray(lever, dtype=float).reshape(3)
+        if not np.any(lv):
+            return None
+        M = -_skew(np.einsum("kij,j->ki", R, lv))[:, list(ax), :]     # (K, nax, 3)
+        K, nax = M.shape[0], M.shape[1]
+        out = None
+        Psi = self._attitude_columns()
+        if Psi is not None and np.any(Psi):
+            P = self.grid.interpolation_matrix(times, what)
+            psi = np.stack([P @ Psi[:, a, :] for a in range(3)], axis=1)           # (K, 3, q)
+            L = np.einsum("kbn,knq->kbq", M, psi)
+            out = sp.csr_matrix(L.reshape(K * nax, self.q)) @ self.params().A
+        if self.ns and "attitude_error" in self.state_model.state_kinds(self.data):
+            cols = (np.arange(K)[:, None, None] * 3 + np.arange(3)[None, None, :]).repeat(nax, axis=1).ravel()
+            B = sp.csr_matrix((M.ravel(), (np.repeat(np.arange(K * nax), 3), cols)), shape=(K * nax, 3 * K))
+            term = B @ self.attitude_error(times).A
+            out = term if out is None else out + term
+        return None if out is None else sp.csr_matrix(out)
 
     def time_offset(self, what: str = "time offset") -> Affine:
         """The delay of the GNSS fixes against the IMU clock as one row (s): the parameter of

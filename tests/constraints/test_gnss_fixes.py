@@ -16,7 +16,7 @@ from scipy.spatial.transform import Rotation
 
 import bvpnav
 from bvpnav.constraints import Position, Velocity
-from bvpnav.error_models import LeverArm, TimeOffset
+from bvpnav.error_models import AttitudeError, LeverArm, TimeOffset
 from bvpnav.errors import InputError
 from bvpnav.log import BvpnavWarning
 from bvpnav.simulate import strapdown_3d_2010
@@ -103,6 +103,60 @@ def test_lever_and_delay_together_on_a_turning_body(turning):
     assert abs(sol.error_params["time_offset"] - delay) <= 1e-6 * delay
     est = sol.error_params[["lever_x", "lever_y", "lever_z"]].to_numpy()
     assert np.max(np.abs(est - LEVER)) <= 1e-6
+
+
+def test_delay_seen_through_the_antennas_own_motion_about_a_still_imu():
+    """The IMU stands still and turns about z at a varying rate, the antenna 2 m off: only the
+    antenna moves, so the delay shows in the fixes only through :math:`d(C l)/dt`. The delay's
+    linearization carries that rate (it had the IMU's velocity alone: zero here, and the solve
+    refused the hard fixes as infeasible); noise-free, delay and lever arm are found to 1e-6."""
+    t = np.linspace(0.0, 20.0, 201)
+    w = np.column_stack([np.zeros(t.size), np.zeros(t.size), 0.5 + 0.3 * np.sin(0.4 * t)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")   # a rate that stays put for a while looks like saturation
+        data = bvpnav.ImuData.from_gyro(t, np.tile([0.0, 0.0, 9.80665], (t.size, 1)), w)
+    lever, delay = np.array([2.0, -0.5, 0.3]), 0.3
+    k = np.arange(5, t.size - 5, 4)
+    ant = data.attitude[k].apply(lever)
+    ant_v = data.attitude[k].apply(np.cross(w[k], lever))
+    cases = [(Position, ant, tuple(lever), TimeOffset()), (Velocity, ant_v, tuple(lever), TimeOffset()),
+             (Position, ant, "estimated", TimeOffset() + LeverArm())]
+    for item, value, lev, em in cases:
+        prob = bvpnav.NavigationProblem(data, error_model=em, grade=None)
+        prob.add(item(t=t[k] + delay, value=value, lever=lev, delay="estimated", name="antenna"),
+                 Position(t=0.0, value=0.0, name="start"), Velocity(t=0.0, value=0.0, name="v0"))
+        sol = prob.solve(solver="direct", sequential={"tol": 1e-12})
+        assert sol.stats["sequential"]["converged"]
+        assert abs(sol.error_params["time_offset"] - delay) <= 1e-6 * delay, (item.__name__, lev)
+        if lev == "estimated":
+            est = sol.error_params[["lever_x", "lever_y", "lever_z"]].to_numpy()
+            assert np.max(np.abs(est - lever)) <= 1e-6 * np.max(np.abs(lever)), est
+        assert np.max(np.abs(sol.position())) < 1e-6   # the IMU stays at the origin
+
+
+def test_heading_seen_through_the_antenna_about_a_still_imu():
+    r"""The IMU stands still and turns about z at a varying rate, its initial heading guessed
+    10 degrees off; the antenna 2 m off is fixed to 1 cm. Only the antenna's place tells the
+    heading (the accelerations do not change with it), through :math:`d(C l)/d\psi`, which the
+    attitude loop's rows now carry (without it: "nothing determines parameter attitude_z").
+    The heading correction is found to 1e-9 rad, and the IMU stays at the origin."""
+    t = np.linspace(0.0, 20.0, 201)
+    w = np.column_stack([np.zeros(t.size), np.zeros(t.size), 0.5 + 0.3 * np.sin(0.4 * t)])
+    f = np.tile([0.0, 0.0, 9.80665], (t.size, 1))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")   # a rate that stays put for a while looks like saturation
+        true = bvpnav.ImuData.from_gyro(t, f, w)
+        off = Rotation.from_rotvec([0.0, 0.0, np.pi / 18])
+        data = bvpnav.ImuData.from_gyro(t, f, w, initial_attitude=off)
+    k = np.arange(0, t.size, 4)
+    prob = bvpnav.NavigationProblem(data, error_model=AttitudeError(axes="z"), grade=None)
+    prob.add(Position(t=t[k], value=true.attitude[k].apply(LEVER * 2), lever=tuple(LEVER * 2), sigma=0.01,
+                      name="antenna"),
+             Position(t=0.0, value=0.0, name="start"), Velocity(t=0.0, value=0.0, name="v0"))
+    sol = prob.solve(solver="direct", attitude={"heading": "given", "progress": False})
+    assert sol.stats["sequential"]["converged"]
+    assert abs(sol.error_params["attitude_z"] + np.pi / 18) < 1e-9
+    assert np.max(np.abs(sol.position())) < 1e-9
 
 
 @pytest.mark.parametrize("model", [LeverArm, TimeOffset])

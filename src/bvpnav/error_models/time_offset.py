@@ -39,7 +39,10 @@ class TimeOffset(ErrorModel):
     .. math:: r(t_k - \delta) \approx r(t_k - \hat\delta) - \hat v(t_k - \hat\delta)\,
               (\delta - \hat\delta),
 
-    exact at the fixed point (the velocity only sets how fast the loop gets there).
+    exact at the fixed point. The velocity is the derivative of the fixed quantity, so that
+    with noisy fixes the fixed point is the least-squares answer; with a lever arm it is the
+    antenna's, :math:`\hat v + C(\omega \times \hat l)` (a turning vehicle's antenna moves
+    even where the IMU stands still).
     Observable where the vehicle moves: :math:`\delta` shifts each fix along the velocity.
 
     Examples

@@ -172,6 +172,13 @@ def objective_value(form: Formulation, x: np.ndarray, lam: float) -> float:
 
 
 # ------------------------------------------------------------- the loop
+def _turns_with_attitude(items) -> bool:
+    """Whether some item's rows turn with the attitude and so take the loop's linearization
+    point: body-frame items (``body_frame``) and fixes of an antenna off the IMU
+    (``turns_with_attitude``)."""
+    return any(getattr(it, "body_frame", False) or getattr(it, "turns_with_attitude", False) for it in items)
+
+
 class _Loop:
     def __init__(self, form: Formulation, inner: Stage, opts, lam, o: dict):
         self.form, self.inner, self.opts, self.o = form, inner, opts, o
@@ -345,7 +352,7 @@ class _Loop:
         data = self.data_at(values)
         if damping:
             data = with_damping(data, damping)
-        if at_values is not None and any(getattr(it, "body_frame", False) for it in self.form.items):
+        if at_values is not None and _turns_with_attitude(self.form.items):
             data = self.body_point(data, at_values)
         form = self._form(data, self.form.error_model)
         sol = self._solve(form)
@@ -384,8 +391,10 @@ class _Loop:
             names += list(c.names(data))
             cols.append(psi)
         out = copy.copy(data)
+        ep = at_values.error_params
+        lever = tuple(float(ep[f"lever_{a}"]) for a in "xyz") if "lever_x" in ep.index else None
         out.body_point = LinearizationPoint(velocity=vel, names=tuple(names),
-                                            psi=np.concatenate(cols, axis=2))
+                                            psi=np.concatenate(cols, axis=2), lever=lever)
         return out
 
     def heading_start(self, values: dict) -> tuple[dict, list, tuple | None, str | None]:
@@ -457,7 +466,7 @@ def _at_point(loop: _Loop, values: dict, at_values: Solution) -> Solution:
     from .assemble import make_solution
 
     data = loop.data_at(values)
-    if any(getattr(it, "body_frame", False) for it in loop.form.items):  # their attitude terms too
+    if _turns_with_attitude(loop.form.items):  # their attitude terms too
         data = loop.body_point(data, at_values)
     form = loop._form(data, loop.form.error_model)
     used = at_values.formulation
