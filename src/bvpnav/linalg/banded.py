@@ -71,7 +71,22 @@ class NotBanded(ValueError):
     """The problem's rows are not local enough for the banded factorization (says why)."""
 
 
-
+def _eliminated(D: sp.csr_matrix, fold: np.ndarray, colnode: np.ndarray,
+                lam_rows: np.ndarray | None) -> np.ndarray:
+    """The unknowns eliminated before the banded factorization: those with a node whose every
+    objective entry is alone in a folded row that lambda does not weight (indices, sorted)."""
+    Drow = np.repeat(np.arange(D.shape[0]), np.diff(D.indptr))
+    Dcol = D.indices.astype(np.int64)
+    alone = fold[Drow] & (np.diff(D.indptr)[Drow] == 1)
+    if lam_rows is not None:
+        alone &= ~np.asarray(lam_rows, dtype=bool)[Drow]
+    # columns with an entry, none of them shared (boolean marks: a byte per unknown
+    # where two integer counts of the unknowns' length took sixteen)
+    single = np.zeros(D.shape[1], dtype=bool)
+    single[Dcol] = True
+    single[Dcol[~alone]] = False
+    single &= colnode >= 0
+    return np.flatnonzero(single)
 
 def row_span(A: sp.csr_matrix, colnode: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Lowest and highest node of each row's columns with a node >= 0 (``hi = -1`` for a
@@ -895,20 +910,7 @@ class BandPlan:
         lo, hi = row_span(D, colnode)
         fold = (hi < 0) | (hi - lo <= span)
         unf = np.flatnonzero(~fold)
-        Drow = np.repeat(np.arange(m), np.diff(D.indptr))
-        Dcol = D.indices.astype(np.int64)
-        nnz_row = np.diff(D.indptr)[Drow]
-        # an unknown is eliminated when each of its objective entries is alone in a folded row
-        alone = fold[Drow] & (nnz_row == 1)
-        if lam_rows is not None:
-            alone &= ~np.asarray(lam_rows, dtype=bool)[Drow]
-        # columns with an entry, none of them shared (boolean marks: a byte per unknown
-        # where two integer counts of the unknowns' length took sixteen)
-        single = np.zeros(n, dtype=bool)
-        single[Dcol] = True
-        single[Dcol[~alone]] = False
-        single &= colnode >= 0
-        elim = np.flatnonzero(single)
+        elim = _eliminated(D, fold, colnode, lam_rows)
         pieces = _entry_pieces(E, diagonal)
         elo, ehi = _spans(pieces, colnode, p)
         enode = np.where((ehi >= 0) & (ehi - elo <= span), (elo + ehi) // 2, -1)
@@ -964,7 +966,7 @@ class BandPlan:
         plan.pos_order, plan.border_order = order, border
         plan.band_node = node[order]   # the node of each band position (CondensedKKT)
         plan.segments = plan._segment(node, segments)
-        del Drow, Dcol, nnz_row, alone, lo, hi, elo, ehi, node, reach, local, order, border
+        del lo, hi, elo, ehi, node, reach, local, order, border
         plan._analyse(D, E, max_band, diagonal)
         return plan
 
@@ -1346,17 +1348,9 @@ class BandPlan:
         fold = (hi < 0) | (hi - lo <= span)
         if not np.array_equal(fold, self.fold):
             return None
-        Drow = np.repeat(np.arange(m), np.diff(D.indptr))
-        Dcol = D.indices.astype(np.int64)
-        alone = fold[Drow] & (np.diff(D.indptr)[Drow] == 1)
-        if lam_rows is not None:
-            alone &= ~np.asarray(lam_rows, dtype=bool)[Drow]
-        single = np.zeros(n, dtype=bool)
-        single[Dcol] = True
-        single[Dcol[~alone]] = False
-        single &= colnode >= 0
-        if not np.array_equal(np.flatnonzero(single), self.elim):
+        if not np.array_equal(_eliminated(D, fold, colnode, lam_rows), self.elim):
             return None
+        Dcol = D.indices.astype(np.int64)
         rows = np.flatnonzero(np.diff(D.indptr))
         if rows.size:   # the band positions each row spans (rows with entries: whole segments)
             pc = self.pos[Dcol].astype(np.int64)
