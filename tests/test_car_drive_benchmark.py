@@ -3,13 +3,13 @@
 Measured on seed 0, tactical, 120 s at 50 Hz (the full 600 s / 100 Hz table over seeds is in
 README and the script's docstring): at 10 / 30 s between kept fixes node states (``ErrorStates``)
 reach 0.655 / 2.128 m, with NonHolonomic 0.430 / 1.754 m, a spline 6.98 / 48.8 m; GTSAM's example
-graph 0.663 / 2.110 m, the peer smoother 0.655 / 2.123 m. Every bvpnav answer verified.
+graph 0.663 / 2.110 m, the peer smoother 0.655 / 2.123 m. Every bvpnav answer verified. The
+comparison with GTSAM (a peer, not a test dependency) is the benchmark's: its table prints the ratios.
 """
 
 from __future__ import annotations
 
 import contextlib
-import importlib.util
 import io
 
 import numpy as np
@@ -18,13 +18,10 @@ from _helpers import load_benchmark_module
 
 pytestmark = pytest.mark.slow  # the benchmark's quick run
 
-HAVE_GTSAM = importlib.util.find_spec("gtsam") is not None
-
-
 @pytest.fixture(scope="module")
 def quick():
     bench = load_benchmark_module("car_drive")
-    methods = ["bvpnav states", "bvpnav states NHC soft", "spline"] + (["GTSAM"] if HAVE_GTSAM else [])
+    methods = ["bvpnav states", "bvpnav states NHC soft", "spline"]
     with contextlib.redirect_stdout(io.StringIO()) as out:
         rows = bench.main(["--quick", "--grade", "tactical", "--methods", *methods, "--ref", "spline"])
     return {(r["method"], r["gap"]): r for r in rows}, out.getvalue()
@@ -42,14 +39,6 @@ def test_node_states_fit_and_beat_the_spline(quick):
         assert spline["rms"] > 5.0 * states["rms"], (spline, states)
         assert states["samples"] == 6001 and 0.0 < states["peak_mb"] < 4096.0
     assert "over seeds [0]" in printed and "verified" in printed
-
-
-@pytest.mark.skipif(not HAVE_GTSAM, reason="GTSAM (bvpnav[peers]) not installed")
-def test_node_states_tie_gtsam(quick):
-    by, _ = quick
-    for gap in (10.0, 30.0):  # measured bvpnav / GTSAM 0.988 and 1.009
-        ratio = by[("bvpnav states", gap)]["rms"] / by[("GTSAM", gap)]["rms"]
-        assert 0.9 < ratio < 1.03, (gap, ratio)
 
 
 def test_summary_mean_worst_ratios_and_counts():

@@ -176,21 +176,31 @@ def test_bad_arguments_are_named():
 # ------------------------------------------------------------------ the benchmark's pieces
 def test_benchmark_split_spline_and_bias_only(small):
     from _helpers import load_benchmark_module
+    from scipy.interpolate import CubicSpline
+
+    from bvpnav import NavigationProblem
+    from bvpnav.constraints import Position
+    from bvpnav.error_models import Bias
+    from bvpnav.sensors import grade as sensor_grade
 
     bench = load_benchmark_module("car_drive")
-    kept, withheld = bench.split_fixes(small, 30.0)
+    kept, withheld = bench.split_fixes(small.fix_t, 30.0)
     np.testing.assert_array_equal(small.fix_t[kept], [0.0, 30.0, 60.0, 90.0, 120.0])
     assert withheld.size == 116 and np.intersect1d(kept, withheld).size == 0
-    kept, withheld = bench.split_fixes(car_drive(100.0, 50.0), 30.0)
+    kept, withheld = bench.split_fixes(car_drive(100.0, 50.0).fix_t, 30.0)
     assert kept[-1] == 100  # the last fix is always kept
     assert bench.rms3(np.zeros((4, 3)), np.full((4, 3), 2.0)) == pytest.approx(np.sqrt(12.0))
     # bvpnav with Bias() alone on the gyro-integrated attitude: the 5-degree heading and
     # 0.5-degree tilt errors of the guess cost metres between the fixes (measured 8 m)
-    kept, withheld = bench.split_fixes(small, 10.0)
-    sol, _ = bench.bvpnav_solve(small, kept, bench.Bias(), uncertainty=False)
-    pos = sol.position()
+    kept, withheld = bench.split_fixes(small.fix_t, 10.0)
+    prob = NavigationProblem(small.data(), error_model=Bias(),
+                             sigma_a=sensor_grade(small.params["grade"]).sigma_a(small.rate))
+    prob.add(Position(t=small.fix_t[kept], value=small.fix_position[kept],
+                      sigma=np.tile(small.fix_sigma, (kept.size, 1))))
+    pos = prob.solve(solver="direct", lam=1.0).position()
     t_w = small.fix_t[withheld]
-    err = bench.rms3(bench.at_times(small.t, pos, t_w), small.truth_at(t_w))
+    at_w = np.column_stack([np.interp(t_w, small.t, pos[:, k]) for k in range(3)])
+    err = bench.rms3(at_w, small.truth_at(t_w))
     assert 2.0 < err < 20.0  # m
-    spline = bench.CubicSpline(small.fix_t[kept], small.fix_position[kept])(t_w)
+    spline = CubicSpline(small.fix_t[kept], small.fix_position[kept])(t_w)
     assert 1.0 < bench.rms3(spline, small.truth_at(t_w)) < 20.0  # m
