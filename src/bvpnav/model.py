@@ -931,25 +931,33 @@ class NavModel:
             Wl = sp.kron(sp.identity(K), sp.csr_matrix(Lx), format="csr")
             rate = self.body_rate(times, None, what)
             A, c = A + Wl @ rate.A, c + Wl @ rate.c
-        if self.q:
-            L = np.zeros((K, nb, self.q))
-            Psi = self._attitude_columns()
-            if Psi is not None and np.any(Psi):
-                psi = np.stack([P @ Psi[:, a, :] for a in range(3)], axis=1)          # (K, 3, q)
-                vk = P @ data.body_point.velocity                                     # (K, 3)
-                cross = np.cross(vk[:, :, None], psi, axis=1)                         # v0 x psi
-                L += np.einsum("kbn,knq->kbq", Ct, cross)
-            if np.any(L):
-                A = A + sp.csr_matrix(L.reshape(K * nb, self.q)) @ self.params().A
         point = getattr(data, "body_point", None)
-        if point is not None and self.ns and "attitude_error" in self.state_model.state_kinds(data):
-            # node states: the attitude error increments at the instants, C^T [v0 x] delta psi(t)
-            vk = P @ point.velocity
-            Mk = np.einsum("kbn,knm->kbm", Ct, _skew(vk))                                # (K, nb, 3)
-            rows_m = np.repeat(np.arange(K * nb), 3)
-            B = sp.csr_matrix((Mk.ravel(), (rows_m, cols)), shape=(K * nb, 3 * K))
-            A = A + B @ self.attitude_error(times).A
+        if point is not None:   # the attitude increments at the instants: C^T [v0 x] psi(t)
+            turn = self._attitude_rows(times, np.einsum("kbn,knm->kbm", Ct, _skew(P @ point.velocity)), what)
+            if turn is not None:
+                A = A + turn
         return Affine(A, c, TimeLabels("vb_", list(names), times))
+
+    def _attitude_rows(self, times: np.ndarray, M: np.ndarray, what: str) -> sp.csr_matrix | None:
+        r"""The rows :math:`M_k\,\psi(t_k)` ((K * r, size)) of per-time maps ``M`` (K, r, 3) of the
+        attitude increments :math:`\psi` about the loop's :class:`LinearizationPoint`: the
+        attitude parameters' columns (:meth:`_attitude_columns`) and the node states' attitude
+        error (:meth:`attitude_error`), or None when the model has neither."""
+        K, r = M.shape[0], M.shape[1]
+        out = None
+        Psi = self._attitude_columns()
+        if Psi is not None and np.any(Psi):
+            P = self.grid.interpolation_matrix(times, what)
+            psi = np.stack([P @ Psi[:, a, :] for a in range(3)], axis=1)           # (K, 3, q)
+            L = np.einsum("kbn,knq->kbq", M, psi)
+            if np.any(L):
+                out = sp.csr_matrix(L.reshape(K * r, self.q)) @ self.params().A
+        if self.ns and "attitude_error" in self.state_model.state_kinds(self.data):
+            cols = (np.arange(K)[:, None, None] * 3 + np.arange(3)[None, None, :]).repeat(r, axis=1).ravel()
+            B = sp.csr_matrix((M.ravel(), (np.repeat(np.arange(K * r), 3), cols)), shape=(K * r, 3 * K))
+            term = B @ self.attitude_error(times).A
+            out = term if out is None else out + term
+        return None if out is None else sp.csr_matrix(out)
 
     def _attitude_at(self, times: np.ndarray, what: str) -> np.ndarray:
         """The data's body-to-navigation attitude matrices at ``times`` (K, 3, 3): the samples'
@@ -1079,21 +1087,7 @@ class NavModel:
             lv = np.asarray(lever, dtype=float).reshape(3)
         if not np.any(lv):
             return None
-        M = -_skew(np.einsum("kij,j->ki", R, lv))[:, list(ax), :]     # (K, nax, 3)
-        K, nax = M.shape[0], M.shape[1]
-        out = None
-        Psi = self._attitude_columns()
-        if Psi is not None and np.any(Psi):
-            P = self.grid.interpolation_matrix(times, what)
-            psi = np.stack([P @ Psi[:, a, :] for a in range(3)], axis=1)           # (K, 3, q)
-            L = np.einsum("kbn,knq->kbq", M, psi)
-            out = sp.csr_matrix(L.reshape(K * nax, self.q)) @ self.params().A
-        if self.ns and "attitude_error" in self.state_model.state_kinds(self.data):
-            cols = (np.arange(K)[:, None, None] * 3 + np.arange(3)[None, None, :]).repeat(nax, axis=1).ravel()
-            B = sp.csr_matrix((M.ravel(), (np.repeat(np.arange(K * nax), 3), cols)), shape=(K * nax, 3 * K))
-            term = B @ self.attitude_error(times).A
-            out = term if out is None else out + term
-        return None if out is None else sp.csr_matrix(out)
+        return self._attitude_rows(times, -_skew(np.einsum("kij,j->ki", R, lv))[:, list(ax), :], what)
 
     def time_offset(self, what: str = "time offset") -> Affine:
         """The delay of the GNSS fixes against the IMU clock as one row (s): the parameter of

@@ -294,6 +294,13 @@ class ErrorModel(_Combinable):
     def validate(self) -> None:
         """Check the model's own arguments; raise :class:`InputError` naming the model."""
 
+    def _check_counts(self, sizes: tuple[int, ...], give: str) -> None:
+        """For a model of a fixed number of parameters: ``sigma`` and ``prior`` have one of
+        ``sizes`` values, else an error naming the model and saying to give ``give``."""
+        for what, v in (("sigma", self.sigma), ("prior", self.prior)):
+            if v is not None and np.size(v) not in sizes:
+                raise InputError(f"{type(self).__name__}: {what} has {np.size(v)} values; give {give}")
+
     def names(self, data) -> list[str]:
         """Parameter names, one per column."""
         raise NotImplementedError

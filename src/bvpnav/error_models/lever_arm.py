@@ -57,10 +57,7 @@ class LeverArm(ErrorModel):
         if self.axes is not None:
             raise InputError("LeverArm: axes= is not supported; the lever arm has three body-frame "
                              "components (give a tight sigma on a component you know)")
-        for what, v in (("sigma", self.sigma), ("prior", self.prior)):
-            if v is not None and np.size(v) not in (1, 3):
-                raise InputError(f"LeverArm: {what} has {np.size(v)} values; give one or three (x, y, z "
-                                 "body axes, m)")
+        self._check_counts((1, 3), "one or three (x, y, z body axes, m)")
 
     def names(self, data) -> list[str]:
         return ["lever_x", "lever_y", "lever_z"]

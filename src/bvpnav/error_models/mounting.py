@@ -97,10 +97,7 @@ class Mounting(ErrorModel):
         if self.axes is not None:
             raise InputError("Mounting: axes= is not supported; the mounting has a yaw and a pitch (give one "
                              "sigma per angle to hold one of them)")
-        for what, v in (("sigma", self.sigma), ("prior", self.prior)):
-            if v is not None and np.size(v) not in (1, 2):
-                raise InputError(f"Mounting: {what} has {np.size(v)} values; give one or two (yaw, pitch, "
-                                 "rad)")
+        self._check_counts((1, 2), "one or two (yaw, pitch, rad)")
 
     def names(self, data) -> list[str]:
         return list(NAMES)

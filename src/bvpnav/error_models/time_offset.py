@@ -59,9 +59,7 @@ class TimeOffset(ErrorModel):
     def validate(self) -> None:
         if self.axes is not None:
             raise InputError("TimeOffset: axes= is not supported; the delay is one number for every fix")
-        for what, v in (("sigma", self.sigma), ("prior", self.prior)):
-            if v is not None and np.size(v) != 1:
-                raise InputError(f"TimeOffset: {what} has {np.size(v)} values; give one number (s)")
+        self._check_counts((1,), "one number (s)")
 
     def names(self, data) -> list[str]:
         return ["time_offset"]
