@@ -28,6 +28,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from dataclasses import dataclass
+
 from .grid import TimeGrid, as_times
 
 __all__ = [
@@ -38,6 +40,8 @@ __all__ = [
     "node_velocity_operators",
     "velocity_operators",
     "tridiagonal",
+    "Condensation",
+    "condensation",
 ]
 
 
@@ -208,3 +212,103 @@ def _node_velocity_rows(grid: TimeGrid, j: np.ndarray) -> tuple[sp.csr_matrix, s
     e = np.flatnonzero(~interior)   # the ends: v0 and v1 themselves
     Vb = sp.csr_matrix((np.ones(e.size), (e, np.where(j[e] == 0, 0, 1))), shape=(m, 2))
     return Vr, Va, Vb
+
+
+@dataclass(frozen=True, eq=False)
+class Condensation:
+    r"""The samples of a fine grid condensed onto a mesh of some of them (:func:`condensation`).
+
+    Attributes
+    ----------
+    nodes : ndarray of int, shape (n,)
+        Sample index of every mesh node (increasing, first and last sample included).
+    Cp, Cq : scipy.sparse.csr_matrix, shape (n - 1, N), s
+        Row ``e`` holds :math:`\int_{E_e} \phi_p \phi_i\,dt` (``Cp``) and
+        :math:`\int_{E_e} \phi_q \phi_i\,dt` (``Cq``) over the samples ``i`` of element
+        :math:`E_e = [t_p, t_q]` (``p = nodes[e]``, ``q = nodes[e + 1]``), with
+        :math:`\phi_p, \phi_q` the coarse hats and :math:`\phi_i` the fine ones: ``Cp @ a``
+        and ``Cq @ a`` are the element's loads on its two nodes for samples ``a``.
+    load : scipy.sparse.csr_matrix, shape (n, N), s
+        :math:`\Phi^T M_f`: node ``k`` gets ``Cp`` of the element on its right plus ``Cq``
+        of the element on its left.
+    interior : ndarray of int
+        The samples strictly inside an element (no node).
+    element : ndarray of int, shape (N,)
+        The element of every sample (-1 at nodes).
+    """
+
+    nodes: np.ndarray
+    Cp: sp.csr_matrix
+    Cq: sp.csr_matrix
+    load: sp.csr_matrix
+    interior: np.ndarray
+    element: np.ndarray
+
+
+def condensation(grid: TimeGrid, nodes: np.ndarray) -> Condensation:
+    r"""The condensation of the linear elements of ``grid`` onto the mesh of samples ``nodes``.
+
+    Parameters
+    ----------
+    grid : TimeGrid
+        The fine grid (every sample), times in s.
+    nodes : ndarray of int
+        Increasing sample indices, the first (0) and the last (N - 1) included.
+
+    Returns
+    -------
+    Condensation
+
+    Notes
+    -----
+    Write the fine nodal positions as :math:`r_f = \Phi r_c + z`, with :math:`\Phi` (N, n)
+    the coarse hats at the samples (linear interpolation between nodes) and :math:`z` zero at
+    the nodes. In 1-D, :math:`\Phi^T K_f \Phi = K_c` and :math:`\Phi^T K_f z = 0` (the coarse
+    hats have a constant slope on each element and :math:`z` vanishes at its ends), and the
+    boundary columns are the same, so :math:`\Phi^T` times the fine FEM rows is
+
+    .. math:: K_c r_c + B v + \Phi^T M_f a = 0,
+
+    exact for the nodal values whatever the samples between nodes are; the rows at the
+    samples between nodes determine :math:`z` (one Dirichlet problem per element). The
+    velocity at node :math:`q` from the element :math:`[t_p, t_q]` on its left is, by the
+    weak form with the test function :math:`\phi_q` restricted to the element,
+
+    .. math:: v_q = \frac{r_q - r_p}{H} + \int_{t_p}^{t_q} \phi_q a \, dt
+              = \frac{r_q - r_p}{H} + (C_q a)_e ,
+
+    the fine formula :math:`(r_q - r_{q-1})/h + h (a_{q-1} + 2 a_q)/6` when the fine rows
+    between the nodes hold. Per fine step ``i`` (samples ``i``, ``i + 1``) of element ``e``
+    with :math:`\theta = (t - t_p)/H` linear, the products of two linear functions integrate
+    to :math:`\int \phi_q a = \tfrac{h_i}{6}\,[\theta_i (2 a_i + a_{i+1}) + \theta_{i+1}(a_i +
+    2 a_{i+1})]` (``Cp`` with :math:`1 - \theta`).
+    """
+    t, h = grid.t, grid.h
+    nodes = np.asarray(nodes, dtype=np.int64)
+    N, n = grid.n, nodes.size
+    step_elem = np.repeat(np.arange(n - 1), np.diff(nodes))          # element of fine step i
+    tp, H = t[nodes[:-1]][step_elem], (t[nodes[1:]] - t[nodes[:-1]])[step_elem]
+    th0 = (t[:-1] - tp) / H
+    th1 = (t[1:] - tp) / H
+    th1[nodes[1:] - 1] = 1.0            # the last step of an element ends on its right node
+    th0[nodes[:-1]] = 0.0
+    k6 = h / 6.0
+    rows = np.concatenate([step_elem, step_elem])
+    cols = np.concatenate([np.arange(N - 1), np.arange(1, N)])
+    q_vals = np.concatenate([k6 * (2.0 * th0 + th1), k6 * (th0 + 2.0 * th1)])
+    p_vals = np.concatenate([k6 * (2.0 * (1.0 - th0) + (1.0 - th1)), k6 * ((1.0 - th0) + 2.0 * (1.0 - th1))])
+    Cq = sp.csr_matrix((q_vals, (rows, cols)), shape=(n - 1, N))
+    Cp = sp.csr_matrix((p_vals, (rows, cols)), shape=(n - 1, N))
+    Cq.sum_duplicates()
+    Cp.sum_duplicates()
+    e = np.arange(n - 1)
+    Sp = sp.csr_matrix((np.ones(n - 1), (e, e)), shape=(n, n - 1))       # element e -> its left node
+    Sq = sp.csr_matrix((np.ones(n - 1), (e + 1, e)), shape=(n, n - 1))   # element e -> its right node
+    load = sp.csr_matrix(Sp @ Cp + Sq @ Cq)
+    load.sum_duplicates()
+    element = np.full(N, -1, dtype=np.int64)
+    is_node = np.zeros(N, dtype=bool)
+    is_node[nodes] = True
+    interior = np.flatnonzero(~is_node)
+    element[interior] = step_elem[interior]   # sample i (not a node) is inside the element of step i
+    return Condensation(nodes=nodes, Cp=Cp, Cq=Cq, load=load, interior=interior, element=element)

@@ -20,6 +20,7 @@ import scipy.sparse as sp
 from .errors import BvpnavError, ConvexityError, InputError
 from .imu import ImuData
 from .items import Item, Linearizable, positive_array
+from .mesh import MeshModel, check_segment, item_times
 from .model import Affine, NavModel
 from .sensors import DEFAULT_GRADE, resolve_grade
 from .terms import Term
@@ -207,6 +208,10 @@ class Formulation:
         gyro parameters (``GyroBias``, ``AttitudeError``) that states no prior at all
         (:meth:`bvpnav.sensors.SensorGrade.complete`); default ``"consumer"``. None: no
         priors are assumed. What was filled in is ``grade_report`` (None when nothing was).
+    segment : float, optional
+        Solve on a coarse mesh of the samples (:class:`bvpnav.mesh.MeshModel`): nodes at the
+        items' instants and no element longer than ``segment`` s, the samples between nodes
+        condensed exactly. None (default): every sample is a node.
 
     Notes
     -----
@@ -216,13 +221,18 @@ class Formulation:
     """
 
     def __init__(self, data: ImuData, residual: str = "acceleration", sigma_a=None, error_model=None,
-                 items: Iterable[Item] = (), model: NavModel | None = None, grade: Any = DEFAULT_GRADE):
+                 items: Iterable[Item] = (), model: NavModel | None = None, grade: Any = DEFAULT_GRADE,
+                 segment: float | None = None):
         if not isinstance(data, ImuData):
             raise InputError(f"data must be a bvpnav.ImuData, got {type(data).__name__}")
         if residual not in RESIDUAL_FORMS:
             raise InputError(f"residual={residual!r}; choose one of {list(RESIDUAL_FORMS)}")
         if sigma_a is not None and residual == "load":
             raise InputError("sigma_a goes with residual='acceleration'; the load form has no sigma_a")
+        self.segment = check_segment(segment)
+        if self.segment is not None and residual != "acceleration":
+            raise InputError("segment= goes with residual='acceleration' (the condensed residuals are weighted "
+                             "by sigma_a); solve the load form on every sample (segment=None)")
         self.data = data
         self.residual = residual
         self.sigma_a = _check_sigma_a(sigma_a, data)
@@ -248,9 +258,21 @@ class Formulation:
         With ``error_model=True`` the copy keeps the error model and shares this
         formulation's :class:`NavModel`; without it the copy has no error-model parameters.
         """
+        items = list(items)
+        share = error_model and (self.segment is None or self._on_mesh(items))
         return Formulation(self.data, self.residual, self.sigma_a if self.sigma_a_given else None,
                            self.error_model_given if error_model else None, items,
-                           model=self._model if error_model else None, grade=self.grade)
+                           model=self._model if share else None, grade=self.grade, segment=self.segment)
+
+    def _on_mesh(self, items) -> bool:
+        """Whether this formulation's mesh (when made) has nodes at every instant of ``items``."""
+        if self._model is None:
+            return True
+        try:
+            self._model.grid.check_on_mesh(self._model.grid.check_inside(item_times(items), "t"), "t")
+        except InputError:
+            return False
+        return True
 
     @property
     def labels(self) -> list[str]:
@@ -267,7 +289,11 @@ class Formulation:
     def model(self) -> NavModel:
         """The :class:`NavModel` (unknowns and their maps), built on first use."""
         if self._model is None:
-            self._model = NavModel(self.data, self.error_model)
+            if self.segment is None:
+                self._model = NavModel(self.data, self.error_model)
+            else:
+                self._model = MeshModel(self.data, self.error_model, segment=self.segment,
+                                        times=item_times(self.items), sigma_a=self.sigma_a_used)
         return self._model
 
     def terms(self) -> list[Term]:
@@ -307,9 +333,7 @@ class Formulation:
         if self._data_rows is None:
             m = self.model
             if self.residual == "acceleration":
-                sa = self.sigma_a_used
-                per_row = sa.T.ravel() if sa.ndim == 2 else np.repeat(sa, m.N)  # axis-major rows
-                self._data_rows = m.residual_rows() / per_row
+                self._data_rows = m.residual_rows() / m.residual_sigma(self.sigma_a_used)
             else:
                 self._data_rows = m.load_residual_rows()
         return self._data_rows

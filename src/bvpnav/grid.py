@@ -10,7 +10,7 @@ import scipy.sparse as sp
 from .errors import InputError
 from .timebase import as_seconds
 
-__all__ = ["TimeGrid", "as_times"]
+__all__ = ["TimeGrid", "MeshGrid", "as_times", "mesh_nodes"]
 
 #: Relative slack (in units of the window length) allowed when an item time sits
 #: on the window's edge but is off by rounding, e.g. ``t = 0.1 * 100``.
@@ -165,3 +165,135 @@ class TimeGrid:
 
     def __repr__(self) -> str:
         return f"TimeGrid(N={self.n}, t0={self.t0:g} s, t1={self.t1:g} s)"
+
+
+def mesh_nodes(grid: TimeGrid, segment: float, times=()) -> np.ndarray:
+    r"""The samples a coarse mesh keeps as nodes (increasing indices into ``grid``).
+
+    Parameters
+    ----------
+    grid : TimeGrid
+        Every sample, times in s.
+    segment : float
+        Longest element, s: between two nodes further apart, samples are added greedily (the
+        last sample within ``segment`` of the previous node) until none is; one step longer
+        than ``segment`` stays one element.
+    times : array_like of float
+        Times (s) that need nodes (the items' instants): a time on a sample makes it a node,
+        a time between two samples makes both of them nodes (the element between them is
+        then one step, where positions and velocities are those of the fine grid).
+
+    Notes
+    -----
+    The first and last samples are nodes. An element with exactly one sample inside it
+    gets that sample as a node too: the condensed load residual of an element is a
+    2-vector whose covariance is regular only with two or more samples inside.
+    """
+    t, N = grid.t, grid.n
+    keep = np.zeros(N, dtype=bool)
+    keep[[0, N - 1]] = True
+    tt = np.asarray(times, dtype=float).ravel()
+    if tt.size:
+        tt = grid.check_inside(tt, "mesh time")
+        tol = EDGE_SLACK * max(grid.duration, 1.0)
+        k = np.clip(np.searchsorted(t, tt), 0, N - 1)
+        near = np.where((k > 0) & (np.abs(t[k - 1] - tt) < np.abs(t[k] - tt)), k - 1, k)
+        on = np.abs(t[near] - tt) <= tol
+        keep[near[on]] = True
+        j = np.clip(np.searchsorted(t, tt[~on], side="right") - 1, 0, N - 2)
+        keep[j] = True
+        keep[j + 1] = True
+    fixed = np.flatnonzero(keep)
+    out = [fixed[:1]]
+    for p, q in zip(fixed[:-1], fixed[1:], strict=True):
+        cur, add = int(p), []
+        while t[q] - t[cur] > segment:
+            nxt = max(int(np.searchsorted(t, t[cur] + segment, side="right")) - 1, cur + 1)
+            if nxt >= q:
+                break
+            add.append(nxt)
+            cur = nxt
+        out.append(np.array(add + [int(q)], dtype=np.int64))
+    nodes = np.concatenate(out).astype(np.int64)
+    lone = nodes[:-1][np.diff(nodes) == 2] + 1          # one sample inside: make it a node
+    return np.union1d(nodes, lone).astype(np.int64)
+
+
+@dataclass(frozen=True, eq=False)
+class MeshGrid(TimeGrid):
+    r"""The nodes of a coarse mesh over a fine grid of samples (``t`` the node times, s).
+
+    Parameters
+    ----------
+    t : array_like, shape (n,)
+        Node times, s: some of ``fine``'s sample times.
+    fine : TimeGrid
+        Every sample.
+    nodes : ndarray of int, shape (n,)
+        The sample index of each node.
+
+    Notes
+    -----
+    Between two nodes the condensed problem keeps no position: a row evaluated at a time
+    inside an element of more than one sample step (:meth:`interpolation_matrix`,
+    :meth:`nodes_in`) raises :class:`~bvpnav.errors.InputError` naming what asked, instead of
+    interpolating the nodes linearly (which is not the fine trajectory). Inside an element
+    of one step the fine and the coarse hats agree.
+    """
+
+    fine: TimeGrid | None = field(default=None, repr=False)
+    nodes: np.ndarray | None = field(default=None, repr=False)
+
+    def __post_init__(self):
+        super().__post_init__()
+        nodes = np.asarray(self.nodes, dtype=np.int64).copy()
+        nodes.setflags(write=False)
+        object.__setattr__(self, "nodes", nodes)
+
+    def single_step(self, j: np.ndarray) -> np.ndarray:
+        """Whether element ``j`` is one sample step of the fine grid."""
+        return self.nodes[j + 1] == self.nodes[j] + 1
+
+    def interpolation_matrix(self, times, what: str = "time") -> sp.csr_matrix:
+        """As :meth:`TimeGrid.interpolation_matrix`, for times on a node or inside an element
+        of one sample step; :class:`InputError` naming ``what`` for any other time."""
+        times = self.check_inside(as_times(times, what), what)
+        self.check_on_mesh(times, what)
+        return super().interpolation_matrix(self.snapped(times), what)
+
+    def snapped(self, times: np.ndarray) -> np.ndarray:
+        """``times`` with those within rounding of a node moved onto it."""
+        tol = EDGE_SLACK * max(self.duration, 1.0)
+        k = np.clip(np.searchsorted(self.t, times), 0, self.n - 1)
+        near = np.where((k > 0) & (np.abs(self.t[k - 1] - times) < np.abs(self.t[k] - times)), k - 1, k)
+        return np.where(np.abs(self.t[near] - times) <= tol, self.t[near], times)
+
+    def check_on_mesh(self, times: np.ndarray, what: str) -> None:
+        """:class:`InputError` naming ``what`` for a time inside an element of several samples."""
+        times = self.snapped(np.asarray(times, dtype=float))
+        j, s = self.locate(times)
+        bad = np.flatnonzero((s > 0) & (times != self.t[j + 1]) & ~self.single_step(j))
+        if bad.size:
+            k = int(bad[0])
+            jj = int(j[k])
+            raise InputError(
+                f"{what}: time {float(times[k])!r} s lies inside the mesh element [{float(self.t[jj])!r}, "
+                f"{float(self.t[jj + 1])!r}] s ({int(self.nodes[jj + 1] - self.nodes[jj])} sample steps), where "
+                "the condensed problem keeps no position; the mesh gets nodes at the items' times `t`, "
+                "`t0`, `t1` it finds: give this time to the item as one of those, or solve without "
+                "segment=")
+
+    def nodes_in(self, t0: float, t1: float) -> np.ndarray:
+        """Indices of the nodes with ``t0 <= t_j <= t1``; :class:`InputError` when samples of the
+        interval are not nodes (an item over every sample of an interval would silently see
+        the nodes only)."""
+        fine = self.fine.nodes_in(t0, t1)
+        if fine.size and not np.all(np.isin(fine, self.nodes)):
+            raise InputError(
+                f"an item over every sample of [{t0!r}, {t1!r}] s: {int(np.sum(~np.isin(fine, self.nodes)))} "
+                "of its samples are not mesh nodes (segment=); such items need every sample: solve "
+                "without segment=")
+        return super().nodes_in(t0, t1)
+
+    def __repr__(self) -> str:
+        return f"MeshGrid(n={self.n} nodes of N={self.fine.n} samples, t0={self.t0:g} s, t1={self.t1:g} s)"

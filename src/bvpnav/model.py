@@ -562,6 +562,27 @@ class NavModel:
         """Indices of the error model's node states in ``x`` (empty without them)."""
         return np.arange(self.d * self.block + self.q, self.size)
 
+    @property
+    def node_samples(self) -> np.ndarray:
+        """The sample index of every node (all samples; a coarse mesh keeps some,
+        :class:`bvpnav.mesh.MeshModel`)."""
+        return np.arange(self.N)
+
+    def element_index(self, axis: int) -> np.ndarray:
+        """Indices in ``x`` of the condensed element residuals of one axis (none here; see
+        :class:`bvpnav.mesh.MeshModel`), after ``v0, v1`` in the axis' block."""
+        return np.zeros(0, dtype=np.int64)
+
+    def element_nodes(self) -> np.ndarray:
+        """The node each element residual of an axis sits at (for banded orderings)."""
+        return np.zeros(0, dtype=np.int64)
+
+    def residual_sigma(self, sigma_a: np.ndarray) -> np.ndarray:
+        """The standard deviation of every row of :meth:`residual_rows` (m/s^2), from
+        ``sigma_a`` per axis (d,) or per sample and axis (N, d): axis-major."""
+        sa = np.asarray(sigma_a, dtype=float)
+        return sa.T.ravel() if sa.ndim == 2 else np.repeat(sa, self.N)
+
     def state_nodes(self) -> np.ndarray:
         """Time node (sample index) of every node state, (ns,) int."""
         if not self.ns:
@@ -611,8 +632,8 @@ class NavModel:
         """Per-axis blocks (keys r, w, vb, l) with the first column of ``x`` each multiplies:
         ``[(block, column)]`` in increasing column order (:func:`rows_side_by_side`)."""
         o = self._offset(axis)
-        starts = (("r", o), ("w", o + self.N), ("vb", o + 2 * self.N), ("l", self.d * self.block),
-                  ("s", self.d * self.block + self.q))
+        starts = (("r", o), ("w", o + self.N), ("vb", o + 2 * self.N), ("u", o + 2 * self.N + 2),
+                  ("l", self.d * self.block), ("s", self.d * self.block + self.q))
         return [(blocks[key], start) for key, start in starts
                 if key in blocks and (key != "l" or self.q) and (key != "s" or self.ns)]
 
@@ -690,8 +711,12 @@ class NavModel:
         # and the rows ``below`` after them
         groups = [self._placed(self.fem_blocks(a), a) for a in range(self.d)]
         A = rows_side_by_side(groups + [[(p.A, 0)] for p in below], self.size)
-        c = np.concatenate([self.M @ self.data.acc[:, a] for a in range(self.d)] + [p.c for p in below])
+        c = np.concatenate([self._acc_load(a) for a in range(self.d)] + [p.c for p in below])
         return Affine(A, c, Affine.stacked_labels([self._fem_labels(), *(p.labels for p in below)]))
+
+    def _acc_load(self, axis: int) -> np.ndarray:
+        """``M a_hat`` of one axis (m/s): the measured accelerations' part of the FEM rows."""
+        return self.M @ self.data.acc[:, axis]
 
     def _fem_labels(self) -> RowLabels:
         """The FEM rows' labels, ``fem_x[j]`` axis by axis."""
@@ -1207,6 +1232,12 @@ class NavModel:
         return Affine(A, np.zeros(idx.size), tuple(self.param_names[i] for i in idx))
 
     # --------------------------------------------------------- extraction
+    def trajectory(self, xval: np.ndarray) -> dict[str, np.ndarray]:
+        """The answer at every sample: ``t`` (N,, s), ``r`` (N, d, m), ``v`` (N, d, m/s) and the
+        acceleration residuals ``w`` (N, d, m/s^2) of the stacked solution ``xval``."""
+        return {"t": self.grid.t, "r": self.split(xval)["r"], "w": self.split(xval)["w"],
+                "v": np.column_stack([self.node_velocity_values(a, xval) for a in range(self.d)])}
+
     def split(self, xval: np.ndarray) -> dict[str, np.ndarray]:
         """Numeric pieces of a solution vector: r, w (N, d), v_end (2, d), l (q,), s (ns,)."""
         r = np.column_stack([xval[self.r_index(a)] for a in range(self.d)])

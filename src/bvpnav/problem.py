@@ -63,6 +63,16 @@ class NavigationProblem:
         says so (``sol.stats["grade"]`` and its summary). Default ``"consumer"``, the
         loosest preset; None assumes nothing (a model without priors may then be
         refused as undetermined when the fixes are sparse).
+    segment : float, optional
+        Solve on a coarse FEM mesh (:mod:`bvpnav.mesh`), s: the positions are unknowns at the
+        items' instants and at enough samples that no element is longer than ``segment``
+        seconds; the samples between nodes (their accelerations, error-model columns and
+        acceleration residuals) are condensed onto the nodes exactly, the analogue of a factor
+        graph's preintegration. The answer at the nodes is that of the problem on every
+        sample, and the solution still has every sample (recovered from the nodes). Needs
+        ``residual="acceleration"``; items that evaluate every sample of an interval, body-frame
+        items and the attitude loop's error models are refused on a mesh. None (default):
+        every sample is a node.
 
     Notes
     -----
@@ -102,10 +112,11 @@ class NavigationProblem:
         error_model=None,
         items: Iterable[Item] = (),
         grade: Any = DEFAULT_GRADE,
+        segment: float | None = None,
     ):
         self.data = data
         self._base = Formulation(data, residual=residual, sigma_a=sigma_a, error_model=error_model,
-                                 grade=grade)
+                                 grade=grade, segment=segment)
         self._items: list[Item] = []
         self._form: Formulation | None = None
         self._model: NavModel | None = None
@@ -115,7 +126,8 @@ class NavigationProblem:
     def _redefine(self, **change) -> None:
         """The definition with ``change`` (checked by :class:`Formulation`); caches dropped."""
         kw = dict(residual=self.residual, sigma_a=self.sigma_a if self.sigma_a_given else None,
-                  error_model=self._base.error_model_given, grade=self._base.grade)
+                  error_model=self._base.error_model_given, grade=self._base.grade,
+                  segment=self._base.segment)
         self._base = Formulation(self.data, **{**kw, **change})
         self._form, self._model = None, None
 
@@ -129,6 +141,9 @@ class NavigationProblem:
                            doc="The sensor error model (None for none); setting it starts a new formulation.")
     grade = property(lambda self: self._base.grade, lambda self, v: self._redefine(grade=v),
                      doc="The sensor grade whose figures fill in missing error-model priors (None: none).")
+    segment = property(lambda self: self._base.segment, lambda self, v: self._redefine(segment=v),
+                       doc="The longest coarse-mesh element, s (None: every sample a node); setting it "
+                           "(checked) starts a new formulation.")
     grade_report = property(lambda self: self._base.grade_report,
                             doc="The grade and the priors it filled in, or None when nothing was.")
     sigma_a_given = property(lambda self: self._base.sigma_a_given,
@@ -176,8 +191,8 @@ class NavigationProblem:
         new = NavigationProblem(self.data, residual=self.residual,
                                 sigma_a=self.sigma_a if self.sigma_a_given else None,
                                 error_model=self.error_model if error_model else None, items=items,
-                                grade=self._base.grade)
-        if error_model:
+                                grade=self._base.grade, segment=self._base.segment)
+        if error_model and self._base.segment is None:
             new._model = self._model
         return new
 
@@ -186,8 +201,9 @@ class NavigationProblem:
         """What the problem is now: an immutable :class:`Formulation` of its items."""
         if self._form is None:
             self._form = Formulation(self.data, self.residual, self.sigma_a if self.sigma_a_given else None,
-                                     self._base.error_model_given, self._items, model=self._model,
-                                     grade=self._base.grade)
+                                     self._base.error_model_given, self._items,
+                                     model=self._model if self._base.segment is None else None,
+                                     grade=self._base.grade, segment=self._base.segment)
         if self._model is None:
             self._model = self._form.model
         return self._form

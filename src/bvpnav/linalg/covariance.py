@@ -228,6 +228,7 @@ class _Posterior:
         for a in range(d):
             colaxis[model.r_index(a)[1:]] = a
             colaxis[model.w_index(a)] = a
+            colaxis[model.element_index(a)] = a
         coupled = d > 1 and (model.ns > 0 or any(bool(np.any((hi >= 0) & (hi != lo)))  # a row on two axes
                                                  for lo, hi in (row_span(D, colaxis), row_span(E, colaxis))))
         self.chain = None if coupled or d == 1 else N   # nodes per independent chain
@@ -236,6 +237,7 @@ class _Posterior:
             off = 0 if coupled else a * N
             colnode[model.r_index(a)[1:]] = off + np.arange(1, N)
             colnode[model.w_index(a)] = off + np.arange(N)
+            colnode[model.element_index(a)] = off + model.element_nodes()   # a coarse mesh's (bvpnav.mesh)
         if model.ns:   # node states at their node (all axes of a node together: coupled)
             colnode[model.s_index] = model.state_nodes()
         lo, hi = row_span(D, colnode)

@@ -411,6 +411,7 @@ def column_nodes(model, interleave: bool = False) -> np.ndarray:
         colnode[model.w_index(a)] = off + np.arange(N)
         v0, v1 = model.v_end_index(a)
         colnode[v0], colnode[v1] = off, off + N - 1
+        colnode[model.element_index(a)] = off + model.element_nodes()   # a coarse mesh's element residuals
     if model.ns:
         colnode[model.s_index] = model.state_nodes()
     return colnode
@@ -442,6 +443,11 @@ def fem_rows_by_diagonals(form: Formulation, workspace: Workspace | None = None)
             mcols, mg = model.mg_columns(a)
             dense += [(a * N, int(model.l_index[k]), mg[:, i].copy()) for i, k in enumerate(mcols)
                       if mg[:, i].any()]
+        if "u" in blocks:   # a coarse mesh's element residuals (bvpnav.mesh): two rows each
+            u = blocks["u"].tocoo()
+            rows.append(a * N + u.row)
+            cols.append(model.element_index(a)[u.col])
+            vals.append(u.data)
         if model.ns:   # the node states' local columns M G_s
             ms = model.ms_columns(a).tocoo()
             rows.append(a * N + ms.row)

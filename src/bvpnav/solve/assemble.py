@@ -143,7 +143,7 @@ def _warnings(form: Formulation, run: Run | None, check: Verification | None) ->
     if run is not None and str(run.status).endswith("inaccurate"):
         warn.append(f"{run.solver} reported status {run.status!r}; the answer passed "
                     "bvpnav's verification (see stats['verification'])")
-    grid = form.model.grid
+    grid = getattr(form.model, "fine", form.model.grid)   # the samples, also under a coarse mesh
     gaps = grid.gaps()
     if gaps.size:
         h, med, t = grid.h, float(np.median(grid.h)), grid.t
@@ -157,11 +157,12 @@ def make_solution(form: Formulation, xval: np.ndarray, lam: float, lam_rule: str
                   duals: dict | None = None) -> Solution:
     """The :class:`~bvpnav.Solution` of a stacked vector with its records."""
     model = form.model
-    idx = pd.Index(model.grid.t, name="t")
-    cols = {ax: xval[model.r_index(a)] for a, ax in enumerate(model.axes)}
-    cols.update({"v" + ax: model.node_velocity_values(a, xval) for a, ax in enumerate(model.axes)})
+    traj = model.trajectory(xval)   # every sample (a coarse mesh recovers them from its nodes)
+    idx = pd.Index(traj["t"], name="t")
+    cols = {ax: traj["r"][:, a] for a, ax in enumerate(model.axes)}
+    cols.update({"v" + ax: traj["v"][:, a] for a, ax in enumerate(model.axes)})
     parts = model.split(xval)
-    resid = pd.DataFrame({f"w_{ax}": parts["w"][:, a] for a, ax in enumerate(model.axes)}, index=idx)
+    resid = pd.DataFrame({f"w_{ax}": traj["w"][:, a] for a, ax in enumerate(model.axes)}, index=idx)
     items_df, item_res, item_rows = _items_table(form, xval, duals)
     if form.error_model is not None and model.q:
         params = form.error_model.report(parts["l"], model)

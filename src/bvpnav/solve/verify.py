@@ -142,7 +142,7 @@ def _gradient_floor(form: Formulation, xval: np.ndarray, lam: float, data) -> fl
         r_a = xval[model.r_index(a)]
         v_a = model.node_velocity_values(a, xval)
         a_scale = max(float(np.max(np.abs(r_a))) / T**2, float(np.max(np.abs(v_a))) / T)
-        probe[model.w_index(a)] = np.maximum(np.abs(model.data.acc[:, a]), a_scale)
+        probe[model.w_index(a)] = np.maximum(np.abs(model.data.acc[model.node_samples, a]), a_scale)
     floor = 2.0 * abs_max(data.A.T @ data.value(probe))
     for term in form.terms():
         floor = max(floor, term.gradient_floor(xval, lam))

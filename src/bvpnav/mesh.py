@@ -1,0 +1,408 @@
+r"""A coarse FEM mesh with the samples between its nodes condensed: :class:`MeshModel`.
+
+With ``NavigationProblem(..., segment=1.0)`` the unknowns are the positions at a mesh of
+some of the samples (every item time, and enough samples that no element is longer than
+``segment`` seconds), not at every sample; the measured accelerations, the error models'
+columns and the acceleration residuals of the samples between nodes reach the nodes through
+the exact condensation of the linear elements (:func:`bvpnav.fem.condensation`). It is the
+FEM analogue of a factor graph's preintegration, and it is exact: with items at the nodes
+only, the nodal positions and velocities are those of the problem on every sample, and the
+trajectory at every sample is recovered from them (:meth:`MeshModel.trajectory`).
+
+Notes
+-----
+**Unknowns.** Per axis the block of ``x`` is
+
+    [ r (n nodal positions, m) | w (n residuals at the nodes, m/s^2) | v0, v1 (m/s) |
+      u (2 per element with samples inside it, whitened, dimensionless) ]
+
+**Rows.** With :math:`L_f = \Phi^T M_f` (:attr:`bvpnav.fem.Condensation.load`) the fine FEM
+rows condense to (per axis)
+
+.. math:: K_c r + B v + L_f (\hat a + G l) + L_f P_n w_n + \sum_e P_e L_e u_e = 0 ,
+
+where :math:`P_n` puts the node residuals at their samples, and the residuals
+:math:`w_e` of the samples strictly inside element :math:`e = [t_p, t_q]` reach the rows
+only as the 2-vector :math:`\epsilon_e = B_e w_e` (its loads on nodes p and q, rows of
+``Cp`` and ``Cq`` at those samples), placed by :math:`P_e` at rows p and q.
+
+**Weights (the elimination of the samples inside an element).** The data term of the
+acceleration form is :math:`\sum_i w_i^2 / \sigma_i^2` over every sample. Given
+:math:`\epsilon_e`, the smallest :math:`\sum_{i \in e} w_i^2/\sigma_i^2` with
+:math:`B_e w_e = \epsilon_e` is :math:`\epsilon_e^T C_e^{-1} \epsilon_e` with
+
+.. math:: C_e = B_e \,\mathrm{diag}(\sigma_i^2)\, B_e^T
+        = \sum_{i \in e} \sigma_i^2 \begin{bmatrix} c_{p,i}^2 & c_{p,i} c_{q,i} \\
+          c_{p,i} c_{q,i} & c_{q,i}^2 \end{bmatrix},
+
+(the 2x2 covariance of the load residual for white noise; regular with two or more
+samples inside, :func:`bvpnav.grid.mesh_nodes` sees to it), attained at
+:math:`w_e = \mathrm{diag}(\sigma_i^2) B_e^T C_e^{-1} \epsilon_e`, the conditional mean of
+the residuals given :math:`\epsilon_e`. With :math:`C_e = L_e L_e^T` (Cholesky) and
+:math:`\epsilon_e = L_e u_e` the term is :math:`\|u_e\|^2`: the data rows are
+:math:`w_n / \sigma` at the nodes and :math:`u_e` itself. Since the items see :math:`w`
+only through the condensed rows and the nodal velocities (below), minimizing over the
+inside residuals first changes nothing: the condensed problem has the same minimizer at
+the nodes, exactly (it is a partial minimization of a convex quadratic).
+
+**Velocities.** At node q the velocity is :math:`(r_q - r_p)/H + C_q (\hat a + G l + w)`
+over the element on its left (:func:`bvpnav.fem.condensation`), :math:`C_q w = c_{q,p}
+w_p + c_{q,q} w_q + \epsilon_{e,2}`; ``v0`` and ``v1`` at the ends. A time inside an
+element of one sample step uses the fine formula between its two nodes.
+
+**Recovery.** The residuals inside an element are the conditional mean above; the
+positions there solve the element's fine FEM rows with the nodal positions as Dirichlet
+conditions (one tridiagonal solve for all elements); the velocities at every sample come
+from the fine formula (:meth:`bvpnav.NavModel.node_velocity_values`), which at the nodes
+equals the coarse one.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from . import fem
+from .errors import InputError
+from .grid import MeshGrid, as_times, mesh_nodes
+from .imu import ImuData
+from .model import Affine, NavModel, columns_csr, state_component
+
+__all__ = ["MeshModel", "item_times", "check_segment"]
+
+#: Item fields holding the instants the mesh must have nodes at (s).
+TIME_FIELDS = ("t", "t0", "t1", "about_t", "lower_t", "upper_t")
+
+
+def check_segment(segment) -> float | None:
+    """``segment`` as a float (s), or None; :class:`InputError` for anything but a finite
+    positive number of seconds."""
+    if segment is None:
+        return None
+    try:
+        val = float(segment)
+    except (TypeError, ValueError):
+        val = float("nan")
+    if isinstance(segment, bool) or not np.isfinite(val) or val <= 0:
+        raise InputError(f"segment={segment!r}: give the longest mesh element in seconds (a finite number "
+                         "> 0, e.g. segment=1.0), or None to solve on every sample")
+    return val
+
+
+def item_times(items) -> np.ndarray:
+    """Every instant (s) the items name in their time fields (:data:`TIME_FIELDS`)."""
+    out = []
+    for it in items:
+        for name in TIME_FIELDS:
+            v = getattr(it, name, None)
+            if v is None or isinstance(v, str | bool):
+                continue
+            try:
+                arr = np.asarray(v, dtype=float).ravel()
+            except (TypeError, ValueError):
+                continue
+            out.append(arr[np.isfinite(arr)])
+    return np.concatenate(out) if out else np.zeros(0)
+
+
+class MeshModel(NavModel):
+    r"""The unknowns of a problem on a coarse mesh of its samples (see the module Notes).
+
+    Parameters
+    ----------
+    data : ImuData
+        Every sample.
+    error_model : ErrorModel, optional
+        Its columns are made on every sample and condensed (node states are not supported
+        on a mesh yet).
+    segment : float
+        Longest element, s (:func:`bvpnav.grid.mesh_nodes`).
+    times : array_like of float
+        Instants that need nodes (the items'), s.
+    sigma_a : ndarray
+        Accelerometer noise, m/s^2, (d,) or (N, d) (the formulation's, clipping applied): the
+        weights of the condensed residuals depend on it.
+
+    Attributes
+    ----------
+    fine : TimeGrid
+        Every sample.
+    grid : MeshGrid
+        The nodes.
+    cond : bvpnav.fem.Condensation
+    """
+
+    def __init__(self, data: ImuData, error_model=None, *, segment: float, times=(), sigma_a=None):
+        if state_component(error_model) is not None:
+            raise InputError("segment=: node states (ErrorStates) are not carried on a coarse mesh yet; solve "
+                             "them on every sample (segment=None)")
+        comps = getattr(error_model, "components", (error_model,))
+        gyro = [type(c).__name__ for c in comps if c is not None and hasattr(c, "rate_columns")]
+        if gyro:
+            raise InputError(f"segment=: the attitude loop's error models ({', '.join(gyro)}) are not carried "
+                             "on a coarse mesh yet; solve them on every sample (segment=None)")
+        fine = data.grid
+        nodes = mesh_nodes(fine, float(segment), times)
+        self.data = data
+        self.fine = fine
+        self.segment = float(segment)
+        self.cond = fem.condensation(fine, nodes)
+        self.grid = MeshGrid(fine.t[nodes], fine=fine, nodes=nodes)
+        self.axes = data.axes
+        self.error_model = error_model
+        n, d, Nf = nodes.size, data.ndim, fine.n
+        self.N, self.d = n, d
+        if error_model is not None:
+            G = np.asarray(error_model.columns(data), dtype=float)
+            if G.shape[:2] != (Nf, d):
+                raise InputError(f"error model {error_model!r}: columns of shape {G.shape}, expected "
+                                 f"({Nf}, {d}, q)")
+            self.param_names = tuple(error_model.names(data))
+        else:
+            G = np.zeros((Nf, d, 0))
+            self.param_names = ()
+        self.G = G                      # on every sample; condensed by mg_columns
+        self.q = G.shape[2]
+        self.state_model, self.ns, self.Gs = None, 0, []
+        sa = np.ones(d) if sigma_a is None else np.asarray(sigma_a, dtype=float)
+        self.sigma_fine = np.array(np.broadcast_to(sa if sa.ndim == 2 else sa[None, :], (Nf, d)))
+        inside = np.diff(nodes) - 1
+        self.elements = np.flatnonzero(inside >= 2)        # elements with residuals to condense
+        self.me = self.elements.size
+        self.block = 2 * n + 2 + 2 * self.me
+        self.size = d * self.block + self.q
+        self.K = fem.stiffness(self.grid)
+        W = self.cond.load[:, nodes].tocsr()
+        self.M = fem.tridiagonal(W.diagonal(-1), W.diagonal(0), W.diagonal(1))   # the node residuals
+        self._prepare_elements()
+
+    def _prepare_elements(self) -> None:
+        """The load coefficients of the samples inside elements and the Cholesky factors of
+        the elements' 2x2 covariances per axis (module Notes)."""
+        c = self.cond
+        idx = c.interior
+        e = c.element[idx]
+        self._cp = np.asarray(c.Cp[e, idx]).ravel()
+        self._cq = np.asarray(c.Cq[e, idx]).ravel()
+        self._slot = np.full(self.N - 1, -1, dtype=np.int64)
+        self._slot[self.elements] = np.arange(self.me)
+        nE = self.N - 1
+        self.chol = []
+        for a in range(self.d):
+            s2 = self.sigma_fine[idx, a] ** 2
+            Spp = np.bincount(e, self._cp**2 * s2, nE)[self.elements]
+            Spq = np.bincount(e, self._cp * self._cq * s2, nE)[self.elements]
+            Sqq = np.bincount(e, self._cq**2 * s2, nE)[self.elements]
+            L00 = np.sqrt(Spp)
+            L10 = Spq / L00
+            L11 = np.sqrt(np.maximum(Sqq - L10**2, 0.0))
+            self.chol.append(np.stack([L00, L10, L11], axis=1))
+
+    # ------------------------------------------------------------ layout
+    @property
+    def node_samples(self) -> np.ndarray:
+        """The sample index of every node."""
+        return self.grid.nodes
+
+    def element_index(self, axis: int) -> np.ndarray:
+        """Indices in ``x`` of the whitened element residuals ``u`` of one axis (2 per element
+        with samples inside it, in element order)."""
+        o = self._offset(axis) + 2 * self.N + 2
+        return np.arange(o, o + 2 * self.me)
+
+    def element_nodes(self) -> np.ndarray:
+        """The node of each element residual: the element's left node for the first, its
+        right node for the second."""
+        return np.column_stack([self.elements, self.elements + 1]).ravel()
+
+    def _element_block(self, axis: int) -> sp.csr_matrix:
+        r"""The columns of the ``u`` of one axis in its FEM rows, (n, 2 m):
+        :math:`\epsilon_e = L_e u_e` at rows p (``L00 u0``) and q (``L10 u0 + L11 u1``)."""
+        L = self.chol[axis]
+        k = np.arange(self.me)
+        rows = np.concatenate([self.elements, self.elements + 1, self.elements + 1])
+        cols = np.concatenate([2 * k, 2 * k, 2 * k + 1])
+        out = sp.csr_matrix((np.concatenate([L[:, 0], L[:, 1], L[:, 2]]), (rows, cols)),
+                            shape=(self.N, 2 * self.me))
+        out.sum_duplicates()
+        out.sort_indices()
+        return out
+
+    # ----------------------------------------------------------- FEM rows
+    def fem_blocks(self, axis: int) -> dict:
+        """As :meth:`NavModel.fem_blocks`, with the element residuals' columns ``u``."""
+        blocks = super().fem_blocks(axis)
+        if self.me:
+            blocks["u"] = self._element_block(axis)
+        return blocks
+
+    def mg_columns(self, axis: int) -> tuple[np.ndarray, np.ndarray]:
+        """:math:`\\Phi^T M_f G` of one axis (s): the error model's columns condensed."""
+        cache = self.__dict__.setdefault("_mg_cache", {})
+        if axis not in cache:
+            cache[axis] = self._times_g(self.cond.load, axis)
+        return cache[axis]
+
+    def _acc_load(self, axis: int) -> np.ndarray:
+        return self.cond.load @ self.data.acc[:, axis]
+
+    def residual_rows(self, axes=None) -> Affine:
+        """The node residuals ``w`` (m/s^2) and the whitened element residuals ``u``, axis by
+        axis (:meth:`residual_sigma` gives their standard deviations)."""
+        parts = []
+        for a in self.axes_of(axes):
+            cols = np.concatenate([self.w_index(a), self.element_index(a)])
+            m = cols.size
+            parts.append(Affine(sp.csr_matrix((np.ones(m), (np.arange(m), cols)), shape=(m, self.size)),
+                                np.zeros(m)))
+        return Affine.vstack(parts)
+
+    def residual_sigma(self, sigma_a: np.ndarray) -> np.ndarray:
+        """``sigma_a`` at the node samples (m/s^2) and 1 for the whitened ``u``, axis by axis.
+        The element weights are the model's own (made from the ``sigma_a`` it was given)."""
+        return np.concatenate([np.r_[self.sigma_fine[self.grid.nodes, a], np.ones(2 * self.me)]
+                               for a in range(self.d)])
+
+    def load_residual_rows(self, axes=None) -> Affine:
+        raise InputError("segment=: a coarse mesh weighs the acceleration residuals (residual='acceleration'); "
+                         "the load form is solved on every sample")
+
+    # ------------------------------------------------------ velocities
+    def velocity(self, t, axes=None, what: str = "velocity") -> Affine:
+        r"""Velocities at times ``t`` (m/s), rows time-major then axis: at a node from the
+        element on its left (module Notes), ``v0``/``v1`` at the ends; inside an element of
+        one sample step the linear acceleration integrated from its left node, as
+        :func:`bvpnav.fem.velocity_operators`. Other times raise :class:`InputError`."""
+        times = self.grid.check_inside(as_times(t, what), what)
+        self.grid.check_on_mesh(times, what)
+        times = self.grid.snapped(times)
+        ax = self.axes_of(axes, what)
+        g, n, nodes = self.grid, self.N, self.grid.nodes
+        j, s = g.locate(times)
+        end = times >= g.t1
+        j, s = np.where(end, n - 1, j), np.where(end, 0.0, s)
+        m = times.size
+        k = np.arange(m)
+        inner = (j > 0) & (j < n - 1)
+        ki, ji = k[inner], j[inner]
+        H = g.h[ji - 1]
+        Vr = sp.csr_matrix((np.r_[-1.0 / H, 1.0 / H], (np.r_[ki, ki], np.r_[ji - 1, ji])), shape=(m, n))
+        ends = ~inner
+        Vb = sp.csr_matrix((np.ones(int(ends.sum())), (k[ends], np.where(j[ends] == 0, 0, 1))), shape=(m, 2))
+        Cq = self.cond.Cq[ji - 1]                           # the left element's loads on node j
+        F = sp.csr_matrix((Cq.data, Cq.indices, Cq.indptr), shape=(ki.size, self.fine.n))
+        F = sp.csr_matrix((m, self.fine.n)) + sp.csr_matrix(
+            (np.ones(ki.size), (ki, np.arange(ki.size))), shape=(m, ki.size)) @ F
+        # inside a one-step element: + a_i s - (a_i - a_{i+1}) s^2 / (2 h)
+        mid = s > 0
+        km, jm, sm = k[mid], j[mid], s[mid]
+        hm = g.h[np.minimum(jm, n - 2)]
+        c1, c2 = sm - sm**2 / (2.0 * hm), sm**2 / (2.0 * hm)
+        F = F + sp.csr_matrix((np.r_[c1, c2], (np.r_[km, km], np.r_[nodes[jm], nodes[jm] + 1])),
+                              shape=(m, self.fine.n))
+        F = F.tocsr()
+        Vw = F[:, nodes]                                    # the node residuals' share
+        slot = np.full(m, -1, dtype=np.int64)
+        slot[ki] = self._slot[ji - 1]
+        has = slot >= 0
+        parts = []
+        for a in ax:
+            blocks = {"r": Vr, "w": Vw, "vb": Vb}
+            if self.me:
+                L = self.chol[a][slot[has]]
+                kk, ss = k[has], slot[has]
+                blocks["u"] = sp.csr_matrix((np.r_[L[:, 1], L[:, 2]], (np.r_[kk, kk], np.r_[2 * ss, 2 * ss + 1])),
+                                            shape=(m, 2 * self.me))
+            if self.q:
+                blocks["l"] = columns_csr(*self._times_g(F, a), self.q)
+            parts.append(Affine(self._place(blocks, a), F @ self.data.acc[:, a]))
+        out = self._interleave(parts, m)
+        return Affine(out.A, out.c, self._labels("v", times, ax))
+
+    def node_velocity(self, axis: int) -> Affine:
+        """Velocity at every node of one axis (m/s)."""
+        return self.velocity(self.grid.t, [self.axes[axis]])
+
+    def node_velocity_values(self, axis: int, xval: np.ndarray) -> np.ndarray:
+        """:meth:`node_velocity` of one axis evaluated at ``xval`` (m/s)."""
+        return self.node_velocity(axis).value(xval)
+
+    # ------------------------------------------------------- recovery
+    def trajectory(self, xval: np.ndarray) -> dict[str, np.ndarray]:
+        r"""The answer at every sample: ``t`` (N,), ``r``, ``v``, ``w`` (N, d) from the nodal
+        solution ``xval`` (module Notes, Recovery).
+
+        Notes
+        -----
+        Inside element e, :math:`w_i = \sigma_i^2 (c_{p,i} z_0 + c_{q,i} z_1)` with
+        :math:`z = L_e^{-T} u_e`; the positions there solve the fine FEM rows
+        :math:`K_f r + M_f a = 0` at those samples with the nodal positions given.
+        """
+        fine, nodes, idx = self.fine, self.grid.nodes, self.cond.interior
+        Nf = fine.n
+        Kf, Mf = fem.stiffness(fine), fem.mass(fine)
+        lval = xval[self.l_index]
+        e = self.cond.element[idx]
+        R, V, W = np.zeros((Nf, self.d)), np.zeros((Nf, self.d)), np.zeros((Nf, self.d))
+        ab = self._interior_band(Kf)
+        for a in range(self.d):
+            w = np.zeros(Nf)
+            w[nodes] = xval[self.w_index(a)]
+            if self.me:
+                u = xval[self.element_index(a)].reshape(self.me, 2)
+                L = self.chol[a]
+                z1 = u[:, 1] / L[:, 2]
+                z0 = (u[:, 0] - L[:, 1] * z1) / L[:, 0]
+                sl = self._slot[e]
+                w[idx] = self.sigma_fine[idx, a] ** 2 * (self._cp * z0[sl] + self._cq * z1[sl])
+            acc = self.data.acc[:, a] + w
+            if self.q:
+                acc = acc + self.G[:, a, :] @ lval
+            r = np.zeros(Nf)
+            r[nodes] = xval[self.r_index(a)]
+            if idx.size:
+                rhs = -(Mf @ acc)[idx] - (Kf @ r)[idx]
+                r[idx] = sla.solve_banded((1, 1), ab, rhs)
+            v = np.empty(Nf)
+            v0, v1 = self.v_end_index(a)
+            v[0], v[-1] = xval[v0], xval[v1]
+            hl = fine.h[:-1]
+            v[1:-1] = (r[1:-1] - r[:-2]) / hl + hl * (acc[:-2] + 2.0 * acc[1:-1]) / 6.0
+            R[:, a], V[:, a], W[:, a] = r, v, w
+        return {"t": fine.t, "r": R, "v": V, "w": W}
+
+    def _interior_band(self, Kf: sp.csr_matrix) -> np.ndarray:
+        """``K_f`` on the samples inside elements (nodes held), in :func:`scipy.linalg.solve_banded`'s
+        (1, 1) layout: neighbours across a node are not coupled."""
+        idx = self.cond.interior
+        lo, dg, up = Kf._bvpnav_diagonals
+        ab = np.zeros((3, idx.size))
+        ab[1] = dg[idx]
+        if idx.size > 1:
+            adj = np.diff(idx) == 1
+            ab[0, 1:] = np.where(adj, up[idx[:-1]], 0.0)
+            ab[2, :-1] = np.where(adj, lo[idx[:-1]], 0.0)
+        return ab
+
+    # ------------------------------------- not carried on a mesh (yet)
+    def _not_on_mesh(self, what: str):
+        raise InputError(f"{what}: body-frame and attitude rows are not carried on a coarse mesh yet "
+                         "(segment=); solve on every sample (segment=None)")
+
+    def body_velocity(self, t, axes=None, lever=(0.0, 0.0, 0.0), what: str = "body velocity") -> Affine:
+        self._not_on_mesh(what)
+
+    def body_rate(self, t, axes=None, what: str = "body rate") -> Affine:
+        self._not_on_mesh(what)
+
+    def antenna_offset(self, t, lever, axes=None, *, rate: bool = False, what: str = "lever arm") -> Affine:
+        self._not_on_mesh(what)
+
+    def mounting_velocity(self, t, axes, what: str = "mounting") -> Affine:
+        self._not_on_mesh(what)
+
+    def __repr__(self) -> str:
+        return (f"MeshModel(n={self.N} nodes of N={self.fine.n} samples, segment={self.segment:g} s, "
+                f"axes={self.axes}, q={self.q}, unknowns={self.size})")
+
