@@ -60,6 +60,9 @@ class Symmetry(Item):
     offsets: Any = None
     parity: str = "even"
     units = "m"
+    #: Its instants mirror the samples about ``about`` (times between samples): a coarse mesh
+    #: (``segment=``) cannot give them nodes in advance, so it refuses the item.
+    on_mesh = False
 
     def validate(self) -> None:
         c = times(self.about, self.label, "about")

@@ -25,10 +25,10 @@ vector of the papers is ``f = -M a``. Summing all rows gives ``v_1 - v_0 = \int 
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import scipy.sparse as sp
-
-from dataclasses import dataclass
 
 from .grid import TimeGrid, as_times
 

@@ -231,7 +231,8 @@ class Formulation:
             raise InputError("sigma_a goes with residual='acceleration'; the load form has no sigma_a")
         self.segment = check_segment(segment)
         if self.segment is not None and residual != "acceleration":
-            raise InputError("segment= goes with residual='acceleration' (the condensed residuals are weighted "
+            raise InputError("segment= goes with residual='acceleration' (the condensed residuals are "
+                             "weighted "
                              "by sigma_a); solve the load form on every sample (segment=None)")
         self.data = data
         self.residual = residual
@@ -269,7 +270,8 @@ class Formulation:
         if self._model is None:
             return True
         try:
-            self._model.grid.check_on_mesh(self._model.grid.check_inside(item_times(items), "t"), "t")
+            grid = self._model.grid
+            grid.check_on_mesh(grid.check_inside(item_times(items, self.data.grid), "t"), "t")
         except InputError:
             return False
         return True
@@ -293,7 +295,8 @@ class Formulation:
                 self._model = NavModel(self.data, self.error_model)
             else:
                 self._model = MeshModel(self.data, self.error_model, segment=self.segment,
-                                        times=item_times(self.items), sigma_a=self.sigma_a_used)
+                                        times=item_times(self.items, self.data.grid),
+                                        sigma_a=self.sigma_a_used)
         return self._model
 
     def terms(self) -> list[Term]:

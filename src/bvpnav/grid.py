@@ -278,7 +278,8 @@ class MeshGrid(TimeGrid):
             jj = int(j[k])
             raise InputError(
                 f"{what}: time {float(times[k])!r} s lies inside the mesh element [{float(self.t[jj])!r}, "
-                f"{float(self.t[jj + 1])!r}] s ({int(self.nodes[jj + 1] - self.nodes[jj])} sample steps), where "
+                f"{float(self.t[jj + 1])!r}] s ({int(self.nodes[jj + 1] - self.nodes[jj])} sample steps), "
+                "where "
                 "the condensed problem keeps no position; the mesh gets nodes at the items' times `t`, "
                 "`t0`, `t1` it finds: give this time to the item as one of those, or solve without "
                 "segment=")

@@ -90,10 +90,28 @@ def check_segment(segment) -> float | None:
     return val
 
 
-def item_times(items) -> np.ndarray:
-    """Every instant (s) the items name in their time fields (:data:`TIME_FIELDS`)."""
+def item_times(items, grid=None) -> np.ndarray:
+    """Every instant (s) the items name in their time fields (:data:`TIME_FIELDS`) and, with
+    the samples' ``grid``, the instants of items that list them (``instants(grid)``, e.g.
+    :class:`~bvpnav.constraints.ZeroVelocity`: every sample of its interval).
+
+    Raises
+    ------
+    InputError
+        For an item that declares ``on_mesh = False`` (its instants cannot be known in advance).
+    """
     out = []
     for it in items:
+        if getattr(it, "on_mesh", True) is False:
+            raise InputError(f"{it.identify()}: its instants are not known before it is compiled, so a "
+                             "coarse "
+                             "mesh (segment=) cannot give them nodes; solve on every sample (segment=None)")
+        inst = getattr(it, "instants", None)
+        if grid is not None and callable(inst):
+            try:
+                out.append(np.asarray(inst(grid), dtype=float).ravel())
+            except (TypeError, AttributeError, ValueError):   # instants of a model, not of a grid
+                pass
         for name in TIME_FIELDS:
             v = getattr(it, name, None)
             if v is None or isinstance(v, str | bool):
@@ -135,12 +153,14 @@ class MeshModel(NavModel):
 
     def __init__(self, data: ImuData, error_model=None, *, segment: float, times=(), sigma_a=None):
         if state_component(error_model) is not None:
-            raise InputError("segment=: node states (ErrorStates) are not carried on a coarse mesh yet; solve "
+            raise InputError("segment=: node states (ErrorStates) are not carried on a coarse mesh yet; "
+                             "solve "
                              "them on every sample (segment=None)")
         comps = getattr(error_model, "components", (error_model,))
         gyro = [type(c).__name__ for c in comps if c is not None and hasattr(c, "rate_columns")]
         if gyro:
-            raise InputError(f"segment=: the attitude loop's error models ({', '.join(gyro)}) are not carried "
+            raise InputError(f"segment=: the attitude loop's error models ({', '.join(gyro)}) are not "
+                             "carried "
                              "on a coarse mesh yet; solve them on every sample (segment=None)")
         fine = data.grid
         nodes = mesh_nodes(fine, float(segment), times)
@@ -265,7 +285,8 @@ class MeshModel(NavModel):
                                for a in range(self.d)])
 
     def load_residual_rows(self, axes=None) -> Affine:
-        raise InputError("segment=: a coarse mesh weighs the acceleration residuals (residual='acceleration'); "
+        raise InputError("segment=: a coarse mesh weighs the acceleration residuals "
+                         "(residual='acceleration'); "
                          "the load form is solved on every sample")
 
     # ------------------------------------------------------ velocities
@@ -312,7 +333,8 @@ class MeshModel(NavModel):
             if self.me:
                 L = self.chol[a][slot[has]]
                 kk, ss = k[has], slot[has]
-                blocks["u"] = sp.csr_matrix((np.r_[L[:, 1], L[:, 2]], (np.r_[kk, kk], np.r_[2 * ss, 2 * ss + 1])),
+                blocks["u"] = sp.csr_matrix((np.r_[L[:, 1], L[:, 2]],
+                                             (np.r_[kk, kk], np.r_[2 * ss, 2 * ss + 1])),
                                             shape=(m, 2 * self.me))
             if self.q:
                 blocks["l"] = columns_csr(*self._times_g(F, a), self.q)

@@ -184,7 +184,7 @@ def _variance_factor(sol: Solution, form: Formulation) -> tuple[float, int, dict
     w = sol.residuals.to_numpy(dtype=float)
     data = float(np.sum((w / form.sigma_a_used) ** 2))
     parts = {"acceleration residual": data}
-    rows, hard = w.size, model.fem_rows().m
+    rows, hard = form.data_rows().m, model.fem_rows().m   # a coarse mesh's: fewer rows, fewer unknowns
     for term in form.terms():
         role = term.least_squares_role()
         if role == "D":
