@@ -18,10 +18,11 @@ import numpy as np
 import scipy.sparse as sp
 
 from .errors import BvpnavError, ConvexityError, InputError
+from .grid import mesh_nodes
 from .imu import ImuData
 from .items import Item, Linearizable, positive_array
 from .mesh import MeshModel, check_segment, item_times
-from .model import Affine, NavModel
+from .model import Affine, NavModel, state_component
 from .sensors import DEFAULT_GRADE, resolve_grade
 from .terms import Term
 
@@ -186,6 +187,24 @@ def _with_grade(error_model, grade, data) -> tuple[Any, dict[str, Any] | None]:
     return model, {"name": grade.name, "filled": filled, "figures": grade.table()}
 
 
+def _meshed(data: ImuData, segment: float, error_model, items) -> ImuData:
+    """``data`` for a coarse mesh: with node states (:class:`~bvpnav.error_models.ErrorStates`) a
+    shallow copy carrying the mesh's node samples as ``state_mesh`` (the states sit at the
+    nodes); else ``data`` itself. The user's data is never changed."""
+    if state_component(error_model) is None:
+        return data
+    nodes = mesh_nodes(data.grid, segment, item_times(items, data.grid))
+    if getattr(data, "state_point", None) is not None:   # a node-state loop's step: its raw data has it
+        if not np.array_equal(getattr(data.state_point.raw, "state_mesh", None), nodes):
+            raise InputError("segment=: this data carries a node-state linearization point made without "
+                             "this mesh; give the data as measured")
+    if np.array_equal(getattr(data, "state_mesh", None), nodes):
+        return data
+    out = copy.copy(data)
+    out.state_mesh = nodes
+    return out
+
+
 class Formulation:
     r"""Data + objective form + error model + items, compiled (once) to terms.
 
@@ -234,6 +253,9 @@ class Formulation:
             raise InputError("segment= goes with residual='acceleration' (the condensed residuals are "
                              "weighted "
                              "by sigma_a); solve the load form on every sample (segment=None)")
+        items = tuple(label_items(items))
+        if self.segment is not None:
+            data = _meshed(data, self.segment, error_model, items)
         self.data = data
         self.residual = residual
         self.sigma_a = _check_sigma_a(sigma_a, data)
@@ -246,7 +268,7 @@ class Formulation:
         #: The error model as given (``error_model`` is it with the grade's priors filled in).
         self.error_model_given = error_model
         self.error_model, self.grade_report = _with_grade(error_model, self.grade, data)
-        self.items: tuple[Item, ...] = tuple(label_items(items))  # unique labels (a no-op when they are)
+        self.items: tuple[Item, ...] = items  # unique labels (a no-op when they are)
         self._model = model
         self._terms: list[Term] | None = None
         self._observable = False
@@ -296,7 +318,8 @@ class Formulation:
             else:
                 self._model = MeshModel(self.data, self.error_model, segment=self.segment,
                                         times=item_times(self.items, self.data.grid),
-                                        sigma_a=self.sigma_a_used)
+                                        sigma_a=self.sigma_a_used,
+                                        nodes=getattr(self.data, "state_mesh", None))
         return self._model
 
     def terms(self) -> list[Term]:

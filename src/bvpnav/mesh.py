@@ -67,7 +67,8 @@ from . import fem
 from .errors import InputError
 from .grid import MeshGrid, as_times, mesh_nodes
 from .imu import ImuData
-from .model import Affine, NavModel, columns_csr, state_component
+from .model import Affine, NavModel, canonical_csr, columns_csr, state_component
+from .sparse import as_csr
 
 __all__ = ["MeshModel", "item_times", "check_segment"]
 
@@ -151,11 +152,8 @@ class MeshModel(NavModel):
     cond : bvpnav.fem.Condensation
     """
 
-    def __init__(self, data: ImuData, error_model=None, *, segment: float, times=(), sigma_a=None):
-        if state_component(error_model) is not None:
-            raise InputError("segment=: node states (ErrorStates) are not carried on a coarse mesh yet; "
-                             "solve "
-                             "them on every sample (segment=None)")
+    def __init__(self, data: ImuData, error_model=None, *, segment: float, times=(), sigma_a=None,
+                 nodes: np.ndarray | None = None):
         comps = getattr(error_model, "components", (error_model,))
         gyro = [type(c).__name__ for c in comps if c is not None and hasattr(c, "rate_columns")]
         if gyro:
@@ -163,7 +161,7 @@ class MeshModel(NavModel):
                              "carried "
                              "on a coarse mesh yet; solve them on every sample (segment=None)")
         fine = data.grid
-        nodes = mesh_nodes(fine, float(segment), times)
+        nodes = mesh_nodes(fine, float(segment), times) if nodes is None else np.asarray(nodes, np.int64)
         self.data = data
         self.fine = fine
         self.segment = float(segment)
@@ -184,14 +182,20 @@ class MeshModel(NavModel):
             self.param_names = ()
         self.G = G                      # on every sample; condensed by mg_columns
         self.q = G.shape[2]
-        self.state_model, self.ns, self.Gs = None, 0, []
+        self.state_model, self.ns, self.Gs = state_component(error_model), 0, []
+        if self.state_model is not None:   # node states at the mesh nodes (data.state_mesh)
+            if not np.array_equal(getattr(data, "state_mesh", None), nodes):
+                raise InputError("segment=: the node states' mesh (data.state_mesh) is not this mesh; build "
+                                 "the problem with NavigationProblem(..., segment=...), which sets it")
+            self.ns = int(self.state_model.state_size(data))
+            self.Gs = [as_csr(g) for g in self.state_model.state_columns(data)]   # (N, ns) per axis
         sa = np.ones(d) if sigma_a is None else np.asarray(sigma_a, dtype=float)
         self.sigma_fine = np.array(np.broadcast_to(sa if sa.ndim == 2 else sa[None, :], (Nf, d)))
         inside = np.diff(nodes) - 1
         self.elements = np.flatnonzero(inside >= 2)        # elements with residuals to condense
         self.me = self.elements.size
         self.block = 2 * n + 2 + 2 * self.me
-        self.size = d * self.block + self.q
+        self.size = d * self.block + self.q + self.ns
         self.K = fem.stiffness(self.grid)
         W = self.cond.load[:, nodes].tocsr()
         self.M = fem.tridiagonal(W.diagonal(-1), W.diagonal(0), W.diagonal(1))   # the node residuals
@@ -203,8 +207,8 @@ class MeshModel(NavModel):
         c = self.cond
         idx = c.interior
         e = c.element[idx]
-        self._cp = np.asarray(c.Cp[e, idx]).ravel()
-        self._cq = np.asarray(c.Cq[e, idx]).ravel()
+        self._cp = np.asarray(c.Cp[e, idx]).ravel() if idx.size else np.zeros(0)
+        self._cq = np.asarray(c.Cq[e, idx]).ravel() if idx.size else np.zeros(0)
         self._slot = np.full(self.N - 1, -1, dtype=np.int64)
         self._slot[self.elements] = np.arange(self.me)
         nE = self.N - 1
@@ -256,6 +260,14 @@ class MeshModel(NavModel):
         if self.me:
             blocks["u"] = self._element_block(axis)
         return blocks
+
+    def ms_columns(self, axis: int) -> sp.csr_matrix:
+        r""":math:`\Phi^T M_f G_s` of one axis (s): the node states' columns condensed (local: a
+        state of node k reaches rows k - 1 .. k + 1)."""
+        cache = self.__dict__.setdefault("_ms_cache", {})
+        if axis not in cache:
+            cache[axis] = canonical_csr(self.cond.load @ self.Gs[axis])
+        return cache[axis]
 
     def mg_columns(self, axis: int) -> tuple[np.ndarray, np.ndarray]:
         """:math:`\\Phi^T M_f G` of one axis (s): the error model's columns condensed."""
@@ -338,6 +350,8 @@ class MeshModel(NavModel):
                                             shape=(m, 2 * self.me))
             if self.q:
                 blocks["l"] = columns_csr(*self._times_g(F, a), self.q)
+            if self.ns:
+                blocks["s"] = canonical_csr(F @ self.Gs[a])
             parts.append(Affine(self._place(blocks, a), F @ self.data.acc[:, a]))
         out = self._interleave(parts, m)
         return Affine(out.A, out.c, self._labels("v", times, ax))
@@ -381,6 +395,8 @@ class MeshModel(NavModel):
             acc = self.data.acc[:, a] + w
             if self.q:
                 acc = acc + self.G[:, a, :] @ lval
+            if self.ns:
+                acc = acc + self.Gs[a] @ xval[self.s_index]
             r = np.zeros(Nf)
             r[nodes] = xval[self.r_index(a)]
             if idx.size:

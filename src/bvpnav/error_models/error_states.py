@@ -57,6 +57,31 @@ which need the attitude states), and a model that owns all of them can keep thei
 (node-major, interleaved axes) and their process rows together. The knot models stay for
 data without a gyro and for the published tables that use them.
 
+On a coarse mesh (``NavigationProblem(..., segment=...)``, :mod:`bvpnav.mesh`) the states sit at
+the mesh's nodes (``data.state_mesh``, the node samples, set by the formulation). Inside
+element :math:`[t_p, t_q]` the biases are linear in time, :math:`b_i = (1 - \theta_i) b_p +
+\theta_i b_q` with :math:`\theta_i = (t_i - t_p)/H`, and the attitude is the node's integrated
+with the corrected rates, :math:`C_i = C_p P_i`, :math:`P_i = \prod_{j=p}^{i-1}\exp([a_j\times])`,
+:math:`a_j = \phi_j - h_j b_{g,j}` (each sample's bias held over its step, as above; the loop
+re-integrates it at every step, ``updated``). The acceleration columns of every sample are
+the exact first derivatives, condensed onto the nodes with the rest of the load:
+:math:`\varepsilon_p \times f_{n,i}` for the attitude, :math:`-C_i\,\delta b_{a,i}` for the
+accelerometer bias, and for the gyro bias :math:`C_i \to \exp([-C_p Y_i\,\delta b\times])\,C_i`
+with :math:`Y_i = \sum_{j=p}^{i-1} P_{j+1} J_r(a_j)\, h_j\, w_j` (:math:`w_j = 1 - \theta_j` for
+node p, :math:`\theta_j` for node q). With constant biases the truth zeroes every row, on the
+mesh as on the samples. The process rows tie neighbouring nodes over the element (the
+continuous-time model with :math:`H` for :math:`h`): the attitude residual uses the element's
+product :math:`\Delta R = P_q` for :math:`\exp([a_j\times])`, and its gyro-bias Jacobian sums
+the steps' terms,
+
+.. math::
+
+    \frac{\partial e}{\partial b_{g,p|q}} = J_l(e)^{-1} C_q \sum_{i=p}^{q-1} w_i\, D_i^T
+        J_r(a_i)\, h_i, \qquad D_i = \prod_{k=i+1}^{q-1}\exp([a_k\times]),
+
+GTSAM's bias Jacobian of the preintegrated rotation. With one step per element all of it is
+the per-sample model.
+
 Items reach the states only through :class:`~bvpnav.model.NavModel` accessors
 (``attitude_error(t)``, ``gyro_bias(t)``, ``acc_bias(t)``, and ``body_rate(t)``, which
 subtracts the gyro-bias states), never by index.
@@ -138,6 +163,66 @@ def _inverse_jacobian(phi: np.ndarray, sign: float) -> np.ndarray:
     return np.eye(3) - 0.5 * sign * S + c[..., None, None] * (S @ S)
 
 
+def _mesh(data) -> np.ndarray | None:
+    """The node samples carrying the states on a coarse mesh (``state_mesh`` of the data as
+    measured, set by :class:`~bvpnav.formulation.Formulation` for ``segment=``), or None: every
+    sample is a node."""
+    return getattr(_raw(data), "state_mesh", None)
+
+
+def _hats(data) -> sp.csr_matrix:
+    """The mesh's hat functions at the samples, (N, n): biases linear between nodes."""
+    from ..grid import TimeGrid
+
+    t = np.asarray(data.t, dtype=float)
+    return TimeGrid(t[_mesh(data)]).interpolation_matrix(t)
+
+
+@dataclass(frozen=True)
+class _Elements:
+    """A coarse mesh's elements at a point: per sample its element's left node ``left`` and
+    ``theta`` (0 at nodes); per step ``a`` (the corrected step rotations, rad) and ``S`` (the
+    product of the element's steps up to and including this one)."""
+
+    left: np.ndarray
+    theta: np.ndarray
+    a: np.ndarray
+    S: Rotation
+
+
+def _elements(data, mesh: np.ndarray, bg: np.ndarray) -> _Elements:
+    """:class:`_Elements` with the gyro-bias totals ``bg`` (N, 3) at the samples."""
+    from ..attitude import step_rotation_vectors
+
+    raw = _raw(data)
+    t = np.asarray(raw.t, dtype=float)
+    n = t.size
+    left = np.minimum(np.searchsorted(mesh, np.arange(n), side="right") - 1, mesh.size - 1)
+    theta = np.zeros(n)
+    inner = left < mesh.size - 1
+    theta[inner] = (t[inner] - t[mesh[left[inner]]]) / np.diff(t[mesh])[left[inner]]
+    a = step_rotation_vectors(t, np.asarray(raw.gyro, dtype=float)) - np.diff(t)[:, None] * bg[:-1]
+    S = _segment_products(Rotation.from_rotvec(a).as_quat(), mesh[left[:-1]])
+    return _Elements(left, theta, a, S)
+
+
+def _segment_products(steps: np.ndarray, start: np.ndarray) -> Rotation:
+    """``R_s ... R_i`` for every step ``i`` (quaternions ``steps``, (M, 4)) from the first step
+    ``start[i]`` of its element: a segmented parallel prefix scan (log2 of the longest element
+    vectorised compositions)."""
+    q = steps.copy()
+    idx = np.arange(q.shape[0])
+    off = 1
+    while True:
+        take = np.flatnonzero(idx - off >= start)
+        if not take.size:
+            break
+        head = Rotation.from_quat(q[take - off])
+        q[take] = _compose(head, Rotation.from_quat(q[take])).as_quat()
+        off *= 2
+    return Rotation.from_quat(q)
+
+
 def states_at(data, totals: dict):
     r"""The measured data re-linearized at the node-state ``totals`` (kind -> (N, 3)): attitude
     :math:`\exp([\psi\times])\hat C`, specific force :math:`\hat f - b_a`, ``state_point`` set."""
@@ -169,6 +254,38 @@ def process_residuals(data) -> tuple[np.ndarray, np.ndarray]:
     C = data.attitude
     R = _compose(_compose(C[1:], Rotation.from_rotvec(-a)), C[:-1].inv())
     return R.as_rotvec(), a
+
+
+def _mesh_process(data, mesh: np.ndarray, gyro: bool):
+    r"""The attitude process rows of a coarse mesh's elements (module Notes): the residuals
+    :math:`e_k` (n - 1, 3, rad), :math:`J_l(e_k)^{-1}`, :math:`J_r(e_k)^{-1}` and the gyro-bias
+    Jacobians of the element's left and right nodes (n - 1, 3, 3; s, or None without gyro-bias
+    states)."""
+    from ..attitude import step_rotation_vectors
+
+    raw = _raw(data)
+    t = np.asarray(raw.t, dtype=float)
+    h = np.diff(t)
+    phi = step_rotation_vectors(t, np.asarray(raw.gyro, dtype=float))
+    a = phi - h[:, None] * _totals(data, "gyro_bias")[:-1]
+    elem = np.repeat(np.arange(mesh.size - 1), np.diff(mesh))     # element of every step
+    start = mesh[:-1][elem]
+    S = _segment_products(Rotation.from_rotvec(a).as_quat(), start)
+    dR = S[mesh[1:] - 1]                                          # each element's product of steps
+    C = data.attitude
+    Cp, Cq = C[mesh[:-1]], C[mesh[1:]]
+    e0 = _compose(_compose(Cq, dR.inv()), Cp.inv()).as_rotvec()
+    Jli = _inverse_jacobian(e0, 1.0)
+    Jri = _inverse_jacobian(e0, -1.0)
+    if not gyro:
+        return e0, Jli, Jri, None, None
+    Dt = _compose(dR[elem].inv(), S).as_matrix()                 # D_i^T = dR^T (R_s ... R_i)
+    Mi = Dt @ right_jacobian(a) * h[:, None, None]
+    theta = (t[:-1] - t[start]) / (t[mesh[1:]] - t[mesh[:-1]])[elem]
+    lead = Jli @ Cq.as_matrix()
+    Bp = lead @ np.add.reduceat((1.0 - theta)[:, None, None] * Mi, mesh[:-1], axis=0)
+    Bq = lead @ np.add.reduceat(theta[:, None, None] * Mi, mesh[:-1], axis=0)
+    return e0, Jli, Jri, Bp, Bq
 
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
@@ -277,26 +394,36 @@ class ErrorStates(ErrorModel):
     def _per_node(self, data) -> int:
         return 3 * len(self.state_kinds(data))
 
+    @staticmethod
+    def _nodes(data) -> int:
+        """Number of state nodes: the samples, or the nodes of a coarse mesh."""
+        mesh = _mesh(data)
+        return data.n if mesh is None else int(np.size(mesh))
+
     def state_size(self, data) -> int:
-        """Number of node states, ``3 * kinds * N``."""
+        """Number of node states, ``3 * kinds * N`` (n nodes on a coarse mesh)."""
         _check_strapdown_gyro(data, "ErrorStates")
         if data.ndim != 3:
             raise InputError("ErrorStates: needs three navigation axes")
-        return self._per_node(data) * data.n
+        return self._per_node(data) * self._nodes(data)
 
     def state_nodes(self, data) -> np.ndarray:
-        """Node (sample) of every state: node-major, ``3 * kinds`` per node."""
-        return np.repeat(np.arange(data.n), self._per_node(data))
+        """Node of every state: node-major, ``3 * kinds`` per node."""
+        return np.repeat(np.arange(self._nodes(data)), self._per_node(data))
 
-    def state_index(self, data, kind: str) -> np.ndarray:
-        """Position in the state block of ``kind`` at every node and axis, (N, 3) int."""
+    def state_index(self, data, kind: str, n: int | None = None) -> np.ndarray:
+        """Position in the state block of ``kind`` at every node and axis, (N, 3) int (``n``
+        nodes: default the model's)."""
         k = self.state_kinds(data).index(kind)
         K = self._per_node(data)
-        return np.arange(data.n)[:, None] * K + 3 * k + np.arange(3)[None, :]
+        n = self._nodes(data) if n is None else n
+        return np.arange(n)[:, None] * K + 3 * k + np.arange(3)[None, :]
 
     def state_total(self, data, kind: str) -> np.ndarray:
-        """The current total of ``kind`` at every node, (N, 3) (zero at the data as measured)."""
-        return _totals(data, kind)
+        """The current total of ``kind`` at every node, (N, 3) (zero at the data as measured;
+        at the node samples on a coarse mesh)."""
+        mesh = _mesh(data)
+        return _totals(data, kind) if mesh is None else _totals(data, kind)[mesh]
 
     def state_columns(self, data) -> list:
         r"""Acceleration change per unit state, one sparse (N, ns) matrix per navigation
@@ -307,15 +434,50 @@ class ErrorStates(ErrorModel):
         fn = data.attitude.apply(data.specific_force)
         S = -_skew(fn)                       # (N, 3, 3): column c = e_c x fn
         C = data.attitude.as_matrix()
+        mesh = _mesh(data)
+        if mesh is not None:
+            return self._mesh_columns(data, mesh, S, C)
         out = []
         for a in range(3):
-            blocks = [(self.state_index(data, "attitude_error"), S[:, a, :])]
+            blocks = [(self.state_index(data, "attitude_error", n), S[:, a, :])]
             if "acc_bias" in kinds:
-                blocks.append((self.state_index(data, "acc_bias"), -C[:, a, :]))
+                blocks.append((self.state_index(data, "acc_bias", n), -C[:, a, :]))
             cols = np.concatenate([b[0] for b in blocks], axis=1)
             vals = np.concatenate([b[1] for b in blocks], axis=1)
             rows = np.repeat(np.arange(n), cols.shape[1])
             out.append(sp.csr_matrix((vals.ravel(), (rows, cols.ravel())), shape=(n, K * n)))
+        return out
+
+    def _mesh_columns(self, data, mesh: np.ndarray, S: np.ndarray, C: np.ndarray) -> list:
+        """:meth:`state_columns` on a coarse mesh (module Notes): (N, ns) per axis, every sample
+        on the states of its element's two nodes."""
+        n, nn, K = data.n, mesh.size, self._per_node(data)
+        kinds = self.state_kinds(data)
+        el = _elements(data, mesh, _totals(data, "gyro_bias"))
+        k, th = el.left, el.theta
+        nxt = np.minimum(k + 1, nn - 1)
+        per = [(k, np.ones(n), S, "attitude_error")]   # (node and weight per sample, (N, 3, 3), kind)
+        if "acc_bias" in kinds:
+            per += [(k, 1.0 - th, -C, "acc_bias"), (nxt, th, -C, "acc_bias")]
+        if "gyro_bias" in kinds:
+            # Y_i = sum_{p <= j < i} P_{j+1} J_r(a_j) h_j w_j: running sums, restarted per element
+            Z = el.S.as_matrix() @ right_jacobian(el.a) * np.diff(np.asarray(data.t, float))[:, None, None]
+            SCp = S @ C[mesh[k]]
+            for node, w in ((k, 1.0 - th[:-1]), (nxt, th[:-1])):
+                cum = np.zeros((n, 3, 3))
+                np.cumsum(w[:, None, None] * Z, axis=0, out=cum[1:])
+                per.append((node, np.ones(n), -SCp @ (cum - cum[mesh[k]]), "gyro_bias"))
+        out = []
+        for a in range(3):
+            rows, cols, vals = [], [], []
+            for node, w, B, kind in per:
+                rows.append(np.repeat(np.arange(n), 3))
+                cols.append(self.state_index(data, kind, nn)[node].ravel())
+                vals.append((w[:, None] * B[:, a, :]).ravel())
+            G = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                              shape=(n, K * nn))
+            G.sum_duplicates()
+            out.append(G)
         return out
 
     # ------------------------------------------------------------ rows
@@ -324,8 +486,9 @@ class ErrorStates(ErrorModel):
         from ..terms import Term
 
         data = model.data
-        n = data.n
-        h = data.grid.h
+        mesh = _mesh(data)
+        n = self._nodes(data)
+        h = data.grid.h if mesh is None else np.diff(np.asarray(data.t, dtype=float)[mesh])
         s0 = int(model.s_index[0])
         kinds = self.state_kinds(data)
         out = []
@@ -336,15 +499,22 @@ class ErrorStates(ErrorModel):
             return Affine(A, const, RowLabels([(prefix, count)]))
 
         # the attitude process rows
-        e0, a = process_residuals(data)
-        Jli = _inverse_jacobian(e0, 1.0)
-        Jri = _inverse_jacobian(e0, -1.0)
         P = self.state_index(data, "attitude_error")
-        blocks = [(P[1:], Jli), (P[:-1], -Jri)]
-        if "gyro_bias" in kinds:
-            C1 = data.attitude.as_matrix()[1:]
-            Bg = Jli @ C1 @ right_jacobian(a) * h[:, None, None]
-            blocks.append((self.state_index(data, "gyro_bias")[:-1], Bg))
+        if mesh is None:
+            e0, a = process_residuals(data)
+            Jli = _inverse_jacobian(e0, 1.0)
+            Jri = _inverse_jacobian(e0, -1.0)
+            blocks = [(P[1:], Jli), (P[:-1], -Jri)]
+            if "gyro_bias" in kinds:
+                C1 = data.attitude.as_matrix()[1:]
+                Bg = Jli @ C1 @ right_jacobian(a) * h[:, None, None]
+                blocks.append((self.state_index(data, "gyro_bias")[:-1], Bg))
+        else:
+            e0, Jli, Jri, Bp, Bq = _mesh_process(data, mesh, "gyro_bias" in kinds)
+            blocks = [(P[1:], Jli), (P[:-1], -Jri)]
+            if "gyro_bias" in kinds:
+                B = self.state_index(data, "gyro_bias")
+                blocks += [(B[:-1], Bp), (B[1:], Bq)]
         m = n - 1
         r = np.arange(3 * m).reshape(m, 3)
         rr, cc, vv = [], [], []
@@ -362,7 +532,7 @@ class ErrorStates(ErrorModel):
             if kind not in kinds:
                 continue
             B = self.state_index(data, kind)
-            tot = _totals(data, kind)
+            tot = self.state_total(data, kind)
             r = np.arange(3 * m)
             res = rows_of(f"process_{kind}", 3 * m, np.r_[r, r], np.r_[B[1:].ravel(), B[:-1].ravel()],
                           np.r_[np.ones(3 * m), -np.ones(3 * m)], (tot[1:] - tot[:-1]).ravel())
@@ -379,7 +549,7 @@ class ErrorStates(ErrorModel):
             if sig is None or kind not in kinds:
                 continue
             cols = self.state_index(data, kind)[0]
-            tot = _totals(data, kind)[0]
+            tot = self.state_total(data, kind)[0]
             J = _inverse_jacobian(tot, 1.0) if kind == "attitude_error" else np.eye(3)
             res = rows_of(f"prior_{kind}", 3, np.repeat(np.arange(3), 3), np.tile(cols, 3), J.ravel(), tot)
             keep = np.flatnonzero(np.isfinite(sig))
@@ -395,6 +565,9 @@ class ErrorStates(ErrorModel):
         composition, :math:`\exp([\psi'\times]) = \exp([\varepsilon\times])\exp([\psi\times])`,
         biases by addition."""
         out = {}
+        mesh = _mesh(data)
+        if mesh is not None:
+            return self._mesh_updated(data, mesh, s)
         for kind in self.state_kinds(data):
             d = np.asarray(s, dtype=float)[self.state_index(data, kind)]
             tot = _totals(data, kind)
@@ -402,6 +575,32 @@ class ErrorStates(ErrorModel):
                 out[kind] = _compose(Rotation.from_rotvec(d), Rotation.from_rotvec(tot)).as_rotvec()
             else:
                 out[kind] = tot + d
+        return out
+
+    def _mesh_updated(self, data, mesh: np.ndarray, s: np.ndarray) -> dict:
+        r""":meth:`updated` on a coarse mesh: the nodes' totals take the increments, the biases at
+        the samples are linear between nodes, and the attitude at a sample is re-integrated from
+        its element's left node with the corrected rates, :math:`C_i = C_p P_i` (module Notes),
+        returned as the attitude error :math:`\mathrm{Log}(C_i \hat C_i^T)` of every sample."""
+        hats = _hats(data)
+        out = {}
+        for kind in self.state_kinds(data):
+            d = np.asarray(s, dtype=float)[self.state_index(data, kind)]
+            tot = _totals(data, kind)[mesh]
+            if kind == "attitude_error":
+                nodes = _compose(Rotation.from_rotvec(d), Rotation.from_rotvec(tot))
+            else:
+                out[kind] = hats @ (tot + d)
+        raw = _raw(data)
+        n = raw.n
+        el = _elements(data, mesh, out.get("gyro_bias", np.zeros((n, 3))))
+        q = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))                  # P_i: identity at the nodes
+        inside = np.flatnonzero(~np.isin(np.arange(n), mesh))
+        q[inside] = el.S.as_quat()[inside - 1]
+        Chat = raw.attitude
+        p = mesh[el.left]
+        C = _compose(_compose(nodes[el.left], Chat[p]), Rotation.from_quat(q))
+        out["attitude_error"] = _compose(C, Chat.inv()).as_rotvec()
         return out
 
     def frame(self, data, totals: dict) -> pd.DataFrame:

@@ -930,7 +930,7 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
                 data.body_point = LinearizationPoint(velocity=vel, names=(), psi=np.zeros((raw.n, 3, 0)))
             if iters:
                 f = Formulation(data, form.residual, form.sigma_a if form.sigma_a_given else None,
-                                form.error_model, form.items, grade=None)
+                                form.error_model, form.items, grade=None, segment=form.segment)
                 f.grade_report = form.grade_report
                 f._observable = checked
             else:
