@@ -288,3 +288,17 @@ def test_mesh_states_on_a_noisy_drive_match_the_per_sample_accuracy():
     assert ref[0] < 0.3                                   # the smoother beats the 0.3 m fixes
     for seg in (1.0, 2.0):                                # measured: equal to 3 digits
         assert np.all(np.abs(np.array(out[seg]) - ref) <= 0.03 * ref), (seg, out[seg], ref)
+
+
+def test_lambda_rules_matrices_and_what_a_mesh_refuses():
+    data, rng = _data("random", n=900, d=2, seed=8)
+    fine = _problem(data, np.random.default_rng(9), None, 0.05, Bias())
+    prob = _problem(data, np.random.default_rng(9), 1.0, 0.05, Bias())
+    a, b = fine.solve(solver="direct", lam="lcurve"), prob.solve(solver="direct", lam="lcurve")
+    assert b.lam == a.lam and _rel(b.position("x"), a.position("x")) <= 1e-9
+    mats, model = prob.matrices(), prob.formulation.model
+    assert mats.A_eq.shape[1] == model.size and mats.f.size == model.N * 2 and "u_x" in mats.layout
+    with pytest.raises(InputError, match="GCV.*segment="):
+        prob.solve(solver="direct", lam="gcv")
+    with pytest.raises(InputError, match="uncertainty=.*segment=None"):
+        prob.solve(solver="direct", lam=1.0, uncertainty=True)

@@ -225,7 +225,12 @@ MOUNTED = ("bvpnav states NHC mount", "bvpnav NHC+FM mount")
 #: Prior sigma of the mounting angles, rad (about 1 deg: an IMU mounted by eye).
 MOUNT_SIGMA = 0.02
 MOUNT_NAMES = ("mounting_yaw", "mounting_pitch")
-METHODS = ("GTSAM", "GTSAM peer", "bvpnav README", "bvpnav defaults", "bvpnav states", *VEHICLE)
+#: The coarse mesh's longest element, s (``"bvpnav states mesh"``: ``NavigationProblem(segment=...)``, the
+#: node states at the mesh's nodes, the samples between them condensed; issue 42).
+MESH_SEGMENT = 1.0
+
+METHODS = ("GTSAM", "GTSAM peer", "bvpnav README", "bvpnav defaults", "bvpnav states", "bvpnav states mesh",
+           *VEHICLE)
 
 
 def data_dir() -> Path:
@@ -429,7 +434,8 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float, *, fix_s
                             gyro_sigma=fig["gyro_bias"], acc_sigma=fig["acc_bias"])
         if method in MOUNTED:
             model = model + Mounting(sigma=MOUNT_SIGMA)
-        prob = NavigationProblem(data, error_model=model, sigma_a=fig["acc_noise"] * math.sqrt(rate))
+        prob = NavigationProblem(data, error_model=model, sigma_a=fig["acc_noise"] * math.sqrt(rate),
+                                 segment=MESH_SEGMENT if method == "bvpnav states mesh" else None)
     elif method == "bvpnav README" or method in VEHICLE:
         g = from_datasheet(**fig, tilt=tilt, base="tactical", name="KITTI metadata")
         em = g.error_model(interval)

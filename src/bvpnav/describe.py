@@ -87,9 +87,11 @@ def matrices(problem) -> Matrices:
     d, n = model.d, model.N
     K = sp.block_diag([model.K] * d, format="csr")
     M = sp.block_diag([model.M] * d, format="csr")
-    f = np.concatenate([-(model.M @ model.data.acc[:, a]) for a in range(d)])
-    F = (np.vstack([-(model.M @ model.G[:, a, :]) for a in range(d)]) if model.q
-         else np.zeros((n * d, 0)))
+    f = np.concatenate([-model._acc_load(a) for a in range(d)])
+    F = np.zeros((n * d, model.q))
+    for a in range(d if model.q else 0):   # -M G by the columns acting on the axis (condensed on a mesh)
+        cols, vals = model.mg_columns(a)
+        F[a * n:(a + 1) * n, cols] = -vals
     fem = model.fem_rows()
     eq = [fem]
     legend = [("fem", "hard", "A_eq", slice(0, fem.m))]
@@ -125,6 +127,9 @@ def matrices(problem) -> Matrices:
         layout[f"w_{ax}"] = slice(w[0], w[-1] + 1)
         layout[f"v0_{ax}"] = slice(i0, i0 + 1)
         layout[f"v1_{ax}"] = slice(i1, i1 + 1)
+        u = model.element_index(a)   # a coarse mesh's whitened element residuals (bvpnav.mesh)
+        if u.size:
+            layout[f"u_{ax}"] = slice(u[0], u[-1] + 1)
     o = model.d * model.block
     layout["l"] = slice(o, o + model.q)
     if model.ns:   # node states (ErrorStates): after l

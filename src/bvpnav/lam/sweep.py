@@ -521,6 +521,10 @@ class DirectSweep:
 
     def _trace(self, ls, fac, lam, probes, seed, h=None) -> float:
         N, d = self.model.N, self.model.d
+        if N != self.form.data.n:
+            raise InputError("GCV's trace of the influence matrix is taken over every sample, which a "
+                             "coarse mesh (segment=) does not keep; give lam= (a number) or a rule without "
+                             "the trace (lam='lcurve'), or solve with segment=None")
         exact = self.trace == "exact" or (self.trace == "auto" and N * d <= self.exact_trace_limit)
         why = ""
         if (self.trace in ("auto", "logdet") and not exact and isinstance(fac, BandedKKT)

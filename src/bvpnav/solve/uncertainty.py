@@ -33,6 +33,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats as _stats
 
+from ..errors import InputError
 from ..formulation import Formulation
 from ..linalg.covariance import BORDER_COND_WARN, posterior
 from ..log import warn
@@ -99,6 +100,9 @@ def attach_uncertainty(sol: Solution, form: Formulation, how) -> Solution:
     """Add standard deviations and covariances to ``sol`` (see the module docstring)."""
     t0 = time.perf_counter()
     model = form.model
+    if model.N != form.data.n:
+        raise InputError("uncertainty=: the posterior of a coarse mesh (segment=) is not carried to every "
+                         "sample yet; solve with segment=None for standard deviations")
     cov = posterior(form, sol.x, sol.lam)
     scale = "scaled" if how == "scaled" or form.residual == "load" else "stated"
     unscalable = None
