@@ -89,6 +89,7 @@ subtracts the gyro-bias states), never by index.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -178,7 +179,7 @@ def _hats(data) -> sp.csr_matrix:
     return TimeGrid(t[_mesh(data)]).interpolation_matrix(t)
 
 
-@dataclass(frozen=True)
+@dataclass(eq=False)
 class _Elements:
     """A coarse mesh's elements at a point: per sample its element's left node ``left`` and
     ``theta`` (0 at nodes); per step ``a`` (the corrected step rotations, rad) and ``S`` (the
@@ -189,9 +190,24 @@ class _Elements:
     a: np.ndarray
     S: Rotation
 
+    @functools.cached_property
+    def Jr(self) -> np.ndarray:
+        """:math:`J_r(a_j)` of every step, (N - 1, 3, 3)."""
+        return right_jacobian(self.a)
+
 
 def _elements(data, mesh: np.ndarray, bg: np.ndarray) -> _Elements:
-    """:class:`_Elements` with the gyro-bias totals ``bg`` (N, 3) at the samples."""
+    """:class:`_Elements` with the gyro-bias totals ``bg`` (N, 3) at the samples; kept on the data
+    for the same ``mesh`` and ``bg`` (its state columns and process rows share them)."""
+    kept = data.__dict__.get("_mesh_elements")
+    if kept is not None and kept[0] is mesh and (kept[1] is bg or np.array_equal(kept[1], bg)):
+        return kept[2]
+    el = _make_elements(data, mesh, bg)
+    data.__dict__["_mesh_elements"] = (mesh, bg, el)
+    return el
+
+
+def _make_elements(data, mesh: np.ndarray, bg: np.ndarray) -> _Elements:
     from ..attitude import step_rotation_vectors
 
     raw = _raw(data)
@@ -217,10 +233,19 @@ def _segment_products(steps: np.ndarray, start: np.ndarray) -> Rotation:
         take = np.flatnonzero(idx - off >= start)
         if not take.size:
             break
-        head = Rotation.from_quat(q[take - off])
-        q[take] = _compose(head, Rotation.from_quat(q[take])).as_quat()
+        q[take] = _quat_product(q[take - off], q[take])
         off *= 2
     return Rotation.from_quat(q)
+
+
+def _quat_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The quaternion products ``a b`` (scalar last, (M, 4)) of :func:`_compose`, on the arrays
+    (no rotation objects made and normalized between the steps of a scan)."""
+    av, aw, bv, bw = a[:, :3], a[:, 3], b[:, :3], b[:, 3]
+    out = np.empty_like(a)
+    out[:, 3] = aw * bw - np.einsum("ij,ij->i", av, bv)
+    out[:, :3] = aw[:, None] * bv + bw[:, None] * av + np.cross(av, bv)
+    return out
 
 
 def states_at(data, totals: dict):
@@ -261,16 +286,10 @@ def _mesh_process(data, mesh: np.ndarray, gyro: bool):
     :math:`e_k` (n - 1, 3, rad), :math:`J_l(e_k)^{-1}`, :math:`J_r(e_k)^{-1}` and the gyro-bias
     Jacobians of the element's left and right nodes (n - 1, 3, 3; s, or None without gyro-bias
     states)."""
-    from ..attitude import step_rotation_vectors
-
-    raw = _raw(data)
-    t = np.asarray(raw.t, dtype=float)
+    t = np.asarray(data.t, dtype=float)
     h = np.diff(t)
-    phi = step_rotation_vectors(t, np.asarray(raw.gyro, dtype=float))
-    a = phi - h[:, None] * _totals(data, "gyro_bias")[:-1]
-    elem = np.repeat(np.arange(mesh.size - 1), np.diff(mesh))     # element of every step
-    start = mesh[:-1][elem]
-    S = _segment_products(Rotation.from_rotvec(a).as_quat(), start)
+    el = _elements(data, mesh, _totals(data, "gyro_bias"))
+    S, elem, theta = el.S, el.left[:-1], el.theta[:-1]   # per step, in its element
     dR = S[mesh[1:] - 1]                                          # each element's product of steps
     C = data.attitude
     Cp, Cq = C[mesh[:-1]], C[mesh[1:]]
@@ -280,8 +299,7 @@ def _mesh_process(data, mesh: np.ndarray, gyro: bool):
     if not gyro:
         return e0, Jli, Jri, None, None
     Dt = _compose(dR[elem].inv(), S).as_matrix()                 # D_i^T = dR^T (R_s ... R_i)
-    Mi = Dt @ right_jacobian(a) * h[:, None, None]
-    theta = (t[:-1] - t[start]) / (t[mesh[1:]] - t[mesh[:-1]])[elem]
+    Mi = Dt @ el.Jr * h[:, None, None]
     lead = Jli @ Cq.as_matrix()
     Bp = lead @ np.add.reduceat((1.0 - theta)[:, None, None] * Mi, mesh[:-1], axis=0)
     Bq = lead @ np.add.reduceat(theta[:, None, None] * Mi, mesh[:-1], axis=0)
@@ -461,21 +479,22 @@ class ErrorStates(ErrorModel):
             per += [(k, 1.0 - th, -C, "acc_bias"), (nxt, th, -C, "acc_bias")]
         if "gyro_bias" in kinds:
             # Y_i = sum_{p <= j < i} P_{j+1} J_r(a_j) h_j w_j: running sums, restarted per element
-            Z = el.S.as_matrix() @ right_jacobian(el.a) * np.diff(np.asarray(data.t, float))[:, None, None]
+            Z = el.S.as_matrix() @ el.Jr * np.diff(np.asarray(data.t, float))[:, None, None]
             SCp = S @ C[mesh[k]]
             for node, w in ((k, 1.0 - th[:-1]), (nxt, th[:-1])):
                 cum = np.zeros((n, 3, 3))
                 np.cumsum(w[:, None, None] * Z, axis=0, out=cum[1:])
                 per.append((node, np.ones(n), -SCp @ (cum - cum[mesh[k]]), "gyro_bias"))
+        # every sample's row holds 3 entries per block: the CSR arrays directly (rows of
+        # len(per) * 3 entries; a sample's two nodes coincide at the last one: summed)
+        cols = np.concatenate([self.state_index(data, kind, nn)[node] for node, _, _, kind in per], axis=1)
+        itype = np.int32 if K * nn < 2**31 and cols.size < 2**31 else np.int64
+        cols = cols.astype(itype).ravel()
+        indptr = np.arange(0, cols.size + 1, 3 * len(per), dtype=itype)
         out = []
         for a in range(3):
-            rows, cols, vals = [], [], []
-            for node, w, B, kind in per:
-                rows.append(np.repeat(np.arange(n), 3))
-                cols.append(self.state_index(data, kind, nn)[node].ravel())
-                vals.append((w[:, None] * B[:, a, :]).ravel())
-            G = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                              shape=(n, K * nn))
+            vals = np.concatenate([w[:, None] * B[:, a, :] for _, w, B, _ in per], axis=1).ravel()
+            G = sp.csr_matrix((vals, cols.copy(), indptr.copy()), shape=(n, K * nn))
             G.sum_duplicates()
             out.append(G)
         return out
