@@ -282,6 +282,18 @@ def condensation(grid: TimeGrid, nodes: np.ndarray) -> Condensation:
     with :math:`\theta = (t - t_p)/H` linear, the products of two linear functions integrate
     to :math:`\int \phi_q a = \tfrac{h_i}{6}\,[\theta_i (2 a_i + a_{i+1}) + \theta_{i+1}(a_i +
     2 a_{i+1})]` (``Cp`` with :math:`1 - \theta`).
+
+    Examples
+    --------
+    Eleven samples, nodes at 0, 0.5 and 1 s: a constant acceleration of 1 m/s^2 loads each node
+    with the integral of its hat function (0.25, 0.5, 0.25 m/s), as one coarse element would:
+
+    >>> import numpy as np
+    >>> from bvpnav.fem import condensation
+    >>> from bvpnav.grid import TimeGrid
+    >>> c = condensation(TimeGrid(np.linspace(0.0, 1.0, 11)), np.array([0, 5, 10]))
+    >>> np.round(c.load @ np.ones(11), 12).tolist()
+    [0.25, 0.5, 0.25]
     """
     t, h = grid.t, grid.h
     nodes = np.asarray(nodes, dtype=np.int64)

@@ -188,6 +188,17 @@ def mesh_nodes(grid: TimeGrid, segment: float, times=()) -> np.ndarray:
     The first and last samples are nodes. An element with exactly one sample inside it
     gets that sample as a node too: the condensed load residual of an element is a
     2-vector whose covariance is regular only with two or more samples inside.
+
+    Examples
+    --------
+    Ten seconds at 10 Hz, elements of at most 2 s, and a node wanted at 3.05 s (between two
+    samples: both become nodes):
+
+    >>> import numpy as np
+    >>> from bvpnav.grid import TimeGrid, mesh_nodes
+    >>> grid = TimeGrid(np.linspace(0.0, 10.0, 101))
+    >>> mesh_nodes(grid, 2.0, times=[3.05]).tolist()
+    [0, 20, 30, 31, 51, 71, 91, 100]
     """
     t, N = grid.t, grid.n
     keep = np.zeros(N, dtype=bool)
@@ -207,8 +218,9 @@ def mesh_nodes(grid: TimeGrid, segment: float, times=()) -> np.ndarray:
     out = [fixed[:1]]
     for p, q in zip(fixed[:-1], fixed[1:], strict=True):
         cur, add = int(p), []
-        while t[q] - t[cur] > segment:
-            nxt = max(int(np.searchsorted(t, t[cur] + segment, side="right")) - 1, cur + 1)
+        reach = segment * (1.0 + 1e-9)   # a sample at the segment's end up to rounding is within it
+        while t[q] - t[cur] > reach:
+            nxt = max(int(np.searchsorted(t, t[cur] + reach, side="right")) - 1, cur + 1)
             if nxt >= q:
                 break
             add.append(nxt)

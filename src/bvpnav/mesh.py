@@ -270,7 +270,7 @@ class MeshModel(NavModel):
         return cache[axis]
 
     def mg_columns(self, axis: int) -> tuple[np.ndarray, np.ndarray]:
-        """:math:`\\Phi^T M_f G` of one axis (s): the error model's columns condensed."""
+        r""":math:`\Phi^T M_f G` of one axis (s): the error model's columns condensed."""
         cache = self.__dict__.setdefault("_mg_cache", {})
         if axis not in cache:
             cache[axis] = self._times_g(self.cond.load, axis)
