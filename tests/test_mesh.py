@@ -302,3 +302,19 @@ def test_lambda_rules_matrices_and_what_a_mesh_refuses():
         prob.solve(solver="direct", lam="gcv")
     with pytest.raises(InputError, match="uncertainty=.*segment=None"):
         prob.solve(solver="direct", lam=1.0, uncertainty=True)
+
+
+def test_the_spec_file_keeps_the_segment_and_names_a_bad_one():
+    from bvpnav.spec import parse_spec, to_spec
+
+    data, rng = _data("random", n=600, d=1, seed=10)
+    prob = _problem(data, rng, 0.75, 0.05, Bias(), between=False)
+    text = to_spec(prob, solve={"solver": "direct", "lam": 1.0})
+    assert "segment = 0.75" in text
+    again = parse_spec(text).build(data)
+    assert again.segment == 0.75
+    a, b = prob.solve(solver="direct", lam=1.0), again.solve(solver="direct", lam=1.0)
+    assert np.array_equal(a.position("x"), b.position("x"))
+    bad = text.replace("segment = 0.75", "segment = -2")
+    with pytest.raises(InputError, match=r"line \d+: segment=-2"):
+        parse_spec(bad)

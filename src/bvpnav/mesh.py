@@ -87,7 +87,8 @@ def check_segment(segment) -> float | None:
         val = float("nan")
     if isinstance(segment, bool) or not np.isfinite(val) or val <= 0:
         raise InputError(f"segment={segment!r}: give the longest mesh element in seconds (a finite number "
-                         "> 0, e.g. segment=1.0), or None to solve on every sample")
+                         "> 0, e.g. segment=1.0), or None (no segment key in a spec) to solve on every "
+                         "sample")
     return val
 
 

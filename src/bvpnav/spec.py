@@ -25,6 +25,7 @@ Example::
     [problem]
     residual = "acceleration"     # or "load" (the 2011 paper's form)
     sigma_a = 1.0                 # m/s^2
+    segment = 1.0                 # optional: a coarse mesh, no element longer than this (s)
 
     [solve]
     solver = "direct"
@@ -66,6 +67,7 @@ from .formulation import RESIDUAL_FORMS
 from .imu import ACC_UNITS as _ACC_UNITS
 from .io import read_regular_file
 from .items import _snake, positive_array, registry
+from .mesh import check_segment
 from .problem import NavigationProblem
 from .timebase import TIME_UNITS as _TIME_UNITS
 
@@ -79,7 +81,7 @@ ACC_UNITS = _ACC_UNITS
 
 _SECTIONS = {
     "input": None,  # the readers' options and the frame options: see _input_keys()
-    "problem": {"residual", "sigma_a"},
+    "problem": {"residual", "sigma_a", "segment"},
     "solve": None,  # the declared solve options the spec takes: see _solve_keys()
     "stationary": None,  # detector options and the items' fields: see _STATIONARY_KEYS
     "align": None,  # the initial attitude of a strapdown recording: see _ALIGN_KEYS
@@ -126,7 +128,8 @@ class Spec:
         ``time``, ``time_unit`` (or ``"iso8601"``), ``time_origin`` (``"first"``),
         ``columns`` (axis -> column), ``unit``.
     problem : dict
-        Keyword arguments of :class:`bvpnav.NavigationProblem` (``residual``, ``sigma_a``).
+        Keyword arguments of :class:`bvpnav.NavigationProblem` (``residual``, ``sigma_a``,
+        ``segment``).
     solve : dict
         Keyword arguments of :meth:`bvpnav.NavigationProblem.solve`: the declared options
         with ``spec=True`` (:data:`bvpnav.declare.SOLVE_OPTIONS`: ``solver``, ``accuracy``,
@@ -464,7 +467,8 @@ def _fixes(items: list, name, at: str):
 
 
 def _check_problem_values(prob: dict, where) -> None:
-    """Check ``[problem]``: the residual form and ``sigma_a`` (``where(key)`` names the line)."""
+    """Check ``[problem]``: the residual form, ``sigma_a`` and ``segment`` (``where(key)`` names
+    the line)."""
 
     if "residual" in prob and not (isinstance(prob["residual"], str) and prob["residual"] in RESIDUAL_FORMS):
         raise InputError(f"{where('residual')}: residual={prob['residual']!r}; choose one of "
@@ -480,6 +484,11 @@ def _check_problem_values(prob: dict, where) -> None:
         if arr.ndim > 1 or arr.size not in (1, 2, 3):
             raise InputError(f"{where('sigma_a')}: sigma_a={sa!r}; give one number in m/s^2 or "
                              "one per axis")
+    if "segment" in prob:
+        try:
+            check_segment(prob["segment"])
+        except InputError as exc:
+            raise InputError(f"{where('segment')}: {exc}") from None
 
 
 def _solve_keys() -> set[str]:
@@ -811,6 +820,8 @@ def problem_to_spec(problem, solve: dict | None = None, input: dict | None = Non
                              "problem in Python")
         sa = sa.ravel()
         prob_kw["sigma_a"] = float(sa[0]) if np.all(sa == sa[0]) else sa.tolist()
+    if getattr(problem, "segment", None) is not None:
+        prob_kw["segment"] = float(problem.segment)
     em = problem.error_model
     models = [] if em is None else list(getattr(em, "components", (em,)))
     return Spec(dict(input or {}), prob_kw, dict(solve or {}), list(problem.items), models)
