@@ -247,7 +247,10 @@ def test_mesh_states_recover_constant_biases_to_rounding(drift, segment):
 
     d = _drive()
     model = ErrorStates(arw=1e-5, gyro_drift=drift[0], acc_drift=drift[1])
+    before = dict(vars(d["data"]))
     prob, sol = _states_solve(d, model, segment, every=20, sigma=1e-4, sigma_a=1e-4)
+    assert vars(d["data"]).keys() == before.keys()       # the user's data is not written to
+    assert prob.data is d["data"] and not hasattr(d["data"], "state_mesh")
     assert prob.formulation.model.N <= 31 < d["t"].size / 10
     es = sol.error_states
     assert np.abs(es.filter(like="gyro_bias").to_numpy() - d["bg"]).max() < 1e-11

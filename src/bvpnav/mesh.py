@@ -126,6 +126,21 @@ def item_times(items, grid=None) -> np.ndarray:
     return np.concatenate(out) if out else np.zeros(0)
 
 
+def _condensation(data: ImuData, fine, nodes: np.ndarray) -> fem.Condensation:
+    """:func:`bvpnav.fem.condensation` of these nodes, kept on the formulation's copy of the
+    measured data when it has one (node states: ``state_mesh``; the loop's steps share the grid
+    and the mesh through ``data.state_point.raw``); the user's data is never written to."""
+    raw = getattr(getattr(data, "state_point", None), "raw", data)
+    if getattr(raw, "state_mesh", None) is None:   # the user's own data: never written to
+        return fem.condensation(fine, nodes)
+    kept = raw.__dict__.get("_mesh_condensation")
+    if kept is not None and np.array_equal(kept.nodes, nodes) and np.array_equal(raw.t, fine.t):
+        return kept
+    out = fem.condensation(fine, nodes)
+    raw.__dict__["_mesh_condensation"] = out
+    return out
+
+
 class MeshModel(NavModel):
     r"""The unknowns of a problem on a coarse mesh of its samples (see the module Notes).
 
@@ -166,7 +181,7 @@ class MeshModel(NavModel):
         self.data = data
         self.fine = fine
         self.segment = float(segment)
-        self.cond = fem.condensation(fine, nodes)
+        self.cond = _condensation(data, fine, nodes)
         self.grid = MeshGrid(fine.t[nodes], fine=fine, nodes=nodes)
         self.axes = data.axes
         self.error_model = error_model

@@ -197,13 +197,16 @@ class _Elements:
 
 
 def _elements(data, mesh: np.ndarray, bg: np.ndarray) -> _Elements:
-    """:class:`_Elements` with the gyro-bias totals ``bg`` (N, 3) at the samples; kept on the data
-    for the same ``mesh`` and ``bg`` (its state columns and process rows share them)."""
-    kept = data.__dict__.get("_mesh_elements")
+    """:class:`_Elements` with the gyro-bias totals ``bg`` (N, 3) at the samples; the last one kept
+    on the measured data (it depends on nothing else): the state columns and process rows of a
+    point share it, and so does the next step's point with the one :meth:`ErrorStates.updated`
+    made."""
+    raw = _raw(data)
+    kept = raw.__dict__.get("_mesh_elements")
     if kept is not None and kept[0] is mesh and (kept[1] is bg or np.array_equal(kept[1], bg)):
         return kept[2]
     el = _make_elements(data, mesh, bg)
-    data.__dict__["_mesh_elements"] = (mesh, bg, el)
+    raw.__dict__["_mesh_elements"] = (mesh, np.array(bg), el)
     return el
 
 
