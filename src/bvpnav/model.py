@@ -1235,7 +1235,8 @@ class NavModel:
     def trajectory(self, xval: np.ndarray) -> dict[str, np.ndarray]:
         """The answer at every sample: ``t`` (N,, s), ``r`` (N, d, m), ``v`` (N, d, m/s) and the
         acceleration residuals ``w`` (N, d, m/s^2) of the stacked solution ``xval``."""
-        return {"t": self.grid.t, "r": self.split(xval)["r"], "w": self.split(xval)["w"],
+        parts = self.split(xval)
+        return {"t": self.grid.t, "r": parts["r"], "w": parts["w"],
                 "v": np.column_stack([self.node_velocity_values(a, xval) for a in range(self.d)])}
 
     def split(self, xval: np.ndarray) -> dict[str, np.ndarray]:
