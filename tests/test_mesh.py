@@ -199,6 +199,10 @@ def test_refusals_name_the_problem():
         model.position([t[151]], what="probe item")
     with pytest.raises(InputError, match="not mesh nodes"):
         PositionBound(lower=-1.0, t0=t[10], t1=t[300]).compile(model)
+    late_fix = Position(t=[t[0], t[-1] + 5.0], value=[0.0, 1.0], name="late fix")
+    late = bvpnav.NavigationProblem(data, segment=1.0, items=[late_fix])
+    with pytest.raises(InputError, match="late fix.*outside the recording window"):
+        late.solve(solver="direct")
 
 
 def test_mesh_grid_keeps_the_fine_rows_inside_one_step_elements():

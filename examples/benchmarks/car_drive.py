@@ -117,7 +117,7 @@ from kitti_drive import split_fixes  # noqa: E402
 from bvpnav.scenarios import SENSOR_GRADES, CarDrive, car_drive  # noqa: E402
 
 METHODS = ("GTSAM", "GTSAM peer", "bvpnav README", "bvpnav states", "bvpnav states NHC soft", "spline",
-           "GTSAM course start", "bvpnav states course start", "GTSAM from truth")
+           "GTSAM course start", "bvpnav states course start", "GTSAM from truth", "bvpnav states mesh")
 DEFAULT_METHODS = METHODS[:5]
 #: Levenberg-Marquardt iterations allowed to the ``GTSAM`` graph: it converges within them at every spacing
 #: here (the KITTI script's 100 stop it early at 60 s, where it needs about 160).
