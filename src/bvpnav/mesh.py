@@ -50,6 +50,10 @@ over the element on its left (:func:`bvpnav.fem.condensation`), :math:`C_q w = c
 w_p + c_{q,q} w_q + \epsilon_{e,2}`; ``v0`` and ``v1`` at the ends. A time inside an
 element of one sample step uses the fine formula between its two nodes.
 
+**Node states** (:class:`~bvpnav.error_models.ErrorStates`) sit at the nodes; their columns are
+made at every sample (exact derivatives with the attitude re-integrated from the node) and
+condensed as the other loads; see :mod:`bvpnav.error_models.error_states`.
+
 **Recovery.** The residuals inside an element are the conditional mean above; the
 positions there solve the element's fine FEM rows with the nodal positions as Dirichlet
 conditions (one tridiagonal solve for all elements); the velocities at every sample come
@@ -149,8 +153,9 @@ class MeshModel(NavModel):
     data : ImuData
         Every sample.
     error_model : ErrorModel, optional
-        Its columns are made on every sample and condensed (node states are not supported
-        on a mesh yet).
+        Its columns are made on every sample and condensed; node states
+        (:class:`~bvpnav.error_models.ErrorStates`) sit at the nodes (``data.state_mesh``, which
+        must be this mesh: :class:`~bvpnav.formulation.Formulation` sets it on a copy).
     segment : float
         Longest element, s (:func:`bvpnav.grid.mesh_nodes`).
     times : array_like of float
@@ -158,6 +163,9 @@ class MeshModel(NavModel):
     sigma_a : ndarray
         Accelerometer noise, m/s^2, (d,) or (N, d) (the formulation's, clipping applied): the
         weights of the condensed residuals depend on it.
+    nodes : ndarray of int, optional
+        The node samples, when already made (default: :func:`bvpnav.grid.mesh_nodes` of
+        ``segment`` and ``times``).
 
     Attributes
     ----------
