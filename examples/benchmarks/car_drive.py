@@ -88,6 +88,18 @@ Consumer, seed 0 (seed 1), 3-D RMS m::
 (graph error at 10 s, seed 0: 23,789 from the raw-gyro start, 87.7 from the truth or the course.)
 ``bvpnav states NHC soft`` from the raw-gyro start at 10 s: 94.8 m, not converged, warned.
 
+``bvpnav states mesh`` (``NavigationProblem(segment=1.0)``, issue 42; ``--duration 240 --rate 100
+--gaps 30 --seeds 0 --methods GTSAM "bvpnav states mesh" "bvpnav states"``, one run at load about 8:
+CPU s are the ratios to read; 3-D RMS m, Gauss-Newton or LM iterations)::
+
+    grade     GTSAM (example)         states mesh                 states per sample
+    tactical  1.4864  CPU 0.70  72 it  1.4921  CPU 0.76   4 it  1.4921  CPU 5.1   4 it
+    consumer  7.7562  CPU 3.19 300 it  3.0029  CPU 2.88  21 it  74.62   CPU 21.7 30 it, not converged
+    peak      8.7 kB/sample            12.9 kB                     36.4-36.7 kB
+
+On the consumer drive the per-sample loop stops at its 30 iterations (warned) where the mesh's,
+whose attitude between nodes follows the gyro, converges.
+
 Measured before node states (2026-12-03, the previous version of this script, ``--seeds 0 1 2 3
 4``, tactical; withheld-fix 3-D RMS averaged over the five drives, m; ``+GyroBias+AttitudeError+
 Walk`` = ``grade.error_model(30, walk=True)`` with ``grade.sigma_a(100, 30)``, 3-5 minutes per
