@@ -325,3 +325,26 @@ def test_the_spec_file_keeps_the_segment_and_names_a_bad_one():
     bad = text.replace("segment = 0.75", "segment = -2")
     with pytest.raises(InputError, match=r"line \d+: segment=-2"):
         parse_spec(bad)
+
+
+def test_a_formulation_with_other_items_keeps_its_states_mesh():
+    """Demotion and linearization make formulations with other items (``with_items``): on a mesh
+    with node states the copy shares the model only with its mesh, and solves."""
+    from bvpnav.constraints import Position
+    from bvpnav.error_models import ErrorStates
+    from bvpnav.solve import pipeline
+
+    d = _drive()
+    t, k = d["t"], np.arange(0, d["t"].size, 20)
+    extra = 0.5 * (t[101] + t[102])
+    model = ErrorStates(arw=1e-5, gyro_drift=0.0, acc_drift=0.0)
+    prob = bvpnav.NavigationProblem(d["data"], error_model=model, sigma_a=1e-4, segment=2.0)
+    prob.add(Position(t=t[k], value=d["r"][k], sigma=1e-4, name="fixes"),
+             Position(t=extra, value=d["r"][101], sigma=1.0, name="x"))   # a loose one between samples
+    form = prob.formulation
+    assert {101, 102} <= set(form.model.grid.nodes.tolist())
+    fewer = form.with_items(form.items[:1])
+    assert fewer.model is form.model and np.array_equal(fewer.data.state_mesh, form.model.grid.nodes)
+    sol = pipeline.solve(fewer, solver="direct", attitude={"progress": False})
+    assert sol.records.attitude.converged and sol.stats["verified"]
+    assert np.abs(sol.position() - d["r"]).max() < 1e-8

@@ -187,21 +187,26 @@ def _with_grade(error_model, grade, data) -> tuple[Any, dict[str, Any] | None]:
     return model, {"name": grade.name, "filled": filled, "figures": grade.table()}
 
 
-def _meshed(data: ImuData, segment: float, error_model, items) -> ImuData:
+def _meshed(data: ImuData, segment: float, error_model, items, nodes=None) -> ImuData:
     """``data`` for a coarse mesh: with node states (:class:`~bvpnav.error_models.ErrorStates`) a
     shallow copy carrying the mesh's node samples as ``state_mesh`` (the states sit at the
-    nodes); else ``data`` itself. The user's data is never changed."""
+    nodes); else ``data`` itself. The mesh is ``nodes`` (a shared model's), a node-state loop
+    step's (its measured data's), or made from ``segment`` and the items. The user's data is
+    never changed."""
     if state_component(error_model) is None:
         return data
-    nodes = mesh_nodes(data.grid, segment, item_times(items, data.grid))
-    if getattr(data, "state_point", None) is not None:   # a node-state loop's step: its raw data has it
-        if not np.array_equal(getattr(data.state_point.raw, "state_mesh", None), nodes):
-            raise InputError("segment=: this data carries a node-state linearization point made without "
-                             "this mesh; give the data as measured")
+    point = getattr(data, "state_point", None)
+    if point is not None:   # a node-state loop's step: the mesh its measured data carries
+        nodes = getattr(point.raw, "state_mesh", None)
+        if nodes is None:
+            raise InputError("segment=: this data carries a node-state linearization point made without a "
+                             "mesh; give the data as measured")
+    elif nodes is None:
+        nodes = mesh_nodes(data.grid, segment, item_times(items, data.grid))
     if np.array_equal(getattr(data, "state_mesh", None), nodes):
         return data
     out = copy.copy(data)
-    out.state_mesh = nodes
+    out.state_mesh = np.asarray(nodes)
     return out
 
 
@@ -254,8 +259,9 @@ class Formulation:
                              "weighted "
                              "by sigma_a); solve the load form on every sample (segment=None)")
         items = tuple(label_items(items))
-        if self.segment is not None:
-            data = _meshed(data, self.segment, error_model, items)
+        if self.segment is not None:   # a shared model keeps its mesh
+            data = _meshed(data, self.segment, error_model, items,
+                           model.grid.nodes if isinstance(model, MeshModel) else None)
         self.data = data
         self.residual = residual
         self.sigma_a = _check_sigma_a(sigma_a, data)
