@@ -620,9 +620,9 @@ class ErrorStates(ErrorModel):
         inside = np.flatnonzero(~np.isin(np.arange(n), mesh))
         q[inside] = el.S.as_quat()[inside - 1]
         Chat = raw.attitude
-        p = mesh[el.left]
-        C = _compose(_compose(nodes[el.left], Chat[p]), Rotation.from_quat(q))
-        out["attitude_error"] = _compose(C, Chat.inv()).as_rotvec()
+        Cnode = _compose(nodes, Chat[mesh]).as_quat()               # C_p of every node
+        C = _quat_product(Cnode[el.left], q)                        # C_i = C_p P_i
+        out["attitude_error"] = Rotation.from_quat(_quat_product(C, Chat.inv().as_quat())).as_rotvec()
         return out
 
     def frame(self, data, totals: dict) -> pd.DataFrame:
