@@ -845,6 +845,25 @@ def _next_totals(sm, data, s: np.ndarray, iters: list, prev_att: np.ndarray | No
     return sm.updated(data, alpha * s), att
 
 
+def _quick_next(o: dict, k: int, iters: list, lam) -> bool:
+    """Whether step ``k`` of the node-state loop (options ``o``) may be one banded solve: the
+    loop goes on, it is not the last allowed step, and either it is the first at a fixed
+    ``lam`` (a lambda rule is resolved by the stage) or the next step is expected at least
+    ``tol`` (:func:`_expected`)."""
+    if not o["loop"] or k + 1 >= int(o["max_iter"]):
+        return False
+    return _expected(iters) >= o["tol"] if iters else not isinstance(lam, str)
+
+
+def _checked_first(form: Formulation, quick: bool, o: dict, lam) -> bool:
+    """Check ``form`` (the stage's refusal, :meth:`~bvpnav.formulation.Formulation.check_observability`)
+    when the loop's first step will be one banded solve, which checks nothing; whether it did."""
+    if quick and _quick_next(o, 0, [], lam):
+        form.check_observability()
+        return True
+    return False
+
+
 def _quick_step(f: Formulation, lam: float, workspace) -> np.ndarray | None:
     """The unknowns ``x`` of one banded solve of ``f`` at ``lam``, without refinement or
     verification (an intermediate Gauss-Newton step, whose answer only moves the
@@ -879,15 +898,16 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     that step's solve (its increments below ``tol``). ``stats["sequential"]`` holds the
     report (``kind="states"``).
 
-    With ``direct`` as the first back end (and ``quick``, the default), the steps between
-    the first and the one expected to converge (the ratio of the last two steps carried on
-    below ``tol``) are one banded solve each (:func:`bvpnav.linalg.lsq.banded_factor`, no
-    refinement, no verification): they only move the linearization point, which the next
-    step re-linearizes about (``iterations[k]["solve"]``: ``"banded"``; ``"stage"``
-    otherwise). The first step (which checks the problem and resolves a lambda rule) and
-    the answer go through the stage (refined and verified); a quick step whose change is
-    below ``tol`` is solved again by the stage, and so is a form the banded path does not
-    take. When the steps shrink by a steady ratio along one line (Gauss-Newton converges
+    With ``direct`` as the first back end (and ``quick``, the default), the steps before
+    the one expected to converge (the ratio of the last two steps carried on below ``tol``)
+    are one banded solve each (:func:`bvpnav.linalg.lsq.banded_factor`, no refinement, no
+    verification): they only move the linearization point, which the next step
+    re-linearizes about (``iterations[k]["solve"]``: ``"banded"``; ``"stage"`` otherwise).
+    The problem is checked (:meth:`~bvpnav.formulation.Formulation.check_observability`,
+    the stage's refusal) before the first step; a first step that resolves a lambda rule,
+    and the answer, go through the stage (refined and verified); a quick step whose change
+    is below ``tol`` is solved again by the stage, and so is a form the banded path does
+    not take. When the steps shrink by a steady ratio along one line (Gauss-Newton converges
     linearly where the data misfit their sigmas), a step is lengthened or, when they
     alternate, damped to the limit the ratio predicts (:func:`_extrapolation`,
     ``iterations[k]["extrapolated"]``).
@@ -910,7 +930,6 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     iters: list[dict] = []
     reason = None
     lam_now, rule, curve = lam, (lam if isinstance(lam, str) else None), None
-    checked = False
     sol = data = f = x = prev_att = None
     # every step's formulation has the same sparsity pattern: one workspace keeps the band
     # plan (reused when the pattern matches, bvpnav.linalg.lsq.banded_plan)
@@ -920,6 +939,7 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     if workspace is not None:   # each step's factor is dead before the next: one band's memory
         workspace.band_buffer = np.empty(0)
     quick = bool(o["quick"]) and workspace is not None and _direct_first(opts)
+    checked = _checked_first(form, quick, o, lam_now)
     with progress(desc="state loop", unit="iter", enabled=o["progress"]) as bar:
         for k in range(int(o["max_iter"])):
             data = form.data if not iters else states_at(raw, totals)
@@ -936,10 +956,10 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
             else:
                 f = form
             # an intermediate step only moves the linearization point: one banded solve, no
-            # refinement or verification; the step expected to be the last (and the first,
-            # which checks the problem and resolves a lambda rule) goes through the stage
+            # refinement or verification; the step expected to be the last (and the first
+            # when it resolves a lambda rule) goes through the stage
             x, staged = None, True
-            if quick and iters and o["loop"] and k + 1 < int(o["max_iter"]) and _expected(iters) >= o["tol"]:
+            if quick and _quick_next(o, k, iters, lam_now):
                 x = _quick_step(f, float(lam_now), workspace)
                 staged = x is None
             if staged:
