@@ -259,16 +259,6 @@ def _scale_rows(ab: np.ndarray, sU: np.ndarray, kl: int, rows: np.ndarray | None
 SCATTER_SLICE = 1 << 13
 
 
-def _put(flat: np.ndarray, j: np.ndarray, i: np.ndarray, v: np.ndarray, ldab: int, kl: int) -> None:
-    """``ab[j, 2 kl + i - j] = v`` on the flat band (``ab`` C order (nb, ldab)), the flat
-    index built in place in one int64 array."""
-    idx = j.astype(np.int64)
-    idx *= ldab - 1
-    idx += i
-    idx += 2 * kl
-    flat[idx] = v
-
-
 def _equal_cells(cols: list, rows: list, vals: list, L: int, seg: int) -> bool:
     """Whether the band cells (column, row, value arrays) of every run of ``L`` band rows
     are those of the first run, moved by the run's length, none reaching another run."""
@@ -341,8 +331,9 @@ class _Stride(NamedTuple):
 def _scale_entries(strided: list, band: list, nb: int) -> np.ndarray:
     """The symmetric scale ``sU`` of :func:`scale_band` from the entries' column maxima,
     taken before they are placed (no passes over the band), and the entries' values
-    scaled by it in place (their own arrays: copies made for them by
-    :meth:`BandPlan._entries`)."""
+    scaled by it: a stride's in place (its own copy, made by
+    :meth:`BandPlan._place_diagonal`), an index entry's into a new array that replaces it
+    in ``band`` (its values may be the caller's)."""
     colmax = np.zeros(nb)
     for e in strided:   # positions distinct within one: a strided maximum
         a = np.abs(e.v)
@@ -359,9 +350,10 @@ def _scale_entries(strided: list, band: list, nb: int) -> np.ndarray:
         v = e.v
         v *= sU[e.span(1, 0, nb)[0]]   # the row's scale, then the column's, as below
         v *= sU[e.span(0, 0, nb)[0]]
-    for pi, pj, v, _ in band:
-        v *= sU[pi]
-        v *= sU[pj]
+    for k, (pi, pj, v, mirror) in enumerate(band):
+        w = v * sU[pi]
+        w *= sU[pj]
+        band[k] = (pi, pj, w, mirror)
     return sU
 
 
@@ -370,6 +362,12 @@ def _scale_entries(strided: list, band: list, nb: int) -> np.ndarray:
 #: the whole band and comparing its runs is cheaper.
 MANY_CELLS = 4
 MIN_SORTED_CELLS = 1 << 16
+
+#: Blocks of at least this many entries are placed through :meth:`BandPlan._placed` (their
+#: band positions remembered per plan); at most :data:`MEMO_PER_KEY` index patterns are
+#: kept per block size and ends.
+MEMO_ENTRIES = 1024
+MEMO_PER_KEY = 2
 
 #: Shortest run of evenly spaced band positions placed as a :class:`_Stride` (shorter ones,
 #: where extra unknowns sit at a node, go entry by entry).
@@ -1098,8 +1096,15 @@ class BandPlan:
 
     def _place(self, r: np.ndarray, c: np.ndarray, v: np.ndarray, mirror: bool, out: tuple) -> None:
         """Append one block's entries (reduced indices ``r``, ``c``; ``mirror``: its
-        transpose too) to ``out = (band, border_coupling, border)`` (see :meth:`_entries`)."""
+        transpose too) to ``out = (band, border_coupling, border)`` (see :meth:`_entries`).
+
+        Without a border, a block of at least :data:`MEMO_ENTRIES` entries is placed from
+        :meth:`_placed` (its band positions found once per plan and index pattern)."""
         band, cpl, brd = out
+        if not self.border_order.size and r.size >= MEMO_ENTRIES:
+            keep, pi, pj = self._placed(r, c)
+            band.append((pi, pj, v if keep is None else v[keep], mirror))
+            return
         pi, pj = self.pos[r], self.pos[c]
         keep = (pi >= 0) & (pj >= 0)
         band.append((pi[keep], pj[keep], v[keep], mirror))
@@ -1111,6 +1116,54 @@ class BandPlan:
             cpl.append((a[sel], b[sel], v[sel]))
             sel = (pa >= 0) & (pb >= 0)
             brd.append((pa[sel], pb[sel], v[sel]))
+
+    def _placed(self, r: np.ndarray, c: np.ndarray) -> tuple:
+        """``(keep, pi, pj)`` for a block at reduced indices ``r``, ``c``: the entries in the
+        band (``keep``: their indices, None for all) and their band positions, remembered
+        per plan for the next assembly of the same index arrays (the Gauss-Newton steps of
+        one pattern: the positions are found once, and :meth:`_flat_index` on these very
+        ``pi``, ``pj`` is computed once). The indices are compared in full, so a block of
+        another pattern is placed afresh."""
+        memo = self.__dict__.setdefault("_place_memo", {})
+        key = (r.size, int(r[0]), int(r[-1]), int(c[0]), int(c[-1]))
+        for rec in memo.get(key, ()):
+            if np.array_equal(rec[0], r) and np.array_equal(rec[1], c):
+                return rec[2:]
+        pi, pj = self.pos[r], self.pos[c]
+        keep = (pi >= 0) & (pj >= 0)
+        if keep.all():
+            rec = (r.copy(), c.copy(), None, pi, pj)
+        else:
+            idx = np.flatnonzero(keep)
+            rec = (r.copy(), c.copy(), idx, pi[idx], pj[idx])
+        memo.setdefault(key, []).append(rec)
+        owned = self.__dict__.setdefault("_memo_owned", set())
+        owned.update((id(rec[3]), id(rec[4])))
+        if len(memo[key]) > MEMO_PER_KEY:   # another pattern each time: keep the newest
+            old = memo[key].pop(0)
+            dead = {id(old[3]), id(old[4])}
+            owned -= dead
+            flat = getattr(self, "_flat_memo", {})
+            for k in [k for k in flat if k[0] in dead or k[1] in dead]:
+                del flat[k]
+        return rec[2:]
+
+    def _flat_index(self, j: np.ndarray, i: np.ndarray) -> np.ndarray:
+        """The flat band index ``j (ldab - 1) + i + 2 kl`` of entries at band rows ``j`` and
+        columns ``i`` (``ab[j, 2 kl + i - j]`` of the C-order band ``(nb, ldab)``), int64;
+        remembered for position arrays of :meth:`_placed` (the same objects each assembly)."""
+        memo = self.__dict__.setdefault("_flat_memo", {})
+        rec = memo.get((id(j), id(i)))
+        if rec is not None and rec[0] is j and rec[1] is i:
+            return rec[2]
+        idx = j.astype(np.int64)
+        idx *= self.ldab - 1
+        idx += i
+        idx += 2 * self.kl
+        owned = getattr(self, "_memo_owned", ())
+        if id(j) in owned and id(i) in owned:   # arrays the place memo keeps alive
+            memo[(id(j), id(i))] = (j, i, idx)
+        return idx
 
     def _place_diagonal(self, rows: tuple, cols: tuple, dr: int, dc: int, v: np.ndarray, mirror: bool,
                         out: tuple, runs: dict) -> None:
@@ -1277,9 +1330,9 @@ class BandPlan:
             del off
             for j, i in ((pj, pi), (pi, pj))[:1 + mirror]:
                 if j.size > SCATTER_SLICE and bool(np.all(j[1:] >= j[:-1])):
-                    runs.append((j, i, v))
+                    runs.append((j, self._flat_index(j, i), v))
                 else:
-                    _put(flat, j, i, v, ldab, kl)
+                    flat[self._flat_index(j, i)] = v
         if runs:
             edges = np.minimum(np.arange(0, nb + SCATTER_SLICE, SCATTER_SLICE), nb)
             cuts = [None if isinstance(r, _Stride) else np.searchsorted(r[0], edges) for r in runs]
@@ -1289,7 +1342,7 @@ class BandPlan:
                         r.write(ab, kl, edges[c], edges[c + 1])
                     elif cut[c + 1] > cut[c]:
                         a, b = cut[c], cut[c + 1]
-                        _put(flat, r[0][a:b], r[1][a:b], r[2][a:b], ldab, kl)
+                        flat[r[1][a:b]] = r[2][a:b]
         return ab
 
     def assemble(self, D: sp.csr_matrix, E: sp.csr_matrix, diagonal: DiagonalRows | None = None,
@@ -1363,6 +1416,8 @@ class BandPlan:
         out = copy.copy(self)
         out.nnz_D = D.nnz
         out._first = None
+        for memo in ("_place_memo", "_flat_memo", "_memo_owned"):   # the copy keeps its own
+            out.__dict__.pop(memo, None)
         return out
 
     def same_pattern(self, D: sp.csr_matrix, E: sp.csr_matrix) -> bool:

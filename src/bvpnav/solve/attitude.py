@@ -777,72 +777,114 @@ def _expected(iters: list) -> float:
     """The next step's size (rad) expected from the last two (Gauss-Newton converges
     linearly here: the ratio of successive steps carries on), or the last one's."""
     last = iters[-1]["step"]
-    if len(iters) < 2 or not iters[-2]["step"] > 0 or iters[-2].get("extrapolated"):
-        return last   # (after an extrapolated step the ratio says nothing of the next)
+    if len(iters) < 2 or not iters[-2]["step"] > 0:
+        return last
     return last * min(1.0, last / iters[-2]["step"])
 
 
-#: The node-state loop extrapolates a step (:func:`_extrapolation`) when the last two ratios of
-#: successive steps differ by at most this fraction of the larger...
-STEADY_RATIO = 0.2
+#: The node-state loop's Anderson acceleration (:func:`_anderson`) mixes this many past steps...
+ANDERSON_DEPTH = 2
 
-#: ... the ratio is at most this when the steps keep their direction (the step is then
-#: lengthened by at most 1 / (1 - r) = 2)...
-MAX_RATIO = 0.5
+#: ... once the last step is below this largest attitude change, rad (Gauss-Newton's linear
+#: regime; the first steps from a heading far off are taken as they come)...
+ANDERSON_START = 0.1
 
-#: ... and at least minus this when they alternate (the step shortened to at least 1 / 1.9)...
-OSCILLATING_RATIO = 0.9
-
-#: ... and the last three steps lie along one line: the cosines between successive attitude
-#: steps at least this in size, of one sign (one mode shrinking, not several).
-MIN_COSINE = 0.95
+#: ... and keeps the mixed point only when it moves the attitude at most this many times as far
+#: as the plain step would (else the plain step).
+ANDERSON_REACH = 10.0
 
 
-def _extrapolation(iters: list, tol: float) -> float:
-    r"""The length factor :math:`\alpha = 1/(1 - r)` for the last node-state step when the loop
-    converges linearly along one line, else 1.
+def _flat_totals(sm, data, totals: dict) -> np.ndarray:
+    """The node-state totals of every kind as one vector (kind after kind, (N, 3) each)."""
+    return np.concatenate([np.asarray(totals[k], dtype=float).ravel() for k in sm.state_kinds(data)])
 
-    :math:`r` is the signed ratio of successive steps: their size ratio, negative when they
-    alternate (``turn``, the cosine between successive attitude steps, near -1). It applies
-    when the last two ratios are steady within :data:`STEADY_RATIO`, the cosines are at least
-    :data:`MIN_COSINE` in size and of one sign, :math:`-`:data:`OSCILLATING_RATIO`
-    :math:`\le r \le` :data:`MAX_RATIO`, the step is not below ``tol`` (the loop goes on), and neither of the
-    two steps before was itself extrapolated.
+
+def _anderson(history: list, n: int) -> tuple[np.ndarray, np.ndarray] | None:
+    r"""The Anderson-mixed point from ``history`` (``(x_k, g_k)``: totals before a step and
+    after it, as :func:`_flat_totals` vectors of blocks of ``3 n``, one per kind of state),
+    and the mixing coefficients; None with too little history or non-finite coefficients.
 
     Notes
     -----
-    A fixed-point iteration whose error shrinks by a steady factor :math:`r` along one line
-    is :math:`(x_{k+1} - x_k)/(1 - r)` from its limit (Aitken): a step lengthened when the
-    steps keep their direction, shortened (damped) when they alternate. The answer does not
-    depend on it: the loop still stops at a Gauss-Newton step below ``tol``, solved by the
-    stage.
+    Gauss-Newton as a fixed-point map :math:`x \mapsto g(x)` with :math:`f_k = g_k - x_k`
+    (the step): with the differences :math:`\Delta f_i = f_{i+1} - f_i`,
+    :math:`\Delta g_i = g_{i+1} - g_i` of the last :data:`ANDERSON_DEPTH` + 1 steps,
+
+    .. math:: \gamma = \arg\min_\gamma \|W (f_k - \Delta F \gamma)\|_2, \qquad
+              x_{k+1} = g_k - \Delta G\, \gamma,
+
+    ``W`` scaling each kind of state by the RMS of its step (rad, rad/s and m/s^2 weigh
+    alike). Where the steps shrink by steady ratios along a few directions (the linear
+    convergence of Gauss-Newton where the data misfit their sigmas) this is the secant
+    estimate of the limit along them; the fixed point, hence the answer, is the same.
     """
-    if len(iters) < 3 or iters[-2].get("extrapolated") or iters[-3].get("extrapolated"):
-        return 1.0
-    s0, s1, s2 = (it["step"] for it in iters[-3:])
-    c1, c2 = iters[-2].get("turn", 0.0), iters[-1].get("turn", 0.0)
-    if not (s0 > 0 and s1 > 0 and s2 >= tol and min(abs(c1), abs(c2)) >= MIN_COSINE and c1 * c2 > 0):
-        return 1.0
-    sign = np.sign(c2)
-    r1, r2 = sign * s1 / s0, sign * s2 / s1
-    if not (-OSCILLATING_RATIO <= r2 <= MAX_RATIO) or abs(r1 - r2) > STEADY_RATIO * max(abs(r1), abs(r2)):
-        return 1.0
-    return float(1.0 / (1.0 - r2))
+    if len(history) < 2:
+        return None
+    H = history[-(ANDERSON_DEPTH + 1):]
+    f = [g - x for x, g in H]
+    fk = f[-1]
+    w = np.empty_like(fk)
+    for a in range(fk.size // (3 * n)):
+        seg = slice(3 * n * a, 3 * n * (a + 1))
+        rms = float(np.sqrt(np.mean(fk[seg] ** 2)))
+        w[seg] = 1.0 / rms if rms > 0 else 0.0
+    dF = np.column_stack([f[i + 1] - f[i] for i in range(len(H) - 1)])
+    dG = np.column_stack([H[i + 1][1] - H[i][1] for i in range(len(H) - 1)])
+    gam, *_ = np.linalg.lstsq(dF * w[:, None], fk * w, rcond=1e-10)
+    if not np.all(np.isfinite(gam)):
+        return None
+    return H[-1][1] - dG @ gam, gam
 
 
-def _next_totals(sm, data, s: np.ndarray, iters: list, prev_att: np.ndarray | None, o: dict
-                 ) -> tuple[dict, np.ndarray]:
-    """The totals after the step ``s`` (extrapolated by :func:`_extrapolation` when the loop
-    converges linearly along one direction; ``iters[-1]`` records ``turn``, the cosine
-    between this attitude step and the last, and ``extrapolated``) and this attitude step."""
+def _next_totals(sm, data, s: np.ndarray, iters: list, prev_att: np.ndarray | None, o: dict,
+                 history: list) -> tuple[dict, np.ndarray]:
+    """The totals after the step ``s`` (Anderson-mixed with the past steps, :func:`_anderson`,
+    in the linear regime) and this attitude step. ``iters[-1]`` records ``turn``, the cosine
+    between this attitude step and the last, and ``accelerated``, the mixing coefficients;
+    ``history`` keeps ``(x, g)`` of the last steps."""
+    from ..error_models.error_states import _totals
+
     att = s[sm.state_index(data, "attitude_error")].ravel()
     if prev_att is not None:
         den = max(float(np.linalg.norm(att) * np.linalg.norm(prev_att)), 1e-300)
         iters[-1]["turn"] = float(att @ prev_att) / den
-    alpha = _extrapolation(iters, o["tol"]) if o["loop"] else 1.0
-    if alpha != 1.0:
-        iters[-1]["extrapolated"] = alpha
-    return sm.updated(data, alpha * s), att
+    plain = sm.updated(data, s)
+    kinds = sm.state_kinds(data)
+    before = _flat_totals(sm, data, {k: _totals(data, k) for k in kinds})
+    history.append((before, _flat_totals(sm, data, plain)))
+    del history[:-(ANDERSON_DEPTH + 1)]
+    if not o["loop"] or not (o["tol"] <= iters[-1]["step"] < ANDERSON_START):
+        return plain, att   # the first steps, and the answer's totals, as Gauss-Newton gives them
+    mixed = _anderson(history, data.n)
+    if mixed is None:
+        return plain, att
+    xn, gam = mixed
+    x, g = history[-1]
+    na = 3 * data.n   # the attitude block comes first
+    reach = float(np.max(np.abs(g[:na] - x[:na])))
+    if np.max(np.abs(xn[:na] - x[:na])) > ANDERSON_REACH * max(reach, 1e-300):
+        return plain, att
+    iters[-1]["accelerated"] = [float(v) for v in gam]
+    return {k: xn[na * i:na * (i + 1)].reshape(data.n, 3) for i, k in enumerate(kinds)}, att
+
+
+def _quick_next(o: dict, k: int, iters: list, lam) -> bool:
+    """Whether step ``k`` of the node-state loop (options ``o``) may be one banded solve: the
+    loop goes on, it is not the last allowed step, and either it is the first at a fixed
+    ``lam`` (a lambda rule is resolved by the stage) or the next step is expected at least
+    ``tol`` (:func:`_expected`)."""
+    if not o["loop"] or k + 1 >= int(o["max_iter"]):
+        return False
+    return _expected(iters) >= o["tol"] if iters else not isinstance(lam, str)
+
+
+def _checked_first(form: Formulation, quick: bool, o: dict, lam) -> bool:
+    """Check ``form`` (the stage's refusal, :meth:`~bvpnav.formulation.Formulation.check_observability`)
+    when the loop's first step will be one banded solve, which checks nothing; whether it did."""
+    if quick and _quick_next(o, 0, [], lam):
+        form.check_observability()
+        return True
+    return False
 
 
 def _quick_step(f: Formulation, lam: float, workspace) -> np.ndarray | None:
@@ -879,18 +921,19 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     that step's solve (its increments below ``tol``). ``stats["sequential"]`` holds the
     report (``kind="states"``).
 
-    With ``direct`` as the first back end (and ``quick``, the default), the steps between
-    the first and the one expected to converge (the ratio of the last two steps carried on
-    below ``tol``) are one banded solve each (:func:`bvpnav.linalg.lsq.banded_factor`, no
-    refinement, no verification): they only move the linearization point, which the next
-    step re-linearizes about (``iterations[k]["solve"]``: ``"banded"``; ``"stage"``
-    otherwise). The first step (which checks the problem and resolves a lambda rule) and
-    the answer go through the stage (refined and verified); a quick step whose change is
-    below ``tol`` is solved again by the stage, and so is a form the banded path does not
-    take. When the steps shrink by a steady ratio along one line (Gauss-Newton converges
-    linearly where the data misfit their sigmas), a step is lengthened or, when they
-    alternate, damped to the limit the ratio predicts (:func:`_extrapolation`,
-    ``iterations[k]["extrapolated"]``).
+    With ``direct`` as the first back end (and ``quick``, the default), the steps before
+    the one expected to converge (the ratio of the last two steps carried on below ``tol``)
+    are one banded solve each (:func:`bvpnav.linalg.lsq.banded_factor`, no refinement, no
+    verification): they only move the linearization point, which the next step
+    re-linearizes about (``iterations[k]["solve"]``: ``"banded"``; ``"stage"`` otherwise).
+    The problem is checked (:meth:`~bvpnav.formulation.Formulation.check_observability`,
+    the stage's refusal) before the first step; a first step that resolves a lambda rule,
+    and the answer, go through the stage (refined and verified); a quick step whose change
+    is below ``tol`` is solved again by the stage, and so is a form the banded path does
+    not take. Gauss-Newton converges linearly where the data misfit their sigmas: once the
+    steps are below :data:`ANDERSON_START`, each new point mixes the last steps (Anderson
+    acceleration, :func:`_anderson`, ``iterations[k]["accelerated"]``); the loop still stops
+    at a Gauss-Newton step below ``tol``, and that step's totals are not mixed.
     """
     from ..error_models.error_states import states_at
 
@@ -910,8 +953,8 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     iters: list[dict] = []
     reason = None
     lam_now, rule, curve = lam, (lam if isinstance(lam, str) else None), None
-    checked = False
     sol = data = f = x = prev_att = None
+    history: list = []   # (totals before, after) of the last steps, for _next_totals
     # every step's formulation has the same sparsity pattern: one workspace keeps the band
     # plan (reused when the pattern matches, bvpnav.linalg.lsq.banded_plan)
     from ..linalg.workspace import Workspace
@@ -920,6 +963,7 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     if workspace is not None:   # each step's factor is dead before the next: one band's memory
         workspace.band_buffer = np.empty(0)
     quick = bool(o["quick"]) and workspace is not None and _direct_first(opts)
+    checked = _checked_first(form, quick, o, lam_now)
     with progress(desc="state loop", unit="iter", enabled=o["progress"]) as bar:
         for k in range(int(o["max_iter"])):
             data = form.data if not iters else states_at(raw, totals)
@@ -936,10 +980,10 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
             else:
                 f = form
             # an intermediate step only moves the linearization point: one banded solve, no
-            # refinement or verification; the step expected to be the last (and the first,
-            # which checks the problem and resolves a lambda rule) goes through the stage
+            # refinement or verification; the step expected to be the last (and the first
+            # when it resolves a lambda rule) goes through the stage
             x, staged = None, True
-            if quick and iters and o["loop"] and k + 1 < int(o["max_iter"]) and _expected(iters) >= o["tol"]:
+            if quick and _quick_next(o, k, iters, lam_now):
                 x = _quick_step(f, float(lam_now), workspace)
                 staged = x is None
             if staged:
@@ -960,7 +1004,7 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
             j = objective_value(f, x, float(sol.lam if staged else lam_now))
             iters.append({"objective": j, "trial": j, "step": step, "accepted": True, "damping": 0.0,
                           "solve": "stage" if staged else "banded"})
-            new, prev_att = _next_totals(sm, data, s, iters, prev_att, o)
+            new, prev_att = _next_totals(sm, data, s, iters, prev_att, o, history)
             log.info("state iteration %d: objective %.9g, step %.3g rad%s", len(iters), j, step,
                      "" if staged else " (intermediate: one banded solve)")
             bar.update(1)
