@@ -974,7 +974,10 @@ def frame_check(data: ImuLike, *, fixes: dict | None = None, source: str | None 
     -----
     Rest is found by the magnitude detector of :func:`stationary` (window
     :data:`FRAME_CHECK_WINDOW` samples; with gyro rates when there are any, below
-    :data:`FRAME_CHECK_GYRO`); with no sample at rest the whole recording is averaged.
+    :data:`FRAME_CHECK_GYRO`); with no sample at rest the whole recording is averaged. The
+    detector cannot tell rest from steady motion (a car cruising straight), and need not: both
+    have a navigation-frame acceleration of about zero, which is all the check uses; the
+    message says so.
     With :math:`\hat g = g/\|g\|`,
 
     .. math:: \bar a = \frac{1}{|R|}\sum_{i \in R} (C_i f_i + g), \quad
@@ -1026,7 +1029,8 @@ def frame_check(data: ImuLike, *, fixes: dict | None = None, source: str | None 
     msg = None
     if verdict is not None:
         n = int(np.count_nonzero(rest)) if over == "rest" else f.shape[0]
-        what = (f"the {n} samples at rest (bvpnav.detect.stationary, magnitude test)" if over == "rest"
+        what = (f"the {n} samples the magnitude test finds unaccelerated (at rest, or moving steadily: "
+                "bvpnav.detect.stationary)" if over == "rest"
                 else f"the whole recording ({n} samples; no rest detected)")
         fix = (fixes or {}).get(verdict) or ("State the navigation frame and the sensor's axes correctly "
                                              "(frame, gravity, attitude, initial attitude).")
