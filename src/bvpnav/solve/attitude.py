@@ -841,7 +841,8 @@ def _next_totals(sm, data, s: np.ndarray, iters: list, prev_att: np.ndarray | No
     """The totals after the step ``s`` (Anderson-mixed with the past steps, :func:`_anderson`,
     in the linear regime) and this attitude step. ``iters[-1]`` records ``turn``, the cosine
     between this attitude step and the last, and ``accelerated``, the mixing coefficients;
-    ``history`` keeps ``(x, g)`` of the last steps."""
+    ``history`` keeps ``(x, g)`` of the last steps below :data:`ANDERSON_START` (a step above
+    it clears it: a pair from the nonlinear regime would mislead the secant)."""
     from ..error_models.error_states import _totals
 
     att = s[sm.state_index(data, "attitude_error")].ravel()
@@ -849,12 +850,15 @@ def _next_totals(sm, data, s: np.ndarray, iters: list, prev_att: np.ndarray | No
         den = max(float(np.linalg.norm(att) * np.linalg.norm(prev_att)), 1e-300)
         iters[-1]["turn"] = float(att @ prev_att) / den
     plain = sm.updated(data, s)
+    if not o["loop"] or iters[-1]["step"] >= ANDERSON_START:
+        history.clear()   # mixed only with steps of the linear regime
+        return plain, att
     kinds = sm.state_kinds(data)
     before = _flat_totals(sm, data, {k: _totals(data, k) for k in kinds})
     history.append((before, _flat_totals(sm, data, plain)))
     del history[:-(ANDERSON_DEPTH + 1)]
-    if not o["loop"] or not (o["tol"] <= iters[-1]["step"] < ANDERSON_START):
-        return plain, att   # the first steps, and the answer's totals, as Gauss-Newton gives them
+    if iters[-1]["step"] < o["tol"]:
+        return plain, att   # the answer's totals, as Gauss-Newton gives them
     mixed = _anderson(history, data.n)
     if mixed is None:
         return plain, att
