@@ -8,6 +8,7 @@ option given by the user reaches every stage that needs it.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -16,7 +17,7 @@ from ..declare import RULE, SEQUENTIAL, SOLVE_OPTIONS, UNCERTAINTY, check_option
 from ..errors import BvpnavError
 from ..lam.sweep import check_range
 
-__all__ = ["SolveOptions", "prepare", "check_lam", "DEFAULT_FALLBACK", "fallback_chain", "RULE_KEYS",
+__all__ = ["Chain", "SolveOptions", "prepare", "check_lam", "DEFAULT_FALLBACK", "fallback_chain", "RULE_KEYS",
            "SEQUENTIAL_KEYS", "SEQUENTIAL_DEFAULTS", "UNCERTAINTY", "SEQUENTIAL"]
 
 #: Options of the lambda sweep a solve with a rule name takes (``solve(rule={...})``).
@@ -52,6 +53,56 @@ def check_lam(lam):
     return check_option("lam", lam)
 
 
+class Chain(Sequence):
+    """The back ends of a solve in order, the fallbacks looked up on first use.
+
+    ``fallback="auto"`` names optional back ends (Clarabel, SCS) that only cvxpy knows
+    about, and asking cvxpy which solvers are installed imports it (a quarter of a second):
+    a solve the primary back end answers never needs them, so the tail of the chain is
+    built (by ``tail()``) only when an entry past ``head`` is read or the chain is iterated
+    past it. Explicit fallback lists are resolved by :func:`prepare` up front (a wrong name
+    is refused before any work).
+
+    Examples
+    --------
+    >>> c = Chain([("a", {})], lambda: [("b", {})])
+    >>> c[0], c.resolved
+    (('a', {}), False)
+    >>> list(c), c.resolved
+    ([('a', {}), ('b', {})], True)
+    """
+
+    def __init__(self, head: list, tail: Callable[[], list] | None = None):
+        self._head = list(head)
+        self._tail = tail
+        self._all: list | None = None if tail is not None else list(head)
+
+    @property
+    def resolved(self) -> bool:
+        """Whether the fallback back ends have been looked up."""
+        return self._all is not None
+
+    def _full(self) -> list:
+        if self._all is None:
+            self._all = self._head + list(self._tail())
+        return self._all
+
+    def __getitem__(self, i):
+        if isinstance(i, int) and 0 <= i < len(self._head):
+            return self._head[i]
+        return self._full()[i]
+
+    def __iter__(self) -> Iterator:
+        yield from self._head
+        yield from self._full()[len(self._head):]
+
+    def __len__(self) -> int:
+        return len(self._full())
+
+    def __repr__(self) -> str:
+        return f"Chain({self._full()!r})"
+
+
 @dataclass(frozen=True, eq=False)
 class SolveOptions:
     """Every option of a solve, checked (see :meth:`bvpnav.NavigationProblem.solve`).
@@ -65,8 +116,9 @@ class SolveOptions:
     ----------
     backend : Backend
         The primary back end.
-    chain : list of (Backend, dict)
-        Primary back end with its options in force, then the fallback back ends.
+    chain : Chain of (Backend, dict)
+        Primary back end with its options in force, then the fallback back ends (with
+        ``fallback="auto"`` looked up on first use: see :class:`Chain`).
     values : dict
         The declared options' values by name (read them as attributes).
 
@@ -165,6 +217,10 @@ def prepare(lam=1.0, **options) -> tuple[SolveOptions, Any]:
     backend = resolve_solver(values["solver"])
     values["solver"] = backend.name
     primary = solver_options(backend, values["accuracy"], values["options"])
-    chain = [(backend, primary)] + fallback_chain(backend, values["accuracy"], values["options"],
-                                                  values["fallback"])
+    fallback = values["fallback"]
+    tail = lambda: fallback_chain(backend, values["accuracy"], values["options"], fallback)  # noqa: E731
+    if fallback == "auto":   # optional back ends, skipped when not installed: looked up on first use
+        chain = Chain([(backend, primary)], tail)
+    else:
+        chain = Chain([(backend, primary)] + tail())
     return SolveOptions(backend=backend, chain=chain, values=values), lam
