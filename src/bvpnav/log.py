@@ -163,13 +163,41 @@ def progress_enabled(progress: bool | None = None) -> bool:
 def progress(iterable=None, *, total=None, desc: str = "", unit: str = "it", enabled: bool | None = None,
              **kw):
     """A ``tqdm.auto`` bar (shown after 0.5 s, removed when done), disabled unless
-    :func:`progress_enabled`."""
+    :func:`progress_enabled`; disabled, an object with the same calls that does nothing
+    (tqdm is not imported: ``tqdm.auto`` loads asyncio, a tenth of a second per process)."""
+    if not progress_enabled(enabled):
+        return _NoBar(iterable)
     from tqdm.auto import tqdm
 
     kw.setdefault("leave", False)
     kw.setdefault("delay", 0.5)
     return tqdm(iterable, total=total, desc=desc, unit=unit, disable=not progress_enabled(enabled),
                 file=sys.stderr, **kw)
+
+
+class _NoBar:
+    """A disabled progress bar: iterates ``iterable`` and ignores every bar call."""
+
+    def __init__(self, iterable=None):
+        self.iterable = iterable
+        self.n = 0
+
+    def __iter__(self):
+        return iter(self.iterable if self.iterable is not None else ())
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> bool:
+        return False
+
+    def update(self, n: float = 1) -> None:
+        self.n += n
+
+    def __getattr__(self, name: str):   # set_postfix_str, set_description, close, refresh, ...
+        if name.startswith("__"):
+            raise AttributeError(name)
+        return lambda *args, **kwargs: None
 
 
 # ----------------------------------------------------------------------- configure

@@ -244,10 +244,13 @@ def _segment_products(steps: np.ndarray, start: np.ndarray) -> Rotation:
 def _quat_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """The quaternion products ``a b`` (scalar last, (M, 4)) of :func:`_compose`, on the arrays
     (no rotation objects made and normalized between the steps of a scan)."""
-    av, aw, bv, bw = a[:, :3], a[:, 3], b[:, :3], b[:, 3]
-    out = np.empty_like(a)
-    out[:, 3] = aw * bw - np.einsum("ij,ij->i", av, bv)
-    out[:, :3] = aw[:, None] * bv + bw[:, None] * av + np.cross(av, bv)
+    ax, ay, az, aw = a.T
+    bx, by, bz, bw = b.T
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[:, 0] = aw * bx + bw * ax + (ay * bz - az * by)
+    out[:, 1] = aw * by + bw * ay + (az * bx - ax * bz)
+    out[:, 2] = aw * bz + bw * az + (ax * by - ay * bx)
+    out[:, 3] = aw * bw - (ax * bx + ay * by + az * bz)
     return out
 
 
@@ -488,17 +491,28 @@ class ErrorStates(ErrorModel):
                 cum = np.zeros((n, 3, 3))
                 np.cumsum(w[:, None, None] * Z, axis=0, out=cum[1:])
                 per.append((node, np.ones(n), -SCp @ (cum - cum[mesh[k]]), "gyro_bias"))
-        # every sample's row holds 3 entries per block: the CSR arrays directly (rows of
-        # len(per) * 3 entries; a sample's two nodes coincide at the last one: summed)
+        # every sample's row holds 3 entries per block: the CSR arrays directly, in canonical
+        # form (blocks ordered by node, then kind: increasing columns); at the samples of the
+        # last node the right node is the left one, and its blocks (weight 0) are left out
+        order = sorted(range(len(per)), key=lambda j: (per[j][0] is nxt, kinds.index(per[j][3])))
+        per = [per[j] for j in order]
         cols = np.concatenate([self.state_index(data, kind, nn)[node] for node, _, _, kind in per], axis=1)
         itype = np.int32 if K * nn < 2**31 and cols.size < 2**31 else np.int64
-        cols = cols.astype(itype).ravel()
-        indptr = np.arange(0, cols.size + 1, 3 * len(per), dtype=itype)
+        V = np.empty((3, n, len(per), 3))        # per axis: a sample's entries, block after block
+        for j, (_, w, B, _) in enumerate(per):
+            np.multiply(w[:, None, None], B, out=V[:, :, j, :].transpose(1, 0, 2))
+        V = V.reshape(3, n, -1)
+        width = 3 * len(per)
+        r0 = int(np.searchsorted(k, nn - 1))       # the first sample of the last node (k ascends)
+        own = np.flatnonzero(np.repeat([p[0] is not nxt for p in per], 3))
+        cols = np.concatenate([cols[:r0].ravel(), cols[r0:, own].ravel()]).astype(itype)
+        V = np.concatenate([V[:, :r0].reshape(3, -1), V[:, r0:, own].reshape(3, -1)], axis=1)
+        indptr = np.concatenate([np.arange(0, r0 * width + 1, width),
+                                 r0 * width + own.size * np.arange(1, n - r0 + 1)]).astype(itype)
         out = []
         for a in range(3):
-            vals = np.concatenate([w[:, None] * B[:, a, :] for _, w, B, _ in per], axis=1).ravel()
-            G = sp.csr_matrix((vals, cols.copy(), indptr.copy()), shape=(n, K * nn))
-            G.sum_duplicates()
+            G = sp.csr_matrix((V[a], cols.copy(), indptr.copy()), shape=(n, K * nn))
+            G.has_canonical_format = True
             out.append(G)
         return out
 

@@ -99,6 +99,9 @@ class Chain(Sequence):
     def __len__(self) -> int:
         return len(self._full())
 
+    def __bool__(self) -> bool:
+        return bool(self._head) or bool(self._full())
+
     def __repr__(self) -> str:
         return f"Chain({self._full()!r})"
 
