@@ -373,3 +373,23 @@ def test_a_misfit_loop_is_accelerated_to_the_same_answer_in_fewer_steps(monkeypa
     assert np.abs(fast.position() - slow.position()).max() < 1e-5
     assert np.abs(fast.error_states.to_numpy() - slow.error_states.to_numpy()).max() < 1e-6
     assert fast.stats["verified"] and slow.stats["verified"]
+
+
+@pytest.mark.parametrize("lengths", [[7, 8, 8, 6, 8], [1, 30, 2, 2, 5], [12]])
+def test_segment_products_are_the_element_products(lengths):
+    """The mesh's per-step products ``R_s ... R_i`` from each element's first step: equal to the
+    product taken one step at a time, whether the elements are of similar lengths (the padded
+    scan) or not (the indexed scan)."""
+    from bvpnav.error_models.error_states import _segment_products
+
+    rng = np.random.default_rng(3)
+    m = sum(lengths)
+    steps = Rotation.from_rotvec(0.3 * rng.standard_normal((m, 3)))
+    first = np.cumsum([0] + lengths[:-1])
+    start = np.repeat(first, lengths)
+    got = _segment_products(steps.as_quat(), start)
+    for i in range(m):
+        want = steps[start[i]]
+        for j in range(start[i] + 1, i + 1):
+            want = want * steps[j]
+        assert (got[i] * want.inv()).magnitude() < 1e-13

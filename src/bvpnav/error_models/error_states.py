@@ -220,7 +220,10 @@ def _make_elements(data, mesh: np.ndarray, bg: np.ndarray) -> _Elements:
     theta = np.zeros(n)
     inner = left < mesh.size - 1
     theta[inner] = (t[inner] - t[mesh[left[inner]]]) / np.diff(t[mesh])[left[inner]]
-    a = step_rotation_vectors(t, np.asarray(raw.gyro, dtype=float)) - np.diff(t)[:, None] * bg[:-1]
+    phi = raw.__dict__.get("_step_rotations")      # of the measured rates: the same at every point
+    if phi is None:
+        phi = raw.__dict__["_step_rotations"] = step_rotation_vectors(t, np.asarray(raw.gyro, dtype=float))
+    a = phi - np.diff(t)[:, None] * bg[:-1]
     S = _segment_products(Rotation.from_rotvec(a).as_quat(), mesh[left[:-1]])
     return _Elements(left, theta, a, S)
 
@@ -228,7 +231,24 @@ def _make_elements(data, mesh: np.ndarray, bg: np.ndarray) -> _Elements:
 def _segment_products(steps: np.ndarray, start: np.ndarray) -> Rotation:
     """``R_s ... R_i`` for every step ``i`` (quaternions ``steps``, (M, 4)) from the first step
     ``start[i]`` of its element: a segmented parallel prefix scan (log2 of the longest element
-    vectorised compositions)."""
+    vectorised compositions). The steps of an element are contiguous (``start`` ascends): when
+    the elements are of similar lengths the scan runs on an (elements, longest, 4) array
+    padded with identities, on contiguous slices (the same products in the same order)."""
+    m = steps.shape[0]
+    first = np.flatnonzero(np.r_[True, start[1:] != start[:-1]]) if m else np.zeros(0, np.int64)
+    lens = np.diff(np.r_[first, m])
+    if m and first.size * int(lens.max()) <= 1.5 * m:
+        ne, L = first.size, int(lens.max())
+        row, pos = np.repeat(np.arange(ne), lens), np.arange(m) - np.repeat(first, lens)
+        Q = np.zeros((ne, L, 4))
+        Q[..., 3] = 1.0
+        Q[row, pos] = steps
+        off = 1
+        while off < L:
+            Q[:, off:] = _quat_product(Q[:, :-off].reshape(-1, 4),
+                                       Q[:, off:].reshape(-1, 4)).reshape(ne, L - off, 4)
+            off *= 2
+        return Rotation.from_quat(Q[row, pos])
     q = steps.copy()
     idx = np.arange(q.shape[0])
     off = 1
