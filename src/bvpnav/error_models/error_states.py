@@ -495,45 +495,70 @@ class ErrorStates(ErrorModel):
     def _mesh_columns(self, data, mesh: np.ndarray, S: np.ndarray, C: np.ndarray) -> list:
         """:meth:`state_columns` on a coarse mesh (module Notes): (N, ns) per axis, every sample
         on the states of its element's two nodes."""
-        n, nn, K = data.n, mesh.size, self._per_node(data)
+        n, nn = data.n, mesh.size
         kinds = self.state_kinds(data)
         el = _elements(data, mesh, _totals(data, "gyro_bias"))
         k, th = el.left, el.theta
-        nxt = np.minimum(k + 1, nn - 1)
-        per = [(k, np.ones(n), S, "attitude_error")]   # (node and weight per sample, (N, 3, 3), kind)
+        # (kind, right node?) -> (weight per sample or None, (N, 3, 3))
+        blocks = {("attitude_error", 0): (None, S)}
         if "acc_bias" in kinds:
-            per += [(k, 1.0 - th, -C, "acc_bias"), (nxt, th, -C, "acc_bias")]
+            blocks[("acc_bias", 0)] = (1.0 - th, -C)
+            blocks[("acc_bias", 1)] = (th, -C)
         if "gyro_bias" in kinds:
             # Y_i = sum_{p <= j < i} P_{j+1} J_r(a_j) h_j w_j: running sums, restarted per element
+            # (w_j = theta_j for the right node, 1 - theta_j for the left one)
             Z = el.S.as_matrix() @ el.Jr * np.diff(np.asarray(data.t, float))[:, None, None]
-            SCp = S @ C[mesh[k]]
-            for node, w in ((k, 1.0 - th[:-1]), (nxt, th[:-1])):
-                cum = np.zeros((n, 3, 3))
-                np.cumsum(w[:, None, None] * Z, axis=0, out=cum[1:])
-                per.append((node, np.ones(n), -SCp @ (cum - cum[mesh[k]]), "gyro_bias"))
+            cum = np.zeros((2, n, 3, 3))
+            np.cumsum(Z, axis=0, out=cum[0, 1:])
+            np.cumsum(th[:-1, None, None] * Z, axis=0, out=cum[1, 1:])
+            cum -= cum[:, mesh[k]]
+            SCp = -(S @ C[mesh[k]])
+            blocks[("gyro_bias", 0)] = (None, SCp @ (cum[0] - cum[1]))
+            blocks[("gyro_bias", 1)] = (None, SCp @ cum[1])
+        cols, indptr, r0, order = self._mesh_layout(data, mesh, kinds, k)
         # every sample's row holds 3 entries per block: the CSR arrays directly, in canonical
         # form (blocks ordered by node, then kind: increasing columns); at the samples of the
         # last node the right node is the left one, and its blocks (weight 0) are left out
-        order = sorted(range(len(per)), key=lambda j: (per[j][0] is nxt, kinds.index(per[j][3])))
-        per = [per[j] for j in order]
-        cols = np.concatenate([self.state_index(data, kind, nn)[node] for node, _, _, kind in per], axis=1)
-        itype = np.int32 if K * nn < 2**31 and cols.size < 2**31 else np.int64
-        V = np.empty((3, n, len(per), 3))        # per axis: a sample's entries, block after block
-        for j, (_, w, B, _) in enumerate(per):
-            np.multiply(w[:, None, None], B, out=V[:, :, j, :].transpose(1, 0, 2))
-        V = V.reshape(3, n, -1)
-        width = 3 * len(per)
-        r0 = int(np.searchsorted(k, nn - 1))       # the first sample of the last node (k ascends)
-        own = np.flatnonzero(np.repeat([p[0] is not nxt for p in per], 3))
-        cols = np.concatenate([cols[:r0].ravel(), cols[r0:, own].ravel()]).astype(itype)
-        V = np.concatenate([V[:, :r0].reshape(3, -1), V[:, r0:, own].reshape(3, -1)], axis=1)
-        indptr = np.concatenate([np.arange(0, r0 * width + 1, width),
-                                 r0 * width + own.size * np.arange(1, n - r0 + 1)]).astype(itype)
+        nb, no = len(order), sum(1 for _, right in order if not right)
+        V = np.empty((3, r0 * 3 * nb + (n - r0) * 3 * no))
+        main = V[:, :r0 * 3 * nb].reshape(3, r0, nb, 3)
+        tail = V[:, r0 * 3 * nb:].reshape(3, n - r0, no, 3)
+        for j, key in enumerate(order):
+            w, B = blocks[key]
+            B = B if w is None else w[:, None, None] * B
+            main[:, :, j, :] = B[:r0].transpose(1, 0, 2)
+            if not key[1]:
+                tail[:, :, j, :] = B[r0:].transpose(1, 0, 2)   # the left node's blocks come first
+        ns = self._per_node(data) * nn
         out = []
         for a in range(3):
-            G = sp.csr_matrix((V[a], cols.copy(), indptr.copy()), shape=(n, K * nn))
+            G = sp.csr_matrix((V[a], cols.copy(), indptr.copy()), shape=(n, ns))
             G.has_canonical_format = True
             out.append(G)
+        return out
+
+    def _mesh_layout(self, data, mesh: np.ndarray, kinds: list, k: np.ndarray) -> tuple:
+        """The column indices and row pointers of :meth:`_mesh_columns` (the same at every point:
+        kept on the measured data), the first sample ``r0`` of the last node and the blocks'
+        order ``(kind, right node?)``."""
+        raw = _raw(data)
+        kept = raw.__dict__.get("_mesh_layout")
+        if kept is not None and kept[0] is mesh and kept[1] == tuple(kinds):
+            return kept[2]
+        nn, n, K = mesh.size, k.size, self._per_node(data)
+        order = [(kind, 0) for kind in kinds] + [(kind, 1) for kind in kinds if kind != "attitude_error"]
+        nxt = np.minimum(k + 1, nn - 1)
+        cols = np.concatenate([self.state_index(data, kind, nn)[nxt if right else k]
+                               for kind, right in order], axis=1)
+        itype = np.int32 if K * nn < 2**31 and cols.size < 2**31 else np.int64
+        r0 = int(np.searchsorted(k, nn - 1))       # the first sample of the last node (k ascends)
+        no = sum(1 for _, right in order if not right)
+        width = 3 * len(order)
+        cols = np.concatenate([cols[:r0].ravel(), cols[r0:, :3 * no].ravel()]).astype(itype)
+        indptr = np.concatenate([np.arange(0, r0 * width + 1, width),
+                                 r0 * width + 3 * no * np.arange(1, n - r0 + 1)]).astype(itype)
+        out = (cols, indptr, r0, order)
+        raw.__dict__["_mesh_layout"] = (mesh, tuple(kinds), out)
         return out
 
     # ------------------------------------------------------------ rows
