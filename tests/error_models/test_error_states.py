@@ -393,3 +393,19 @@ def test_segment_products_are_the_element_products(lengths):
         for j in range(start[i] + 1, i + 1):
             want = want * steps[j]
         assert (got[i] * want.inv()).magnitude() < 1e-13
+
+
+def test_rotation_vectors_of_quaternions_are_scipys():
+    """The re-integrated attitude's rotation vectors (no rotation objects): scipy's to rounding,
+    on both hemispheres, below and above the series' 1e-3 rad, near pi and unnormalized."""
+    from bvpnav.error_models.error_states import _rotvec
+
+    rng = np.random.default_rng(5)
+    axes = rng.standard_normal((6, 3))
+    axes /= np.linalg.norm(axes, axis=1)[:, None]
+    angles = np.array([0.0, 1e-9, 9e-4, 1.1e-3, 1.0, np.pi - 1e-6])
+    q = Rotation.from_rotvec(axes * angles[:, None]).as_quat()
+    q = np.concatenate([q, -q, 3.0 * q])          # the other hemisphere; another norm
+    want = Rotation.from_quat(q).as_rotvec()
+    assert np.max(np.abs(_rotvec(q) - want)) < 1e-14
+    assert np.allclose(np.linalg.norm(_rotvec(q[:6]), axis=1), angles, rtol=1e-12, atol=0)

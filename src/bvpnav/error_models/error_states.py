@@ -139,12 +139,23 @@ def _totals(data, kind: str) -> np.ndarray:
 def _compose(p: Rotation, q: Rotation) -> Rotation:
     """``p * q`` for equal-length rotations by the quaternion product written out (scipy's
     ``__mul__`` takes several times longer at these lengths; the same product to rounding)."""
-    a, b = p.as_quat(), q.as_quat()
-    av, aw, bv, bw = a[:, :3], a[:, 3], b[:, :3], b[:, 3]
-    out = np.empty_like(a)
-    out[:, 3] = aw * bw - np.einsum("ij,ij->i", av, bv)
-    out[:, :3] = aw[:, None] * bv + bw[:, None] * av + np.cross(av, bv)
-    return Rotation.from_quat(out)
+    return Rotation.from_quat(_quat_product(p.as_quat(), q.as_quat()))
+
+
+def _rotvec(q: np.ndarray) -> np.ndarray:
+    r"""The rotation vectors (M, 3), rad, of quaternions ``q`` (M, 4, scalar last, of any norm):
+    :math:`\theta\,\hat v` with :math:`\theta = 2\,\mathrm{atan2}(|v|, w)` on the hemisphere
+    :math:`w \ge 0` (scipy's ``Rotation.from_quat(q).as_rotvec()`` without the rotation object;
+    the scale :math:`\theta / \sin(\theta/2)` by its series below 1e-3 rad)."""
+    q = q / np.linalg.norm(q, axis=1)[:, None]
+    q *= np.where(q[:, 3] < 0.0, -1.0, 1.0)[:, None]
+    v = q[:, :3]
+    angle = 2.0 * np.arctan2(np.linalg.norm(v, axis=1), q[:, 3])
+    small = angle <= 1e-3
+    a2 = angle**2
+    scale = np.where(small, 2.0 + a2 / 12.0 + 7.0 * a2**2 / 2880.0,
+                     angle / np.sin(0.5 * np.where(small, 1.0, angle)))
+    return scale[:, None] * v
 
 
 def _inverse_jacobian(phi: np.ndarray, sign: float) -> np.ndarray:
@@ -175,8 +186,15 @@ def _hats(data) -> sp.csr_matrix:
     """The mesh's hat functions at the samples, (N, n): biases linear between nodes."""
     from ..grid import TimeGrid
 
+    raw = _raw(data)
+    mesh = _mesh(data)
+    kept = raw.__dict__.get("_mesh_hats")
+    if kept is not None and kept[0] is mesh:
+        return kept[1]
     t = np.asarray(data.t, dtype=float)
-    return TimeGrid(t[_mesh(data)]).interpolation_matrix(t)
+    out = TimeGrid(t[mesh]).interpolation_matrix(t)
+    raw.__dict__["_mesh_hats"] = (mesh, out)
+    return out
 
 
 @dataclass(eq=False)
@@ -681,7 +699,10 @@ class ErrorStates(ErrorModel):
         Chat = raw.attitude
         Cnode = _compose(nodes, Chat[mesh]).as_quat()               # C_p of every node
         C = _quat_product(Cnode[el.left], q)                        # C_i = C_p P_i
-        out["attitude_error"] = Rotation.from_quat(_quat_product(C, Chat.inv().as_quat())).as_rotvec()
+        inv = raw.__dict__.get("_attitude_inverse")
+        if inv is None:
+            inv = raw.__dict__["_attitude_inverse"] = Chat.inv().as_quat()
+        out["attitude_error"] = _rotvec(_quat_product(C, inv))
         return out
 
     def frame(self, data, totals: dict) -> pd.DataFrame:
