@@ -258,15 +258,14 @@ def _segment_products(steps: np.ndarray, start: np.ndarray) -> Rotation:
     if m and first.size * int(lens.max()) <= 1.5 * m:
         ne, L = first.size, int(lens.max())
         row, pos = np.repeat(np.arange(ne), lens), np.arange(m) - np.repeat(first, lens)
-        Q = np.zeros((ne, L, 4))
-        Q[..., 3] = 1.0
-        Q[row, pos] = steps
+        Q = np.zeros((4, ne, L))                   # components first: contiguous slices
+        Q[3] = 1.0
+        Q[:, row, pos] = steps.T
         off = 1
         while off < L:
-            Q[:, off:] = _quat_product(Q[:, :-off].reshape(-1, 4),
-                                       Q[:, off:].reshape(-1, 4)).reshape(ne, L - off, 4)
+            Q[:, :, off:] = _quat_components_product(Q[:, :, :-off], Q[:, :, off:])
             off *= 2
-        return Rotation.from_quat(Q[row, pos])
+        return Rotation.from_quat(Q[:, row, pos].T)
     q = steps.copy()
     idx = np.arange(q.shape[0])
     off = 1
@@ -277,6 +276,16 @@ def _segment_products(steps: np.ndarray, start: np.ndarray) -> Rotation:
         q[take] = _quat_product(q[take - off], q[take])
         off *= 2
     return Rotation.from_quat(q)
+
+
+def _quat_components_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """:func:`_quat_product` on quaternions stored components first, ``(4, ...)`` (x, y, z, w)."""
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return np.stack([aw * bx + bw * ax + (ay * bz - az * by),
+                     aw * by + bw * ay + (az * bx - ax * bz),
+                     aw * bz + bw * az + (ax * by - ay * bx),
+                     aw * bw - (ax * bx + ay * by + az * bz)])
 
 
 def _quat_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
