@@ -46,6 +46,13 @@ drive). Methods:
     ``bvpnav states NHC soft`` / ``bvpnav NHC+FM soft`` with the IMU's mounting estimated:
     ``NonHolonomic(mounting="estimated")`` and ``Mounting(sigma=0.02)`` (about 1 degree, an
     IMU mounted by eye) in the error model.
+``bvpnav states NHC lever`` / ``bvpnav states NHC lever band`` / ``bvpnav NHC+FM lever``
+    ``bvpnav states NHC soft`` / ``bvpnav states NHC band`` / ``bvpnav NHC+FM soft`` with the
+    point where the rows hold estimated (issue 39: the lateral velocity is zero at the rear
+    axle, not at the IMU): ``NonHolonomic(lever="estimated")`` (and ``ForwardMotion(lever=
+    "estimated")``) with ``NhcLever(sigma=2.0)`` in the error model, prior zero (the IMU) and
+    2 m per body axis (set by physics, not by this drive: a car's IMU is within about 2 m of its
+    rear axle).
 
 The metadata's bias sigmas are per sample, as GTSAM's example applies them
 (``sqrt(count) * sigma`` between fixes): at the mean step of 10.04 ms they are random walks
@@ -232,7 +239,9 @@ NHC_WIDTH = 0.1
 VEHICLE = {"bvpnav NHC soft": ("soft", False), "bvpnav NHC band": ("band", False),
            "bvpnav NHC+FM soft": ("soft", True), "bvpnav NHC+FM band": ("band", True),
            "bvpnav states NHC soft": ("soft", False), "bvpnav states NHC band": ("band", False),
-           "bvpnav states NHC mount": ("soft", False), "bvpnav NHC+FM mount": ("soft", True)}
+           "bvpnav states NHC mount": ("soft", False), "bvpnav NHC+FM mount": ("soft", True),
+           "bvpnav states NHC lever": ("soft", False), "bvpnav states NHC lever band": ("band", False),
+           "bvpnav NHC+FM lever": ("soft", True)}
 #: The methods that estimate the IMU's mounting (yaw and pitch boresight) with the non-holonomic
 #: rows (``NonHolonomic(mounting="estimated")``), prior sigma :data:`MOUNT_SIGMA`.
 MOUNTED = ("bvpnav states NHC mount", "bvpnav NHC+FM mount")
@@ -242,6 +251,14 @@ MOUNT_NAMES = ("mounting_yaw", "mounting_pitch")
 #: The coarse mesh's longest element, s (``"bvpnav states mesh"``: ``NavigationProblem(segment=...)``, the
 #: node states at the mesh's nodes, the samples between them condensed; issue 42).
 MESH_SEGMENT = 1.0
+#: The methods that estimate where on the car the rows hold (``NonHolonomic(lever="estimated")``,
+#: ``ForwardMotion(lever="estimated")`` with ``NhcLever``): the no-slip point's offset from the IMU,
+#: prior zero (the IMU) with sigma :data:`LEVER_SIGMA` per body axis.
+LEVERED = ("bvpnav states NHC lever", "bvpnav states NHC lever band", "bvpnav NHC+FM lever")
+#: Prior sigma of the no-slip point's offset from the IMU, m per body axis: set by physics, not by
+#: this drive (a car's IMU is within about 2 m of its rear axle).
+LEVER_SIGMA = 2.0
+LEVER_NAMES = ("nhc_lever_x", "nhc_lever_y", "nhc_lever_z")
 
 METHODS = ("GTSAM", "GTSAM peer", "bvpnav README", "bvpnav defaults", "bvpnav states", "bvpnav states mesh",
            *VEHICLE)
@@ -434,7 +451,7 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float, *, fix_s
     tilt = TILT if tilt is None else tilt
     from bvpnav import ImuData, NavigationProblem
     from bvpnav.constraints import Position
-    from bvpnav.error_models import AttitudeError, Bias, ErrorStates, GyroBias, Mounting
+    from bvpnav.error_models import AttitudeError, Bias, ErrorStates, GyroBias, Mounting, NhcLever
     from bvpnav.sensors import from_datasheet
 
     data = ImuData.from_gyro(d["t"], d["f"], d["w"], initial_attitude=c0,
@@ -448,6 +465,8 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float, *, fix_s
                             gyro_sigma=fig["gyro_bias"], acc_sigma=fig["acc_bias"])
         if method in MOUNTED:
             model = model + Mounting(sigma=MOUNT_SIGMA)
+        if method in LEVERED:
+            model = model + NhcLever(sigma=LEVER_SIGMA)
         prob = NavigationProblem(data, error_model=model, sigma_a=fig["acc_noise"] * math.sqrt(rate),
                                  segment=MESH_SEGMENT if method == "bvpnav states mesh" else None)
     elif method == "bvpnav README" or method in VEHICLE:
@@ -455,6 +474,8 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float, *, fix_s
         em = g.error_model(interval)
         if method in MOUNTED:
             em = em + Mounting(sigma=MOUNT_SIGMA)
+        if method in LEVERED:
+            em = em + NhcLever(sigma=LEVER_SIGMA)
         prob = NavigationProblem(data, error_model=em, sigma_a=g.sigma_a(rate, interval))
     else:
         prob = NavigationProblem(data, error_model=Bias() + GyroBias(interval=interval) + AttitudeError())
@@ -466,10 +487,11 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float, *, fix_s
 
         mode, forward = VEHICLE[method]
         width = {"sigma": NHC_WIDTH} if mode == "soft" else {"tol": NHC_WIDTH}
-        prob.add(NonHolonomic(axes=("y", "z"), lever=(0.0, 0.0, 0.0), rate=NHC_RATE, mode=mode, **width,
+        lever = "estimated" if method in LEVERED else (0.0, 0.0, 0.0)
+        prob.add(NonHolonomic(axes=("y", "z"), lever=lever, rate=NHC_RATE, mode=mode, **width,
                               mounting="estimated" if method in MOUNTED else None, name="non-holonomic"))
         if forward:
-            prob.add(ForwardMotion(min_speed=0.0, rate=NHC_RATE, name="forward"))
+            prob.add(ForwardMotion(min_speed=0.0, lever=lever, rate=NHC_RATE, name="forward"))
     return prob
 
 
@@ -516,7 +538,9 @@ def run_bvpnav(d: dict, kept, withheld, method: str, fig: dict, c0, interval: fl
             "grade": (sol.stats.get("grade") or {}).get("name"),
             "gyro_bias_max": float(np.max(np.abs(gb))) if gb else None,
             "mounting_deg": [math.degrees(float(sol.error_params[n])) for n in MOUNT_NAMES]
-            if "mounting_yaw" in sol.error_params else None}
+            if "mounting_yaw" in sol.error_params else None,
+            "nhc_lever": [float(sol.error_params[n]) for n in LEVER_NAMES]
+            if "nhc_lever_x" in sol.error_params else None}
 
 
 #: Gravity magnitude used by both smoothers, m/s^2 (GTSAM's KITTI example uses 9.8).
@@ -585,6 +609,7 @@ def main(argv: list[str] | None = None) -> list[dict]:
                 + (f" solver={r['solver']}" if r.get("solver") not in (None, "direct") else "")
                 + (" mounting yaw {:.3f} pitch {:.3f} deg".format(*r["mounting_deg"]) if r.get("mounting_deg")
                    else "")
+                + (" lever ({:.3f}, {:.3f}, {:.3f}) m".format(*r["nhc_lever"]) if r.get("nhc_lever") else "")
                 + (" along {along:.3f} cross {cross:.3f} first {early:.3f} last 50 s {late:.3f} m".format(
                     **r["track"]) if r.get("track") else ""))
             print(f"{gap:6g} {r['method']:>16} {r.get('rms', float('nan')):9.3f} "
