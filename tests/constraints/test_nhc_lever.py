@@ -57,6 +57,10 @@ def test_rows_are_omega_cross_the_offset_and_attitude_free():
     x[cols] = LEVER
     at = NonHolonomic(lever=tuple(LEVER), axes=("x", "y", "z"), rate=None, sigma=0.1).compile(model)
     np.testing.assert_allclose(rows.value(x), at.value(x), rtol=0, atol=1e-12)
+    fm = ForwardMotion(lever="estimated", min_speed=0.5, rate=None).compile(model)
+    fm_at = ForwardMotion(lever=tuple(LEVER), min_speed=0.5, rate=None).compile(model)
+    np.testing.assert_allclose(fm.value(x), fm_at.value(x), rtol=0, atol=1e-12)
+    assert abs(fm.A[:, cols]).max() > 0.0
 
 
 def test_offset_and_trajectory_recovered_exactly():
