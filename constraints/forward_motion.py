@@ -17,6 +17,7 @@ from .non_holonomic import (
     check_body_data,
     intervals,
     lever_arm,
+    point_rows,
     positive_rate,
     vehicle_example_model,
 )
@@ -44,8 +45,10 @@ class ForwardMotion(Item):
         Upper bound, m/s (> ``min_speed``); default none.
     axis : {"x", "y", "z"}
         The body axis that points forward (default ``"x"``).
-    lever : array_like (3,)
-        The point, m, in body axes from the IMU; default the IMU itself.
+    lever : array_like (3,) or ``"estimated"``
+        The point, m, in body axes from the IMU; default the IMU itself. ``"estimated"``:
+        the point of :class:`~bvpnav.error_models.NhcLever` in the error model (as for
+        :class:`~bvpnav.constraints.NonHolonomic`).
     t : (float, float) or list of them, optional
         Interval(s) in s where it holds; default the whole recording.
     rate : float or None
@@ -104,9 +107,15 @@ class ForwardMotion(Item):
                 raise InputError(f"{label}: max_speed={self.max_speed!r}; give one speed in m/s above "
                                  f"min_speed={self.min_speed:g} m/s")
             object.__setattr__(self, "max_speed", float(hi.ravel()[0]))
-        object.__setattr__(self, "lever", lever_arm(self.lever, label))
+        object.__setattr__(self, "lever", lever_arm(self.lever, label, estimated=True))
         object.__setattr__(self, "t", intervals(self.t, label))
         object.__setattr__(self, "rate", positive_rate(self.rate, label))
+
+    @property
+    def reads_error_model(self) -> bool:
+        """With ``lever="estimated"`` the rows read the :class:`~bvpnav.error_models.NhcLever`:
+        the contract check then solves with it."""
+        return isinstance(self.lever, str)
 
     def instants(self, model) -> np.ndarray:
         """The rows' times (s): the samples in the intervals at :attr:`rate`."""
@@ -129,7 +138,7 @@ class ForwardMotion(Item):
     def compile(self, model):
         who = self.identify()
         check_body_data(model, who)
-        s = model.body_velocity(self.instants(model), self.axis, self.lever, what=who)
+        s = point_rows(model, self.instants(model), self.axis, self.lever, who)
         low = Affine(-s.A, self.min_speed - s.c, tuple(f"{lab} >= {self.min_speed:g}" for lab in s.labels))
         if self.max_speed is None:
             return low

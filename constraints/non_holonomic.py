@@ -42,8 +42,14 @@ def intervals(t, label: str) -> tuple[tuple[float, float], ...] | None:
     return tuple(order)
 
 
-def lever_arm(lever, label: str) -> tuple[float, float, float]:
-    """The lever as three body-frame coordinates, m."""
+def lever_arm(lever, label: str, estimated: bool = False) -> tuple[float, float, float] | str:
+    """The lever as three body-frame coordinates, m (or ``"estimated"`` where ``estimated``
+    allows it: the :class:`~bvpnav.error_models.NhcLever` parameters)."""
+    if estimated and isinstance(lever, str):
+        if lever != "estimated":
+            raise InputError(f"{label}: lever={lever!r}; give 'estimated' (the point is the error model's "
+                             "NhcLever) or three body-frame coordinates in m, e.g. lever=(-1.4, 0, -0.3)")
+        return lever
     v = finite(lever, label, "lever").ravel()
     if v.size != 3:
         raise InputError(f"{label}: lever={lever!r} has {v.size} component(s); give the point as three "
@@ -59,6 +65,24 @@ def positive_rate(rate, label: str) -> float | None:
     if r.size != 1 or not float(r.ravel()[0]) > 0:
         raise InputError(f"{label}: rate={rate!r}; give the rows' rate in Hz (> 0), or None for every sample")
     return float(r.ravel()[0])
+
+
+def point_rows(model, t, axes, lever, who: str):
+    """The body-frame velocity rows of the point ``lever`` (:meth:`bvpnav.NavModel.body_velocity`),
+    or with ``lever="estimated"`` those of the IMU plus :meth:`bvpnav.NavModel.vehicle_point_velocity`
+    (the point the error model's :class:`~bvpnav.error_models.NhcLever` gives)."""
+    if isinstance(lever, str):
+        rows = model.body_velocity(t, axes, (0.0, 0.0, 0.0), what=who)
+        point = model.vehicle_point_velocity(t, axes, what=who)
+        return Affine(rows.A + point.A, rows.c, rows.labels)
+    return model.body_velocity(t, axes, lever, what=who)
+
+
+def lever_text(lever) -> str:
+    """The lever for ``math()``: its coordinates, or the estimated point."""
+    if isinstance(lever, str):
+        return "l (estimated, NhcLever)"
+    return "(" + ", ".join(f"{v:g}" for v in lever) + ") m"
 
 
 def check_body_data(model, who: str) -> None:
@@ -113,10 +137,12 @@ class NonHolonomic(Item):
     axes : sequence of str
         Body axes whose velocity is ~0, among ``"x", "y", "z"`` (default ``("y", "z")``:
         lateral and vertical). The body frame is the IMU's (x forward, y left, z up on a car).
-    lever : array_like (3,)
+    lever : array_like (3,) or ``"estimated"``
         The point, m, in body axes from the IMU; default ``(0, 0, 0)`` (the IMU itself).
         Ideally the middle of the rear axle (the point of a car that does not slide when it
         turns; a point ``d`` m ahead of it moves sideways at ``d`` times the yaw rate).
+        ``"estimated"``: the point is unknown, the parameters of
+        :class:`~bvpnav.error_models.NhcLever` (add it to the error model, with a prior).
     t : (float, float) or list of them, optional
         Interval(s) in s where the vehicle rolls on the ground; default the whole recording.
     mounting : {None, "estimated"}
@@ -151,7 +177,10 @@ class NonHolonomic(Item):
     increments (see :meth:`bvpnav.NavModel.body_velocity`). With ``mounting="estimated"``
     the rows are :math:`\rho_{k,y} - s_y v^0_{x,k}` and :math:`\rho_{k,z} + s_z v^0_{x,k}`
     (:meth:`bvpnav.NavModel.mounting_velocity`): zero when the point moves along the
-    vehicle's forward axis :math:`(1, s_y, -s_z)` in body axes.
+    vehicle's forward axis :math:`(1, s_y, -s_z)` in body axes. With ``lever="estimated"``
+    :math:`\ell` is the unknown of :class:`~bvpnav.error_models.NhcLever` and
+    :math:`\omega_k \times \ell = [\omega_k\times]\,\ell` is linear in it
+    (:meth:`bvpnav.NavModel.vehicle_point_velocity`).
 
     Examples
     --------
@@ -198,15 +227,16 @@ class NonHolonomic(Item):
         if self.mounting is not None and "x" in axes:
             raise InputError(f"{label}: mounting='estimated' with axes={list(axes)}; the mounting turns the "
                              "lateral and vertical rows: give axes among ('y', 'z')")
-        object.__setattr__(self, "lever", lever_arm(self.lever, label))
+        object.__setattr__(self, "lever", lever_arm(self.lever, label, estimated=True))
         object.__setattr__(self, "t", intervals(self.t, label))
         object.__setattr__(self, "rate", positive_rate(self.rate, label))
 
     @property
     def reads_error_model(self) -> bool:
         """Whether the rows read a parameter of the error model (the :class:`~bvpnav.error_models.
-        Mounting` with ``mounting="estimated"``): the contract check then solves with it."""
-        return self.mounting is not None
+        Mounting` with ``mounting="estimated"``, the :class:`~bvpnav.error_models.NhcLever` with
+        ``lever="estimated"``): the contract check then solves with it."""
+        return self.mounting is not None or isinstance(self.lever, str)
 
     def row_layout(self, m: int) -> tuple[int, int]:
         """``(instants, body axes)``: sigma and tol may be given per axis."""
@@ -232,7 +262,7 @@ class NonHolonomic(Item):
         who = self.identify()
         check_body_data(model, who)
         t = self.instants(model)
-        rows = model.body_velocity(t, self.axes, self.lever, what=who)
+        rows = point_rows(model, t, self.axes, self.lever, who)
         if self.mounting is None:
             return rows
         return Affine(rows.A + model.mounting_velocity(t, self.axes, what=who).A, rows.c, rows.labels)
@@ -274,8 +304,7 @@ class NonHolonomic(Item):
         return r"e_j^T (C_k^T v_n(t_k) + \omega_k \times \ell) = 0"
 
     def math(self) -> str:
-        lev = ", ".join(f"{v:g}" for v in self.lever)
-        return f"e_j^T (C^T v_n(t_k) + omega x ({lev}) m) = 0 for body axes {list(self.axes)}"
+        return f"e_j^T (C^T v_n(t_k) + omega x {lever_text(self.lever)}) = 0 for body axes {list(self.axes)}"
 
 
 def vehicle_example_model():
