@@ -274,6 +274,25 @@ def test_accessors_read_the_states():
         bvpnav.NavModel(d["data"], ErrorStates(arw=1e-4)).acc_bias()
 
 
+def test_body_rate_takes_the_gyro_bias_totals_and_the_increments():
+    # at a linearization point whose gyro-bias totals are b0, the rate is the measured one less
+    # b0 less the step's increment: omega = omega_hat - (b0 + delta b)
+    from bvpnav.error_models.error_states import states_at
+
+    d = simulate(const(BG), const(BA), T=1.0)
+    model = ErrorStates(arw=1e-4, gyro_drift=1e-4, acc_drift=1e-3)
+    raw = d["data"]
+    b0 = np.array([1e-3, -2e-3, 4e-3])
+    totals = {k: np.zeros((raw.n, 3)) for k in model.state_kinds(raw)}
+    totals["gyro_bias"] = np.tile(b0, (raw.n, 1))
+    nav = bvpnav.NavModel(states_at(raw, totals), model)
+    x = np.zeros(nav.size)
+    x[nav.s_index[nav.state_model.state_index(nav.data, "gyro_bias")]] = 5e-4
+    w = nav.body_rate([0.0, 0.5]).value(x).reshape(2, 3)
+    ref = np.array([[np.interp(tk, raw.t, raw.gyro[:, a]) for a in range(3)] for tk in (0.0, 0.5)])
+    np.testing.assert_allclose(w, ref - b0 - 5e-4, rtol=0, atol=1e-12)
+
+
 def test_bad_options_are_named():
     with pytest.raises(InputError, match="arw"):
         ErrorStates()
