@@ -52,7 +52,22 @@ import kitti_drive as K  # noqa: E402
 from _memory import own_peak_mb, run_case  # noqa: E402
 
 METHODS = {"README": ("bvpnav README", None), "NHC+FM band": ("bvpnav NHC+FM band", "auto"),
-           "NHC+FM band (ipm)": ("bvpnav NHC+FM band", "interior point")}
+           "NHC+FM band (ipm)": ("bvpnav NHC+FM band", "interior point"),
+           "states": ("bvpnav states", None), "states NHC+FM band": ("bvpnav states", "auto")}
+
+#: The reference of each case: the same problem without the vehicle rows.
+REFERENCE = {"README": "README", "NHC+FM band": "README", "NHC+FM band (ipm)": "README",
+             "states": "states", "states NHC+FM band": "states"}
+
+
+def vehicle_rows(prob) -> None:
+    """``NonHolonomic`` (lateral and vertical, a band of 0.1 m/s, 10 Hz) and ``ForwardMotion``
+    (forward speed >= 0), as ``kitti_drive``'s ``NHC+FM band`` adds them."""
+    from bvpnav.constraints import ForwardMotion, NonHolonomic
+
+    prob.add(NonHolonomic(axes=("y", "z"), lever=(0.0, 0.0, 0.0), rate=K.NHC_RATE, mode="band",
+                          tol=K.NHC_WIDTH, name="non-holonomic"))
+    prob.add(ForwardMotion(min_speed=0.0, rate=K.NHC_RATE, name="forward"))
 
 
 def case(name: str, gap: float) -> dict:
@@ -65,12 +80,18 @@ def case(name: str, gap: float) -> dict:
     c0 = K.initial_attitude(d, kept)
     method, qp = METHODS[name]
     prob = K.problem(d, kept, method, fig, c0, 30.0)
+    if method == "bvpnav states" and qp is not None:
+        vehicle_rows(prob)
     methods: collections.Counter = collections.Counter()
     inner = AS.solve_bands
+    record: list = []
 
     def counted(*a, **kw):
+        c1 = time.process_time()
         x, info = inner(*a, **kw)
         methods[info["qp_method"]] += 1
+        record.append([info["qp_method"], info.get("active_set", ""), info.get("iterations"),
+                       info.get("active_rows"), round(time.process_time() - c1, 3)])
         return x, info
 
     AS.solve_bands = counted
@@ -87,7 +108,7 @@ def case(name: str, gap: float) -> dict:
     att = sol.stats.get("sequential", {})
     return {"name": name, "gap": gap, "rms": K.hrms(est, d["fix_p"][withheld]), "seconds": wall,
             "cpu_seconds": cpu, "solves": att.get("solves"), "qp": dict(methods),
-            "verified": sol.stats.get("verified"), "peak_mb": own_peak_mb()}
+            "verified": sol.stats.get("verified"), "peak_mb": own_peak_mb(), "band_solves": record}
 
 
 def main(argv=None):
@@ -110,8 +131,8 @@ def main(argv=None):
     print(f"\n{'gap s':>6} {'case':<18} {'RMS m':>8} {'wall s':>8} {'CPU s':>8} {'x README':>9} "
           f"{'solves':>7}  qp")
     for gap in args.gaps:
-        ref = next((r for r in rows if r["gap"] == gap and r["name"] == "README"), {})
         for r in (r for r in rows if r["gap"] == gap):
+            ref = next((q for q in rows if q["gap"] == gap and q["name"] == REFERENCE[r["name"]]), {})
             ratio = r.get("cpu_seconds", np.nan) / ref.get("cpu_seconds", np.nan)
             print(f"{gap:6g} {r['name']:<18} {r.get('rms', np.nan):8.3f} {r.get('seconds', np.nan):8.1f} "
                   f"{r.get('cpu_seconds', np.nan):8.1f} {ratio:9.2f} {r.get('solves')!s:>7}  "
