@@ -42,7 +42,12 @@ times the largest term of the stationarity residual. A multiplier within
 An outer loop that solves a sequence of such problems (the attitude loop re-linearizes
 the same items) passes the rows at their bounds from one solve to the next
 (:class:`ActiveHint`, in :attr:`bvpnav.linalg.workspace.Workspace.active_hint`): the
-next solve starts from them instead of from none.
+next solve starts from them instead of from none, and assembles into the same banded plan
+(refitted where the next linearization's rows gain or lose entries,
+:func:`bvpnav.linalg.ipm._refit`) instead of analysing the pattern again. The node-state
+loop's intermediate steps, which only move the linearization point, take at most
+:data:`QUICK_PASSES` passes of the method from those rows (:func:`quick_step`): the rows
+at their bounds then settle along with the loop, and its last step is solved in full.
 """
 
 from __future__ import annotations
