@@ -41,6 +41,7 @@ import bvpnav
 from bvpnav.constraints import Position, Velocity
 from bvpnav.error_models import Bias, ErrorModel, ScaleFactor
 from bvpnav.errors import Inaccurate, InputError
+from bvpnav.linalg.lsq import least_squares_form
 from bvpnav.solve.assemble import finish
 from bvpnav.solve.conditioning import (
     GAIN_LIMIT,
@@ -195,6 +196,28 @@ def test_problem_with_an_inequality_uses_its_least_squares_part():
     sv = np.array(sol.stats["conditioning"]["relative_singular_values"])
     assert np.allclose(sv, dense_reference_sv(recording(nu=0.0)), rtol=1e-4, atol=0)
     assert _by_name(sol.warnings, "bias_y and scale_y are nearly indistinguishable")
+
+
+def test_least_squares_part_of_a_band_problem_by_the_banded_factorization():
+    """With band or inequality rows no back end hands a factorization of the least-squares
+    part: the acceleration form's is the banded one (not a sparse LU), the same reduced
+    Hessian as the sparse LU's to rounding, and the same singular values as the dense
+    definition on the problem without the bound."""
+    from bvpnav.constraints import PositionBound
+    from bvpnav.solve.conditioning import _banded_schur, _schur
+
+    prob = recording(nu=0.0)
+    prob.add(PositionBound(upper=100.0, axes=("x",)))
+    form = prob.formulation
+    assert form.residual == "acceleration"
+    ls = least_squares_form(form, 1.0, surrogate=True)
+    banded = _banded_schur(ls, form)
+    assert banded is not None and banded.shape == (form.model.q, form.model.q)
+    m, n = ls.D.A.shape
+    lu = _schur(ls.augmented(), m + form.model.l_index, np.arange(m + n, m + n + ls.E.m))
+    np.testing.assert_allclose(banded, lu, rtol=1e-8, atol=1e-8 * np.abs(lu).max())
+    own = relative_singular_values(information_matrix(form, 1.0))[0]
+    assert np.allclose(own, dense_reference_sv(recording(nu=0.0)), rtol=1e-4, atol=0)
 
 
 # ------------------------------------------------------- NaN is never verified

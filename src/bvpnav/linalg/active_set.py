@@ -42,7 +42,12 @@ times the largest term of the stationarity residual. A multiplier within
 An outer loop that solves a sequence of such problems (the attitude loop re-linearizes
 the same items) passes the rows at their bounds from one solve to the next
 (:class:`ActiveHint`, in :attr:`bvpnav.linalg.workspace.Workspace.active_hint`): the
-next solve starts from them instead of from none.
+next solve starts from them instead of from none, and assembles into the same banded plan
+(refitted where the next linearization's rows gain or lose entries,
+:func:`bvpnav.linalg.ipm._refit`) instead of analysing the pattern again. The node-state
+loop's intermediate steps, which only move the linearization point, take at most
+:data:`QUICK_PASSES` passes of the method from those rows (:func:`quick_step`): the rows
+at their bounds then settle along with the loop, and its last step is solved in full.
 """
 
 from __future__ import annotations
@@ -52,16 +57,30 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..sparse import abs_max
-from .ipm import _DECOUPLED, QuadraticForm, _info, _Newton, _Steps, interior_point, quadratic_form
+from .ipm import (
+    _DECOUPLED,
+    IPM_TOL,
+    QuadraticForm,
+    _info,
+    _Newton,
+    _Steps,
+    interior_point,
+    quadratic_form,
+    unsupported_term,
+)
 from .workspace import Workspace
 
-__all__ = ["ActiveHint", "solve_bands", "active_set", "QP_METHODS"]
+__all__ = ["ActiveHint", "solve_bands", "active_set", "quick_step", "QP_METHODS"]
 
 #: Values of the direct back end's ``qp`` option: ``auto`` tries the active set first.
 QP_METHODS = ("auto", "active set", "interior point")
 
 #: Largest number of active-set updates before the interior-point method takes over.
 MAX_UPDATES = 25
+
+#: Largest number of active-set passes (factorizations) of an outer loop's intermediate step
+#: (:func:`quick_step`).
+QUICK_PASSES = 3
 
 #: The active set gives way when this many updates have not lowered the fewest rows to
 #: change (violated rows off the set plus rows on it whose multiplier pulls) seen so far.
@@ -81,11 +100,16 @@ class ActiveHint:
     gave_way : bool
         Whether the active set gave way in that solve: the next one (``qp="auto"``) goes
         straight to the interior-point method, spending no factorization on it again.
+    plan : tuple or None
+        That solve's banded plan with the pattern it was made for
+        (:attr:`bvpnav.linalg.ipm._Steps.plan_key`): a solve of the same pattern assembles
+        into it instead of analysing the pattern again.
     """
 
     signature: tuple
     active: np.ndarray
     gave_way: bool = False
+    plan: tuple | None = None
 
 
 def signature(qp: QuadraticForm) -> tuple:
@@ -145,9 +169,7 @@ def active_set(qp: QuadraticForm, newton: _Newton, tol: float, max_iter: int = M
     why : str or None
         Why it gave way.
     """
-    ls, G = qp.ls, qp.G
-    mi, nb = G.m, qp.base.shape[0]
-    m, n, pE = newton.m, newton.n, newton.pE
+    mi = qp.G.m
     act = np.zeros(mi, dtype=bool) if start is None else start.copy()
     kkt = _Refined(qp, newton)
     seen: set[bytes] = set()
@@ -155,31 +177,16 @@ def active_set(qp: QuadraticForm, newton: _Newton, tol: float, max_iter: int = M
     for it in range(max_iter + 1):
         act = _one_side(qp, act)
         seen.add(act.tobytes())
-        ia = np.flatnonzero(act)
-        kb = qp.base_of[ia]
-        delta = np.full(nb, _DECOUPLED)
-        delta[kb] = 0.0
-        rk = np.zeros(nb)
-        rk[kb] = -qp.sign[ia] * G.c[ia]
         try:
-            fac = newton.steps.factor(delta)
+            held = _Held(qp, newton, act)
         except np.linalg.LinAlgError:
-            return None, f"the KKT matrix with {ia.size} rows at their bounds is singular"
-        rhs = np.concatenate([-ls.D.c, np.zeros(n), -ls.E.c, rk])
+            return None, f"the KKT matrix with {int(act.sum())} rows at their bounds is singular"
         # one refinement step while the guess may change; the rest once it holds
-        sol = kkt.solve(fac, rhs, delta, steps=1)
+        sol = held.solve(kkt, steps=1)
         for final in (False, True):
             if final:
-                sol = kkt.solve(fac, rhs, delta, steps=2, z=sol)
-            x, y, w = sol[m:m + n], 2.0 * sol[m + n:m + n + pE], 2.0 * sol[m + n + pE:]
-            z = np.zeros(mi)
-            z[ia] = qp.sign[ia] * w[kb]
-            r = G.value(x)
-            eps_g = tol * max(abs_max(newton.absG @ np.abs(x)) + abs_max(G.c), 1e-300)
-            grad = 2.0 * (newton.At @ ls.D.value(x))
-            eps_z = tol * max(abs_max(grad), abs_max(newton.Et @ y), abs_max(newton.Gt @ z), 1e-300)
-            violated = ~act & (r > eps_g)
-            wrong = act & (z < -eps_z)
+                sol = held.solve(kkt, steps=2, z=sol)
+            x, y, z, r, violated, wrong = held.check(sol, tol)
             if violated.any() or wrong.any():
                 break
             if final:
@@ -190,12 +197,54 @@ def active_set(qp: QuadraticForm, newton: _Newton, tol: float, max_iter: int = M
         elif it - since >= STALL:
             return None, (f"no fewer than {fewest} rows to change in {STALL} updates (after {it + 1}: "
                           f"{int(violated.sum())} violated, {int(wrong.sum())} pulling)")
-        act = (act & ~wrong) | (violated & _peaks(r))
+        act = _next_guess(act, r, violated, wrong)
         if it < max_iter and _one_side(qp, act).tobytes() in seen:
             return None, (f"the rows at their bounds repeat after {it + 1} updates "
                           f"({int(violated.sum())} violated, {int(wrong.sum())} pulling)")
     return None, f"no answer in {max_iter} updates ({int(violated.sum())} rows violated, " \
                  f"{int(wrong.sum())} pulling)"
+
+
+class _Held:
+    """The KKT system with the rows of a guess ``act`` held hard and the others decoupled,
+    factorized once (:class:`~bvpnav.linalg.ipm._Steps`), and the optimality test of its
+    answers (module Notes)."""
+
+    def __init__(self, qp: QuadraticForm, newton: _Newton, act: np.ndarray):
+        ls, G, nb = qp.ls, qp.G, qp.base.shape[0]
+        self.qp, self.nw, self.act = qp, newton, act
+        self.ia = np.flatnonzero(act)
+        self.kb = qp.base_of[self.ia]
+        self.delta = np.full(nb, _DECOUPLED)
+        self.delta[self.kb] = 0.0
+        rk = np.zeros(nb)
+        rk[self.kb] = -qp.sign[self.ia] * G.c[self.ia]
+        self.fac = newton.steps.factor(self.delta)
+        self.rhs = np.concatenate([-ls.D.c, np.zeros(newton.n), -ls.E.c, rk])
+
+    def solve(self, kkt: _Refined, steps: int, z: np.ndarray | None = None) -> np.ndarray:
+        return kkt.solve(self.fac, self.rhs, self.delta, steps=steps, z=z)
+
+    def check(self, sol: np.ndarray, tol: float) -> tuple:
+        """``(x, y, z, r, violated, wrong)`` of the solution ``sol``: the unknowns, the
+        multipliers, the rows' values ``G x + g``, the rows off the guess above their bound
+        and the rows on it whose multiplier pulls."""
+        qp, nw, G, ia = self.qp, self.nw, self.qp.G, self.ia
+        m, n, pE = nw.m, nw.n, nw.pE
+        x, y, w = sol[m:m + n], 2.0 * sol[m + n:m + n + pE], 2.0 * sol[m + n + pE:]
+        z = np.zeros(G.m)
+        z[ia] = qp.sign[ia] * w[self.kb]
+        r = G.value(x)
+        eps_g = tol * max(abs_max(nw.absG @ np.abs(x)) + abs_max(G.c), 1e-300)
+        grad = 2.0 * (nw.At @ qp.ls.D.value(x))
+        eps_z = tol * max(abs_max(grad), abs_max(nw.Et @ y), abs_max(nw.Gt @ z), 1e-300)
+        return x, y, z, r, ~self.act & (r > eps_g), self.act & (z < -eps_z)
+
+
+def _next_guess(act: np.ndarray, r: np.ndarray, violated: np.ndarray, wrong: np.ndarray) -> np.ndarray:
+    """The next guess: the rows whose multiplier pulls dropped, the violated rows that peak
+    (:func:`_peaks`) added."""
+    return (act & ~wrong) | (violated & _peaks(r))
 
 
 def _peaks(r: np.ndarray) -> np.ndarray:
@@ -258,11 +307,11 @@ def solve_bands(form, lam: float, tol: float, max_iter: int = 80, workspace: Wor
         raise ValueError(f"qp_method {qp_method!r}: use one of {', '.join(QP_METHODS)}")
     qp = quadratic_form(form, lam)
     banded = method == "banded" or (method == "auto" and form.residual == "acceleration")
-    steps = _Steps(qp, form, workspace, banded)
-    newton = _Newton(qp, steps)
     hint = getattr(workspace, "active_hint", None)
     sig = signature(qp)
     hint = hint if isinstance(hint, ActiveHint) and hint.signature == sig else None
+    steps = _Steps(qp, form, workspace, banded, reuse=None if hint is None else hint.plan)
+    newton = _Newton(qp, steps)
     start = None if hint is None else hint.active
     why = "not tried (qp='interior point')"
     skip = qp_method == "auto" and hint is not None and hint.gave_way
@@ -275,7 +324,7 @@ def solve_bands(form, lam: float, tol: float, max_iter: int = 80, workspace: Wor
             info.update(active_rows=int(ans.active.sum()), warm_start=start is not None,
                         active_set=f"{ans.updates} updates" + (" from the last solve's rows"
                                                                if start is not None else ""))
-            _keep(workspace, sig, ans.active)
+            _keep(workspace, sig, ans.active, plan=steps.plan_key)
             return ans.x, info
         if qp_method == "active set":
             raise SolveError(f"direct: the active-set method gave way: {why}; use qp='auto' (the "
@@ -286,7 +335,8 @@ def solve_bands(form, lam: float, tol: float, max_iter: int = 80, workspace: Wor
     active = _ipm_active(qp, x, info)
     info.update(active_rows=int(active.sum()), warm_start=False, active_set=why or "")
     if qp.G.m:
-        _keep(workspace, sig, active, gave_way=qp_method == "auto")   # tried and gave way, or skipped
+        # tried and gave way, or skipped
+        _keep(workspace, sig, active, gave_way=qp_method == "auto", plan=steps.plan_key)
     return x, info
 
 
@@ -301,6 +351,53 @@ def _ipm_active(qp: QuadraticForm, x: np.ndarray, info: dict) -> np.ndarray:
     return z > -qp.G.value(x)
 
 
-def _keep(workspace: Workspace | None, sig: tuple, active: np.ndarray, gave_way: bool = False) -> None:
+def _keep(workspace: Workspace | None, sig: tuple, active: np.ndarray, gave_way: bool = False,
+          plan: tuple | None = None) -> None:
     if workspace is not None:
-        workspace.active_hint = ActiveHint(sig, active.copy(), gave_way)
+        workspace.active_hint = ActiveHint(sig, active.copy(), gave_way, plan)
+
+
+def quick_step(form, lam: float, workspace: Workspace | None, tol: float = IPM_TOL["default"]
+               ) -> np.ndarray | None:
+    """The unknowns of one pass of the active set from the last answer's rows: an outer
+    loop's intermediate step, whose answer only moves the linearization point.
+
+    The rows at their bounds in the workspace's :class:`ActiveHint` are held hard (one banded
+    factorization, one refinement step, no verification) and the hint takes the next guess
+    (the rows whose multiplier pulls dropped, the violated rows that peak added), so the
+    active set is updated along with the outer loop instead of to convergence at every
+    step; the loop's last step is solved in full (:func:`solve_bands`), starting from that
+    guess.
+
+    Returns
+    -------
+    ndarray or None
+        None (the caller then solves in full) without a hint of these rows, when the active
+        set gave way on them, when the form is not the banded acceleration form, or when
+        the KKT matrix of the guess is singular.
+    """
+    hint = getattr(workspace, "active_hint", None)
+    if (not isinstance(hint, ActiveHint) or hint.gave_way or form.residual != "acceleration"
+            or unsupported_term(form) is not None):
+        return None
+    qp = quadratic_form(form, lam)
+    sig = signature(qp)
+    if hint.signature != sig or not qp.G.m:
+        return None
+    steps = _Steps(qp, form, workspace, True, reuse=hint.plan)
+    if steps.band is None:
+        return None
+    newton = _Newton(qp, steps)
+    kkt = _Refined(qp, newton)
+    act = _one_side(qp, hint.active)
+    for _ in range(QUICK_PASSES):
+        try:
+            held = _Held(qp, newton, act)
+        except np.linalg.LinAlgError:
+            return None
+        x, _, _, r, violated, wrong = held.check(held.solve(kkt, steps=0), tol)
+        if not (violated.any() or wrong.any()):
+            break
+        act = _one_side(qp, _next_guess(act, r, violated, wrong))
+    _keep(workspace, sig, act, plan=steps.plan_key)
+    return x

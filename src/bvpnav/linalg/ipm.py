@@ -38,6 +38,7 @@ optimum, with :math:`z = 0`, and the method stops there.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import numpy as np
@@ -47,7 +48,7 @@ from ..errors import SolveError
 from ..formulation import Formulation
 from ..model import Affine
 from ..sparse import abs_max, canonical
-from .banded import BandedKKT, BandPlan, NotBanded, _scale_rows, _scales
+from .banded import BandedKKT, BandPlan, NotBanded, _scales, _Stride
 from .lsq import BorderedLU, LeastSquaresForm, column_nodes, fem_rows_by_diagonals, least_squares_form
 from .workspace import Workspace
 
@@ -207,9 +208,7 @@ class MultiplierBand:
         # the band at Delta = 0 with the multipliers' scales from their entries at Delta = 0
         s0 = sU.copy()
         s0[k] = _scales(np.maximum(np.abs(self.d0), off))
-        ratio = np.ones_like(sU)
-        ratio[k] = s0[k] / sU[k]
-        _scale_rows(ab, ratio, kl)
+        _rescale(ab, k, s0[k] / sU[k], kl)
         self.scaled0, self.s0, self.sk2 = ab, s0, s0[k] ** 2
         self.B, self.C0, self.h = B, C, h
         self.border_at = bpos[~self.in_band]
@@ -229,6 +228,29 @@ class MultiplierBand:
         return ab, self.B, C, self.h, self.s0
 
 
+def _rescale(ab: np.ndarray, k: np.ndarray, ratio: np.ndarray, kl: int) -> None:
+    """:func:`~bvpnav.linalg.banded._scale_rows` with the factor ``ratio`` on the band rows
+    ``k`` (distinct) and 1 elsewhere, in place: only the entries in those rows and columns
+    are touched (the multipliers' rows, a few per sample against the whole band)."""
+    if not k.size:
+        return
+    nb = ab.shape[0]
+    full = np.ones(nb)
+    full[k] = ratio
+    # columns k of the matrix (rows k of ab): entry ab[k, kl + s] is A[k + s - kl, k]
+    pad = np.concatenate([np.zeros(kl), full, np.zeros(kl)])   # (0 outside the matrix, as there)
+    ab[k, kl:] *= ratio[:, None] * pad[k[:, None] + np.arange(2 * kl + 1)[None, :]]
+    # rows k of the matrix in the other columns j = k + t: ab[k + t, 2 kl - t]
+    t = np.arange(-kl, kl + 1)
+    J = k[:, None] + t[None, :]
+    mine = np.zeros(nb, dtype=bool)
+    mine[k] = True
+    ok = (J >= 0) & (J < nb)
+    ok[ok] = ~mine[J[ok]]
+    rows, cols = np.nonzero(ok)
+    ab[J[rows, cols], 2 * kl - t[cols]] *= ratio[rows]
+
+
 def _window(sU: np.ndarray, k: np.ndarray, kl: int) -> np.ndarray:
     """``sU`` of the rows ``k + s - 2 kl`` met by band row ``k``'s entries ``ab[k, s]``
     (1 outside the band)."""
@@ -241,7 +263,8 @@ class _Steps:
     rows' multipliers: the banded one of a :class:`MultiplierBand` when the rows allow,
     else a pivoted sparse LU of the augmented matrix per step."""
 
-    def __init__(self, qp: QuadraticForm, form: Formulation, workspace: Workspace | None, banded: bool):
+    def __init__(self, qp: QuadraticForm, form: Formulation, workspace: Workspace | None, banded: bool,
+                 reuse: tuple | None = None):
         self.qp, self.form = qp, form
         ls = qp.ls
         self.A = ls.D.A
@@ -250,27 +273,54 @@ class _Steps:
         self.pE = ls.E.m
         self.band: MultiplierBand | None = None
         self.notes: list[str] = []
+        #: ``(pattern, plan, colnode)`` of the banded plan, for a later solve of the same pattern
+        #: (:meth:`_plan`'s ``reuse``); None when not banded
+        self.plan_key: tuple | None = None
         if banded:
             try:
-                self.band = self._multiplier_band(workspace)
+                self.band = self._multiplier_band(workspace, reuse)
             except (NotBanded, ValueError, np.linalg.LinAlgError) as exc:
                 self.notes.append(f"not banded: {exc}")
 
-    def _multiplier_band(self, workspace) -> MultiplierBand:
-        form, ls = self.form, self.qp.ls
-        model = form.model
-        diagonal = fem_rows_by_diagonals(form, workspace)
-        try:
-            plan = BandPlan.build(self.A, self.E, column_nodes(model), lam_rows=ls.lam_rows,
-                                  diagonal=diagonal)
-        except NotBanded:
-            if model.d == 1:
-                raise
-            plan = BandPlan.build(self.A, self.E, column_nodes(model, interleave=True), lam_rows=ls.lam_rows,
-                                  diagonal=diagonal)
-        first, plan._first = plan._first[2], None
+    def _multiplier_band(self, workspace, reuse: tuple | None) -> MultiplierBand:
+        diagonal = fem_rows_by_diagonals(self.form, workspace)
+        plan, first = self._plan(diagonal, reuse)
         rows = self.n + plan.unfolded.size + self.pE + np.arange(self.qp.base.shape[0])
         return MultiplierBand(plan, first, rows)
+
+    def _plan(self, diagonal, reuse: tuple | None) -> tuple[BandPlan, tuple]:
+        """The plan and its assembly at these values: ``reuse``'s plan (an earlier solve's
+        :attr:`plan_key`) when the pattern is its own, or one it admits (node states: a
+        Gauss-Newton step's objective rows filling exact zeros, :meth:`BandPlan.admitting`),
+        else a new analysis."""
+        ls, model = self.qp.ls, self.form.model
+        lam_rows = np.asarray(ls.lam_rows, dtype=bool)
+        colnode = column_nodes(model)
+        pattern = (self.A.indptr, self.A.indices, self.E.indptr, self.E.indices, lam_rows, colnode)
+        if reuse is not None:
+            old, plan, cols = reuse
+            same = [a is b or np.array_equal(a, b) for a, b in zip(old, pattern, strict=True)]
+            if all(same):
+                self.plan_key = (pattern, plan, cols)
+                return plan, plan.assemble(self.A, self.E, diagonal)
+            if all(same[4:]):
+                fitted = _refit(plan, self.A, self.E, cols, lam_rows, diagonal)
+                if fitted is not None:
+                    self.plan_key = (pattern, fitted[0], cols)
+                    return fitted
+        cols = colnode
+        try:
+            if model.ns:   # node states couple the axes at every node: interleaved from the start
+                raise NotBanded("node states")
+            plan = BandPlan.build(self.A, self.E, cols, lam_rows=ls.lam_rows, diagonal=diagonal)
+        except NotBanded:
+            if model.d == 1 and not model.ns:
+                raise
+            cols = column_nodes(model, interleave=True)
+            plan = BandPlan.build(self.A, self.E, cols, lam_rows=ls.lam_rows, diagonal=diagonal)
+        first, plan._first = plan._first[2], None
+        self.plan_key = (pattern, plan, cols)
+        return plan, first
 
     def describe(self) -> str:
         return self.band.plan.describe() if self.band is not None else "lu"
@@ -288,6 +338,38 @@ class _Steps:
         S = sp.bmat([[-sp.identity(m), self.A, None], [self.A.T, None, self.E.T],
                      [None, self.E, -sp.diags(reg)]], format="csc")
         return BorderedLU(S, m + self.form.model.l_index, np.arange(m + n, m + n + self.pE))
+
+
+def _refit(plan: BandPlan, D: sp.csr_matrix, E: sp.csr_matrix, colnode: np.ndarray, lam_rows: np.ndarray,
+           diagonal) -> tuple[BandPlan, tuple] | None:
+    """``plan`` for rows ``D``, ``E`` of another pattern with its assembly, or None when it
+    does not serve them.
+
+    An outer loop's next linearization has the same unknowns and rows, but entries that
+    were exact zeros may fill and others vanish (a velocity of exactly 0 at a standstill in
+    a body-frame row). The plan serves them when ``D``'s rows fold and eliminate as in the
+    plan (:meth:`BandPlan.admitting`) and every entry of the assembly lands within its
+    bandwidth (what :meth:`BandPlan.build` measured to choose it); plans that split the band
+    into runs (``segments``) are not refitted.
+    """
+    if getattr(plan, "segments", 1) != 1:
+        return None
+    base = copy.copy(plan)
+    base.nnz_E = E.nnz
+    fitted = base.admitting(D, E, colnode, lam_rows)
+    if fitted is None:
+        return None
+    entries = fitted._entries(D, E, diagonal)
+    for e in entries[0]:
+        if isinstance(e, _Stride):
+            off = abs(e.off)
+        elif e[0].size:
+            off = int(np.max(np.abs(e[0].astype(np.int64) - e[1])))
+        else:
+            continue
+        if off > fitted.kl:
+            return None
+    return fitted, fitted._scatter(entries, scaled=True)
 
 
 class _Newton:

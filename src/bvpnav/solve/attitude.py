@@ -895,17 +895,21 @@ def _quick_step(f: Formulation, lam: float, workspace) -> np.ndarray | None:
     """The unknowns ``x`` of one banded solve of ``f`` at ``lam``, without refinement or
     verification (an intermediate Gauss-Newton step, whose answer only moves the
     linearization point), or None when ``f`` is not banded equality-constrained least
-    squares or the solve fails (the stage then solves it)."""
+    squares or the solve fails (the stage then solves it). Band and inequality rows: one
+    pass of the active set from the last answer's rows
+    (:func:`bvpnav.linalg.active_set.quick_step`)."""
+    from ..linalg.active_set import quick_step
     from ..linalg.banded import NotBanded
     from ..linalg.lsq import banded_factor, least_squares_form
 
     if f.residual != "acceleration":
         return None
     ls = least_squares_form(f, lam)
-    if ls is None:
-        return None
     try:
-        x = banded_factor(ls, f, workspace=workspace).solve_x(ls.rhs())
+        x = (quick_step(f, lam, workspace) if ls is None
+             else banded_factor(ls, f, workspace=workspace).solve_x(ls.rhs()))
+        if x is None:
+            return None
     except (NotBanded, RuntimeError, np.linalg.LinAlgError, ValueError):
         return None
     return x if np.all(np.isfinite(x)) else None

@@ -25,7 +25,9 @@ Two things make an error-model estimate unreliable although the solve succeeds:
 
 Both checks cost ``O(q^3)`` once the Schur complement is known; the verification step
 (:func:`bvpnav.solve.verify.verify`) passes its own factorization, so no extra
-factorization of size N is made for equality-constrained least-squares problems.
+factorization of size N is made for equality-constrained least-squares problems. Problems
+with band or inequality rows use their least-squares part, factorized by the banded path on
+the acceleration form (a pivoted sparse LU elsewhere).
 """
 
 from __future__ import annotations
@@ -109,10 +111,32 @@ def information_matrix(form: Formulation, lam: float, factored: Factored | None 
         H = np.asarray(factored.factor.schur, dtype=float)
     else:
         ls = least_squares_form(form, lam, surrogate=True)
-        m, n = ls.D.A.shape
-        p = ls.E.m
-        H = _schur(ls.augmented(), m + model.l_index, np.arange(m + n, m + n + p))
+        H = _banded_schur(ls, form)
+        if H is None:
+            m, n = ls.D.A.shape
+            p = ls.E.m
+            H = _schur(ls.augmented(), m + model.l_index, np.arange(m + n, m + n + p))
     return 0.5 * (H + H.T)
+
+
+def _banded_schur(ls, form: Formulation) -> np.ndarray | None:
+    """The parameters' Schur complement from the banded factorization of ``ls`` (the
+    acceleration form: the problems with band and inequality rows, whose back end hands no
+    factorization of their least-squares part), or None where that is not banded or singular
+    (:func:`_schur` then factorizes)."""
+    from ..linalg.banded import NotBanded
+    from ..linalg.lsq import banded_factor
+
+    if form.residual != "acceleration":
+        return None
+    try:
+        fac = banded_factor(ls, form)
+        if fac.keep is None:
+            return None
+        H = np.asarray(fac.schur, dtype=float)
+    except (NotBanded, RuntimeError, np.linalg.LinAlgError, ValueError):
+        return None
+    return H if np.all(np.isfinite(H)) else None
 
 
 def relative_singular_values(H: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
