@@ -221,7 +221,10 @@ ATTITUDE: dict[str, tuple[Any, Rule]] = {
                                                              "prior), 'search' or 'given' (start from "
                                                              "the data's heading)")),
     "candidates": (12, number(2, integer=True, want="an integer of at least 2 headings")),
-    "loop": (True, boolean()), "progress": (None, _PROGRESS), "quick": (True, boolean())}
+    "loop": (True, boolean()), "progress": (None, _PROGRESS), "quick": (True, boolean()),
+    "start": ("data", one_of("data", "course", want="'data' (the node states' first linearization point is "
+                                                    "the data's attitude) or 'course' (a car's: the heading "
+                                                    "of the fixes' velocity, bvpnav.solve.course)"))}
 #: The lambda sweep's options (``solve(rule={...})``; checked as a whole by the sweep).
 RULE: dict[str, tuple[Any, Rule]] = {
     "lam_range": ((1e-6, 1e6), _ANY), "points": (25, _ANY), "tau": (None, _ANY), "probes": (None, _ANY),
@@ -354,7 +357,9 @@ def _options() -> list[Option]:
                "Options of the damped outer loop that error models acting on the attitude "
                "(``AttitudeError``, ``GyroBias``, ``GyroScaleFactor``) are solved by: ``tol`` (rad), "
                "``max_iter``, ``heading`` (``\"auto\"``, ``\"search\"``, ``\"given\"``), ``candidates``, "
-               "``loop``, ``progress`` (:func:`bvpnav.solve.attitude.with_attitude`)."),
+               "``loop``, ``progress``, and for ``ErrorStates`` ``quick`` and ``start`` (``\"data\"``, or "
+               "``\"course\"``: a car's heading from the position fixes, :mod:`bvpnav.solve.course`) "
+               "(:func:`bvpnav.solve.attitude.with_attitude`)."),
         Option("time_limit", None, _TIME_LIMIT, "float or None",
                "Seconds each back-end attempt may take (None: no limit). A cvxpy solver gets it as its "
                "own option (Clarabel and OSQP ``time_limit``, SCS ``time_limit_secs``, HiGHS "

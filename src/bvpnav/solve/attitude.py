@@ -915,6 +915,20 @@ def _quick_step(f: Formulation, lam: float, workspace) -> np.ndarray | None:
     return x if np.all(np.isfinite(x)) else None
 
 
+def _start_totals(form: Formulation, o: dict) -> tuple[dict, bool]:
+    """The node states' totals (kind -> (N, 3)) at the loop's first point, and whether they
+    move it off the data: zero, or with ``start="course"`` the attitude error to a car's
+    course attitude (:func:`bvpnav.solve.course.course_totals`)."""
+    raw = form.data
+    totals = {k: np.zeros((raw.n, 3)) for k in form.model.state_model.state_kinds(raw)}
+    if o["start"] != "course":
+        return totals, False
+    from .course import course_totals
+
+    totals["attitude_error"] = course_totals(form)
+    return totals, True
+
+
 def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solution:
     r"""Gauss-Newton on the node states of :class:`~bvpnav.error_models.ErrorStates`.
 
@@ -957,7 +971,7 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
                          "measured")
     sm = form.model.state_model
     t0 = time.perf_counter()
-    totals = {k: np.zeros((raw.n, 3)) for k in sm.state_kinds(raw)}
+    totals, started = _start_totals(form, o)
     iters: list[dict] = []
     reason = None
     lam_now, rule, curve = lam, (lam if isinstance(lam, str) else None), None
@@ -974,13 +988,13 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     checked = _checked_first(form, quick, o, lam_now)
     with progress(desc="state loop", unit="iter", enabled=o["progress"]) as bar:
         for k in range(int(o["max_iter"])):
-            data = form.data if not iters else states_at(raw, totals)
+            data = form.data if not (iters or started) else states_at(raw, totals)
             if iters and any(getattr(it, "body_frame", False) for it in form.items):
                 # body-frame items: their attitude term about the last step's velocity
                 m = f.model
                 vel = np.column_stack([m.node_velocity_values(a, x) for a in range(m.d)])
                 data.body_point = LinearizationPoint(velocity=vel, names=(), psi=np.zeros((raw.n, 3, 0)))
-            if iters:
+            if iters or started:
                 f = Formulation(data, form.residual, form.sigma_a if form.sigma_a_given else None,
                                 form.error_model, form.items, grade=None, segment=form.segment)
                 f.grade_report = form.grade_report
@@ -1072,6 +1086,13 @@ def with_attitude(inner: Stage) -> Stage:
         Node states (:class:`~bvpnav.error_models.ErrorStates`) with ``direct``: the
         intermediate Gauss-Newton steps are one banded solve each, without refinement or
         verification (default True); False: every step through the stage.
+    start : {"data", "course"}
+        Node states: the first linearization point. ``"data"`` (default): the data's
+        attitude; ``"course"``: a car's attitude from the ``Position`` items (the heading of
+        the fix-interpolated velocity, held below
+        :data:`~bvpnav.solve.course.COURSE_MIN_SPEED`; the roll and pitch of the data's
+        first sample), as initial attitude-error totals (:mod:`bvpnav.solve.course`); the
+        process rows keep the raw gyro rates.
 
     The answer is the last linearized solve at the accepted totals (its increments are
     below ``tol``), so ``error_params`` holds the totals and ``solve(uncertainty=...)``
@@ -1084,6 +1105,10 @@ def with_attitude(inner: Stage) -> Stage:
         comps = attitude_components(form.error_model)
         if form.model.ns:
             return _state_loop(form, inner, lam, opts, comps)
+        if check_attitude(getattr(opts, "attitude", None))["start"] == "course":
+            from .course import course_totals
+
+            course_totals(form)   # refuses: no node states to start
         if not comps:
             return inner(form, lam, opts)
         o = check_attitude(getattr(opts, "attitude", None))
