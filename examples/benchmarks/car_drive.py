@@ -35,11 +35,12 @@ used here, with the drive's fix sigma and the grade's tilt), every figure from t
     a cubic spline through the kept fixes (scipy; no IMU).
 ``GTSAM course start`` / ``bvpnav states course start``
     ``GTSAM`` and ``bvpnav states`` linearized first about the attitude the kept fixes imply
-    for a car (:func:`course_attitude`: the heading of the fix-interpolated velocity, held
-    through stops, the guess's roll and pitch) instead of the attitude integrated from the raw
-    gyro. A harness start, not the README's path: bvpnav takes it through data whose
-    ``attitude`` is that sequence and whose ``gyro`` attribute is set to the raw rates (the
-    node states' process rows read them), which no documented call builds.
+    for a car (the heading of the fix-interpolated velocity, held through stops, the guess's
+    roll and pitch) instead of the attitude integrated from the raw gyro. GTSAM's is a harness
+    start (:func:`course_attitude`, the graph's initial values at its nodes); bvpnav's is the
+    documented option ``solve(attitude={"start": "course"})`` (:mod:`bvpnav.solve.course`: the
+    same heading, as initial totals of the node states' attitude errors, the process rows on
+    the raw gyro rates).
 ``GTSAM from truth``
     not a method but a check of the others' start: the ``GTSAM`` graph solved by
     Levenberg-Marquardt from the TRUE states at its nodes. Its graph error against ``GTSAM``'s
@@ -193,25 +194,16 @@ def gtsam_from(g: dict, rotations, positions, velocities, acc_bias=None,
 
 
 def states_course_start(drive: CarDrive, kept, withheld, fig: dict, tilt: float, truth) -> dict:
-    """``bvpnav states`` linearized first about :func:`course_attitude` (see the module docstring)."""
-    import math
+    """``bvpnav states`` (the same problem, :func:`kitti_drive.problem`) solved with the documented
+    course start, ``solve(attitude={"start": "course"})`` (:mod:`bvpnav.solve.course`)."""
+    from kitti_drive import problem
 
     import bvpnav.solve.pipeline  # noqa: F401  (imported before the clock, as in kitti_drive.run_bvpnav)
-    from bvpnav import ImuData, NavigationProblem
-    from bvpnav.constraints import Position
-    from bvpnav.error_models import ErrorStates
 
-    att = course_attitude(drive.t, drive.fix_t[kept], drive.fix_position[kept], drive.initial_attitude_guess)
-    data = ImuData(drive.t, specific_force=drive.specific_force, attitude=att, gravity=drive.gravity)
-    data.gyro = drive.gyro
-    model = ErrorStates(arw=fig["gyro_noise"], gyro_drift=fig["gyro_bias_walk"],
-                        acc_drift=fig["acc_bias_walk"], attitude_sigma=[tilt, tilt, np.inf],
-                        gyro_sigma=fig["gyro_bias"], acc_sigma=fig["acc_bias"])
-    prob = NavigationProblem(data, error_model=model, sigma_a=fig["acc_noise"] * math.sqrt(drive.rate))
-    prob.add(Position(t=drive.fix_t[kept], value=drive.fix_position[kept],
-                      sigma=np.tile(drive.fix_sigma, (kept.size, 1)), name="fixes"))
+    prob = problem(drive_dict(drive), kept, "bvpnav states", fig, drive.initial_attitude_guess, 30.0,
+                   fix_sigma=drive.fix_sigma, tilt=tilt)
     t0, cpu = time.perf_counter(), time.process_time()
-    sol = prob.solve(solver="direct", attitude={"progress": False})
+    sol = prob.solve(solver="direct", attitude={"progress": False, "start": "course"})
     sec, cpu = time.perf_counter() - t0, time.process_time() - cpu
     pos = sol.position()
     est = np.column_stack([np.interp(drive.fix_t[withheld], drive.t, pos[:, k]) for k in range(3)])
