@@ -99,7 +99,8 @@ course start"``, one run at load about 17: read the CPU seconds and ratios), 3-D
     60  106.4019 300 it  CPU 6.3 s  91.1884 100 it  CPU 2.3 s   7.7333  13 steps  CPU 26.4 s  44 kB/sample
 
 the harness start's figures above to the last digit shown (0.991 / 1.966 / 7.73), every answer
-verified, misfit 1.00 / 1.00 / 0.97, no warning.
+verified, misfit 1.00 / 1.00 / 0.97, no warning. The default start at 10 s in a second run (main
+of 2026-12-05): 19.1866 m, 30 steps, not converged, misfit 16 x, CPU 46.8 s (GTSAM 19.1875 m).
 
 ``bvpnav states mesh`` (``NavigationProblem(segment=1.0)``, issue 42; ``--duration 240 --rate 100
 --gaps 30 --seeds 0 --methods GTSAM "bvpnav states mesh" "bvpnav states"``, one run at load about 8:
