@@ -13,11 +13,14 @@ A hostile case is a realistic mistake of a user. Each case asserts three things:
 
 from __future__ import annotations
 
+import contextlib
+import io
 import os
 import re
 import stat
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import pytest
@@ -58,6 +61,39 @@ def run_cli(args: list[str], cwd: str | os.PathLike | None = None, timeout: floa
     return subprocess.run([sys.executable, "-m", "bvpnav.cli", *map(str, args)], cwd=cwd,
                           capture_output=True, text=True, timeout=timeout, env=env,
                           stdin=subprocess.DEVNULL, **kw)
+
+
+def main_cli(args: list, cwd: str | os.PathLike | None = None) -> subprocess.CompletedProcess:
+    """Run ``bvpnav.cli.main(ARGS)`` in this process, as :func:`run_cli` runs the command:
+    its exit code (argparse's usage errors included), stdout and stderr as text, stdin empty,
+    Python's default warning filters (``PYTHONWARNINGS=default``), in the folder ``cwd``.
+
+    For tests of what the command does and says, where a process adds nothing but its start-up
+    (about a second of imports); the entry point itself, signals, stdin, hangs and memory caps
+    are tested through :func:`run_cli`. ``main`` restores the logging and warning state it
+    changes (``bvpnav.log.configured``).
+    """
+    from bvpnav.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    here = os.getcwd()
+    stdin = sys.stdin
+    with open(os.devnull) as devnull, contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), \
+            warnings.catch_warnings():
+        warnings.simplefilter("default")
+        sys.stdin = devnull
+        try:
+            if cwd is not None:
+                os.chdir(cwd)
+            code = main([str(a) for a in args])
+        except SystemExit as exc:  # argparse: --help, usage errors
+            code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+            if not isinstance(exc.code, (int, type(None))):
+                print(exc.code, file=sys.stderr)
+        finally:
+            os.chdir(here)
+            sys.stdin = stdin
+    return subprocess.CompletedProcess(["bvpnav", *map(str, args)], code, out.getvalue(), err.getvalue())
 
 
 def assert_clean_failure(proc: subprocess.CompletedProcess, code: int, *patterns: str) -> None:

@@ -1,4 +1,9 @@
-"""Command line and files: simulate -> solve as a subprocess, specs round-trip, bad files."""
+"""Command line and files: simulate -> solve as a subprocess, specs round-trip, bad files.
+
+``run`` starts ``python -m bvpnav.cli`` (the entry point as a user runs it); ``here`` calls
+``bvpnav.cli.main`` in this process with the same exit code and output (``_hostile.main_cli``),
+for checks of what a command does and says, where a new process adds only its start-up.
+"""
 
 from __future__ import annotations
 
@@ -9,6 +14,7 @@ import sys
 import numpy as np
 import pandas as pd
 import pytest
+from _hostile import main_cli
 
 import bvpnav
 from bvpnav.error_models import Bias, Misalignment, ScaleFactor, UnknownGravity
@@ -22,10 +28,14 @@ def run(*args, cwd=None):
                           capture_output=True, text=True, timeout=300)
 
 
+def here(*args, cwd=None):
+    return main_cli(list(args), cwd=cwd)
+
+
 @pytest.fixture(scope="module")
 def sample(tmp_path_factory):
     d = tmp_path_factory.mktemp("sim")
-    proc = run("simulate", "tikhonov2011", "--out", d / "rec")
+    proc = here("simulate", "tikhonov2011", "--out", d / "rec")
     assert proc.returncode == 0, proc.stderr
     return d / "rec"
 
@@ -55,8 +65,8 @@ def test_parquet_in_and_out_match_csv(sample, tmp_path):
     a = read_recording(sample / "recording.csv", load_spec(sample / "spec.toml").input)
     b = read_recording(tmp_path / "rec.parquet", load_spec(sample / "spec.toml").input)
     np.testing.assert_array_equal(a.acc, b.acc)
-    proc = run("solve", tmp_path / "rec.parquet", "--spec", sample / "spec.toml", "--out",
-               tmp_path / "t.parquet", "--quiet")
+    proc = here("solve", tmp_path / "rec.parquet", "--spec", sample / "spec.toml", "--out",
+                tmp_path / "t.parquet", "--quiet")
     assert proc.returncode == 0 and proc.stdout == "", proc.stderr
     assert list(pd.read_parquet(tmp_path / "t.parquet").columns) == ["t", "x", "vx"]
 
@@ -131,7 +141,7 @@ def test_bad_recordings_exit_2_with_one_line_naming_row_or_column(sample, tmp_pa
     rec = tmp_path / "bad.csv"
     rec.write_text(body)
     before = rec.read_bytes()
-    proc = run("solve", rec, "--spec", sample / "spec.toml", "--out", tmp_path / "o.csv")
+    proc = here("solve", rec, "--spec", sample / "spec.toml", "--out", tmp_path / "o.csv")
     assert proc.returncode == 2
     assert needle in proc.stderr and "Traceback" not in proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1
@@ -141,8 +151,8 @@ def test_bad_recordings_exit_2_with_one_line_naming_row_or_column(sample, tmp_pa
 def test_wrong_unit_name_exits_2(sample, tmp_path):
     spec = (sample / "spec.toml").read_text().replace('unit = "m/s^2"', 'unit = "m/s2"')
     (tmp_path / "spec.toml").write_text(spec)
-    proc = run("solve", sample / "recording.csv", "--spec", tmp_path / "spec.toml", "--out",
-               tmp_path / "o.csv")
+    proc = here("solve", sample / "recording.csv", "--spec", tmp_path / "spec.toml", "--out",
+                tmp_path / "o.csv")
     assert proc.returncode == 2 and "unit='m/s2'; valid acceleration units" in proc.stderr
     assert "Traceback" not in proc.stderr
 
@@ -193,7 +203,7 @@ def test_example_specs_parse_and_match_the_simulated_ones(tmp_path):
     assert {p.stem for p in specs} >= {"shuttle", "tikhonov2011"}
     for p in specs:
         spec = load_spec(p)
-        assert run("simulate", p.stem, "--out", tmp_path / p.stem, "--quiet").returncode == 0
+        assert here("simulate", p.stem, "--out", tmp_path / p.stem, "--quiet").returncode == 0
         sim = load_spec(tmp_path / p.stem / "spec.toml")
         assert [type(i).__name__ for i in spec.items] == [type(i).__name__ for i in sim.items]
         assert spec.solve == sim.solve and spec.input == sim.input
@@ -236,7 +246,7 @@ value = 2.0
 """
     (tmp_path / "spec.toml").write_text(spec_text)
     out = tmp_path / "traj.csv"
-    proc = run("solve", tmp_path / "rec.csv", "--spec", tmp_path / "spec.toml", "--out", out)
+    proc = here("solve", tmp_path / "rec.csv", "--spec", tmp_path / "spec.toml", "--out", out)
     assert proc.returncode == 0, proc.stderr
     assert "'fix B'" in proc.stderr + proc.stdout and "demoted" in proc.stderr + proc.stdout
     got = pd.read_csv(out)
@@ -245,8 +255,8 @@ value = 2.0
     assert [d["item"] for d in summary["solver"]["demoted"]] == ["fix B"]
     # without the option the same spec is an error naming both fixes (exit code 3)
     (tmp_path / "raise.toml").write_text(spec_text.replace('on_conflict = "demote"', ""))
-    proc = run("solve", tmp_path / "rec.csv", "--spec", tmp_path / "raise.toml", "--out",
-               tmp_path / "t2.csv")
+    proc = here("solve", tmp_path / "rec.csv", "--spec", tmp_path / "raise.toml", "--out",
+                tmp_path / "t2.csv")
     assert proc.returncode == 3 and "['fix A', 'fix B']" in proc.stderr
     with pytest.raises(bvpnav.InputError, match=r"line 9: on_conflict='ignore'"):
         parse_spec(spec_text.replace('"demote"', '"ignore"'))

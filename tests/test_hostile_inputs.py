@@ -21,7 +21,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from _hostile import EXIT_INPUT, assert_clean_failure, assert_unchanged, raises_named, run_cli, snapshot
+from _hostile import (
+    EXIT_INPUT,
+    assert_clean_failure,
+    assert_unchanged,
+    main_cli,
+    raises_named,
+    run_cli,
+    snapshot,
+)
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -477,7 +485,8 @@ def test_reader_says_what_the_file_is(sample, tmp_path, build, culprit, fix):
     assert_unchanged(before)
 
 
-#: The cases also run through ``bvpnav solve`` (exit 2, no traceback, no output written).
+#: The cases also run through ``bvpnav solve`` (``bvpnav.cli.main`` in this process: exit 2, no
+#: traceback, no output written).
 CLI_IDS = ["xlsx-renamed-csv", "comment-preamble-hash", "decimal-commas", "iso-timestamps-without-unit",
            "int-ns-epoch", "parquet-time-index-other-name", "duplicate-header", "acc_vx-beside-acc_x",
            "F7-one-column-two-axes", "F8-header-trailing-space", "F9-blank-line-between-rows",
@@ -494,8 +503,7 @@ def test_cli_says_what_the_file_is(sample, tmp_path, build, culprit, fix):
     out.mkdir()
     (out / "earlier.csv").write_text("t,x\n0,0\n")  # an earlier output
     before = snapshot(folder, sample, out)
-    proc = run_cli(["solve", path, "--spec", spec or sample / "spec.toml", "--out", out / "traj.csv"],
-                   timeout=120)
+    proc = main_cli(["solve", path, "--spec", spec or sample / "spec.toml", "--out", out / "traj.csv"])
     assert_clean_failure(proc, EXIT_INPUT, culprit, fix)
     assert_unchanged(before)
     assert sorted(p.name for p in out.iterdir()) == ["earlier.csv"]
@@ -726,8 +734,7 @@ def test_spec_errors_found_with_the_data_name_the_line(sample, tmp_path, edit, c
     out.mkdir()
     (out / "earlier.csv").write_text("t,x\n0,0\n")
     before = snapshot(sample, spec, out)
-    proc = run_cli(["solve", sample / "recording.csv", "--spec", spec, "--out", out / "traj.csv"],
-                   timeout=120)
+    proc = main_cli(["solve", sample / "recording.csv", "--spec", spec, "--out", out / "traj.csv"])
     assert_clean_failure(proc, EXIT_INPUT, culprit, fix)
     assert_unchanged(before)
     assert sorted(p.name for p in out.iterdir()) == ["earlier.csv"]

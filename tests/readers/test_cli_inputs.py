@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
-from _hostile import EXIT_INPUT, EXIT_OK, assert_clean_failure, run_cli
+from _hostile import EXIT_INPUT, EXIT_OK, assert_clean_failure, main_cli
 
 pytest.importorskip("pynmea2")
 pymap3d = pytest.importorskip("pymap3d")
@@ -64,8 +64,8 @@ type = "bias"
 def test_an_imu_table_and_an_nmea_log_give_a_trajectory_and_its_geodetic_coordinates(drive, tmp_path):
     d, sim = drive
     out, geo = tmp_path / "traj.csv", tmp_path / "geo.csv"
-    proc = run_cli(["solve", d / "imu.csv", "--spec", d / "spec.toml", "--info", d / "fixes.nmea",
-                    "--origin", *ORIGIN, "--out", out, "--geodetic", geo, "-v"])
+    proc = main_cli(["solve", d / "imu.csv", "--spec", d / "spec.toml", "--info", d / "fixes.nmea",
+                     "--origin", *ORIGIN, "--out", out, "--geodetic", geo, "-v"])
     assert proc.returncode == EXIT_OK, proc.stderr
     # both clocks are UTC: the log's t = 0 is its first fix, 0.5 s after the IMU's first sample
     assert "fixes.nmea: times shifted by +0.500000000 s" in proc.stderr, proc.stderr
@@ -88,12 +88,12 @@ def test_without_a_stated_clock_relation_the_log_is_refused(drive, tmp_path):
     spec = spec.replace('[[error_model]]\ntype = "bias"\n', '[[item]]\ntype = "position"\nt = [0.0, 19.95]\n'
                         'value = 0.0\n')
     (tmp_path / "spec.toml").write_text(spec)
-    proc = run_cli(["solve", tmp_path / "rel.csv", "--spec", tmp_path / "spec.toml", "--info",
-                    d / "fixes.nmea", "--out", tmp_path / "traj.csv"])
+    proc = main_cli(["solve", tmp_path / "rel.csv", "--spec", tmp_path / "spec.toml", "--info",
+                     d / "fixes.nmea", "--out", tmp_path / "traj.csv"])
     assert_clean_failure(proc, EXIT_INPUT, r"not known to be one", r"--clock-offset SECONDS")
     assert not (tmp_path / "traj.csv").exists()
-    proc = run_cli(["solve", tmp_path / "rel.csv", "--spec", tmp_path / "spec.toml", "--out",
-                    tmp_path / "t2.csv", "--geodetic", tmp_path / "g.csv"])
+    proc = main_cli(["solve", tmp_path / "rel.csv", "--spec", tmp_path / "spec.toml", "--out",
+                     tmp_path / "t2.csv", "--geodetic", tmp_path / "g.csv"])
     assert_clean_failure(proc, EXIT_INPUT, r"--geodetic: the local frame's geodetic origin is not known",
                          r"--origin LAT LON HEIGHT")
 
@@ -107,8 +107,8 @@ def test_a_ros2_bag_with_imu_and_navsatfix_to_a_trajectory_and_a_plot_in_one_cal
     spec = '[problem]\nsigma_a = 0.05\n\n[solve]\nsolver = "direct"\nlam = 1.0\n'
     (tmp_path / "spec.toml").write_text(spec)
     out, png, geo = tmp_path / "traj.csv", tmp_path / "traj.png", tmp_path / "geo.csv"
-    proc = run_cli(["solve", bag.path, "--spec", tmp_path / "spec.toml", "--out", out, "--plot", png,
-                    "--geodetic", geo, "-v"])
+    proc = main_cli(["solve", bag.path, "--spec", tmp_path / "spec.toml", "--out", out, "--plot", png,
+                     "--geodetic", geo, "-v"])
     assert proc.returncode == EXIT_OK, proc.stderr
     assert "t = 0 at the first Imu stamp" in proc.stderr  # the reader's notes are said
     traj = pd.read_csv(out).set_index("t")
@@ -125,6 +125,6 @@ def test_a_ros2_bag_with_imu_and_navsatfix_to_a_trajectory_and_a_plot_in_one_cal
     assert np.abs(np.column_stack([e, n, u]) - truth[["x", "y", "z"]].to_numpy()).max() < 0.3
     ned = tmp_path / "ned.toml"
     ned.write_text('[input]\nframe = "ned"\n\n' + (tmp_path / "spec.toml").read_text())
-    proc = run_cli(["solve", bag.path, "--spec", ned, "--out", tmp_path / "t3.csv"])
+    proc = main_cli(["solve", bag.path, "--spec", ned, "--out", tmp_path / "t3.csv"])
     assert_clean_failure(proc, EXIT_INPUT, r'set frame = "enu"',
                          r"are in the local ENU frame but the spec's \[input\] frame is 'ned'")

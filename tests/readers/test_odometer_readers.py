@@ -234,7 +234,7 @@ def test_cli_states_an_nmea_speed_over_ground_as_an_odometer(tmp_path):
     import json
 
     import pandas as pd
-    from _hostile import EXIT_INPUT, EXIT_OK, assert_clean_failure, run_cli
+    from _hostile import EXIT_INPUT, EXIT_OK, assert_clean_failure, main_cli
 
     from bvpnav.readers.nmea import format_gga, sentence
     from bvpnav.scenarios import car_drive
@@ -271,8 +271,8 @@ lam = 1.0
     out = tmp_path / "traj.csv"
     base = ["solve", tmp_path / "imu.csv", "--spec", tmp_path / "spec.toml", "--info", tmp_path / "log.nmea",
             "--origin", *origin, "--out", out]
-    proc = run_cli([*base, "--info-option", "speed_as=odometer", "--info-option", "velocity_sigma=0.05",
-                    "--info-option", "date=2026-05-01"])   # no RMC: the date puts the log on UTC
+    proc = main_cli([*base, "--info-option", "speed_as=odometer", "--info-option", "velocity_sigma=0.05",
+                     "--info-option", "date=2026-05-01"])   # no RMC: the date puts the log on UTC
     assert proc.returncode == EXIT_OK, proc.stderr
     summ = json.loads(out.with_suffix(".json").read_text())
     assert summ["run"]["information_options"] == {"speed_as": "odometer", "velocity_sigma": 0.05,
@@ -282,10 +282,10 @@ lam = 1.0
     traj = pd.read_csv(out)
     err = traj[["x", "y", "z"]].to_numpy() - d.truth_at(traj.t.to_numpy())
     assert float(np.sqrt(np.mean(np.sum(err**2, axis=1)))) < 0.05   # m: exact fixes, noise-free IMU
-    proc = run_cli([*base, "--info-option", "speed_as=odometer", "--info-option", "odometry_as=odometer",
-                    "--info-option", "date=2026-05-01", "--out", tmp_path / "t2.csv"])
+    proc = main_cli([*base, "--info-option", "speed_as=odometer", "--info-option", "odometry_as=odometer",
+                     "--info-option", "date=2026-05-01", "--out", tmp_path / "t2.csv"])
     assert_clean_failure(proc, EXIT_INPUT, r"information option\(s\) \['odometry_as'\]", r"speed_as")
-    proc = run_cli([*base, "--info-option", "speed_as"])
+    proc = main_cli([*base, "--info-option", "speed_as"])
     assert_clean_failure(proc, EXIT_INPUT, r"--info-option 'speed_as': give KEY=VALUE")
 
 
@@ -298,7 +298,7 @@ def test_a_speed_column_of_a_strapdown_table_to_the_scale_on_the_command_line(tm
     import sys
 
     import pandas as pd
-    from _hostile import EXIT_INPUT, EXIT_OK, assert_clean_failure, run_cli
+    from _hostile import EXIT_INPUT, EXIT_OK, assert_clean_failure, main_cli
 
     from bvpnav import ImuData
     from bvpnav.readers import read
@@ -345,19 +345,19 @@ type = "odometer_scale"
     assert odo.label == "drive.csv column speed" and odo.t.size == d.t.size
     np.testing.assert_allclose(odo.sigma, 0.05)
     out = tmp_path / "traj.csv"
-    proc = run_cli(["solve", tmp_path / "drive.csv", "--spec", tmp_path / "spec.toml", "--out", out])
+    proc = main_cli(["solve", tmp_path / "drive.csv", "--spec", tmp_path / "spec.toml", "--out", out])
     assert proc.returncode == EXIT_OK, proc.stderr
     summ = json.loads(out.with_suffix(".json").read_text())
     scale = summ["error_model"]["odometer_scale"]
     assert scale["units"] == "1" and abs(scale["estimate"] - 0.02) <= 1e-6 * 0.02, scale
     # the column must be there, and needs its sigma
     (tmp_path / "nosig.toml").write_text(spec.replace("odometer_sigma = 0.05\n", ""))
-    proc = run_cli(["solve", tmp_path / "drive.csv", "--spec", tmp_path / "nosig.toml", "--out",
-                    tmp_path / "t2.csv"])
+    proc = main_cli(["solve", tmp_path / "drive.csv", "--spec", tmp_path / "nosig.toml", "--out",
+                     tmp_path / "t2.csv"])
     assert_clean_failure(proc, EXIT_INPUT, r"odometer_sigma = None; give the speed's noise")
     (tmp_path / "nocol.toml").write_text(spec.replace('odometer = "speed"', 'odometer = "wheel"'))
-    proc = run_cli(["solve", tmp_path / "drive.csv", "--spec", tmp_path / "nocol.toml", "--out",
-                    tmp_path / "t3.csv"])
+    proc = main_cli(["solve", tmp_path / "drive.csv", "--spec", tmp_path / "nocol.toml", "--out",
+                     tmp_path / "t3.csv"])
     assert_clean_failure(proc, EXIT_INPUT, r"wheel")
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
-from _hostile import EXIT_INPUT, EXIT_OK, assert_clean_failure, run_cli
+from _hostile import EXIT_INPUT, EXIT_OK, assert_clean_failure, main_cli
 from scipy.spatial.transform import Rotation
 
 from bvpnav import readers, simulate
@@ -190,12 +190,12 @@ def test_simulated_strapdown_recordings_solve_from_the_command_line(tmp_path, sc
     # measured: 0.037 m (walking: start position and the detected stances), 0.11 m (strapdown3d:
     # nine-parameter model, ends and three velocities, 0.02 m/s^2 noise)
     folder = tmp_path / scenario
-    proc = run_cli(["simulate", scenario, "--out", folder])
+    proc = main_cli(["simulate", scenario, "--out", folder])
     assert proc.returncode == EXIT_OK, proc.stderr
     head = (folder / "recording.csv").read_text().splitlines()[0]
     assert head.startswith("t,f_x,f_y,f_z,")
-    proc = run_cli(["solve", folder / "recording.csv", "--spec", folder / "spec.toml", "--out",
-                    tmp_path / "traj.csv", "--truth", folder / "truth.csv", "--plot", tmp_path / "traj.png"])
+    proc = main_cli(["solve", folder / "recording.csv", "--spec", folder / "spec.toml", "--out",
+                     tmp_path / "traj.csv", "--truth", folder / "truth.csv", "--plot", tmp_path / "traj.png"])
     assert proc.returncode == EXIT_OK, proc.stderr
     rms = float(proc.stdout.split("truth.csv): ")[1].split(" m")[0])
     assert rms < limit, proc.stdout
@@ -205,20 +205,20 @@ def test_simulated_strapdown_recordings_solve_from_the_command_line(tmp_path, sc
 
 def test_the_stationary_command_finds_the_walks_stances_and_draws_them(tmp_path):
     folder = tmp_path / "walk"
-    assert run_cli(["simulate", "walking", "--out", folder]).returncode == EXIT_OK
-    proc = run_cli(["stationary", folder / "recording.csv", "--spec", folder / "spec.toml", "--out",
-                    tmp_path / "still.csv", "--plot", tmp_path / "still.png"])
+    assert main_cli(["simulate", "walking", "--out", folder]).returncode == EXIT_OK
+    proc = main_cli(["stationary", folder / "recording.csv", "--spec", folder / "spec.toml", "--out",
+                     tmp_path / "still.csv", "--plot", tmp_path / "still.png"])
     assert proc.returncode == EXIT_OK, proc.stderr
     assert proc.stdout.startswith("11 stationary interval(s)"), proc.stdout  # 10 strides: 9 + both ends
     got = pd.read_csv(tmp_path / "still.csv")
     assert list(got.columns) == ["t0", "t1"] and len(got) == 11 and (got.t1 > got.t0).all()
     assert (tmp_path / "still.png").stat().st_size > 10_000
-    proc = run_cli(["stationary", folder / "truth.csv", "--spec", folder / "spec.toml"])
+    proc = main_cli(["stationary", folder / "truth.csv", "--spec", folder / "spec.toml"])
     assert_clean_failure(proc, EXIT_INPUT, r"column 'f_x' \(specific force x\) not found")
 
 
 def test_the_readers_command_lists_every_reader():
-    proc = run_cli(["readers"])
+    proc = main_cli(["readers"])
     assert proc.returncode == EXIT_OK, proc.stderr
     for name in readers.registry():
         assert any(line.startswith(name) for line in proc.stdout.splitlines()), proc.stdout
@@ -270,7 +270,7 @@ def test_attitude_frame_without_an_orientation_and_clock_options_without_info_ar
     with pytest.raises(InputError, match=r'euler = \["yaw", "pitch", "roll"\], sequence = "ZYX"'):
         _read(path, specific_force=["f_0", "f_1", "f_2"], attitude={"euler": ["f_0", "f_1", "f_2"]})
     (tmp_path / "s.toml").write_text("[solve]\nsolver = \"direct\"\n")
-    proc = run_cli(["solve", path, "--spec", tmp_path / "s.toml", "--out", tmp_path / "o.csv",
-                    "--clock-offset", "5"])
+    proc = main_cli(["solve", path, "--spec", tmp_path / "s.toml", "--out", tmp_path / "o.csv",
+                     "--clock-offset", "5"])
     assert_clean_failure(proc, EXIT_INPUT, r"--clock-offset relates the clock of an --info file",
                          r"add --info FILE or drop the option")
