@@ -8,12 +8,11 @@ of the same spec solved in Python.
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pandas as pd
 import pytest
+from _hostile import main_cli
 
 try:
     import tomllib
@@ -209,9 +208,8 @@ def test_the_flag_overrides_the_spec_scaled_and_off(rec, tmp_path, capsys):
 
 def test_a_bad_flag_value_exits_2_before_any_work(rec, tmp_path):
     out = tmp_path / "o.csv"
-    proc = subprocess.run([sys.executable, "-m", "bvpnav.cli", "solve", str(rec / "recording.csv"), "--spec",
-                           str(rec / "plain.toml"), "--out", str(out), "--uncertainty", "maybe"],
-                          capture_output=True, text=True, timeout=300)
+    proc = main_cli(["solve", rec / "recording.csv", "--spec", rec / "plain.toml", "--out", out,
+                     "--uncertainty", "maybe"])
     assert proc.returncode == 2
     assert proc.stderr.startswith("bvpnav: error: --uncertainty 'maybe': choose stated")
     assert "scaled" in proc.stderr and "off" in proc.stderr and "Traceback" not in proc.stderr
@@ -219,9 +217,8 @@ def test_a_bad_flag_value_exits_2_before_any_work(rec, tmp_path):
 
 
 def test_solve_plot_draws_the_band_from_the_cli(rec, tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "bvpnav.cli", "solve", str(rec / "recording.csv"), "--spec",
-                           str(rec / "spec.toml"), "--out", str(tmp_path / "t.csv"), "--plot",
-                           str(tmp_path / "t.png")], capture_output=True, text=True, timeout=300)
+    proc = main_cli(["solve", rec / "recording.csv", "--spec", rec / "spec.toml", "--out", tmp_path / "t.csv",
+                     "--plot", tmp_path / "t.png"])
     assert proc.returncode == 0, proc.stderr
     assert "uncertainty (exact covariance): the standard deviations assume the stated noise" in proc.stdout
     assert (tmp_path / "t.png").stat().st_size > 5000
