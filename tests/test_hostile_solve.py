@@ -17,8 +17,8 @@ from _hostile import (
     EXIT_INPUT,
     assert_clean_failure,
     assert_unchanged,
+    main_cli,
     raises_named,
-    run_cli,
     snapshot,
 )
 
@@ -434,8 +434,8 @@ def test_cli_extremes_exit_2_and_touch_nothing(shuttle, tmp_path, extra, culprit
     out.mkdir()
     (out / "earlier.csv").write_text("t,x\n0,0\n")
     before = snapshot(shuttle, out)
-    proc = run_cli(["solve", shuttle / "recording.csv", "--spec", shuttle / "spec.toml",
-                    "--out", out / "traj.csv", *extra])
+    proc = main_cli(["solve", shuttle / "recording.csv", "--spec", shuttle / "spec.toml",
+                     "--out", out / "traj.csv", *extra])
     assert_clean_failure(proc, EXIT_INPUT, culprit, fix)
     assert_unchanged(before)
     assert sorted(p.name for p in out.iterdir()) == ["earlier.csv"]
