@@ -69,7 +69,7 @@ without the gyro's white noise +3.43 ms, without the fix noise +4.36, without th
 leaves out, so the reported std cannot hold it.
 
 Run: ``python examples/benchmarks/vehicle_faults.py [--grade tactical consumer] [--quality ...]
-[--duration 300] [--rate 10] [--seeds 0 1 2 3 4] [--explain] [--no-odometer] [--quick]
+[--duration 300] [--rate 10] [--seeds 0 1 2 3 4] [--explain] [--no-odometer] [--walk] [--quick]
 [--json FILE]``; each drive in its own process with ``--json`` and then ``--table FILE ...``
 for the tables of them all.
 """
@@ -104,6 +104,9 @@ ODO_SIGMA = 0.05             # m/s, odometer noise
 TAPE = 0.02                  # m, standard deviation of the vertical lever arm's tape measurement
 #: Whether both runs have the odometer (``--no-odometer``: neither, and no scale to estimate).
 ODOMETER = True
+#: Whether every run's error model also has the gyro noise's attitude walk (``--walk``:
+#: ``grade.error_model(walk=True)``, the AttitudeWalk the simulated gyro's white noise makes).
+WALK = False
 #: The solves: (a), (b), (c) and the two of ``--explain``.
 RUNS = ("clean", "faults", "reference", "known", "calibration")
 
@@ -152,7 +155,7 @@ def solve(d: Drive, which: str = "faults", uncertainty: bool = False):
     """One of :data:`RUNS` (see the module docstring); returns the solution and its wall time, s."""
     drive, fx = d.drive, d.fixes
     g = sensor_grade(drive.params["grade"])
-    em = g.error_model(INTERVAL, walk=False)
+    em = g.error_model(INTERVAL, walk=WALK)
     sigma = np.tile(drive.fix_sigma, (fx.t.size, 1))
     if which == "clean":
         items, models = extra_information(d, faults=False)
@@ -207,7 +210,7 @@ def run(grade: str, quality: str, duration: float, rate: float, seed: int = 0, e
     got = set() if rej is None or not len(rej) else set(
         np.searchsorted(fixes.t, rej["t"].to_numpy()).tolist())
     bad = set(fixes.bad.tolist())
-    out = {"grade": grade, "quality": quality, "duration": duration, "rate": rate, "seed": seed,
+    out = {"grade": grade, "quality": quality, "duration": duration, "rate": rate, "seed": seed, "walk": WALK,
            "fixes": int(fixes.t.size), "bad": len(bad), "caught": len(bad & got),
            "false": sorted(got - bad), "missed": sorted(bad - got), "gating": faults.stats.get("gating", {}),
            "lever": [float(ep[f"lever_{a}"]) for a in "xyz"],
@@ -356,6 +359,8 @@ def main(argv=None) -> list[dict]:
     ap.add_argument("--explain", action="store_true", help="also the 'known' and 'calibration' solves")
     ap.add_argument("--quick", action="store_true", help="120 s at 10 Hz, seed 0")
     ap.add_argument("--no-odometer", action="store_true", help="neither run has the odometer")
+    ap.add_argument("--walk", action="store_true",
+                    help="the error models also have the gyro noise's attitude walk (AttitudeWalk)")
     ap.add_argument("--json", help="also write each drive's measures to this file (JSON lines, appended)")
     ap.add_argument("--table", nargs="+", metavar="JSON",
                     help="print the tables of drives measured earlier (--json files) and solve nothing")
@@ -364,14 +369,15 @@ def main(argv=None) -> list[dict]:
         results = [json.loads(line) for f in a.table for line in open(f) if line.strip()]
         print_table(results)
         return results
-    global ODOMETER
+    global ODOMETER, WALK
     ODOMETER = not a.no_odometer
+    WALK = a.walk
     if a.quick:
         a.duration, a.rate, a.seeds = 120.0, 10.0, [0]
     print(f"car drive {a.duration:g} s at {a.rate:g} Hz, seeds {a.seeds}; lever {LEVER} m (vertical from "
           f"a tape, sigma {100 * TAPE:g} cm), delay {1e3 * DELAY:g} ms, {100 * OUTLIERS:g} % outliers of "
           f"20-50 m, gate {GATE:g}; odometer {ODO_RATE:g} Hz, {100 * SCALE:g} % scale, noise "
-          f"{ODO_SIGMA:g} m/s")
+          f"{ODO_SIGMA:g} m/s" + ("; the gyro noise's attitude walk modelled (--walk)" if WALK else ""))
     results = []
     print_header()
     for grade in a.grade:
