@@ -54,6 +54,7 @@ tactical::
 consumer::
 
     seed  lever x, y cm (std)      delay ms (std)  scale % (std)   RMS B, A, faults cm  /A    /B    (A) ms
+       1  5.2 (3.5), 0.3 (1.8)    +1.36 (1.46)    +0.008 (0.009)  4.18 6.13 6.06     0.99  1.45  +0.99 (1.44)
        3  -11.4 (3.4), 2.7 (1.8)  -3.48 (1.46)    +0.019 (0.009)  3.83 9.83 9.87     1.00  2.58  -3.24 (1.44)
 
 Every outlier rejected and no good fix in every drive; the RMS within 10 % of the reference
