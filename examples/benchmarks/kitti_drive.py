@@ -140,6 +140,18 @@ the state columns of every sample 0.51 s and the attitude re-integrated at every
 (11 Gauss-Newton steps), cvxpy's import by the solver registry 0.24 s, band factors 0.15 s,
 process rows 0.13 s, FEM rows 0.13 s.
 
+After the mesh's cheaper steps, ``direct`` without cvxpy's import and the Anderson-mixed
+Gauss-Newton steps (2026-12-05, ``--methods GTSAM "bvpnav states mesh" "bvpnav states" "bvpnav
+states NHC soft"``, one run beside the test suite; RMS m, wall / CPU s, CPU ratio to GTSAM's,
+peak bytes per IMU sample)::
+
+    gap s  GTSAM (example)      states mesh                   states per sample        + NHC soft
+    10     1.473  0.11/0.08 7.9k  1.473 1.0/0.71 (9x) 8 it 15k  1.472 10.2/6.6 (85x) 41k  1.538 11.6/7.1 44k
+    30    15.547  0.12/0.09 7.9k 15.529 1.2/0.82 (9x) 9 it 15k 15.529 11.4/7.7 (86x) 46k  2.696 12.0/8.0 44k
+    60    54.803  0.13/0.09 7.9k 55.389 1.0/0.63 (7x) 7 it 15k 55.389  9.3/6.2 (66x) 42k  3.892 12.6/8.2 46k
+
+Every bvpnav answer verified.
+
 After the harness fix (every method starts from the kept fixes only: GTSAM's example had
 started LM from every fix and both smoothers' heading came from the first fixes, withheld or
 not), one run on a nearly idle machine (2026-12-04, 20:45-21:00; RMS m, wall s, CPU s, peak
