@@ -541,6 +541,34 @@ def _sensor_layout(model) -> dict[tuple[str, int, int], str]:
 
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
+class _Installed(ErrorModel):
+    """Base of the models of a fixed set of parameters that do not act on the accelerations
+    (an antenna's or a vehicle point's offset, a mounting, a delay): the items read them
+    through :class:`~bvpnav.NavModel` accessors, and their columns are zero.
+
+    Subclasses state their parameter names (``NAMES``), why ``axes=`` does not apply
+    (``NO_AXES``, the rest of the message) and the sigma/prior counts they take
+    (``COUNTS``: the sizes and what to give, as :meth:`ErrorModel._check_counts`).
+    """
+
+    NAMES: ClassVar[tuple[str, ...]] = ()
+    NO_AXES: ClassVar[str] = ""
+    COUNTS: ClassVar[tuple[tuple[int, ...], str]] = ((), "")
+
+    def validate(self) -> None:
+        if self.axes is not None:
+            raise InputError(f"{type(self).__name__}: axes= is not supported; {self.NO_AXES}")
+        self._check_counts(*self.COUNTS)
+
+    def names(self, data) -> list[str]:
+        return list(self.NAMES)
+
+    def columns(self, data) -> np.ndarray:
+        """Zero: the parameters do not act on the accelerations, shape (N, d, q)."""
+        return np.zeros((data.n, data.ndim, len(self.NAMES)))
+
+
+@dataclass(frozen=True, kw_only=True, eq=False, repr=False)
 class SensorErrorModel(ErrorModel):
     r"""Base of the built-in sensor models (scale, misalignment, bias, gravity).
 

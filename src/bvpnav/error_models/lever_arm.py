@@ -7,14 +7,13 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..errors import InputError
-from ._base import ErrorModel
+from ._base import _Installed
 
 __all__ = ["LeverArm"]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
-class LeverArm(ErrorModel):
+class LeverArm(_Installed):
     r"""Position of the GNSS antenna relative to the IMU in the body frame, m (estimated).
 
     Parameters
@@ -53,17 +52,10 @@ class LeverArm(ErrorModel):
     #: The role the fix items look the component up by (:meth:`bvpnav.NavModel.antenna_offset`).
     provides: ClassVar[str] = "lever_arm"
 
-    def validate(self) -> None:
-        if self.axes is not None:
-            raise InputError("LeverArm: axes= is not supported; the lever arm has three body-frame "
-                             "components (give a tight sigma on a component you know)")
-        self._check_counts((1, 3), "one or three (x, y, z body axes, m)")
-
-    def names(self, data) -> list[str]:
-        return ["lever_x", "lever_y", "lever_z"]
-
-    def columns(self, data) -> np.ndarray:
-        return np.zeros((data.n, data.ndim, 3))
+    NAMES: ClassVar[tuple[str, ...]] = ("lever_x", "lever_y", "lever_z")
+    NO_AXES: ClassVar[str] = ("the lever arm has three body-frame components (give a tight sigma on a "
+                              "component you know)")
+    COUNTS: ClassVar[tuple[tuple[int, ...], str]] = ((1, 3), "one or three (x, y, z body axes, m)")
 
     @classmethod
     def example(cls) -> LeverArm:

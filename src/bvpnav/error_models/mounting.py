@@ -8,8 +8,7 @@ from typing import ClassVar
 import numpy as np
 import pandas as pd
 
-from ..errors import InputError
-from ._base import ErrorModel, _series
+from ._base import _Installed, _series
 
 __all__ = ["Mounting"]
 
@@ -41,7 +40,7 @@ def mounting_slopes(yaw: float, pitch: float) -> np.ndarray:
 
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
-class Mounting(ErrorModel):
+class Mounting(_Installed):
     r"""Yaw and pitch of the vehicle's forward axis in the IMU's body frame, rad (estimated).
 
     An IMU is never bolted in exactly along the car: a boresight of a fraction of a degree
@@ -93,18 +92,10 @@ class Mounting(ErrorModel):
     #: grade from filling in the IMU models' priors.
     other_sensor = True
 
-    def validate(self) -> None:
-        if self.axes is not None:
-            raise InputError("Mounting: axes= is not supported; the mounting has a yaw and a pitch (give one "
-                             "sigma per angle to hold one of them)")
-        self._check_counts((1, 2), "one or two (yaw, pitch, rad)")
-
-    def names(self, data) -> list[str]:
-        return list(NAMES)
-
-    def columns(self, data) -> np.ndarray:
-        """Zero: the mounting does not act on the accelerations, shape (N, d, 2)."""
-        return np.zeros((data.n, data.ndim, 2))
+    NAMES: ClassVar[tuple[str, ...]] = NAMES
+    NO_AXES: ClassVar[str] = ("the mounting has a yaw and a pitch (give one sigma per angle to hold one of "
+                              "them)")
+    COUNTS: ClassVar[tuple[tuple[int, ...], str]] = ((1, 2), "one or two (yaw, pitch, rad)")
 
     def report(self, l, model) -> pd.Series:
         """The yaw and pitch, rad, from the internal slopes (:func:`mounting_angles`)."""

@@ -7,8 +7,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..errors import InputError
-from ._base import ErrorModel
+from ._base import _Installed
 
 __all__ = ["NhcLever"]
 
@@ -17,7 +16,7 @@ NAMES = ("nhc_lever_x", "nhc_lever_y", "nhc_lever_z")
 
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
-class NhcLever(ErrorModel):
+class NhcLever(_Installed):
     r"""The point of the vehicle that does not slide, relative to the IMU in body axes, m (estimated).
 
     A car's lateral velocity is zero at the middle of its rear axle (the no-slip point of a
@@ -68,18 +67,10 @@ class NhcLever(ErrorModel):
     #: grade from filling in the IMU models' priors.
     other_sensor = True
 
-    def validate(self) -> None:
-        if self.axes is not None:
-            raise InputError("NhcLever: axes= is not supported; the point has three body-frame components "
-                             "(give a tight sigma on a component you know, e.g. sigma=[2.0, 0.3, 1.0])")
-        self._check_counts((1, 3), "one or three (x, y, z body axes, m)")
-
-    def names(self, data) -> list[str]:
-        return list(NAMES)
-
-    def columns(self, data) -> np.ndarray:
-        """Zero: the offset does not act on the accelerations, shape (N, d, 3)."""
-        return np.zeros((data.n, data.ndim, 3))
+    NAMES: ClassVar[tuple[str, ...]] = NAMES
+    NO_AXES: ClassVar[str] = ("the point has three body-frame components (give a tight sigma on a component "
+                              "you know, e.g. sigma=[2.0, 0.3, 1.0])")
+    COUNTS: ClassVar[tuple[tuple[int, ...], str]] = ((1, 3), "one or three (x, y, z body axes, m)")
 
     @classmethod
     def example(cls) -> NhcLever:

@@ -7,14 +7,13 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..errors import InputError
-from ._base import ErrorModel
+from ._base import _Installed
 
 __all__ = ["TimeOffset"]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
-class TimeOffset(ErrorModel):
+class TimeOffset(_Installed):
     r"""A constant delay of the GNSS fixes against the IMU clock, s (estimated).
 
     Parameters
@@ -56,16 +55,9 @@ class TimeOffset(ErrorModel):
     #: The role the fix items look the component up by (:meth:`bvpnav.NavModel.time_offset`).
     provides: ClassVar[str] = "time_offset"
 
-    def validate(self) -> None:
-        if self.axes is not None:
-            raise InputError("TimeOffset: axes= is not supported; the delay is one number for every fix")
-        self._check_counts((1,), "one number (s)")
-
-    def names(self, data) -> list[str]:
-        return ["time_offset"]
-
-    def columns(self, data) -> np.ndarray:
-        return np.zeros((data.n, data.ndim, 1))
+    NAMES: ClassVar[tuple[str, ...]] = ("time_offset",)
+    NO_AXES: ClassVar[str] = "the delay is one number for every fix"
+    COUNTS: ClassVar[tuple[tuple[int, ...], str]] = ((1,), "one number (s)")
 
     @classmethod
     def example(cls) -> TimeOffset:
