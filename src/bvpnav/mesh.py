@@ -347,10 +347,9 @@ class MeshModel(NavModel):
         Vr = sp.csr_matrix((np.r_[-1.0 / H, 1.0 / H], (np.r_[ki, ki], np.r_[ji - 1, ji])), shape=(m, n))
         ends = ~inner
         Vb = sp.csr_matrix((np.ones(int(ends.sum())), (k[ends], np.where(j[ends] == 0, 0, 1))), shape=(m, 2))
-        Cq = self.cond.Cq[ji - 1]                           # the left element's loads on node j
-        F = sp.csr_matrix((Cq.data, Cq.indices, Cq.indptr), shape=(ki.size, self.fine.n))
-        F = sp.csr_matrix((m, self.fine.n)) + sp.csr_matrix(
-            (np.ones(ki.size), (ki, np.arange(ki.size))), shape=(m, ki.size)) @ F
+        # the left element's loads on node j, placed at the rows of the inner times
+        place = sp.csr_matrix((np.ones(ki.size), (ki, np.arange(ki.size))), shape=(m, ki.size))
+        F = place @ self.cond.Cq[ji - 1]
         # inside a one-step element: + a_i s - (a_i - a_{i+1}) s^2 / (2 h)
         mid = s > 0
         km, jm, sm = k[mid], j[mid], s[mid]

@@ -291,14 +291,7 @@ def _quat_components_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def _quat_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """The quaternion products ``a b`` (scalar last, (M, 4)) of :func:`_compose`, on the arrays
     (no rotation objects made and normalized between the steps of a scan)."""
-    ax, ay, az, aw = a.T
-    bx, by, bz, bw = b.T
-    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
-    out[:, 0] = aw * bx + bw * ax + (ay * bz - az * by)
-    out[:, 1] = aw * by + bw * ay + (az * bx - ax * bz)
-    out[:, 2] = aw * bz + bw * az + (ax * by - ay * bx)
-    out[:, 3] = aw * bw - (ax * bx + ay * by + az * bz)
-    return out
+    return _quat_components_product(a.T, b.T).T
 
 
 def states_at(data, totals: dict):
@@ -482,13 +475,11 @@ class ErrorStates(ErrorModel):
         """Node of every state: node-major, ``3 * kinds`` per node."""
         return np.repeat(np.arange(self._nodes(data)), self._per_node(data))
 
-    def state_index(self, data, kind: str, n: int | None = None) -> np.ndarray:
-        """Position in the state block of ``kind`` at every node and axis, (N, 3) int (``n``
-        nodes: default the model's)."""
+    def state_index(self, data, kind: str) -> np.ndarray:
+        """Position in the state block of ``kind`` at every node and axis, (N, 3) int (the
+        samples, or the nodes of a coarse mesh)."""
         k = self.state_kinds(data).index(kind)
-        K = self._per_node(data)
-        n = self._nodes(data) if n is None else n
-        return np.arange(n)[:, None] * K + 3 * k + np.arange(3)[None, :]
+        return np.arange(self._nodes(data))[:, None] * self._per_node(data) + 3 * k + np.arange(3)[None, :]
 
     def state_total(self, data, kind: str) -> np.ndarray:
         """The current total of ``kind`` at every node, (N, 3) (zero at the data as measured;
@@ -510,9 +501,9 @@ class ErrorStates(ErrorModel):
             return self._mesh_columns(data, mesh, S, C)
         out = []
         for a in range(3):
-            blocks = [(self.state_index(data, "attitude_error", n), S[:, a, :])]
+            blocks = [(self.state_index(data, "attitude_error"), S[:, a, :])]
             if "acc_bias" in kinds:
-                blocks.append((self.state_index(data, "acc_bias", n), -C[:, a, :]))
+                blocks.append((self.state_index(data, "acc_bias"), -C[:, a, :]))
             cols = np.concatenate([b[0] for b in blocks], axis=1)
             vals = np.concatenate([b[1] for b in blocks], axis=1)
             rows = np.repeat(np.arange(n), cols.shape[1])
@@ -575,7 +566,7 @@ class ErrorStates(ErrorModel):
         nn, n, K = mesh.size, k.size, self._per_node(data)
         order = [(kind, 0) for kind in kinds] + [(kind, 1) for kind in kinds if kind != "attitude_error"]
         nxt = np.minimum(k + 1, nn - 1)
-        cols = np.concatenate([self.state_index(data, kind, nn)[nxt if right else k]
+        cols = np.concatenate([self.state_index(data, kind)[nxt if right else k]
                                for kind, right in order], axis=1)
         itype = np.int32 if K * nn < 2**31 and cols.size < 2**31 else np.int64
         r0 = int(np.searchsorted(k, nn - 1))       # the first sample of the last node (k ascends)
