@@ -171,8 +171,7 @@ def progress(iterable=None, *, total=None, desc: str = "", unit: str = "it", ena
 
     kw.setdefault("leave", False)
     kw.setdefault("delay", 0.5)
-    return tqdm(iterable, total=total, desc=desc, unit=unit, disable=not progress_enabled(enabled),
-                file=sys.stderr, **kw)
+    return tqdm(iterable, total=total, desc=desc, unit=unit, file=sys.stderr, **kw)
 
 
 class _NoBar:

@@ -13,8 +13,8 @@ otherwise those of the default start.
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
+from ..align import initial_attitude
 from ..errors import InputError
 
 __all__ = ["COURSE_MIN_SPEED", "course_heading", "course_totals"]
@@ -117,6 +117,5 @@ def course_totals(form) -> np.ndarray:
     t = np.asarray(data.t, dtype=float)
     yaw = course_heading(t, fix_t, fix_xy)
     _, pitch0, roll0 = data.attitude[0].as_euler("ZYX")
-    n = t.size
-    course = Rotation.from_euler("ZYX", np.column_stack([yaw, np.full(n, pitch0), np.full(n, roll0)]))
+    course = initial_attitude(roll0, pitch0, yaw)
     return (course * data.attitude.inv()).as_rotvec()
