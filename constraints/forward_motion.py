@@ -107,7 +107,7 @@ class ForwardMotion(Item):
                 raise InputError(f"{label}: max_speed={self.max_speed!r}; give one speed in m/s above "
                                  f"min_speed={self.min_speed:g} m/s")
             object.__setattr__(self, "max_speed", float(hi.ravel()[0]))
-        object.__setattr__(self, "lever", lever_arm(self.lever, label, estimated=True))
+        object.__setattr__(self, "lever", lever_arm(self.lever, label))
         object.__setattr__(self, "t", intervals(self.t, label))
         object.__setattr__(self, "rate", positive_rate(self.rate, label))
 

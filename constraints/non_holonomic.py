@@ -9,7 +9,6 @@ import numpy as np
 
 from bvpnav.errors import InputError
 from bvpnav.items import Item
-from bvpnav.model import Affine
 
 from ._common import finite, interval
 
@@ -42,10 +41,10 @@ def intervals(t, label: str) -> tuple[tuple[float, float], ...] | None:
     return tuple(order)
 
 
-def lever_arm(lever, label: str, estimated: bool = False) -> tuple[float, float, float] | str:
-    """The lever as three body-frame coordinates, m (or ``"estimated"`` where ``estimated``
-    allows it: the :class:`~bvpnav.error_models.NhcLever` parameters)."""
-    if estimated and isinstance(lever, str):
+def lever_arm(lever, label: str) -> tuple[float, float, float] | str:
+    """The lever as three body-frame coordinates, m, or ``"estimated"`` (the
+    :class:`~bvpnav.error_models.NhcLever` parameters)."""
+    if isinstance(lever, str):
         if lever != "estimated":
             raise InputError(f"{label}: lever={lever!r}; give 'estimated' (the point is the error model's "
                              "NhcLever) or three body-frame coordinates in m, e.g. lever=(-1.4, 0, -0.3)")
@@ -74,7 +73,7 @@ def point_rows(model, t, axes, lever, who: str):
     if isinstance(lever, str):
         rows = model.body_velocity(t, axes, (0.0, 0.0, 0.0), what=who)
         point = model.vehicle_point_velocity(t, axes, what=who)
-        return Affine(rows.A + point.A, rows.c, rows.labels)
+        return rows + point       # the point's rows have no constant: the labels and c are the IMU's
     return model.body_velocity(t, axes, lever, what=who)
 
 
@@ -227,7 +226,7 @@ class NonHolonomic(Item):
         if self.mounting is not None and "x" in axes:
             raise InputError(f"{label}: mounting='estimated' with axes={list(axes)}; the mounting turns the "
                              "lateral and vertical rows: give axes among ('y', 'z')")
-        object.__setattr__(self, "lever", lever_arm(self.lever, label, estimated=True))
+        object.__setattr__(self, "lever", lever_arm(self.lever, label))
         object.__setattr__(self, "t", intervals(self.t, label))
         object.__setattr__(self, "rate", positive_rate(self.rate, label))
 
@@ -265,7 +264,7 @@ class NonHolonomic(Item):
         rows = point_rows(model, t, self.axes, self.lever, who)
         if self.mounting is None:
             return rows
-        return Affine(rows.A + model.mounting_velocity(t, self.axes, what=who).A, rows.c, rows.labels)
+        return rows + model.mounting_velocity(t, self.axes, what=who)   # no constant: rows' labels and c
 
     def active(self, solution, rtol: float = 1e-3):
         """The rows at the band's edge in a solution: where the vehicle slid by at least ``tol``.

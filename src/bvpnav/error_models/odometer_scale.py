@@ -3,13 +3,14 @@ r"""The scale-factor error of an odometer (wheel speed): one dimensionless param
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 import pandas as pd
 
 from ..errors import InputError
 from ..model import Affine
-from ._base import ErrorModel, _per_param, _series
+from ._base import _Installed, _per_param, _series
 
 __all__ = ["OdometerScale"]
 
@@ -18,7 +19,7 @@ NAME = "odometer_scale"
 
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
-class OdometerScale(ErrorModel):
+class OdometerScale(_Installed):
     r"""Scale-factor error of an odometer or wheel-speed sensor, dimensionless.
 
     The odometer reads :math:`\hat s = (1 + k)\, s` with :math:`s` the true forward speed
@@ -58,6 +59,7 @@ class OdometerScale(ErrorModel):
     """
 
     units = "1"
+    NAMES: ClassVar[tuple[str, ...]] = (NAME,)
     #: A model of another sensor than the IMU: its prior does not stop a sensor grade from
     #: filling in the IMU models' priors (:class:`bvpnav.NavigationProblem`'s ``grade``).
     other_sensor = True
@@ -84,13 +86,6 @@ class OdometerScale(ErrorModel):
             lo, hi = (np.ravel(b) for b in self.bounds)
             if lo.size != 1 or hi.size != 1 or not float(lo[0]) > -1.0:
                 raise InputError(f"{label}: bounds={self.bounds!r}; give (lo, hi) with -1 < lo < hi")
-
-    def names(self, data) -> list[str]:
-        return [NAME]
-
-    def columns(self, data) -> np.ndarray:
-        """Zero: the scale does not act on the accelerations, shape (N, d, 1)."""
-        return np.zeros((data.n, data.ndim, 1))
 
     def speed_gain(self, model) -> Affine:
         """The gain ``1 + e`` that turns a measured speed into the true one, one row
