@@ -9,7 +9,10 @@ The hostile matrices' harness is the sibling module ``_hostile.py``.
 from __future__ import annotations
 
 import importlib.util
+import json
+import subprocess
 import sys
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +22,16 @@ import scipy.sparse.linalg as spla
 import bvpnav
 from bvpnav.constraints import Position, Velocity
 from bvpnav.scenarios import tikhonov2011
+
+
+# ------------------------------------------------------------ a fresh interpreter
+def run_python(code: str) -> dict:
+    """Run ``code`` in a fresh interpreter (this test process may already have imported what a
+    check looks for); it prints one JSON object as its last line, returned parsed."""
+    proc = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True,
+                          text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
 # ------------------------------------------------------------ analytic trajectories

@@ -4,23 +4,14 @@ test process may already have imported cvxpy."""
 
 from __future__ import annotations
 
-import json
 import subprocess
 import sys
-import textwrap
 
 import pytest
+from _helpers import run_python
 
 #: Packages bvpnav imports only where they are used.
 HEAVY = ("cvxpy", "matplotlib")
-
-
-def run_python(code: str) -> dict:
-    """Run ``code`` in a fresh interpreter; it prints one JSON object as its last line."""
-    proc = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True,
-                          text=True, timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
 def loaded(after: str) -> dict:

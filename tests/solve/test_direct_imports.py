@@ -5,26 +5,15 @@ already have imported cvxpy)."""
 
 from __future__ import annotations
 
-import json
-import subprocess
-import sys
-import textwrap
-
 import pytest
+from _helpers import run_python
 
 import bvpnav
 from bvpnav.solve import prepare
 
 
-def _fresh(code: str) -> dict:
-    proc = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True,
-                          text=True, timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    return json.loads(proc.stdout.strip().splitlines()[-1])
-
-
 def test_a_direct_solve_does_not_import_cvxpy():
-    out = _fresh("""
+    out = run_python("""
         import json, sys
         import numpy as np
         import bvpnav
