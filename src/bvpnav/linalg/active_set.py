@@ -363,7 +363,7 @@ def quick_step(form, lam: float, workspace: Workspace | None, tol: float = IPM_T
     loop's intermediate step, whose answer only moves the linearization point.
 
     The rows at their bounds in the workspace's :class:`ActiveHint` are held hard (one banded
-    factorization, one refinement step, no verification) and the hint takes the next guess
+    factorization, no refinement, no verification) and the hint takes the next guess
     (the rows whose multiplier pulls dropped, the violated rows that peak added), so the
     active set is updated along with the outer loop instead of to convergence at every
     step; the loop's last step is solved in full (:func:`solve_bands`), starting from that
@@ -388,14 +388,13 @@ def quick_step(form, lam: float, workspace: Workspace | None, tol: float = IPM_T
     if steps.band is None:
         return None
     newton = _Newton(qp, steps)
-    kkt = _Refined(qp, newton)
     act = _one_side(qp, hint.active)
     for _ in range(QUICK_PASSES):
         try:
             held = _Held(qp, newton, act)
         except np.linalg.LinAlgError:
             return None
-        x, _, _, r, violated, wrong = held.check(held.solve(kkt, steps=0), tol)
+        x, _, _, r, violated, wrong = held.check(held.fac.solve(held.rhs), tol)   # unrefined
         if not (violated.any() or wrong.any()):
             break
         act = _one_side(qp, _next_guess(act, r, violated, wrong))
