@@ -41,6 +41,10 @@ used here, with the drive's fix sigma and the grade's tilt), every figure from t
     documented option ``solve(attitude={"start": "course"})`` (:mod:`bvpnav.solve.course`: the
     same heading, as initial totals of the node states' attitude errors, the process rows on
     the raw gyro rates).
+``bvpnav states mesh`` / ``bvpnav states mesh course start``
+    ``bvpnav states`` / ``bvpnav states course start`` on the 1 s mesh
+    (``NavigationProblem(segment=1.0)``, the README's documented path for a drive: the node states
+    at the mesh's nodes, the samples between them condensed).
 ``GTSAM from truth``
     not a method but a check of the others' start: the ``GTSAM`` graph solved by
     Levenberg-Marquardt from the TRUE states at its nodes. Its graph error against ``GTSAM``'s
@@ -143,7 +147,8 @@ from kitti_drive import split_fixes  # noqa: E402
 from bvpnav.scenarios import SENSOR_GRADES, CarDrive, car_drive  # noqa: E402
 
 METHODS = ("GTSAM", "GTSAM peer", "bvpnav README", "bvpnav states", "bvpnav states NHC soft", "spline",
-           "GTSAM course start", "bvpnav states course start", "GTSAM from truth", "bvpnav states mesh")
+           "GTSAM course start", "bvpnav states course start", "GTSAM from truth", "bvpnav states mesh",
+           "bvpnav states mesh course start")
 DEFAULT_METHODS = METHODS[:5]
 #: Levenberg-Marquardt iterations allowed to the ``GTSAM`` graph: it converges within them at every spacing
 #: here (the KITTI script's 100 stop it early at 60 s, where it needs about 160).
@@ -206,14 +211,16 @@ def gtsam_from(g: dict, rotations, positions, velocities, acc_bias=None,
     return pos, int(opt.iterations()), float(g["graph"].error(res))
 
 
-def states_course_start(drive: CarDrive, kept, withheld, fig: dict, tilt: float, truth) -> dict:
-    """``bvpnav states`` (the same problem, :func:`kitti_drive.problem`) solved with the documented
-    course start, ``solve(attitude={"start": "course"})`` (:mod:`bvpnav.solve.course`)."""
+def states_course_start(drive: CarDrive, kept, withheld, fig: dict, tilt: float, truth,
+                        method: str = "bvpnav states") -> dict:
+    """``method`` (``"bvpnav states"`` or ``"bvpnav states mesh"``: the same problem,
+    :func:`kitti_drive.problem`) solved with the documented course start,
+    ``solve(attitude={"start": "course"})`` (:mod:`bvpnav.solve.course`)."""
     from kitti_drive import problem
 
     import bvpnav.solve.pipeline  # noqa: F401  (imported before the clock, as in kitti_drive.run_bvpnav)
 
-    prob = problem(drive_dict(drive), kept, "bvpnav states", fig, drive.initial_attitude_guess, 30.0,
+    prob = problem(drive_dict(drive), kept, method, fig, drive.initial_attitude_guess, 30.0,
                    fix_sigma=drive.fix_sigma, tilt=tilt)
     t0, cpu = time.perf_counter(), time.process_time()
     sol = prob.solve(solver="direct", attitude={"progress": False, "start": "course"})
@@ -277,8 +284,9 @@ def case(method: str, grade: str, seed: int, gap: float, duration: float, rate: 
         est = CubicSpline(drive.fix_t[kept], drive.fix_position[kept])(t_w)
         out = {"rms": rms3(est, truth), "seconds": time.perf_counter() - t0,
                "cpu_seconds": time.process_time() - cpu}
-    elif method == "bvpnav states course start":
-        out = states_course_start(drive, kept, withheld, fig, tilt, truth)
+    elif method.endswith(" course start"):   # bvpnav states (mesh) course start
+        out = states_course_start(drive, kept, withheld, fig, tilt, truth,
+                                  method.removesuffix(" course start"))
     else:
         from kitti_drive import run_bvpnav
 

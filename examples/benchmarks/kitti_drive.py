@@ -401,23 +401,25 @@ def track_rms(est: np.ndarray, d: dict, withheld) -> dict:
 
 
 def gtsam_example_smoother(d: dict, kept, fig: dict, c0, max_iterations: int = 100, *,
-                           fix_sigma=None, tilt: float | None = None) -> dict:
+                           fix_sigma=None, tilt: float | None = None, start_prior: str | None = None) -> dict:
     """GTSAM's KITTI example as a batch smoother: a node at every fix time (1 Hz), an ``ImuFactor``
     between consecutive nodes integrating each IMU sample held constant over its preceding step
     (the file's ``dt``, as ``IMUKittiExampleGPS.py`` does), a ``BetweenFactorConstantBias`` with
-    sigma ``sqrt(count) * per-sample bias sigma``, a ``GPSFactor`` at every kept fix, the
-    peer's priors at the first node, Levenberg-Marquardt from the fix-interpolated positions
-    and the gyro-integrated attitudes. Returns the positions at every node (= every fix).
+    sigma ``sqrt(count) * per-sample bias sigma``, a ``GPSFactor`` at every kept fix, priors at the
+    first node (the bias priors of ``fig``, roll and pitch ``tilt`` about ``c0``, and as bvpnav's
+    problem has them, :data:`START_PRIOR`: no heading or velocity prior, or with ``"fixes"`` those of
+    :func:`start_velocity`), Levenberg-Marquardt from the fix-interpolated positions and the
+    gyro-integrated attitudes. Returns the positions at every node (= every fix).
 
     ``fix_sigma`` (m, one or per navigation axis) and ``tilt`` (rad, the roll and pitch prior) default
     to this drive's (:data:`FIX_SIGMA`, :data:`TILT`); the simulated car drive (``car_drive.py``)
     passes its own."""
     import gtsam
-    from _gtsam_peer import _priors
     from gtsam.symbol_shorthand import B, V, X
 
     fix_sigma = FIX_SIGMA if fix_sigma is None else fix_sigma
     tilt = TILT if tilt is None else tilt
+    start_prior = START_PRIOR if start_prior is None else start_prior
     start, cpu = time.perf_counter(), time.process_time()
     t, f, w = d["t"], d["f"], d["w"]
     ft, fp = d["fix_t"], d["fix_p"]
@@ -434,8 +436,7 @@ def gtsam_example_smoother(d: dict, kept, fig: dict, c0, max_iterations: int = 1
     # are the score and must not reach the smoother, not even as LM's starting point
     pos0 = np.column_stack([np.interp(ft, ft[kt], fp[kt, i]) for i in range(3)])
     vel0 = np.gradient(pos0, ft, axis=0)
-    gr = {**fig, "tilt": tilt, "heading": math.pi}
-    for fac in _priors(c0.as_matrix(), pos0[0], vel0[0], gr, None):
+    for fac in _start_factors(c0.as_matrix(), pos0[0], start_velocity(d, kept), fig, tilt, start_prior):
         graph.add(fac)
     gps_noise = gtsam.noiseModel.Diagonal.Sigmas(np.broadcast_to(np.asarray(fix_sigma, float), (3,)).copy())
     keep = set(int(k) for k in kept)
@@ -474,6 +475,34 @@ def gtsam_example_smoother(d: dict, kept, fig: dict, c0, max_iterations: int = 1
             "graph": graph, "values": res}
 
 
+def _start_factors(r0: np.ndarray, p0: np.ndarray, v0: np.ndarray, fig: dict, tilt: float,
+                   start_prior: str) -> list:
+    """GTSAM's prior factors at the first node: the attitude (roll and pitch ``tilt`` rad about
+    ``r0``; the heading open, or :data:`START_HEADING_SIGMA` with ``start_prior="fixes"``), the
+    velocity (none, or ``v0`` within :data:`START_VELOCITY_SIGMA` m/s), the biases (``fig``'s
+    sigmas about zero). The Pose3 prior is in information form (an open heading has none; the
+    position none to speak of, 1e-8 per m^2: the fixes anchor it), rotated into the body frame
+    (Pose3's tangent, ``R exp(xi)``)."""
+    import gtsam
+    from gtsam.symbol_shorthand import B, V, X
+
+    if start_prior not in START_PRIORS:
+        raise ValueError(f"start_prior={start_prior!r}; give one of {START_PRIORS}")
+    fixes = start_prior == "fixes"
+    info = np.zeros((6, 6))
+    info[:3, :3] = r0.T @ np.diag([tilt**-2, tilt**-2, START_HEADING_SIGMA**-2 if fixes else 0.0]) @ r0
+    info[3:, 3:] = 1e-8 * np.eye(3)
+    out = [gtsam.PriorFactorPose3(X(0), gtsam.Pose3(gtsam.Rot3(r0), p0),
+                                  gtsam.noiseModel.Gaussian.Information(info))]
+    if fixes:
+        out.append(gtsam.PriorFactorVector(V(0), np.asarray(v0, float),
+                                           gtsam.noiseModel.Isotropic.Sigma(3, START_VELOCITY_SIGMA)))
+    sig = np.array([fig["acc_bias"]] * 3 + [fig["gyro_bias"]] * 3)
+    out.append(gtsam.PriorFactorConstantBias(B(0), gtsam.imuBias.ConstantBias(),
+                                             gtsam.noiseModel.Diagonal.Sigmas(sig)))
+    return out
+
+
 def run_gtsam_example(d: dict, kept, withheld, fig: dict, c0) -> dict:
     g = gtsam_example_smoother(d, kept, fig, c0)
     return {"rms": hrms(g["position"][withheld], d["fix_p"][withheld]), "seconds": g["seconds"],
@@ -495,12 +524,15 @@ def run_gtsam(d: dict, kept, withheld, fig: dict, c0) -> dict:
 
 
 def problem(d: dict, kept, method: str, fig: dict, c0, interval: float, *, fix_sigma=None,
-            tilt: float | None = None):
+            tilt: float | None = None, start_prior: str | None = None):
     """The bvpnav problem of ``method`` (the data, the error model, the kept fixes); ``fix_sigma`` (m,
-    one or per navigation axis) and ``tilt`` (rad) default to this drive's (:data:`FIX_SIGMA`,
-    :data:`TILT`)."""
+    one or per navigation axis), ``tilt`` (rad) and ``start_prior`` default to this drive's
+    (:data:`FIX_SIGMA`, :data:`TILT`, :data:`START_PRIOR`; with ``"fixes"`` the node-state methods get
+    GTSAM's heading and velocity priors, :func:`_start_factors`)."""
     fix_sigma = FIX_SIGMA if fix_sigma is None else fix_sigma
     tilt = TILT if tilt is None else tilt
+    start_prior = START_PRIOR if start_prior is None else start_prior
+    fixes = start_prior == "fixes" and method.startswith("bvpnav states")
     from bvpnav import ImuData, NavigationProblem
     from bvpnav.constraints import Position
     from bvpnav.error_models import AttitudeError, Bias, ErrorStates, GyroBias, Mounting, NhcLever
@@ -513,7 +545,8 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float, *, fix_s
         # node states (issue 42 item 2): attitude error and both bias walks per sample, in the band;
         # the metadata's densities, GTSAM's example's bias priors, an open heading
         model = ErrorStates(arw=fig["gyro_noise"], gyro_drift=fig["gyro_bias_walk"],
-                            acc_drift=fig["acc_bias_walk"], attitude_sigma=[tilt, tilt, np.inf],
+                            acc_drift=fig["acc_bias_walk"],
+                            attitude_sigma=[tilt, tilt, START_HEADING_SIGMA if fixes else np.inf],
                             gyro_sigma=fig["gyro_bias"], acc_sigma=fig["acc_bias"])
         if method in MOUNTED:
             model = model + Mounting(sigma=MOUNT_SIGMA)
@@ -534,6 +567,11 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float, *, fix_s
     prob.add(Position(t=d["fix_t"][kept], value=d["fix_p"][kept],
                       sigma=np.broadcast_to(np.asarray(fix_sigma, dtype=float), (kept.size, 3)).copy(),
                       name="fixes"))
+    if fixes:
+        from bvpnav.constraints import Velocity
+
+        prob.add(Velocity(t=float(d["fix_t"][0]), value=start_velocity(d, kept).reshape(1, 3),
+                          sigma=START_VELOCITY_SIGMA, name="start velocity"))
     if method in VEHICLE:
         from bvpnav.constraints import ForwardMotion, NonHolonomic
 
@@ -595,13 +633,37 @@ def run_bvpnav(d: dict, kept, withheld, method: str, fig: dict, c0, interval: fl
             if "nhc_lever_x" in sol.error_params else None}
 
 
+#: The priors at the start that both smoothers get (``--start-prior``): ``"open"`` (default) none on
+#: the heading and the velocity, as the README path states none (and GTSAM's own KITTI example gives its
+#: rotation zero precision and its velocity 1000 m/s); ``"fixes"`` a velocity prior of
+#: :data:`START_VELOCITY_SIGMA` about the kept fixes' velocity at the first fix and a heading prior of
+#: :data:`START_HEADING_SIGMA` about the guess, to both (``Velocity`` and ``ErrorStates(attitude_sigma=)``
+#: for bvpnav). Roll and pitch have :data:`TILT` in both modes.
+START_PRIOR = "open"
+START_PRIORS = ("open", "fixes")
+#: The ``"fixes"`` start's velocity sigma, m/s per axis, and heading sigma, rad.
+START_VELOCITY_SIGMA = 10.0
+START_HEADING_SIGMA = math.pi
+
+
+def start_velocity(d: dict, kept) -> np.ndarray:
+    """The velocity at the first fix, m/s (3,), of the positions interpolated linearly between the
+    kept fixes (the ``"fixes"`` start prior's value; GTSAM's initial values)."""
+    ft, fp = d["fix_t"], d["fix_p"]
+    kt = np.asarray(sorted(int(k) for k in kept))
+    pos0 = np.column_stack([np.interp(ft, ft[kt], fp[kt, i]) for i in range(3)])
+    return np.gradient(pos0, ft, axis=0)[0]
+
+
 #: Gravity magnitude used by both smoothers, m/s^2 (GTSAM's KITTI example uses 9.8).
 GRAVITY = 9.80665
 
 
-def case(method: str, gap: float, interval: float, fix_sigma: float = FIX_SIGMA) -> dict:
-    global FIX_SIGMA
+def case(method: str, gap: float, interval: float, fix_sigma: float = FIX_SIGMA,
+         start_prior: str = START_PRIOR) -> dict:
+    global FIX_SIGMA, START_PRIOR
     FIX_SIGMA = fix_sigma   # read by both smoothers' fix factors and items
+    START_PRIOR = start_prior   # and their priors at the start
     d = load_dev()
     kept, withheld = split_fixes(d["fix_t"], gap)
     fig = figures(d["meta"], 1.0 / float(np.mean(np.diff(d["t"]))))
@@ -625,20 +687,25 @@ def main(argv: list[str] | None = None) -> list[dict]:
     ap.add_argument("--fix-sigma", type=float, default=FIX_SIGMA,
                     help=f"the fixes' sigma per axis for every method, m (default {FIX_SIGMA:.4f}, GTSAM's "
                          "example's)")
-    ap.add_argument("--case", nargs=4, metavar=("METHOD", "GAP", "INTERVAL", "FIX_SIGMA"),
+    ap.add_argument("--start-prior", default=START_PRIOR, choices=START_PRIORS,
+                    help="the priors at the start, the same for every method: 'open' (default: no heading or "
+                         "velocity prior) or 'fixes' (the kept fixes' velocity within "
+                         f"{START_VELOCITY_SIGMA:g} m/s, the heading within {START_HEADING_SIGMA:.4g} rad)")
+    ap.add_argument("--case", nargs=5, metavar=("METHOD", "GAP", "INTERVAL", "FIX_SIGMA", "START_PRIOR"),
                     help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.case:
-        print(json.dumps(case(args.case[0], float(args.case[1]), float(args.case[2]), float(args.case[3]))))
+        print(json.dumps(case(args.case[0], float(args.case[1]), float(args.case[2]), float(args.case[3]),
+                              args.case[4])))
         return []
     d = load_dev()
     print(f"KITTI development split: {d['t'].size} IMU samples over {d['t'][-1] - d['t'][0]:.1f} s "
           f"(steps {np.diff(d['t']).min() * 1e3:.1f} to {np.diff(d['t']).max() * 1e3:.1f} ms), "
-          f"{d['fix_t'].size} fixes; fix sigma {args.fix_sigma:.4f} m")
+          f"{d['fix_t'].size} fixes; fix sigma {args.fix_sigma:.4f} m; start prior {args.start_prior!r}")
     rows = []
     for gap in args.gaps:
         for m in args.methods:
-            r = run_case(__file__, [m, str(gap), str(args.interval), repr(args.fix_sigma)])
+            r = run_case(__file__, [m, str(gap), str(args.interval), repr(args.fix_sigma), args.start_prior])
             r.setdefault("method", m)
             r.setdefault("gap", gap)
             rows.append(r)
