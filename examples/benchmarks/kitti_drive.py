@@ -480,9 +480,11 @@ def _start_factors(r0: np.ndarray, p0: np.ndarray, v0: np.ndarray, fig: dict, ti
     """GTSAM's prior factors at the first node: the attitude (roll and pitch ``tilt`` rad about
     ``r0``; the heading open, or :data:`START_HEADING_SIGMA` with ``start_prior="fixes"``), the
     velocity (none, or ``v0`` within :data:`START_VELOCITY_SIGMA` m/s), the biases (``fig``'s
-    sigmas about zero). The Pose3 prior is in information form (an open heading has none; the
-    position none to speak of, 1e-8 per m^2: the fixes anchor it), rotated into the body frame
-    (Pose3's tangent, ``R exp(xi)``)."""
+    sigmas about zero). The Pose3 prior is in information form, rotated into the body frame
+    (Pose3's tangent, ``R exp(xi)``); an open heading and the position get 1e-8 per rad^2 and per
+    m^2, none to speak of (the fixes determine them). Not exactly 0: with a singular information
+    matrix GTSAM's Levenberg-Marquardt stops short of the optimum (KITTI, 60 s: graph error 1.2332
+    against 1.2273 with 1e-8, 55.30 m against 55.42)."""
     import gtsam
     from gtsam.symbol_shorthand import B, V, X
 
@@ -490,7 +492,7 @@ def _start_factors(r0: np.ndarray, p0: np.ndarray, v0: np.ndarray, fig: dict, ti
         raise ValueError(f"start_prior={start_prior!r}; give one of {START_PRIORS}")
     fixes = start_prior == "fixes"
     info = np.zeros((6, 6))
-    info[:3, :3] = r0.T @ np.diag([tilt**-2, tilt**-2, START_HEADING_SIGMA**-2 if fixes else 0.0]) @ r0
+    info[:3, :3] = r0.T @ np.diag([tilt**-2, tilt**-2, START_HEADING_SIGMA**-2 if fixes else 1e-8]) @ r0
     info[3:, 3:] = 1e-8 * np.eye(3)
     out = [gtsam.PriorFactorPose3(X(0), gtsam.Pose3(gtsam.Rot3(r0), p0),
                                   gtsam.noiseModel.Gaussian.Information(info))]
