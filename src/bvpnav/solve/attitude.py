@@ -842,7 +842,8 @@ def _next_totals(sm, data, s: np.ndarray, iters: list, prev_att: np.ndarray | No
     in the linear regime) and this attitude step. ``iters[-1]`` records ``turn``, the cosine
     between this attitude step and the last, and ``accelerated``, the mixing coefficients;
     ``history`` keeps ``(x, g)`` of the last steps below :data:`ANDERSON_START` (a step above
-    it clears it: a pair from the nonlinear regime would mislead the secant)."""
+    it, or one larger than the step before, clears it: a pair from the nonlinear regime or from
+    steps that grow, where Gauss-Newton overshoots, would mislead the secant)."""
     from ..error_models.error_states import _totals
 
     att = s[sm.state_index(data, "attitude_error")].ravel()
@@ -850,8 +851,9 @@ def _next_totals(sm, data, s: np.ndarray, iters: list, prev_att: np.ndarray | No
         den = max(float(np.linalg.norm(att) * np.linalg.norm(prev_att)), 1e-300)
         iters[-1]["turn"] = float(att @ prev_att) / den
     plain = sm.updated(data, s)
-    if not o["loop"] or iters[-1]["step"] >= ANDERSON_START:
-        history.clear()   # mixed only with steps of the linear regime
+    grew = len(iters) > 1 and iters[-1]["step"] >= iters[-2]["step"]
+    if not o["loop"] or iters[-1]["step"] >= ANDERSON_START or grew:
+        history.clear()   # mixed only with steps of the linear regime, where they shrink
         return plain, att
     kinds = sm.state_kinds(data)
     before = _flat_totals(sm, data, {k: _totals(data, k) for k in kinds})
@@ -953,8 +955,8 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     and the answer, go through the stage (refined and verified); a quick step whose change
     is below ``tol`` is solved again by the stage, and so is a form the banded path does
     not take. Gauss-Newton converges linearly where the data misfit their sigmas: once the
-    steps are below :data:`ANDERSON_START`, each new point mixes the last steps (Anderson
-    acceleration, :func:`_anderson`, ``iterations[k]["accelerated"]``); the loop still stops
+    steps are below :data:`ANDERSON_START` and shrinking, each new point mixes the last steps
+    (Anderson acceleration, :func:`_anderson`, ``iterations[k]["accelerated"]``); the loop still stops
     at a Gauss-Newton step below ``tol``, and that step's totals are not mixed.
     """
     from ..error_models.error_states import states_at
