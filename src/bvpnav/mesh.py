@@ -69,9 +69,9 @@ import scipy.sparse as sp
 
 from . import fem
 from .errors import InputError
-from .grid import MeshGrid, as_times, mesh_nodes
+from .grid import MeshGrid, TimeGrid, as_times, mesh_nodes
 from .imu import ImuData
-from .model import Affine, NavModel, canonical_csr, columns_csr, state_component
+from .model import Affine, NavModel, TimeLabels, _body_axes, canonical_csr, columns_csr, state_component
 from .sparse import as_csr
 
 __all__ = ["MeshModel", "item_times", "check_segment"]
@@ -446,24 +446,142 @@ class MeshModel(NavModel):
             ab[2, :-1] = np.where(adj, lo[idx[:-1]], 0.0)
         return ab
 
-    # ------------------------------------- not carried on a mesh (yet)
-    def _not_on_mesh(self, what: str):
-        raise InputError(f"{what}: body-frame and attitude rows are not carried on a coarse mesh yet "
-                         "(segment=); solve on every sample (segment=None)")
-
-    def body_velocity(self, t, axes=None, lever=(0.0, 0.0, 0.0), what: str = "body velocity") -> Affine:
-        self._not_on_mesh(what)
-
-    def body_rate(self, t, axes=None, what: str = "body rate") -> Affine:
-        self._not_on_mesh(what)
-
-    def antenna_offset(self, t, lever, axes=None, *, rate: bool = False, what: str = "lever arm") -> Affine:
-        self._not_on_mesh(what)
-
-    def mounting_velocity(self, t, axes, what: str = "mounting") -> Affine:
-        self._not_on_mesh(what)
-
     def __repr__(self) -> str:
         return (f"MeshModel(n={self.N} nodes of N={self.fine.n} samples, segment={self.segment:g} s, "
                 f"axes={self.axes}, q={self.q}, unknowns={self.size})")
 
+    # ------------------------------------------- body-frame rows (issue 39)
+    @property
+    def sample_grid(self):
+        """Every sample (:attr:`fine`): the attitude and the rates are per sample."""
+        return self.fine
+
+    def sample_velocity(self, t, axes=None, what: str = "velocity") -> Affine:
+        r"""Velocities at times ``t`` (m/s), rows time-major then axis: :meth:`velocity` at the
+        nodes (and inside elements of one sample step), and at a sample strictly inside element
+        :math:`[t_p, t_q]` from the condensed element alone.
+
+        Notes
+        -----
+        The fine velocity is continuous at the samples and its steps are the trapezoids of
+        the linear acceleration, :math:`v_i = v_p^+ + \sum_{j=p}^{i-1} h_j (a_j + a_{j+1})/2`,
+        with the velocity at node p from the element on its right
+        :math:`v_p^+ = (r_q - r_p)/H - (C_p a)_e` (as :math:`v_q = (r_q - r_p)/H + (C_q a)_e`
+        from the left, :func:`bvpnav.fem.condensation`). So
+
+        .. math:: v_i = \frac{r_q - r_p}{H} + F_i\,(\hat a + G l + G_s s + w),
+                  \qquad F_i = T_i - (C_p)_e ,
+
+        :math:`T_i` the trapezoid weights over samples p..i: affine in the two nodes' unknowns,
+        their residuals, the element's whitened residuals :math:`u_e` (the residuals inside are
+        their conditional mean, :math:`w_j = \sigma_j^2 (c_{p,j} z_0 + c_{q,j} z_1)`,
+        :math:`z = L_e^{-T} u_e`, as :meth:`trajectory` recovers them) and the load. It is the
+        recovered trajectory's velocity (:meth:`trajectory`) at that sample, exactly. A row
+        couples only the element's two nodes, so the band stays a band. Times between two
+        samples inside an element raise :class:`InputError` (as :meth:`velocity`).
+        """
+        f = self.fine
+        times = f.check_inside(as_times(t, what), what)
+        ax = self.axes_of(axes, what)
+        k = np.clip(np.searchsorted(f.t, times), 0, f.n - 1)
+        near = np.where((k > 0) & (np.abs(f.t[k - 1] - times) < np.abs(f.t[k] - times)), k - 1, k)
+        on = np.abs(f.t[near] - times) <= 1e-9 * max(f.duration, 1.0)
+        inner = on & (self.cond.element[near] >= 0)
+        rest = np.flatnonzero(~inner)
+        ins = np.flatnonzero(inner)
+        parts = []
+        if rest.size:
+            parts.append(self.velocity(times[rest], [self.axes[a] for a in ax], what))
+        if ins.size:
+            parts.append(self._inner_velocity(near[ins], ax))
+        out = Affine.vstack(parts)
+        nax = len(ax)
+        pos = np.empty(times.size, dtype=np.int64)
+        pos[np.r_[rest, ins]] = np.arange(times.size)
+        order = (pos[:, None] * nax + np.arange(nax)[None, :]).ravel()
+        return Affine(out.A[order], out.c[order], self._labels("v", times, ax))
+
+    def _inner_velocity(self, i: np.ndarray, ax) -> Affine:
+        """:meth:`sample_velocity` at samples ``i`` strictly inside elements (see its Notes)."""
+        f, nodes, c = self.fine, self.grid.nodes, self.cond
+        m = i.size
+        e = c.element[i]
+        p = nodes[e]
+        # the trapezoid weights over the samples p..i of each row
+        lens = i - p + 1
+        row = np.repeat(np.arange(m), lens)
+        j = np.repeat(p, lens) + (np.arange(row.size) - np.repeat(np.cumsum(lens) - lens, lens))
+        h = np.r_[f.h, 0.0]
+        last = np.repeat(i, lens)
+        wt = 0.5 * (np.where(j > np.repeat(p, lens), h[j - 1], 0.0) + np.where(j < last, h[j], 0.0))
+        T = sp.csr_matrix((wt, (row, j)), shape=(m, f.n))
+        F = (T - c.Cp[e]).tocsr()
+        H = self.grid.h[e]
+        k = np.arange(m)
+        Vr = sp.csr_matrix((np.r_[-1.0 / H, 1.0 / H], (np.r_[k, k], np.r_[e, e + 1])), shape=(m, self.N))
+        Vw = F[:, nodes]
+        slot = self._slot[e]
+        if np.any(slot < 0):   # pragma: no cover - mesh_nodes leaves no element with one sample inside
+            raise InputError("segment=: an element with one sample inside has no condensed residuals")
+        idx = c.interior
+        parts = []
+        for a in ax:
+            s2 = self.sigma_fine[idx, a] ** 2
+            gp, gq = np.zeros(f.n), np.zeros(f.n)
+            gp[idx], gq[idx] = s2 * self._cp, s2 * self._cq
+            al0, al1 = F @ gp, F @ gq
+            L = self.chol[a][slot]
+            c0 = al0 / L[:, 0]
+            c1 = (al1 - c0 * L[:, 1]) / L[:, 2]
+            blocks = {"r": Vr, "w": Vw,
+                      "u": sp.csr_matrix((np.r_[c0, c1], (np.r_[k, k], np.r_[2 * slot, 2 * slot + 1])),
+                                         shape=(m, 2 * self.me))}
+            if self.q:
+                blocks["l"] = columns_csr(*self._times_g(F, a), self.q)
+            if self.ns:
+                blocks["s"] = canonical_csr(F @ self.Gs[a])
+            parts.append(Affine(self._place(blocks, a), F @ self.data.acc[:, a]))
+        return self._interleave(parts, m)
+
+    def _point_velocity(self, times: np.ndarray, point, what: str) -> np.ndarray:
+        """The linearization point's velocity at ``times`` (K, 3), m/s: given at the nodes (the
+        node-state loop's) or at every sample, linear in between."""
+        v = np.asarray(point.velocity, dtype=float)
+        grid = self.fine if v.shape[0] == self.fine.n else TimeGrid(self.grid.t)
+        return grid.interpolation_matrix(times, what) @ v
+
+    def states(self, kind: str, t=None, axes=None, what: str | None = None) -> Affine:
+        r"""As :meth:`bvpnav.NavModel.states`, at any time: the biases linear between the nodes;
+        the attitude error at a sample inside an element the left node's carried by the corrected
+        rates (:meth:`bvpnav.error_models.ErrorStates.attitude_columns`: its total at the sample
+        plus the exact first-order change), linear between samples."""
+        if t is None or kind not in getattr(self.state_model, "state_kinds", lambda d: [])(self.data):
+            return super().states(kind, t, axes, what)
+        what = what or kind.replace("_", " ")
+        names, ax = _body_axes(axes, what, "axes")
+        times = self.fine.check_inside(as_times(t, what), what)
+        sm, n = self.state_model, self.N
+        point = getattr(self.data, "state_point", None)
+        totals = None if point is None else point.totals.get(kind)
+        parts = []
+        if kind == "attitude_error":
+            P = self.fine.interpolation_matrix(times, what)
+            cols = self._attitude_state_columns()
+            total = np.zeros((self.fine.n, 3)) if totals is None else np.asarray(totals, dtype=float)
+            for a in ax:
+                parts.append(Affine(self._place({"s": canonical_csr(P @ cols[a])}, 0), P @ total[:, a]))
+        else:
+            P = TimeGrid(self.grid.t).interpolation_matrix(times, what)
+            idx = np.asarray(sm.state_index(self.data, kind), dtype=np.int64)
+            total = np.asarray(sm.state_total(self.data, kind), dtype=float)
+            for a in ax:
+                S = sp.csr_matrix((np.ones(n), (np.arange(n), idx[:, a])), shape=(n, self.ns))
+                parts.append(Affine(self._place({"s": canonical_csr(P @ S)}, 0), P @ total[:, a]))
+        out = self._interleave(parts, times.size)
+        return Affine(out.A, out.c, TimeLabels(f"{kind}_", list(names), times))
+
+    def _attitude_state_columns(self) -> list:
+        """:meth:`bvpnav.error_models.ErrorStates.attitude_columns` of this model's data, made once."""
+        if "_att_cols" not in self.__dict__:
+            self.__dict__["_att_cols"] = [as_csr(g) for g in self.state_model.attitude_columns(self.data)]
+        return self.__dict__["_att_cols"]

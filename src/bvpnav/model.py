@@ -815,12 +815,30 @@ class NavModel:
         out = self._interleave(parts, times.size)
         return Affine(out.A, out.c, self._labels("v", times, ax))
 
+    @property
+    def sample_grid(self):
+        """The grid of every sample (the data's): the unknowns' own grid here; a coarse mesh
+        (:class:`bvpnav.mesh.MeshModel`) keeps its nodes in :attr:`grid` and the samples here.
+        Per-sample arrays (attitude, rates) are interpolated on it."""
+        return self.grid
+
+    def sample_velocity(self, t, axes=None, what: str = "velocity") -> Affine:
+        """Velocities at times ``t`` (m/s) for the body-frame rows: :meth:`velocity` here; on a
+        coarse mesh also at the samples inside its elements
+        (:meth:`bvpnav.mesh.MeshModel.sample_velocity`)."""
+        return self.velocity(t, axes, what)
+
+    def _point_velocity(self, times: np.ndarray, point: LinearizationPoint, what: str) -> np.ndarray:
+        """The linearization point's navigation velocity at ``times`` (K, 3), m/s: linear between
+        the nodes it is given at."""
+        return self.grid.interpolation_matrix(times, what) @ point.velocity
+
     @functools.cached_property
     def _rate_columns(self) -> np.ndarray:
         """Change of the corrected body rates per unit parameter on all of the model's
         parameters, (N, 3, q), rad/s per unit (zero for parameters without rate columns); made
         once per model, for every stance item that asks."""
-        W = np.zeros((self.N, 3, self.q))
+        W = np.zeros((self.data.n, 3, self.q))
         for comp in getattr(self.error_model, "components", (self.error_model,)):
             if comp is None or not hasattr(comp, "rate_columns"):
                 continue
@@ -859,7 +877,7 @@ class NavModel:
             raise InputError(f"{what}: needs the gyro rates; build the data with bvpnav.ImuData.from_gyro "
                              "(or a reader given a gyro column)")
         names, ax = _body_axes(axes, what)
-        P = self.grid.interpolation_matrix(times, what)
+        P = self.sample_grid.interpolation_matrix(times, what)
         W = self._rate_columns
         L = self.params().A
         empty = sp.csr_matrix((times.size, self.size))
@@ -937,13 +955,12 @@ class NavModel:
         jb = np.array(jb)
         K, nb = times.size, jb.size
         C = self._attitude_at(times, what)                       # (K, 3, 3) body to navigation
-        V = self.velocity(times, None, what)                     # rows k * 3 + a
+        V = self.sample_velocity(times, None, what)              # rows k * 3 + a
         Ct = np.swapaxes(C, 1, 2)[:, jb, :]                      # (K, nb, 3): rows of C^T
         rows = np.repeat(np.arange(K * nb), 3)
         cols = (np.arange(K)[:, None, None] * 3 + np.arange(3)[None, None, :]).repeat(nb, axis=1).ravel()
         R = sp.csr_matrix((Ct.ravel(), (rows, cols)), shape=(K * nb, 3 * K))
         A, c = R @ V.A, R @ V.c
-        P = self.grid.interpolation_matrix(times, what)
         if np.any(ell):
             point = getattr(data, "attitude_point", None)
             rates = point.rates if point is not None else getattr(data, "gyro", None)
@@ -958,7 +975,8 @@ class NavModel:
             A, c = A + Wl @ rate.A, c + Wl @ rate.c
         point = getattr(data, "body_point", None)
         if point is not None:   # the attitude increments at the instants: C^T [v0 x] psi(t)
-            turn = self._attitude_rows(times, np.einsum("kbn,knm->kbm", Ct, _skew(P @ point.velocity)), what)
+            v0 = self._point_velocity(times, point, what)
+            turn = self._attitude_rows(times, np.einsum("kbn,knm->kbm", Ct, _skew(v0)), what)
             if turn is not None:
                 A = A + turn
         return Affine(A, c, TimeLabels("vb_", list(names), times))
@@ -972,7 +990,7 @@ class NavModel:
         out = None
         Psi = self._attitude_columns()
         if Psi is not None and np.any(Psi):
-            P = self.grid.interpolation_matrix(times, what)
+            P = self.sample_grid.interpolation_matrix(times, what)
             psi = np.stack([P @ Psi[:, a, :] for a in range(3)], axis=1)           # (K, 3, q)
             L = np.einsum("kbn,knq->kbq", M, psi)
             if np.any(L):
@@ -990,8 +1008,9 @@ class NavModel:
         from scipy.spatial.transform import Slerp
 
         att = self.data.attitude
-        times = self.grid.check_inside(times, what)
-        t = self.grid.t
+        grid = self.sample_grid
+        times = grid.check_inside(times, what)
+        t = grid.t
         k = np.clip(np.searchsorted(t, times), 0, t.size - 1)
         on = np.isclose(t[k], times, rtol=0.0, atol=1e-12 * max(1.0, float(np.max(np.abs(t)))))
         out = np.empty((times.size, 3, 3))
@@ -1077,7 +1096,7 @@ class NavModel:
             if rates is None:
                 raise InputError(f"{what}: the antenna's velocity needs the gyro rates; build the data with "
                                  "bvpnav.ImuData.from_gyro")
-            P = self.grid.interpolation_matrix(times, what)
+            P = self.sample_grid.interpolation_matrix(times, what)
             w = P @ np.asarray(rates, dtype=float)
             skew = np.zeros((times.size, 3, 3))
             skew[:, 0, 1], skew[:, 0, 2], skew[:, 1, 2] = -w[:, 2], w[:, 1], -w[:, 0]
@@ -1170,7 +1189,7 @@ class NavModel:
             return Affine(sp.csr_matrix((K * nb, self.size)), np.zeros(K * nb),
                           TimeLabels("mount_", list(names), times))
         C = self._attitude_at(times, what)
-        vx = np.einsum("kn,kn->k", C[:, :, 0], self.grid.interpolation_matrix(times, what) @ point.velocity)
+        vx = np.einsum("kn,kn->k", C[:, :, 0], self._point_velocity(times, point, what))
         sign = np.array([{1: -1.0, 2: 1.0}[j] for j in jb])
         col = np.array([idx[j - 1] for j in jb])
         A = sp.csr_matrix(((vx[:, None] * sign[None, :]).ravel(), (np.arange(K * nb), np.tile(col, K))),
@@ -1219,7 +1238,7 @@ class NavModel:
             rates = rates - states.totals["gyro_bias"]
         times = as_times(t, what)
         K, nb = times.size, len(jb)
-        w = self.grid.interpolation_matrix(times, what) @ rates      # (K, 3)
+        w = self.sample_grid.interpolation_matrix(times, what) @ rates      # (K, 3)
         W = _skew(w)[:, jb, :]                                         # (K, nb, 3): rows of [omega x]
         A = sp.csr_matrix((W.ravel(), (np.repeat(np.arange(K * nb), 3), np.tile(idx, K * nb))),
                           shape=(K * nb, self.size))

@@ -713,6 +713,32 @@ class ErrorStates(ErrorModel):
                 cols[f"{kind}_{ax} ({KINDS[kind]})"] = totals[kind][:, c]
         return pd.DataFrame(cols, index=pd.Index(np.asarray(data.t, dtype=float), name="t (s)"))
 
+    def attitude_columns(self, data) -> list:
+        r"""Navigation-frame attitude change per unit state at every sample, one sparse (N, ns)
+        matrix per navigation axis, rad per unit: the :math:`\psi_i` of
+        :math:`C_i \to \exp([\psi_i\times])\,C_i` that the body-frame rows linearize.
+
+        Notes
+        -----
+        At every sample its own node's :math:`\varepsilon_i`. On a coarse mesh (module Notes) the
+        attitude inside element :math:`[t_p, t_q]` is the left node's integrated,
+        :math:`\psi_i = \varepsilon_p - C_p Y_i\,\delta b`: the columns of :meth:`state_columns`
+        with the identity for :math:`-[f_{n,i}\times]` and the accelerometer bias left out.
+        """
+        mesh = _mesh(data)
+        kinds = self.state_kinds(data)
+        n, ns = data.n, self.state_size(data)
+        if mesh is None:
+            cols = self.state_index(data, "attitude_error")
+            return [sp.csr_matrix((np.ones(n), (np.arange(n), cols[:, a])), shape=(n, ns)) for a in range(3)]
+        eye = np.broadcast_to(np.eye(3), (n, 3, 3))
+        out = self._mesh_columns(data, mesh, eye, data.attitude.as_matrix())
+        if "acc_bias" not in kinds:
+            return out
+        keep = np.ones(ns)
+        keep[self.state_index(data, "acc_bias").ravel()] = 0.0
+        return [sp.csr_matrix(g @ sp.diags(keep)) for g in out]
+
     @staticmethod
     def example_data():
         """Strapdown data with gyro rates (that of the attitude models' contract checks)."""
