@@ -97,7 +97,7 @@ def check_body_data(model, who: str) -> None:
 def body_instants(model, spans, rate: float | None, who: str) -> np.ndarray:
     """The samples inside ``spans`` (the whole window when None), thinned to at most ``rate`` Hz:
     per interval, the first sample at or after each of ``t0, t0 + 1/rate, ...`` (s)."""
-    t = model.sample_grid.t     # every sample (a coarse mesh's nodes are some of them)
+    t = getattr(model, "sample_grid", model).t   # every sample (a coarse mesh's nodes are some of them)
     eps = 1e-9 * max(1.0, abs(float(t[0])), abs(float(t[-1])))
     spans = ((float(t[0]), float(t[-1])),) if spans is None else spans
     out = []

@@ -331,7 +331,9 @@ VEHICLE = {"bvpnav NHC soft": ("soft", False), "bvpnav NHC band": ("band", False
            "bvpnav states NHC soft": ("soft", False), "bvpnav states NHC band": ("band", False),
            "bvpnav states NHC mount": ("soft", False), "bvpnav NHC+FM mount": ("soft", True),
            "bvpnav states NHC lever": ("soft", False), "bvpnav states NHC lever band": ("band", False),
-           "bvpnav NHC+FM lever": ("soft", True)}
+           "bvpnav NHC+FM lever": ("soft", True),
+           "bvpnav states mesh NHC soft": ("soft", False), "bvpnav states mesh NHC band": ("band", False),
+           "bvpnav states mesh NHC+FM band": ("band", True)}
 #: The methods that estimate the IMU's mounting (yaw and pitch boresight) with the non-holonomic
 #: rows (``NonHolonomic(mounting="estimated")``), prior sigma :data:`MOUNT_SIGMA`.
 MOUNTED = ("bvpnav states NHC mount", "bvpnav NHC+FM mount")
@@ -593,7 +595,7 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float, *, fix_s
         if method in LEVERED:
             model = model + NhcLever(sigma=LEVER_SIGMA)
         prob = NavigationProblem(data, error_model=model, sigma_a=fig["acc_noise"] * math.sqrt(rate),
-                                 segment=MESH_SEGMENT if method == "bvpnav states mesh" else None)
+                                 segment=MESH_SEGMENT if method.startswith("bvpnav states mesh") else None)
     elif method == "bvpnav README" or method in VEHICLE:
         g = from_datasheet(**fig, tilt=tilt, base="tactical", name="KITTI metadata")
         em = g.error_model(interval)

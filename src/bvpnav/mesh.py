@@ -74,7 +74,7 @@ from .imu import ImuData
 from .model import Affine, NavModel, TimeLabels, _body_axes, canonical_csr, columns_csr, state_component
 from .sparse import as_csr
 
-__all__ = ["MeshModel", "item_times", "check_segment"]
+__all__ = ["MeshModel", "item_times", "check_segment", "rows_inside_elements"]
 
 #: Item fields holding the instants the mesh must have nodes at (s).
 TIME_FIELDS = ("t", "t0", "t1", "about_t", "lower_t", "upper_t")
@@ -99,7 +99,8 @@ def check_segment(segment) -> float | None:
 def item_times(items, grid=None) -> np.ndarray:
     """Every instant (s) the items name in their time fields (:data:`TIME_FIELDS`) and, with
     the samples' ``grid``, the instants of items that list them (``instants(grid)``, e.g.
-    :class:`~bvpnav.constraints.ZeroVelocity`: every sample of its interval).
+    :class:`~bvpnav.constraints.ZeroVelocity`: every sample of its interval), except the rows
+    that stay inside elements (:func:`rows_inside_elements`).
 
     Raises
     ------
@@ -113,7 +114,7 @@ def item_times(items, grid=None) -> np.ndarray:
                              "coarse "
                              "mesh (segment=) cannot give them nodes; solve on every sample (segment=None)")
         inst = getattr(it, "instants", None)
-        if grid is not None and callable(inst):
+        if grid is not None and callable(inst) and not rows_inside_elements(it):
             try:
                 out.append(np.asarray(inst(grid), dtype=float).ravel())
             except (TypeError, AttributeError, ValueError):   # instants of a model, not of a grid
@@ -128,6 +129,18 @@ def item_times(items, grid=None) -> np.ndarray:
                 continue
             out.append(arr[np.isfinite(arr)])
     return np.concatenate(out) if out else np.zeros(0)
+
+
+def rows_inside_elements(item) -> bool:
+    """Whether ``item``'s rows stay at their samples inside the mesh's elements instead of
+    getting nodes: the penalty rows (soft, robust) of a body-frame item
+    (:meth:`MeshModel.sample_velocity`). Its rows held as constraints (hard, band, inequality)
+    get nodes: inside an element the residuals are their conditional mean given the element's
+    loads (two per axis), which cannot follow a row profile the data contradict at a cost the
+    samples' problem would pay (``examples/benchmarks/kitti_drive.py``: a band inside 1 s
+    elements made the node-state loop diverge; with nodes at its rows it gives the samples'
+    answer)."""
+    return bool(getattr(item, "body_frame", False)) and item.mode in ("soft", "robust")
 
 
 def _condensation(data: ImuData, fine, nodes: np.ndarray) -> fem.Condensation:

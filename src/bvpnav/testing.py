@@ -164,7 +164,7 @@ def _allowed_columns(model: NavModel, axes: tuple[str, ...]) -> set[int]:
 def _other_model(model: NavModel) -> NavModel:
     """The same axes and window on a coarser grid (navigation-frame accelerations; strapdown
     data with gyro rates stay strapdown, with the same error model)."""
-    t = model.grid.t
+    t = np.asarray(model.data.t, dtype=float)     # every sample (a coarse mesh's grid is its nodes)
     t2 = np.linspace(float(t[0]), float(t[-1]), max(t.size // 2 + 1, 3))
     data = model.data
     if getattr(data, "gyro", None) is not None:
