@@ -59,12 +59,19 @@ def test_sample_velocity_is_the_recovered_trajectorys(kind):
 
 
 def _rows_at_nodes(segment):
+    from bvpnav.constraints import Odometer
+    from bvpnav.error_models import OdometerScale
+
     drive = car_drive(duration=60.0, rate=20.0, grade="tactical", seed=1)
     data = drive.data()
     truth = drive.truth_at(data.t)
-    prob = _mesh_problem(data, None, every=20, value=truth, sigma=0.5, segment=segment)
-    # rows at 1 Hz: the samples of the fixes (nodes of the mesh)
-    prob.add(NonHolonomic(mode="soft", sigma=0.1, rate=1.0, lever=(-1.0, 0.0, -0.3), name="nhc"),
+    k = np.arange(0, data.t.size, 20)
+    prob = bvpnav.NavigationProblem(data, error_model=OdometerScale(), sigma_a=0.05, segment=segment)
+    # a fix antenna off the IMU, an odometer and the rows at 1 Hz: the samples of the fixes (nodes)
+    prob.add(Position(t=data.t[k], value=truth[k], sigma=0.5, lever=(1.0, 0.2, -0.3), name="fixes"),
+             Odometer(t=data.t[k[1::2]], speed=np.linalg.norm(drive.velocity[k[1::2]], axis=1), sigma=0.05,
+                      lever=(-1.2, 0.5, -0.4), name="odo"),
+             NonHolonomic(mode="soft", sigma=0.1, rate=1.0, lever=(-1.0, 0.0, -0.3), name="nhc"),
              ForwardMotion(min_speed=0.5, rate=1.0, name="fwd"))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -73,15 +80,17 @@ def _rows_at_nodes(segment):
 
 def test_rows_at_node_instants_give_the_per_sample_answer():
     """With the rows at node instants only the condensation is exact: the mesh's answer is the
-    answer on every sample, at the nodes and (recovered) between them."""
+    answer on every sample, at the nodes and (recovered) between them (a fix antenna's lever
+    arm, an odometer with its scale, the non-holonomic rows and forward motion)."""
     fprob, fine = _rows_at_nodes(None)
     mprob, mesh = _rows_at_nodes(1.0)
     assert isinstance(mprob.formulation.model, MeshModel)
     assert fine.stats["verified"] and mesh.stats["verified"]
     scale = np.abs(fine.position()).max()
     assert np.abs(mesh.position() - fine.position()).max() <= 1e-8 * scale
-    for name in ("nhc", "fwd"):
+    for name in ("nhc", "fwd", "odo", "fixes"):
         np.testing.assert_allclose(mesh.item_residuals[name], fine.item_residuals[name], rtol=0, atol=1e-8)
+    assert abs(mesh.error_params["odometer_scale"] - fine.error_params["odometer_scale"]) < 1e-10
 
 
 def _car(T=40.0, rate=20.0, bg=BG, ba=BA):
