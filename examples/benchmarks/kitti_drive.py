@@ -125,8 +125,10 @@ steps, peak kB per IMU sample; every bvpnav answer verified)::
 CPU ratio of the bands to the plain mesh: NHC band 4.8 / 5.5 / 6.6x, NHC + FM band 5.1 / 6.4 /
 7.4x at 10 / 30 / 60 s (issue 39 asks for at most 3x). Nearly all of it is the band's nodes
 (2,403 instead of 253): the same rows soft at those nodes took 3.12 s of CPU at 10 s (against
-3.23 s as the band, 0.80 s for the plain mesh, one load), so the band itself costs about
-1.0-1.2x the soft rows on the same mesh. The answers are the per-sample ones within 0.3 % (``bvpnav
+3.23 s as the band, 0.80 s for the plain mesh, one load), and in another side-by-side set at 10 s
+the band with ``tol=1000`` (never reached: the same nodes and rows, the answer the plain one's,
+1.472 m) took 2.64 s against 3.76 s with 0.1 m/s and 0.79 s for the plain mesh: the band itself
+costs 1.4x the same mesh without its pull. The answers are the per-sample ones within 0.3 % (``bvpnav
 states NHC soft`` / ``NHC band``: 1.538 / 2.696 / 3.892 and 1.800 / 3.727 / 6.033 m) in a fifth to a
 half of their CPU (per sample 7-8 s soft, 17.7 s with the band at 10 s).
 Why the band's rows are nodes: inside a 1 s element the residuals of the samples are their
