@@ -59,6 +59,12 @@ positions there solve the element's fine FEM rows with the nodal positions as Di
 conditions (one tridiagonal solve for all elements); the velocities at every sample come
 from the fine formula (:meth:`bvpnav.NavModel.node_velocity_values`), which at the nodes
 equals the coarse one.
+
+**Body-frame rows** (``NonHolonomic``, ``ForwardMotion``, ``Odometer``, a lever arm) read the
+attitude and the rates at the samples (:attr:`MeshModel.sample_grid`) and the velocity at a
+sample inside an element from that element alone (:meth:`MeshModel.sample_velocity`: the
+recovered trajectory's velocity there, exactly). Soft rows stay inside the elements; rows held
+as constraints get nodes (:func:`rows_inside_elements`).
 """
 
 from __future__ import annotations
