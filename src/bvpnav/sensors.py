@@ -361,12 +361,7 @@ class SensorGrade:
             tv_gyro: dict[str, Any] = {"interval": interval, "drift": self.gyro_bias_walk}
         else:
             tv_acc, tv_gyro = {}, {}
-        if heading_sigma is None:
-            heading_sigma = self.heading
-        elif not (isinstance(heading_sigma, (int, float)) and math.isinf(heading_sigma)):
-            heading_sigma = _positive(heading_sigma, "heading_sigma")
-        else:
-            heading_sigma = None
+        heading_sigma = self._heading(heading_sigma)
         em = (Bias(sigma=self.acc_bias, **tv_acc)
               + GyroBias(sigma=self.gyro_bias, **tv_gyro)
               + AttitudeError(sigma=(self.tilt, self.tilt, heading_sigma)))
@@ -374,6 +369,58 @@ class SensorGrade:
             arw = self.arw(interval if time_varying else None)
             em = em + AttitudeWalk(arw=arw, interval=walk_interval(self.acc_noise, arw))
         return em
+
+    def _heading(self, heading_sigma: float | None) -> float | None:
+        """The initial heading's prior sigma, rad: ``heading_sigma``, else the grade's; None for none."""
+        if heading_sigma is None:
+            return self.heading
+        if isinstance(heading_sigma, (int, float)) and math.isinf(heading_sigma):
+            return None
+        return _positive(heading_sigma, "heading_sigma")
+
+    def error_states(self, heading_sigma: float | None = None):
+        r"""Node states with this grade's figures: the error model of the documented drive path.
+
+        Parameters
+        ----------
+        heading_sigma : float, optional
+            Prior standard deviation of the initial heading, rad; default the grade's ``heading``
+            (None for the presets: no prior, the positions determine it). ``math.inf`` also means
+            no prior.
+
+        Returns
+        -------
+        bvpnav.error_models.ErrorStates
+            ``ErrorStates(arw=gyro_noise, gyro_drift=gyro_bias_walk, acc_drift=acc_bias_walk,
+            attitude_sigma=(tilt, tilt, heading_sigma), gyro_sigma=gyro_bias, acc_sigma=acc_bias)``.
+
+        Notes
+        -----
+        The attitude error :math:`\delta\theta`, the gyro bias :math:`b_g` and the accelerometer
+        bias :math:`b_a` are states at every node (every sample, or every mesh node with
+        ``NavigationProblem(..., segment=...)``), tied to their neighbours by the process noise of
+        the continuous-time model a factor graph discretizes:
+
+        .. math:: \dot{\delta\theta} = -b_g + n_g, \quad \dot b_g = q_g, \quad \dot b_a = q_a,
+
+        with intensities ``gyro_noise``, ``gyro_bias_walk`` and ``acc_bias_walk``; the first node
+        has the priors ``tilt`` (roll, pitch), ``heading_sigma``, ``gyro_bias`` and ``acc_bias``.
+        Pair it with :meth:`sigma_a` without an ``interval`` (no knots leave a bridge out).
+
+        Examples
+        --------
+        >>> from bvpnav.sensors import grade
+        >>> m = grade("tactical").error_states()
+        >>> m.arw == grade("tactical").gyro_noise, bool(m.attitude_sigma[2] == float("inf"))
+        (True, True)
+        """
+        from .error_models import ErrorStates  # error models load numpy/pandas
+
+        heading_sigma = self._heading(heading_sigma)
+        return ErrorStates(arw=self.gyro_noise, gyro_drift=self.gyro_bias_walk, acc_drift=self.acc_bias_walk,
+                           attitude_sigma=(self.tilt, self.tilt, math.inf if heading_sigma is None
+                                           else heading_sigma),
+                           gyro_sigma=self.gyro_bias, acc_sigma=self.acc_bias)
 
     def complete(self, error_model) -> tuple[Any, list[str]]:
         r"""``error_model`` with this grade's figures as the priors it does not state.
