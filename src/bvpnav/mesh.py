@@ -69,6 +69,8 @@ as constraints get nodes (:func:`rows_inside_elements`).
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
@@ -225,13 +227,12 @@ class MeshModel(NavModel):
             self.param_names = ()
         self.G = G                      # on every sample; condensed by mg_columns
         self.q = G.shape[2]
-        self.state_model, self.ns, self.Gs = state_component(error_model), 0, []
+        self.state_model, self.ns = state_component(error_model), 0
         if self.state_model is not None:   # node states at the mesh nodes (data.state_mesh)
             if not np.array_equal(getattr(data, "state_mesh", None), nodes):
                 raise InputError("segment=: the node states' mesh (data.state_mesh) is not this mesh; build "
                                  "the problem with NavigationProblem(..., segment=...), which sets it")
             self.ns = int(self.state_model.state_size(data))
-            self.Gs = [as_csr(g) for g in self.state_model.state_columns(data)]   # (N, ns) per axis
         sa = np.ones(d) if sigma_a is None else np.asarray(sigma_a, dtype=float)
         self.sigma_fine = np.array(np.broadcast_to(sa if sa.ndim == 2 else sa[None, :], (Nf, d)))
         inside = np.diff(nodes) - 1
@@ -304,13 +305,29 @@ class MeshModel(NavModel):
             blocks["u"] = self._element_block(axis)
         return blocks
 
+    @functools.cached_property
+    def Gs(self) -> list:
+        """The node states' columns at every sample, sparse (N, ns) per axis, m/s^2 per unit
+        (made on first use: the rows read them condensed, :meth:`_state_times`)."""
+        if self.state_model is None:
+            return []
+        return [as_csr(g) for g in self.state_model.state_columns(self.data)]
+
+    def _state_times(self, W) -> list:
+        """``W @ Gs[a]`` for every axis, canonical CSR (``W`` sparse (m, N)): by the state
+        model's per-element sums when it has them (``condensed_columns``), without the columns
+        of every sample."""
+        by_sums = getattr(self.state_model, "condensed_columns", None)
+        if by_sums is None:
+            return [canonical_csr(W @ g) for g in self.Gs]
+        return by_sums(self.data, W)
+
     def ms_columns(self, axis: int) -> sp.csr_matrix:
         r""":math:`\Phi^T M_f G_s` of one axis (s): the node states' columns condensed (local: a
-        state of node k reaches rows k - 1 .. k + 1)."""
-        cache = self.__dict__.setdefault("_ms_cache", {})
-        if axis not in cache:
-            cache[axis] = canonical_csr(self.cond.load @ self.Gs[axis])
-        return cache[axis]
+        state of node k reaches rows k - 1 .. k + 1); made for every axis at once."""
+        if "_ms_cache" not in self.__dict__:
+            self._ms_cache = dict(enumerate(self._state_times(self.cond.load)))
+        return self._ms_cache[axis]
 
     def mg_columns(self, axis: int) -> tuple[np.ndarray, np.ndarray]:
         r""":math:`\Phi^T M_f G` of one axis (s): the error model's columns condensed."""
@@ -381,6 +398,7 @@ class MeshModel(NavModel):
         slot = np.full(m, -1, dtype=np.int64)
         slot[ki] = self._slot[ji - 1]
         has = slot >= 0
+        FGs = self._state_times(F) if self.ns else None
         parts = []
         for a in ax:
             blocks = {"r": Vr, "w": Vw, "vb": Vb}
@@ -393,7 +411,7 @@ class MeshModel(NavModel):
             if self.q:
                 blocks["l"] = columns_csr(*self._times_g(F, a), self.q)
             if self.ns:
-                blocks["s"] = canonical_csr(F @ self.Gs[a])
+                blocks["s"] = FGs[a]
             parts.append(Affine(self._place(blocks, a), F @ self.data.acc[:, a]))
         out = self._interleave(parts, m)
         return Affine(out.A, out.c, self._labels("v", times, ax))
@@ -418,6 +436,8 @@ class MeshModel(NavModel):
         :math:`K_f r + M_f a = 0` at those samples with the nodal positions given.
         """
         fine, nodes, idx = self.fine, self.grid.nodes, self.cond.interior
+        if self.ns:
+            sacc = self._state_acceleration(xval[self.s_index])
         Nf = fine.n
         Kf, Mf = fem.stiffness(fine), fem.mass(fine)
         lval = xval[self.l_index]
@@ -438,7 +458,7 @@ class MeshModel(NavModel):
             if self.q:
                 acc = acc + self.G[:, a, :] @ lval
             if self.ns:
-                acc = acc + self.Gs[a] @ xval[self.s_index]
+                acc = acc + sacc[:, a]
             r = np.zeros(Nf)
             r[nodes] = xval[self.r_index(a)]
             if idx.size:
@@ -451,6 +471,14 @@ class MeshModel(NavModel):
             v[1:-1] = (r[1:-1] - r[:-2]) / hl + hl * (acc[:-2] + 2.0 * acc[1:-1]) / 6.0
             R[:, a], V[:, a], W[:, a] = r, v, w
         return {"t": fine.t, "r": R, "v": V, "w": W}
+
+    def _state_acceleration(self, s: np.ndarray) -> np.ndarray:
+        """``Gs[a] @ s`` for every axis, (N, d), m/s^2 (by the state model's
+        ``state_acceleration`` when it has it, without the columns of every sample)."""
+        by_blocks = getattr(self.state_model, "state_acceleration", None)
+        if by_blocks is None:
+            return np.column_stack([g @ s for g in self.Gs])
+        return by_blocks(self.data, s)
 
     def _interior_band(self, Kf: sp.csr_matrix) -> np.ndarray:
         """``K_f`` on the samples inside elements (nodes held), in :func:`scipy.linalg.solve_banded`'s

@@ -200,18 +200,25 @@ def _hats(data) -> sp.csr_matrix:
 @dataclass(eq=False)
 class _Elements:
     """A coarse mesh's elements at a point: per sample its element's left node ``left`` and
-    ``theta`` (0 at nodes); per step ``a`` (the corrected step rotations, rad) and ``S`` (the
-    product of the element's steps up to and including this one)."""
+    ``theta`` (0 at nodes); per step ``a`` (the corrected step rotations, rad), ``S`` (the
+    product of the element's steps up to and including this one) and ``h`` (the step, s)."""
 
     left: np.ndarray
     theta: np.ndarray
     a: np.ndarray
     S: Rotation
 
+    h: np.ndarray
+
     @functools.cached_property
     def Jr(self) -> np.ndarray:
         """:math:`J_r(a_j)` of every step, (N - 1, 3, 3)."""
         return right_jacobian(self.a)
+
+    @functools.cached_property
+    def Z(self) -> np.ndarray:
+        """:math:`S_j J_r(a_j) h_j` of every step, (N - 1, 3, 3) (s): ``S`` as matrices."""
+        return self.S.as_matrix() @ self.Jr * self.h[:, None, None]
 
 
 def _elements(data, mesh: np.ndarray, bg: np.ndarray) -> _Elements:
@@ -243,7 +250,7 @@ def _make_elements(data, mesh: np.ndarray, bg: np.ndarray) -> _Elements:
         phi = raw.__dict__["_step_rotations"] = step_rotation_vectors(t, np.asarray(raw.gyro, dtype=float))
     a = phi - np.diff(t)[:, None] * bg[:-1]
     S = _segment_products(Rotation.from_rotvec(a).as_quat(), mesh[left[:-1]])
-    return _Elements(left, theta, a, S)
+    return _Elements(left, theta, a, S, np.diff(t))
 
 
 def _segment_products(steps: np.ndarray, start: np.ndarray) -> Rotation:
@@ -276,6 +283,17 @@ def _segment_products(steps: np.ndarray, start: np.ndarray) -> Rotation:
         q[take] = _quat_product(q[take - off], q[take])
         off *= 2
     return Rotation.from_quat(q)
+
+
+def _cross_columns(v: np.ndarray, M: np.ndarray) -> np.ndarray:
+    """``[v x] M`` for (N, 3) vectors and (N, 3, 3) matrices: the cross product of ``v`` with
+    every column of ``M``, written out by component (no skew matrices made)."""
+    x, y, z = v[:, 0, None], v[:, 1, None], v[:, 2, None]
+    out = np.empty_like(M)
+    out[:, 0] = y * M[:, 2] - z * M[:, 1]
+    out[:, 1] = z * M[:, 0] - x * M[:, 2]
+    out[:, 2] = x * M[:, 1] - y * M[:, 0]
+    return out
 
 
 def _quat_components_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -332,10 +350,8 @@ def _mesh_process(data, mesh: np.ndarray, gyro: bool):
     :math:`e_k` (n - 1, 3, rad), :math:`J_l(e_k)^{-1}`, :math:`J_r(e_k)^{-1}` and the gyro-bias
     Jacobians of the element's left and right nodes (n - 1, 3, 3; s, or None without gyro-bias
     states)."""
-    t = np.asarray(data.t, dtype=float)
-    h = np.diff(t)
     el = _elements(data, mesh, _totals(data, "gyro_bias"))
-    S, elem, theta = el.S, el.left[:-1], el.theta[:-1]   # per step, in its element
+    S, theta = el.S, el.theta[:-1]                                # per step, in its element
     dR = S[mesh[1:] - 1]                                          # each element's product of steps
     C = data.attitude
     Cp, Cq = C[mesh[:-1]], C[mesh[1:]]
@@ -344,11 +360,10 @@ def _mesh_process(data, mesh: np.ndarray, gyro: bool):
     Jri = _inverse_jacobian(e0, -1.0)
     if not gyro:
         return e0, Jli, Jri, None, None
-    Dt = _compose(dR[elem].inv(), S).as_matrix()                 # D_i^T = dR^T (R_s ... R_i)
-    Mi = Dt @ el.Jr * h[:, None, None]
-    lead = Jli @ Cq.as_matrix()
-    Bp = lead @ np.add.reduceat((1.0 - theta)[:, None, None] * Mi, mesh[:-1], axis=0)
-    Bq = lead @ np.add.reduceat(theta[:, None, None] * Mi, mesh[:-1], axis=0)
+    # D_i^T = dR^T (R_s ... R_i), dR the element's: dR^T out of the sums over its steps
+    lead = Jli @ Cq.as_matrix() @ np.swapaxes(dR.as_matrix(), 1, 2)
+    Bp = lead @ np.add.reduceat((1.0 - theta)[:, None, None] * el.Z, mesh[:-1], axis=0)
+    Bq = lead @ np.add.reduceat(theta[:, None, None] * el.Z, mesh[:-1], axis=0)
     return e0, Jli, Jri, Bp, Bq
 
 
@@ -510,14 +525,15 @@ class ErrorStates(ErrorModel):
             out.append(sp.csr_matrix((vals.ravel(), (rows, cols.ravel())), shape=(n, K * n)))
         return out
 
-    def _mesh_columns(self, data, mesh: np.ndarray, S: np.ndarray, C: np.ndarray) -> list:
-        """:meth:`state_columns` on a coarse mesh (module Notes): (N, ns) per axis, every sample
-        on the states of its element's two nodes."""
-        n, nn = data.n, mesh.size
+    def _mesh_blocks(self, data, mesh: np.ndarray, S: np.ndarray, C: np.ndarray) -> tuple:
+        """The per-sample blocks of :meth:`state_columns` on a coarse mesh (module Notes): the
+        elements :class:`_Elements`, the blocks' order ``(kind, right node?)`` and
+        ``{key: (weight per sample or None, (N, 3, 3))}`` (row: navigation axis, column: state
+        component; the block of sample i acts on the states of node ``left[i] + right``)."""
+        n = data.n
         kinds = self.state_kinds(data)
         el = _elements(data, mesh, _totals(data, "gyro_bias"))
         k, th = el.left, el.theta
-        # (kind, right node?) -> (weight per sample or None, (N, 3, 3))
         blocks = {("attitude_error", 0): (None, S)}
         if "acc_bias" in kinds:
             blocks[("acc_bias", 0)] = (1.0 - th, -C)
@@ -525,7 +541,7 @@ class ErrorStates(ErrorModel):
         if "gyro_bias" in kinds:
             # Y_i = sum_{p <= j < i} P_{j+1} J_r(a_j) h_j w_j: running sums, restarted per element
             # (w_j = theta_j for the right node, 1 - theta_j for the left one)
-            Z = el.S.as_matrix() @ el.Jr * np.diff(np.asarray(data.t, float))[:, None, None]
+            Z = el.Z
             cum = np.zeros((2, n, 3, 3))
             np.cumsum(Z, axis=0, out=cum[0, 1:])
             np.cumsum(th[:-1, None, None] * Z, axis=0, out=cum[1, 1:])
@@ -533,7 +549,16 @@ class ErrorStates(ErrorModel):
             SCp = -(S @ C[mesh[k]])
             blocks[("gyro_bias", 0)] = (None, SCp @ (cum[0] - cum[1]))
             blocks[("gyro_bias", 1)] = (None, SCp @ cum[1])
-        cols, indptr, r0, order = self._mesh_layout(data, mesh, kinds, k)
+        order = [(kind, 0) for kind in kinds] + [(kind, 1) for kind in kinds if kind != "attitude_error"]
+        return el, order, blocks
+
+    def _mesh_columns(self, data, mesh: np.ndarray, S: np.ndarray, C: np.ndarray) -> list:
+        """:meth:`state_columns` on a coarse mesh (module Notes): (N, ns) per axis, every sample
+        on the states of its element's two nodes."""
+        n, nn = data.n, mesh.size
+        kinds = self.state_kinds(data)
+        el, _, blocks = self._mesh_blocks(data, mesh, S, C)
+        cols, indptr, r0, order = self._mesh_layout(data, mesh, kinds, el.left)
         # every sample's row holds 3 entries per block: the CSR arrays directly, in canonical
         # form (blocks ordered by node, then kind: increasing columns); at the samples of the
         # last node the right node is the left one, and its blocks (weight 0) are left out
@@ -553,6 +578,135 @@ class ErrorStates(ErrorModel):
             G = sp.csr_matrix((V[a], cols.copy(), indptr.copy()), shape=(n, ns))
             G.has_canonical_format = True
             out.append(G)
+        return out
+
+    def _point_blocks(self, data, mesh: np.ndarray) -> tuple:
+        """:meth:`_mesh_blocks` at the data's point (the attitude's matrices and the specific
+        force in the navigation frame made here), and that force ``fn`` (N, 3), m/s^2."""
+        fn = data.attitude.apply(data.specific_force)
+        return (*self._mesh_blocks(data, mesh, -_skew(fn), data.attitude.as_matrix()), fn)
+
+    def condensed_columns(self, data, W) -> list:
+        r"""``W @ state_columns(data)[a]`` for every navigation axis, without the columns of
+        every sample: on a coarse mesh, sums over the samples that ``W`` (sparse (m, N), e.g.
+        the condensation's load :math:`\Phi^T M_f`) weighs of the per-sample blocks, grouped
+        by the row and the sample's element (one sparse product per kind of block; the same
+        products as ``W @ state_columns``, summed in another order). Canonical CSR (m, ns)
+        per axis (explicit zeros dropped, as :func:`bvpnav.model.canonical_csr`).
+
+        Notes
+        -----
+        Per group (row r, element of left node p) the sums are :math:`\sum_i W_{ri} f_{n,i}`
+        (the attitude block :math:`-[\cdot\times]` of it), :math:`-\sum_i W_{ri} w_i C_i`
+        (accelerometer bias, :math:`w = 1 - \theta, \theta`) and :math:`\sum_i W_{ri}
+        [f_{n,i}\times] C_p Y_i` (gyro bias, module Notes); the weights :math:`W_{ri} w_i` are
+        the same at every point.
+        """
+        mesh = _mesh(data)
+        if mesh is None:
+            return [sp.csr_matrix(W @ g) for g in self.state_columns(data)]
+        kinds = self.state_kinds(data)
+        n = data.n
+        el = _elements(data, mesh, _totals(data, "gyro_bias"))
+        g = self._groups(data, mesh, W, el.left)
+        P = g["P"]
+        fn = data.attitude.apply(data.specific_force)
+        Y = {("attitude_error", 0): -_skew(P @ fn)}
+        C = data.attitude.as_matrix()
+        if "acc_bias" in kinds:
+            C9 = C.reshape(n, 9)
+            Y[("acc_bias", 0)] = -(g["P1"] @ C9).reshape(-1, 3, 3)
+            Y[("acc_bias", 1)] = -(g["P2"] @ C9).reshape(-1, 3, 3)
+        if "gyro_bias" in kinds:
+            k, th, Z = el.left, el.theta, el.Z
+            cum = np.zeros((n, 3, 6))          # [Y_i of the left node | of the right node]
+            right = np.zeros((n, 3, 3))
+            np.cumsum(Z, axis=0, out=cum[1:, :, :3])
+            np.cumsum(th[:-1, None, None] * Z, axis=0, out=right[1:])
+            at = mesh[k]
+            cum[:, :, :3] -= cum[at, :, :3]
+            right -= right[at]
+            cum[:, :, :3] -= right
+            cum[:, :, 3:] = right
+            T = _cross_columns(fn, C[at])     # [f_n x] C_p
+            X = (T @ cum).reshape(n, 3, 2, 3).transpose(0, 2, 1, 3).reshape(n, 18)
+            Yg = (P @ X).reshape(-1, 2, 3, 3)
+            Y[("gyro_bias", 0)], Y[("gyro_bias", 1)] = Yg[:, 0], Yg[:, 1]
+        vals = [Y[key][g["keep"][key]] for key in g["order"]]
+        out = []
+        for a in range(3):
+            v = np.concatenate([y[:, a, :].ravel() for y in vals])
+            A = sp.csr_matrix((np.bincount(g["slot"], v, minlength=g["nnz"]), g["indices"].copy(),
+                               g["indptr"].copy()), shape=g["shape"])   # the kept layout is not pruned
+            A.has_canonical_format = True
+            A.eliminate_zeros()
+            out.append(A)
+        return out
+
+    def _groups(self, data, mesh: np.ndarray, W, left: np.ndarray) -> dict:
+        """How :meth:`condensed_columns` groups the entries of ``W``: by row, then the element
+        (left node) of the sample; the placement of the groups' blocks in the (m, ns) result.
+        The same for every point: kept on the measured data for the last ``W`` (the load)."""
+        raw = _raw(data)
+        kinds = tuple(self.state_kinds(data))
+        kept = raw.__dict__.get("_mesh_groups")
+        if kept is not None and kept[0] is W and kept[1] is mesh and kept[2] == kinds:
+            return kept[3]
+        Wc = sp.coo_matrix(W)
+        nn, K = mesh.size, self._per_node(data)
+        key = Wc.row.astype(np.int64) * nn + left[Wc.col]
+        perm = np.argsort(key, kind="stable")
+        key = key[perm]
+        starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
+        R, L = key[starts] // nn, key[starts] % nn
+        order = [(kind, 0) for kind in kinds] + [(kind, 1) for kind in kinds if kind != "attitude_error"]
+        rows, cols, keep = [], [], {}
+        for kind, right in order:
+            node = L + right
+            ok = np.flatnonzero(node < nn)
+            keep[(kind, right)] = ok
+            c = self.state_index(data, kind)[node[ok]]                    # (G, 3)
+            rows.append(np.repeat(R[ok], 3))
+            cols.append(c.ravel())
+        rows, cols = np.concatenate(rows), np.concatenate(cols)
+        shape = (W.shape[0], K * nn)
+        lin = rows * shape[1] + cols
+        uniq, slot = np.unique(lin, return_inverse=True)
+        ur, uc = uniq // shape[1], uniq % shape[1]
+        indptr = np.r_[0, np.cumsum(np.bincount(ur, minlength=shape[0]))]
+        group = np.cumsum(np.r_[False, key[1:] != key[:-1]])        # group of every entry of W
+        vals, cols_w = np.asarray(Wc.data, dtype=float)[perm], Wc.col[perm]
+        th = _elements(data, mesh, _totals(data, "gyro_bias")).theta
+
+        def summing(w):
+            return sp.csr_matrix((w, (group, cols_w)), shape=(starts.size, W.shape[1]))
+
+        out = {"P": summing(vals), "P1": summing(vals * (1.0 - th[cols_w])), "P2": summing(vals * th[cols_w]),
+               "order": order, "keep": keep, "slot": slot, "nnz": uniq.size, "indices": uc.astype(np.int32),
+               "indptr": indptr.astype(np.int32), "shape": shape}
+        raw.__dict__["_mesh_groups"] = (W, mesh, kinds, out)
+        return out
+
+    def state_acceleration(self, data, s: np.ndarray) -> np.ndarray:
+        """``state_columns(data)[a] @ s`` for every axis, (N, 3), m/s^2: the acceleration the
+        state increments ``s`` make at every sample (on a coarse mesh without the columns)."""
+        mesh = _mesh(data)
+        s = np.asarray(s, dtype=float)
+        if mesh is None:
+            return np.column_stack([g @ s for g in self.state_columns(data)])
+        el, order, blocks, _ = self._point_blocks(data, mesh)
+        nn = mesh.size
+        out = np.zeros((data.n, 3))
+        for key in order:
+            w, B = blocks[key]
+            kind, right = key
+            node = el.left + right
+            ok = node < nn
+            x = np.zeros((data.n, 3))
+            x[ok] = s[self.state_index(data, kind)[node[ok]]]
+            if w is not None:
+                x *= w[:, None]
+            out += np.einsum("nij,nj->ni", B, x)
         return out
 
     def _mesh_layout(self, data, mesh: np.ndarray, kinds: list, k: np.ndarray) -> tuple:
