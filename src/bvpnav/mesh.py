@@ -166,6 +166,23 @@ def _condensation(data: ImuData, fine, nodes: np.ndarray) -> fem.Condensation:
     return out
 
 
+def _kept_constants(data: ImuData, cond: fem.Condensation, sigma: np.ndarray) -> tuple | None:
+    """The mesh's matrices and element weights a step before made with this condensation and
+    these ``sigma`` (kept on the formulation's copy of the measured data, as
+    :func:`_condensation`), or None."""
+    raw = getattr(getattr(data, "state_point", None), "raw", data)
+    kept = raw.__dict__.get("_mesh_constants")
+    if kept is not None and kept[0] is cond and np.array_equal(kept[1], sigma):
+        return kept[2]
+    return None
+
+
+def _keep_constants(data: ImuData, cond: fem.Condensation, sigma: np.ndarray, values: tuple) -> None:
+    raw = getattr(getattr(data, "state_point", None), "raw", data)
+    if getattr(raw, "state_mesh", None) is not None:   # the user's own data: never written to
+        raw.__dict__["_mesh_constants"] = (cond, sigma, values)
+
+
 class MeshModel(NavModel):
     r"""The unknowns of a problem on a coarse mesh of its samples (see the module Notes).
 
@@ -240,10 +257,16 @@ class MeshModel(NavModel):
         self.me = self.elements.size
         self.block = 2 * n + 2 + 2 * self.me
         self.size = d * self.block + self.q + self.ns
+        kept = _kept_constants(data, self.cond, self.sigma_fine)
+        if kept is not None:   # the loop's steps share the mesh and sigma_a
+            self.K, self.M, self._cp, self._cq, self._slot, self.chol = kept
+            return
         self.K = fem.stiffness(self.grid)
         W = self.cond.load[:, nodes].tocsr()
         self.M = fem.tridiagonal(W.diagonal(-1), W.diagonal(0), W.diagonal(1))   # the node residuals
         self._prepare_elements()
+        _keep_constants(data, self.cond, self.sigma_fine,
+                        (self.K, self.M, self._cp, self._cq, self._slot, self.chol))
 
     def _prepare_elements(self) -> None:
         """The load coefficients of the samples inside elements and the Cholesky factors of
@@ -322,12 +345,32 @@ class MeshModel(NavModel):
             return [canonical_csr(W @ g) for g in self.Gs]
         return by_sums(self.data, W)
 
+    @functools.cached_property
+    def _element_state_columns(self) -> tuple[list, list]:
+        r"""``Cp @ Gs[a]`` and ``Cq @ Gs[a]`` of every axis ((n - 1, ns) each, s): the node states'
+        loads of every element on its two nodes, made once per model (one pass over the
+        samples); the condensed rows and the velocities at nodes are made of them."""
+        c = self.cond
+        raw = getattr(getattr(self.data, "state_point", None), "raw", self.data)
+        W = raw.__dict__.get("_mesh_element_loads") if getattr(raw, "state_mesh", None) is not None else None
+        if W is None or W[0] is not c:
+            W = (c, sp.vstack([c.Cp, c.Cq]).tocsr())
+            if getattr(raw, "state_mesh", None) is not None:
+                raw.__dict__["_mesh_element_loads"] = W
+        both = self._state_times(W[1])
+        m = self.N - 1
+        return [b[:m] for b in both], [b[m:] for b in both]
+
     def ms_columns(self, axis: int) -> sp.csr_matrix:
         r""":math:`\Phi^T M_f G_s` of one axis (s): the node states' columns condensed (local: a
-        state of node k reaches rows k - 1 .. k + 1); made for every axis at once."""
-        if "_ms_cache" not in self.__dict__:
-            self._ms_cache = dict(enumerate(self._state_times(self.cond.load)))
-        return self._ms_cache[axis]
+        state of node k reaches rows k - 1 .. k + 1): node k gets ``Cp G_s`` of the element on
+        its right and ``Cq G_s`` of the one on its left."""
+        cache = self.__dict__.setdefault("_ms_cache", {})
+        if axis not in cache:
+            CpG, CqG = self._element_state_columns
+            z = sp.csr_matrix((1, self.ns))
+            cache[axis] = canonical_csr(sp.vstack([CpG[axis], z]) + sp.vstack([z, CqG[axis]]))
+        return cache[axis]
 
     def mg_columns(self, axis: int) -> tuple[np.ndarray, np.ndarray]:
         r""":math:`\Phi^T M_f G` of one axis (s): the error model's columns condensed."""
@@ -398,7 +441,15 @@ class MeshModel(NavModel):
         slot = np.full(m, -1, dtype=np.int64)
         slot[ki] = self._slot[ji - 1]
         has = slot >= 0
-        FGs = self._state_times(F) if self.ns else None
+        FGs = None
+        if self.ns:   # the left element's loads (Cq G_s), and the samples' columns inside one-step elements
+            Fm = F - place @ self.cond.Cq[ji - 1]
+            Fm.eliminate_zeros()
+            FGs = [place @ CqG[ji - 1] for CqG in self._element_state_columns[1]]
+            if Fm.nnz:
+                FGs = [canonical_csr(a + b) for a, b in zip(FGs, self._state_times(Fm), strict=True)]
+            else:
+                FGs = [canonical_csr(a) for a in FGs]
         parts = []
         for a in ax:
             blocks = {"r": Vr, "w": Vw, "vb": Vb}
@@ -416,9 +467,15 @@ class MeshModel(NavModel):
         out = self._interleave(parts, m)
         return Affine(out.A, out.c, self._labels("v", times, ax))
 
+    @functools.cached_property
+    def _node_velocities(self) -> Affine:
+        """:meth:`velocity` at every node, every axis (time-major), made once."""
+        return self.velocity(self.grid.t)
+
     def node_velocity(self, axis: int) -> Affine:
-        """Velocity at every node of one axis (m/s)."""
-        return self.velocity(self.grid.t, [self.axes[axis]])
+        """Velocity at every node of one axis (m/s): rows of :meth:`velocity` at the nodes for
+        every axis, made once per model."""
+        return self._node_velocities.rows(np.arange(axis, self.N * self.d, self.d))
 
     def node_velocity_values(self, axis: int, xval: np.ndarray) -> np.ndarray:
         """:meth:`node_velocity` of one axis evaluated at ``xval`` (m/s)."""

@@ -646,10 +646,11 @@ class ErrorStates(ErrorModel):
     def _groups(self, data, mesh: np.ndarray, W, left: np.ndarray) -> dict:
         """How :meth:`condensed_columns` groups the entries of ``W``: by row, then the element
         (left node) of the sample; the placement of the groups' blocks in the (m, ns) result.
-        The same for every point: kept on the measured data for the last ``W`` (the load)."""
+        The same for every point: kept on the measured data for the last few ``W`` (the load)."""
         raw = _raw(data)
         kinds = tuple(self.state_kinds(data))
-        kept = raw.__dict__.get("_mesh_groups")
+        cache = raw.__dict__.setdefault("_mesh_groups", {})
+        kept = cache.get(id(W))
         if kept is not None and kept[0] is W and kept[1] is mesh and kept[2] == kinds:
             return kept[3]
         Wc = sp.coo_matrix(W)
@@ -684,7 +685,9 @@ class ErrorStates(ErrorModel):
         out = {"P": summing(vals), "P1": summing(vals * (1.0 - th[cols_w])), "P2": summing(vals * th[cols_w]),
                "order": order, "keep": keep, "slot": slot, "nnz": uniq.size, "indices": uc.astype(np.int32),
                "indptr": indptr.astype(np.int32), "shape": shape}
-        raw.__dict__["_mesh_groups"] = (W, mesh, kinds, out)
+        if len(cache) >= 8:   # the load's, and a few others (velocity rows)
+            cache.pop(next(iter(cache)))
+        cache[id(W)] = (W, mesh, kinds, out)
         return out
 
     def state_acceleration(self, data, s: np.ndarray) -> np.ndarray:
