@@ -285,17 +285,6 @@ def _segment_products(steps: np.ndarray, start: np.ndarray) -> Rotation:
     return Rotation.from_quat(q)
 
 
-def _cross_columns(v: np.ndarray, M: np.ndarray) -> np.ndarray:
-    """``[v x] M`` for (N, 3) vectors and (N, 3, 3) matrices: the cross product of ``v`` with
-    every column of ``M``, written out by component (no skew matrices made)."""
-    x, y, z = v[:, 0, None], v[:, 1, None], v[:, 2, None]
-    out = np.empty_like(M)
-    out[:, 0] = y * M[:, 2] - z * M[:, 1]
-    out[:, 1] = z * M[:, 0] - x * M[:, 2]
-    out[:, 2] = x * M[:, 1] - y * M[:, 0]
-    return out
-
-
 def _quat_components_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """:func:`_quat_product` on quaternions stored components first, ``(4, ...)`` (x, y, z, w)."""
     ax, ay, az, aw = a
@@ -618,19 +607,19 @@ class ErrorStates(ErrorModel):
             Y[("acc_bias", 0)] = -(g["P1"] @ C9).reshape(-1, 3, 3)
             Y[("acc_bias", 1)] = -(g["P2"] @ C9).reshape(-1, 3, 3)
         if "gyro_bias" in kinds:
-            k, th, Z = el.left, el.theta, el.Z
-            cum = np.zeros((n, 3, 6))          # [Y_i of the left node | of the right node]
-            right = np.zeros((n, 3, 3))
-            np.cumsum(Z, axis=0, out=cum[1:, :, :3])
-            np.cumsum(th[:-1, None, None] * Z, axis=0, out=right[1:])
-            at = mesh[k]
-            cum[:, :, :3] -= cum[at, :, :3]
-            right -= right[at]
-            cum[:, :, :3] -= right
-            cum[:, :, 3:] = right
-            T = _cross_columns(fn, C[at])     # [f_n x] C_p
-            X = (T @ cum).reshape(n, 3, 2, 3).transpose(0, 2, 1, 3).reshape(n, 18)
-            Yg = (P @ X).reshape(-1, 2, 3, 3)
+            # component-major (9, N) arrays: the running sums along contiguous rows
+            th, at = el.theta, mesh[el.left]
+            Zt = el.Z.reshape(n - 1, 9).T
+            Y2 = np.zeros((2, 9, n))            # Y_i of the left node, of the right node
+            np.cumsum(Zt, axis=1, out=Y2[0, :, 1:])
+            np.cumsum(Zt * th[:-1], axis=1, out=Y2[1, :, 1:])
+            Y2 -= Y2[:, :, at]
+            Y2[0] -= Y2[1]
+            Cp = C.reshape(n, 9).T[:, at].reshape(3, 3, n)
+            f0, f1, f2 = fn.T
+            T = np.stack([f1 * Cp[2] - f2 * Cp[1], f2 * Cp[0] - f0 * Cp[2], f0 * Cp[1] - f1 * Cp[0]])
+            X = np.einsum("rjn,bjcn->brcn", T, Y2.reshape(2, 3, 3, n))   # [f_n x] C_p Y_i
+            Yg = (P @ X.reshape(18, n).T).reshape(-1, 2, 3, 3)
             Y[("gyro_bias", 0)], Y[("gyro_bias", 1)] = Yg[:, 0], Yg[:, 1]
         vals = [Y[key][g["keep"][key]] for key in g["order"]]
         out = []
