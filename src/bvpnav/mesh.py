@@ -479,7 +479,8 @@ class MeshModel(NavModel):
 
     def node_velocity_values(self, axis: int, xval: np.ndarray) -> np.ndarray:
         """:meth:`node_velocity` of one axis evaluated at ``xval`` (m/s)."""
-        return self.node_velocity(axis).value(xval)
+        V = self._node_velocities
+        return (V.A @ xval + V.c)[axis::self.d]
 
     # ------------------------------------------------------- recovery
     def trajectory(self, xval: np.ndarray) -> dict[str, np.ndarray]:

@@ -123,9 +123,13 @@ def random_walk_cost(base: np.ndarray, knots: np.ndarray, drift: float, anchored
 # ------------------------------------------------------------- SO(3) helpers
 def _skew(v: np.ndarray) -> np.ndarray:
     """``[v x]`` for an array of vectors (..., 3) -> (..., 3, 3)."""
-    z = np.zeros(v.shape[:-1])
+    v = np.asarray(v)
+    out = np.zeros(v.shape + (3,), dtype=np.result_type(v.dtype, float))
     x, y, w = v[..., 0], v[..., 1], v[..., 2]
-    return np.stack([np.stack([z, -w, y], -1), np.stack([w, z, -x], -1), np.stack([-y, x, z], -1)], -2)
+    out[..., 0, 1], out[..., 0, 2] = -w, y
+    out[..., 1, 0], out[..., 1, 2] = w, -x
+    out[..., 2, 0], out[..., 2, 1] = -y, x
+    return out
 
 
 def _jacobian(phi: np.ndarray, sign: float) -> np.ndarray:
@@ -138,9 +142,13 @@ def _jacobian(phi: np.ndarray, sign: float) -> np.ndarray:
     # a = (1 - cos th) / th^2, b = (th - sin th) / th^3, with their series below 1e-4 rad
     a = np.where(small, 0.5 - th2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
     b = np.where(small, 1.0 / 6.0 - th2 / 120.0, (safe - np.sin(safe)) / safe**3)
-    S = _skew(phi)
-    eye = np.broadcast_to(np.eye(3), S.shape)
-    return eye + sign * a[..., None, None] * S + b[..., None, None] * (S @ S)
+    # [phi x]^2 = phi phi^T - th^2 I: the entries written directly (no matrix products)
+    out = b[..., None, None] * phi[..., :, None] * phi[..., None, :]
+    d = 1.0 - b * th2
+    for i in range(3):
+        out[..., i, i] += d
+    out += (sign * a)[..., None, None] * _skew(phi)
+    return out
 
 
 def right_jacobian(phi: np.ndarray) -> np.ndarray:

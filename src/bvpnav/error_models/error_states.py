@@ -253,6 +253,21 @@ def _make_elements(data, mesh: np.ndarray, bg: np.ndarray) -> _Elements:
     return _Elements(left, theta, a, S, np.diff(t))
 
 
+def _gyro_sums(el: _Elements, mesh: np.ndarray) -> np.ndarray:
+    r"""The running sums :math:`Y_i` of the gyro-bias columns (module Notes) for the left and
+    the right node of every sample's element, component-major (2, 9, N) (s; row-major 3 x 3
+    per sample): :math:`\sum_{p \le j < i} w_j P_{j+1} J_r(a_j) h_j` with :math:`w_j = 1 -
+    \theta_j` and :math:`\theta_j` (contiguous cumulative sums, restarted at every node)."""
+    n = el.left.size
+    Zt = el.Z.reshape(n - 1, 9).T
+    Y2 = np.zeros((2, 9, n))
+    np.cumsum(Zt, axis=1, out=Y2[0, :, 1:])
+    np.cumsum(Zt * el.theta[:-1], axis=1, out=Y2[1, :, 1:])
+    Y2 -= Y2[:, :, mesh[el.left]]
+    Y2[0] -= Y2[1]
+    return Y2
+
+
 def _segment_products(steps: np.ndarray, start: np.ndarray) -> Rotation:
     """``R_s ... R_i`` for every step ``i`` (quaternions ``steps``, (M, 4)) from the first step
     ``start[i]`` of its element: a segmented parallel prefix scan (log2 of the longest element
@@ -607,14 +622,8 @@ class ErrorStates(ErrorModel):
             Y[("acc_bias", 0)] = -(g["P1"] @ C9).reshape(-1, 3, 3)
             Y[("acc_bias", 1)] = -(g["P2"] @ C9).reshape(-1, 3, 3)
         if "gyro_bias" in kinds:
-            # component-major (9, N) arrays: the running sums along contiguous rows
-            th, at = el.theta, mesh[el.left]
-            Zt = el.Z.reshape(n - 1, 9).T
-            Y2 = np.zeros((2, 9, n))            # Y_i of the left node, of the right node
-            np.cumsum(Zt, axis=1, out=Y2[0, :, 1:])
-            np.cumsum(Zt * th[:-1], axis=1, out=Y2[1, :, 1:])
-            Y2 -= Y2[:, :, at]
-            Y2[0] -= Y2[1]
+            at = mesh[el.left]
+            Y2 = _gyro_sums(el, mesh)
             Cp = C.reshape(n, 9).T[:, at].reshape(3, 3, n)
             f0, f1, f2 = fn.T
             T = np.stack([f1 * Cp[2] - f2 * Cp[1], f2 * Cp[0] - f0 * Cp[2], f0 * Cp[1] - f1 * Cp[0]])
@@ -680,25 +689,30 @@ class ErrorStates(ErrorModel):
         return out
 
     def state_acceleration(self, data, s: np.ndarray) -> np.ndarray:
-        """``state_columns(data)[a] @ s`` for every axis, (N, 3), m/s^2: the acceleration the
-        state increments ``s`` make at every sample (on a coarse mesh without the columns)."""
+        r"""``state_columns(data)[a] @ s`` for every axis, (N, 3), m/s^2: the acceleration the
+        state increments ``s`` make at every sample (on a coarse mesh without the columns:
+        :math:`\varepsilon_p \times f_{n,i} - C_i \delta b_{a,i} + f_{n,i} \times C_p (Y_{p,i}
+        \delta b_{g,p} + Y_{q,i} \delta b_{g,q})`, module Notes)."""
         mesh = _mesh(data)
         s = np.asarray(s, dtype=float)
         if mesh is None:
             return np.column_stack([g @ s for g in self.state_columns(data)])
-        el, order, blocks, _ = self._point_blocks(data, mesh)
-        nn = mesh.size
-        out = np.zeros((data.n, 3))
-        for key in order:
-            w, B = blocks[key]
-            kind, right = key
-            node = el.left + right
-            ok = node < nn
-            x = np.zeros((data.n, 3))
-            x[ok] = s[self.state_index(data, kind)[node[ok]]]
-            if w is not None:
-                x *= w[:, None]
-            out += np.einsum("nij,nj->ni", B, x)
+        kinds = self.state_kinds(data)
+        n, nn = data.n, mesh.size
+        el = _elements(data, mesh, _totals(data, "gyro_bias"))
+        left, right = el.left, np.minimum(el.left + 1, nn - 1)   # the last node's right weight is 0
+        fn = data.attitude.apply(data.specific_force)
+        out = np.cross(s[self.state_index(data, "attitude_error")][left], fn)
+        if "acc_bias" in kinds:
+            B = s[self.state_index(data, "acc_bias")]
+            th = el.theta[:, None]
+            out -= data.attitude.apply((1.0 - th) * B[left] + th * B[right])
+        if "gyro_bias" in kinds:
+            B = s[self.state_index(data, "gyro_bias")]
+            Y2 = _gyro_sums(el, mesh).reshape(2, 3, 3, n)
+            u = (np.einsum("jcn,nc->nj", Y2[0], B[left]) + np.einsum("jcn,nc->nj", Y2[1], B[right]))
+            Cp = data.attitude.as_matrix()[mesh[left]]
+            out += np.cross(fn, np.einsum("nij,nj->ni", Cp, u))
         return out
 
     def _mesh_layout(self, data, mesh: np.ndarray, kinds: list, k: np.ndarray) -> tuple:
