@@ -241,10 +241,15 @@ def _make_elements(data, mesh: np.ndarray, bg: np.ndarray) -> _Elements:
     raw = _raw(data)
     t = np.asarray(raw.t, dtype=float)
     n = t.size
-    left = np.minimum(np.searchsorted(mesh, np.arange(n), side="right") - 1, mesh.size - 1)
-    theta = np.zeros(n)
-    inner = left < mesh.size - 1
-    theta[inner] = (t[inner] - t[mesh[left[inner]]]) / np.diff(t[mesh])[left[inner]]
+    kept = raw.__dict__.get("_mesh_left")          # of the mesh only: the same at every point
+    if kept is not None and kept[0] is mesh:
+        left, theta = kept[1]
+    else:
+        left = np.minimum(np.searchsorted(mesh, np.arange(n), side="right") - 1, mesh.size - 1)
+        theta = np.zeros(n)
+        inner = left < mesh.size - 1
+        theta[inner] = (t[inner] - t[mesh[left[inner]]]) / np.diff(t[mesh])[left[inner]]
+        raw.__dict__["_mesh_left"] = (mesh, (left, theta))
     phi = raw.__dict__.get("_step_rotations")      # of the measured rates: the same at every point
     if phi is None:
         phi = raw.__dict__["_step_rotations"] = step_rotation_vectors(t, np.asarray(raw.gyro, dtype=float))
@@ -301,13 +306,27 @@ def _segment_products(steps: np.ndarray, start: np.ndarray) -> Rotation:
 
 
 def _quat_components_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """:func:`_quat_product` on quaternions stored components first, ``(4, ...)`` (x, y, z, w)."""
+    """:func:`_quat_product` on quaternions stored components first, ``(4, ...)`` (x, y, z, w):
+    each component written into the result in place (the sums in the order
+    ``(aw bx + bw ax) + (ay bz - az by)``)."""
     ax, ay, az, aw = a
     bx, by, bz, bw = b
-    return np.stack([aw * bx + bw * ax + (ay * bz - az * by),
-                     aw * by + bw * ay + (az * bx - ax * bz),
-                     aw * bz + bw * az + (ax * by - ay * bx),
-                     aw * bw - (ax * bx + ay * by + az * bz)])
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    tmp = np.empty(out.shape[1:])
+    for o, (p, q, u, v, w, z) in zip(out[:3], ((bx, ax, ay, bz, az, by), (by, ay, az, bx, ax, bz),
+                                              (bz, az, ax, by, ay, bx)), strict=True):
+        np.multiply(aw, p, out=o)
+        np.multiply(bw, q, out=tmp)
+        o += tmp
+        np.multiply(u, v, out=tmp)
+        tmp -= w * z
+        o += tmp
+    np.multiply(ax, bx, out=tmp)
+    tmp += ay * by
+    tmp += az * bz
+    np.multiply(aw, bw, out=out[3])
+    out[3] -= tmp
+    return out
 
 
 def _quat_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -854,7 +873,10 @@ class ErrorStates(ErrorModel):
         n = raw.n
         el = _elements(data, mesh, out.get("gyro_bias", np.zeros((n, 3))))
         q = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))                  # P_i: identity at the nodes
-        inside = np.flatnonzero(~np.isin(np.arange(n), mesh))
+        inside = raw.__dict__.get("_mesh_inside")
+        if inside is None or inside[0] is not mesh:
+            inside = raw.__dict__["_mesh_inside"] = (mesh, np.flatnonzero(~np.isin(np.arange(n), mesh)))
+        inside = inside[1]
         q[inside] = el.S.as_quat()[inside - 1]
         Chat = raw.attitude
         Cnode = _compose(nodes, Chat[mesh]).as_quat()               # C_p of every node
