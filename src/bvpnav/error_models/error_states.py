@@ -856,19 +856,34 @@ class ErrorStates(ErrorModel):
         return out
 
     def _mesh_updated(self, data, mesh: np.ndarray, s: np.ndarray) -> dict:
-        r""":meth:`updated` on a coarse mesh: the nodes' totals take the increments, the biases at
-        the samples are linear between nodes, and the attitude at a sample is re-integrated from
-        its element's left node with the corrected rates, :math:`C_i = C_p P_i` (module Notes),
-        returned as the attitude error :math:`\mathrm{Log}(C_i \hat C_i^T)` of every sample."""
-        hats = _hats(data)
+        r""":meth:`updated` on a coarse mesh: the nodes' totals take the increments
+        (:meth:`node_totals`) and the samples' follow from them (:meth:`expand`)."""
+        return self.expand(data, self.node_totals(data, s))
+
+    def node_totals(self, data, s: np.ndarray) -> dict:
+        r"""The totals at the nodes of a coarse mesh after the increments ``s``, kind -> (n, 3)
+        (attitude by composition, biases by addition; :meth:`updated` at the nodes only)."""
+        mesh = _mesh(data)
         out = {}
         for kind in self.state_kinds(data):
             d = np.asarray(s, dtype=float)[self.state_index(data, kind)]
             tot = _totals(data, kind)[mesh]
             if kind == "attitude_error":
-                nodes = _compose(Rotation.from_rotvec(d), Rotation.from_rotvec(tot))
+                out[kind] = _compose(Rotation.from_rotvec(d), Rotation.from_rotvec(tot)).as_rotvec()
             else:
-                out[kind] = hats @ (tot + d)
+                out[kind] = tot + d
+        return out
+
+    def expand(self, data, nodes: dict) -> dict:
+        r"""The totals at every sample, kind -> (N, 3), from those at the nodes of a coarse mesh
+        (``nodes``, kind -> (n, 3)): the biases linear between nodes, the attitude
+        re-integrated from its element's left node with the corrected rates, :math:`C_i = C_p
+        P_i` (module Notes), as the attitude error :math:`\mathrm{Log}(C_i \hat C_i^T)` of every
+        sample."""
+        mesh = _mesh(data)
+        hats = _hats(data)
+        out = {kind: hats @ np.asarray(v, dtype=float) for kind, v in nodes.items()
+               if kind != "attitude_error"}
         raw = _raw(data)
         n = raw.n
         el = _elements(data, mesh, out.get("gyro_bias", np.zeros((n, 3))))
@@ -879,7 +894,7 @@ class ErrorStates(ErrorModel):
         inside = inside[1]
         q[inside] = el.S.as_quat()[inside - 1]
         Chat = raw.attitude
-        Cnode = _compose(nodes, Chat[mesh]).as_quat()               # C_p of every node
+        Cnode = _compose(Rotation.from_rotvec(nodes["attitude_error"]), Chat[mesh]).as_quat()   # C_p
         C = _quat_product(Cnode[el.left], q)                        # C_i = C_p P_i
         inv = raw.__dict__.get("_attitude_inverse")
         if inv is None:

@@ -843,35 +843,51 @@ def _next_totals(sm, data, s: np.ndarray, iters: list, prev_att: np.ndarray | No
     between this attitude step and the last, and ``accelerated``, the mixing coefficients;
     ``history`` keeps ``(x, g)`` of the last steps below :data:`ANDERSON_START` (a step above
     it, or one larger than the step before, clears it: a pair from the nonlinear regime or from
-    steps that grow, where Gauss-Newton overshoots, would mislead the secant)."""
-    from ..error_models.error_states import _totals
+    steps that grow, where Gauss-Newton overshoots, would mislead the secant).
+
+    On a coarse mesh (``sm.node_totals``, ``sm.expand``) the unknowns are the nodes' totals:
+    they are the ones mixed, and the samples' totals are made from the point taken (the
+    attitude re-integrated once per step)."""
+    from ..error_models.error_states import _mesh, _totals
 
     att = s[sm.state_index(data, "attitude_error")].ravel()
     if prev_att is not None:
         den = max(float(np.linalg.norm(att) * np.linalg.norm(prev_att)), 1e-300)
         iters[-1]["turn"] = float(att @ prev_att) / den
-    plain = sm.updated(data, s)
+    mesh = _mesh(data) if hasattr(sm, "node_totals") else None
+    if mesh is None:
+        plain = sm.updated(data, s)
+        expand, nodes = (lambda tot: tot), (lambda tot: tot)
+    else:
+        plain = sm.node_totals(data, s)
+
+        def expand(tot):
+            return sm.expand(data, tot)
+
+        def nodes(tot):
+            return {k: v[mesh] for k, v in tot.items()}
     grew = len(iters) > 1 and iters[-1]["step"] >= iters[-2]["step"]
     if not o["loop"] or iters[-1]["step"] >= ANDERSON_START or grew:
         history.clear()   # mixed only with steps of the linear regime, where they shrink
-        return plain, att
+        return expand(plain), att
     kinds = sm.state_kinds(data)
-    before = _flat_totals(sm, data, {k: _totals(data, k) for k in kinds})
+    before = _flat_totals(sm, data, nodes({k: _totals(data, k) for k in kinds}))
     history.append((before, _flat_totals(sm, data, plain)))
     del history[:-(ANDERSON_DEPTH + 1)]
     if iters[-1]["step"] < o["tol"]:
-        return plain, att   # the answer's totals, as Gauss-Newton gives them
-    mixed = _anderson(history, data.n)
+        return expand(plain), att   # the answer's totals, as Gauss-Newton gives them
+    m = before.size // (3 * len(kinds))   # samples, or nodes
+    mixed = _anderson(history, m)
     if mixed is None:
-        return plain, att
+        return expand(plain), att
     xn, gam = mixed
     x, g = history[-1]
-    na = 3 * data.n   # the attitude block comes first
+    na = 3 * m   # the attitude block comes first
     reach = float(np.max(np.abs(g[:na] - x[:na])))
     if np.max(np.abs(xn[:na] - x[:na])) > ANDERSON_REACH * max(reach, 1e-300):
-        return plain, att
+        return expand(plain), att
     iters[-1]["accelerated"] = [float(v) for v in gam]
-    return {k: xn[na * i:na * (i + 1)].reshape(data.n, 3) for i, k in enumerate(kinds)}, att
+    return expand({k: xn[na * i:na * (i + 1)].reshape(m, 3) for i, k in enumerate(kinds)}), att
 
 
 def _quick_next(o: dict, k: int, iters: list, lam) -> bool:
