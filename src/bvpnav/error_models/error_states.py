@@ -277,22 +277,30 @@ def _segment_products(steps: np.ndarray, start: np.ndarray) -> Rotation:
     """``R_s ... R_i`` for every step ``i`` (quaternions ``steps``, (M, 4)) from the first step
     ``start[i]`` of its element: a segmented parallel prefix scan (log2 of the longest element
     vectorised compositions). The steps of an element are contiguous (``start`` ascends): when
-    the elements are of similar lengths the scan runs on an (elements, longest, 4) array
-    padded with identities, on contiguous slices (the same products in the same order)."""
+    the elements are of similar lengths the products run on an (elements, blocks, block, 4)
+    array padded with identities (blocks of about the square root of the longest element):
+    running products within every block, then of the blocks' totals, then each block's
+    from the totals before it (about two compositions per step in all, in vectorised
+    slices; the same products grouped otherwise, equal to rounding)."""
     m = steps.shape[0]
     first = np.flatnonzero(np.r_[True, start[1:] != start[:-1]]) if m else np.zeros(0, np.int64)
     lens = np.diff(np.r_[first, m])
     if m and first.size * int(lens.max()) <= 1.5 * m:
         ne, L = first.size, int(lens.max())
+        B = max(1, int(np.ceil(np.sqrt(L))))
+        nb = -(-L // B)
         row, pos = np.repeat(np.arange(ne), lens), np.arange(m) - np.repeat(first, lens)
-        Q = np.zeros((4, ne, L))                   # components first: contiguous slices
+        Q = np.zeros((4, ne, nb, B))               # components first
         Q[3] = 1.0
-        Q[:, row, pos] = steps.T
-        off = 1
-        while off < L:
-            Q[:, :, off:] = _quat_components_product(Q[:, :, :-off], Q[:, :, off:])
-            off *= 2
-        return Rotation.from_quat(Q[:, row, pos].T)
+        Q[:, row, pos // B, pos % B] = steps.T
+        for j in range(1, B):                      # within the blocks
+            Q[..., j] = _quat_components_product(Q[..., j - 1], Q[..., j])
+        T = Q[..., B - 1].copy()                   # the blocks' totals, then their running products
+        for b in range(1, nb):
+            T[:, :, b] = _quat_components_product(T[:, :, b - 1], T[:, :, b])
+        if nb > 1:
+            Q[:, :, 1:] = _quat_components_product(T[:, :, :-1, None], Q[:, :, 1:])
+        return Rotation.from_quat(Q[:, row, pos // B, pos % B].T)
     q = steps.copy()
     idx = np.arange(q.shape[0])
     off = 1
