@@ -350,9 +350,12 @@ def states_at(data, totals: dict):
 
     raw = _raw(data)
     n = raw.n
+    made = raw.__dict__.get("_expanded_attitude")   # (totals' array, its attitude) of the last expand
     tot = {k: np.asarray(v, dtype=float).reshape(n, 3) for k, v in totals.items()}
     att = raw.attitude
-    if "attitude_error" in tot:
+    if made is not None and totals.get("attitude_error") is made[0]:
+        att = Rotation.from_quat(made[1])     # C_i as expand re-integrated it (to rounding the same)
+    elif "attitude_error" in tot:
         att = _compose(Rotation.from_rotvec(tot["attitude_error"]), att)
     f = raw.specific_force - tot["acc_bias"] if "acc_bias" in tot else raw.specific_force
     out = ImuData(raw.t, specific_force=f, attitude=att, gravity=raw.gravity, axes=raw.axes,
@@ -908,6 +911,7 @@ class ErrorStates(ErrorModel):
         if inv is None:
             inv = raw.__dict__["_attitude_inverse"] = Chat.inv().as_quat()
         out["attitude_error"] = _rotvec(_quat_product(C, inv))
+        raw.__dict__["_expanded_attitude"] = (out["attitude_error"], C)
         return out
 
     def frame(self, data, totals: dict) -> pd.DataFrame:
