@@ -262,7 +262,11 @@ def _gyro_sums(el: _Elements, mesh: np.ndarray) -> np.ndarray:
     r"""The running sums :math:`Y_i` of the gyro-bias columns (module Notes) for the left and
     the right node of every sample's element, component-major (2, 9, N) (s; row-major 3 x 3
     per sample): :math:`\sum_{p \le j < i} w_j P_{j+1} J_r(a_j) h_j` with :math:`w_j = 1 -
-    \theta_j` and :math:`\theta_j` (contiguous cumulative sums, restarted at every node)."""
+    \theta_j` and :math:`\theta_j` (contiguous cumulative sums, restarted at every node); kept
+    on the elements (the condensed columns and the trajectory of one point share them)."""
+    kept = el.__dict__.get("_gyro_sums")
+    if kept is not None:
+        return kept
     n = el.left.size
     Zt = el.Z.reshape(n - 1, 9).T
     Y2 = np.zeros((2, 9, n))
@@ -270,6 +274,7 @@ def _gyro_sums(el: _Elements, mesh: np.ndarray) -> np.ndarray:
     np.cumsum(Zt * el.theta[:-1], axis=1, out=Y2[1, :, 1:])
     Y2 -= Y2[:, :, mesh[el.left]]
     Y2[0] -= Y2[1]
+    el.__dict__["_gyro_sums"] = Y2
     return Y2
 
 
