@@ -233,6 +233,29 @@ Levenberg-Marquardt needs a prior of some information on the heading: with exact
 (a singular information matrix) it stopped at graph error 1.2332 (55.30 m), with 1e-8 per rad^2
 it reaches 1.2273.
 
+After the mesh's per-step work was cut (2026-12-05, issue 42: the condensed state columns by
+per-element sums, no columns of every sample; the nodes' totals as the loop's unknowns, the
+attitude re-integrated once per step; ``--methods GTSAM "bvpnav states mesh"``, one run at load
+average 11-16 on the 2-core machine, so wall times are about 3x the CPU seconds; RMS m, wall /
+CPU s, CPU ratio to GTSAM's, Gauss-Newton steps, peak bytes per IMU sample)::
+
+    gap s  GTSAM (example)          states mesh
+    10     1.473  0.23/0.086 7.9k    1.473  1.4/0.51 (6.0x)  8 it  11.7k
+    30    15.547  0.29/0.106 7.9k   15.529  1.8/0.58 (5.4x)  9 it  11.7k
+    60    54.803  0.27/0.101 7.9k   55.389  1.2/0.48 (4.8x)  7 it  11.7k
+
+Every bvpnav answer verified; RMS 1.472610 / 15.528535 / 55.389439 m, as before (positions
+within 1.4e-7 m). The same solves in one process, the library of the commit before against
+this one (least CPU of 5, load 15-17): 0.72 -> 0.47 s, 0.80 -> 0.54 s, 0.68 -> 0.42 s. Where
+the CPU of the 30 s solve goes now (0.55 s in-process; timers on the functions): per
+Gauss-Newton step about 50 ms, of which the condensed state columns 17 ms (per-sample 3 x 3
+products, running sums and the sparse sums over the elements), the process rows 9 ms (right
+Jacobians and the elements' products), the samples' attitude re-integrated 9 ms (segment
+products 4 ms), the banded factor 8 ms, ``states_at`` 3 ms; outside the steps the final stage's
+refinement and verification, the observability check 19 ms and the trajectory 14 ms. The
+loop's ``tol`` (1e-7 rad, the largest attitude change of a step) costs the last two steps:
+``attitude={"tol": 1e-5}`` gives 7 / 7 / 6 steps and RMS 1.472610 / 15.528533 / 55.389446 m.
+
 After the harness fix (every method starts from the kept fixes only: GTSAM's example had
 started LM from every fix and both smoothers' heading came from the first fixes, withheld or
 not), one run on a nearly idle machine (2026-12-04, 20:45-21:00; RMS m, wall s, CPU s, peak
