@@ -61,7 +61,7 @@ Run: ``python examples/benchmarks/car_drive.py [--grade tactical consumer] [--se
 
 The mesh after its per-step work was cut (2026-12-05, issue 42; ``--methods GTSAM "bvpnav states
 mesh" --grade tactical consumer --seeds 0``, one run at load average 15-17, wall times inflated;
-3-D RMS m, wall / CPU s, Gauss-Newton steps; in brackets the library of the commit before, same
+3-D RMS m, wall / CPU s, Gauss-Newton steps; in brackets main's library (b88ecc4), same
 seed, another run)::
 
     grade     gap  GTSAM (example)          states mesh

@@ -245,7 +245,7 @@ CPU s, CPU ratio to GTSAM's, Gauss-Newton steps, peak bytes per IMU sample)::
     60    54.803  0.27/0.101 7.9k   55.389  1.2/0.48 (4.8x)  7 it  11.7k
 
 Every bvpnav answer verified; RMS 1.472610 / 15.528535 / 55.389439 m, as before (positions
-within 1.4e-7 m). The same solves in one process, the library of the commit before against
+within 1.4e-7 m). The same solves in one process, main's library (b88ecc4) against
 this one (least CPU of 5, load 15-17): 0.72 -> 0.47 s, 0.80 -> 0.54 s, 0.68 -> 0.42 s. Where
 the CPU of the 30 s solve goes now (0.55 s in-process; timers on the functions): per
 Gauss-Newton step about 50 ms, of which the condensed state columns 17 ms (per-sample 3 x 3
