@@ -268,11 +268,13 @@ def _gyro_sums(el: _Elements, mesh: np.ndarray) -> np.ndarray:
     if kept is not None:
         return kept
     n = el.left.size
-    Zt = el.Z.reshape(n - 1, 9).T
+    Zt = np.ascontiguousarray(el.Z.reshape(n - 1, 9).T)
     Y2 = np.zeros((2, 9, n))
     np.cumsum(Zt, axis=1, out=Y2[0, :, 1:])
-    np.cumsum(Zt * el.theta[:-1], axis=1, out=Y2[1, :, 1:])
-    Y2 -= Y2[:, :, mesh[el.left]]
+    Zt *= el.theta[:-1]
+    np.cumsum(Zt, axis=1, out=Y2[1, :, 1:])
+    counts = np.bincount(el.left, minlength=mesh.size)      # samples whose element starts at each node
+    Y2 -= np.repeat(Y2[:, :, mesh], counts, axis=2)
     Y2[0] -= Y2[1]
     el.__dict__["_gyro_sums"] = Y2
     return Y2
@@ -660,7 +662,7 @@ class ErrorStates(ErrorModel):
             at = mesh[el.left]
             Y2 = _gyro_sums(el, mesh)
             Cp = C.reshape(n, 9).T[:, at].reshape(3, 3, n)
-            f0, f1, f2 = fn.T
+            f0, f1, f2 = np.ascontiguousarray(fn.T)
             T = np.stack([f1 * Cp[2] - f2 * Cp[1], f2 * Cp[0] - f0 * Cp[2], f0 * Cp[1] - f1 * Cp[0]])
             X = np.einsum("rjn,bjcn->brcn", T, Y2.reshape(2, 3, 3, n))   # [f_n x] C_p Y_i
             Yg = (P @ X.reshape(18, n).T).reshape(-1, 2, 3, 3)
