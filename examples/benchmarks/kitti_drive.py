@@ -236,18 +236,18 @@ it reaches 1.2273.
 After the mesh's per-step work was cut (2026-12-05, issue 42: the condensed state columns by
 per-element sums, no columns of every sample; the nodes' totals as the loop's unknowns, the
 attitude re-integrated once per step; start prior ``open``, ``--methods GTSAM "bvpnav states
-mesh"``, one run at load average 15-17 on the 2-core machine, so wall times are 2-3x the CPU
+mesh"``, one run at load average 12-13 on the 2-core machine, so wall times are about 2x the CPU
 seconds; RMS m, wall / CPU s, CPU ratio to GTSAM's, Gauss-Newton steps, peak bytes per IMU
-sample)::
+sample; the wall ratio to GTSAM's 5.5 / 5.2 / 6.0)::
 
     gap s  GTSAM (example)           states mesh
-    10      1.473  0.21/0.086 7.9k    1.473  1.2/0.50 (5.8x)  8 it  11.7k
-    30     15.547  0.28/0.104 7.9k   15.529  1.4/0.58 (5.6x)  9 it  11.7k
-    60     55.419  0.25/0.099 7.9k   55.389  1.3/0.52 (5.3x)  8 it  12.0k
+    10      1.473  0.18/0.084 7.9k    1.473  1.0/0.51 (6.0x)  8 it  11.7k
+    30     15.547  0.22/0.105 7.9k   15.529  1.1/0.57 (5.4x)  9 it  11.7k
+    60     55.419  0.18/0.097 7.9k   55.389  1.1/0.55 (5.7x)  8 it  12.0k
 
 Every bvpnav answer verified; RMS 1.472610 / 15.528535 / 55.389439 m, as before (positions
 within 1.4e-7 m). The same solves in one process, main's library (8b53a57) against this one
-(least CPU of 5, load 17-19): 0.69 -> 0.47 s, 0.80 -> 0.53 s, 0.68 -> 0.48 s. Where the CPU
+(least CPU of 4, load 13-18): 0.68 -> 0.45 s, 0.76 -> 0.51 s, 0.67 -> 0.47 s. Where the CPU
 of the 30 s solve goes now (0.55 s in-process; timers on the functions): per Gauss-Newton step
 about 50 ms, of which the condensed state columns 17 ms (per-sample 3 x 3 products, running
 sums and the sparse sums over the elements), the process rows 9 ms (right Jacobians and the
