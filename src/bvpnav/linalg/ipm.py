@@ -102,6 +102,10 @@ class QuadraticForm:
     ineq_blocks : list of (label, list of slice)
         For each band or inequality term, its rows of ``G``: one slice (``r - tol``, or
         ``g - tol``) or two (a band's upper ``r - tol`` and lower ``-r - tol`` sides).
+    before, after : ndarray of int
+        Per row of ``G``, the row of the same term, side and axis at the item's previous
+        and next instant (:meth:`bvpnav.items.Item.row_layout`: rows time-major), -1 at
+        the ends; every row its own instant when the term has no item.
     """
 
     ls: LeastSquaresForm
@@ -111,6 +115,8 @@ class QuadraticForm:
     base_of: np.ndarray
     sign: np.ndarray
     ineq_blocks: list
+    before: np.ndarray
+    after: np.ndarray
 
     def base_weights(self, w: np.ndarray) -> np.ndarray:
         r"""``w`` (one value per row of ``G``) summed onto :attr:`base`'s rows
@@ -132,12 +138,14 @@ def quadratic_form(form: Formulation, lam: float) -> QuadraticForm:
         raise ValueError(f"item {bad.label!r} (kind {bad.kind!r}, mode {bad.mode!r}) is not a "
                          "quadratic-program row")
     ls = least_squares_form(form, lam, surrogate=True)
-    bases, consts, signs, of, blocks = [], [], [], [], []
+    bases, consts, signs, of, blocks, strides = [], [], [], [], [], []
     start = nbase = 0
     for term in form.terms():
         if term.least_squares_role() is not None:
             continue
         res = term.residual
+        item = getattr(term, "item", None)
+        axes = item.row_layout(res.m)[1] if item is not None else 1
         A = canonical(res.A)
         bases.append(A)
         tol = np.zeros(res.m) if term.mode == "hard" else np.broadcast_to(term.tol, (res.m,))
@@ -147,6 +155,7 @@ def quadratic_form(form: Formulation, lam: float) -> QuadraticForm:
             signs.append(np.full(res.m, sign))
             of.append(nbase + np.arange(res.m))
             pieces.append(slice(start, start + res.m))
+            strides.append((start, res.m, axes))
             start += res.m
         nbase += res.m
         blocks.append((term.label, pieces))
@@ -161,7 +170,11 @@ def quadratic_form(form: Formulation, lam: float) -> QuadraticForm:
     G = sp.csr_matrix((G.data * np.repeat(sign, np.diff(G.indptr)), G.indices, G.indptr), shape=G.shape)
     scale = big[base_of]
     c = np.concatenate(consts) / scale if consts else np.zeros(0)
-    return QuadraticForm(ls, Affine(G, c), scale, B, base_of, sign, blocks)
+    before, after = np.full(start, -1, dtype=np.int64), np.full(start, -1, dtype=np.int64)
+    for first, m, axes in strides:
+        i = np.arange(first, first + m)
+        before[i[axes:]], after[i[:-axes]] = i[:-axes], i[axes:]
+    return QuadraticForm(ls, Affine(G, c), scale, B, base_of, sign, blocks, before, after)
 
 
 class MultiplierBand:
