@@ -181,11 +181,11 @@ def active_set(qp: QuadraticForm, newton: _Newton, tol: float, max_iter: int = M
             held = _Held(qp, newton, act)
         except np.linalg.LinAlgError:
             return None, f"the KKT matrix with {int(act.sum())} rows at their bounds is singular"
-        # one refinement step while the guess may change; the rest once it holds
-        sol = held.solve(kkt, steps=1)
+        # no refinement while the guess may change (as a quick step); three steps once it holds
+        sol = held.solve(kkt, steps=0)
         for final in (False, True):
             if final:
-                sol = held.solve(kkt, steps=2, z=sol)
+                sol = held.solve(kkt, steps=3, z=sol)
             x, y, z, r, violated, wrong = held.check(sol, tol)
             if violated.any() or wrong.any():
                 break
