@@ -81,3 +81,42 @@ def test_two_axis_band_matches_clarabel():
     assert min(up.min(), low.min()) >= 0.0
     pressed = (up > 0) | (low > 0)
     assert pressed[0::2].sum() >= 5 and pressed[1::2].sum() >= 5, (pressed[0::2].sum(), pressed[1::2].sum())
+
+
+def test_loop_band_memory_reused_with_the_same_answers():
+    """A loop's ``band_buffer`` (the node-state loop gives one): the assembled band and each
+    pass's copy live in its two halves, solve after solve, and the answers are bitwise those
+    of solves in fresh memory (one solve, then the next from its rows and plan)."""
+    from bvpnav.linalg import ipm
+    from bvpnav.linalg.workspace import Workspace
+
+    prob = plane_band()
+    form = prob.formulation
+    fresh, loop = Workspace(), Workspace(band_buffer=np.empty(0))
+    seen = []
+    made = ipm.MultiplierBand.__init__
+
+    def spy(self, *a, **k):
+        made(self, *a, **k)
+        seen.append((self.scaled0, self._buffer))
+
+    ipm.MultiplierBand.__init__ = spy
+    try:
+        answers = []
+        for ws in (fresh, fresh, loop, loop):
+            x, info = AS.solve_bands(form, 1.0, tol=1e-10, workspace=ws, qp_method="active set")
+            answers.append((x, info["active_set"]))
+    finally:
+        ipm.MultiplierBand.__init__ = made
+    assert answers[0][1] == answers[2][1] and answers[1][1] == answers[3][1] == "0 updates from the last " \
+                                                                              "solve's rows"
+    np.testing.assert_array_equal(answers[0][0], answers[2][0])
+    np.testing.assert_array_equal(answers[1][0], answers[3][0])
+    buf = loop.band_buffer
+    half = buf.size // 2
+    for _band, copy in seen[2:]:
+        assert np.shares_memory(copy, buf[half:]) and not np.shares_memory(copy, buf[:half])
+    # the second solve reuses the plan: its assembly is in the first half too
+    assert np.shares_memory(seen[3][0], buf[:half])
+    for band, copy in seen[:2]:
+        assert not np.shares_memory(copy, buf) and not np.shares_memory(band, buf)
