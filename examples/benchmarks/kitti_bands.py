@@ -31,7 +31,7 @@ Run: ``python examples/benchmarks/kitti_bands.py [--gaps 10 30 60] [--methods ..
 Measured (2026-12-05, 03:31-03:56 UTC, 2-core machine shared with other jobs, load average
 15-20: wall times inflated 5-10x, read the CPU ratios; three runs side by side: the README
 path at gaps 10 and 30, at 60, and the node-state path at all three; every answer verified;
-on branch ``bands2`` before its rebase onto main ``8b53a57``)::
+on branch ``bands2`` based on main ``b88ecc4``, before its rebase)::
 
     gap s  case                 RMS m    CPU s  x ref  solves  band solves: updates of each
     10     README               1.760     47.1   1.00      40
