@@ -47,6 +47,10 @@ on branch ``bands2`` based on main ``b88ecc4``, before its rebase)::
     60     states              55.389      6.0   1.00       7
     60     states NHC+FM band   5.906     17.1   2.83       8  active set (2): 16, 0; 6 quick steps
 
+The node-state path again after the rebase onto main ``508d049`` (04:00 UTC, load 9-11, one
+run per gap pair): 13.2 / 15.8 / 15.8 s against 6.6 / 7.1 / 7.2 s, 2.00 / 2.22 / 2.18x, the
+same RMS and solves.
+
 What changed since the run before (node states 1.94 / 2.54 / 3.13x, README path 1.87 / 2.22 /
 4.22x): the violated rows an update adds are those that peak among their neighbours in time
 (``QuadraticForm.before``/``after``: the same item's row of the same axis and side at the
