@@ -28,34 +28,60 @@ bounds, CPU s). On a shared machine read the CPU ratios.
 
 Run: ``python examples/benchmarks/kitti_bands.py [--gaps 10 30 60] [--methods ...]``.
 
-Measured (2026-12-05, 2-core machine shared with other jobs, load average 15-22: wall times
-inflated 5-10x, read the CPU ratios; the README path as two runs side by side, gaps 10 and 30
-in one, 60 in the other, and the node-state path in a third; every answer verified)::
+Measured (2026-12-05, 03:31-03:56 UTC, 2-core machine shared with other jobs, load average
+15-20: wall times inflated 5-10x, read the CPU ratios; three runs side by side: the README
+path at gaps 10 and 30, at 60, and the node-state path at all three; every answer verified;
+on branch ``bands2`` based on main ``b88ecc4``, before its rebase)::
 
     gap s  case                 RMS m    CPU s  x ref  solves  band solves: updates of each
-    10     README               1.760     49.0   1.00      40
-    10     NHC+FM band          1.710     91.7   1.87      30  active set (18): 11, 13, 11, 3, 2, 1, 0...
-    30     README              15.534     48.5   1.00      45
-    30     NHC+FM band          3.078    107.7   2.22      32  active set (20): 13, 12, 11, 11, 9, 3...
-    60     README              55.400     38.7   1.00      32
-    60     NHC+FM band          5.714    163.3   4.22      50  active set (38): 13, 18, 9, 10, 6, 1...
-    10     states               1.472      9.7   1.00      11
-    10     states NHC+FM band   1.817     18.9   1.94       7  active set (2): 12, 0; 5 quick steps
-    30     states              15.529      9.3   1.00      11
-    30     states NHC+FM band   3.744     23.6   2.54      10  active set (2): 13, 0; 8 quick steps
-    60     states              55.389      8.1   1.00       9
-    60     states NHC+FM band   5.906     25.4   3.13       9  active set (2): 20, 0; 7 quick steps
+    10     README               1.760     47.1   1.00      40
+    10     NHC+FM band          1.710     83.7   1.78      30  active set (18): 8, 10, 7, 2, 2, 0, 1, 0...
+    30     README              15.534     48.3   1.00      45
+    30     NHC+FM band          3.078    105.1   2.17      32  active set (20): 9, 10, 9, 10, 8, 3, 1...
+    60     README              55.400     37.2   1.00      32
+    60     NHC+FM band          5.714    145.2   3.90      46  active set (34): 13, 17, 8, 8, 5, 1, 2, 0...
+    10     states               1.472      6.9   1.00       8
+    10     states NHC+FM band   1.817     13.8   1.99       8  active set (3): 9, 0, 0; 5 quick steps
+    30     states              15.529      8.1   1.00       9
+    30     states NHC+FM band   3.744     16.7   2.06       9  active set (2): 11, 0; 7 quick steps
+    60     states              55.389      6.0   1.00       7
+    60     states NHC+FM band   5.906     17.1   2.83       8  active set (2): 16, 0; 6 quick steps
 
-Before (without the quick steps, the kept plan and the banded conditioning): README path
-2.40x at 10 s (this session, load about 7), 3.01x at 30 s and 5.47x at 60 s (the day before,
-load 18-22); node states 3.2x at 30 s (28.7 s against 9.0 s on a quiet machine, every step
-solved in full, 18 pattern analyses). Where the rest goes: the first solve of each kind
-starts with no rows at their bounds (12-20 updates: about half of the node-state path's extra
-CPU), and at 60 s the README path's attitude loop makes 50 solves with the bands against 32
-without (the rows at their bounds unchanged after the seventh band solve); a band solve with
-0 updates costs about 2 s (steps: the attitude parameters in the border) and 0.8 s
-(evaluations). Starting a kind's first solve from the other kind's rows was tried: 13 -> 10
-updates, 87.3 s against 91.7 s at 10 s (within the load's noise), not kept.
+The node-state path again after the rebase onto main ``508d049`` (04:00 UTC, load 9-11, one
+run per gap pair): 13.2 / 15.8 / 15.8 s against 6.6 / 7.1 / 7.2 s, 2.00 / 2.22 / 2.18x, the
+same RMS and solves.
+
+What changed since the run before (node states 1.94 / 2.54 / 3.13x, README path 1.87 / 2.22 /
+4.22x): the violated rows an update adds are those that peak among their neighbours in time
+(``QuadraticForm.before``/``after``: the same item's row of the same axis and side at the
+instants before and after; they were the next rows of ``G``, which for ``NonHolonomic``'s
+interleaved y/z rows compared one axis with the other: 3573 of the first solve's 4650
+violated rows at 60 s counted as peaks, 688 now), 20 -> 16 updates in the node-state path's
+first solve at 60 s and its loop 10 -> 8 outer steps; the node-state loop's assembled band
+and each pass's copy reuse the loop's ``band_buffer`` (a fresh 294 MB band cost about 0.2 s
+of page faults twice per outer step); an update checks the unrefined solve and refines only
+once the guess holds (the first solve at 60 s 8.2 -> 6.5 s). Tried and not kept: adding
+every violated row (23 updates at 60 s against 20 with the peaks by ``G`` order), dropping
+only the rows whose multiplier pulls most among their neighbours (17 against 16), the node-state
+loop's first step as a quick step too (12 outer steps instead of 10, 22.2 against 21.3 s);
+low-rank (Woodbury) updates of the band factor do not pay here: a banded solve costs a
+quarter of a factorization (``dgbtrs`` reads the factor once per right-hand side), and the
+updates that change few rows are the last few.
+
+Where the rest goes. Node states at 60 s (17.1 s): the first solve 6.6 s (16 updates of
+about 0.4 s: factorization 0.19 s, two banded solves, the checks), the quick steps about 7 s
+(a one-pass step 0.75 s against about 0.5 s for a plain step), the last solve 0.7 s. The
+README path at 60 s: 46 solves against 32 (12 heading candidates in both; with the bands one
+more evaluation at the start, 17 iterations against 10), a band solve of 0 updates about 2.2 s
+(steps) and 0.8-0.9 s (evaluations) against about 1.1 s per solve without the rows. Its loop
+takes more steps because of the damping: from the fifth iteration the undamped and lightly
+damped steps (1e-5 rad) raise the objective and steps at damping 100 lower it by 2e-9
+relative, the damping alternating 10 / 100 for a dozen iterations; the rows at their bounds no
+longer change then (0 updates from the 8th band solve on). The linearized step holds the
+body-frame rows (bilinear in the velocity and the attitude) at their bounds to first order, the
+evaluation at the new attitude holds them exactly: the Maratos effect of SQP with nonlinear
+constraints, which a second-order correction of the step or a non-monotone acceptance would
+address (attitude.py ``_iterate``, not changed here).
 """
 
 from __future__ import annotations

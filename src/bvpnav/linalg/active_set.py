@@ -181,11 +181,11 @@ def active_set(qp: QuadraticForm, newton: _Newton, tol: float, max_iter: int = M
             held = _Held(qp, newton, act)
         except np.linalg.LinAlgError:
             return None, f"the KKT matrix with {int(act.sum())} rows at their bounds is singular"
-        # one refinement step while the guess may change; the rest once it holds
-        sol = held.solve(kkt, steps=1)
+        # no refinement while the guess may change (as a quick step); three steps once it holds
+        sol = held.solve(kkt, steps=0)
         for final in (False, True):
             if final:
-                sol = held.solve(kkt, steps=2, z=sol)
+                sol = held.solve(kkt, steps=3, z=sol)
             x, y, z, r, violated, wrong = held.check(sol, tol)
             if violated.any() or wrong.any():
                 break
@@ -197,7 +197,7 @@ def active_set(qp: QuadraticForm, newton: _Newton, tol: float, max_iter: int = M
         elif it - since >= STALL:
             return None, (f"no fewer than {fewest} rows to change in {STALL} updates (after {it + 1}: "
                           f"{int(violated.sum())} violated, {int(wrong.sum())} pulling)")
-        act = _next_guess(act, r, violated, wrong)
+        act = _next_guess(qp, act, r, violated, wrong)
         if it < max_iter and _one_side(qp, act).tobytes() in seen:
             return None, (f"the rows at their bounds repeat after {it + 1} updates "
                           f"({int(violated.sum())} violated, {int(wrong.sum())} pulling)")
@@ -241,16 +241,20 @@ class _Held:
         return x, y, z, r, ~self.act & (r > eps_g), self.act & (z < -eps_z)
 
 
-def _next_guess(act: np.ndarray, r: np.ndarray, violated: np.ndarray, wrong: np.ndarray) -> np.ndarray:
+def _next_guess(qp: QuadraticForm, act: np.ndarray, r: np.ndarray, violated: np.ndarray,
+                wrong: np.ndarray) -> np.ndarray:
     """The next guess: the rows whose multiplier pulls dropped, the violated rows that peak
     (:func:`_peaks`) added."""
-    return (act & ~wrong) | (violated & _peaks(r))
+    return (act & ~wrong) | (violated & _peaks(qp, r))
 
 
-def _peaks(r: np.ndarray) -> np.ndarray:
-    """Rows whose value is at least their neighbours' (the rows before and after in ``G``)."""
-    pad = np.concatenate([[-np.inf], r, [-np.inf]])
-    return (r >= pad[:-2]) & (r >= pad[2:])
+def _peaks(qp: QuadraticForm, r: np.ndarray) -> np.ndarray:
+    """Rows whose value is at least their neighbours' in time (the same item's row of the
+    same axis and side at the instants before and after: :attr:`QuadraticForm.before`,
+    :attr:`~QuadraticForm.after`)."""
+    left = np.where(qp.before >= 0, r[qp.before], -np.inf)
+    right = np.where(qp.after >= 0, r[qp.after], -np.inf)
+    return (r >= left) & (r >= right)
 
 
 def _one_side(qp: QuadraticForm, act: np.ndarray) -> np.ndarray:
@@ -397,6 +401,6 @@ def quick_step(form, lam: float, workspace: Workspace | None, tol: float = IPM_T
         x, _, _, r, violated, wrong = held.check(held.fac.solve(held.rhs), tol)   # unrefined
         if not (violated.any() or wrong.any()):
             break
-        act = _one_side(qp, _next_guess(act, r, violated, wrong))
+        act = _one_side(qp, _next_guess(qp, act, r, violated, wrong))
     _keep(workspace, sig, act, plan=steps.plan_key)
     return x

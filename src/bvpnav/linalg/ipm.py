@@ -102,6 +102,10 @@ class QuadraticForm:
     ineq_blocks : list of (label, list of slice)
         For each band or inequality term, its rows of ``G``: one slice (``r - tol``, or
         ``g - tol``) or two (a band's upper ``r - tol`` and lower ``-r - tol`` sides).
+    before, after : ndarray of int
+        Per row of ``G``, the row of the same term, side and axis at the item's previous
+        and next instant (:meth:`bvpnav.items.Item.row_layout`: rows time-major), -1 at
+        the ends; every row its own instant when the term has no item.
     """
 
     ls: LeastSquaresForm
@@ -111,6 +115,8 @@ class QuadraticForm:
     base_of: np.ndarray
     sign: np.ndarray
     ineq_blocks: list
+    before: np.ndarray
+    after: np.ndarray
 
     def base_weights(self, w: np.ndarray) -> np.ndarray:
         r"""``w`` (one value per row of ``G``) summed onto :attr:`base`'s rows
@@ -132,12 +138,14 @@ def quadratic_form(form: Formulation, lam: float) -> QuadraticForm:
         raise ValueError(f"item {bad.label!r} (kind {bad.kind!r}, mode {bad.mode!r}) is not a "
                          "quadratic-program row")
     ls = least_squares_form(form, lam, surrogate=True)
-    bases, consts, signs, of, blocks = [], [], [], [], []
+    bases, consts, signs, of, blocks, strides = [], [], [], [], [], []
     start = nbase = 0
     for term in form.terms():
         if term.least_squares_role() is not None:
             continue
         res = term.residual
+        item = getattr(term, "item", None)
+        axes = item.row_layout(res.m)[1] if item is not None else 1
         A = canonical(res.A)
         bases.append(A)
         tol = np.zeros(res.m) if term.mode == "hard" else np.broadcast_to(term.tol, (res.m,))
@@ -147,6 +155,7 @@ def quadratic_form(form: Formulation, lam: float) -> QuadraticForm:
             signs.append(np.full(res.m, sign))
             of.append(nbase + np.arange(res.m))
             pieces.append(slice(start, start + res.m))
+            strides.append((start, res.m, axes))
             start += res.m
         nbase += res.m
         blocks.append((term.label, pieces))
@@ -161,7 +170,11 @@ def quadratic_form(form: Formulation, lam: float) -> QuadraticForm:
     G = sp.csr_matrix((G.data * np.repeat(sign, np.diff(G.indptr)), G.indices, G.indptr), shape=G.shape)
     scale = big[base_of]
     c = np.concatenate(consts) / scale if consts else np.zeros(0)
-    return QuadraticForm(ls, Affine(G, c), scale, B, base_of, sign, blocks)
+    before, after = np.full(start, -1, dtype=np.int64), np.full(start, -1, dtype=np.int64)
+    for first, m, axes in strides:
+        i = np.arange(first, first + m)
+        before[i[axes:]], after[i[:-axes]] = i[:-axes], i[axes:]
+    return QuadraticForm(ls, Affine(G, c), scale, B, base_of, sign, blocks, before, after)
 
 
 class MultiplierBand:
@@ -177,6 +190,9 @@ class MultiplierBand:
         The plan's first assembly ``(ab, B, C, h, sU)`` (the band scaled by ``sU``).
     rows : ndarray of int
         The reduced unknowns of the ``base`` rows' multipliers.
+    buffer : ndarray, optional
+        Memory of at least the band's size for the band of each step (and its factor); None:
+        fresh memory.
 
     Notes
     -----
@@ -192,7 +208,7 @@ class MultiplierBand:
     multiplier in the border (a row reaching far) has its diagonal in the border block.
     """
 
-    def __init__(self, plan: BandPlan, first: tuple, rows: np.ndarray):
+    def __init__(self, plan: BandPlan, first: tuple, rows: np.ndarray, buffer: np.ndarray | None = None):
         self.plan = plan
         ab, B, C, h, sU = first
         kl = plan.kl
@@ -212,7 +228,8 @@ class MultiplierBand:
         self.scaled0, self.s0, self.sk2 = ab, s0, s0[k] ** 2
         self.B, self.C0, self.h = B, C, h
         self.border_at = bpos[~self.in_band]
-        self._buffer = np.empty_like(ab)
+        self._buffer = (np.empty_like(ab) if buffer is None
+                        else buffer.reshape(-1)[:ab.size].reshape(ab.shape))
 
     def parts(self, delta: np.ndarray) -> tuple:
         """``(ab, B, C, h, sU)`` at ``delta`` (one per ``base`` row), the band written into one
@@ -284,11 +301,12 @@ class _Steps:
 
     def _multiplier_band(self, workspace, reuse: tuple | None) -> MultiplierBand:
         diagonal = fem_rows_by_diagonals(self.form, workspace)
-        plan, first = self._plan(diagonal, reuse)
+        plan, first = self._plan(diagonal, reuse, workspace)
         rows = self.n + plan.unfolded.size + self.pE + np.arange(self.qp.base.shape[0])
-        return MultiplierBand(plan, first, rows)
+        return MultiplierBand(plan, first, rows, _loop_buffers(workspace, plan)[1])
 
-    def _plan(self, diagonal, reuse: tuple | None) -> tuple[BandPlan, tuple]:
+    def _plan(self, diagonal, reuse: tuple | None, workspace: Workspace | None = None
+              ) -> tuple[BandPlan, tuple]:
         """The plan and its assembly at these values: ``reuse``'s plan (an earlier solve's
         :attr:`plan_key`) when the pattern is its own, or one it admits (node states: a
         Gauss-Newton step's objective rows filling exact zeros, :meth:`BandPlan.admitting`),
@@ -302,9 +320,10 @@ class _Steps:
             same = [a is b or np.array_equal(a, b) for a, b in zip(old, pattern, strict=True)]
             if all(same):
                 self.plan_key = (pattern, plan, cols)
-                return plan, plan.assemble(self.A, self.E, diagonal)
+                return plan, plan.assemble(self.A, self.E, diagonal, out=_loop_buffers(workspace, plan)[0])
             if all(same[4:]):
-                fitted = _refit(plan, self.A, self.E, cols, lam_rows, diagonal)
+                band_out = _loop_buffers(workspace, plan)[0]
+                fitted = _refit(plan, self.A, self.E, cols, lam_rows, diagonal, band_out)
                 if fitted is not None:
                     self.plan_key = (pattern, fitted[0], cols)
                     return fitted
@@ -341,7 +360,7 @@ class _Steps:
 
 
 def _refit(plan: BandPlan, D: sp.csr_matrix, E: sp.csr_matrix, colnode: np.ndarray, lam_rows: np.ndarray,
-           diagonal) -> tuple[BandPlan, tuple] | None:
+           diagonal, out: np.ndarray | None = None) -> tuple[BandPlan, tuple] | None:
     """``plan`` for rows ``D``, ``E`` of another pattern with its assembly, or None when it
     does not serve them.
 
@@ -369,7 +388,23 @@ def _refit(plan: BandPlan, D: sp.csr_matrix, E: sp.csr_matrix, colnode: np.ndarr
             continue
         if off > fitted.kl:
             return None
-    return fitted, fitted._scatter(entries, scaled=True)
+    return fitted, fitted._scatter(entries, scaled=True, out=out)
+
+
+def _loop_buffers(workspace: Workspace | None, plan: BandPlan) -> tuple:
+    """Memory for the assembled band and for each step's copy of it (its factor), from the
+    :attr:`~bvpnav.linalg.workspace.Workspace.band_buffer` of a loop whose every factor is
+    dead before its next solve assembles (the node-state loop): halves of one buffer of twice
+    the band, which the loop's solves then reuse instead of faulting in fresh pages for each
+    (about 0.2 s of CPU per 300 MB band); ``(None, None)`` without one."""
+    buf = getattr(workspace, "band_buffer", None)
+    if buf is None:
+        return None, None
+    need = plan.pos_order.size * plan.ldab
+    if buf.size // 2 < need:
+        buf = workspace.band_buffer = np.empty(2 * need)
+    half = buf.size // 2   # fixed halves: a band of another plan in the first never meets the second
+    return buf[:half], buf[half:2 * half]
 
 
 class _Newton:
