@@ -653,19 +653,17 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float, *, fix_s
     fixes = start_prior == "fixes" and method.startswith("bvpnav states")
     from bvpnav import ImuData, NavigationProblem
     from bvpnav.constraints import Position
-    from bvpnav.error_models import AttitudeError, Bias, ErrorStates, GyroBias, Mounting, NhcLever
+    from bvpnav.error_models import AttitudeError, Bias, GyroBias, Mounting, NhcLever
     from bvpnav.sensors import from_datasheet
 
     data = ImuData.from_gyro(d["t"], d["f"], d["w"], initial_attitude=c0,
                              gravity=np.array([0.0, 0.0, -GRAVITY]))
     rate = 1.0 / float(np.mean(np.diff(d["t"])))
     if method.startswith("bvpnav states"):
-        # node states (issue 42 item 2): attitude error and both bias walks per sample, in the band;
-        # the metadata's densities, GTSAM's example's bias priors, an open heading
-        model = ErrorStates(arw=fig["gyro_noise"], gyro_drift=fig["gyro_bias_walk"],
-                            acc_drift=fig["acc_bias_walk"],
-                            attitude_sigma=[tilt, tilt, START_HEADING_SIGMA if fixes else np.inf],
-                            gyro_sigma=fig["gyro_bias"], acc_sigma=fig["acc_bias"])
+        # node states (issue 42 item 2), README's documented path: the datasheet's figures as
+        # ErrorStates (the metadata's densities, GTSAM's example's bias priors), an open heading
+        g = from_datasheet(**fig, tilt=tilt, base="tactical", name="KITTI metadata")
+        model = g.error_states(heading_sigma=START_HEADING_SIGMA if fixes else math.inf)
         if method in MOUNTED:
             model = model + Mounting(sigma=MOUNT_SIGMA)
         if method in LEVERED:
