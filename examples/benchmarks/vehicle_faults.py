@@ -97,7 +97,7 @@ import pandas as pd
 
 from bvpnav import NavigationProblem
 from bvpnav.constraints import Odometer, Position
-from bvpnav.error_models import LeverArm, OdometerScale, TimeOffset
+from bvpnav.error_models import ErrorStates, LeverArm, OdometerScale, TimeOffset
 from bvpnav.scenarios import CarDrive, FaultyFixes, car_drive, faulty_fixes
 from bvpnav.sensors import grade as sensor_grade
 
@@ -117,6 +117,10 @@ ODOMETER = True
 #: Whether every run's error model also has the gyro noise's attitude walk (``--walk``:
 #: ``grade.error_model(walk=True)``, the AttitudeWalk the simulated gyro's white noise makes).
 WALK = False
+#: Whether every run's error model is the node states (``--states``: ``ErrorStates`` from the grade's
+#: figures, the attitude error and both bias random walks as states at every sample, the model the
+#: simulation draws from) instead of the grade's knot model (``grade.error_model(INTERVAL)``).
+STATES = False
 #: The solves: (a), (b), (c) and the two of ``--explain``.
 RUNS = ("clean", "faults", "reference", "known", "calibration")
 
@@ -161,11 +165,25 @@ def extra_information(d: Drive, faults: bool, estimated: bool | None = None) -> 
     return [Odometer(t=d.odo_t, speed=speed, sigma=ODO_SIGMA, name="odometer")], models
 
 
+def error_model(g, rate: float):
+    """The IMU's error model of every run and its ``sigma_a`` (m/s^2): the grade's knot model
+    (biases at knots :data:`INTERVAL` s apart, the initial attitude; with :data:`WALK` the
+    gyro noise's attitude walk too), or with :data:`STATES` the node states from the same
+    figures (the process noise the gyro's angle random walk and both bias walks, the first
+    node's priors the turn-on biases and the tilt, the heading open)."""
+    if STATES:
+        em = ErrorStates(arw=g.gyro_noise, gyro_drift=g.gyro_bias_walk, acc_drift=g.acc_bias_walk,
+                         attitude_sigma=[g.tilt, g.tilt, np.inf], gyro_sigma=g.gyro_bias,
+                         acc_sigma=g.acc_bias)
+        return em, g.acc_noise * float(np.sqrt(rate))
+    return g.error_model(INTERVAL, walk=WALK), g.sigma_a(rate, INTERVAL)
+
+
 def solve(d: Drive, which: str = "faults", uncertainty: bool = False):
     """One of :data:`RUNS` (see the module docstring); returns the solution and its wall time, s."""
     drive, fx = d.drive, d.fixes
     g = sensor_grade(drive.params["grade"])
-    em = g.error_model(INTERVAL, walk=WALK)
+    em, sigma_a = error_model(g, drive.rate)
     sigma = np.tile(drive.fix_sigma, (fx.t.size, 1))
     if which == "clean":
         items, models = extra_information(d, faults=False)
@@ -187,7 +205,7 @@ def solve(d: Drive, which: str = "faults", uncertainty: bool = False):
         raise ValueError(f"which={which!r}: one of {RUNS}")
     for m in models:
         em = em + m
-    prob = NavigationProblem(drive.data(), error_model=em, sigma_a=g.sigma_a(drive.rate, INTERVAL))
+    prob = NavigationProblem(drive.data(), error_model=em, sigma_a=sigma_a)
     prob.add(*items)
     t0 = time.perf_counter()
     with warnings.catch_warnings():
@@ -221,6 +239,7 @@ def run(grade: str, quality: str, duration: float, rate: float, seed: int = 0, e
         np.searchsorted(fixes.t, rej["t"].to_numpy()).tolist())
     bad = set(fixes.bad.tolist())
     out = {"grade": grade, "quality": quality, "duration": duration, "rate": rate, "seed": seed, "walk": WALK,
+           "model": "states" if STATES else "knots",
            "fixes": int(fixes.t.size), "bad": len(bad), "caught": len(bad & got),
            "false": sorted(got - bad), "missed": sorted(bad - got), "gating": faults.stats.get("gating", {}),
            "lever": [float(ep[f"lever_{a}"]) for a in "xyz"],
@@ -295,8 +314,11 @@ def print_row(r: dict) -> None:
 def summary(results: list[dict]) -> list[dict]:
     """Per grade and fix quality: the mean and worst over the seeds of each measure."""
     out = []
-    for key in dict.fromkeys((r["grade"], r["quality"], r["duration"]) for r in results):
-        rs = [r for r in results if (r["grade"], r["quality"], r["duration"]) == key]
+    def key_of(r):
+        return r["grade"], r["quality"], r["duration"], r.get("model", "knots")
+
+    for key in dict.fromkeys(key_of(r) for r in results):
+        rs = [r for r in results if key_of(r) == key]
         cols = {"lever_cm": [1e2 * r["lever_err_norm"] for r in rs],
                 "lever_h_cm": [1e2 * float(np.hypot(*r["lever_err"][:2])) for r in rs],
                 "lever_h_std_cm": [1e2 * max(r["lever_std"][:2]) for r in rs],
@@ -310,7 +332,7 @@ def summary(results: list[dict]) -> list[dict]:
                                 for r in rs],
                 "ratio_ref": [r["ratio_ref"] for r in rs], "ratio_ref_h": [r["ratio_ref_h"] for r in rs],
                 "ratio": [r["ratio"] for r in rs], "ratio_h": [r["ratio_h"] for r in rs]}
-        row = {"grade": key[0], "quality": key[1], "seeds": [r["seed"] for r in rs],
+        row = {"grade": key[0], "quality": key[1], "model": key[3], "seeds": [r["seed"] for r in rs],
                "caught": sum(r["caught"] for r in rs), "bad": sum(r["bad"] for r in rs),
                "missed": sum(len(r["missed"]) for r in rs), "false": sum(len(r["false"]) for r in rs),
                "duration": rs[0]["duration"], "rate": rs[0]["rate"]}
@@ -332,7 +354,8 @@ def print_summary(rows: list[dict]) -> None:
         return f"{s[name][0]:{fmt}} / {s[name][1]:{fmt}}"
 
     for s in rows:
-        print(f"| {s['duration']:g} s | {s['grade']} | {len(s['seeds'])} "
+        grade = s["grade"] + (", node states" if s.get("model") == "states" else "")
+        print(f"| {s['duration']:g} s | {grade} | {len(s['seeds'])} "
               f"| {mw(s, 'lever_cm', '.1f')} | {mw(s, 'lever_h_cm', '.1f')} ({s['lever_h_std_cm'][0]:.1f}) "
               f"| {mw(s, 'lever_h_z', '.1f')} | {mw(s, 'scale_pct', '.3f')} "
               f"| {mw(s, 'delay_ms', '.2f')} ({s['delay_std_ms'][0]:.2f}) | {mw(s, 'delay_z', '.1f')} "
@@ -371,6 +394,8 @@ def main(argv=None) -> list[dict]:
     ap.add_argument("--no-odometer", action="store_true", help="neither run has the odometer")
     ap.add_argument("--walk", action="store_true",
                     help="the error models also have the gyro noise's attitude walk (AttitudeWalk)")
+    ap.add_argument("--states", action="store_true",
+                    help="node states (ErrorStates from the grade's figures) instead of the knot model")
     ap.add_argument("--json", help="also write each drive's measures to this file (JSON lines, appended)")
     ap.add_argument("--table", nargs="+", metavar="JSON",
                     help="print the tables of drives measured earlier (--json files) and solve nothing")
@@ -379,15 +404,17 @@ def main(argv=None) -> list[dict]:
         results = [json.loads(line) for f in a.table for line in open(f) if line.strip()]
         print_table(results)
         return results
-    global ODOMETER, WALK
+    global ODOMETER, WALK, STATES
     ODOMETER = not a.no_odometer
     WALK = a.walk
+    STATES = a.states
     if a.quick:
         a.duration, a.rate, a.seeds = 120.0, 10.0, [0]
     print(f"car drive {a.duration:g} s at {a.rate:g} Hz, seeds {a.seeds}; lever {LEVER} m (vertical from "
           f"a tape, sigma {100 * TAPE:g} cm), delay {1e3 * DELAY:g} ms, {100 * OUTLIERS:g} % outliers of "
           f"20-50 m, gate {GATE:g}; odometer {ODO_RATE:g} Hz, {100 * SCALE:g} % scale, noise "
-          f"{ODO_SIGMA:g} m/s" + ("; the gyro noise's attitude walk modelled (--walk)" if WALK else ""))
+          f"{ODO_SIGMA:g} m/s" + ("; the gyro noise's attitude walk modelled (--walk)" if WALK else "")
+          + ("; node states (--states)" if STATES else ""))
     results = []
     print_header()
     for grade in a.grade:

@@ -1041,7 +1041,10 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
                 x, staged = sol.x, True
                 s = f.model.split(x)["s"]
                 step = float(np.max(np.linalg.norm(s[sm.state_index(raw, "attitude_error")], axis=1)))
-            j = objective_value(f, x, float(sol.lam if staged else lam_now))
+            # the objective of the formulation the step solved (items the sequential stage linearizes,
+            # e.g. a fix's estimated delay, at their linearization)
+            used = sol.formulation if staged and sol.formulation is not None else f
+            j = objective_value(used, x, float(sol.lam if staged else lam_now))
             iters.append({"objective": j, "trial": j, "step": step, "accepted": True, "damping": 0.0,
                           "solve": "stage" if staged else "banded"})
             new, prev_att = _next_totals(sm, data, s, iters, prev_att, o, history)
