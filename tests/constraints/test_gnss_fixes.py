@@ -289,3 +289,29 @@ def test_attitude_slerp_between_samples_matches_the_rotation():
     expect = Slerp(data.t, data.attitude)(tq).apply([1.0, 0.0, 0.0])
     np.testing.assert_allclose(off, expect, atol=1e-12)
     assert isinstance(data.attitude, Rotation)
+
+
+def test_lever_and_delay_with_node_states(turning):
+    """The same fixes with the node states (``ErrorStates``) as the IMU's error model: the
+    node-state loop scores each step on the formulation the step solved, with the delay at its
+    linearization (it compiled the unlinearized item and refused it); noise-free, every state
+    stays at zero and the delay and lever arm are found to 1e-6."""
+    from bvpnav.error_models import ErrorStates
+
+    data, pos, _ = turning
+    k = np.arange(3, data.n - 3, 9)
+    delay = 0.2
+    ant = pos[k] + data.attitude[k].apply(LEVER)
+    em = ErrorStates(arw=1e-4, gyro_drift=1e-5, acc_drift=1e-4, attitude_sigma=0.01, gyro_sigma=1e-3,
+                     acc_sigma=1e-2) + LeverArm() + TimeOffset()
+    prob = bvpnav.NavigationProblem(data, error_model=em, grade=None)
+    prob.add(Position(t=data.t[k] + delay, value=ant, lever="estimated", delay="estimated"),
+             Position(t=0.0, value=0.0, name="start"), Velocity(t=0.0, value=0.0, name="v0"))
+    sol = prob.solve(solver="direct", sequential={"tol": 1e-10})
+    report = sol.records.attitude
+    assert report.kind == "states" and report.converged
+    assert abs(sol.error_params["time_offset"] - delay) <= 1e-6 * delay
+    est = sol.error_params[["lever_x", "lever_y", "lever_z"]].to_numpy()
+    assert np.max(np.abs(est - LEVER)) <= 1e-6
+    assert np.max(np.abs(sol.position() - pos)) < 1e-6
+    assert np.max(np.abs(sol.error_states.to_numpy())) < 1e-6

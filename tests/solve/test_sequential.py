@@ -44,6 +44,30 @@ def test_loop_recovers_a_noise_free_track_from_a_poor_start(solver):
     assert sol.stats["verified"]
 
 
+def test_loop_checks_observability_once(monkeypatch):
+    """Each iteration's formulation has the same items and error model, only linearized
+    elsewhere: what determines the unknowns (an SVD, as long as a solve) is checked on the first
+    of them and not again (the soft loop above: 4 iterations, 1 check)."""
+    from bvpnav.formulation import Formulation
+
+    calls = []
+    real = Formulation.unobservable
+
+    def counted(self):
+        calls.append(1)
+        return real(self)
+
+    monkeypatch.setattr(Formulation, "unobservable", counted)
+    t, truth, path, data = planar_track()
+    track = TrackLine(x=path[:, 0], y=path[:, 1], axes=("x", "z"), sigma=0.01)
+    prob = bvpnav.NavigationProblem(data).add(Position(t=[0.0, 20.0], value=[truth[0], truth[-1]]), track)
+    start = truth + np.column_stack([2 * np.sin(np.pi * t / 20), 1.5 * np.sin(2 * np.pi * t / 20)])
+    sol = solve_sequential(prob, solver="direct", initial=start, tol=1e-4)
+    assert sol.stats["sequential"]["iterations"] >= 3
+    assert len(calls) == 1
+    assert sol.rms_error(truth) < 1e-6
+
+
 HARD_LIKE = [({"mode": "hard"}, "direct"), ({"mode": "hard"}, "clarabel"),
              ({"mode": "band", "tol": 0.05}, "clarabel"),
              ({"mode": "robust", "sigma": 0.01, "huber": 0.02}, "clarabel")]
