@@ -37,7 +37,6 @@ then converges in one or two steps (measured: 3 soft + 1 hard iteration, 7e-12 m
 
 from __future__ import annotations
 
-import copy
 import logging
 import time
 from collections.abc import Callable
@@ -58,13 +57,6 @@ __all__ = ["with_sequential", "check_sequential", "SEQUENTIAL_DEFAULTS"]
 Stage = Callable[..., Solution]
 
 log = logging.getLogger(__name__)
-
-#: The loop extrapolates (see :func:`_extrapolation`) when the last two position changes of plain
-#: iterations shrink by a ratio at least this (slower than Gauss-Newton's quadratic convergence) ...
-EXTRAPOLATE_RATIO = 0.3
-#: ... and below 1, taking the ratio as at most this (at most 9 more steps' worth), as the attitude
-#: loop does (:mod:`bvpnav.solve.attitude`).
-EXTRAPOLATE_CAP = 0.9
 
 
 
@@ -141,11 +133,6 @@ class _Loop:
         self.phases, self.counts, self.curve = [], {}, None
         self.soft = bool(self.cont)
         self.current: dict = {}   # the latest linearization of each item, by label
-        #: per solve: whether its linearization was made at the previous answer itself (not at
-        #: an extrapolated point), and the last two answers (for the extrapolation)
-        self.plain: list[bool] = []
-        self.answers: list[Solution] = []
-        self.extrapolated = 0
         #: whether the linearized formulations were checked for observability: they all have the
         #: same items and error model, only the linearization point moves (a check is an SVD, about
         #: as long as a solve)
@@ -219,55 +206,6 @@ def _settled(before: dict, now: dict, tol: float) -> bool:
     return True
 
 
-def _extrapolated(loop: _Loop) -> dict:
-    """The phase record's count of extrapolated linearizations (none: no entry)."""
-    return {"extrapolated": loop.extrapolated} if loop.extrapolated else {}
-
-
-def _extrapolation(loop: _Loop) -> Solution | None:
-    r"""The point to linearize at next when the loop converges linearly, else None.
-
-    When the last two solves were each linearized at the answer before them (plain
-    iterations of the map :math:`G`: answer -> next answer) and their largest position changes
-    shrink by a steady ratio :math:`\rho` in [:data:`EXTRAPOLATE_RATIO`, 1), the remaining
-    distance to the fixed point is about :math:`\rho / (1 - \rho)` of the last change along the
-    same direction (Aitken's extrapolation, :math:`\rho` capped at :data:`EXTRAPOLATE_CAP`):
-    the point :math:`s_n + \rho/(1-\rho)\,(s_n - s_{n-1})` of the trajectory (positions and
-    velocities) and the error-model estimates. The fixed point is the same (the loop still stops
-    on the change between two answers, or on a settled linearization); only the way to it is
-    shorter.
-
-    Notes
-    -----
-    Gauss-Newton converges linearly when the residuals are large next to the curvature they
-    multiply: an estimated fix delay (``Position(delay="estimated")``) whose rows are linearized
-    with the velocity of the previous answer, on a drive whose attitude is still far off (an
-    attitude loop's first steps) or with outlier fixes not yet gated. Measured on the simulated
-    consumer-grade car of ``examples/benchmarks/vehicle_faults.py`` (300 s, seed 0): the changes
-    shrank by 0.82 per iteration and the loop ran into ``max_iter`` at every attitude step.
-    """
-    if len(loop.answers) < 2 or len(loop.plain) < 2 or not (loop.plain[-1] and loop.plain[-2]):
-        return None
-    mc = loop.max_change
-    if len(mc) < 2 or not mc[-2] > 0:
-        return None
-    rho = mc[-1] / mc[-2]
-    if not EXTRAPOLATE_RATIO <= rho < 1.0:
-        return None
-    rho = min(rho, EXTRAPOLATE_CAP)
-    alpha = rho / (1.0 - rho)
-    a, b = loop.answers
-    if list(a.trajectory.columns) != list(b.trajectory.columns) or a.trajectory.shape != b.trajectory.shape:
-        return None
-    out = copy.copy(b)
-    out.trajectory = b.trajectory + alpha * (b.trajectory - a.trajectory.to_numpy())
-    ea = a.error_params.reindex(b.error_params.index).fillna(b.error_params)
-    out.error_params = b.error_params + alpha * (b.error_params - ea)
-    log.info("sequential loop: changes shrink by %.3g per iteration; linearizing %.3g steps ahead", rho,
-             alpha)
-    return out
-
-
 def _iterate(loop: _Loop, inner: Stage, opts: SolveOptions, traj: pd.DataFrame,
              sol: Solution | None = None) -> tuple[Solution, bool]:
     """Linearize and solve until the final phase converges or runs out of iterations."""
@@ -282,27 +220,16 @@ def _iterate(loop: _Loop, inner: Stage, opts: SolveOptions, traj: pd.DataFrame,
             if before is not None and not loop.soft and _settled(before, loop.current, loop.o["tol"]):
                 # every item's linearization moved by less than tol: the last solve answers it
                 loop.phases.append({"mode": "final", "iterations": n_phase, "tol": loop.o["tol"],
-                                    "converged": True, "by": "linearization change",
-                                    **_extrapolated(loop)})
+                                    "converged": True, "by": "linearization change"})
                 return sol, True
-            point = _extrapolation(loop) if not loop.soft else None
-            if point is not None:
-                # linear convergence: linearize at the extrapolated point instead
-                loop.sigmas.pop()
-                sub = loop.linearized_form(t, point.trajectory[axes], point)
-                loop.extrapolated += 1
-            loop.plain.append(point is None)
             before = dict(loop.current) if n_phase or not loop.soft else None
             sol = inner(sub, loop.lam_soft if loop.soft else loop.lam_now, opts)
             loop.observable = loop.observable or bool(getattr(sub, "_observable", False))
-            loop.answers = (loop.answers + [sol])[-2:]
             prev = loop.note(sol, prev)
             traj = sol.trajectory[axes]
             n_phase += 1
             limit = loop.o["soft_tol"] if loop.soft else loop.o["tol"]
-            # a change after an extrapolated linearization does not show a fixed point: the next
-            # plain iteration judges
-            done = loop.max_change[-1] < limit and loop.plain[-1]
+            done = loop.max_change[-1] < limit
             mode = "soft" if loop.soft else "final"
             log.info("sequential iteration %d (%s phase, %d): max change %.3g m (rms %.3g m, tol %g m), "
                      "lam=%g",
@@ -312,15 +239,13 @@ def _iterate(loop: _Loop, inner: Stage, opts: SolveOptions, traj: pd.DataFrame,
             bar.set_postfix_str(f"{mode}, max change {loop.max_change[-1]:.2g} m", refresh=False)
             if done or n_phase >= int(loop.o["max_iter"]):
                 loop.phases.append({"mode": mode, "iterations": n_phase, "tol": limit,
-                                    "converged": bool(done), **_extrapolated(loop)})
+                                    "converged": bool(done)})
                 if not loop.soft:
                     return sol, done
                 log.info("sequential loop: soft continuation ended after %d iteration(s) (%s); now %s",
                          n_phase, "converged" if done else "max_iter reached", "the requested modes")
-                # the requested modes make other terms: check them again, and start the
-                # extrapolation's record afresh
-                loop.soft, n_phase = False, 0
-                loop.observable, loop.plain, loop.answers, loop.extrapolated = False, [], [], 0
+                # the requested modes make other terms: checked again
+                loop.soft, n_phase, loop.observable = False, 0, False
 
 
 def with_sequential(inner: Stage) -> Stage:
