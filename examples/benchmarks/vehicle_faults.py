@@ -78,8 +78,35 @@ and 2.78, 3.94, 4.04 cm (/A 0.97 and 1.03, /B 1.43 and 1.45): part of the excess
 rows above are without it. Consumer seed 0 was stopped after 7 CPU minutes (it did not finish
 in the previous session either).
 
+Why consumer seed 0 is slow (profiled 2026-12-05, 670 CPU s of its faults run (b) without
+finishing): its raw attitude drifts by radians over the 300 s (the consumer gyro's turn-on bias,
+0.005 rad/s; the first attitude step is 5.2 rad and the objective 6.5e8), and in the first gating
+pass the outliers are still in. With residuals that large the estimated delay's Gauss-Newton
+linearization (the rows take the previous answer's velocity) converges linearly, the position
+changes shrinking by 0.82 per iteration, so the sequential loop inside every attitude step and
+every evaluation ran into its ``max_iter`` (30); and half of the CPU (324 of 670 s) was an
+observability check (an SVD as long as the solve) repeated on every linearized copy. The check is
+now made once per loop (the copies have the same items and error model); the linear convergence
+stays (an Aitken extrapolation of the linearization point was tried: 0.82 became about 0.63 per
+iteration on this drive, but on a simulated delay with 5 m outliers it broke a loop that converges
+plainly in 36 iterations, so it was not kept). Smaller, on the 120 s consumer seed 0 drive: the
+attitude loop of the first gating pass stalls at steps of 1e-7-1e-4 rad that its objective
+(2.5e6, the outliers in) cannot tell apart, rejected and accepted in turn until a damped step
+falls below ``tol`` (17-27 iterations, without any delay estimated as well). The faults run of
+that 120 s drive took 77 CPU s before the check was made once, 21 after.
+
+``--states``: every run's error model is the node states instead of the knot model,
+``ErrorStates(arw=gyro_noise, gyro_drift=gyro_bias_walk, acc_drift=acc_bias_walk,
+attitude_sigma=[tilt, tilt, inf], gyro_sigma=gyro_bias, acc_sigma=acc_bias)`` from the grade's
+figures (the model the simulation draws its IMU from: white noise and bias random walks), with
+``sigma_a = acc_noise * sqrt(rate)``, per sample (the odometer's and the delayed fixes' rows
+fall between the nodes of a 1 s mesh). It runs (60 s tactical seed 0: lever arm -1.4 / 0.8 cm,
+delay -2.67 ms, RMS faults / (A) 0.95, as the knot model's -1.7 / 0.4 cm, -2.73 ms, 0.96); the
+300 s table over seeds 0-4 was not measured this session (the machine's load average was 15-16
+on 2 cores); the knot model stays the default.
+
 Run: ``python examples/benchmarks/vehicle_faults.py [--grade tactical consumer] [--quality ...]
-[--duration 300] [--rate 10] [--seeds 0 1 2 3 4] [--explain] [--no-odometer] [--walk] [--quick]
+[--duration 300] [--rate 10] [--seeds 0 1 2 3 4] [--explain] [--no-odometer] [--walk] [--states] [--quick]
 [--json FILE]``; each drive in its own process with ``--json`` and then ``--table FILE ...``
 for the tables of them all.
 """
