@@ -113,8 +113,9 @@ the commit before the rebase onto main of 03:40 UTC), tactical, 300 s::
 Every criterion met on every seed (against the knot model's rows above: the lever arm 3.5 / 4.1 cm
 3-D mean / worst against 4.4 / 5.8, its worst horizontal err/std 1.4 against 2.5, the delay 1.35 /
 3.03 ms against 1.55 / 3.06, 2.4 standard deviations at worst against 2.8; RMS faults / (A) 0.95-
-1.04 3-D, 0.88-1.12 horizontal; RMS A 13-29 % lower on seeds 1-4, 4 % higher on seed 0); the delay of seeds 2 and 3
-is what ``--walk`` gave, so the node states take up the gyro noise's attitude walk as that does.
+1.04 3-D, 0.88-1.12 horizontal; RMS A 13-29 % lower on seeds 1-4, 4 % higher on seed 0); the
+delay of seeds 2 and 3 is what ``--walk`` gave, so the node states take up the gyro noise's
+attitude walk as that does.
 Consumer, 300 s, seeds 1-4 (seed 0 did not finish in 7 CPU minutes, as with the knot model)::
 
     seed  lever x, y cm (std)      delay ms (std)  scale % (std)   RMS B, A, faults cm  /A    /B    (A) ms
