@@ -5,7 +5,8 @@ IMU of the chosen grade with drifting biases and a 5 degree initial heading erro
 GNSS fixes that carry the faults of a real receiver (:func:`bvpnav.scenarios.faulty_fixes`):
 the antenna 1 m ahead of the IMU, the fixes stamped 50 ms late, 5 % of them 20-50 m off; and
 a 10 Hz odometer (the forward speed at the IMU, 0.05 m/s noise) reading 2 % high. Three solves
-per drive, the grade's error model (biases at knots 30 s apart, initial attitude) in each:
+per drive, the same IMU error model in each (the node states from the grade's figures, see
+below; ``--knots``: the grade's knot model, biases at knots 30 s apart and the initial attitude):
 
 (a) ``clean``: the run without the faults and without their unknowns: the same fix stamps
     and fix noise with the antenna at the IMU and no delay or outliers, soft positions, and
@@ -38,7 +39,7 @@ under 2), and the acceptance of issue 39: lever arm within 5 cm, scale within 0.
 5 ms, every bad fix rejected and no good one, RMS within 10 % of (c).
 
 Measured (2026-12-05, on a shared machine under heavy load, so the wall times say little; the
-summary over seeds is in ``docs/guide/strapdown.md``, section "Vehicles"), default options, 300
+summary over seeds is in ``docs/guide/strapdown.md``, section "Vehicles"), ``--knots``, 300
 s, the drives that finished this session, on the commit before the rebase onto main's merges of
 2026-12-05 (B: the calibrated run (a), A: the reference run (c); "(A) ms" is run (c)'s own
 delay estimate, truth 0):
