@@ -97,8 +97,9 @@ falls below ``tol`` (17-27 iterations, without any delay estimated as well). The
 that 120 s drive took 77 CPU s before the check was made once, 21 after.
 
 The node states (the default; ``--knots`` for the knot model): every run's error model is
-``ErrorStates(arw=gyro_noise, gyro_drift=gyro_bias_walk, acc_drift=acc_bias_walk,
-attitude_sigma=[tilt, tilt, inf], gyro_sigma=gyro_bias, acc_sigma=acc_bias)`` from the grade's
+``grade.error_states()``, i.e. ``ErrorStates(arw=gyro_noise, gyro_drift=gyro_bias_walk,
+acc_drift=acc_bias_walk, attitude_sigma=[tilt, tilt, inf], gyro_sigma=gyro_bias,
+acc_sigma=acc_bias)`` from the grade's
 figures (the model the simulation draws its IMU from: white noise and bias random walks), with
 ``sigma_a = acc_noise * sqrt(rate)``, per sample (the odometer's and the delayed fixes' rows
 fall between the nodes of a 1 s mesh). Measured (2026-12-05, load average 15-16 on 2 cores, on
@@ -154,7 +155,7 @@ import pandas as pd
 
 from bvpnav import NavigationProblem
 from bvpnav.constraints import Odometer, Position
-from bvpnav.error_models import ErrorStates, LeverArm, OdometerScale, TimeOffset
+from bvpnav.error_models import LeverArm, OdometerScale, TimeOffset
 from bvpnav.scenarios import CarDrive, FaultyFixes, car_drive, faulty_fixes
 from bvpnav.sensors import grade as sensor_grade
 
@@ -228,11 +229,8 @@ def error_model(g, rate: float):
     gyro noise's attitude walk too), or with :data:`STATES` the node states from the same
     figures (the process noise the gyro's angle random walk and both bias walks, the first
     node's priors the turn-on biases and the tilt, the heading open)."""
-    if STATES:
-        em = ErrorStates(arw=g.gyro_noise, gyro_drift=g.gyro_bias_walk, acc_drift=g.acc_bias_walk,
-                         attitude_sigma=[g.tilt, g.tilt, np.inf], gyro_sigma=g.gyro_bias,
-                         acc_sigma=g.acc_bias)
-        return em, g.acc_noise * float(np.sqrt(rate))
+    if STATES:   # ErrorStates(arw=gyro_noise, ..., attitude_sigma=(tilt, tilt, inf), ...), no knots
+        return g.error_states(), g.sigma_a(rate)
     return g.error_model(INTERVAL, walk=WALK), g.sigma_a(rate, INTERVAL)
 
 
