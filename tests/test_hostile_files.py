@@ -410,6 +410,34 @@ def test_ctrl_c_in_a_batch_exits_130_in_one_line_and_resume_finishes_it(work, sc
     assert stray_temporaries(work) == []
 
 
+def test_ctrl_c_swallowed_by_a_library_still_stops_a_serial_batch(work, monkeypatch):
+    """Ctrl-C while pandas' C parser reads a recording came back as a ParserError ("Calling
+    read(nbytes) on source failed"): the recording was called a bad file and the batch went on
+    (exit 3 instead of 130, seen once in CI). The serial loop notes the signal and stops."""
+    import bvpnav.batch as batch
+
+    recs = many_recordings(work, 6)
+    out = work / "out"
+    real, calls = batch._task, []
+
+    def task(*job):
+        calls.append(job[0])
+        if len(calls) == 2:
+            try:
+                signal.raise_signal(signal.SIGINT)  # Ctrl-C, caught inside the task like pandas did
+            except KeyboardInterrupt:
+                return {"recording": job[0], "ok": False, "error": "ParserError: read failed"}
+        return real(*job)
+
+    monkeypatch.setattr(batch, "_task", task)
+    before = signal.getsignal(signal.SIGINT)
+    with pytest.raises(KeyboardInterrupt):
+        batch.run_batch(recs, work / "spec.toml", out, scheduler="serial", progress=False)
+    assert len(calls) == 2                              # no recording after the interrupt
+    assert signal.getsignal(signal.SIGINT) is before    # the caller's handler is back
+    assert sorted(p.name for p in out.glob("*.json")) == ["run00.json"] and not (out / "summary.csv").exists()
+
+
 def test_sigterm_in_a_batch_exits_143_and_cleans_up(work):
     # 96 recordings: the signal must arrive while the batch still runs. With 24 the batch
     # ended about 0.8 s after the first summary appeared, and once in a fresh-clone CI run

@@ -598,14 +598,46 @@ def _run(files, outs, spec_text, spec_source, scheduler, workers, over: dict, re
         jobs.append((str(p), spec_text, spec_source, str(out), over, note))
     if jobs and scheduler == "serial":
         # once(): a warning shared by many recordings is issued once (each summary records it)
-        with once(), progress_bar(total=len(jobs), desc="recordings", unit="rec", enabled=progress) as bar:
+        with once(), progress_bar(total=len(jobs), desc="recordings", unit="rec", enabled=progress) as bar, \
+                _ctrl_c_noted() as ctrl_c:
             for job in jobs:
                 rows.append(_task(*job))
+                if ctrl_c:  # a library swallowed the KeyboardInterrupt (e.g. into a parser error)
+                    raise KeyboardInterrupt
                 _done(rows[-1], len(rows), len(jobs))
                 bar.update(1)
     elif jobs:
         rows += _run_on_dask(jobs, scheduler, workers, progress, client)
     return rows
+
+
+@contextlib.contextmanager
+def _ctrl_c_noted():
+    """Note every SIGINT (Ctrl-C) before raising KeyboardInterrupt as usual; yields a list that is
+    true once one arrived. A library can catch the KeyboardInterrupt inside a task and report
+    something else (pandas' C parser, interrupted in its read of the in-memory text, raised
+    "Calling read(nbytes) on source failed"): the serial loop then stops on the note instead of
+    solving the other recordings and calling the interrupted one a bad file."""
+    noted: list = []
+
+    def handler(signum, frame):
+        noted.append(signum)
+        if callable(old):
+            old(signum, frame)
+        raise KeyboardInterrupt
+
+    old = signal.getsignal(signal.SIGINT)
+    try:
+        if old is signal.SIG_IGN:  # Ctrl-C ignored by whoever started us: keep it so
+            raise ValueError
+        signal.signal(signal.SIGINT, handler)
+    except ValueError:  # not the main thread: signals are not ours to change
+        yield noted
+        return
+    try:
+        yield noted
+    finally:
+        signal.signal(signal.SIGINT, old)
 
 
 @contextlib.contextmanager
