@@ -43,6 +43,7 @@ extensions = [
     "sphinx.ext.napoleon",
     "sphinx.ext.mathjax",
     "bvpnav_docs",  # docs/_ext: MathJax copied into _static (equations render without a network)
+    "titles_only_toc",  # docs/_ext: the sidebar's tree made without copying each page's whole ToC
     "sphinx.ext.viewcode",
     "myst_nb",
 ]

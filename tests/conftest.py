@@ -19,6 +19,8 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
@@ -36,6 +38,21 @@ _UNITS_KEY = pytest.StashKey[str]()
 @pytest.fixture
 def quintic_traj():
     return quintic()
+
+
+@pytest.fixture(scope="session")
+def wheel_build(tmp_path_factory) -> tuple[subprocess.CompletedProcess, Path]:
+    """``pip wheel --no-deps`` of the source tree, built once for the tests that read the wheel
+    (test_docs, test_install: their ``wheel-build`` xdist group puts them on one worker, which
+    makes a session fixture once): pip's finished process and the folder it wrote the wheel to.
+    Each test checks pip's exit status itself."""
+    out = tmp_path_factory.mktemp("wheel")
+    root = Path(__file__).resolve().parents[1]
+    proc = subprocess.run(
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(out), str(root)],
+        capture_output=True, text=True, timeout=300,
+    )
+    return proc, out
 
 
 def _shared(item: pytest.Item) -> list[str]:

@@ -283,17 +283,14 @@ def test_changelog_is_grouped_by_issue(site):
 
 # pip builds in the source tree (build/, *.egg-info): one worker for every wheel build (pytest -n)
 @pytest.mark.xdist_group("wheel-build")
-def test_license_and_typing_marker_ship_in_the_wheel(tmp_path):
+def test_license_and_typing_marker_ship_in_the_wheel(wheel_build):
     meta = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     assert meta["license"] == {"text": "MIT"}
     text = (ROOT / "LICENSE").read_text()
     assert text.startswith("MIT License") and "Copyright (c) bvpnav developers" in text
-    proc = subprocess.run(
-        [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(tmp_path), str(ROOT)],
-        capture_output=True, text=True, timeout=300,
-    )
+    proc, folder = wheel_build   # conftest: pip wheel --no-deps of the source tree
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    names = zipfile.ZipFile(next(tmp_path.glob("bvpnav-*.whl"))).namelist()
+    names = zipfile.ZipFile(next(folder.glob("bvpnav-*.whl"))).namelist()
     assert "bvpnav/py.typed" in names
     assert any(re.search(r"\.dist-info/(licenses/)?LICENSE$", n) for n in names), names
 

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import importlib
-import subprocess
-import sys
 import zipfile
 from pathlib import Path
 
@@ -29,15 +27,13 @@ def test_every_constraints_file_imports_from_the_installed_package():
 # pip builds in the source tree (build/, *.egg-info): one worker for every wheel build (pytest -n)
 @pytest.mark.xdist_group("wheel-build")
 @pytest.mark.slow
-def test_wheel_contains_every_constraints_file(tmp_path):
-    """What `pip install .` installs: build the wheel and read its file list."""
-    proc = subprocess.run(
-        [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(tmp_path), str(ROOT)],
-        capture_output=True, text=True, timeout=300,
-    )
+def test_wheel_contains_every_constraints_file(wheel_build):
+    """What `pip install .` installs: build the wheel (conftest: pip wheel --no-deps of the
+    source tree) and read its file list."""
+    proc, folder = wheel_build
     if proc.returncode != 0:
         pytest.fail(f"building the wheel failed:\n{proc.stdout}\n{proc.stderr}")
-    wheel = next(tmp_path.glob("bvpnav-*.whl"))
+    wheel = next(folder.glob("bvpnav-*.whl"))
     names = set(zipfile.ZipFile(wheel).namelist())
     for name in FILES:
         assert f"bvpnav/constraints/{name}" in names, name
