@@ -133,13 +133,17 @@ class _Loop:
         self.phases, self.counts, self.curve = [], {}, None
         self.soft = bool(self.cont)
         self.current: dict = {}   # the latest linearization of each item, by label
-        #: whether the linearized formulations were checked for observability: they all have the
-        #: same items and error model, only the linearization point moves (a check is an SVD, about
-        #: as long as a solve)
-        self.observable = bool(getattr(form, "_observable", False))
+        #: whether the linearized formulations were checked for observability: they have the same
+        #: items and error model, only the linearization point moves (a check is an SVD, about as
+        #: long as a solve) -- unless an item keeps other rows at the new point (TrackLine drops
+        #: the samples that do not project onto the track): the rows each item kept at the checked
+        #: linearization (``linearization_counts``), so that a change is checked again
+        self.observable = bool(form._observable)
+        self.kept: dict = {}
+        self.checked_kept: dict | None = {} if self.observable else None
 
     def linearized_form(self, t, traj, sol: Solution | None = None):
-        items, sig = [], {}
+        items, sig, kept = [], {}, {}
         for it in self.form.items:
             if id(it) not in self.nonlin:
                 items.append(it)
@@ -149,15 +153,24 @@ class _Loop:
             counts = lin.linearization_counts() if isinstance(lin, Linearizable) else None
             if counts is not None:
                 self.counts[it.label] = counts
+                kept[it.label] = dict(counts)
             if self.soft and it.label in self.cont:
                 lin, s = _continued(lin, self.lam_soft)
                 if s is not None:
                     sig[it.label] = s
             items.append(lin)
         self.sigmas.append(sig)
+        self.kept = kept
+        if kept != self.checked_kept:   # other rows than at the checked point: check again
+            self.observable = False
         out = self.form.with_items(items)
         out._observable = self.observable
         return out
+
+    def checked(self, sub: Formulation) -> None:
+        """Note that ``sub`` (the latest linearized formulation) passed the observability check."""
+        if sub._observable and not self.observable:
+            self.observable, self.checked_kept = True, self.kept
 
     def note(self, sol: Solution, prev: np.ndarray) -> np.ndarray:
         if not self.soft:
@@ -224,7 +237,7 @@ def _iterate(loop: _Loop, inner: Stage, opts: SolveOptions, traj: pd.DataFrame,
                 return sol, True
             before = dict(loop.current) if n_phase or not loop.soft else None
             sol = inner(sub, loop.lam_soft if loop.soft else loop.lam_now, opts)
-            loop.observable = loop.observable or bool(getattr(sub, "_observable", False))
+            loop.checked(sub)
             prev = loop.note(sol, prev)
             traj = sol.trajectory[axes]
             n_phase += 1
