@@ -648,12 +648,11 @@ class MeshModel(NavModel):
             parts.append(Affine(self._place(blocks, a), F @ self.data.acc[:, a]))
         return self._interleave(parts, m)
 
-    def _point_velocity(self, times: np.ndarray, point, what: str) -> np.ndarray:
-        """The linearization point's velocity at ``times`` (K, 3), m/s: given at the nodes (the
-        node-state loop's) or at every sample, linear in between."""
-        v = np.asarray(point.velocity, dtype=float)
-        grid = self.fine if v.shape[0] == self.fine.n else TimeGrid(self.grid.t)
-        return grid.interpolation_matrix(times, what) @ v
+    def point_velocities(self, xval: np.ndarray) -> np.ndarray:
+        """The velocity of the nodal solution ``xval`` at every sample (n, d), m/s, as
+        :meth:`trajectory` recovers it: body-frame rows inside an element linearize about their own
+        sample's velocity, as on every sample (not about one interpolated between the nodes)."""
+        return self.trajectory(xval)["v"]
 
     def states(self, kind: str, t=None, axes=None, what: str | None = None) -> Affine:
         r"""As :meth:`bvpnav.NavModel.states`, at any time: the biases linear between the nodes;

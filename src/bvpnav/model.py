@@ -829,9 +829,9 @@ class NavModel:
         return self.velocity(t, axes, what)
 
     def _point_velocity(self, times: np.ndarray, point: LinearizationPoint, what: str) -> np.ndarray:
-        """The linearization point's navigation velocity at ``times`` (K, 3), m/s: linear between
-        the nodes it is given at."""
-        return self.grid.interpolation_matrix(times, what) @ point.velocity
+        """The linearization point's navigation velocity at ``times`` (K, 3), m/s: given at every
+        sample (:meth:`point_velocities`), linear in between."""
+        return self.sample_grid.interpolation_matrix(times, what) @ point.velocity
 
     @functools.cached_property
     def _rate_columns(self) -> np.ndarray:
@@ -889,12 +889,13 @@ class NavModel:
         return Affine(out.A, out.c, TimeLabels("omega_", list(names), times))
 
     def _attitude_columns(self) -> np.ndarray | None:
-        """Navigation-frame attitude change per unit parameter on the model's parameters, (N, 3,
-        q), rad per unit, from the data's :class:`LinearizationPoint` (None without one)."""
+        """Navigation-frame attitude change per unit parameter on the model's parameters, (n, 3,
+        q) at every sample (:attr:`sample_grid`), rad per unit, from the data's
+        :class:`LinearizationPoint` (None without one)."""
         point = getattr(self.data, "body_point", None)
         if point is None or not self.q:
             return None
-        Psi = np.zeros((self.N, 3, self.q))
+        Psi = np.zeros((self.data.n, 3, self.q))
         for k, name in enumerate(point.names):
             if name in self.param_names:
                 Psi[:, :, self.param_names.index(name)] = point.psi[:, :, k]
@@ -1253,6 +1254,12 @@ class NavModel:
         if self.ns:
             blocks["s"] = canonical_csr(Va @ self.Gs[axis])
         return Affine(self._place(blocks, axis), Va @ self.data.acc[:, axis])
+
+    def point_velocities(self, xval: np.ndarray) -> np.ndarray:
+        """The velocity of the stacked solution ``xval`` at every sample (n, d), m/s: the point about
+        which the next step linearizes body-frame rows (here the nodes are the samples; a coarse
+        mesh recovers its samples, :meth:`bvpnav.mesh.MeshModel.point_velocities`)."""
+        return np.column_stack([self.node_velocity_values(a, xval) for a in range(self.d)])
 
     def node_velocity_values(self, axis: int, xval: np.ndarray) -> np.ndarray:
         r""":meth:`node_velocity` of one axis evaluated at the stacked solution ``xval``

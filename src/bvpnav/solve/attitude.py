@@ -264,7 +264,7 @@ class _Loop:
 
             data = copy.copy(data)
             m = self.velocity_point.formulation.model
-            vel = np.column_stack([m.node_velocity_values(a, self.velocity_point.x) for a in range(m.d)])
+            vel = m.point_velocities(self.velocity_point.x)
             data.body_point = LinearizationPoint(velocity=vel, names=(), psi=np.zeros((data.n, 3, 0)))
         sol = self._solve(self._form(data, self.rest_model, search))
         if not search and self.mounted:
@@ -381,7 +381,7 @@ class _Loop:
         import copy
 
         m = at_values.formulation.model
-        vel = np.column_stack([m.node_velocity_values(a, at_values.x) for a in range(m.d)])
+        vel = m.point_velocities(at_values.x)
         names, cols = [], []
         for c in self.comps:
             psi = propagate(data, np.asarray(c.rate_columns(data), dtype=float),
@@ -1010,7 +1010,7 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
             if iters and any(getattr(it, "body_frame", False) for it in form.items):
                 # body-frame items: their attitude term about the last step's velocity
                 m = f.model
-                vel = np.column_stack([m.node_velocity_values(a, x) for a in range(m.d)])
+                vel = m.point_velocities(x)
                 data.body_point = LinearizationPoint(velocity=vel, names=(), psi=np.zeros((raw.n, 3, 0)))
             if iters or started:
                 f = Formulation(data, form.residual, form.sigma_a if form.sigma_a_given else None,
