@@ -621,10 +621,14 @@ def _ctrl_c_noted():
     noted: list = []
 
     def handler(signum, frame):
-        noted.append(signum)
-        if callable(old):
-            old(signum, frame)
-        raise KeyboardInterrupt
+        if not callable(old):   # SIG_DFL: Python's own default is to raise KeyboardInterrupt
+            noted.append(signum)
+            raise KeyboardInterrupt
+        try:
+            old(signum, frame)   # the caller's handler decides; noted only if it interrupts
+        except BaseException:
+            noted.append(signum)
+            raise
 
     old = signal.getsignal(signal.SIGINT)
     try:
