@@ -621,12 +621,6 @@ class ErrorStates(ErrorModel):
             out.append(G)
         return out
 
-    def _point_blocks(self, data, mesh: np.ndarray) -> tuple:
-        """:meth:`_mesh_blocks` at the data's point (the attitude's matrices and the specific
-        force in the navigation frame made here), and that force ``fn`` (N, 3), m/s^2."""
-        fn = data.attitude.apply(data.specific_force)
-        return (*self._mesh_blocks(data, mesh, -_skew(fn), data.attitude.as_matrix()), fn)
-
     def condensed_columns(self, data, W) -> list:
         r"""``W @ state_columns(data)[a]`` for every navigation axis, without the columns of
         every sample: on a coarse mesh, sums over the samples that ``W`` (sparse (m, N), e.g.
@@ -857,35 +851,21 @@ class ErrorStates(ErrorModel):
 
     # ------------------------------------------------------------ totals
     def updated(self, data, s: np.ndarray) -> dict:
-        r"""The totals after the increments ``s`` (the state block of a solution): attitude by
-        composition, :math:`\exp([\psi'\times]) = \exp([\varepsilon\times])\exp([\psi\times])`,
-        biases by addition."""
-        out = {}
-        mesh = _mesh(data)
-        if mesh is not None:
-            return self._mesh_updated(data, mesh, s)
-        for kind in self.state_kinds(data):
-            d = np.asarray(s, dtype=float)[self.state_index(data, kind)]
-            tot = _totals(data, kind)
-            if kind == "attitude_error":
-                out[kind] = _compose(Rotation.from_rotvec(d), Rotation.from_rotvec(tot)).as_rotvec()
-            else:
-                out[kind] = tot + d
-        return out
-
-    def _mesh_updated(self, data, mesh: np.ndarray, s: np.ndarray) -> dict:
-        r""":meth:`updated` on a coarse mesh: the nodes' totals take the increments
-        (:meth:`node_totals`) and the samples' follow from them (:meth:`expand`)."""
+        r"""The totals at every sample after the increments ``s`` (the state block of a solution):
+        attitude by composition, :math:`\exp([\psi'\times]) = \exp([\varepsilon\times])\exp([\psi\times])`,
+        biases by addition; on a coarse mesh at the nodes, and the samples follow
+        (:meth:`node_totals`, :meth:`expand`)."""
         return self.expand(data, self.node_totals(data, s))
 
     def node_totals(self, data, s: np.ndarray) -> dict:
-        r"""The totals at the nodes of a coarse mesh after the increments ``s``, kind -> (n, 3)
-        (attitude by composition, biases by addition; :meth:`updated` at the nodes only)."""
+        r"""The totals at the nodes after the increments ``s``, kind -> (n, 3) (attitude by
+        composition, biases by addition; the nodes of a coarse mesh, else every sample)."""
         mesh = _mesh(data)
+        at = slice(None) if mesh is None else mesh
         out = {}
         for kind in self.state_kinds(data):
             d = np.asarray(s, dtype=float)[self.state_index(data, kind)]
-            tot = _totals(data, kind)[mesh]
+            tot = _totals(data, kind)[at]
             if kind == "attitude_error":
                 out[kind] = _compose(Rotation.from_rotvec(d), Rotation.from_rotvec(tot)).as_rotvec()
             else:
@@ -897,8 +877,10 @@ class ErrorStates(ErrorModel):
         (``nodes``, kind -> (n, 3)): the biases linear between nodes, the attitude
         re-integrated from its element's left node with the corrected rates, :math:`C_i = C_p
         P_i` (module Notes), as the attitude error :math:`\mathrm{Log}(C_i \hat C_i^T)` of every
-        sample."""
+        sample. Without a mesh the nodes are the samples: ``nodes`` itself."""
         mesh = _mesh(data)
+        if mesh is None:
+            return dict(nodes)
         hats = _hats(data)
         out = {kind: hats @ np.asarray(v, dtype=float) for kind, v in nodes.items()
                if kind != "attitude_error"}

@@ -795,7 +795,7 @@ ANDERSON_REACH = 10.0
 
 
 def _flat_totals(sm, data, totals: dict) -> np.ndarray:
-    """The node-state totals of every kind as one vector (kind after kind, (N, 3) each)."""
+    """The node-state totals of every kind as one vector (kind after kind, (n, 3) each at the nodes)."""
     return np.concatenate([np.asarray(totals[k], dtype=float).ravel() for k in sm.state_kinds(data)])
 
 
@@ -854,18 +854,14 @@ def _next_totals(sm, data, s: np.ndarray, iters: list, prev_att: np.ndarray | No
     if prev_att is not None:
         den = max(float(np.linalg.norm(att) * np.linalg.norm(prev_att)), 1e-300)
         iters[-1]["turn"] = float(att @ prev_att) / den
-    mesh = _mesh(data) if hasattr(sm, "node_totals") else None
-    if mesh is None:
-        plain = sm.updated(data, s)
-        expand, nodes = (lambda tot: tot), (lambda tot: tot)
-    else:
-        plain = sm.node_totals(data, s)
+    mesh = _mesh(data)
+    plain = sm.node_totals(data, s)     # at the nodes: a coarse mesh's, else every sample
 
-        def expand(tot):
-            return sm.expand(data, tot)
+    def expand(tot):
+        return sm.expand(data, tot)
 
-        def nodes(tot):
-            return {k: v[mesh] for k, v in tot.items()}
+    def nodes(tot):
+        return tot if mesh is None else {k: v[mesh] for k, v in tot.items()}
     grew = len(iters) > 1 and iters[-1]["step"] >= iters[-2]["step"]
     if not o["loop"] or iters[-1]["step"] >= ANDERSON_START or grew:
         history.clear()   # mixed only with steps of the linear regime, where they shrink
