@@ -70,8 +70,9 @@ class NavigationProblem:
         acceleration residuals) are condensed onto the nodes exactly, the analogue of a factor
         graph's preintegration. The answer at the nodes is that of the problem on every
         sample, and the solution still has every sample (recovered from the nodes). Needs
-        ``residual="acceleration"``; items that evaluate every sample of an interval and the
-        knot attitude loop's error models are refused on a mesh. Body-frame items
+        ``residual="acceleration"``; items that evaluate every sample of an interval get those
+        samples as nodes; items whose instants are known only when compiled and the knot
+        attitude loop's error models are refused on a mesh. Body-frame items
         (``NonHolonomic``, ``ForwardMotion``, lever arms) work with ``ErrorStates``: their soft
         rows stay at their samples inside the elements, rows held as constraints (bands, hard,
         inequalities) get nodes at their instants. None (default): every sample is a node.
