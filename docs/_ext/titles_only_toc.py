@@ -51,8 +51,8 @@ def _standard_entry(title, ref, maxdepth, toc, toctree_ancestors, prune, collaps
     cache = _standard_entry.cache
     # the arguments Sphinx's entry depends on; ``toc`` by identity (a page read again has a new one)
     key = (title, ref, maxdepth, ref in toctree_ancestors, prune, collapse, id(tags), id(toc))
-    hit = cache.get(key)
-    if hit is None or hit[0] is not toc or hit[1] is not tags:
+    hit = cache.get(key)   # the entry keeps toc and tags alive, so their ids cannot be reused
+    if hit is None:
         entry, refdoc = _sphinx_standard_entry(title, ref, maxdepth, toc, toctree_ancestors, prune,
                                                collapse, tags)
         hit = cache[key] = (toc, tags, _titles_only(entry), refdoc)

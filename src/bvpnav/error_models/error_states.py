@@ -221,6 +221,12 @@ class _Elements:
         return self.S.as_matrix() @ self.Jr * self.h[:, None, None]
 
 
+def _block_order(kinds: list) -> list:
+    """The order of a mesh element's state blocks, ``(kind, right node?)``: every kind at the left
+    node, then the biases at the right node (the attitude error is carried from the left node)."""
+    return [(kind, 0) for kind in kinds] + [(kind, 1) for kind in kinds if kind != "attitude_error"]
+
+
 def _elements(data, mesh: np.ndarray, bg: np.ndarray) -> _Elements:
     """:class:`_Elements` with the gyro-bias totals ``bg`` (N, 3) at the samples; the last one kept
     on the measured data (it depends on nothing else): the state columns and process rows of a
@@ -590,7 +596,7 @@ class ErrorStates(ErrorModel):
             SCp = -(S @ C[mesh[k]])
             blocks[("gyro_bias", 0)] = (None, SCp @ (cum[0] - cum[1]))
             blocks[("gyro_bias", 1)] = (None, SCp @ cum[1])
-        order = [(kind, 0) for kind in kinds] + [(kind, 1) for kind in kinds if kind != "attitude_error"]
+        order = _block_order(kinds)
         return el, order, blocks
 
     def _mesh_columns(self, data, mesh: np.ndarray, S: np.ndarray, C: np.ndarray) -> list:
@@ -689,7 +695,7 @@ class ErrorStates(ErrorModel):
         key = key[perm]
         starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
         R, L = key[starts] // nn, key[starts] % nn
-        order = [(kind, 0) for kind in kinds] + [(kind, 1) for kind in kinds if kind != "attitude_error"]
+        order = _block_order(kinds)
         rows, cols, keep = [], [], {}
         for kind, right in order:
             node = L + right
@@ -755,7 +761,7 @@ class ErrorStates(ErrorModel):
         if kept is not None and kept[0] is mesh and kept[1] == tuple(kinds):
             return kept[2]
         nn, n, K = mesh.size, k.size, self._per_node(data)
-        order = [(kind, 0) for kind in kinds] + [(kind, 1) for kind in kinds if kind != "attitude_error"]
+        order = _block_order(kinds)
         nxt = np.minimum(k + 1, nn - 1)
         cols = np.concatenate([self.state_index(data, kind)[nxt if right else k]
                                for kind, right in order], axis=1)

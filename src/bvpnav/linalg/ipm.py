@@ -317,12 +317,12 @@ class _Steps:
         pattern = (self.A.indptr, self.A.indices, self.E.indptr, self.E.indices, lam_rows, colnode)
         if reuse is not None:
             old, plan, cols = reuse
+            band_out = _loop_buffers(workspace, plan)[0]
             same = [a is b or np.array_equal(a, b) for a, b in zip(old, pattern, strict=True)]
             if all(same):
                 self.plan_key = (pattern, plan, cols)
-                return plan, plan.assemble(self.A, self.E, diagonal, out=_loop_buffers(workspace, plan)[0])
+                return plan, plan.assemble(self.A, self.E, diagonal, out=band_out)
             if all(same[4:]):
-                band_out = _loop_buffers(workspace, plan)[0]
                 fitted = _refit(plan, self.A, self.E, cols, lam_rows, diagonal, band_out)
                 if fitted is not None:
                     self.plan_key = (pattern, fitted[0], cols)
