@@ -50,7 +50,7 @@ from .io import (
     write_table,
     write_trajectory,
 )
-from .log import once
+from .log import once, signal_handled
 from .log import progress as progress_bar
 from .readers import align, read, reader_for
 from .spec import parse_spec, read_spec_text
@@ -631,17 +631,11 @@ def _ctrl_c_noted():
             raise
 
     old = signal.getsignal(signal.SIGINT)
-    try:
-        if old is signal.SIG_IGN:  # Ctrl-C ignored by whoever started us: keep it so
-            raise ValueError
-        signal.signal(signal.SIGINT, handler)
-    except ValueError:  # not the main thread: signals are not ours to change
+    if old is signal.SIG_IGN:  # Ctrl-C ignored by whoever started us: keep it so
         yield noted
         return
-    try:
+    with signal_handled(signal.SIGINT, handler):
         yield noted
-    finally:
-        signal.signal(signal.SIGINT, old)
 
 
 @contextlib.contextmanager
@@ -649,15 +643,8 @@ def _workers_ignore_ctrl_c():
     """Start the local workers with SIGINT ignored (inherited through spawn's exec): Ctrl-C in
     a terminal reaches the whole process group, and only this process should handle it (by
     closing the cluster), not each worker with its own traceback."""
-    try:
-        old = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    except ValueError:  # not the main thread: signals are not ours to change
+    with signal_handled(signal.SIGINT, signal.SIG_IGN):
         yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, old)
 
 
 def _done(row: dict, k: int, n: int) -> None:
