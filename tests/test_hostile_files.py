@@ -438,6 +438,36 @@ def test_ctrl_c_swallowed_by_a_library_still_stops_a_serial_batch(work, monkeypa
     assert sorted(p.name for p in out.glob("*.json")) == ["run00.json"] and not (out / "summary.csv").exists()
 
 
+def test_sigterm_swallowed_by_a_library_still_stops_a_serial_batch(work, monkeypatch, capsys):
+    """The CLI's SIGTERM handler raises an exception like Ctrl-C does, which a library can
+    catch inside a task the same way (pandas' C parser turned it into a ParserError): the
+    serial loop notes SIGTERM too, so the batch stops with exit 143 instead of calling the
+    recording a bad file and solving the others."""
+    import bvpnav.batch as batch
+
+    recs = many_recordings(work, 6)
+    out = work / "out"
+    real, calls = batch._task, []
+
+    def task(*job):
+        calls.append(job[0])
+        if len(calls) == 2:
+            try:
+                signal.raise_signal(signal.SIGTERM)  # caught inside the task like pandas did
+            except BaseException:
+                return {"recording": job[0], "ok": False, "error": "ParserError: read failed"}
+        return real(*job)
+
+    monkeypatch.setattr(batch, "_task", task)
+    before = signal.getsignal(signal.SIGTERM)
+    code = main([str(a) for a in batch_argv(work, recs, out)])
+    assert (code, capsys.readouterr().err.strip()) == (EXIT_TERM, "bvpnav: terminated")
+    assert len(calls) == 2                              # no recording after the signal
+    assert signal.getsignal(signal.SIGTERM) is before   # the caller's handler is back
+    assert sorted(p.name for p in out.glob("*.json")) == ["run00.json"] and not (out / "summary.csv").exists()
+    assert stray_temporaries(work) == [] and not (out / ".bvpnav.lock").exists()
+
+
 def test_sigterm_in_a_batch_exits_143_and_cleans_up(work):
     # 96 recordings: the signal must arrive while the batch still runs. With 24 the batch
     # ended about 0.8 s after the first summary appeared, and once in a fresh-clone CI run

@@ -599,11 +599,11 @@ def _run(files, outs, spec_text, spec_source, scheduler, workers, over: dict, re
     if jobs and scheduler == "serial":
         # once(): a warning shared by many recordings is issued once (each summary records it)
         with once(), progress_bar(total=len(jobs), desc="recordings", unit="rec", enabled=progress) as bar, \
-                _ctrl_c_noted() as ctrl_c:
+                _interrupts_noted() as interrupts:
             for job in jobs:
                 rows.append(_task(*job))
-                if ctrl_c:  # a library swallowed the KeyboardInterrupt (e.g. into a parser error)
-                    raise KeyboardInterrupt
+                if interrupts:  # a library swallowed the interrupt (e.g. into a parser error)
+                    raise interrupts[0]
                 _done(rows[-1], len(rows), len(jobs))
                 bar.update(1)
     elif jobs:
@@ -612,30 +612,39 @@ def _run(files, outs, spec_text, spec_source, scheduler, workers, over: dict, re
 
 
 @contextlib.contextmanager
-def _ctrl_c_noted():
-    """Note every SIGINT (Ctrl-C) before raising KeyboardInterrupt as usual; yields a list that is
-    true once one arrived. A library can catch the KeyboardInterrupt inside a task and report
-    something else (pandas' C parser, interrupted in its read of the in-memory text, raised
-    "Calling read(nbytes) on source failed"): the serial loop then stops on the note instead of
-    solving the other recordings and calling the interrupted one a bad file."""
-    noted: list = []
+def _interrupts_noted():
+    """Note every SIGINT (Ctrl-C) and SIGTERM that interrupts before its exception is raised as
+    usual; yields the list of those exceptions. A library can catch the exception inside a task
+    and report something else (pandas' C parser, interrupted in its read of the in-memory text,
+    raised "Calling read(nbytes) on source failed"): the serial loop then raises the first again
+    instead of solving the other recordings and calling the interrupted one a bad file.
+
+    SIGINT is chained unless ignored (SIG_IGN) by whoever started us; SIGTERM only when a Python
+    handler interrupts with an exception (the CLI's raises ``_Terminated``), as its default ends
+    the process, with nothing to swallow.
+    """
+    noted: list[BaseException] = []
+    with contextlib.ExitStack() as handlers:
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            old = signal.getsignal(signum)
+            if callable(old) or (signum == signal.SIGINT and old is not signal.SIG_IGN):
+                handlers.enter_context(signal_handled(signum, _noting(old, noted)))
+        yield noted
+
+
+def _noting(old, noted: list[BaseException]):
+    """A handler that calls ``old`` and appends to ``noted`` what it raises."""
 
     def handler(signum, frame):
-        if not callable(old):   # SIG_DFL: Python's own default is to raise KeyboardInterrupt
-            noted.append(signum)
-            raise KeyboardInterrupt
         try:
-            old(signum, frame)   # the caller's handler decides; noted only if it interrupts
-        except BaseException:
-            noted.append(signum)
+            if not callable(old):  # SIGINT's SIG_DFL: Python's own default is to raise KeyboardInterrupt
+                raise KeyboardInterrupt
+            old(signum, frame)     # the caller's handler decides; noted only if it interrupts
+        except BaseException as exc:
+            noted.append(exc)
             raise
 
-    old = signal.getsignal(signal.SIGINT)
-    if old is signal.SIG_IGN:  # Ctrl-C ignored by whoever started us: keep it so
-        yield noted
-        return
-    with signal_handled(signal.SIGINT, handler):
-        yield noted
+    return handler
 
 
 @contextlib.contextmanager
