@@ -210,9 +210,12 @@ class _Loop:
             self._data[key] = reintegrate(self.raw, self.form.error_model, values)
         return self._data[key]
 
-    def _form(self, data, error_model, search: bool = False) -> Formulation:
+    def _form(self, data, error_model, search: bool = False, items: list | None = None) -> Formulation:
+        """The fixed-attitude formulation of ``data`` with ``error_model`` and the loop's items
+        (``items``: others in their place, whose observability is checked afresh)."""
         f = self.form
-        items = f.items
+        own = items is None
+        items = f.items if own else items
         if search:  # the heading search scores candidates without the items that turn with the attitude
             items = [it for it in items if not getattr(it, "body_frame", False)]
         if error_model is not f.error_model:  # attitude fixed: items on the gyro model alone drop out
@@ -222,7 +225,7 @@ class _Loop:
         out.grade_report = f.grade_report
         # the same items and error model at every point: what determines the unknowns was
         # checked on the first formulation of each kind (an SVD, a fifth of a solve)
-        out._observable = self.checked.get(id(error_model), False)
+        out._observable = own and self.checked.get(id(error_model), False)
         return out
 
     def _solve(self, form: Formulation) -> Solution:
@@ -298,9 +301,7 @@ class _Loop:
                          sigma=0.1 if it.sigma is None else it.sigma)
                  if getattr(it, "mounting", None) else it
                  for it in self.form.items if not it.needs_error_model]
-        f = self.form
-        form = Formulation(data, f.residual, f.sigma_a if f.sigma_a_given else None, model, items, grade=None)
-        form.grade_report = f.grade_report
+        form = self._form(data, model, items=items)
         sol = self.inner(form, self.lam if isinstance(self.lam, float) else 1.0, self.opts)
         self.solves += 1
         return sol
