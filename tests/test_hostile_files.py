@@ -410,6 +410,28 @@ def test_ctrl_c_in_a_batch_exits_130_in_one_line_and_resume_finishes_it(work, sc
     assert stray_temporaries(work) == []
 
 
+def swallowing_task(monkeypatch, signum: int) -> list:
+    """Replace the batch's task by one that, on the second recording, raises ``signum`` in
+    this process and catches whatever its handler raises, reporting a bad file as pandas' C
+    parser did ("Calling read(nbytes) on source failed"); returns the recordings the tasks
+    were given."""
+    import bvpnav.batch as batch
+
+    real, calls = batch._task, []
+
+    def task(*job):
+        calls.append(job[0])
+        if len(calls) == 2:
+            try:
+                signal.raise_signal(signum)
+            except BaseException:   # like the parser: anything raised inside its read
+                return {"recording": job[0], "ok": False, "error": "ParserError: read failed"}
+        return real(*job)
+
+    monkeypatch.setattr(batch, "_task", task)
+    return calls
+
+
 def test_ctrl_c_swallowed_by_a_library_still_stops_a_serial_batch(work, monkeypatch):
     """Ctrl-C while pandas' C parser reads a recording came back as a ParserError ("Calling
     read(nbytes) on source failed"): the recording was called a bad file and the batch went on
@@ -418,18 +440,7 @@ def test_ctrl_c_swallowed_by_a_library_still_stops_a_serial_batch(work, monkeypa
 
     recs = many_recordings(work, 6)
     out = work / "out"
-    real, calls = batch._task, []
-
-    def task(*job):
-        calls.append(job[0])
-        if len(calls) == 2:
-            try:
-                signal.raise_signal(signal.SIGINT)  # Ctrl-C, caught inside the task like pandas did
-            except KeyboardInterrupt:
-                return {"recording": job[0], "ok": False, "error": "ParserError: read failed"}
-        return real(*job)
-
-    monkeypatch.setattr(batch, "_task", task)
+    calls = swallowing_task(monkeypatch, signal.SIGINT)  # Ctrl-C
     before = signal.getsignal(signal.SIGINT)
     with pytest.raises(KeyboardInterrupt):
         batch.run_batch(recs, work / "spec.toml", out, scheduler="serial", progress=False)
@@ -443,22 +454,9 @@ def test_sigterm_swallowed_by_a_library_still_stops_a_serial_batch(work, monkeyp
     catch inside a task the same way (pandas' C parser turned it into a ParserError): the
     serial loop notes SIGTERM too, so the batch stops with exit 143 instead of calling the
     recording a bad file and solving the others."""
-    import bvpnav.batch as batch
-
     recs = many_recordings(work, 6)
     out = work / "out"
-    real, calls = batch._task, []
-
-    def task(*job):
-        calls.append(job[0])
-        if len(calls) == 2:
-            try:
-                signal.raise_signal(signal.SIGTERM)  # caught inside the task like pandas did
-            except BaseException:
-                return {"recording": job[0], "ok": False, "error": "ParserError: read failed"}
-        return real(*job)
-
-    monkeypatch.setattr(batch, "_task", task)
+    calls = swallowing_task(monkeypatch, signal.SIGTERM)
     before = signal.getsignal(signal.SIGTERM)
     code = main([str(a) for a in batch_argv(work, recs, out)])
     assert (code, capsys.readouterr().err.strip()) == (EXIT_TERM, "bvpnav: terminated")
