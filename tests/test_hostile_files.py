@@ -135,6 +135,14 @@ def wait_for(cond, proc: subprocess.Popen, what: str, limit: float = 240.0) -> N
         time.sleep(0.005)
 
 
+def lock_holder(out: Path) -> str:
+    """The process id written in ``out``'s lock file ('' while there is none)."""
+    try:
+        return (out / ".bvpnav.lock").read_text().strip()
+    except OSError:
+        return ""
+
+
 def many_recordings(t: Path, n: int) -> Path:
     recs = t / "recs"
     recs.mkdir()
@@ -622,7 +630,8 @@ def test_a_second_batch_into_the_same_folder_is_refused_at_once(work):
     recs = many_recordings(work, 24)
     out = work / "out"
     first = popen_cli(batch_argv(work, recs, out))
-    wait_for(lambda: (out / ".bvpnav.lock").exists(), first, "the first run's lock")
+    # the lock file exists before it is locked and holds the pid: wait until it names the first run
+    wait_for(lambda: lock_holder(out) == str(first.pid), first, "the first run's lock")
     first.send_signal(signal.SIGSTOP)  # hold it mid-run, deterministically
     try:
         before = snapshot(recs, work / "spec.toml", out)
