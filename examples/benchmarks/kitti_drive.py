@@ -517,10 +517,14 @@ def track_rms(est: np.ndarray, d: dict, withheld) -> dict:
 
 
 def gtsam_example_smoother(d: dict, kept, fig: dict, c0, max_iterations: int = 100, *,
-                           fix_sigma=None, tilt: float | None = None, start_prior: str | None = None) -> dict:
+                           fix_sigma=None, tilt: float | None = None, start_prior: str | None = None,
+                           feed: str = "held") -> dict:
     """GTSAM's KITTI example as a batch smoother: a node at every fix time (1 Hz), an ``ImuFactor``
     between consecutive nodes integrating each IMU sample held constant over its preceding step
-    (the file's ``dt``, as ``IMUKittiExampleGPS.py`` does), a ``BetweenFactorConstantBias`` with
+    (the file's ``dt``, as ``IMUKittiExampleGPS.py`` does; with ``feed="second order"`` each step
+    is fed instead the mean of its two samples, the force rotated back by half the step's rotation,
+    as ``_gtsam_peer.py`` does: GTSAM rotates a step's force by the attitude at its start), a
+    ``BetweenFactorConstantBias`` with
     sigma ``sqrt(count) * per-sample bias sigma``, a ``GPSFactor`` at every kept fix, priors at the
     first node (the bias priors of ``fig``, roll and pitch ``tilt`` about ``c0``, and as bvpnav's
     problem has them, :data:`START_PRIOR`: no heading or velocity prior, or with ``"fixes"`` those of
@@ -540,6 +544,14 @@ def gtsam_example_smoother(d: dict, kept, fig: dict, c0, max_iterations: int = 1
     t, f, w = d["t"], d["f"], d["w"]
     ft, fp = d["fix_t"], d["fix_p"]
     dt = np.diff(t, prepend=t[0])  # the step each sample closes (the file's dt column)
+    if feed not in FEEDS:
+        raise ValueError(f"feed={feed!r}; give one of {FEEDS}")
+    if feed == "second order":     # what each step is fed, at the index of the sample closing it
+        from scipy.spatial.transform import Rotation
+
+        wm = 0.5 * (w[:-1] + w[1:])
+        fm = Rotation.from_rotvec(0.5 * wm * dt[1:, None]).apply(0.5 * (f[:-1] + f[1:]))
+        f, w = np.vstack([f[:1], fm]), np.vstack([w[:1], wm])
     params = gtsam.PreintegrationParams.MakeSharedU(GRAVITY)
     params.setAccelerometerCovariance(fig["acc_noise"] ** 2 * np.eye(3))
     params.setGyroscopeCovariance(fig["gyro_noise"] ** 2 * np.eye(3))
@@ -757,6 +769,10 @@ def run_bvpnav(d: dict, kept, withheld, method: str, fig: dict, c0, interval: fl
 #: for bvpnav). Roll and pitch have :data:`TILT` in both modes.
 START_PRIOR = "open"
 START_PRIORS = ("open", "fixes")
+#: What :func:`gtsam_example_smoother` feeds GTSAM's preintegration per step: ``"held"`` (the closing
+#: sample, GTSAM's example) or ``"second order"`` (the two samples' mean, the force rotated back by half
+#: the step's rotation).
+FEEDS = ("held", "second order")
 #: The ``"fixes"`` start's velocity sigma, m/s per axis, and heading sigma, rad.
 START_VELOCITY_SIGMA = 10.0
 START_HEADING_SIGMA = math.pi
