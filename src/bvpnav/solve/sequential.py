@@ -295,6 +295,12 @@ def with_sequential(inner: Stage) -> Stage:
     progress bar counts the iterations when stderr is a terminal (``rule={"progress":
     False}`` turns it off).
 
+    An outer loop that re-linearizes after every call (the node-state loop,
+    :func:`bvpnav.solve.attitude.with_attitude`) may pass ``steps`` (int) to the stage: at most
+    that many linearizations from the previous answer, without the warning (its intermediate
+    steps are Gauss-Newton steps on the states and the linearized items' unknowns together; the
+    step it expects to be its last calls the stage without ``steps``, iterated to ``tol``).
+
     Notes
     -----
     Iteration :math:`k` solves the convex problem with every nonlinear item
@@ -322,12 +328,15 @@ def with_sequential(inner: Stage) -> Stage:
 
     last: dict = {}   # the previous answer per set of items (the outer loops call this stage often)
 
-    def stage(form: Formulation, lam, opts: SolveOptions, workspace=None) -> Solution:
+    def stage(form: Formulation, lam, opts: SolveOptions, workspace=None, steps: int | None = None
+              ) -> Solution:
         nonlin = form.nonlinear_items
         if not nonlin:   # a caller's workspace (a loop of same-pattern formulations) goes on down
             kw = {} if workspace is None else {"workspace": workspace}
             return inner(form, lam, opts, **kw)
         o = check_sequential(opts.sequential)
+        if steps is not None:   # an outer loop's intermediate step: it re-linearizes anyway
+            o = {**o, "max_iter": int(steps)}
         t_start = time.perf_counter()
         key = (form.model.N, tuple(it.label for it in nonlin))
         if o["initial"] is None and key in last:
@@ -349,7 +358,7 @@ def with_sequential(inner: Stage) -> Stage:
         if loop.rule is not None:
             sol.lam_rule = loop.rule if o["lam_each"] else f"{loop.rule} (first linearization)"
             sol.curve = loop.curve
-        if not converged:
+        if not converged and steps is None:
             msg = _not_converged(loop)
             sol.warnings.append(msg)
             warn(msg)
