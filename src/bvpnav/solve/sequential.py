@@ -220,8 +220,10 @@ def _settled(before: dict, now: dict, tol: float) -> bool:
 
 
 def _iterate(loop: _Loop, inner: Stage, opts: SolveOptions, traj: pd.DataFrame,
-             sol: Solution | None = None) -> tuple[Solution, bool]:
-    """Linearize and solve until the final phase converges or runs out of iterations."""
+             sol: Solution | None = None, capped: bool = False) -> tuple[Solution, bool]:
+    """Linearize and solve until the final phase converges or runs out of iterations
+    (``capped``: an outer loop's intermediate step, which ends with the phase it is in: a
+    continuation's soft phase is not cut short by the requested modes)."""
     t = loop.form.model.grid.t
     axes = list(loop.form.model.axes)
     prev = traj[axes].to_numpy()
@@ -253,8 +255,8 @@ def _iterate(loop: _Loop, inner: Stage, opts: SolveOptions, traj: pd.DataFrame,
             if done or n_phase >= int(loop.o["max_iter"]):
                 loop.phases.append({"mode": mode, "iterations": n_phase, "tol": limit,
                                     "converged": bool(done)})
-                if not loop.soft:
-                    return sol, done
+                if not loop.soft or capped:
+                    return sol, bool(done) and not loop.soft
                 log.info("sequential loop: soft continuation ended after %d iteration(s) (%s); now %s",
                          n_phase, "converged" if done else "max_iter reached", "the requested modes")
                 # the requested modes make other terms: checked again
@@ -349,7 +351,7 @@ def with_sequential(inner: Stage) -> Stage:
         loop = _Loop(form, nonlin, o, lam)
         log.info("sequential loop over %s: initial estimate from %s; continuation for %s",
                  [it.label for it in nonlin], origin, sorted(loop.cont) or "none")
-        sol, converged = _iterate(loop, inner, opts, traj, sol0)
+        sol, converged = _iterate(loop, inner, opts, traj, sol0, capped=steps is not None)
         seconds = time.perf_counter() - t_start
         sol.record(sequential=loop.report(converged, origin, seconds))
         last[key] = sol
