@@ -370,6 +370,7 @@ lost metres are in the turning intervals, but not as yaw rate times an offset of
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import math
 import sys
@@ -428,8 +429,33 @@ LEVERED = ("bvpnav states NHC lever", "bvpnav states NHC lever band", "bvpnav NH
 LEVER_SIGMA = 2.0
 LEVER_NAMES = ("nhc_lever_x", "nhc_lever_y", "nhc_lever_z")
 
+#: The methods that estimate one more error of the IMU itself beside the node states (issue 39, the 10 s
+#: gap): method -> (the method it extends, the error). ``"acc scale"``: the horizontal accelerometers'
+#: scale factors, ``ScaleFactor(axes=("x", "y"), sigma=SENSOR_SIGMA)``; ``"misalignment"``: the six
+#: accelerometer misalignment angles, ``Misalignment(sigma=SENSOR_SIGMA)``; ``"delay"``: the fixes' delay
+#: against the IMU clock, ``Position(delay="estimated")`` with ``TimeOffset(sigma=DELAY_SIGMA)`` (on the
+#: samples: a coarse mesh keeps no position where a delayed fix falls inside an element); ``"gyro
+#: scale"``: the z gyro's scale factor, a profile estimate (:func:`gyro_scale_profile`: ``GyroScaleFactor``
+#: is refused beside node states, so the rates are rescaled and the objective minimized over the one
+#: number, prior ``SENSOR_SIGMA``).
+IMU_ERRORS = {"bvpnav states mesh acc scale": ("bvpnav states mesh", "acc scale"),
+              "bvpnav states mesh NHC acc scale": ("bvpnav states mesh NHC soft", "acc scale"),
+              "bvpnav states mesh misalignment": ("bvpnav states mesh", "misalignment"),
+              "bvpnav states mesh NHC misalignment": ("bvpnav states mesh NHC soft", "misalignment"),
+              "bvpnav states delay": ("bvpnav states", "delay"),
+              "bvpnav states NHC delay": ("bvpnav states NHC soft", "delay"),
+              "bvpnav states mesh gyro scale": ("bvpnav states mesh", "gyro scale"),
+              "bvpnav states mesh NHC gyro scale": ("bvpnav states mesh NHC soft", "gyro scale")}
+#: Prior sigma of the estimated scale factors (dimensionless) and misalignment angles (rad): 1 %, set by
+#: physics, not by this drive (a calibrated tactical-grade unit is well inside it).
+SENSOR_SIGMA = 0.01
+#: Prior sigma of the fixes' delay, s (a receiver's latency, unknown).
+DELAY_SIGMA = 0.1
+#: The profile's first half-width (dimensionless): the objective at the estimate and this far either side.
+GYRO_SCALE_STEP = 0.005
+
 METHODS = ("GTSAM", "GTSAM peer", "bvpnav README", "bvpnav defaults", "bvpnav states", "bvpnav states mesh",
-           *VEHICLE)
+           *VEHICLE, *IMU_ERRORS)
 
 
 def data_dir() -> Path:
@@ -647,6 +673,9 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float, *, fix_s
     one or per navigation axis), ``tilt`` (rad) and ``start_prior`` default to this drive's
     (:data:`FIX_SIGMA`, :data:`TILT`, :data:`START_PRIOR`; with ``"fixes"`` the node-state methods get
     GTSAM's heading and velocity priors, :func:`_start_factors`)."""
+    if method in IMU_ERRORS:
+        return _with_imu_error(d, kept, method, fig, c0, interval, fix_sigma=fix_sigma, tilt=tilt,
+                               start_prior=start_prior)
     fix_sigma = FIX_SIGMA if fix_sigma is None else fix_sigma
     tilt = TILT if tilt is None else tilt
     start_prior = START_PRIOR if start_prior is None else start_prior
@@ -701,6 +730,80 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float, *, fix_s
     return prob
 
 
+def _with_imu_error(d: dict, kept, method: str, fig: dict, c0, interval: float, **options):
+    """The problem of an :data:`IMU_ERRORS` method: its base method's with the error's model added
+    (``"gyro scale"``: the base's, solved by :func:`gyro_scale_profile`)."""
+    from bvpnav.error_models import Misalignment, ScaleFactor, TimeOffset
+
+    base, error = IMU_ERRORS[method]
+    if error == "delay":
+        import bvpnav.constraints as bc
+
+        plain = bc.Position
+        bc.Position = functools.partial(plain, delay="estimated")   # problem() builds its fixes with it
+        try:
+            prob = problem(d, kept, base, fig, c0, interval, **options)
+        finally:
+            bc.Position = plain
+        prob.error_model = prob.error_model + TimeOffset(sigma=DELAY_SIGMA)
+        return prob
+    prob = problem(d, kept, base, fig, c0, interval, **options)
+    if error == "acc scale":
+        prob.error_model = prob.error_model + ScaleFactor(axes=("x", "y"), sigma=SENSOR_SIGMA)
+    elif error == "misalignment":
+        prob.error_model = prob.error_model + Misalignment(sigma=SENSOR_SIGMA)
+    return prob
+
+
+def gyro_scale_profile(d: dict, kept, method: str, fig: dict, c0, interval: float, *,
+                       step: float = GYRO_SCALE_STEP, sigma: float = SENSOR_SIGMA, **options) -> dict:
+    r"""The z gyro's scale factor by its profile: the node-state problem of ``method`` solved with the z
+    rates rescaled, :math:`\omega_z = \hat\omega_z / (1 + s)`, and :math:`s` where the objective plus its
+    prior, :math:`J(s) + (s / \sigma)^2`, is least.
+
+    Returns ``scale`` (dimensionless; 0.01: the gyro reads 1 % high), ``std`` (from the curvature,
+    :math:`\sqrt{2 / J''}`, times the square root of the answer's a-posteriori variance factor),
+    ``std_stated`` (without it), ``profile`` ((s, J + prior) of every solve) and ``solution`` (the solve
+    at the estimate).
+
+    Notes
+    -----
+    The objective is a sum of squared whitened residuals (minus twice the log-likelihood), so its
+    minimum over :math:`s` is the joint MAP estimate and :math:`J'' = 2/\sigma_s^2`. Two parabolas:
+    three solves at :math:`0, \pm` ``step``, then three at the first vertex and ``step / 2`` either side
+    (one of them reused where it falls on a solved point); the estimate is the second vertex, kept
+    within ``step`` of the first. ``GyroScaleFactor`` would estimate it in the same solve, but it is
+    refused beside :class:`~bvpnav.error_models.ErrorStates` (issue 39: not carried by the node states
+    yet); the profile is the same estimate by other means.
+    """
+    evals: dict[float, tuple] = {}
+
+    def cost(s: float) -> float:
+        s = round(s, 9)
+        if s not in evals:
+            w = d["w"].copy()
+            w[:, 2] = d["w"][:, 2] / (1.0 + s)
+            sol = problem({**d, "w": w}, kept, method, fig, c0, interval, **options).solve(
+                solver="direct", attitude={"progress": False})
+            evals[s] = (float(sol.stats["sequential"]["objective"]) + (s / sigma) ** 2, sol)
+        return evals[s][0]
+
+    centre, curv = 0.0, float("nan")
+    for h in (step, step / 2.0):
+        jm, j0, jp = cost(centre - h), cost(centre), cost(centre + h)
+        curv = (jp - 2.0 * j0 + jm) / h**2
+        if not curv > 0.0:
+            raise RuntimeError(f"gyro scale profile: the objective is not convex about s = {centre:.4g} "
+                               f"(J = {jm:.6g}, {j0:.6g}, {jp:.6g} at -/+ {h:g})")
+        centre = float(np.clip(centre - h * (jp - jm) / (2.0 * h * h * curv), centre - step, centre + step))
+    cost(centre)
+    sol = evals[round(centre, 9)][1]
+    vf = (sol.stats.get("plausibility") or {}).get("variance_factor") or 1.0
+    stated = math.sqrt(2.0 / curv)
+    return {"scale": centre, "std": stated * math.sqrt(max(vf, 1.0)), "std_stated": stated,
+            "profile": sorted((s, j) for s, (j, _) in evals.items()), "solution": sol}
+
+
 def run_bvpnav(d: dict, kept, withheld, method: str, fig: dict, c0, interval: float, *, ref=None,
                score=None, **options) -> dict:
     """Solve ``method`` and score it at the withheld fixes: ``score(est, ref)`` (default
@@ -714,9 +817,16 @@ def run_bvpnav(d: dict, kept, withheld, method: str, fig: dict, c0, interval: fl
 
     t0, cpu = time.perf_counter(), time.process_time()
     solver = "direct"
+    imu_error = IMU_ERRORS.get(method, (None, None))[1]
+    profile = None
     try:
         try:
-            sol = prob.solve(solver=solver, attitude={"progress": False})
+            if imu_error == "gyro scale":
+                profile = gyro_scale_profile(d, kept, IMU_ERRORS[method][0], fig, c0, interval, **options)
+                sol = profile["solution"]
+            else:   # the delay's standard deviation (on the samples; a coarse mesh has none yet)
+                sol = prob.solve(solver=solver, attitude={"progress": False},
+                                 uncertainty="scaled" if imu_error == "delay" else False)
         except InputError as exc:
             if method not in VEHICLE or "cannot take item" not in str(exc):
                 raise
@@ -746,7 +856,18 @@ def run_bvpnav(d: dict, kept, withheld, method: str, fig: dict, c0, interval: fl
             "mounting_deg": [math.degrees(float(sol.error_params[n])) for n in MOUNT_NAMES]
             if "mounting_yaw" in sol.error_params else None,
             "nhc_lever": [float(sol.error_params[n]) for n in LEVER_NAMES]
-            if "nhc_lever_x" in sol.error_params else None}
+            if "nhc_lever_x" in sol.error_params else None,
+            "imu_error": _imu_estimates(sol, profile) if imu_error else None}
+
+
+def _imu_estimates(sol, profile) -> dict:
+    """The :data:`IMU_ERRORS` estimates of a solution: name -> (value, std or None); the gyro scale's
+    from its profile (with the solves' count), the others' from the error parameters."""
+    if profile is not None:
+        return {"gyro_scale_z": (profile["scale"], profile["std"]), "profile_solves": len(profile["profile"])}
+    std = sol.error_params_std
+    return {k: (float(v), float(std[k]) if std is not None and k in std else None)
+            for k, v in sol.error_params.items() if k.startswith(("scale_", "misalignment_", "time_offset"))}
 
 
 #: The priors at the start that both smoothers get (``--start-prior``): ``"open"`` (default) none on
@@ -845,6 +966,8 @@ def main(argv: list[str] | None = None) -> list[dict]:
                 + (" mounting yaw {:.3f} pitch {:.3f} deg".format(*r["mounting_deg"]) if r.get("mounting_deg")
                    else "")
                 + (" lever ({:.3f}, {:.3f}, {:.3f}) m".format(*r["nhc_lever"]) if r.get("nhc_lever") else "")
+                + "".join(f" {k} {v[0]:.5g}" + (f" +- {v[1]:.2g}" if v[1] is not None else "")
+                          for k, v in (r.get("imu_error") or {}).items() if isinstance(v, list | tuple))
                 + (" along {along:.3f} cross {cross:.3f} first {early:.3f} last 50 s {late:.3f} m".format(
                     **r["track"]) if r.get("track") else ""))
             print(f"{gap:6g} {r['method']:>16} {r.get('rms', float('nan')):9.3f} "
