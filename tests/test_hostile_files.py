@@ -474,6 +474,31 @@ def test_sigterm_swallowed_by_a_library_still_stops_a_serial_batch(work, monkeyp
     assert stray_temporaries(work) == [] and not (out / ".bvpnav.lock").exists()
 
 
+def test_a_serial_batch_leaves_the_callers_sig_dfl_for_ctrl_c_as_it_is(work, monkeypatch):
+    """A caller that set SIGINT to SIG_DFL wants Ctrl-C to end the process at once: the serial
+    loop chains only Python handlers, so it neither replaces SIG_DFL during the recordings
+    (before, its noting handler raised KeyboardInterrupt instead) nor afterwards."""
+    import bvpnav.batch as batch
+
+    recs = many_recordings(work, 2)
+    out = work / "out"
+    real, seen = batch._task, []
+
+    def task(*job):
+        seen.append(signal.getsignal(signal.SIGINT))
+        return real(*job)
+
+    monkeypatch.setattr(batch, "_task", task)
+    before = signal.signal(signal.SIGINT, signal.SIG_DFL)
+    try:
+        df = batch.run_batch(recs, work / "spec.toml", out, scheduler="serial", progress=False)
+        after = signal.getsignal(signal.SIGINT)
+    finally:
+        signal.signal(signal.SIGINT, before)
+    assert df.ok.all() and len(df) == 2
+    assert seen == [signal.SIG_DFL, signal.SIG_DFL] and after is signal.SIG_DFL
+
+
 def test_sigterm_in_a_batch_exits_143_and_cleans_up(work):
     # 96 recordings: the signal must arrive while the batch still runs. With 24 the batch
     # ended about 0.8 s after the first summary appeared, and once in a fresh-clone CI run

@@ -27,6 +27,7 @@ import os
 import signal
 import time
 import traceback
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -619,26 +620,28 @@ def _interrupts_noted():
     raised "Calling read(nbytes) on source failed"): the serial loop then raises the first again
     instead of solving the other recordings and calling the interrupted one a bad file.
 
-    SIGINT is chained unless ignored (SIG_IGN) by whoever started us; SIGTERM only when a Python
-    handler interrupts with an exception (the CLI's raises ``_Terminated``), as its default ends
-    the process, with nothing to swallow.
+    Either signal is chained only when its handler is a Python function (Python's own SIGINT
+    handler, :func:`signal.default_int_handler`, which raises KeyboardInterrupt, or the CLI's
+    SIGTERM handler, which raises ``_Terminated``): the caller's handler still decides what a
+    signal does. Any other handler is left as it is: :data:`signal.SIG_DFL` ends the process
+    and :data:`signal.SIG_IGN` ignores the signal, with nothing raised to swallow, and a
+    handler installed outside Python (:func:`signal.getsignal` gives None) could not be put
+    back afterwards.
     """
     noted: list[BaseException] = []
     with contextlib.ExitStack() as handlers:
         for signum in (signal.SIGINT, signal.SIGTERM):
             old = signal.getsignal(signum)
-            if callable(old) or (signum == signal.SIGINT and old is not signal.SIG_IGN):
+            if callable(old):
                 handlers.enter_context(signal_handled(signum, _noting(old, noted)))
         yield noted
 
 
-def _noting(old, noted: list[BaseException]):
-    """A handler that calls ``old`` and appends to ``noted`` what it raises."""
+def _noting(old: Callable, noted: list[BaseException]):
+    """A handler that calls the Python handler ``old`` and appends to ``noted`` what it raises."""
 
     def handler(signum, frame):
         try:
-            if not callable(old):  # SIGINT's SIG_DFL: Python's own default is to raise KeyboardInterrupt
-                raise KeyboardInterrupt
             old(signum, frame)     # the caller's handler decides; noted only if it interrupts
         except BaseException as exc:
             noted.append(exc)
