@@ -438,10 +438,12 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
         A ``dask.distributed`` scheduler address, connected to (within
         :data:`CONNECT_TIMEOUT` seconds) before any output is written; default an
         in-process LocalCluster of ``workers`` single-threaded worker processes on the
-        loopback interface. ``"serial"`` (any case) solves the recordings one after the
-        other in this process, without Dask (for debugging and tests; an exception that
-        is not an ``Exception``, such as ``KeyboardInterrupt``, stops the run, leaving the
-        finished outputs).
+        loopback interface; its workers ignore SIGINT (Ctrl-C is for this process alone),
+        also one restarted after a death, and while they start SIGINT is ignored here too
+        (they inherit it), so a Ctrl-C before they are up is lost. ``"serial"`` (any
+        case) solves the recordings one after the other in this process, without Dask
+        (for debugging and tests; an exception that is not an ``Exception``, such as
+        ``KeyboardInterrupt``, stops the run, leaving the finished outputs).
     workers : int
         Workers of the local cluster (>= 1).
     solver, lam : optional
@@ -654,9 +656,33 @@ def _noting(old: Callable, noted: list[BaseException]):
 def _workers_ignore_ctrl_c():
     """Start the local workers with SIGINT ignored (inherited through spawn's exec): Ctrl-C in
     a terminal reaches the whole process group, and only this process should handle it (by
-    closing the cluster), not each worker with its own traceback."""
+    closing the cluster), not each worker with its own traceback. A worker that a nanny starts
+    again later does not inherit it: :class:`bvpnav._dask.IgnoreCtrlC` covers those."""
     with signal_handled(signal.SIGINT, signal.SIG_IGN):
         yield
+
+
+def _local_cluster(workers: int):
+    """The batch's LocalCluster of ``workers`` single-threaded worker processes, each ignoring
+    Ctrl-C from its start (also one restarted by its nanny after the first died).
+
+    SIGINT is ignored in this process while the cluster starts (the workers inherit it), so
+    a Ctrl-C before the workers are up is lost: the batch stops at a Ctrl-C given after that.
+    """
+    from dask.distributed import LocalCluster
+
+    from ._dask import IgnoreCtrlC
+
+    # silence_logs: the workers' warnings and errors (tasks cancelled by Ctrl-C, a heartbeat
+    # that finds the scheduler already closed while the cluster shuts down) are not for
+    # users; a task's own failure is a row of the summary, a dead worker too.
+    # dashboard_address: the scheduler's HTTP server on a free loopback port (None still
+    # binds 8787 on every interface, and warns when another cluster has it).
+    # plugins: passed on to each worker, and again to one its nanny starts after a death
+    with _workers_ignore_ctrl_c():
+        return LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
+                            host="127.0.0.1", dashboard_address="127.0.0.1:0",
+                            silence_logs=logging.CRITICAL, plugins=(IgnoreCtrlC(),))
 
 
 def _done(row: dict, k: int, n: int) -> None:
@@ -669,22 +695,12 @@ def _done(row: dict, k: int, n: int) -> None:
 
 def _run_on_dask(jobs, scheduler, workers, progress, client=None) -> list[dict]:
     try:
-        from dask.distributed import Client, LocalCluster, as_completed
+        from dask.distributed import Client, as_completed
     except ImportError:
         raise InputError("batch needs dask.distributed: pip install 'bvpnav[batch]'") from None
     cluster, own = None, client is None
     if scheduler is None:
-        import logging
-
-        # silence_logs: the workers' warnings and errors (tasks cancelled by Ctrl-C, a heartbeat
-        # that finds the scheduler already closed while the cluster shuts down) are not for
-        # users; a task's own failure is a row of the summary, a dead worker too.
-        # dashboard_address: the scheduler's HTTP server on a free loopback port (None still
-        # binds 8787 on every interface, and warns when another cluster has it)
-        with _workers_ignore_ctrl_c():
-            cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
-                                   host="127.0.0.1", dashboard_address="127.0.0.1:0",
-                                   silence_logs=logging.CRITICAL)
+        cluster = _local_cluster(workers)
         client = Client(cluster)
     elif client is None:
         client = _connect(scheduler)
