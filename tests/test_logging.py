@@ -375,3 +375,27 @@ def test_signal_handled_off_the_main_thread_runs_the_block_and_changes_nothing()
     worker.start()
     worker.join()
     assert seen == [(False, before)] and signal.getsignal(signal.SIGTERM) is before
+
+
+def test_signal_handled_off_the_main_thread_leaves_the_blocks_errors_unchained():
+    """Off the main thread :func:`signal.signal` raises ValueError; the block must not run
+    inside that except clause, or every error leaving it carries the ValueError ("signal only
+    works in main thread") as its ``__context__`` in tracebacks."""
+    import signal
+    import sys
+    import threading
+
+    seen = []
+
+    def run():
+        try:
+            with blog.signal_handled(signal.SIGTERM, signal.SIG_IGN) as installed:
+                seen.append((installed, sys.exc_info()[1]))
+                raise RuntimeError("the block failed")
+        except RuntimeError as exc:
+            seen.append((exc.__context__, exc.__cause__))
+
+    worker = threading.Thread(target=run)
+    worker.start()
+    worker.join()
+    assert seen == [(False, None), (None, None)]

@@ -27,6 +27,7 @@ import os
 import signal
 import time
 import traceback
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -437,10 +438,12 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
         A ``dask.distributed`` scheduler address, connected to (within
         :data:`CONNECT_TIMEOUT` seconds) before any output is written; default an
         in-process LocalCluster of ``workers`` single-threaded worker processes on the
-        loopback interface. ``"serial"`` (any case) solves the recordings one after the
-        other in this process, without Dask (for debugging and tests; an exception that
-        is not an ``Exception``, such as ``KeyboardInterrupt``, stops the run, leaving the
-        finished outputs).
+        loopback interface; its workers ignore SIGINT (Ctrl-C is for this process alone),
+        also one restarted after a death, and while they start SIGINT is ignored here too
+        (they inherit it), so a Ctrl-C before they are up is lost. ``"serial"`` (any
+        case) solves the recordings one after the other in this process, without Dask
+        (for debugging and tests; an exception that is not an ``Exception``, such as
+        ``KeyboardInterrupt``, stops the run, leaving the finished outputs).
     workers : int
         Workers of the local cluster (>= 1).
     solver, lam : optional
@@ -619,26 +622,28 @@ def _interrupts_noted():
     raised "Calling read(nbytes) on source failed"): the serial loop then raises the first again
     instead of solving the other recordings and calling the interrupted one a bad file.
 
-    SIGINT is chained unless ignored (SIG_IGN) by whoever started us; SIGTERM only when a Python
-    handler interrupts with an exception (the CLI's raises ``_Terminated``), as its default ends
-    the process, with nothing to swallow.
+    Either signal is chained only when its handler is a Python function (Python's own SIGINT
+    handler, :func:`signal.default_int_handler`, which raises KeyboardInterrupt, or the CLI's
+    SIGTERM handler, which raises ``_Terminated``): the caller's handler still decides what a
+    signal does. Any other handler is left as it is: :data:`signal.SIG_DFL` ends the process
+    and :data:`signal.SIG_IGN` ignores the signal, with nothing raised to swallow, and a
+    handler installed outside Python (:func:`signal.getsignal` gives None) could not be put
+    back afterwards.
     """
     noted: list[BaseException] = []
     with contextlib.ExitStack() as handlers:
         for signum in (signal.SIGINT, signal.SIGTERM):
             old = signal.getsignal(signum)
-            if callable(old) or (signum == signal.SIGINT and old is not signal.SIG_IGN):
+            if callable(old):
                 handlers.enter_context(signal_handled(signum, _noting(old, noted)))
         yield noted
 
 
-def _noting(old, noted: list[BaseException]):
-    """A handler that calls ``old`` and appends to ``noted`` what it raises."""
+def _noting(old: Callable, noted: list[BaseException]):
+    """A handler that calls the Python handler ``old`` and appends to ``noted`` what it raises."""
 
     def handler(signum, frame):
         try:
-            if not callable(old):  # SIGINT's SIG_DFL: Python's own default is to raise KeyboardInterrupt
-                raise KeyboardInterrupt
             old(signum, frame)     # the caller's handler decides; noted only if it interrupts
         except BaseException as exc:
             noted.append(exc)
@@ -651,9 +656,33 @@ def _noting(old, noted: list[BaseException]):
 def _workers_ignore_ctrl_c():
     """Start the local workers with SIGINT ignored (inherited through spawn's exec): Ctrl-C in
     a terminal reaches the whole process group, and only this process should handle it (by
-    closing the cluster), not each worker with its own traceback."""
+    closing the cluster), not each worker with its own traceback. A worker that a nanny starts
+    again later does not inherit it: :class:`bvpnav._dask.IgnoreCtrlC` covers those."""
     with signal_handled(signal.SIGINT, signal.SIG_IGN):
         yield
+
+
+def _local_cluster(workers: int):
+    """The batch's LocalCluster of ``workers`` single-threaded worker processes, each ignoring
+    Ctrl-C from its start (also one restarted by its nanny after the first died).
+
+    SIGINT is ignored in this process while the cluster starts (the workers inherit it), so
+    a Ctrl-C before the workers are up is lost: the batch stops at a Ctrl-C given after that.
+    """
+    from dask.distributed import LocalCluster
+
+    from ._dask import IgnoreCtrlC
+
+    # silence_logs: the workers' warnings and errors (tasks cancelled by Ctrl-C, a heartbeat
+    # that finds the scheduler already closed while the cluster shuts down) are not for
+    # users; a task's own failure is a row of the summary, a dead worker too.
+    # dashboard_address: the scheduler's HTTP server on a free loopback port (None still
+    # binds 8787 on every interface, and warns when another cluster has it).
+    # plugins: passed on to each worker, and again to one its nanny starts after a death
+    with _workers_ignore_ctrl_c():
+        return LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
+                            host="127.0.0.1", dashboard_address="127.0.0.1:0",
+                            silence_logs=logging.CRITICAL, plugins=(IgnoreCtrlC(),))
 
 
 def _done(row: dict, k: int, n: int) -> None:
@@ -666,22 +695,12 @@ def _done(row: dict, k: int, n: int) -> None:
 
 def _run_on_dask(jobs, scheduler, workers, progress, client=None) -> list[dict]:
     try:
-        from dask.distributed import Client, LocalCluster, as_completed
+        from dask.distributed import Client, as_completed
     except ImportError:
         raise InputError("batch needs dask.distributed: pip install 'bvpnav[batch]'") from None
     cluster, own = None, client is None
     if scheduler is None:
-        import logging
-
-        # silence_logs: the workers' warnings and errors (tasks cancelled by Ctrl-C, a heartbeat
-        # that finds the scheduler already closed while the cluster shuts down) are not for
-        # users; a task's own failure is a row of the summary, a dead worker too.
-        # dashboard_address: the scheduler's HTTP server on a free loopback port (None still
-        # binds 8787 on every interface, and warns when another cluster has it)
-        with _workers_ignore_ctrl_c():
-            cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
-                                   host="127.0.0.1", dashboard_address="127.0.0.1:0",
-                                   silence_logs=logging.CRITICAL)
+        cluster = _local_cluster(workers)
         client = Client(cluster)
     elif client is None:
         client = _connect(scheduler)

@@ -283,6 +283,10 @@ def signal_handled(signum: int, handler: Callable | int) -> Iterator[bool]:
     try:
         old = signal.signal(signum, handler)
     except (ValueError, OSError):
+        installed = False
+    else:
+        installed = True
+    if not installed:  # yielded outside the except clause: the block's errors are not chained to it
         yield False
         return
     try:
