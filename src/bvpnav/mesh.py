@@ -350,6 +350,13 @@ class MeshModel(NavModel):
         r"""``Cp @ Gs[a]`` and ``Cq @ Gs[a]`` of every axis ((n - 1, ns) each, s): the node states'
         loads of every element on its two nodes, made once per model (one pass over the
         samples); the condensed rows and the velocities at nodes are made of them."""
+        both = self._state_times(self._element_loads())
+        m = self.N - 1
+        return [b[:m] for b in both], [b[m:] for b in both]
+
+    def _element_loads(self) -> sp.csr_matrix:
+        """``Cp`` stacked on ``Cq`` ((2 (n - 1), N): every element's loads on its two nodes),
+        kept on the formulation's copy of the measured data (the loop's steps share it)."""
         c = self.cond
         raw = getattr(getattr(self.data, "state_point", None), "raw", self.data)
         W = raw.__dict__.get("_mesh_element_loads") if getattr(raw, "state_mesh", None) is not None else None
@@ -357,9 +364,23 @@ class MeshModel(NavModel):
             W = (c, sp.vstack([c.Cp, c.Cq]).tocsr())
             if getattr(raw, "state_mesh", None) is not None:
                 raw.__dict__["_mesh_element_loads"] = W
-        both = self._state_times(W[1])
+        return W[1]
+
+    @functools.cached_property
+    def _load_change(self) -> np.ndarray | None:
+        """The change of the nodes' loads (n, d), m/s^2 s, that the state model makes without the
+        samples at a cheap Gauss-Newton point
+        (:func:`bvpnav.error_models.error_states.cheap_at`: the data's accelerations are then the
+        last full pass's), from its per-element sums of ``Cp`` and ``Cq``; None at any other point."""
+        by_sums = getattr(self.state_model, "condensed_change", None)
+        dL = None if by_sums is None else by_sums(self.data, self._element_loads())
+        if dL is None:
+            return None
         m = self.N - 1
-        return [b[:m] for b in both], [b[m:] for b in both]
+        out = np.zeros((self.N, dL.shape[1]))
+        out[:-1] += dL[:m]
+        out[1:] += dL[m:]
+        return out
 
     def ms_columns(self, axis: int) -> sp.csr_matrix:
         r""":math:`\Phi^T M_f G_s` of one axis (s): the node states' columns condensed (local: a
@@ -379,8 +400,17 @@ class MeshModel(NavModel):
             cache[axis] = self._times_g(self.cond.load, axis)
         return cache[axis]
 
+    def _check_full_point(self, what: str) -> None:
+        """Refuse ``what`` at a cheap Gauss-Newton point (:attr:`_load_change`): its samples'
+        accelerations are the last full pass's, so only the condensed loads are made there."""
+        if self._load_change is not None:
+            raise RuntimeError(f"{what} of a cheap Gauss-Newton point: made at full passes only (its "
+                               "samples' accelerations are the last full pass's)")
+
     def _acc_load(self, axis: int) -> np.ndarray:
-        return self.cond.load @ self.data.acc[:, axis]
+        out = self.cond.load @ self.data.acc[:, axis]
+        change = self._load_change
+        return out if change is None else out + change[:, axis]
 
     def residual_rows(self, axes=None) -> Affine:
         """The node residuals ``w`` (m/s^2) and the whitened element residuals ``u``, axis by
@@ -410,6 +440,7 @@ class MeshModel(NavModel):
         element on its left (module Notes), ``v0``/``v1`` at the ends; inside an element of
         one sample step the linear acceleration integrated from its left node, as
         :func:`bvpnav.fem.velocity_operators`. Other times raise :class:`InputError`."""
+        self._check_full_point("velocities")
         times = self.grid.check_inside(as_times(t, what), what)
         self.grid.check_on_mesh(times, what)
         times = self.grid.snapped(times)
@@ -493,6 +524,7 @@ class MeshModel(NavModel):
         :math:`z = L_e^{-T} u_e`; the positions there solve the fine FEM rows
         :math:`K_f r + M_f a = 0` at those samples with the nodal positions given.
         """
+        self._check_full_point("the trajectory")
         fine, nodes, idx = self.fine, self.grid.nodes, self.cond.interior
         if self.ns:
             sacc = self._state_acceleration(xval[self.s_index])
@@ -608,6 +640,7 @@ class MeshModel(NavModel):
 
     def _inner_velocity(self, i: np.ndarray, ax) -> Affine:
         """:meth:`sample_velocity` at samples ``i`` strictly inside elements (see its Notes)."""
+        self._check_full_point("velocities")
         f, nodes, c = self.fine, self.grid.nodes, self.cond
         m = i.size
         e = c.element[i]

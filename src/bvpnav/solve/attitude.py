@@ -838,16 +838,17 @@ def _anderson(history: list, n: int) -> tuple[np.ndarray, np.ndarray] | None:
 
 def _next_totals(sm, data, s: np.ndarray, iters: list, prev_att: np.ndarray | None, o: dict,
                  history: list) -> tuple[dict, np.ndarray]:
-    """The totals after the step ``s`` (Anderson-mixed with the past steps, :func:`_anderson`,
-    in the linear regime) and this attitude step. ``iters[-1]`` records ``turn``, the cosine
-    between this attitude step and the last, and ``accelerated``, the mixing coefficients;
+    """The totals at the nodes after the step ``s`` (Anderson-mixed with the past steps,
+    :func:`_anderson`, in the linear regime) and this attitude step. ``iters[-1]`` records
+    ``turn``, the cosine between this attitude step and the last, and ``accelerated``, the
+    mixing coefficients;
     ``history`` keeps ``(x, g)`` of the last steps below :data:`ANDERSON_START` (a step above
     it, or one larger than the step before, clears it: a pair from the nonlinear regime or from
     steps that grow, where Gauss-Newton overshoots, would mislead the secant).
 
-    On a coarse mesh (``sm.node_totals``, ``sm.expand``) the unknowns are the nodes' totals:
-    they are the ones mixed, and the samples' totals are made from the point taken (the
-    attitude re-integrated once per step)."""
+    On a coarse mesh (``sm.node_totals``) the unknowns are the nodes' totals: they are the
+    ones mixed, and the samples' totals are made from the point taken when a full pass needs
+    them (``sm.expand``, the attitude re-integrated)."""
     from ..error_models.error_states import _mesh, _totals
 
     att = s[sm.state_index(data, "attitude_error")].ravel()
@@ -857,33 +858,50 @@ def _next_totals(sm, data, s: np.ndarray, iters: list, prev_att: np.ndarray | No
     mesh = _mesh(data)
     plain = sm.node_totals(data, s)     # at the nodes: a coarse mesh's, else every sample
 
-    def expand(tot):
-        return sm.expand(data, tot)
-
     def nodes(tot):
         return tot if mesh is None else {k: v[mesh] for k, v in tot.items()}
     grew = len(iters) > 1 and iters[-1]["step"] >= iters[-2]["step"]
     if not o["loop"] or iters[-1]["step"] >= ANDERSON_START or grew:
         history.clear()   # mixed only with steps of the linear regime, where they shrink
-        return expand(plain), att
+        return plain, att
     kinds = sm.state_kinds(data)
     before = _flat_totals(sm, data, nodes({k: _totals(data, k) for k in kinds}))
     history.append((before, _flat_totals(sm, data, plain)))
     del history[:-(ANDERSON_DEPTH + 1)]
     if iters[-1]["step"] < o["tol"]:
-        return expand(plain), att   # the answer's totals, as Gauss-Newton gives them
+        return plain, att   # the answer's totals, as Gauss-Newton gives them
     m = before.size // (3 * len(kinds))   # samples, or nodes
     mixed = _anderson(history, m)
     if mixed is None:
-        return expand(plain), att
+        return plain, att
     xn, gam = mixed
     x, g = history[-1]
     na = 3 * m   # the attitude block comes first
     reach = float(np.max(np.abs(g[:na] - x[:na])))
     if np.max(np.abs(xn[:na] - x[:na])) > ANDERSON_REACH * max(reach, 1e-300):
-        return expand(plain), att
+        return plain, att
     iters[-1]["accelerated"] = [float(v) for v in gam]
-    return expand({k: xn[na * i:na * (i + 1)].reshape(m, 3) for i, k in enumerate(kinds)}), att
+    return {k: xn[na * i:na * (i + 1)].reshape(m, 3) for i, k in enumerate(kinds)}, att
+
+
+#: Items whose rows read the nodal positions alone (no attitude, velocity or acceleration of the
+#: point): with only these (and :class:`~bvpnav.error_models.ErrorStates` as the whole error
+#: model) a coarse mesh's Gauss-Newton steps may be cheap (:func:`_cheap_eligible`).
+POINT_FREE_ITEMS = ("Position",)
+
+
+def _cheap_eligible(form: Formulation) -> bool:
+    """Whether the node-state loop of ``form`` may take cheap steps
+    (:func:`bvpnav.error_models.error_states.cheap_at`): node states on a coarse mesh, no
+    other error-model parameters, and items of :data:`POINT_FREE_ITEMS` without a lever arm
+    or a delay (their rows do not move with the linearization point)."""
+    from ..error_models.error_states import _mesh
+
+    m = form.model
+    if _mesh(form.data) is None or m.q or not hasattr(m.state_model, "condensed_change"):
+        return False
+    return all(type(it).__name__ in POINT_FREE_ITEMS and getattr(it, "lever", None) is None
+               and getattr(it, "delay", None) is None for it in form.items)
 
 
 def _quick_next(o: dict, k: int, iters: list, lam) -> bool:
@@ -943,6 +961,35 @@ def _start_totals(form: Formulation, o: dict) -> tuple[dict, bool]:
     return totals, True
 
 
+def _banded_step(f: Formulation, cheap: bool, banded: bool, lam, workspace, full: Callable) -> tuple:
+    """``(f, x, cheap)`` of a node-state step: ``x`` of one banded solve of ``f``
+    (:func:`_quick_step`) when the point is ``cheap`` or ``banded``, else None (the stage
+    solves it). A cheap point the banded path does not solve is made again as a full pass
+    (``full()``, a formulation)."""
+    x = _quick_step(f, float(lam), workspace) if cheap or banded else None
+    if cheap and x is None:
+        f, cheap = full(), False
+        x = _quick_step(f, float(lam), workspace) if banded else None
+    return f, x, cheap
+
+
+def _next_point(form: Formulation, o: dict, iters: list, ref, nodes: dict | None, totals: dict,
+                may_cheap: bool, started: bool) -> tuple:
+    """The data of the node-state loop's next point, whether it is cheap, and the totals at every
+    sample (``totals``, made from ``nodes`` for a full pass). A cheap point
+    (:func:`~bvpnav.error_models.error_states.cheap_at`, no pass over the samples) when
+    ``may_cheap`` and what it leaves out is below ``tol`` (:func:`cheap_error`); else a full
+    pass, the data as measured at an unmoved start."""
+    from ..error_models.error_states import cheap_at, cheap_error, states_at
+
+    raw = form.data
+    if may_cheap and ref is not None and nodes is not None and cheap_error(ref, nodes) <= o["tol"]:
+        return cheap_at(ref, nodes), True, totals
+    if nodes is not None:
+        totals = form.model.state_model.expand(raw, nodes)
+    return (raw if not (iters or started) else states_at(raw, totals)), False, totals
+
+
 def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solution:
     r"""Gauss-Newton on the node states of :class:`~bvpnav.error_models.ErrorStates`.
 
@@ -970,6 +1017,18 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     steps are below :data:`ANDERSON_START` and shrinking, each new point mixes the last steps
     (Anderson acceleration, :func:`_anderson`, ``iterations[k]["accelerated"]``); the loop still stops
     at a Gauss-Newton step below ``tol``, and that step's totals are not mixed.
+
+    On a coarse mesh (``segment=``, items of :data:`POINT_FREE_ITEMS`, :func:`_cheap_eligible`)
+    an intermediate step is *cheap* (``iterations[k]["solve"]``: ``"cheap"``) while what it
+    leaves out is below ``tol``
+    (:func:`bvpnav.error_models.error_states.cheap_error`: the second-order term of the
+    gyro-bias change since the last full pass): it is made from the last full pass's
+    per-element sums and their derivatives (:func:`bvpnav.error_models.error_states.cheap_at`,
+    exact in the nodes' attitude and the accelerometer bias), with no pass over the samples,
+    as a factor graph's preintegration is corrected to first order in the bias. The first step
+    after cheap ones is a full pass (one banded solve: its step is what they left out), and so
+    is the answer's, so the answer is the exact fixed point. ``stats["sequential"]`` counts
+    ``full_passes`` and ``cheap_steps``.
     """
     from ..error_models.error_states import states_at
 
@@ -986,6 +1045,8 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     sm = form.model.state_model
     t0 = time.perf_counter()
     totals, started = _start_totals(form, o)
+    nodes = None   # the next point's totals at the nodes (None: ``totals`` is it)
+    ref = None     # the last full pass's data: the reference of the cheap steps
     iters: list[dict] = []
     reason = None
     lam_now, rule, curve = lam, (lam if isinstance(lam, str) else None), None
@@ -999,29 +1060,36 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     if workspace is not None:   # each step's factor is dead before the next: one band's memory
         workspace.band_buffer = np.empty(0)
     quick = bool(o["quick"]) and workspace is not None and _direct_first(opts)
+    cheap_ok = quick and bool(o["cheap"]) and _cheap_eligible(form)
     checked = _checked_first(form, quick, o, lam_now)
+
+    def step_form(data) -> Formulation:
+        out = Formulation(data, form.residual, form.sigma_a if form.sigma_a_given else None,
+                          form.error_model, form.items, grade=None, segment=form.segment)
+        out.grade_report = form.grade_report
+        out._observable = checked
+        return out
+
     with progress(desc="state loop", unit="iter", enabled=o["progress"]) as bar:
         for k in range(int(o["max_iter"])):
-            data = form.data if not (iters or started) else states_at(raw, totals)
+            data, cheap, totals = _next_point(form, o, iters, ref, nodes, totals,
+                                              cheap_ok and _quick_next(o, k, iters, lam_now), started)
             if iters and any(getattr(it, "body_frame", False) for it in form.items):
                 # body-frame items: their attitude term about the last step's velocity
                 m = f.model
                 vel = m.point_velocities(x)
                 data.body_point = LinearizationPoint(velocity=vel, names=(), psi=np.zeros((raw.n, 3, 0)))
-            if iters or started:
-                f = Formulation(data, form.residual, form.sigma_a if form.sigma_a_given else None,
-                                form.error_model, form.items, grade=None, segment=form.segment)
-                f.grade_report = form.grade_report
-                f._observable = checked
-            else:
-                f = form
+            f = step_form(data) if iters or started else form
             # an intermediate step only moves the linearization point: one banded solve, no
             # refinement or verification; the step expected to be the last (and the first
             # when it resolves a lambda rule) goes through the stage
-            x, staged = None, True
-            if quick and _quick_next(o, k, iters, lam_now):
-                x = _quick_step(f, float(lam_now), workspace)
-                staged = x is None
+            # the first full pass after cheap steps checks their point: one banded solve too (its
+            # step is what the cheap steps left out, seldom below tol)
+            after_cheap = bool(iters) and iters[-1]["solve"] == "cheap" and k + 1 < int(o["max_iter"])
+            f, x, cheap = _banded_step(f, cheap, quick and (after_cheap or _quick_next(o, k, iters, lam_now)),
+                                       lam_now, workspace,
+                                       lambda at=nodes: step_form(states_at(raw, sm.expand(raw, at))))
+            staged = x is None
             if staged:
                 kw = {} if workspace is None else {"workspace": workspace}
                 sol = inner(f, lam_now, opts, **kw)
@@ -1031,7 +1099,7 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
                     curve, lam_now = sol.curve, float(sol.lam)
             s = f.model.split(x)["s"]
             step = float(np.max(np.linalg.norm(s[sm.state_index(raw, "attitude_error")], axis=1)))
-            if not staged and step < o["tol"]:
+            if not staged and not cheap and step < o["tol"]:
                 # a quick step that converged: the answer is this step's solve by the stage
                 sol = inner(f, lam_now, opts, workspace=workspace)
                 x, staged = sol.x, True
@@ -1042,19 +1110,21 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
             used = sol.formulation if staged and sol.formulation is not None else f
             j = objective_value(used, x, float(sol.lam if staged else lam_now))
             iters.append({"objective": j, "trial": j, "step": step, "accepted": True, "damping": 0.0,
-                          "solve": "stage" if staged else "banded"})
-            new, prev_att = _next_totals(sm, data, s, iters, prev_att, o, history)
-            log.info("state iteration %d: objective %.9g, step %.3g rad%s", len(iters), j, step,
-                     "" if staged else " (intermediate: one banded solve)")
+                          "solve": "stage" if staged else ("cheap" if cheap else "banded")})
+            if cheap_ok and not cheap:
+                ref = f.data
+            nodes, prev_att = _next_totals(sm, f.data, s, iters, prev_att, o, history)
+            log.info("state iteration %d: objective %.9g, step %.3g rad (%s)", len(iters), j, step,
+                     iters[-1]["solve"])
             bar.update(1)
-            totals = new
             if not o["loop"]:   # one linearized solve about the data as given
                 reason = "loop off"
                 break
-            if step < o["tol"]:
+            if step < o["tol"] and not cheap:   # a cheap step's point is checked by a full pass
                 reason = "step"
                 iters[-1]["converged"] = True
                 break
+    totals = sm.expand(raw, nodes)
     if reason is None:
         _warn(sol, f"node-state loop did not converge in {o['max_iter']} iterations: the last step changed "
                    f"the attitude by {iters[-1]['step']:.3g} rad > tol={o['tol']:g} rad. Raise max_iter "
@@ -1067,7 +1137,9 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
         kind="states", iterations=iters, converged=reason is not None, reason=reason or "max_iter",
         tol=float(o["tol"]), max_iter=int(o["max_iter"]), objective_initial=iters[0]["objective"],
         objective=iters[-1]["objective"], heading_search=[], solves=len(iters),
-        seconds=time.perf_counter() - t0, inner=sol.records.sequential)
+        seconds=time.perf_counter() - t0, inner=sol.records.sequential,
+        full_passes=sum(it["solve"] != "cheap" for it in iters),
+        cheap_steps=sum(it["solve"] == "cheap" for it in iters))
     sol.record()
     if rule is not None:
         sol.lam_rule = f"{rule} (first evaluation)"
@@ -1103,6 +1175,10 @@ def with_attitude(inner: Stage) -> Stage:
         Node states (:class:`~bvpnav.error_models.ErrorStates`) with ``direct``: the
         intermediate Gauss-Newton steps are one banded solve each, without refinement or
         verification (default True); False: every step through the stage.
+    cheap : bool
+        Node states on a coarse mesh with ``quick``: intermediate steps made from the last
+        full pass's per-element sums while the gyro bias stays near its value there (default
+        True; :func:`_state_loop`); False: every step from the samples.
     start : {"data", "course"}
         Node states: the first linearization point. ``"data"`` (default): the data's
         attitude; ``"course"``: a car's attitude from the ``Position`` items (the heading of
