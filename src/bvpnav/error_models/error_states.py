@@ -448,7 +448,7 @@ def cheap_at(ref, nodes: dict):
     the terms left out (the second order of :math:`\Delta b_g`, its product with the
     accelerometer-bias change, and the columns' change with the biases) are measured by
     :func:`cheap_error`. The loop (:func:`bvpnav.solve.attitude._state_loop`) takes a cheap
-    step only while that is below its ``tol`` and always ends with a full pass, so its answer is
+    step only while that is small and always ends with a full pass, so its answer is
     the exact fixed point.
     """
     raw, mesh = _raw(ref), _mesh(ref)
