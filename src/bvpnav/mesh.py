@@ -371,26 +371,18 @@ class MeshModel(NavModel):
         """The change of the nodes' loads (n, d), m/s^2 s, that the state model makes without the
         samples at a cheap Gauss-Newton point
         (:func:`bvpnav.error_models.error_states.cheap_at`: the data's accelerations are then the
-        last full pass's), from its per-element sums of ``Cp`` and ``Cq``; None at any other point."""
+        last full pass's), from its per-element sums of the load rows; None at any other point."""
         by_sums = getattr(self.state_model, "condensed_change", None)
-        dL = None if by_sums is None else by_sums(self.data, self._element_loads())
-        if dL is None:
-            return None
-        m = self.N - 1
-        out = np.zeros((self.N, dL.shape[1]))
-        out[:-1] += dL[:m]
-        out[1:] += dL[m:]
-        return out
+        return None if by_sums is None else by_sums(self.data, self.cond.load)
 
     def ms_columns(self, axis: int) -> sp.csr_matrix:
         r""":math:`\Phi^T M_f G_s` of one axis (s): the node states' columns condensed (local: a
         state of node k reaches rows k - 1 .. k + 1): node k gets ``Cp G_s`` of the element on
-        its right and ``Cq G_s`` of the one on its left."""
+        its right and ``Cq G_s`` of the one on its left (the rows of the condensation's load,
+        made for every axis at once)."""
         cache = self.__dict__.setdefault("_ms_cache", {})
-        if axis not in cache:
-            CpG, CqG = self._element_state_columns
-            z = sp.csr_matrix((1, self.ns))
-            cache[axis] = canonical_csr(sp.vstack([CpG[axis], z]) + sp.vstack([z, CqG[axis]]))
+        if not cache:   # the condensation's load rows, Sp Cp + Sq Cq: every axis at once
+            cache.update(enumerate(self._state_times(self.cond.load)))
         return cache[axis]
 
     def mg_columns(self, axis: int) -> tuple[np.ndarray, np.ndarray]:

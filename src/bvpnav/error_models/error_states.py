@@ -981,26 +981,29 @@ class ErrorStates(ErrorModel):
             e0, a = process_residuals(data)
             Jli = _inverse_jacobian(e0, 1.0)
             Jri = _inverse_jacobian(e0, -1.0)
-            blocks = [(P[1:], Jli), (P[:-1], -Jri)]
+            blocks = [(P[:-1], -Jri), (P[1:], Jli)]
             if "gyro_bias" in kinds:
                 C1 = data.attitude.as_matrix()[1:]
                 Bg = Jli @ C1 @ right_jacobian(a) * h[:, None, None]
-                blocks.append((self.state_index(data, "gyro_bias")[:-1], Bg))
+                blocks.insert(1, (self.state_index(data, "gyro_bias")[:-1], Bg))
         else:
             e0, Jli, Jri, Bp, Bq = _mesh_process(data, mesh, "gyro_bias" in kinds)
-            blocks = [(P[1:], Jli), (P[:-1], -Jri)]
+            blocks = [(P[:-1], -Jri), (P[1:], Jli)]
             if "gyro_bias" in kinds:
                 B = self.state_index(data, "gyro_bias")
-                blocks += [(B[:-1], Bp), (B[1:], Bq)]
+                blocks = [blocks[0], (B[:-1], Bp), blocks[1], (B[1:], Bq)]
         m = n - 1
-        r = np.arange(3 * m).reshape(m, 3)
-        rr, cc, vv = [], [], []
-        for cols, J in blocks:        # row (j, i): sum_c J[j, i, c] * state cols[j, c]
-            rr.append(np.repeat(r, 3, axis=1).ravel())
-            cc.append(np.tile(cols, (1, 3)).reshape(m, 3, 3).ravel())
-            vv.append(J.ravel())
-        res = rows_of("process_attitude", 3 * m, np.concatenate(rr), np.concatenate(cc), np.concatenate(vv),
-                      e0.ravel())
+        # row (j, i): sum_c J[j, i, c] * state cols[j, c]; the blocks in increasing columns (node j's
+        # states, then node j + 1's), so the CSR arrays are written directly, in canonical order
+        w = 3 * len(blocks)
+        cols = np.empty((m, 3, w), dtype=np.int64)
+        vals = np.empty((m, 3, w))
+        for b, (c, J) in enumerate(blocks):
+            cols[:, :, 3 * b:3 * b + 3] = s0 + c[:, None, :]
+            vals[:, :, 3 * b:3 * b + 3] = J
+        A = sp.csr_matrix((vals.ravel(), cols.ravel(), np.arange(0, 3 * m * w + 1, w)),
+                          shape=(3 * m, model.size))
+        res = Affine(A, e0.ravel(), RowLabels([("process_attitude", 3 * m)]))
         out.append(Term(label="process ErrorStates[attitude]", item=None, residual=res, mode="soft",
                         kind="equality", sigma=np.repeat(self.arw * np.sqrt(h), 3), scaled_by_lam=False,
                         units="rad"))
@@ -1010,9 +1013,10 @@ class ErrorStates(ErrorModel):
                 continue
             B = self.state_index(data, kind)
             tot = self.state_total(data, kind)
-            r = np.arange(3 * m)
-            res = rows_of(f"process_{kind}", 3 * m, np.r_[r, r], np.r_[B[1:].ravel(), B[:-1].ravel()],
-                          np.r_[np.ones(3 * m), -np.ones(3 * m)], (tot[1:] - tot[:-1]).ravel())
+            # row (j, c): b_{j+1,c} - b_{j,c}, its two columns in increasing order
+            A = sp.csr_matrix((np.tile([-1.0, 1.0], 3 * m), (s0 + np.stack([B[:-1], B[1:]], axis=-1)).ravel(),
+                               np.arange(0, 6 * m + 1, 2)), shape=(3 * m, model.size))
+            res = Affine(A, (tot[1:] - tot[:-1]).ravel(), RowLabels([(f"process_{kind}", 3 * m)]))
             if q > 0:
                 out.append(Term(label=f"process ErrorStates[{kind}]", item=None, residual=res, mode="soft",
                                 kind="equality", sigma=np.repeat(q * np.sqrt(h), 3), scaled_by_lam=False,
