@@ -259,14 +259,17 @@ class MeshModel(NavModel):
         self.size = d * self.block + self.q + self.ns
         kept = _kept_constants(data, self.cond, self.sigma_fine)
         if kept is not None:   # the loop's steps share the mesh and sigma_a
-            self.K, self.M, self._cp, self._cq, self._slot, self.chol = kept
+            self.K, self.M, self._cp, self._cq, self._slot, self.chol, self._constant = kept
             return
         self.K = fem.stiffness(self.grid)
         W = self.cond.load[:, nodes].tocsr()
         self.M = fem.tridiagonal(W.diagonal(-1), W.diagonal(0), W.diagonal(1))   # the node residuals
         self._prepare_elements()
+        #: Blocks of the rows that depend on the mesh and sigma_a alone, made once and shared by the
+        #: loop's models (read-only): the element residuals' FEM columns, the end velocities' columns
+        self._constant: dict = {}
         _keep_constants(data, self.cond, self.sigma_fine,
-                        (self.K, self.M, self._cp, self._cq, self._slot, self.chol))
+                        (self.K, self.M, self._cp, self._cq, self._slot, self.chol, self._constant))
 
     def _prepare_elements(self) -> None:
         """The load coefficients of the samples inside elements and the Cholesky factors of
@@ -310,6 +313,9 @@ class MeshModel(NavModel):
     def _element_block(self, axis: int) -> sp.csr_matrix:
         r"""The columns of the ``u`` of one axis in its FEM rows, (n, 2 m):
         :math:`\epsilon_e = L_e u_e` at rows p (``L00 u0``) and q (``L10 u0 + L11 u1``)."""
+        kept = self._constant.get(("u", axis))
+        if kept is not None:
+            return kept
         L = self.chol[axis]
         k = np.arange(self.me)
         rows = np.concatenate([self.elements, self.elements + 1, self.elements + 1])
@@ -318,12 +324,16 @@ class MeshModel(NavModel):
                             shape=(self.N, 2 * self.me))
         out.sum_duplicates()
         out.sort_indices()
+        self._constant[("u", axis)] = out
         return out
 
     # ----------------------------------------------------------- FEM rows
     def fem_blocks(self, axis: int) -> dict:
         """As :meth:`NavModel.fem_blocks`, with the element residuals' columns ``u``."""
         blocks = super().fem_blocks(axis)
+        if "vb" not in self._constant:
+            self._constant["vb"] = blocks["vb"]
+        blocks["vb"] = self._constant["vb"]
         if self.me:
             blocks["u"] = self._element_block(axis)
         return blocks
@@ -407,6 +417,12 @@ class MeshModel(NavModel):
     def residual_rows(self, axes=None) -> Affine:
         """The node residuals ``w`` (m/s^2) and the whitened element residuals ``u``, axis by
         axis (:meth:`residual_sigma` gives their standard deviations)."""
+        key = ("residual_rows", None if axes is None else tuple(np.atleast_1d(axes)), self.size)
+        if key not in self._constant:
+            self._constant[key] = self._residual_rows(axes)
+        return self._constant[key]
+
+    def _residual_rows(self, axes=None) -> Affine:
         parts = []
         for a in self.axes_of(axes):
             cols = np.concatenate([self.w_index(a), self.element_index(a)])
