@@ -331,12 +331,16 @@ class MeshModel(NavModel):
     def fem_blocks(self, axis: int) -> dict:
         """As :meth:`NavModel.fem_blocks`, with the element residuals' columns ``u``."""
         blocks = super().fem_blocks(axis)
-        if "vb" not in self._constant:
-            self._constant["vb"] = blocks["vb"]
-        blocks["vb"] = self._constant["vb"]
         if self.me:
             blocks["u"] = self._element_block(axis)
         return blocks
+
+    def _boundary_columns(self) -> sp.csr_matrix:
+        """As :meth:`NavModel._boundary_columns`, made once for the loop's models (kept with the
+        mesh's constants)."""
+        if "vb" not in self._constant:
+            self._constant["vb"] = super()._boundary_columns()
+        return self._constant["vb"]
 
     @functools.cached_property
     def Gs(self) -> list:

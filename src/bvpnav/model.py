@@ -668,12 +668,16 @@ class NavModel:
         """The blocks of one axis' FEM rows by the unknowns they multiply: ``r`` (K, 1/s),
         ``w`` (M, s), ``vb`` (the end velocities' columns) and, with error-model
         parameters, ``l`` (``M G``, dense (N, q), s); :meth:`fem_rows` places them."""
-        blocks = {"r": self.K, "w": self.M, "vb": fem.boundary_columns(self.grid)}
+        blocks = {"r": self.K, "w": self.M, "vb": self._boundary_columns()}
         if self.q:
             blocks["l"] = columns_csr(*self.mg_columns(axis), self.q)
         if self.ns:
             blocks["s"] = self.ms_columns(axis)
         return blocks
+
+    def _boundary_columns(self) -> sp.csr_matrix:
+        """The end velocities' columns of one axis' FEM rows (:func:`bvpnav.fem.boundary_columns`)."""
+        return fem.boundary_columns(self.grid)
 
     def ms_columns(self, axis: int) -> sp.csr_matrix:
         """``M G_s`` of one axis (s): the node states' columns of the FEM rows, sparse and

@@ -427,27 +427,39 @@ def fem_rows_by_diagonals(form: Formulation, workspace: Workspace | None = None)
     if workspace is not None and workspace.fem_diagonals is not None and workspace.model is model:
         return workspace.fem_diagonals
     N, d = model.N, model.d
-    tri, dense, rows, cols, vals = [], [], [], [], []
+    every = [model.fem_blocks(a) for a in range(d)]
+    # the blocks that do not move with the linearization point (K, M, the end velocities' and
+    # element residuals' columns: one object each for the node-state loop's models) placed once
+    fixed = tuple(b[key] for b in every for key in ("r", "w", "vb", "u") if key in b)
+    kept = None if workspace is None else workspace.fem_fixed
+    if kept is not None and kept[1] == model.size and len(kept[0]) == len(fixed) and all(
+            x is y for x, y in zip(kept[0], fixed, strict=True)):
+        tri, rows, cols, vals = (list(v) for v in kept[2])
+    else:
+        tri, rows, cols, vals = [], [], [], []
+        for a, blocks in enumerate(every):
+            for key, c0 in (("r", model.r_index(a)[0]), ("w", model.w_index(a)[0])):
+                A = blocks[key]   # K and M keep the diagonals they were made from (fem.tridiagonal)
+                lo, dg, up = (getattr(A, "_bvpnav_diagonals", None)
+                              or (A.diagonal(-1), A.diagonal(0), A.diagonal(1)))
+                tri.append((a * N, int(c0), lo, dg, up))
+            vb = blocks["vb"].tocoo()
+            rows.append(a * N + vb.row)
+            cols.append(np.asarray(model.v_end_index(a))[vb.col])
+            vals.append(vb.data)
+            if "u" in blocks:   # a coarse mesh's element residuals (bvpnav.mesh): two rows each
+                u = blocks["u"].tocoo()
+                rows.append(a * N + u.row)
+                cols.append(model.element_index(a)[u.col])
+                vals.append(u.data)
+        if workspace is not None:
+            workspace.fem_fixed = (fixed, model.size, (tuple(tri), tuple(rows), tuple(cols), tuple(vals)))
+    dense = []
     for a in range(d):
-        blocks = model.fem_blocks(a)
-        for key, c0 in (("r", model.r_index(a)[0]), ("w", model.w_index(a)[0])):
-            A = blocks[key]   # K and M keep the diagonals they were made from (fem.tridiagonal)
-            lo, dg, up = (getattr(A, "_bvpnav_diagonals", None)
-                          or (A.diagonal(-1), A.diagonal(0), A.diagonal(1)))
-            tri.append((a * N, int(c0), lo, dg, up))
-        vb = blocks["vb"].tocoo()
-        rows.append(a * N + vb.row)
-        cols.append(np.asarray(model.v_end_index(a))[vb.col])
-        vals.append(vb.data)
         if model.q:   # the columns copied: a view would keep all of the axis' M G alive
             mcols, mg = model.mg_columns(a)
             dense += [(a * N, int(model.l_index[k]), mg[:, i].copy()) for i, k in enumerate(mcols)
                       if mg[:, i].any()]
-        if "u" in blocks:   # a coarse mesh's element residuals (bvpnav.mesh): two rows each
-            u = blocks["u"].tocoo()
-            rows.append(a * N + u.row)
-            cols.append(model.element_index(a)[u.col])
-            vals.append(u.data)
         if model.ns:   # the node states' local columns M G_s
             ms = model.ms_columns(a).tocoo()
             rows.append(a * N + ms.row)

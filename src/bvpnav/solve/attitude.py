@@ -984,7 +984,6 @@ def _quick_step(f: Formulation, lam: float, workspace) -> np.ndarray | None:
     squares or the solve fails (the stage then solves it). Band and inequality rows: one
     pass of the active set from the last answer's rows
     (:func:`bvpnav.linalg.active_set.quick_step`)."""
-    from ..linalg.active_set import quick_step
     from ..linalg.banded import NotBanded
     from ..linalg.lsq import banded_factor, least_squares_form
 
@@ -992,8 +991,12 @@ def _quick_step(f: Formulation, lam: float, workspace) -> np.ndarray | None:
         return None
     ls = least_squares_form(f, lam)
     try:
-        x = (quick_step(f, lam, workspace) if ls is None
-             else banded_factor(ls, f, workspace=workspace).solve_x(ls.rhs()))
+        if ls is None:   # band or inequality rows (imported only then: the module is large)
+            from ..linalg.active_set import quick_step
+
+            x = quick_step(f, lam, workspace)
+        else:
+            x = banded_factor(ls, f, workspace=workspace).solve_x(ls.rhs())
         if x is None:
             return None
     except (NotBanded, RuntimeError, np.linalg.LinAlgError, ValueError):
@@ -1045,6 +1048,19 @@ def _next_point(form: Formulation, o: dict, iters: list, ref, nodes: dict | None
     if nodes is not None:
         totals = form.model.state_model.expand(raw, nodes)
     return (raw if not (iters or started) else states_at(raw, totals)), None, totals
+
+
+def _step_form(form: Formulation, data, checked: bool, item_terms: list | None) -> Formulation:
+    """The formulation of a node-state step: ``form`` at the point ``data``, checked when
+    ``checked``; ``item_terms`` (the items' terms of ``form``, or None) stand for its items' when
+    its model has ``form``'s layout."""
+    out = Formulation(data, form.residual, form.sigma_a if form.sigma_a_given else None,
+                      form.error_model, form.items, grade=None, segment=form.segment)
+    out.grade_report = form.grade_report
+    out._observable = checked
+    if item_terms is not None and out.model.size == form.model.size:
+        out._terms = [*item_terms, *out.error_model.terms(out.model)]
+    return out
 
 
 def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solution:
@@ -1121,12 +1137,12 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     cheap_ok = quick and bool(o["cheap"]) and _cheap_eligible(form)
     checked = _checked_first(form, quick, o, lam_now)
 
+    # the items' terms of every step are the first form's when their rows do not read the point
+    # (the items a cheap loop admits, on the same mesh): compiled once
+    item_terms = form.terms()[:len(form.items)] if cheap_ok else None
+
     def step_form(data) -> Formulation:
-        out = Formulation(data, form.residual, form.sigma_a if form.sigma_a_given else None,
-                          form.error_model, form.items, grade=None, segment=form.segment)
-        out.grade_report = form.grade_report
-        out._observable = checked
-        return out
+        return _step_form(form, data, checked, item_terms)
 
     with progress(desc="state loop", unit="iter", enabled=o["progress"]) as bar:
         for k in range(int(o["max_iter"])):
