@@ -335,6 +335,9 @@ class MeshModel(NavModel):
             blocks["u"] = self._element_block(axis)
         return blocks
 
+    def _kept_constants(self) -> dict:
+        return self._constant
+
     def _boundary_columns(self) -> sp.csr_matrix:
         """As :meth:`NavModel._boundary_columns`, made once for the loop's models (kept with the
         mesh's constants)."""

@@ -130,6 +130,12 @@ class StatePoint:
     cheap: Any = None
 
 
+def _csr(data: np.ndarray, indices: np.ndarray, indptr: np.ndarray, shape: tuple) -> sp.csr_matrix:
+    """A CSR matrix on its arrays (canonical ones: sorted, no duplicates; the loop's steps may
+    share the index arrays, which no reader changes in place)."""
+    return sp.csr_matrix((data, indices, indptr), shape=shape)
+
+
 def _raw(data):
     p = getattr(data, "state_point", None)
     return data if p is None else p.raw
@@ -970,10 +976,13 @@ class ErrorStates(ErrorModel):
         kinds = self.state_kinds(data)
         out = []
 
-        def rows_of(prefix, count, r, c, v, const) -> Affine:
-            A = sp.csr_matrix((v, (r, s0 + c)), shape=(count, model.size))
-            A.sum_duplicates()
-            return Affine(A, const, RowLabels([(prefix, count)]))
+        # the rows' patterns (and the walks' matrices) depend on the layout alone: made once for
+        # the loop's steps, kept on the measured data
+        fixed = _raw(data).__dict__.setdefault("_state_rows", {})
+        if fixed.get("key") != (id(mesh), n, s0, model.size, tuple(kinds)):
+            fixed.clear()
+            fixed["key"] = (id(mesh), n, s0, model.size, tuple(kinds))
+            fixed["mesh"] = mesh   # keeps the mesh alive while its id is the key
 
         # the attitude process rows
         P = self.state_index(data, "attitude_error")
@@ -996,13 +1005,16 @@ class ErrorStates(ErrorModel):
         # row (j, i): sum_c J[j, i, c] * state cols[j, c]; the blocks in increasing columns (node j's
         # states, then node j + 1's), so the CSR arrays are written directly, in canonical order
         w = 3 * len(blocks)
-        cols = np.empty((m, 3, w), dtype=np.int64)
         vals = np.empty((m, 3, w))
-        for b, (c, J) in enumerate(blocks):
-            cols[:, :, 3 * b:3 * b + 3] = s0 + c[:, None, :]
+        for b, (_, J) in enumerate(blocks):
             vals[:, :, 3 * b:3 * b + 3] = J
-        A = sp.csr_matrix((vals.ravel(), cols.ravel(), np.arange(0, 3 * m * w + 1, w)),
-                          shape=(3 * m, model.size))
+        if "process" not in fixed:
+            cols = np.empty((m, 3, w), dtype=np.int64)
+            for b, (c, _) in enumerate(blocks):
+                cols[:, :, 3 * b:3 * b + 3] = s0 + c[:, None, :]
+            fixed["process"] = (cols.ravel(), np.arange(0, 3 * m * w + 1, w))
+        cols, ptr = fixed["process"]
+        A = _csr(vals.ravel(), cols, ptr, (3 * m, model.size))
         res = Affine(A, e0.ravel(), RowLabels([("process_attitude", 3 * m)]))
         out.append(Term(label="process ErrorStates[attitude]", item=None, residual=res, mode="soft",
                         kind="equality", sigma=np.repeat(self.arw * np.sqrt(h), 3), scaled_by_lam=False,
@@ -1011,11 +1023,13 @@ class ErrorStates(ErrorModel):
         for kind, q in (("gyro_bias", self.gyro_drift), ("acc_bias", self.acc_drift)):
             if kind not in kinds:
                 continue
-            B = self.state_index(data, kind)
             tot = self.state_total(data, kind)
-            # row (j, c): b_{j+1,c} - b_{j,c}, its two columns in increasing order
-            A = sp.csr_matrix((np.tile([-1.0, 1.0], 3 * m), (s0 + np.stack([B[:-1], B[1:]], axis=-1)).ravel(),
-                               np.arange(0, 6 * m + 1, 2)), shape=(3 * m, model.size))
+            if kind not in fixed:   # row (j, c): b_{j+1,c} - b_{j,c}, its two columns in increasing order
+                B = self.state_index(data, kind)
+                cols = (s0 + np.stack([B[:-1], B[1:]], axis=-1)).ravel()
+                fixed[kind] = _csr(np.tile([-1.0, 1.0], 3 * m), cols, np.arange(0, 6 * m + 1, 2),
+                                   (3 * m, model.size))
+            A = fixed[kind]
             res = Affine(A, (tot[1:] - tot[:-1]).ravel(), RowLabels([(f"process_{kind}", 3 * m)]))
             if q > 0:
                 out.append(Term(label=f"process ErrorStates[{kind}]", item=None, residual=res, mode="soft",
@@ -1032,10 +1046,12 @@ class ErrorStates(ErrorModel):
             cols = self.state_index(data, kind)[0]
             tot = self.state_total(data, kind)[0]
             J = _inverse_jacobian(tot, 1.0) if kind == "attitude_error" else np.eye(3)
-            res = rows_of(f"prior_{kind}", 3, np.repeat(np.arange(3), 3), np.tile(cols, 3), J.ravel(), tot)
             keep = np.flatnonzero(np.isfinite(sig))
-            if keep.size:
-                out.append(Term(label=f"prior ErrorStates[{kind}]", item=None, residual=res.rows(keep),
+            if keep.size:   # the kept rows of J on the first node's three states (increasing columns)
+                k = keep.size
+                A = _csr(J[keep].ravel(), np.tile(s0 + cols, k), np.arange(0, 3 * k + 1, 3), (k, model.size))
+                res = Affine(A, tot[keep], tuple(f"prior_{kind}[{i}]" for i in keep))
+                out.append(Term(label=f"prior ErrorStates[{kind}]", item=None, residual=res,
                                 mode="soft", kind="equality", sigma=np.asarray(sig, dtype=float)[keep],
                                 scaled_by_lam=False, units=KINDS[kind]))
         return out
