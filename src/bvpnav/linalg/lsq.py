@@ -36,7 +36,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..formulation import Formulation
-from ..model import Affine
+from ..model import Affine, rows_with_tail
 from ..sparse import abs_max, canonical, row_scaled
 from .banded import (
     AugmentedOperator,
@@ -435,6 +435,13 @@ def fem_rows_by_diagonals(form: Formulation, workspace: Workspace | None = None)
     if kept is not None and kept[1] == model.size and len(kept[0]) == len(fixed) and all(
             x is y for x, y in zip(kept[0], fixed, strict=True)):
         tri, rows, cols, vals = (list(v) for v in kept[2])
+        if not model.q and model.ns and kept[3] is not None:
+            # the other entries: the fixed ones' rows with the node states' columns after them
+            # (the same matrix as through coordinates, without their sort)
+            extra = rows_with_tail(kept[3], [model.ms_columns(a) for a in range(d)], int(model.s_index[0]))
+            out = DiagonalRows(N * d, list(tri), [], extra)
+            workspace.fem_diagonals, workspace.model = out, model
+            return out
     else:
         tri, rows, cols, vals = [], [], [], []
         for a, blocks in enumerate(every):
@@ -453,7 +460,10 @@ def fem_rows_by_diagonals(form: Formulation, workspace: Workspace | None = None)
                 cols.append(model.element_index(a)[u.col])
                 vals.append(u.data)
         if workspace is not None:
-            workspace.fem_fixed = (fixed, model.size, (tuple(tri), tuple(rows), tuple(cols), tuple(vals)))
+            head = (sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                                  shape=(N * d, model.size)) if model.ns else None)
+            placed = (tuple(tri), tuple(rows), tuple(cols), tuple(vals))
+            workspace.fem_fixed = (fixed, model.size, placed, head)
     dense = []
     for a in range(d):
         if model.q:   # the columns copied: a view would keep all of the axis' M G alive

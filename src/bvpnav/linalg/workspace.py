@@ -36,8 +36,9 @@ class Workspace:
     fem_fixed : tuple or None
         The FEM rows' blocks that do not move with a Gauss-Newton point (the stiffness, the
         mass, the end velocities' and element residuals' columns: objects the node-state loop's
-        models share) and their placement by :func:`bvpnav.linalg.lsq.fem_rows_by_diagonals`,
-        reused while the blocks are the same objects.
+        models share), their placement by :func:`bvpnav.linalg.lsq.fem_rows_by_diagonals` and
+        (node states) the entries off the diagonals as CSR rows to which the states' columns are
+        appended, reused while the blocks are the same objects.
     band_plan : BandPlan or None
         The symbolic analysis of the banded factorization (:func:`bvpnav.linalg.lsq.banded_plan`),
         for the sparsity pattern :attr:`band_pattern`.
