@@ -828,9 +828,16 @@ class ErrorStates(ErrorModel):
             Y2 = _gyro_sums(el, mesh)
             Cp = C.reshape(n, 9).T[:, at].reshape(3, 3, n)
             f0, f1, f2 = np.ascontiguousarray(fn.T)
-            T = np.stack([f1 * Cp[2] - f2 * Cp[1], f2 * Cp[0] - f0 * Cp[2], f0 * Cp[1] - f1 * Cp[0]])
-            X = np.einsum("rjn,bjcn->brcn", T, Y2.reshape(2, 3, 3, n))   # [f_n x] C_p Y_i
-            Yg = (P @ X.reshape(18, n).T).reshape(-1, 2, 3, 3)
+            T = (f1 * Cp[2] - f2 * Cp[1], f2 * Cp[0] - f0 * Cp[2], f0 * Cp[1] - f1 * Cp[0])
+            # [f_n x] C_p Y_i (row r: sum_j T[r, j] Y[j]), written sample-major for the sums
+            Y4 = Y2.reshape(2, 3, 3, n)
+            X = np.empty((n, 2, 3, 3))
+            for r in range(3):
+                Xr = T[r][0] * Y4[:, 0]
+                Xr += T[r][1] * Y4[:, 1]
+                Xr += T[r][2] * Y4[:, 2]
+                X[:, :, r, :] = Xr.transpose(2, 0, 1)
+            Yg = (P @ X.reshape(n, 18)).reshape(-1, 2, 3, 3)
             Y[("gyro_bias", 0)], Y[("gyro_bias", 1)] = Yg[:, 0], Yg[:, 1]
         # the sums and their derivatives, for the cheap steps that follow (cheap_at)
         data.__dict__.setdefault("_cheap_sums", {})[id(W)] = (W, L, Y)
