@@ -986,6 +986,7 @@ class ErrorStates(ErrorModel):
         # the rows' patterns (and the walks' matrices) depend on the layout alone: made once for
         # the loop's steps, kept on the measured data
         fixed = _raw(data).__dict__.setdefault("_state_rows", {})
+        itype = np.int32 if model.size < 2**31 and 6 * n * len(kinds) ** 2 < 2**31 else np.int64
         if fixed.get("key") != (id(mesh), n, s0, model.size, tuple(kinds)):
             fixed.clear()
             fixed["key"] = (id(mesh), n, s0, model.size, tuple(kinds))
@@ -1019,7 +1020,7 @@ class ErrorStates(ErrorModel):
             cols = np.empty((m, 3, w), dtype=np.int64)
             for b, (c, _) in enumerate(blocks):
                 cols[:, :, 3 * b:3 * b + 3] = s0 + c[:, None, :]
-            fixed["process"] = (cols.ravel(), np.arange(0, 3 * m * w + 1, w))
+            fixed["process"] = (cols.ravel().astype(itype), np.arange(0, 3 * m * w + 1, w, dtype=itype))
         cols, ptr = fixed["process"]
         A = _csr(vals.ravel(), cols, ptr, (3 * m, model.size))
         res = Affine(A, e0.ravel(), RowLabels([("process_attitude", 3 * m)]))
@@ -1034,8 +1035,8 @@ class ErrorStates(ErrorModel):
             if kind not in fixed:   # row (j, c): b_{j+1,c} - b_{j,c}, its two columns in increasing order
                 B = self.state_index(data, kind)
                 cols = (s0 + np.stack([B[:-1], B[1:]], axis=-1)).ravel()
-                fixed[kind] = _csr(np.tile([-1.0, 1.0], 3 * m), cols, np.arange(0, 6 * m + 1, 2),
-                                   (3 * m, model.size))
+                fixed[kind] = _csr(np.tile([-1.0, 1.0], 3 * m), cols.astype(itype),
+                                   np.arange(0, 6 * m + 1, 2, dtype=itype), (3 * m, model.size))
             A = fixed[kind]
             res = Affine(A, (tot[1:] - tot[:-1]).ravel(), RowLabels([(f"process_{kind}", 3 * m)]))
             if q > 0:

@@ -133,6 +133,26 @@ def non_least_squares_term(form: Formulation):
     return None
 
 
+def _weighted(res: Affine, k) -> Affine:
+    """``res * k``; the weighted matrix kept with ``res.A`` (up to :data:`WEIGHTED_KEPT`
+    entries) for the next call with the same ``k`` (the node-state loop's steps share the rows
+    that do not move with the point: the items', the bias walks')."""
+    A = res.A
+    k = np.broadcast_to(np.asarray(k, dtype=float), (res.m,))
+    kept = getattr(A, "_bvpnav_weighted", None)
+    if kept is not None and np.array_equal(kept[0], k):
+        return Affine(kept[1], res.c * k, res.labels)
+    out = res * k
+    if sp.issparse(A) and A.nnz <= WEIGHTED_KEPT:
+        A._bvpnav_weighted = (np.array(k), out.A)
+    return out
+
+
+#: Largest stored entries of a term's matrix whose weighted copy :func:`_weighted` keeps (a big
+#: problem's rows are not kept twice).
+WEIGHTED_KEPT = 1 << 17
+
+
 def least_squares_form(form: Formulation, lam: float, surrogate: bool = False) -> LeastSquaresForm | None:
     r"""The problem as equality-constrained least squares, or None if it is not one.
 
@@ -173,7 +193,7 @@ def least_squares_form(form: Formulation, lam: float, surrogate: bool = False) -
             blocks.append((term.label, slice(start, start + term.residual.m)))
             start += term.residual.m
         elif role == "D":
-            obj.append(term.residual * (np.sqrt(term.weight(lam)) / term.sigma))
+            obj.append(_weighted(term.residual, np.sqrt(term.weight(lam)) / term.sigma))
             scaled.append(np.full(term.residual.m, bool(term.scaled_by_lam)))
     # canonical once (sorted, no duplicates or explicit zeros): every factorization and every
     # lambda of a sweep then shares these arrays instead of cleaning a copy of its own. Each
