@@ -18,13 +18,17 @@ as a :class:`bvpnav.log.BvpnavWarning` and records the numbers in
 2. **Plausibility** of every error-model estimate in ``solution.error_params``, found
    through the error model's components (the model class decides the check, the
    component's own parameter names select the values): accelerometer bias, gravity,
-   scale factors, misalignments, the attitude correction, gyro bias and gyro scale.
+   scale factors, misalignments, the attitude correction, gyro bias and gyro scale,
+   odometer scale; and the installation and timing (found by the role the items look the
+   component up by): the fixes' delay, the GNSS lever arm, the no-slip point and the
+   mounting, each against its physical limit and, with a stated prior, against that.
 
 Every threshold is a module constant, documented where it is defined.
 """
 
 from __future__ import annotations
 
+import math
 import re
 from typing import Any
 
@@ -597,11 +601,211 @@ def _odometer_checks(sol: Solution, groups) -> list[str]:
     return msgs
 
 
+# ------------------------------------------------- installation and timing (issue 39)
+#: Fix delay limits, s: a ``time_offset`` (:class:`~bvpnav.error_models.TimeOffset`, the fixes
+#: of ``Position/Velocity(delay="estimated")``; positive: the fixes stamped late) above
+#: +0.5 or below -0.1. A positive delay is the receiver's latency chain: the position
+#: solution (tens of ms), its output (a GGA sentence over a 9600 baud serial line: 80 ms; a
+#: whole NMEA burst up to a few hundred ms when it is stamped on arrival at its end) and the
+#: logger's own buffering (USB, the operating system: tens of ms); the sum stays below 0.5 s.
+#: A negative delay says that the IMU's samples are stamped late instead: the IMU's own
+#: latency (its digital low-pass filter's group delay, a few ms; the transport and
+#: batching of its samples, tens of ms), below 0.1 s. Beyond either the fixes and the
+#: samples are not on one clock (GPS time against UTC differs by 18 s, time zones, two
+#: devices' clocks, a fix assigned to the wrong epoch), or the delay absorbs an along-track
+#: error of the rest of the model. The limits count from zero and from the stated prior
+#: (``TimeOffset(prior=...)``: a known clock offset): only beyond both is it warned.
+TIME_OFFSET_LATE_LIMIT = 0.5
+
+#: See :data:`TIME_OFFSET_LATE_LIMIT`: the negative side (the IMU's stamps late), s.
+TIME_OFFSET_EARLY_LIMIT = 0.1
+
+#: GNSS lever-arm limit, m: the antenna more than 5 m from the IMU
+#: (:class:`~bvpnav.error_models.LeverArm`, the length of ``(lever_x, lever_y, lever_z)``).
+#: A car is about 4.5 x 1.8 x 1.5 m, so an antenna on it and an IMU in it are at most its
+#: diagonal, 5 m, apart; on a walker both are within 2 m. A larger lever arm puts the antenna
+#: off the vehicle: it absorbs something else (``C(t) l`` turns with the attitude, so a
+#: heading error does it). On a bus, a ship or an aircraft state the measured lever arm as
+#: the prior (``LeverArm(prior=..., sigma=...)``): the limit is then counted from it too,
+#: and only beyond 5 m from both zero and the prior is it warned.
+LEVER_ARM_LIMIT = 5.0
+
+#: No-slip point limit, m: the point where the vehicle does not slide sideways more than
+#: 5 m from the IMU (:class:`~bvpnav.error_models.NhcLever`, the length of
+#: ``(nhc_lever_x, nhc_lever_y, nhc_lever_z)``). The point is the middle of a car's rear axle,
+#: and an IMU anywhere in a 4.5 m car is within 5 m of it; a point farther away is off the
+#: car, so the rows absorb something else. Counted from zero and from the stated prior, as
+#: :data:`LEVER_ARM_LIMIT`.
+NHC_LEVER_LIMIT = 5.0
+
+#: Mounting angle limit, rad: a yaw or pitch of the vehicle's forward axis in the IMU's body
+#: frame (:class:`~bvpnav.error_models.Mounting`) beyond 10 degrees (0.175 rad). An IMU
+#: mounted by eye is aligned with the car to a few degrees (the suggested prior sigma is
+#: 0.02 rad): 10 degrees turn a 30 cm box's far end 5 cm sideways, which the eye sees. A
+#: larger angle is the rows absorbing something else, or body axes that are not the
+#: vehicle's (x forward, y left, z up). Counted from zero and from the stated prior (a unit
+#: set at a known angle on purpose), as :data:`LEVER_ARM_LIMIT`.
+MOUNTING_LIMIT = float(np.radians(10.0))
+
+#: An installation or timing estimate (time offset, lever arm, no-slip point, mounting) more
+#: than this many of its prior sigmas from its prior mean is warned (with ``sigma=`` given),
+#: whatever its size. With the truth drawn from the stated prior, the estimate's distance
+#: from the prior mean has at most the prior sigma (the prior's variance minus the
+#: posterior's), so 3 of them are exceeded with probability below 0.3 %: beyond, the data
+#: contradict the stated prior (the prior is wrong, or the estimate absorbs something else),
+#: as :data:`GYRO_PRIOR_SIGMAS` judges a gyro bias against its prior.
+INSTALLATION_PRIOR_SIGMAS = 3.0
+
+__all__ += ["ODOMETER_SCALE_LIMIT", "TIME_OFFSET_LATE_LIMIT", "TIME_OFFSET_EARLY_LIMIT", "LEVER_ARM_LIMIT",
+            "NHC_LEVER_LIMIT", "MOUNTING_LIMIT", "INSTALLATION_PRIOR_SIGMAS"]
+
+_WHY_DELAY = ("a delay moves each fix along its track, so it absorbs any along-track error the rest of "
+              "the model leaves (a speed or scale error, a heading error in the turns, few fixes across a "
+              "gap), or the fixes and the IMU are not on one clock (GPS time against UTC: 18 s, time zones, "
+              "two devices' clocks); put both on one clock, give the receiver's known latency "
+              "(Position(delay=...)) or a prior from its datasheet (TimeOffset(prior=..., sigma=0.05)), or "
+              "drop TimeOffset")
+_WHY_LEVER = ("the lever arm absorbs something else (C(t) l turns with the attitude, so a heading or "
+              "attitude error puts it there; fixes with an offset of their own; too few turns to see it); "
+              "measure it with a tape and give it as the prior (LeverArm(prior=..., sigma=0.05)); on a "
+              "larger vehicle give its measured lever arm as the prior")
+_WHY_NHC = ("the no-slip point (the middle of a car's rear axle) must be on the vehicle, so the "
+            "NonHolonomic/ForwardMotion rows absorb something else (the tyres' lateral slip in hard turns: "
+            "give the rows a larger sigma or a band; a mounting yaw: Mounting; a heading or gyro error); "
+            "give NhcLever a prior from the car's drawing (NhcLever(prior=..., sigma=0.5))")
+_WHY_MOUNT = ("the boresight absorbs a lateral or vertical velocity the NonHolonomic rows cannot hold "
+              "otherwise (slip in the turns, the constraint at the wrong point: NhcLever; an attitude or "
+              "heading error), or the body axes are not the vehicle's (x forward, y left, z up); if the "
+              "unit sits at a large angle on purpose, rotate the data into the vehicle's axes or give the "
+              "known angles as Mounting's prior")
+
+#: The installation and timing models, by the role the items look them up by (``provides``):
+#: (what, unit, the limit of a vector's length (None: each value has its own), the point the
+#: vector places and on what, likely causes and fix).
+_INSTALLED = {"time_offset": ("the fixes' delay", "s", None, "", _WHY_DELAY),
+              "lever_arm": ("the GNSS lever arm", "m", "LEVER_ARM_LIMIT", "the antenna; a car or a walker",
+                            _WHY_LEVER),
+              "nhc_lever": ("the no-slip point", "m", "NHC_LEVER_LIMIT", "the no-slip point; a car",
+                            _WHY_NHC),
+              "mounting": ("the mounting", "rad", None, "", _WHY_MOUNT)}
+
+
+def _installed(sol: Solution, form: Formulation) -> list[tuple[str, Any, list[str], list[str]]]:
+    """The installation and timing components: ``(role, component, its estimated names, all
+    its names)``, the names the conditioning check calls degenerate left out."""
+    em = getattr(form, "error_model", None)
+    if em is None or not len(sol.error_params):
+        return []
+    cond = (getattr(sol, "stats", None) or {}).get("conditioning") or {}
+    named = {n for dg in cond.get("degenerate_axes", []) for n in dg.get("parameters", [])}
+    out = []
+    for c in getattr(em, "components", (em,)):
+        role = getattr(type(c), "provides", None)
+        if role not in _INSTALLED:
+            continue
+        try:
+            full = list(c.names(form.data))
+        except Exception:  # noqa: BLE001 - a component that cannot name its parameters is skipped
+            continue
+        names = [n for n in full if n in sol.error_params.index and n not in named]
+        if names:
+            out.append((role, c, names, full))
+    return out
+
+
+def _per(value, full: list[str], names: list[str], default: float) -> np.ndarray:
+    """A component's scalar-or-vector ``sigma``/``prior`` at ``names`` (``default`` when None)."""
+    if value is None:
+        return np.full(len(names), default)
+    v = np.asarray(value, dtype=float).ravel()
+    v = np.full(len(full), float(v[0])) if v.size == 1 else v
+    return np.array([v[full.index(n)] for n in names])
+
+
+def _as_given(value) -> str:
+    """A scalar-or-vector ``sigma``/``prior`` as the user gave it (None: the default 0)."""
+    v = np.zeros(1) if value is None else np.asarray(value, dtype=float).ravel()
+    return f"{v[0]:g}" if v.size == 1 else "(" + ", ".join(f"{x:g}" for x in v) + ")"
+
+
+def _show(role: str, n: str, v: float) -> str:
+    if role == "time_offset":
+        return f"{n} = {_fmt(v, 's')} ({1e3 * v:+.4g} ms)"
+    if role == "mounting":
+        return f"{n} = {_fmt(v, 'rad')} ({np.degrees(v):+.3g} deg)"
+    return f"{n} = {_fmt(v, 'm')}"
+
+
+def _installation_checks(sol: Solution, form: Formulation) -> list[str]:
+    """The fixes' delay, the GNSS lever arm, the no-slip point and the mounting: each against
+    its physical limit (:data:`TIME_OFFSET_LATE_LIMIT`, :data:`TIME_OFFSET_EARLY_LIMIT`,
+    :data:`LEVER_ARM_LIMIT`, :data:`NHC_LEVER_LIMIT`, :data:`MOUNTING_LIMIT`, counted from
+    zero and from the stated prior) and, with a stated ``sigma``, against its prior
+    (:data:`INSTALLATION_PRIOR_SIGMAS`)."""
+    msgs: list[str] = []
+    for role, c, names, full in _installed(sol, form):
+        what, unit, vec_limit, where, why = _INSTALLED[role]
+        v = _values(sol, names)
+        ok = np.isfinite(v)
+        if not ok.any():
+            continue
+        names, v = [n for n, k in zip(names, ok, strict=True) if k], v[ok]
+        p = _per(getattr(c, "prior", None), full, names, 0.0)
+        sig = getattr(c, "sigma", None)
+        s = None if sig is None else _per(sig, full, names, np.inf)
+        z = None if s is None else np.abs(v - p) / s
+        prior_txt = "" if s is None else (
+            f"; {'up to ' if len(names) > 1 else ''}{float(np.max(z)):.3g} prior sigmas from its prior "
+            f"({type(c).__name__}(sigma="
+            f"{_as_given(sig)}), prior {_as_given(getattr(c, 'prior', None))} {unit})")
+        shown = ", ".join(_show(role, n, x) for n, x in zip(names, v, strict=True))
+        absurd = None
+        if role == "time_offset":
+            lo, hi = -TIME_OFFSET_EARLY_LIMIT, TIME_OFFSET_LATE_LIMIT
+            bad = [(n, x) for n, x, q in zip(names, v, p, strict=True)
+                   if not (lo <= x <= hi or lo <= x - q <= hi)]
+            if bad:
+                side = ("the IMU's samples stamped that much late, beyond any IMU's own latency"
+                        if bad[0][1] < 0 else "a latency beyond any receiver's output chain")
+                absurd = (f"{', '.join(_show(role, n, x) for n, x in bad)} is beyond the limits "
+                          f"{lo:+g}..{hi:+g} s of {what} ({side})")
+        elif role == "mounting":
+            bad = [(n, x) for n, x, q in zip(names, v, p, strict=True)
+                   if abs(x) > MOUNTING_LIMIT and abs(x - q) > MOUNTING_LIMIT]
+            if bad:
+                absurd = (f"{', '.join(_show(role, n, x) for n, x in bad)} is beyond the limit "
+                          f"{MOUNTING_LIMIT:.3g} rad ({np.degrees(MOUNTING_LIMIT):.3g} deg) of an IMU "
+                          "mounted by eye")
+        else:
+            limit = float(globals()[vec_limit])
+            length, off = float(np.linalg.norm(v)), float(np.linalg.norm(v - p))
+            if length > limit and off > limit:
+                point, vehicle = where.split("; ")
+                absurd = (f"{shown} put {point} {length:.3g} m from the IMU, beyond the limit {limit:g} m "
+                          f"of {vehicle}"
+                          + (f" (and {off:.3g} m from the stated prior)" if np.any(p != 0) else ""))
+        if absurd is not None:
+            msgs.append(f"implausible estimate: {absurd}{prior_txt}: {why}")
+        elif z is not None and np.max(z) > INSTALLATION_PRIOR_SIGMAS:
+            far = [(n, x, q, sd) for n, x, q, sd, zz in zip(names, v, p, s, z, strict=True)
+                   if zz > INSTALLATION_PRIOR_SIGMAS]
+            txt = ", ".join(f"{_show(role, n, x)} is {abs(x - q) / sd:.3g} prior sigmas "
+                            f"({sd:g} {unit}) from its prior {q:g} {unit}" for n, x, q, sd in far)
+            msgs.append(
+                f"implausible estimate: {what}: {txt}, beyond {INSTALLATION_PRIOR_SIGMAS:g}: the data "
+                f"contradict the stated prior (with the truth drawn from it, the estimate is within "
+                f"{INSTALLATION_PRIOR_SIGMAS:g} prior sigmas of it but for "
+                f"{100 * math.erfc(INSTALLATION_PRIOR_SIGMAS / math.sqrt(2)):.2g} % of cases): the prior is "
+                f"too tight or wrong; otherwise: {why}")
+    return msgs
+
+
 def _plausibility(sol: Solution, form: Formulation, data) -> list[str]:
     groups = _groups(sol, form)
     items = getattr(form, "items", ())
     return (_acc_checks(sol, form, groups) + _attitude_checks(sol, groups)
-            + _gyro_checks(sol, groups, data, items) + _odometer_checks(sol, groups))
+            + _gyro_checks(sol, groups, data, items) + _odometer_checks(sol, groups)
+            + _installation_checks(sol, form))
 
 
 # ---------------------------------------------------------------------- API
@@ -647,7 +851,14 @@ def assess(sol: Solution, form: Formulation, data=None) -> dict[str, Any]:
     :data:`GRAVITY_TILT_LIMIT` rad, scale :data:`SCALE_LIMIT`, misalignment
     :data:`MISALIGNMENT_LIMIT` rad, initial tilt :data:`TILT_LIMIT` rad, gyro bias
     :data:`GYRO_BIAS_LIMIT` rad/s and against the mean measured rate
-    (:data:`GYRO_MEAN_FRACTION`), gyro scale :data:`GYRO_SCALE_LIMIT`).
+    (:data:`GYRO_MEAN_FRACTION`), gyro scale :data:`GYRO_SCALE_LIMIT`, odometer scale
+    :data:`ODOMETER_SCALE_LIMIT`). Installation and timing: the fixes' delay
+    :math:`\delta` below minus :data:`TIME_OFFSET_EARLY_LIMIT` s or above
+    :data:`TIME_OFFSET_LATE_LIMIT` s, the lever arm's and the no-slip point's
+    length beyond :data:`LEVER_ARM_LIMIT` and :data:`NHC_LEVER_LIMIT` m, a mounting angle
+    beyond :data:`MOUNTING_LIMIT` rad (each only when beyond it from the stated prior too);
+    and any of them with a stated prior :math:`(p, \sigma)` when
+    :math:`|\hat x - p| > k\sigma`, :math:`k =` :data:`INSTALLATION_PRIOR_SIGMAS`.
     """
     data = form.data if data is None else data
     out: dict[str, Any] = {}
