@@ -182,7 +182,16 @@ def _discover() -> None:
 def discover_backends() -> None:
     """Import this folder's back-end modules now (each registers its back ends; cvxpy itself
     is still imported only when a lookup needs it) instead of at the first solve's lookup:
-    :mod:`bvpnav.solve` calls it on import, so a solve pays for no module of its own."""
+    :mod:`bvpnav.solve` calls it on import, so a solve pays for no module of its own.
+
+    Examples
+    --------
+    >>> import sys
+    >>> from bvpnav.backends import discover_backends
+    >>> discover_backends()
+    >>> "bvpnav.backends.direct" in sys.modules
+    True
+    """
     _discover()
 
 
