@@ -534,7 +534,7 @@ class MeshModel(NavModel):
             V[a, 0], V[a, -1] = xval[v0], xval[v1]
         hl = fine.h[:-1]
         V[:, 1:-1] = (R[:, 1:-1] - R[:, :-2]) / hl + hl * (acc[:, :-2] + 2.0 * acc[:, 1:-1]) / 6.0
-        R, V, W = R.T, V.T, W.T
+        R, V, W = (np.ascontiguousarray(z.T) for z in (R, V, W))   # (Nf, d), as callers index them
         return {"t": fine.t, "r": R, "v": V, "w": W}
 
     def _state_acceleration(self, s: np.ndarray) -> np.ndarray:
