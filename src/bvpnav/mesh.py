@@ -541,40 +541,47 @@ class MeshModel(NavModel):
         """
         self._check_full_point("the trajectory")
         fine, nodes, idx = self.fine, self.grid.nodes, self.cond.interior
-        if self.ns:
-            sacc = self._state_acceleration(xval[self.s_index])
-        Nf = fine.n
-        Kf, Mf = fem.stiffness(fine), fem.mass(fine)
-        lval = xval[self.l_index]
-        e = self.cond.element[idx]
-        R, V, W = np.zeros((Nf, self.d)), np.zeros((Nf, self.d)), np.zeros((Nf, self.d))
-        ab = self._interior_band(Kf)
-        for a in range(self.d):
-            w = np.zeros(Nf)
-            w[nodes] = xval[self.w_index(a)]
-            if self.me:
+        Nf, d = fine.n, self.d
+        # every axis at once, axis-major ((d, Nf): each axis contiguous), one banded solve with d
+        # right-hand sides
+        W = np.zeros((d, Nf))
+        R = np.zeros((d, Nf))
+        for a in range(d):
+            W[a, nodes] = xval[self.w_index(a)]
+            R[a, nodes] = xval[self.r_index(a)]
+        if self.me:
+            e = self.cond.element[idx]
+            sl = self._slot[e]
+            for a in range(d):
                 u = xval[self.element_index(a)].reshape(self.me, 2)
                 L = self.chol[a]
                 z1 = u[:, 1] / L[:, 2]
                 z0 = (u[:, 0] - L[:, 1] * z1) / L[:, 0]
-                sl = self._slot[e]
-                w[idx] = self.sigma_fine[idx, a] ** 2 * (self._cp * z0[sl] + self._cq * z1[sl])
-            acc = self.data.acc[:, a] + w
-            if self.q:
-                acc = acc + self.G[:, a, :] @ lval
-            if self.ns:
-                acc = acc + sacc[:, a]
-            r = np.zeros(Nf)
-            r[nodes] = xval[self.r_index(a)]
-            if idx.size:
-                rhs = -(Mf @ acc)[idx] - (Kf @ r)[idx]
-                r[idx] = sla.solve_banded((1, 1), ab, rhs)
-            v = np.empty(Nf)
+                W[a, idx] = self.sigma_fine[idx, a] ** 2 * (self._cp * z0[sl] + self._cq * z1[sl])
+        acc = self.data.acc[:, :d].T + W
+        if self.q:
+            lval = xval[self.l_index]
+            for a in range(d):
+                acc[a] += self.G[:, a, :] @ lval
+        if self.ns:
+            acc += self._state_acceleration(xval[self.s_index]).T
+        if idx.size:
+            # K_f r + M_f a = 0 at the samples inside elements, the nodal positions given (the
+            # products' inner rows term by term, in the order a CSR product sums them)
+            lo_k, dg_k, up_k = fem.stiffness(fine)._bvpnav_diagonals
+            lo_m, dg_m, up_m = fem.mass(fine)._bvpnav_diagonals
+            rhs = np.zeros((d, Nf))
+            rhs[:, 1:-1] = -(lo_m[:-1] * acc[:, :-2] + dg_m[1:-1] * acc[:, 1:-1] + up_m[1:] * acc[:, 2:])
+            rhs[:, 1:-1] -= lo_k[:-1] * R[:, :-2] + dg_k[1:-1] * R[:, 1:-1] + up_k[1:] * R[:, 2:]
+            R[:, idx] = sla.solve_banded((1, 1), self._interior_band((lo_k, dg_k, up_k)), rhs[:, idx].T,
+                                         check_finite=False).T
+        V = np.empty((d, Nf))
+        for a in range(d):
             v0, v1 = self.v_end_index(a)
-            v[0], v[-1] = xval[v0], xval[v1]
-            hl = fine.h[:-1]
-            v[1:-1] = (r[1:-1] - r[:-2]) / hl + hl * (acc[:-2] + 2.0 * acc[1:-1]) / 6.0
-            R[:, a], V[:, a], W[:, a] = r, v, w
+            V[a, 0], V[a, -1] = xval[v0], xval[v1]
+        hl = fine.h[:-1]
+        V[:, 1:-1] = (R[:, 1:-1] - R[:, :-2]) / hl + hl * (acc[:, :-2] + 2.0 * acc[:, 1:-1]) / 6.0
+        R, V, W = (np.ascontiguousarray(z.T) for z in (R, V, W))   # (Nf, d), as callers index them
         return {"t": fine.t, "r": R, "v": V, "w": W}
 
     def _state_acceleration(self, s: np.ndarray) -> np.ndarray:
@@ -585,11 +592,12 @@ class MeshModel(NavModel):
             return np.column_stack([g @ s for g in self.Gs])
         return by_blocks(self.data, s)
 
-    def _interior_band(self, Kf: sp.csr_matrix) -> np.ndarray:
-        """``K_f`` on the samples inside elements (nodes held), in :func:`scipy.linalg.solve_banded`'s
-        (1, 1) layout: neighbours across a node are not coupled."""
+    def _interior_band(self, diagonals: tuple) -> np.ndarray:
+        """``K_f`` (its diagonals ``(lower, diag, upper)``) on the samples inside elements (nodes
+        held), in :func:`scipy.linalg.solve_banded`'s (1, 1) layout: neighbours across a node are
+        not coupled."""
         idx = self.cond.interior
-        lo, dg, up = Kf._bvpnav_diagonals
+        lo, dg, up = diagonals
         ab = np.zeros((3, idx.size))
         ab[1] = dg[idx]
         if idx.size > 1:

@@ -38,6 +38,7 @@ __all__ = [
     "register_backend",
     "unregister_backend",
     "registry",
+    "discover_backends",
     "available_solvers",
     "resolve_solver",
     "solver_options",
@@ -176,6 +177,22 @@ def register_factory(factory) -> None:
 def _discover() -> None:
     """Import every module of this folder once (each registers its back ends)."""
     discover(__name__, __path__)
+
+
+def discover_backends() -> None:
+    """Import this folder's back-end modules now (each registers its back ends; cvxpy itself
+    is still imported only when a lookup needs it) instead of at the first solve's lookup:
+    :mod:`bvpnav.solve` calls it on import, so a solve pays for no module of its own.
+
+    Examples
+    --------
+    >>> import sys
+    >>> from bvpnav.backends import discover_backends
+    >>> discover_backends()
+    >>> "bvpnav.backends.direct" in sys.modules
+    True
+    """
+    _discover()
 
 
 def registry() -> dict[str, Backend]:

@@ -154,10 +154,12 @@ def _warnings(form: Formulation, run: Run | None, check: Verification | None) ->
 
 
 def make_solution(form: Formulation, xval: np.ndarray, lam: float, lam_rule: str, records: SolveRecords,
-                  duals: dict | None = None) -> Solution:
-    """The :class:`~bvpnav.Solution` of a stacked vector with its records."""
+                  duals: dict | None = None, trajectory: dict | None = None) -> Solution:
+    """The :class:`~bvpnav.Solution` of a stacked vector with its records (``trajectory``:
+    ``form.model.trajectory(xval)`` when the caller has made it)."""
     model = form.model
-    traj = model.trajectory(xval)   # every sample (a coarse mesh recovers them from its nodes)
+    # every sample (a coarse mesh recovers them from its nodes)
+    traj = model.trajectory(xval) if trajectory is None else trajectory
     idx = pd.Index(traj["t"], name="t")
     cols = {ax: traj["r"][:, a] for a, ax in enumerate(model.axes)}
     cols.update({"v" + ax: traj["v"][:, a] for a, ax in enumerate(model.axes)})
@@ -203,7 +205,11 @@ def finish(form: Formulation, xval: np.ndarray, lam: float, run: dict, duals, ac
     Inaccurate
         When the answer fails verification and ``verify_answer`` is True.
     """
-    check = verify(form, xval, lam, accuracy, duals, factored, workspace)
+    # the answer at every sample, made once for the solution and the verification's velocity
+    # scale (a coarse mesh recovers it from its nodes); not of an answer with NaN or inf, which
+    # the verification names
+    traj = form.model.trajectory(xval) if np.all(np.isfinite(xval)) else None
+    check = verify(form, xval, lam, accuracy, duals, factored, workspace, traj)
     attempt = Attempt(solver=run["solver"], status=run.get("status"),
                       reason="verified" if check.verified else "failed verification")
     cond = check.conditioning or {}
@@ -225,4 +231,4 @@ def finish(form: Formulation, xval: np.ndarray, lam: float, run: dict, duals, ac
             attempts=[attempt.as_dict()],
         )
     records = SolveRecords(run=Run.of(run), attempts=[attempt], verification=check)
-    return make_solution(form, xval, lam, "fixed", records, duals)
+    return make_solution(form, xval, lam, "fixed", records, duals, traj)

@@ -12,10 +12,16 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..backends import Backend, resolve_solver, solver_options
+from ..backends import Backend, discover_backends, resolve_solver, solver_options
 from ..declare import RULE, SEQUENTIAL, SOLVE_OPTIONS, UNCERTAINTY, check_option, check_options, defaults
 from ..errors import BvpnavError
+from ..lam import rule_names
 from ..lam.sweep import check_range
+
+# the plug-in families every solve looks up (the back ends, the lambda rules its options are
+# checked against) are imported with the solve's own modules, not by the first solve
+discover_backends()
+rule_names()
 
 __all__ = ["Chain", "SolveOptions", "prepare", "check_lam", "DEFAULT_FALLBACK", "fallback_chain", "RULE_KEYS",
            "SEQUENTIAL_KEYS", "SEQUENTIAL_DEFAULTS", "UNCERTAINTY", "SEQUENTIAL"]

@@ -74,7 +74,7 @@ def _forward(form: Formulation, xval, lam, duals, factored: Factored | None, bou
 
 def verify(form: Formulation, xval: np.ndarray, lam: float, accuracy: str = "default",
            duals: dict | None = None, factored: Factored | None = None,
-           workspace: Workspace | None = None) -> Verification:
+           workspace: Workspace | None = None, trajectory: dict | None = None) -> Verification:
     r"""Judge a stacked solution by recomputed residuals.
 
     Parameters
@@ -92,6 +92,12 @@ def verify(form: Formulation, xval: np.ndarray, lam: float, accuracy: str = "def
         The direct back end's factorization at this ``lam``, reused (with
         :class:`bvpnav.linalg.lsq.Factored`'s record of the last refinement step, its correction
         is the forward-error estimate when it meets the preset's bound).
+    workspace : Workspace, optional
+        The solve's workspace (a band plan to reuse when a factor is made here).
+    trajectory : dict, optional
+        ``form.model.trajectory(xval)``, when the caller has it (the solution is made of it):
+        its velocities at the nodes (m/s) give the stationarity's floor its velocity scale
+        instead of the nodes' velocity rows evaluated again (:func:`stationarity`).
 
     Returns
     -------
@@ -110,7 +116,7 @@ def verify(form: Formulation, xval: np.ndarray, lam: float, accuracy: str = "def
     fem = model.fem_rows()
     fem_rel = abs_max(fem.value(xval)) / max(float(np.max(fem.row_scale(xval))), 1e-300)
     worst, worst_item = _worst_violation(form, xval)
-    stat = None if duals is None else stationarity(form, xval, lam, duals)
+    stat = None if duals is None else stationarity(form, xval, lam, duals, _node_velocities(form, trajectory))
     nonfinite = _nonfinite(form, xval)
     fwd, factored = _forward(form, xval, lam, duals, factored, FORWARD_RTOL[accuracy], workspace)
     conditioning = None
@@ -132,15 +138,25 @@ def verify(form: Formulation, xval: np.ndarray, lam: float, accuracy: str = "def
                         undetermined=undetermined, conditioning=conditioning, verified=bool(ok))
 
 
-def _gradient_floor(form: Formulation, xval: np.ndarray, lam: float, data) -> float:
+def _node_velocities(form: Formulation, trajectory: dict | None) -> np.ndarray | None:
+    """The velocities at the nodes (n, d), m/s, of a trajectory at every sample
+    (:meth:`bvpnav.model.NavModel.trajectory`), or None without one."""
+    if trajectory is None:
+        return None
+    return np.asarray(trajectory["v"])[form.model.node_samples]
+
+
+def _gradient_floor(form: Formulation, xval: np.ndarray, lam: float, data,
+                    velocities: np.ndarray | None = None) -> float:
     """The size the gradient would have if the residuals were as large as the terms that
-    cancel in them (see :func:`stationarity`)."""
+    cancel in them (see :func:`stationarity`); ``velocities`` at the nodes (n, d), m/s, when
+    known (else evaluated from ``xval``)."""
     model = form.model
     probe = np.zeros(model.size)
     T = model.grid.duration
     for a in range(model.d):
         r_a = xval[model.r_index(a)]
-        v_a = model.node_velocity_values(a, xval)
+        v_a = model.node_velocity_values(a, xval) if velocities is None else velocities[:, a]
         a_scale = max(float(np.max(np.abs(r_a))) / T**2, float(np.max(np.abs(v_a))) / T)
         probe[model.w_index(a)] = np.maximum(np.abs(model.data.acc[model.node_samples, a]), a_scale)
     floor = 2.0 * abs_max(data.A.T @ data.value(probe))
@@ -149,8 +165,11 @@ def _gradient_floor(form: Formulation, xval: np.ndarray, lam: float, data) -> fl
     return floor
 
 
-def stationarity(form: Formulation, xval: np.ndarray, lam: float, duals: dict) -> float | None:
-    r"""Relative norm of the Lagrangian gradient (None for non-smooth objectives).
+def stationarity(form: Formulation, xval: np.ndarray, lam: float, duals: dict,
+                 velocities: np.ndarray | None = None) -> float | None:
+    r"""Relative norm of the Lagrangian gradient (None for non-smooth objectives);
+    ``velocities`` at the nodes (n, d), m/s, of ``xval`` when the caller has them (the floor's
+    velocity scale; else evaluated from ``xval``).
 
     Notes
     -----
@@ -182,6 +201,6 @@ def stationarity(form: Formulation, xval: np.ndarray, lam: float, duals: dict) -
         cols, g = transposed_product(term.residual.A, u)
         scale = max(scale, abs_max(g))
         total[cols] += g
-    floor = _gradient_floor(form, xval, lam, data)
+    floor = _gradient_floor(form, xval, lam, data, velocities)
     scale = max(scale, floor, 1e-300)
     return abs_max(total) / scale
