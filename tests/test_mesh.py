@@ -446,3 +446,37 @@ def test_cheap_steps_give_the_full_passes_answer():
     assert np.abs(a.position() - b.position()).max() <= 1e-9 * np.abs(b.position()).max()
     assert np.abs(a.error_states.to_numpy() - b.error_states.to_numpy()).max() <= 1e-8
     assert a.stats["verified"] and b.stats["verified"]
+
+
+def test_a_cheap_step_whose_rows_fail_is_made_again_as_a_full_pass(monkeypatch):
+    """A cheap point whose least-squares rows cannot be built (here: made to fail) does not end
+    the solve: the step is made again as a full pass, and the loop is the cheap-off loop."""
+    import bvpnav.linalg.lsq as lsq
+    from bvpnav.error_models import ErrorStates
+    from bvpnav.error_models.error_states import _cheap
+
+    d = _drive(T=20.0, noise=True)
+    model = ErrorStates(arw=2e-3 / np.sqrt(20.0), gyro_drift=1e-4, acc_drift=1e-3)
+    k = np.arange(0, d["t"].size, 20)
+    built = lsq.least_squares_form
+    tried = []
+
+    def failing(form, lam, surrogate=False):
+        if _cheap(form.data) is not None:
+            tried.append(lam)
+            raise RuntimeError("cheap rows refused (test)")
+        return built(form, lam, surrogate)
+
+    sols = {}
+    for cheap in (True, False):
+        prob = bvpnav.NavigationProblem(d["data"], error_model=model, sigma_a=2e-2, segment=1.0)
+        prob.add(Position(t=d["t"][k], value=d["fix"][k], sigma=0.3))
+        with monkeypatch.context() as mp:
+            mp.setattr(lsq, "least_squares_form", failing)
+            sols[cheap] = prob.solve(solver="direct", attitude={"progress": False, "cheap": cheap})
+    assert len(tried) >= 2   # cheap points were made (and each made again as a full pass)
+    a, b = sols[True], sols[False]
+    kinds = [it["solve"] for it in a.records.attitude.iterations]
+    assert "cheap" not in kinds and kinds == [it["solve"] for it in b.records.attitude.iterations]
+    assert a.records.attitude.converged and a.stats["verified"]
+    np.testing.assert_array_equal(a.position(), b.position())

@@ -990,8 +990,8 @@ def _quick_step(f: Formulation, lam: float, workspace) -> np.ndarray | None:
 
     if f.residual != "acceleration":
         return None
-    ls = least_squares_form(f, lam)
-    try:
+    try:   # building the rows may fail too (then the stage, or a full pass for a cheap point)
+        ls = least_squares_form(f, lam)
         if ls is None:   # band or inequality rows (imported only then: the module is large)
             from ..linalg.active_set import quick_step
 
