@@ -7,6 +7,8 @@ several non-uniform step patterns, per-sample sigma_a and constant error models.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -479,4 +481,26 @@ def test_a_cheap_step_whose_rows_fail_is_made_again_as_a_full_pass(monkeypatch):
     kinds = [it["solve"] for it in a.records.attitude.iterations]
     assert "cheap" not in kinds and kinds == [it["solve"] for it in b.records.attitude.iterations]
     assert a.records.attitude.converged and a.stats["verified"]
+    np.testing.assert_array_equal(a.position(), b.position())
+
+
+def test_a_band_takes_no_cheap_step():
+    """A band's steps are the active set's (not one banded solve): the loop takes no cheap step
+    with it, and its answer is the cheap-off loop's."""
+    from bvpnav.error_models import ErrorStates
+
+    d = _drive(T=30.0, noise=True)
+    model = ErrorStates(arw=2e-3 / np.sqrt(20.0), gyro_drift=1e-4, acc_drift=1e-3)
+    k = np.arange(0, d["t"].size, 20)
+    sols = {}
+    for cheap in (True, False):
+        prob = bvpnav.NavigationProblem(d["data"], error_model=model, sigma_a=2e-2, segment=1.0)
+        prob.add(Position(t=d["t"][k], value=d["fix"][k], mode="band", tol=0.2))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            sols[cheap] = prob.solve(solver="direct", attitude={"progress": False, "cheap": cheap})
+    a, b = sols[True], sols[False]
+    kinds = [it["solve"] for it in a.records.attitude.iterations]
+    assert a.records.attitude.cheap_steps == 0 and "cheap" not in kinds
+    assert kinds == [it["solve"] for it in b.records.attitude.iterations] and a.records.attitude.converged
     np.testing.assert_array_equal(a.position(), b.position())
