@@ -233,6 +233,14 @@ class _Elements:
         return self.S.as_matrix() @ self.Jr * self.h[:, None, None]
 
 
+def _index_type(size: int, m: int, w: int) -> type:
+    """The integer type of the kept index arrays of :meth:`ErrorStates.terms`' process rows:
+    int32 when every stored index fits (the columns, below ``size``; the attitude rows' pointers,
+    up to their ``3 m w`` entries, ``m`` elements of ``w`` entries per row; the bias walks' up to
+    ``6 m``), else int64."""
+    return np.int32 if max(int(size), 3 * int(m) * int(w), 6 * int(m)) < 2**31 else np.int64
+
+
 def _block_order(kinds: list) -> list:
     """The order of a mesh element's state blocks, ``(kind, right node?)``: every kind at the left
     node, then the biases at the right node (the attitude error is carried from the left node)."""
@@ -986,7 +994,6 @@ class ErrorStates(ErrorModel):
         # the rows' patterns (and the walks' matrices) depend on the layout alone: made once for
         # the loop's steps, kept on the measured data
         fixed = _raw(data).__dict__.setdefault("_state_rows", {})
-        itype = np.int32 if model.size < 2**31 and 6 * n * len(kinds) ** 2 < 2**31 else np.int64
         if fixed.get("key") != (id(mesh), n, s0, model.size, tuple(kinds)):
             fixed.clear()
             fixed["key"] = (id(mesh), n, s0, model.size, tuple(kinds))
@@ -1013,6 +1020,7 @@ class ErrorStates(ErrorModel):
         # row (j, i): sum_c J[j, i, c] * state cols[j, c]; the blocks in increasing columns (node j's
         # states, then node j + 1's), so the CSR arrays are written directly, in canonical order
         w = 3 * len(blocks)
+        itype = _index_type(model.size, m, w)
         vals = np.empty((m, 3, w))
         for b, (_, J) in enumerate(blocks):
             vals[:, :, 3 * b:3 * b + 3] = J
