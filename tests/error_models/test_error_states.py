@@ -441,3 +441,22 @@ def test_the_kept_index_arrays_are_int32_only_when_every_index_fits():
     assert _index_type(10**6, edge + 1, 12) is np.int64   # 24 (m + 1) < 2**31: beyond the old bound's reach
     assert _index_type(2**31, 10, 12) is np.int64   # the columns
     assert _index_type(2**31 - 1, 10, 12) is np.int32
+
+
+def test_a_solve_without_a_mesh_leaves_the_users_data_as_it_was():
+    """The node-state loop keeps the rows' patterns for its steps, but not on the user's own
+    data (inputs are never modified): its attributes and its pickled size are as before."""
+    import pickle
+
+    d = simulate(const(BG), const(BA), T=20.0, rate=20.0, turn=5.0)
+    data = d["data"]
+    before, size = dict(data.__dict__), len(pickle.dumps(data))
+    k = np.arange(0, d["t"].size, 20)
+    prob = bvpnav.NavigationProblem(data, error_model=ErrorStates(arw=2e-3 / np.sqrt(20.0), gyro_drift=1e-4,
+                                                                  acc_drift=1e-3), sigma_a=2e-2)
+    prob.add(Position(t=d["t"][k], value=d["r"][k], sigma=0.3))
+    sol = prob.solve(solver="direct", attitude={"progress": False})
+    assert sol.records.attitude.converged and len(sol.records.attitude.iterations) >= 2
+    assert sorted(data.__dict__) == sorted(before)
+    assert all(data.__dict__[key] is v for key, v in before.items())
+    assert len(pickle.dumps(data)) == size

@@ -89,8 +89,10 @@ subtracts the gyro-bias states), never by index.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import functools
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -139,6 +141,38 @@ def _csr(data: np.ndarray, indices: np.ndarray, indptr: np.ndarray, shape: tuple
 def _raw(data):
     p = getattr(data, "state_point", None)
     return data if p is None else p.raw
+
+
+#: The rows' patterns :meth:`ErrorStates.terms` keeps for the node-state loops running now whose
+#: measured data is the user's own (no mesh: it is never written to), by ``id`` of that data:
+#: ``(data, kept)``, for the loop's lifetime (:func:`kept_rows`).
+_LOOP_ROWS: dict[int, tuple[Any, dict]] = {}
+
+
+@contextlib.contextmanager
+def kept_rows(raw) -> Iterator[None]:
+    """Keep :meth:`ErrorStates.terms`' patterns of the rows made on the measured data ``raw``
+    (and the points made from it) while the ``with`` block runs, then drop them: the node-state
+    loop's steps share them. On a coarse mesh they are kept on the formulation's copy of the
+    data (``state_mesh``) instead; the user's own data is never written to."""
+    if getattr(raw, "state_mesh", None) is not None or id(raw) in _LOOP_ROWS:
+        yield
+        return
+    _LOOP_ROWS[id(raw)] = (raw, {})
+    try:
+        yield
+    finally:
+        _LOOP_ROWS.pop(id(raw), None)
+
+
+def _kept_rows(raw) -> dict:
+    """Where :meth:`ErrorStates.terms` keeps its rows' patterns for ``raw``: on the formulation's
+    copy of the data (a mesh), a running loop's (:func:`kept_rows`), else a new dict (kept
+    nowhere)."""
+    if getattr(raw, "state_mesh", None) is not None:
+        return raw.__dict__.setdefault("_state_rows", {})
+    kept = _LOOP_ROWS.get(id(raw))
+    return kept[1] if kept is not None and kept[0] is raw else {}
 
 
 def _totals(data, kind: str) -> np.ndarray:
@@ -992,8 +1026,8 @@ class ErrorStates(ErrorModel):
         out = []
 
         # the rows' patterns (and the walks' matrices) depend on the layout alone: made once for
-        # the loop's steps, kept on the measured data
-        fixed = _raw(data).__dict__.setdefault("_state_rows", {})
+        # the loop's steps (_kept_rows: never on the user's own data)
+        fixed = _kept_rows(_raw(data))
         if fixed.get("key") != (id(mesh), n, s0, model.size, tuple(kinds)):
             fixed.clear()
             fixed["key"] = (id(mesh), n, s0, model.size, tuple(kinds))

@@ -1291,7 +1291,10 @@ def with_attitude(inner: Stage) -> Stage:
     def stage(form: Formulation, lam, opts) -> Solution:
         comps = attitude_components(form.error_model)
         if form.model.ns:
-            return _state_loop(form, inner, lam, opts, comps)
+            from ..error_models.error_states import kept_rows
+
+            with kept_rows(form.data):   # the steps' shared row patterns, for the loop's lifetime
+                return _state_loop(form, inner, lam, opts, comps)
         if check_attitude(getattr(opts, "attitude", None))["start"] == "course":
             from .course import course_totals
 
