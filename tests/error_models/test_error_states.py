@@ -428,3 +428,35 @@ def test_rotation_vectors_of_quaternions_are_scipys():
     want = Rotation.from_quat(q).as_rotvec()
     assert np.max(np.abs(_rotvec(q) - want)) < 1e-14
     assert np.allclose(np.linalg.norm(_rotvec(q[:6]), axis=1), angles, rtol=1e-12, atol=0)
+
+
+def test_the_kept_index_arrays_are_int32_only_when_every_index_fits():
+    """The attitude process rows' pointers reach ``3 m w`` (``w = 12`` entries per row on a
+    mesh with gyro-bias states: 36 per element), the bias walks' ``6 m``, the columns the
+    model's size: int32 only when all are below 2**31 (a wrapped int32 pointer is silent)."""
+    from bvpnav.error_models.error_states import _index_type
+
+    edge = 2**31 // 36   # 36 m: the largest stored index with w = 12
+    assert _index_type(10**6, edge, 12) is np.int32
+    assert _index_type(10**6, edge + 1, 12) is np.int64   # 24 (m + 1) < 2**31: beyond the old bound's reach
+    assert _index_type(2**31, 10, 12) is np.int64   # the columns
+    assert _index_type(2**31 - 1, 10, 12) is np.int32
+
+
+def test_a_solve_without_a_mesh_leaves_the_users_data_as_it_was():
+    """The node-state loop keeps the rows' patterns for its steps, but not on the user's own
+    data (inputs are never modified): its attributes and its pickled size are as before."""
+    import pickle
+
+    d = simulate(const(BG), const(BA), T=20.0, rate=20.0, turn=5.0)
+    data = d["data"]
+    before, size = dict(data.__dict__), len(pickle.dumps(data))
+    k = np.arange(0, d["t"].size, 20)
+    prob = bvpnav.NavigationProblem(data, error_model=ErrorStates(arw=2e-3 / np.sqrt(20.0), gyro_drift=1e-4,
+                                                                  acc_drift=1e-3), sigma_a=2e-2)
+    prob.add(Position(t=d["t"][k], value=d["r"][k], sigma=0.3))
+    sol = prob.solve(solver="direct", attitude={"progress": False})
+    assert sol.records.attitude.converged and len(sol.records.attitude.iterations) >= 2
+    assert sorted(data.__dict__) == sorted(before)
+    assert all(data.__dict__[key] is v for key, v in before.items())
+    assert len(pickle.dumps(data)) == size

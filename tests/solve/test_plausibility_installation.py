@@ -173,6 +173,11 @@ def test_a_stated_prior_moves_the_limits():
     (msg,) = pl.check(sol, form)
     assert msg.startswith("implausible estimate: time_offset = +18 s (+1.802e+04 ms) is beyond the limits")
     assert "a latency beyond any receiver's output chain" in msg
+    # 0.5 s before a stated 18 s clock offset: the IMU's stamps late, though the value is positive
+    sol, form = _stub({"time_offset": 17.5}, [TimeOffset(prior=18.0, sigma=1.0)])
+    (msg,) = pl.check(sol, form)
+    assert msg.startswith("implausible estimate: time_offset = +17.5 s (+1.75e+04 ms) is beyond the limits "
+                          "-0.1..+0.5 s of the fixes' delay (the IMU's samples stamped that much late")
     bus = {"lever_x": 8.1, "lever_y": -0.9, "lever_z": 2.8}
     sol, form = _stub(bus, [LeverArm(prior=(8.0, -1.0, 3.0), sigma=0.1)])
     assert pl.check(sol, form) == []

@@ -89,8 +89,10 @@ subtracts the gyro-bias states), never by index.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import functools
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -139,6 +141,38 @@ def _csr(data: np.ndarray, indices: np.ndarray, indptr: np.ndarray, shape: tuple
 def _raw(data):
     p = getattr(data, "state_point", None)
     return data if p is None else p.raw
+
+
+#: The rows' patterns :meth:`ErrorStates.terms` keeps for the node-state loops running now whose
+#: measured data is the user's own (no mesh: it is never written to), by ``id`` of that data:
+#: ``(data, kept)``, for the loop's lifetime (:func:`kept_rows`).
+_LOOP_ROWS: dict[int, tuple[Any, dict]] = {}
+
+
+@contextlib.contextmanager
+def kept_rows(raw) -> Iterator[None]:
+    """Keep :meth:`ErrorStates.terms`' patterns of the rows made on the measured data ``raw``
+    (and the points made from it) while the ``with`` block runs, then drop them: the node-state
+    loop's steps share them. On a coarse mesh they are kept on the formulation's copy of the
+    data (``state_mesh``) instead; the user's own data is never written to."""
+    if getattr(raw, "state_mesh", None) is not None or id(raw) in _LOOP_ROWS:
+        yield
+        return
+    _LOOP_ROWS[id(raw)] = (raw, {})
+    try:
+        yield
+    finally:
+        _LOOP_ROWS.pop(id(raw), None)
+
+
+def _kept_rows(raw) -> dict:
+    """Where :meth:`ErrorStates.terms` keeps its rows' patterns for ``raw``: on the formulation's
+    copy of the data (a mesh), a running loop's (:func:`kept_rows`), else a new dict (kept
+    nowhere)."""
+    if getattr(raw, "state_mesh", None) is not None:
+        return raw.__dict__.setdefault("_state_rows", {})
+    kept = _LOOP_ROWS.get(id(raw))
+    return kept[1] if kept is not None and kept[0] is raw else {}
 
 
 def _totals(data, kind: str) -> np.ndarray:
@@ -231,6 +265,14 @@ class _Elements:
     def Z(self) -> np.ndarray:
         """:math:`S_j J_r(a_j) h_j` of every step, (N - 1, 3, 3) (s): ``S`` as matrices."""
         return self.S.as_matrix() @ self.Jr * self.h[:, None, None]
+
+
+def _index_type(size: int, m: int, w: int) -> type:
+    """The integer type of the kept index arrays of :meth:`ErrorStates.terms`' process rows:
+    int32 when every stored index fits (the columns, below ``size``; the attitude rows' pointers,
+    up to their ``3 m w`` entries, ``m`` elements of ``w`` entries per row; the bias walks' up to
+    ``6 m``), else int64."""
+    return np.int32 if max(int(size), 3 * int(m) * int(w), 6 * int(m)) < 2**31 else np.int64
 
 
 def _block_order(kinds: list) -> list:
@@ -984,9 +1026,8 @@ class ErrorStates(ErrorModel):
         out = []
 
         # the rows' patterns (and the walks' matrices) depend on the layout alone: made once for
-        # the loop's steps, kept on the measured data
-        fixed = _raw(data).__dict__.setdefault("_state_rows", {})
-        itype = np.int32 if model.size < 2**31 and 6 * n * len(kinds) ** 2 < 2**31 else np.int64
+        # the loop's steps (_kept_rows: never on the user's own data)
+        fixed = _kept_rows(_raw(data))
         if fixed.get("key") != (id(mesh), n, s0, model.size, tuple(kinds)):
             fixed.clear()
             fixed["key"] = (id(mesh), n, s0, model.size, tuple(kinds))
@@ -1013,6 +1054,7 @@ class ErrorStates(ErrorModel):
         # row (j, i): sum_c J[j, i, c] * state cols[j, c]; the blocks in increasing columns (node j's
         # states, then node j + 1's), so the CSR arrays are written directly, in canonical order
         w = 3 * len(blocks)
+        itype = _index_type(model.size, m, w)
         vals = np.empty((m, 3, w))
         for b, (_, J) in enumerate(blocks):
             vals[:, :, 3 * b:3 * b + 3] = J

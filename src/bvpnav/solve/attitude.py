@@ -921,14 +921,18 @@ def _cheap_eligible(form: Formulation) -> bool:
     """Whether the node-state loop of ``form`` may take cheap steps
     (:func:`bvpnav.error_models.error_states.cheap_at`): node states on a coarse mesh, no
     other error-model parameters, and items of :data:`POINT_FREE_ITEMS` without a lever arm
-    or a delay (their rows do not move with the linearization point)."""
+    or a delay (their rows do not move with the linearization point) whose terms are least
+    squares (soft or hard: a band's or a robust penalty's steps are the active set's, which
+    a cheap point does not pay off)."""
     from ..error_models.error_states import _mesh
 
     m = form.model
     if _mesh(form.data) is None or m.q or not hasattr(m.state_model, "condensed_change"):
         return False
-    return all(type(it).__name__ in POINT_FREE_ITEMS and getattr(it, "lever", None) is None
-               and getattr(it, "delay", None) is None for it in form.items)
+    if not all(type(it).__name__ in POINT_FREE_ITEMS and getattr(it, "lever", None) is None
+               and getattr(it, "delay", None) is None for it in form.items):
+        return False
+    return all(t.least_squares_role() is not None for t in form.terms() if t.item is not None)
 
 
 def _quick_next(o: dict, k: int, iters: list, lam) -> bool:
@@ -990,8 +994,8 @@ def _quick_step(f: Formulation, lam: float, workspace) -> np.ndarray | None:
 
     if f.residual != "acceleration":
         return None
-    ls = least_squares_form(f, lam)
-    try:
+    try:   # building the rows may fail too (then the stage, or a full pass for a cheap point)
+        ls = least_squares_form(f, lam)
         if ls is None:   # band or inequality rows (imported only then: the module is large)
             from ..linalg.active_set import quick_step
 
@@ -1287,7 +1291,10 @@ def with_attitude(inner: Stage) -> Stage:
     def stage(form: Formulation, lam, opts) -> Solution:
         comps = attitude_components(form.error_model)
         if form.model.ns:
-            return _state_loop(form, inner, lam, opts, comps)
+            from ..error_models.error_states import kept_rows
+
+            with kept_rows(form.data):   # the steps' shared row patterns, for the loop's lifetime
+                return _state_loop(form, inner, lam, opts, comps)
         if check_attitude(getattr(opts, "attitude", None))["start"] == "course":
             from .course import course_totals
 

@@ -762,12 +762,12 @@ def _installation_checks(sol: Solution, form: Formulation) -> list[str]:
         absurd = None
         if role == "time_offset":
             lo, hi = -TIME_OFFSET_EARLY_LIMIT, TIME_OFFSET_LATE_LIMIT
-            bad = [(n, x) for n, x, q in zip(names, v, p, strict=True)
+            bad = [(n, x, q) for n, x, q in zip(names, v, p, strict=True)
                    if not (lo <= x <= hi or lo <= x - q <= hi)]
-            if bad:
+            if bad:   # the side of the delay past what was stated (the prior; zero without one)
                 side = ("the IMU's samples stamped that much late, beyond any IMU's own latency"
-                        if bad[0][1] < 0 else "a latency beyond any receiver's output chain")
-                absurd = (f"{', '.join(_show(role, n, x) for n, x in bad)} is beyond the limits "
+                        if bad[0][1] - bad[0][2] < 0 else "a latency beyond any receiver's output chain")
+                absurd = (f"{', '.join(_show(role, n, x) for n, x, _ in bad)} is beyond the limits "
                           f"{lo:+g}..{hi:+g} s of {what} ({side})")
         elif role == "mounting":
             bad = [(n, x) for n, x, q in zip(names, v, p, strict=True)
