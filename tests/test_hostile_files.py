@@ -135,6 +135,14 @@ def wait_for(cond, proc: subprocess.Popen, what: str, limit: float = 240.0) -> N
         time.sleep(0.005)
 
 
+def lock_holder(out: Path) -> str:
+    """The process id written in ``out``'s lock file ('' while there is none)."""
+    try:
+        return (out / ".bvpnav.lock").read_text().strip()
+    except OSError:
+        return ""
+
+
 def many_recordings(t: Path, n: int) -> Path:
     recs = t / "recs"
     recs.mkdir()
@@ -410,6 +418,59 @@ def test_ctrl_c_in_a_batch_exits_130_in_one_line_and_resume_finishes_it(work, sc
     assert stray_temporaries(work) == []
 
 
+def test_a_worker_restarted_by_its_nanny_ignores_ctrl_c_too():
+    """The batch's local workers ignore SIGINT so that Ctrl-C is handled by the batch alone.
+    They inherited SIG_IGN while the cluster was built, but a worker that died (as from lack of
+    memory) was started again by its nanny with Python's handler, so Ctrl-C printed its
+    traceback; every worker, the restarted one included, must ignore it."""
+    pytest.importorskip("dask.distributed")
+    from dask.distributed import Client
+
+    def sigint_handler() -> str:  # a local function: sent by value, nothing to import there
+        return repr(signal.getsignal(signal.SIGINT))  # asyncio's handler cannot be sent back
+
+    ignored = repr(signal.SIG_IGN)
+    cluster = bvpnav.batch._local_cluster(1)  # one worker: the cheapest cluster that shows it
+    try:
+        with Client(cluster) as client:
+            client.wait_for_workers(1, timeout=120)
+            assert set(client.run(sigint_handler).values()) == {ignored}
+            ((address, pid),) = client.run(os.getpid).items()
+            os.kill(pid, signal.SIGKILL)  # its nanny starts another worker, at another address
+            deadline = time.monotonic() + 120
+            while ((len(now := set(client.scheduler_info()["workers"])) != 1 or address in now)
+                   and time.monotonic() < deadline):
+                time.sleep(0.2)
+            assert len(now) == 1 and address not in now, (
+                f"the nanny did not restart the killed worker {address} within 120 s (workers now: {now})")
+            handlers = client.run(sigint_handler)
+            assert set(handlers) == now and set(handlers.values()) == {ignored}, handlers
+    finally:
+        cluster.close()
+
+
+def swallowing_task(monkeypatch, signum: int) -> list:
+    """Replace the batch's task by one that, on the second recording, raises ``signum`` in
+    this process and catches whatever its handler raises, reporting a bad file as pandas' C
+    parser did ("Calling read(nbytes) on source failed"); returns the recordings the tasks
+    were given."""
+    import bvpnav.batch as batch
+
+    real, calls = batch._task, []
+
+    def task(*job):
+        calls.append(job[0])
+        if len(calls) == 2:
+            try:
+                signal.raise_signal(signum)
+            except BaseException:   # like the parser: anything raised inside its read
+                return {"recording": job[0], "ok": False, "error": "ParserError: read failed"}
+        return real(*job)
+
+    monkeypatch.setattr(batch, "_task", task)
+    return calls
+
+
 def test_ctrl_c_swallowed_by_a_library_still_stops_a_serial_batch(work, monkeypatch):
     """Ctrl-C while pandas' C parser reads a recording came back as a ParserError ("Calling
     read(nbytes) on source failed"): the recording was called a bad file and the batch went on
@@ -418,24 +479,55 @@ def test_ctrl_c_swallowed_by_a_library_still_stops_a_serial_batch(work, monkeypa
 
     recs = many_recordings(work, 6)
     out = work / "out"
-    real, calls = batch._task, []
-
-    def task(*job):
-        calls.append(job[0])
-        if len(calls) == 2:
-            try:
-                signal.raise_signal(signal.SIGINT)  # Ctrl-C, caught inside the task like pandas did
-            except KeyboardInterrupt:
-                return {"recording": job[0], "ok": False, "error": "ParserError: read failed"}
-        return real(*job)
-
-    monkeypatch.setattr(batch, "_task", task)
+    calls = swallowing_task(monkeypatch, signal.SIGINT)  # Ctrl-C
     before = signal.getsignal(signal.SIGINT)
     with pytest.raises(KeyboardInterrupt):
         batch.run_batch(recs, work / "spec.toml", out, scheduler="serial", progress=False)
     assert len(calls) == 2                              # no recording after the interrupt
     assert signal.getsignal(signal.SIGINT) is before    # the caller's handler is back
     assert sorted(p.name for p in out.glob("*.json")) == ["run00.json"] and not (out / "summary.csv").exists()
+
+
+def test_sigterm_swallowed_by_a_library_still_stops_a_serial_batch(work, monkeypatch, capsys):
+    """The CLI's SIGTERM handler raises an exception like Ctrl-C does, which a library can
+    catch inside a task the same way (pandas' C parser turned it into a ParserError): the
+    serial loop notes SIGTERM too, so the batch stops with exit 143 instead of calling the
+    recording a bad file and solving the others."""
+    recs = many_recordings(work, 6)
+    out = work / "out"
+    calls = swallowing_task(monkeypatch, signal.SIGTERM)
+    before = signal.getsignal(signal.SIGTERM)
+    code = main([str(a) for a in batch_argv(work, recs, out)])
+    assert (code, capsys.readouterr().err.strip()) == (EXIT_TERM, "bvpnav: terminated")
+    assert len(calls) == 2                              # no recording after the signal
+    assert signal.getsignal(signal.SIGTERM) is before   # the caller's handler is back
+    assert sorted(p.name for p in out.glob("*.json")) == ["run00.json"] and not (out / "summary.csv").exists()
+    assert stray_temporaries(work) == [] and not (out / ".bvpnav.lock").exists()
+
+
+def test_a_serial_batch_leaves_the_callers_sig_dfl_for_ctrl_c_as_it_is(work, monkeypatch):
+    """A caller that set SIGINT to SIG_DFL wants Ctrl-C to end the process at once: the serial
+    loop chains only Python handlers, so it neither replaces SIG_DFL during the recordings
+    (before, its noting handler raised KeyboardInterrupt instead) nor afterwards."""
+    import bvpnav.batch as batch
+
+    recs = many_recordings(work, 2)
+    out = work / "out"
+    real, seen = batch._task, []
+
+    def task(*job):
+        seen.append(signal.getsignal(signal.SIGINT))
+        return real(*job)
+
+    monkeypatch.setattr(batch, "_task", task)
+    before = signal.signal(signal.SIGINT, signal.SIG_DFL)
+    try:
+        df = batch.run_batch(recs, work / "spec.toml", out, scheduler="serial", progress=False)
+        after = signal.getsignal(signal.SIGINT)
+    finally:
+        signal.signal(signal.SIGINT, before)
+    assert df.ok.all() and len(df) == 2
+    assert seen == [signal.SIG_DFL, signal.SIG_DFL] and after is signal.SIG_DFL
 
 
 def test_sigterm_in_a_batch_exits_143_and_cleans_up(work):
@@ -594,7 +686,8 @@ def test_a_second_batch_into_the_same_folder_is_refused_at_once(work):
     recs = many_recordings(work, 24)
     out = work / "out"
     first = popen_cli(batch_argv(work, recs, out))
-    wait_for(lambda: (out / ".bvpnav.lock").exists(), first, "the first run's lock")
+    # the lock file exists before it is locked and holds the pid: wait until it names the first run
+    wait_for(lambda: lock_holder(out) == str(first.pid), first, "the first run's lock")
     first.send_signal(signal.SIGSTOP)  # hold it mid-run, deterministically
     try:
         before = snapshot(recs, work / "spec.toml", out)

@@ -331,3 +331,71 @@ def test_readme_lcurve_example_does_not_warn(tmp_path, capsys):
     assert main(["lcurve", str(rec / "recording.csv"), "--spec", str(rec / "spec.toml"), "--rules", "gcv",
                  "--plot", str(tmp_path / "g.png")]) == 0
     assert "edge" in capsys.readouterr().out   # asked for, it runs and says where it landed
+
+
+# ------------------------------------------------------------------------- signals
+def test_signal_handled_installs_for_the_block_and_restores_the_handler_before():
+    import signal
+
+    calls = []
+
+    def caller(signum, frame):
+        calls.append(("caller", signum))
+
+    def inner(signum, frame):
+        calls.append(("inner", signum))
+
+    before = signal.signal(signal.SIGTERM, caller)
+    try:
+        with blog.signal_handled(signal.SIGTERM, inner) as installed:
+            assert installed and signal.getsignal(signal.SIGTERM) is inner
+            signal.raise_signal(signal.SIGTERM)
+        assert signal.getsignal(signal.SIGTERM) is caller
+        with pytest.raises(RuntimeError), blog.signal_handled(signal.SIGTERM, signal.SIG_IGN):
+            signal.raise_signal(signal.SIGTERM)  # ignored
+            raise RuntimeError("the block failed")
+        assert signal.getsignal(signal.SIGTERM) is caller  # restored on the way out of a failure too
+        signal.raise_signal(signal.SIGTERM)
+    finally:
+        signal.signal(signal.SIGTERM, before)
+    assert calls == [("inner", signal.SIGTERM), ("caller", signal.SIGTERM)]
+
+
+def test_signal_handled_off_the_main_thread_runs_the_block_and_changes_nothing():
+    import signal
+    import threading
+
+    before, seen = signal.getsignal(signal.SIGTERM), []
+
+    def run():
+        with blog.signal_handled(signal.SIGTERM, signal.SIG_IGN) as installed:
+            seen.append((installed, signal.getsignal(signal.SIGTERM)))
+
+    worker = threading.Thread(target=run)
+    worker.start()
+    worker.join()
+    assert seen == [(False, before)] and signal.getsignal(signal.SIGTERM) is before
+
+
+def test_signal_handled_off_the_main_thread_leaves_the_blocks_errors_unchained():
+    """Off the main thread :func:`signal.signal` raises ValueError; the block must not run
+    inside that except clause, or every error leaving it carries the ValueError ("signal only
+    works in main thread") as its ``__context__`` in tracebacks."""
+    import signal
+    import sys
+    import threading
+
+    seen = []
+
+    def run():
+        try:
+            with blog.signal_handled(signal.SIGTERM, signal.SIG_IGN) as installed:
+                seen.append((installed, sys.exc_info()[1]))
+                raise RuntimeError("the block failed")
+        except RuntimeError as exc:
+            seen.append((exc.__context__, exc.__cause__))
+
+    worker = threading.Thread(target=run)
+    worker.start()
+    worker.join()
+    assert seen == [(False, None), (None, None)]

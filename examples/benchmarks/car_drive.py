@@ -17,6 +17,10 @@ used here, with the drive's fix sigma and the grade's tilt), every figure from t
     integrating each sample held over its step, ``BetweenFactorConstantBias`` random walk,
     ``GPSFactor`` at the kept fixes, Levenberg-Marquardt, at most 300 iterations), the grade's
     densities and walks.
+``GTSAM second order``
+    ``GTSAM`` with each step fed the mean of its two samples, the force rotated back by half the
+    step's rotation (``gtsam_example_smoother(feed="second order")``, as ``GTSAM peer`` feeds
+    its steps): the same graph, the samples integrated to second order as bvpnav integrates them.
 ``GTSAM peer``
     ``_gtsam_peer.py``: ``CombinedImuFactor`` between nodes every 1 s and at every fix, each step
     fed the mean of its two samples (second order), Levenberg-Marquardt.
@@ -216,7 +220,7 @@ from bvpnav.scenarios import SENSOR_GRADES, CarDrive, car_drive  # noqa: E402
 
 METHODS = ("GTSAM", "GTSAM peer", "bvpnav README", "bvpnav states", "bvpnav states NHC soft", "spline",
            "GTSAM course start", "bvpnav states course start", "GTSAM from truth", "bvpnav states mesh",
-           "bvpnav states mesh course start")
+           "bvpnav states mesh course start", "GTSAM second order")
 DEFAULT_METHODS = METHODS[:5]
 #: Levenberg-Marquardt iterations allowed to the ``GTSAM`` graph: it converges within them at every spacing
 #: here (the KITTI script's 100 stop it early at 60 s, where it needs about 160).
@@ -302,10 +306,24 @@ def states_course_start(drive: CarDrive, kept, withheld, fig: dict, tilt: float,
             "misfit": (sol.stats.get("plausibility") or {}).get("noise_ratio")}
 
 
+def noise_free(drive: CarDrive) -> CarDrive:
+    """``drive`` with perfect sensors and fixes (``--noise-free``): the true specific force and body
+    rate (no bias, no noise), the fixes at the true positions, the true initial attitude as the guess.
+    A method's error on it is its own integration's (discretization and start), not the noise's."""
+    import dataclasses
+
+    zero = np.zeros_like(drive.accel_bias)
+    return dataclasses.replace(drive, specific_force=drive.specific_force_true, gyro=drive.body_rate_true,
+                               accel_bias=zero, gyro_bias=zero, fix_position=drive.truth_at(drive.fix_t),
+                               initial_attitude_guess=drive.attitude[0], attitude_correction=np.zeros(3))
+
+
 def case(method: str, grade: str, seed: int, gap: float, duration: float, rate: float,
-         interval: float) -> dict:
-    """One method on one drive at one fix spacing: RMS (m), wall and CPU s, verification."""
+         interval: float, clean: bool = False) -> dict:
+    """One method on one drive at one fix spacing: RMS (m), wall and CPU s, verification; with
+    ``clean`` on the drive's :func:`noise_free` version."""
     drive = car_drive(duration, rate, grade, seed=seed)
+    drive = noise_free(drive) if clean else drive
     d = drive_dict(drive)
     kept, withheld = split_fixes(drive.fix_t, gap)
     t_w = drive.fix_t[withheld]
@@ -314,11 +332,12 @@ def case(method: str, grade: str, seed: int, gap: float, duration: float, rate: 
     fig = {k: float(sensor[k]) for k in FIGURES}
     tilt = float(sensor["tilt"])
     c0 = drive.initial_attitude_guess
-    if method in ("GTSAM", "GTSAM from truth", "GTSAM course start"):
+    if method in ("GTSAM", "GTSAM from truth", "GTSAM course start", "GTSAM second order"):
         from kitti_drive import gtsam_example_smoother
 
         g = gtsam_example_smoother(d, kept, fig, c0, max_iterations=GTSAM_ITERATIONS,
-                                   fix_sigma=drive.fix_sigma, tilt=tilt)
+                                   fix_sigma=drive.fix_sigma, tilt=tilt,
+                                   feed="second order" if method == "GTSAM second order" else "held")
         out = {"rms": rms3(g["position"][withheld], truth), "seconds": g["seconds"],
                "cpu_seconds": g["cpu_seconds"], "iterations": g["iterations"],
                "graph_error": g["graph_error"]}
@@ -332,7 +351,7 @@ def case(method: str, grade: str, seed: int, gap: float, duration: float, rate: 
             p0 = np.column_stack([np.interp(ft, ft[kept], fp[kept, k]) for k in range(3)])
             pos, it, err = gtsam_from(g, course_attitude(ft, ft[kept], fp[kept], c0), p0,
                                       np.gradient(p0, ft, axis=0))
-        if method != "GTSAM":  # the time of this start's solve (the graph built by the first)
+        if method in ("GTSAM from truth", "GTSAM course start"):  # the time of this start's solve
             out.update(rms=rms3(pos[withheld], truth), iterations=it, graph_error=err,
                        graph_error_from_guess=g["graph_error"], seconds=time.perf_counter() - t0,
                        cpu_seconds=time.process_time() - cpu)
@@ -452,12 +471,15 @@ def main(argv: list[str] | None = None) -> list[dict]:
     ap.add_argument("--methods", nargs="+", default=list(DEFAULT_METHODS), choices=METHODS)
     ap.add_argument("--ref", default="GTSAM", choices=METHODS, help="the method the ratios are taken to")
     ap.add_argument("--quick", action="store_true", help="120 s at 50 Hz, gaps 10 30, seed 0 (a smoke test)")
-    ap.add_argument("--case", nargs=7, help=argparse.SUPPRESS)
+    ap.add_argument("--noise-free", action="store_true",
+                    help="the true samples and fixes (no bias, no noise) and the true initial attitude: "
+                         "each method's own integration error")
+    ap.add_argument("--case", nargs=8, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.case:
-        m, grade, seed, gap, duration, rate, interval = args.case
+        m, grade, seed, gap, duration, rate, interval, clean = args.case
         print(json.dumps(case(m, grade, int(seed), float(gap), float(duration), float(rate),
-                              float(interval))))
+                              float(interval), clean == "1")))
         return []
     if args.quick:
         args.duration, args.rate, args.gaps, args.seeds = 120.0, 50.0, [10.0, 30.0], [0]
@@ -467,12 +489,14 @@ def main(argv: list[str] | None = None) -> list[dict]:
             for gap in args.gaps:
                 for m in args.methods:
                     r = run_case(__file__, [m, grade, str(seed), str(gap), str(args.duration), str(args.rate),
-                                            str(args.interval)])
+                                            str(args.interval), str(int(args.noise_free))])
                     r.update({k: v for k, v in (("method", m), ("grade", grade), ("seed", seed), ("gap", gap))
                               if k not in r})
                     rows.append(r)
                     print(json.dumps(r), flush=True)
-    print(f"\ncar drive {args.duration:g} s at {args.rate:g} Hz, 1 Hz fixes sigma (1, 1, 2) m")
+    print(f"\ncar drive {args.duration:g} s at {args.rate:g} Hz, "
+          + ("noise-free samples and fixes, the true initial attitude" if args.noise_free
+             else "1 Hz fixes sigma (1, 1, 2) m"))
     print_rows(rows, args.ref)
     print_summary(rows, args.ref, args.seeds)
     return rows

@@ -27,6 +27,7 @@ import os
 import signal
 import time
 import traceback
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -50,7 +51,7 @@ from .io import (
     write_table,
     write_trajectory,
 )
-from .log import once
+from .log import once, signal_handled
 from .log import progress as progress_bar
 from .readers import align, read, reader_for
 from .spec import parse_spec, read_spec_text
@@ -437,10 +438,12 @@ def run_batch(directory, spec_path, out_dir, scheduler: str | None = None, worke
         A ``dask.distributed`` scheduler address, connected to (within
         :data:`CONNECT_TIMEOUT` seconds) before any output is written; default an
         in-process LocalCluster of ``workers`` single-threaded worker processes on the
-        loopback interface. ``"serial"`` (any case) solves the recordings one after the
-        other in this process, without Dask (for debugging and tests; an exception that
-        is not an ``Exception``, such as ``KeyboardInterrupt``, stops the run, leaving the
-        finished outputs).
+        loopback interface; its workers ignore SIGINT (Ctrl-C is for this process alone),
+        also one restarted after a death, and while they start SIGINT is ignored here too
+        (they inherit it), so a Ctrl-C before they are up is lost. ``"serial"`` (any
+        case) solves the recordings one after the other in this process, without Dask
+        (for debugging and tests; an exception that is not an ``Exception``, such as
+        ``KeyboardInterrupt``, stops the run, leaving the finished outputs).
     workers : int
         Workers of the local cluster (>= 1).
     solver, lam : optional
@@ -599,11 +602,11 @@ def _run(files, outs, spec_text, spec_source, scheduler, workers, over: dict, re
     if jobs and scheduler == "serial":
         # once(): a warning shared by many recordings is issued once (each summary records it)
         with once(), progress_bar(total=len(jobs), desc="recordings", unit="rec", enabled=progress) as bar, \
-                _ctrl_c_noted() as ctrl_c:
+                _interrupts_noted() as interrupts:
             for job in jobs:
                 rows.append(_task(*job))
-                if ctrl_c:  # a library swallowed the KeyboardInterrupt (e.g. into a parser error)
-                    raise KeyboardInterrupt
+                if interrupts:  # a library swallowed the interrupt (e.g. into a parser error)
+                    raise interrupts[0]
                 _done(rows[-1], len(rows), len(jobs))
                 bar.update(1)
     elif jobs:
@@ -612,52 +615,74 @@ def _run(files, outs, spec_text, spec_source, scheduler, workers, over: dict, re
 
 
 @contextlib.contextmanager
-def _ctrl_c_noted():
-    """Note every SIGINT (Ctrl-C) before raising KeyboardInterrupt as usual; yields a list that is
-    true once one arrived. A library can catch the KeyboardInterrupt inside a task and report
-    something else (pandas' C parser, interrupted in its read of the in-memory text, raised
-    "Calling read(nbytes) on source failed"): the serial loop then stops on the note instead of
-    solving the other recordings and calling the interrupted one a bad file."""
-    noted: list = []
+def _interrupts_noted():
+    """Note every SIGINT (Ctrl-C) and SIGTERM that interrupts before its exception is raised as
+    usual; yields the list of those exceptions. A library can catch the exception inside a task
+    and report something else (pandas' C parser, interrupted in its read of the in-memory text,
+    raised "Calling read(nbytes) on source failed"): the serial loop then raises the first again
+    instead of solving the other recordings and calling the interrupted one a bad file.
+
+    Either signal is chained only when its handler is a Python function (Python's own SIGINT
+    handler, :func:`signal.default_int_handler`, which raises KeyboardInterrupt, or the CLI's
+    SIGTERM handler, which raises ``_Terminated``): the caller's handler still decides what a
+    signal does. Any other handler is left as it is: :data:`signal.SIG_DFL` ends the process
+    and :data:`signal.SIG_IGN` ignores the signal, with nothing raised to swallow, and a
+    handler installed outside Python (:func:`signal.getsignal` gives None) could not be put
+    back afterwards.
+    """
+    noted: list[BaseException] = []
+    with contextlib.ExitStack() as handlers:
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            old = signal.getsignal(signum)
+            if callable(old):
+                handlers.enter_context(signal_handled(signum, _noting(old, noted)))
+        yield noted
+
+
+def _noting(old: Callable, noted: list[BaseException]):
+    """A handler that calls the Python handler ``old`` and appends to ``noted`` what it raises."""
 
     def handler(signum, frame):
-        if not callable(old):   # SIG_DFL: Python's own default is to raise KeyboardInterrupt
-            noted.append(signum)
-            raise KeyboardInterrupt
         try:
-            old(signum, frame)   # the caller's handler decides; noted only if it interrupts
-        except BaseException:
-            noted.append(signum)
+            old(signum, frame)     # the caller's handler decides; noted only if it interrupts
+        except BaseException as exc:
+            noted.append(exc)
             raise
 
-    old = signal.getsignal(signal.SIGINT)
-    try:
-        if old is signal.SIG_IGN:  # Ctrl-C ignored by whoever started us: keep it so
-            raise ValueError
-        signal.signal(signal.SIGINT, handler)
-    except ValueError:  # not the main thread: signals are not ours to change
-        yield noted
-        return
-    try:
-        yield noted
-    finally:
-        signal.signal(signal.SIGINT, old)
+    return handler
 
 
 @contextlib.contextmanager
 def _workers_ignore_ctrl_c():
     """Start the local workers with SIGINT ignored (inherited through spawn's exec): Ctrl-C in
     a terminal reaches the whole process group, and only this process should handle it (by
-    closing the cluster), not each worker with its own traceback."""
-    try:
-        old = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    except ValueError:  # not the main thread: signals are not ours to change
+    closing the cluster), not each worker with its own traceback. A worker that a nanny starts
+    again later does not inherit it: :class:`bvpnav._dask.IgnoreCtrlC` covers those."""
+    with signal_handled(signal.SIGINT, signal.SIG_IGN):
         yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, old)
+
+
+def _local_cluster(workers: int):
+    """The batch's LocalCluster of ``workers`` single-threaded worker processes, each ignoring
+    Ctrl-C from its start (also one restarted by its nanny after the first died).
+
+    SIGINT is ignored in this process while the cluster starts (the workers inherit it), so
+    a Ctrl-C before the workers are up is lost: the batch stops at a Ctrl-C given after that.
+    """
+    from dask.distributed import LocalCluster
+
+    from ._dask import IgnoreCtrlC
+
+    # silence_logs: the workers' warnings and errors (tasks cancelled by Ctrl-C, a heartbeat
+    # that finds the scheduler already closed while the cluster shuts down) are not for
+    # users; a task's own failure is a row of the summary, a dead worker too.
+    # dashboard_address: the scheduler's HTTP server on a free loopback port (None still
+    # binds 8787 on every interface, and warns when another cluster has it).
+    # plugins: passed on to each worker, and again to one its nanny starts after a death
+    with _workers_ignore_ctrl_c():
+        return LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
+                            host="127.0.0.1", dashboard_address="127.0.0.1:0",
+                            silence_logs=logging.CRITICAL, plugins=(IgnoreCtrlC(),))
 
 
 def _done(row: dict, k: int, n: int) -> None:
@@ -670,22 +695,12 @@ def _done(row: dict, k: int, n: int) -> None:
 
 def _run_on_dask(jobs, scheduler, workers, progress, client=None) -> list[dict]:
     try:
-        from dask.distributed import Client, LocalCluster, as_completed
+        from dask.distributed import Client, as_completed
     except ImportError:
         raise InputError("batch needs dask.distributed: pip install 'bvpnav[batch]'") from None
     cluster, own = None, client is None
     if scheduler is None:
-        import logging
-
-        # silence_logs: the workers' warnings and errors (tasks cancelled by Ctrl-C, a heartbeat
-        # that finds the scheduler already closed while the cluster shuts down) are not for
-        # users; a task's own failure is a row of the summary, a dead worker too.
-        # dashboard_address: the scheduler's HTTP server on a free loopback port (None still
-        # binds 8787 on every interface, and warns when another cluster has it)
-        with _workers_ignore_ctrl_c():
-            cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
-                                   host="127.0.0.1", dashboard_address="127.0.0.1:0",
-                                   silence_logs=logging.CRITICAL)
+        cluster = _local_cluster(workers)
         client = Client(cluster)
     elif client is None:
         client = _connect(scheduler)

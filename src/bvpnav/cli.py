@@ -859,16 +859,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return EXIT_INPUT
-    old = None
-    try:
-        old = signal.signal(signal.SIGTERM, _on_sigterm)
-    except (ValueError, OSError):  # not the main thread: leave SIGTERM alone
-        old = None
-    try:
+    with log.signal_handled(signal.SIGTERM, _on_sigterm):  # not on the main thread: SIGTERM left alone
         return _dispatch(args)
-    finally:
-        if old is not None:
-            signal.signal(signal.SIGTERM, old)
 
 
 def _dispatch(args) -> int:

@@ -24,6 +24,11 @@ Warnings
     reported line is the user's call, and only once per public call (:func:`once`): a
     lambda-rule warning raised on every iteration of a sequential loop, or also copied into
     ``solution.warnings``, is issued a single time.
+
+Signals
+    :func:`signal_handled` installs a signal handler for the duration of a block and
+    restores the one before it (the CLI's SIGTERM, a batch's notes of SIGINT and SIGTERM,
+    its workers started with Ctrl-C ignored); off the main thread it changes nothing.
 """
 
 from __future__ import annotations
@@ -32,12 +37,14 @@ import contextlib
 import contextvars
 import logging
 import os
+import signal
 import sys
 import warnings
+from collections.abc import Callable, Iterator
 
 __all__ = ["BvpnavWarning", "DataWarning", "FrameWarning", "SaturationWarning",
            "configure", "configured", "warn", "once", "progress", "progress_enabled",
-           "logger", "in_sweep", "sweeping", "issued"]
+           "logger", "in_sweep", "sweeping", "issued", "signal_handled"]
 
 logger = logging.getLogger("bvpnav")
 logger.addHandler(logging.NullHandler())
@@ -259,3 +266,31 @@ def configured(verbosity: int = 0, *, quiet_warnings: bool = True):
             logger.handlers[:] = handlers
             logger.setLevel(level)
             _PROGRESS_OFF = progress_off
+
+
+# ------------------------------------------------------------------------- signals
+@contextlib.contextmanager
+def signal_handled(signum: int, handler: Callable | int) -> Iterator[bool]:
+    """Handle ``signum`` with ``handler`` (a function or :data:`signal.SIG_IGN`) inside the
+    block, then restore the handler that was there before.
+
+    Yields whether the handler was installed. The block runs either way: off the main
+    thread signals are not ours to change (:func:`signal.signal` raises ValueError there),
+    nor a signal the platform does not let a process handle (OSError). When the handler
+    before was not installed from Python (:func:`signal.signal` returned None), there is
+    nothing to restore it with and ``handler`` stays.
+    """
+    try:
+        old = signal.signal(signum, handler)
+    except (ValueError, OSError):
+        installed = False
+    else:
+        installed = True
+    if not installed:  # yielded outside the except clause: the block's errors are not chained to it
+        yield False
+        return
+    try:
+        yield True
+    finally:
+        if old is not None:
+            signal.signal(signum, old)

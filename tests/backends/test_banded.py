@@ -466,6 +466,49 @@ def test_the_band_written_a_slice_at_a_time_equals_writing_each_block_whole(slic
     np.testing.assert_array_equal(sliced[4], whole[4])
 
 
+def test_the_plans_memos_answer_for_their_own_arrays_and_free_the_ones_they_drop():
+    """BandPlan remembers the band positions of large blocks by their index content
+    (_placed) and the flat band indices of those position arrays by identity (_flat_index):
+    a position array dropped from the first memo is freed (the memos keep no other
+    reference), and a new array that takes its memory and id gets its own flat index, not
+    the dropped one's."""
+    import gc
+    import weakref
+
+    from bvpnav.linalg.banded import MEMO_ENTRIES, MEMO_PER_KEY
+
+    prob = problem(n=801)
+    ls = least_squares_form(prob.formulation, 1.0)
+    plan = BandPlan.build(ls.D.A, ls.E.A, column_nodes(prob.formulation.model), lam_rows=ls.lam_rows)
+    assert plan.border == 0
+    band = np.flatnonzero(plan.pos >= 0)
+    rng = np.random.default_rng(5)
+
+    def flat(j, i):
+        return j.astype(np.int64) * (plan.ldab - 1) + i + 2 * plan.kl
+
+    dropped, reused = [], 0
+    for _ in range(10):   # MEMO_PER_KEY + 1 patterns of one key (size and ends): the oldest dropped
+        for _ in range(MEMO_PER_KEY + 1):
+            r = band[:MEMO_ENTRIES + 10].copy()
+            r[1:-1] = np.sort(rng.choice(band[1:MEMO_ENTRIES + 9], r.size - 2))
+            c = band[:r.size]
+            keep, pi, pj = plan._placed(r, c)
+            assert keep is None
+            np.testing.assert_array_equal(plan._flat_index(pi, pj), flat(plan.pos[r], plan.pos[c]))
+            dropped.append((weakref.ref(pi), weakref.ref(pj), id(pi), id(pj)))
+            del pi, pj
+        gc.collect()
+        gone = {k for wi, wj, *ids in dropped if wi() is None and wj() is None for k in ids}
+        for _ in range(8):   # new position arrays, some in the memory of dropped ones
+            a, b = plan.pos[rng.choice(band, 7)], plan.pos[rng.choice(band, 7)]
+            reused += id(a) in gone or id(b) in gone
+            np.testing.assert_array_equal(plan._flat_index(a, b), flat(a, b))
+    assert sum(wi() is None and wj() is None for wi, wj, *_ in dropped) == len(dropped) - MEMO_PER_KEY
+    assert reused > 0   # ids were reused: the check above met that case
+    assert len(plan._flat_memo) <= len(plan._memo_owned)   # two orientations per kept block at most
+
+
 def test_evenly_spaced_positions_are_found_as_runs_and_the_rest_goes_entry_by_entry():
     """_affine_runs splits a block's band positions into stretches written as strided
     slices (step > 0), stretches of unknowns in neither band nor border (step 0: their

@@ -60,30 +60,42 @@ def _stance_speed(sol, data) -> float:
 
 @pytest.mark.parametrize("solver", ["clarabel", "osqp"])
 def test_a_false_infeasible_verdict_is_not_confirmed_and_the_chain_answers(walk, solver):
-    """Clarabel 0.11 and OSQP 1.x call this feasible problem infeasible (as on the real
-    trial); their certificates prove only that no answer lies within a few centimetres of
-    zero, far below the problem's scale. The chain moves on and ``direct`` answers."""
+    """OSQP 1.x calls this feasible problem infeasible (as Clarabel did on the real trial); its
+    certificate proves only that no answer lies within a few centimetres of zero, far below
+    the problem's scale. The chain moves on and ``direct`` answers.
+
+    Clarabel 0.11's outcome on this badly posed problem is not reproducible: the same solve
+    gives the false verdict or stops with a numerical failure, on one CPU from one call to the
+    next and between CPU models (both seen on an AMD EPYC machine, where an Intel one had
+    always given the verdict). Either way the attempt is a failure the chain records and moves
+    past; when the verdict is given, it must be the unconfirmed one.
+    """
     prob = foot_problem(walk)
     sol = prob.solve(solver=solver)
     att = sol.stats["attempts"]
-    assert att[0]["solver"] == solver and att[0]["status"] == "infeasible"
-    assert "'infeasible' verdict was not confirmed" in att[0]["reason"]
+    assert att[0]["solver"] == solver
+    allowed = ("infeasible", "solver_error") if solver == "clarabel" else ("infeasible",)
+    assert att[0]["status"] in allowed, att[0]
+    if att[0]["status"] == "infeasible":
+        assert "'infeasible' verdict was not confirmed" in att[0]["reason"]
+        assert any(w.startswith(f"{solver} failed (its 'infeasible' verdict was not confirmed: its "
+                                "certificate rules out only the answers with all unknowns within ")
+                   for w in sol.warnings)
     assert sol.stats["solver"] == "direct" and sol.stats["verified"]
-    assert any(w.startswith(f"{solver} failed (its 'infeasible' verdict was not confirmed: its certificate "
-                            "rules out only the answers with all unknowns within ") for w in sol.warnings)
     # the hard items hold: the start and the detected stances
     assert np.max(np.abs(sol.position()[0])) < 1e-9
     assert _stance_speed(sol, walk) < 1e-8
 
 
 def test_the_certificate_of_the_false_verdict_is_far_below_the_scale(walk):
-    """What the unconfirmed certificate proves, in numbers (Clarabel with its own scaling,
-    as the back end retries it)."""
+    """What the unconfirmed certificate proves, in numbers (OSQP with bvpnav's default
+    settings, whose false verdict reproduces; Clarabel's does not, see above)."""
+    from bvpnav.backends.cvxpy_solvers import PRESETS
+
     prob = foot_problem(walk)
     cvx = compiled(prob.formulation)
     cvx.lam.value = 1.0
-    cvx.problem.solve(solver="CLARABEL", static_regularization_enable=False, tol_feas=1e-9,
-                      tol_gap_abs=1e-9, tol_gap_rel=1e-9, canon_backend="SCIPY")
+    cvx.problem.solve(solver="OSQP", canon_backend="SCIPY", **PRESETS["OSQP"]["default"])
     assert cvx.problem.status == "infeasible"
     cert = certificate(prob, cvx)
     assert cert is not None and not cert.confirmed

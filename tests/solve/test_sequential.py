@@ -114,6 +114,36 @@ def test_hard_band_and_robust_tracks_converge_from_the_same_poor_start(kw, solve
     assert d.max() <= (kw.get("tol", 0.0) + 1e-6)
 
 
+def test_an_outer_loops_capped_call_stays_in_the_continuations_soft_phase():
+    """``steps=`` (the node-state loop's intermediate step): at most that many linearizations,
+    no warning, and a hard track's continuation is not cut short by the requested mode (its
+    soft phase goes on at the next call); called again without ``steps`` from that answer, the
+    stage finishes soft, then hard, at the truth."""
+    import warnings
+
+    from bvpnav.solve import prepare
+    from bvpnav.solve.chain import solve_fixed
+    from bvpnav.solve.sequential import with_sequential
+
+    t, truth, path, data = planar_track()
+    track = TrackLine(x=path[:, 0], y=path[:, 1], axes=("x", "z"), name="rail", mode="hard")
+    prob = bvpnav.NavigationProblem(data).add(Position(t=[0.0, 20.0], value=[truth[0], truth[-1]]), track)
+    start = truth + np.column_stack([2 * np.sin(np.pi * t / 20), 1.5 * np.sin(2 * np.pi * t / 20)])
+    opts, lam = prepare(1.0, solver="direct", sequential={"initial": start})
+    stage = with_sequential(solve_fixed)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")   # a capped call that has not converged warns nothing
+        first = stage(prob.formulation, lam, opts, steps=1)
+    rep = first.stats["sequential"]
+    assert rep["mode"] == ["soft"] and not rep["converged"] and rep["max_change"][0] > 1.0
+    assert not [w for w in first.warnings if "did not converge" in w]
+    opts, lam = prepare(1.0, solver="direct", sequential={"initial": first})
+    sol = stage(prob.formulation, lam, opts)
+    rep = sol.stats["sequential"]
+    assert rep["converged"] and rep["mode"][0] == "soft" and rep["mode"][-1] == "final"
+    assert sol.rms_error(truth) < 1e-6
+
+
 def test_hard_track_without_continuation_stalls_mistimed_on_the_path():
     # why the continuation exists: the hard rows put the estimate on the path at once, at the
     # start's (wrong) arc lengths, and the Gauss-Newton step corrects the timing only slowly

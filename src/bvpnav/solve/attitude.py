@@ -210,9 +210,12 @@ class _Loop:
             self._data[key] = reintegrate(self.raw, self.form.error_model, values)
         return self._data[key]
 
-    def _form(self, data, error_model, search: bool = False) -> Formulation:
+    def _form(self, data, error_model, search: bool = False, items: list | None = None) -> Formulation:
+        """The fixed-attitude formulation of ``data`` with ``error_model`` and the loop's items
+        (``items``: others in their place, whose observability is checked afresh)."""
         f = self.form
-        items = f.items
+        own = items is None
+        items = f.items if own else items
         if search:  # the heading search scores candidates without the items that turn with the attitude
             items = [it for it in items if not getattr(it, "body_frame", False)]
         if error_model is not f.error_model:  # attitude fixed: items on the gyro model alone drop out
@@ -222,7 +225,7 @@ class _Loop:
         out.grade_report = f.grade_report
         # the same items and error model at every point: what determines the unknowns was
         # checked on the first formulation of each kind (an SVD, a fifth of a solve)
-        out._observable = self.checked.get(id(error_model), False)
+        out._observable = own and self.checked.get(id(error_model), False)
         return out
 
     def _solve(self, form: Formulation) -> Solution:
@@ -298,9 +301,7 @@ class _Loop:
                          sigma=0.1 if it.sigma is None else it.sigma)
                  if getattr(it, "mounting", None) else it
                  for it in self.form.items if not it.needs_error_model]
-        f = self.form
-        form = Formulation(data, f.residual, f.sigma_a if f.sigma_a_given else None, model, items, grade=None)
-        form.grade_report = f.grade_report
+        form = self._form(data, model, items=items)
         sol = self.inner(form, self.lam if isinstance(self.lam, float) else 1.0, self.opts)
         self.solves += 1
         return sol
@@ -970,6 +971,15 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     steps are below :data:`ANDERSON_START` and shrinking, each new point mixes the last steps
     (Anderson acceleration, :func:`_anderson`, ``iterations[k]["accelerated"]``); the loop still stops
     at a Gauss-Newton step below ``tol``, and that step's totals are not mixed.
+
+    With items the sequential stage linearizes (a fix's estimated delay or lever arm's
+    turning rows, :func:`bvpnav.solve.sequential.with_sequential`), the same steps linearize
+    them once from the last answer (``iterations[k]["solve"]``: ``"linearized once"``): one
+    Gauss-Newton step on the states and the items' unknowns together, rather than the items
+    iterated to their ``tol`` about an attitude the next step moves (their loop converges
+    linearly where the attitude is far off); a step below ``tol`` made so is solved again by
+    the stage, the items iterated to their ``tol``, and is the answer only if its attitude
+    step is still below ``tol``.
     """
     from ..error_models.error_states import states_at
 
@@ -999,6 +1009,10 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     if workspace is not None:   # each step's factor is dead before the next: one band's memory
         workspace.band_buffer = np.empty(0)
     quick = bool(o["quick"]) and workspace is not None and _direct_first(opts)
+    # items the sequential stage linearizes (a fix's estimated delay): an intermediate step
+    # linearizes them once (Gauss-Newton on the states and their unknowns together) instead of
+    # iterating them to convergence about a linearization point that the next step moves
+    joint = bool(o["quick"]) and bool(form.nonlinear_items)
     checked = _checked_first(form, quick, o, lam_now)
     with progress(desc="state loop", unit="iter", enabled=o["progress"]) as bar:
         for k in range(int(o["max_iter"])):
@@ -1018,23 +1032,25 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
             # an intermediate step only moves the linearization point: one banded solve, no
             # refinement or verification; the step expected to be the last (and the first
             # when it resolves a lambda rule) goes through the stage
-            x, staged = None, True
+            x, staged, once = None, True, False
             if quick and _quick_next(o, k, iters, lam_now):
                 x = _quick_step(f, float(lam_now), workspace)
                 staged = x is None
             if staged:
                 kw = {} if workspace is None else {"workspace": workspace}
-                sol = inner(f, lam_now, opts, **kw)
+                once = joint and _quick_next(o, k, iters, lam_now)
+                sol = inner(f, lam_now, opts, **kw, **({"steps": 1} if once else {}))
                 x = sol.x
                 checked = True
                 if rule is not None and not isinstance(lam_now, float):
                     curve, lam_now = sol.curve, float(sol.lam)
             s = f.model.split(x)["s"]
             step = float(np.max(np.linalg.norm(s[sm.state_index(raw, "attitude_error")], axis=1)))
-            if not staged and step < o["tol"]:
-                # a quick step that converged: the answer is this step's solve by the stage
-                sol = inner(f, lam_now, opts, workspace=workspace)
-                x, staged = sol.x, True
+            if (once or not staged) and step < o["tol"]:
+                # a quick step (or one linearization) that converged: the answer is this step's solve
+                # by the stage (the linearized items iterated to their tol)
+                sol = inner(f, lam_now, opts, **({} if workspace is None else {"workspace": workspace}))
+                x, staged, once = sol.x, True, False
                 s = f.model.split(x)["s"]
                 step = float(np.max(np.linalg.norm(s[sm.state_index(raw, "attitude_error")], axis=1)))
             # the objective of the formulation the step solved (items the sequential stage linearizes,
@@ -1042,10 +1058,11 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
             used = sol.formulation if staged and sol.formulation is not None else f
             j = objective_value(used, x, float(sol.lam if staged else lam_now))
             iters.append({"objective": j, "trial": j, "step": step, "accepted": True, "damping": 0.0,
-                          "solve": "stage" if staged else "banded"})
+                          "solve": "banded" if not staged else "linearized once" if once else "stage"})
             new, prev_att = _next_totals(sm, data, s, iters, prev_att, o, history)
             log.info("state iteration %d: objective %.9g, step %.3g rad%s", len(iters), j, step,
-                     "" if staged else " (intermediate: one banded solve)")
+                     " (intermediate: one banded solve)" if not staged else
+                     " (intermediate: the linearized items once)" if once else "")
             bar.update(1)
             totals = new
             if not o["loop"]:   # one linearized solve about the data as given

@@ -220,8 +220,10 @@ def _settled(before: dict, now: dict, tol: float) -> bool:
 
 
 def _iterate(loop: _Loop, inner: Stage, opts: SolveOptions, traj: pd.DataFrame,
-             sol: Solution | None = None) -> tuple[Solution, bool]:
-    """Linearize and solve until the final phase converges or runs out of iterations."""
+             sol: Solution | None = None, capped: bool = False) -> tuple[Solution, bool]:
+    """Linearize and solve until the final phase converges or runs out of iterations
+    (``capped``: an outer loop's intermediate step, which ends with the phase it is in: a
+    continuation's soft phase is not cut short by the requested modes)."""
     t = loop.form.model.grid.t
     axes = list(loop.form.model.axes)
     prev = traj[axes].to_numpy()
@@ -253,8 +255,8 @@ def _iterate(loop: _Loop, inner: Stage, opts: SolveOptions, traj: pd.DataFrame,
             if done or n_phase >= int(loop.o["max_iter"]):
                 loop.phases.append({"mode": mode, "iterations": n_phase, "tol": limit,
                                     "converged": bool(done)})
-                if not loop.soft:
-                    return sol, done
+                if not loop.soft or capped:
+                    return sol, bool(done) and not loop.soft
                 log.info("sequential loop: soft continuation ended after %d iteration(s) (%s); now %s",
                          n_phase, "converged" if done else "max_iter reached", "the requested modes")
                 # the requested modes make other terms: checked again
@@ -295,6 +297,12 @@ def with_sequential(inner: Stage) -> Stage:
     progress bar counts the iterations when stderr is a terminal (``rule={"progress":
     False}`` turns it off).
 
+    An outer loop that re-linearizes after every call (the node-state loop,
+    :func:`bvpnav.solve.attitude.with_attitude`) may pass ``steps`` (int) to the stage: at most
+    that many linearizations from the previous answer, without the warning (its intermediate
+    steps are Gauss-Newton steps on the states and the linearized items' unknowns together; the
+    step it expects to be its last calls the stage without ``steps``, iterated to ``tol``).
+
     Notes
     -----
     Iteration :math:`k` solves the convex problem with every nonlinear item
@@ -322,12 +330,15 @@ def with_sequential(inner: Stage) -> Stage:
 
     last: dict = {}   # the previous answer per set of items (the outer loops call this stage often)
 
-    def stage(form: Formulation, lam, opts: SolveOptions, workspace=None) -> Solution:
+    def stage(form: Formulation, lam, opts: SolveOptions, workspace=None, steps: int | None = None
+              ) -> Solution:
         nonlin = form.nonlinear_items
         if not nonlin:   # a caller's workspace (a loop of same-pattern formulations) goes on down
             kw = {} if workspace is None else {"workspace": workspace}
             return inner(form, lam, opts, **kw)
         o = check_sequential(opts.sequential)
+        if steps is not None:   # an outer loop's intermediate step: it re-linearizes anyway
+            o = {**o, "max_iter": int(steps)}
         t_start = time.perf_counter()
         key = (form.model.N, tuple(it.label for it in nonlin))
         if o["initial"] is None and key in last:
@@ -340,7 +351,7 @@ def with_sequential(inner: Stage) -> Stage:
         loop = _Loop(form, nonlin, o, lam)
         log.info("sequential loop over %s: initial estimate from %s; continuation for %s",
                  [it.label for it in nonlin], origin, sorted(loop.cont) or "none")
-        sol, converged = _iterate(loop, inner, opts, traj, sol0)
+        sol, converged = _iterate(loop, inner, opts, traj, sol0, capped=steps is not None)
         seconds = time.perf_counter() - t_start
         sol.record(sequential=loop.report(converged, origin, seconds))
         last[key] = sol
@@ -349,7 +360,7 @@ def with_sequential(inner: Stage) -> Stage:
         if loop.rule is not None:
             sol.lam_rule = loop.rule if o["lam_each"] else f"{loop.rule} (first linearization)"
             sol.curve = loop.curve
-        if not converged:
+        if not converged and steps is None:
             msg = _not_converged(loop)
             sol.warnings.append(msg)
             warn(msg)
