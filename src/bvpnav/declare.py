@@ -222,6 +222,7 @@ ATTITUDE: dict[str, tuple[Any, Rule]] = {
                                                              "the data's heading)")),
     "candidates": (12, number(2, integer=True, want="an integer of at least 2 headings")),
     "loop": (True, boolean()), "progress": (None, _PROGRESS), "quick": (True, boolean()),
+    "cheap": (True, boolean()),
     "start": ("data", one_of("data", "course", want="'data' (the node states' first linearization point is "
                                                     "the data's attitude) or 'course' (a car's: the heading "
                                                     "of the fixes' velocity, bvpnav.solve.course)"))}
@@ -357,7 +358,8 @@ def _options() -> list[Option]:
                "Options of the damped outer loop that error models acting on the attitude "
                "(``AttitudeError``, ``GyroBias``, ``GyroScaleFactor``) are solved by: ``tol`` (rad), "
                "``max_iter``, ``heading`` (``\"auto\"``, ``\"search\"``, ``\"given\"``), ``candidates``, "
-               "``loop``, ``progress``, and for ``ErrorStates`` ``quick`` and ``start`` (``\"data\"``, or "
+               "``loop``, ``progress``, and for ``ErrorStates`` ``quick``, ``cheap`` and ``start`` "
+               "(``\"data\"``, or "
                "``\"course\"``: a car's heading from the position fixes, :mod:`bvpnav.solve.course`) "
                "(:func:`bvpnav.solve.attitude.with_attitude`)."),
         Option("time_limit", None, _TIME_LIMIT, "float or None",

@@ -259,14 +259,17 @@ class MeshModel(NavModel):
         self.size = d * self.block + self.q + self.ns
         kept = _kept_constants(data, self.cond, self.sigma_fine)
         if kept is not None:   # the loop's steps share the mesh and sigma_a
-            self.K, self.M, self._cp, self._cq, self._slot, self.chol = kept
+            self.K, self.M, self._cp, self._cq, self._slot, self.chol, self._constant = kept
             return
         self.K = fem.stiffness(self.grid)
         W = self.cond.load[:, nodes].tocsr()
         self.M = fem.tridiagonal(W.diagonal(-1), W.diagonal(0), W.diagonal(1))   # the node residuals
         self._prepare_elements()
+        #: Blocks of the rows that depend on the mesh and sigma_a alone, made once and shared by the
+        #: loop's models (read-only): the element residuals' FEM columns, the end velocities' columns
+        self._constant: dict = {}
         _keep_constants(data, self.cond, self.sigma_fine,
-                        (self.K, self.M, self._cp, self._cq, self._slot, self.chol))
+                        (self.K, self.M, self._cp, self._cq, self._slot, self.chol, self._constant))
 
     def _prepare_elements(self) -> None:
         """The load coefficients of the samples inside elements and the Cholesky factors of
@@ -310,6 +313,9 @@ class MeshModel(NavModel):
     def _element_block(self, axis: int) -> sp.csr_matrix:
         r"""The columns of the ``u`` of one axis in its FEM rows, (n, 2 m):
         :math:`\epsilon_e = L_e u_e` at rows p (``L00 u0``) and q (``L10 u0 + L11 u1``)."""
+        kept = self._constant.get(("u", axis))
+        if kept is not None:
+            return kept
         L = self.chol[axis]
         k = np.arange(self.me)
         rows = np.concatenate([self.elements, self.elements + 1, self.elements + 1])
@@ -318,6 +324,7 @@ class MeshModel(NavModel):
                             shape=(self.N, 2 * self.me))
         out.sum_duplicates()
         out.sort_indices()
+        self._constant[("u", axis)] = out
         return out
 
     # ----------------------------------------------------------- FEM rows
@@ -327,6 +334,16 @@ class MeshModel(NavModel):
         if self.me:
             blocks["u"] = self._element_block(axis)
         return blocks
+
+    def _kept_constants(self) -> dict:
+        return self._constant
+
+    def _boundary_columns(self) -> sp.csr_matrix:
+        """As :meth:`NavModel._boundary_columns`, made once for the loop's models (kept with the
+        mesh's constants)."""
+        if "vb" not in self._constant:
+            self._constant["vb"] = super()._boundary_columns()
+        return self._constant["vb"]
 
     @functools.cached_property
     def Gs(self) -> list:
@@ -350,6 +367,13 @@ class MeshModel(NavModel):
         r"""``Cp @ Gs[a]`` and ``Cq @ Gs[a]`` of every axis ((n - 1, ns) each, s): the node states'
         loads of every element on its two nodes, made once per model (one pass over the
         samples); the condensed rows and the velocities at nodes are made of them."""
+        both = self._state_times(self._element_loads())
+        m = self.N - 1
+        return [b[:m] for b in both], [b[m:] for b in both]
+
+    def _element_loads(self) -> sp.csr_matrix:
+        """``Cp`` stacked on ``Cq`` ((2 (n - 1), N): every element's loads on its two nodes),
+        kept on the formulation's copy of the measured data (the loop's steps share it)."""
         c = self.cond
         raw = getattr(getattr(self.data, "state_point", None), "raw", self.data)
         W = raw.__dict__.get("_mesh_element_loads") if getattr(raw, "state_mesh", None) is not None else None
@@ -357,19 +381,25 @@ class MeshModel(NavModel):
             W = (c, sp.vstack([c.Cp, c.Cq]).tocsr())
             if getattr(raw, "state_mesh", None) is not None:
                 raw.__dict__["_mesh_element_loads"] = W
-        both = self._state_times(W[1])
-        m = self.N - 1
-        return [b[:m] for b in both], [b[m:] for b in both]
+        return W[1]
+
+    @functools.cached_property
+    def _load_change(self) -> np.ndarray | None:
+        """The change of the nodes' loads (n, d), m/s^2 s, that the state model makes without the
+        samples at a cheap Gauss-Newton point
+        (:func:`bvpnav.error_models.error_states.cheap_at`: the data's accelerations are then the
+        last full pass's), from its per-element sums of the load rows; None at any other point."""
+        by_sums = getattr(self.state_model, "condensed_change", None)
+        return None if by_sums is None else by_sums(self.data, self.cond.load)
 
     def ms_columns(self, axis: int) -> sp.csr_matrix:
         r""":math:`\Phi^T M_f G_s` of one axis (s): the node states' columns condensed (local: a
         state of node k reaches rows k - 1 .. k + 1): node k gets ``Cp G_s`` of the element on
-        its right and ``Cq G_s`` of the one on its left."""
+        its right and ``Cq G_s`` of the one on its left (the rows of the condensation's load,
+        made for every axis at once)."""
         cache = self.__dict__.setdefault("_ms_cache", {})
-        if axis not in cache:
-            CpG, CqG = self._element_state_columns
-            z = sp.csr_matrix((1, self.ns))
-            cache[axis] = canonical_csr(sp.vstack([CpG[axis], z]) + sp.vstack([z, CqG[axis]]))
+        if not cache:   # the condensation's load rows, Sp Cp + Sq Cq: every axis at once
+            cache.update(enumerate(self._state_times(self.cond.load)))
         return cache[axis]
 
     def mg_columns(self, axis: int) -> tuple[np.ndarray, np.ndarray]:
@@ -379,12 +409,27 @@ class MeshModel(NavModel):
             cache[axis] = self._times_g(self.cond.load, axis)
         return cache[axis]
 
+    def _check_full_point(self, what: str) -> None:
+        """Refuse ``what`` at a cheap Gauss-Newton point (:attr:`_load_change`): its samples'
+        accelerations are the last full pass's, so only the condensed loads are made there."""
+        if self._load_change is not None:
+            raise RuntimeError(f"{what} of a cheap Gauss-Newton point: made at full passes only (its "
+                               "samples' accelerations are the last full pass's)")
+
     def _acc_load(self, axis: int) -> np.ndarray:
-        return self.cond.load @ self.data.acc[:, axis]
+        out = self.cond.load @ self.data.acc[:, axis]
+        change = self._load_change
+        return out if change is None else out + change[:, axis]
 
     def residual_rows(self, axes=None) -> Affine:
         """The node residuals ``w`` (m/s^2) and the whitened element residuals ``u``, axis by
         axis (:meth:`residual_sigma` gives their standard deviations)."""
+        key = ("residual_rows", None if axes is None else tuple(np.atleast_1d(axes)), self.size)
+        if key not in self._constant:
+            self._constant[key] = self._residual_rows(axes)
+        return self._constant[key]
+
+    def _residual_rows(self, axes=None) -> Affine:
         parts = []
         for a in self.axes_of(axes):
             cols = np.concatenate([self.w_index(a), self.element_index(a)])
@@ -410,6 +455,7 @@ class MeshModel(NavModel):
         element on its left (module Notes), ``v0``/``v1`` at the ends; inside an element of
         one sample step the linear acceleration integrated from its left node, as
         :func:`bvpnav.fem.velocity_operators`. Other times raise :class:`InputError`."""
+        self._check_full_point("velocities")
         times = self.grid.check_inside(as_times(t, what), what)
         self.grid.check_on_mesh(times, what)
         times = self.grid.snapped(times)
@@ -493,6 +539,7 @@ class MeshModel(NavModel):
         :math:`z = L_e^{-T} u_e`; the positions there solve the fine FEM rows
         :math:`K_f r + M_f a = 0` at those samples with the nodal positions given.
         """
+        self._check_full_point("the trajectory")
         fine, nodes, idx = self.fine, self.grid.nodes, self.cond.interior
         if self.ns:
             sacc = self._state_acceleration(xval[self.s_index])
@@ -608,6 +655,7 @@ class MeshModel(NavModel):
 
     def _inner_velocity(self, i: np.ndarray, ax) -> Affine:
         """:meth:`sample_velocity` at samples ``i`` strictly inside elements (see its Notes)."""
+        self._check_full_point("velocities")
         f, nodes, c = self.fine, self.grid.nodes, self.cond
         m = i.size
         e = c.element[i]

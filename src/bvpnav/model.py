@@ -163,6 +163,44 @@ def rows_side_by_side(row_blocks: list, ncols: int) -> sp.csr_matrix:
     return sp.csr_matrix((data, indices, indptr.astype(itype, copy=False)), shape=(row0, ncols))
 
 
+def rows_with_tail(head: sp.csr_matrix, tail: list, col: int, below: Sequence = ()) -> sp.csr_matrix:
+    """The rows of ``head`` (CSR, its columns before ``col``) with the rows of the ``tail``
+    blocks (CSR, stacked one below the other, as many rows as ``head``) placed from column
+    ``col`` on after each row's entries, then the rows of the ``below`` matrices: the result of
+    :func:`rows_side_by_side` for these blocks, written by index arithmetic on whole arrays (a
+    ``head`` made once serves every Gauss-Newton step of the node-state loop). Canonical when
+    the blocks are."""
+    R, ncols = head.shape
+    tail = [as_csr(t) for t in tail]
+    below = [as_csr(b) for b in below]
+    hc = np.diff(head.indptr)
+    tc = np.concatenate([np.diff(t.indptr) for t in tail]) if tail else np.zeros(R, np.int64)
+    bc = [np.diff(b.indptr) for b in below]
+    indptr = np.zeros(R + sum(c.size for c in bc) + 1, dtype=np.int64)
+    np.cumsum(np.concatenate([hc + tc, *bc]), out=indptr[1:])
+    nnz = int(indptr[-1])
+    itype = np.int32 if max(nnz, ncols) < 2**31 else np.int64
+    indices = np.empty(nnz, dtype=itype)
+    data = np.empty(nnz)
+    start = indptr[:R]
+    dest = np.arange(head.nnz) + np.repeat(start - head.indptr[:-1], hc)    # the head's entries
+    indices[dest] = head.indices
+    data[dest] = head.data
+    if tail:   # the tail's entries, after the head's in each row
+        tind = np.concatenate([t.indices for t in tail])
+        tptr = np.r_[0, np.cumsum(tc)]
+        dest = np.arange(tind.size) + np.repeat(start + hc - tptr[:-1], tc)
+        indices[dest] = tind + col
+        data[dest] = np.concatenate([t.data for t in tail])
+    at = int(indptr[R])
+    for b in below:
+        indices[at:at + b.nnz] = b.indices
+        data[at:at + b.nnz] = b.data
+        at += b.nnz
+    return sp.csr_matrix((data, indices, indptr.astype(itype, copy=False)),
+                         shape=(R + sum(c.size for c in bc), ncols))
+
+
 def _uniform_rows(per: list) -> tuple[int, int]:
     """The longest stretch of rows ``[lo, hi)`` in which each block has one entry count
     (``per``: each block's entries per row); ``(0, 0)`` for fewer than three rows."""
@@ -668,12 +706,16 @@ class NavModel:
         """The blocks of one axis' FEM rows by the unknowns they multiply: ``r`` (K, 1/s),
         ``w`` (M, s), ``vb`` (the end velocities' columns) and, with error-model
         parameters, ``l`` (``M G``, dense (N, q), s); :meth:`fem_rows` places them."""
-        blocks = {"r": self.K, "w": self.M, "vb": fem.boundary_columns(self.grid)}
+        blocks = {"r": self.K, "w": self.M, "vb": self._boundary_columns()}
         if self.q:
             blocks["l"] = columns_csr(*self.mg_columns(axis), self.q)
         if self.ns:
             blocks["s"] = self.ms_columns(axis)
         return blocks
+
+    def _boundary_columns(self) -> sp.csr_matrix:
+        """The end velocities' columns of one axis' FEM rows (:func:`bvpnav.fem.boundary_columns`)."""
+        return fem.boundary_columns(self.grid)
 
     def ms_columns(self, axis: int) -> sp.csr_matrix:
         """``M G_s`` of one axis (s): the node states' columns of the FEM rows, sparse and
@@ -709,10 +751,32 @@ class NavModel:
     def _fem_rows(self, below: Sequence[Affine] = ()) -> Affine:
         # every axis' rows written into one matrix (no per-axis matrix and stacked copy),
         # and the rows ``below`` after them
-        groups = [self._placed(self.fem_blocks(a), a) for a in range(self.d)]
-        A = rows_side_by_side(groups + [[(p.A, 0)] for p in below], self.size)
+        if self.ns and not self.q:
+            # node states: their columns come last; the other blocks (the same at every
+            # Gauss-Newton point) are placed once and the states' columns appended to their rows
+            A = rows_with_tail(self._fem_fixed_rows(), [self.ms_columns(a) for a in range(self.d)],
+                               int(self.s_index[0]), [p.A for p in below])
+        else:
+            groups = [self._placed(self.fem_blocks(a), a) for a in range(self.d)]
+            A = rows_side_by_side(groups + [[(p.A, 0)] for p in below], self.size)
         c = np.concatenate([self._acc_load(a) for a in range(self.d)] + [p.c for p in below])
         return Affine(A, c, Affine.stacked_labels([self._fem_labels(), *(p.labels for p in below)]))
+
+    def _kept_constants(self) -> dict:
+        """Rows that depend on the grid alone, made once (a coarse mesh shares them between the
+        node-state loop's models)."""
+        return self.__dict__.setdefault("_grid_constants", {})
+
+    def _fem_fixed_rows(self) -> sp.csr_matrix:
+        """The FEM rows of every axis without the node states' columns (they depend on the grid
+        and the mesh alone: made once, :meth:`_kept_constants`)."""
+        kept = self._kept_constants()
+        key = ("fem_fixed", self.size)
+        if key not in kept:
+            groups = [[(b, c) for b, c in self._placed(self.fem_blocks(a), a) if c < int(self.s_index[0])]
+                      for a in range(self.d)]
+            kept[key] = rows_side_by_side(groups, self.size)
+        return kept[key]
 
     def _acc_load(self, axis: int) -> np.ndarray:
         """``M a_hat`` of one axis (m/s): the measured accelerations' part of the FEM rows."""

@@ -219,6 +219,10 @@ class AttitudeLoopReport(_Record):
         and ``answer``: the objective's parts there, ``motion`` (the data rows and the items
         the fixed-attitude solve fits), ``gyro_items`` (items on the attitude models alone,
         e.g. ZeroAngularRate) and ``priors``.
+    full_passes, cheap_steps : int or None
+        Node states (``kind="states"``): the steps made from every sample (full passes) and the
+        cheap ones made from a full pass's per-element sums
+        (:func:`bvpnav.error_models.error_states.cheap_at`); None (not keys) otherwise.
     """
 
     kind: str
@@ -236,8 +240,10 @@ class AttitudeLoopReport(_Record):
     heading: str | None = None
     held: list | None = None
     objective_parts: dict | None = None
+    full_passes: int | None = None
+    cheap_steps: int | None = None
 
-    _optional = ("inner", "heading", "held", "objective_parts")
+    _optional = ("inner", "heading", "held", "objective_parts", "full_passes", "cheap_steps")
 
     def as_dict(self) -> dict[str, Any]:
         out = super().as_dict()

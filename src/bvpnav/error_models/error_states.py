@@ -89,6 +89,7 @@ subtracts the gyro-bias states), never by index.
 
 from __future__ import annotations
 
+import copy
 import functools
 from dataclasses import dataclass, field
 from typing import Any
@@ -118,10 +119,21 @@ class StatePoint:
         The data as measured (its attitude integrated from the raw rates).
     totals : dict of str to ndarray (N, 3)
         The current total of each state kind (rad; rad/s; m/s^2).
+    cheap : _Cheap or None
+        A cheap Gauss-Newton step's point (:func:`cheap_at`): the rows are made from the sums
+        of the last full pass, not from the samples; ``totals`` then hold the biases at every
+        sample but the attitude error at the nodes only.
     """
 
     raw: Any
     totals: dict = field(default_factory=dict)
+    cheap: Any = None
+
+
+def _csr(data: np.ndarray, indices: np.ndarray, indptr: np.ndarray, shape: tuple) -> sp.csr_matrix:
+    """A CSR matrix on its arrays (canonical ones: sorted, no duplicates; the loop's steps may
+    share the index arrays, which no reader changes in place)."""
+    return sp.csr_matrix((data, indices, indptr), shape=shape)
 
 
 def _raw(data):
@@ -379,6 +391,125 @@ def states_at(data, totals: dict):
     return out
 
 
+@dataclass(eq=False)
+class _Cheap:
+    """A cheap step's point relative to ``ref``, the data of the last full pass (whose per-element
+    sums it reads): per mesh node the rotation ``rot`` (n, 3, 3) that takes the reference's node
+    attitude to this point's, :math:`R_p = C_p \\bar C_p^T`, and the bias changes ``dbg``, ``dba``
+    (n, 3; rad/s, m/s^2)."""
+
+    ref: Any
+    rot: np.ndarray
+    dbg: np.ndarray
+    dba: np.ndarray
+
+
+def _cheap(data) -> _Cheap | None:
+    return getattr(getattr(data, "state_point", None), "cheap", None)
+
+
+def cheap_error(data, nodes: dict) -> float:
+    r"""The relative size, rad, of what a cheap step (:func:`cheap_at`) from ``data``'s point (a
+    full pass) to the node totals ``nodes`` (kind -> (n, 3) at a coarse mesh's nodes) leaves
+    out: :math:`\rho_g (\rho_g / 2 + \rho_a)` with :math:`\rho_g = \max_e H_e \max(|\Delta
+    b_{g,p}|, |\Delta b_{g,q}|)` the largest rotation the gyro-bias change makes over an
+    element (taken to first order: its second-order term) and :math:`\rho_a = \max_p |\Delta
+    b_{a,p}| / |g|` the tilt an accelerometer-bias change is equivalent to (its product with the
+    gyro-bias change is left out of the sums). 0 without gyro-bias states (the cheap step is
+    then exact); inf without a mesh."""
+    mesh = _mesh(data)
+    if mesh is None:
+        return float("inf")
+    if "gyro_bias" not in nodes:
+        return 0.0
+    raw = _raw(data)
+    db = np.linalg.norm(np.asarray(nodes["gyro_bias"]) - _totals(data, "gyro_bias")[mesh], axis=1)
+    H = np.diff(np.asarray(raw.t, dtype=float)[mesh])
+    rho_g = float(np.max(H * np.maximum(db[:-1], db[1:]))) if H.size else 0.0
+    rho_a = 0.0
+    if "acc_bias" in nodes:
+        g = float(np.linalg.norm(raw.gravity)) if getattr(raw, "gravity", None) is not None else 0.0
+        da = float(np.max(np.linalg.norm(np.asarray(nodes["acc_bias"]) - _totals(data, "acc_bias")[mesh],
+                                         axis=1)))
+        rho_a = da / g if g > 0 else float("inf")
+    return rho_g * (0.5 * rho_g + rho_a)
+
+
+def cheap_at(ref, nodes: dict):
+    r"""A cheap Gauss-Newton point: the data of the last full pass ``ref`` (its samples, and the
+    per-element sums its rows were made of) moved to the node totals ``nodes`` (kind -> (n, 3)
+    at the mesh's nodes) without a pass over the samples.
+
+    Notes
+    -----
+    Inside element :math:`[t_p, t_q]` the attitude is the left node's carried by the corrected
+    rates, :math:`C_i = C_p P_i` (module Notes), so a change of the node attitudes alone rotates
+    every sample of the element by the same :math:`R_p = C_p \bar C_p^T` (bars: the reference):
+    the element's load sums :math:`\sum_i W_{ri} C_i (\hat f_i - b_{a,i})` become
+    :math:`R_p` times the reference's, exactly, and so do the condensed columns and the process
+    rows (:math:`e = \mathrm{Log}(R_q \bar C_q \Delta R^T \bar C_p^T R_p^T)`). The
+    accelerometer bias enters the sums linearly (exact too). The gyro-bias change
+    :math:`\Delta b_g` is taken to first order, through the reference's own columns
+    (:math:`\sum_i W_{ri} [f_{n,i}\times] C_p Y_i`, and the process rows' bias Jacobians);
+    the terms left out (the second order of :math:`\Delta b_g`, its product with the
+    accelerometer-bias change, and the columns' change with the biases) are measured by
+    :func:`cheap_error`. The loop (:func:`bvpnav.solve.attitude._state_loop`) takes a cheap
+    step only while that is small and always ends with a full pass, so its answer is
+    the exact fixed point.
+    """
+    raw, mesh = _raw(ref), _mesh(ref)
+    if mesh is None or _cheap(ref) is not None:
+        raise ValueError("cheap_at: the reference must be a full pass on a coarse mesh")
+    nn = mesh.size
+    was = {k: _totals(ref, k)[mesh] for k in nodes}
+    rot = _compose(Rotation.from_rotvec(nodes["attitude_error"]),
+                   Rotation.from_rotvec(was["attitude_error"]).inv()).as_matrix()
+    zero = np.zeros((nn, 3))
+    dbg = nodes["gyro_bias"] - was["gyro_bias"] if "gyro_bias" in nodes else zero
+    dba = nodes["acc_bias"] - was["acc_bias"] if "acc_bias" in nodes else zero
+    hats = _hats(ref)
+    tot = {k: hats @ np.asarray(v, dtype=float) for k, v in nodes.items() if k != "attitude_error"}
+    att = np.array(_totals(ref, "attitude_error"))
+    att[mesh] = nodes["attitude_error"]
+    tot["attitude_error"] = att
+    out = copy.copy(ref)
+    for key in ("_cheap_sums", "_cheap_process"):   # the reference's, read through cheap.ref
+        out.__dict__.pop(key, None)
+    out.state_point = StatePoint(raw=raw, totals=tot, cheap=_Cheap(ref, rot, dbg, dba))
+    return out
+
+
+def _cheap_sums(data, W, groups: dict) -> tuple:
+    """A cheap point's condensed sums for the rows ``W``: the load sums (G, 3) of every group
+    (row, element) of :meth:`ErrorStates._groups`, their change from the reference's, and the
+    blocks of :meth:`ErrorStates.condensed_columns` (key -> (G, 3, 3)); kept on ``data``."""
+    cheap = _cheap(data)
+    mine = data.__dict__.setdefault("_cheap_loads", {})
+    kept = mine.get(id(W))
+    if kept is not None and kept[0] is W:
+        return kept[1]
+    ref = cheap.ref.__dict__.get("_cheap_sums", {}).get(id(W))
+    if ref is None or ref[0] is not W:
+        raise RuntimeError("cheap step: the reference pass kept no sums for these rows")
+    L0, Y0 = ref[1], ref[2]
+    left = groups["left"]
+    nn = cheap.rot.shape[0]
+    d = L0.copy()
+    for (kind, right), blk in Y0.items():
+        if kind == "attitude_error":
+            continue
+        node = left + right
+        ok = node < nn
+        db = (cheap.dba if kind == "acc_bias" else cheap.dbg)[node[ok]]
+        d[ok] += np.einsum("gij,gj->gi", blk[ok], db)
+    R = cheap.rot[left]
+    L = np.einsum("gij,gj->gi", R, d)
+    Y = {key: (-_skew(L) if key[0] == "attitude_error" else R @ blk) for key, blk in Y0.items()}
+    out = (L, L - L0, Y)
+    mine[id(W)] = (W, out)
+    return out
+
+
 def process_residuals(data) -> tuple[np.ndarray, np.ndarray]:
     r"""The attitude process residuals :math:`e_j` (N - 1, 3), rad, at the data's point, and
     the step rotations :math:`a_j = \phi_j - h_j b_{g,j}` (N - 1, 3), rad."""
@@ -397,21 +528,50 @@ def _mesh_process(data, mesh: np.ndarray, gyro: bool):
     :math:`e_k` (n - 1, 3, rad), :math:`J_l(e_k)^{-1}`, :math:`J_r(e_k)^{-1}` and the gyro-bias
     Jacobians of the element's left and right nodes (n - 1, 3, 3; s, or None without gyro-bias
     states)."""
+    cheap = _cheap(data)
+    if cheap is not None:
+        return _cheap_process(data, cheap, gyro)
     el = _elements(data, mesh, _totals(data, "gyro_bias"))
     S, theta = el.S, el.theta[:-1]                                # per step, in its element
     dR = S[mesh[1:] - 1]                                          # each element's product of steps
     C = data.attitude
     Cp, Cq = C[mesh[:-1]], C[mesh[1:]]
-    e0 = _compose(_compose(Cq, dR.inv()), Cp.inv()).as_rotvec()
+    M = _compose(_compose(Cq, dR.inv()), Cp.inv())
+    e0 = M.as_rotvec()
+    Jli = _inverse_jacobian(e0, 1.0)
+    Jri = _inverse_jacobian(e0, -1.0)
+    if not gyro:
+        data.__dict__["_cheap_process"] = (M.as_quat(), None, None)
+        return e0, Jli, Jri, None, None
+    # D_i^T = dR^T (R_s ... R_i), dR the element's: dR^T out of the sums over its steps
+    lead = Cq.as_matrix() @ np.swapaxes(dR.as_matrix(), 1, 2)
+    Vp = lead @ np.add.reduceat((1.0 - theta)[:, None, None] * el.Z, mesh[:-1], axis=0)
+    Vq = lead @ np.add.reduceat(theta[:, None, None] * el.Z, mesh[:-1], axis=0)
+    data.__dict__["_cheap_process"] = (M.as_quat(), Vp, Vq)   # a cheap step's reference
+    return e0, Jli, Jri, Jli @ Vp, Jli @ Vq
+
+
+def _cheap_process(data, cheap: _Cheap, gyro: bool):
+    r""":func:`_mesh_process` at a cheap point (:func:`cheap_at`): with the reference's
+    :math:`\bar M = \bar C_q \Delta R^T \bar C_p^T` and bias sums :math:`V_{p|q}` (the bias
+    Jacobians without :math:`J_l^{-1}`), :math:`e = \mathrm{Log}(R_q \exp([V_p \Delta b_p +
+    V_q \Delta b_q]\times) \bar M R_p^T)` and the Jacobians :math:`J_l(e)^{-1} R_q V_{p|q}`."""
+    kept = cheap.ref.__dict__.get("_cheap_process")
+    if kept is None or (gyro and kept[1] is None):
+        raise RuntimeError("cheap step: the reference pass kept no process rows")
+    Mq, Vp, Vq = kept
+    M = Rotation.from_quat(Mq)
+    if gyro:
+        v = np.einsum("eij,ej->ei", Vp, cheap.dbg[:-1]) + np.einsum("eij,ej->ei", Vq, cheap.dbg[1:])
+        M = _compose(Rotation.from_rotvec(v), M)
+    R = Rotation.from_matrix(cheap.rot)
+    e0 = _compose(_compose(R[1:], M), R[:-1].inv()).as_rotvec()
     Jli = _inverse_jacobian(e0, 1.0)
     Jri = _inverse_jacobian(e0, -1.0)
     if not gyro:
         return e0, Jli, Jri, None, None
-    # D_i^T = dR^T (R_s ... R_i), dR the element's: dR^T out of the sums over its steps
-    lead = Jli @ Cq.as_matrix() @ np.swapaxes(dR.as_matrix(), 1, 2)
-    Bp = lead @ np.add.reduceat((1.0 - theta)[:, None, None] * el.Z, mesh[:-1], axis=0)
-    Bq = lead @ np.add.reduceat(theta[:, None, None] * el.Z, mesh[:-1], axis=0)
-    return e0, Jli, Jri, Bp, Bq
+    lead = Jli @ cheap.rot[1:]
+    return e0, Jli, Jri, lead @ Vp, lead @ Vq
 
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
@@ -648,11 +808,16 @@ class ErrorStates(ErrorModel):
             return [sp.csr_matrix(W @ g) for g in self.state_columns(data)]
         kinds = self.state_kinds(data)
         n = data.n
+        cheap = _cheap(data)
+        if cheap is not None:   # from the last full pass's sums (cheap_at)
+            g = self._groups(cheap.ref, mesh, W, None)
+            return self._placed(g, _cheap_sums(data, W, g)[2])
         el = _elements(data, mesh, _totals(data, "gyro_bias"))
         g = self._groups(data, mesh, W, el.left)
         P = g["P"]
         fn = data.attitude.apply(data.specific_force)
-        Y = {("attitude_error", 0): -_skew(P @ fn)}
+        L = P @ fn
+        Y = {("attitude_error", 0): -_skew(L)}
         C = data.attitude.as_matrix()
         if "acc_bias" in kinds:
             C9 = C.reshape(n, 9)
@@ -663,10 +828,36 @@ class ErrorStates(ErrorModel):
             Y2 = _gyro_sums(el, mesh)
             Cp = C.reshape(n, 9).T[:, at].reshape(3, 3, n)
             f0, f1, f2 = np.ascontiguousarray(fn.T)
-            T = np.stack([f1 * Cp[2] - f2 * Cp[1], f2 * Cp[0] - f0 * Cp[2], f0 * Cp[1] - f1 * Cp[0]])
-            X = np.einsum("rjn,bjcn->brcn", T, Y2.reshape(2, 3, 3, n))   # [f_n x] C_p Y_i
-            Yg = (P @ X.reshape(18, n).T).reshape(-1, 2, 3, 3)
+            T = (f1 * Cp[2] - f2 * Cp[1], f2 * Cp[0] - f0 * Cp[2], f0 * Cp[1] - f1 * Cp[0])
+            # [f_n x] C_p Y_i (row r: sum_j T[r, j] Y[j]), written sample-major for the sums
+            Y4 = Y2.reshape(2, 3, 3, n)
+            X = np.empty((n, 2, 3, 3))
+            for r in range(3):
+                Xr = T[r][0] * Y4[:, 0]
+                Xr += T[r][1] * Y4[:, 1]
+                Xr += T[r][2] * Y4[:, 2]
+                X[:, :, r, :] = Xr.transpose(2, 0, 1)
+            Yg = (P @ X.reshape(n, 18)).reshape(-1, 2, 3, 3)
             Y[("gyro_bias", 0)], Y[("gyro_bias", 1)] = Yg[:, 0], Yg[:, 1]
+        # the sums and their derivatives, for the cheap steps that follow (cheap_at)
+        data.__dict__.setdefault("_cheap_sums", {})[id(W)] = (W, L, Y)
+        return self._placed(g, Y)
+
+    def condensed_change(self, data, W) -> np.ndarray | None:
+        """At a cheap point (:func:`cheap_at`): the change of ``W @ (C_i (f_i - b_{a,i}))`` from the
+        reference's, (m, 3) m/s^2 per row of ``W`` (the condensed load of the samples'
+        accelerations moves by it); None at any other point (the load is made from the samples)."""
+        cheap = _cheap(data)
+        mesh = _mesh(data)
+        if cheap is None or mesh is None:
+            return None
+        g = self._groups(cheap.ref, mesh, W, None)
+        dL = _cheap_sums(data, W, g)[1]
+        return np.column_stack([np.bincount(g["row"], dL[:, a], minlength=W.shape[0]) for a in range(3)])
+
+    def _placed(self, g: dict, Y: dict) -> list:
+        """The blocks ``Y`` (key -> (G, 3, 3), one per group of ``g``) as the canonical CSR
+        matrices of :meth:`condensed_columns`, one per navigation axis."""
         vals = [Y[key][g["keep"][key]] for key in g["order"]]
         out = []
         for a in range(3):
@@ -688,6 +879,8 @@ class ErrorStates(ErrorModel):
         kept = cache.get(id(W))
         if kept is not None and kept[0] is W and kept[1] is mesh and kept[2] == kinds:
             return kept[3]
+        if left is None:
+            raise RuntimeError("cheap step: the reference pass grouped no such rows")
         Wc = sp.coo_matrix(W)
         nn, K = mesh.size, self._per_node(data)
         key = Wc.row.astype(np.int64) * nn + left[Wc.col]
@@ -718,7 +911,8 @@ class ErrorStates(ErrorModel):
             return sp.csr_matrix((w, (group, cols_w)), shape=(starts.size, W.shape[1]))
 
         out = {"P": summing(vals), "P1": summing(vals * (1.0 - th[cols_w])), "P2": summing(vals * th[cols_w]),
-               "order": order, "keep": keep, "slot": slot, "nnz": uniq.size, "indices": uc.astype(np.int32),
+               "row": R, "left": L, "order": order, "keep": keep, "slot": slot, "nnz": uniq.size,
+               "indices": uc.astype(np.int32),
                "indptr": indptr.astype(np.int32), "shape": shape}
         if len(cache) >= 8:   # the load's, and a few others (velocity rows)
             cache.pop(next(iter(cache)))
@@ -789,10 +983,14 @@ class ErrorStates(ErrorModel):
         kinds = self.state_kinds(data)
         out = []
 
-        def rows_of(prefix, count, r, c, v, const) -> Affine:
-            A = sp.csr_matrix((v, (r, s0 + c)), shape=(count, model.size))
-            A.sum_duplicates()
-            return Affine(A, const, RowLabels([(prefix, count)]))
+        # the rows' patterns (and the walks' matrices) depend on the layout alone: made once for
+        # the loop's steps, kept on the measured data
+        fixed = _raw(data).__dict__.setdefault("_state_rows", {})
+        itype = np.int32 if model.size < 2**31 and 6 * n * len(kinds) ** 2 < 2**31 else np.int64
+        if fixed.get("key") != (id(mesh), n, s0, model.size, tuple(kinds)):
+            fixed.clear()
+            fixed["key"] = (id(mesh), n, s0, model.size, tuple(kinds))
+            fixed["mesh"] = mesh   # keeps the mesh alive while its id is the key
 
         # the attitude process rows
         P = self.state_index(data, "attitude_error")
@@ -800,26 +998,32 @@ class ErrorStates(ErrorModel):
             e0, a = process_residuals(data)
             Jli = _inverse_jacobian(e0, 1.0)
             Jri = _inverse_jacobian(e0, -1.0)
-            blocks = [(P[1:], Jli), (P[:-1], -Jri)]
+            blocks = [(P[:-1], -Jri), (P[1:], Jli)]
             if "gyro_bias" in kinds:
                 C1 = data.attitude.as_matrix()[1:]
                 Bg = Jli @ C1 @ right_jacobian(a) * h[:, None, None]
-                blocks.append((self.state_index(data, "gyro_bias")[:-1], Bg))
+                blocks.insert(1, (self.state_index(data, "gyro_bias")[:-1], Bg))
         else:
             e0, Jli, Jri, Bp, Bq = _mesh_process(data, mesh, "gyro_bias" in kinds)
-            blocks = [(P[1:], Jli), (P[:-1], -Jri)]
+            blocks = [(P[:-1], -Jri), (P[1:], Jli)]
             if "gyro_bias" in kinds:
                 B = self.state_index(data, "gyro_bias")
-                blocks += [(B[:-1], Bp), (B[1:], Bq)]
+                blocks = [blocks[0], (B[:-1], Bp), blocks[1], (B[1:], Bq)]
         m = n - 1
-        r = np.arange(3 * m).reshape(m, 3)
-        rr, cc, vv = [], [], []
-        for cols, J in blocks:        # row (j, i): sum_c J[j, i, c] * state cols[j, c]
-            rr.append(np.repeat(r, 3, axis=1).ravel())
-            cc.append(np.tile(cols, (1, 3)).reshape(m, 3, 3).ravel())
-            vv.append(J.ravel())
-        res = rows_of("process_attitude", 3 * m, np.concatenate(rr), np.concatenate(cc), np.concatenate(vv),
-                      e0.ravel())
+        # row (j, i): sum_c J[j, i, c] * state cols[j, c]; the blocks in increasing columns (node j's
+        # states, then node j + 1's), so the CSR arrays are written directly, in canonical order
+        w = 3 * len(blocks)
+        vals = np.empty((m, 3, w))
+        for b, (_, J) in enumerate(blocks):
+            vals[:, :, 3 * b:3 * b + 3] = J
+        if "process" not in fixed:
+            cols = np.empty((m, 3, w), dtype=np.int64)
+            for b, (c, _) in enumerate(blocks):
+                cols[:, :, 3 * b:3 * b + 3] = s0 + c[:, None, :]
+            fixed["process"] = (cols.ravel().astype(itype), np.arange(0, 3 * m * w + 1, w, dtype=itype))
+        cols, ptr = fixed["process"]
+        A = _csr(vals.ravel(), cols, ptr, (3 * m, model.size))
+        res = Affine(A, e0.ravel(), RowLabels([("process_attitude", 3 * m)]))
         out.append(Term(label="process ErrorStates[attitude]", item=None, residual=res, mode="soft",
                         kind="equality", sigma=np.repeat(self.arw * np.sqrt(h), 3), scaled_by_lam=False,
                         units="rad"))
@@ -827,11 +1031,14 @@ class ErrorStates(ErrorModel):
         for kind, q in (("gyro_bias", self.gyro_drift), ("acc_bias", self.acc_drift)):
             if kind not in kinds:
                 continue
-            B = self.state_index(data, kind)
             tot = self.state_total(data, kind)
-            r = np.arange(3 * m)
-            res = rows_of(f"process_{kind}", 3 * m, np.r_[r, r], np.r_[B[1:].ravel(), B[:-1].ravel()],
-                          np.r_[np.ones(3 * m), -np.ones(3 * m)], (tot[1:] - tot[:-1]).ravel())
+            if kind not in fixed:   # row (j, c): b_{j+1,c} - b_{j,c}, its two columns in increasing order
+                B = self.state_index(data, kind)
+                cols = (s0 + np.stack([B[:-1], B[1:]], axis=-1)).ravel()
+                fixed[kind] = _csr(np.tile([-1.0, 1.0], 3 * m), cols.astype(itype),
+                                   np.arange(0, 6 * m + 1, 2, dtype=itype), (3 * m, model.size))
+            A = fixed[kind]
+            res = Affine(A, (tot[1:] - tot[:-1]).ravel(), RowLabels([(f"process_{kind}", 3 * m)]))
             if q > 0:
                 out.append(Term(label=f"process ErrorStates[{kind}]", item=None, residual=res, mode="soft",
                                 kind="equality", sigma=np.repeat(q * np.sqrt(h), 3), scaled_by_lam=False,
@@ -847,10 +1054,12 @@ class ErrorStates(ErrorModel):
             cols = self.state_index(data, kind)[0]
             tot = self.state_total(data, kind)[0]
             J = _inverse_jacobian(tot, 1.0) if kind == "attitude_error" else np.eye(3)
-            res = rows_of(f"prior_{kind}", 3, np.repeat(np.arange(3), 3), np.tile(cols, 3), J.ravel(), tot)
             keep = np.flatnonzero(np.isfinite(sig))
-            if keep.size:
-                out.append(Term(label=f"prior ErrorStates[{kind}]", item=None, residual=res.rows(keep),
+            if keep.size:   # the kept rows of J on the first node's three states (increasing columns)
+                k = keep.size
+                A = _csr(J[keep].ravel(), np.tile(s0 + cols, k), np.arange(0, 3 * k + 1, 3), (k, model.size))
+                res = Affine(A, tot[keep], tuple(f"prior_{kind}[{i}]" for i in keep))
+                out.append(Term(label=f"prior ErrorStates[{kind}]", item=None, residual=res,
                                 mode="soft", kind="equality", sigma=np.asarray(sig, dtype=float)[keep],
                                 scaled_by_lam=False, units=KINDS[kind]))
         return out

@@ -36,7 +36,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..formulation import Formulation
-from ..model import Affine
+from ..model import Affine, rows_with_tail
 from ..sparse import abs_max, canonical, row_scaled
 from .banded import (
     AugmentedOperator,
@@ -133,6 +133,26 @@ def non_least_squares_term(form: Formulation):
     return None
 
 
+def _weighted(res: Affine, k) -> Affine:
+    """``res * k``; the weighted matrix kept with ``res.A`` (up to :data:`WEIGHTED_KEPT`
+    entries) for the next call with the same ``k`` (the node-state loop's steps share the rows
+    that do not move with the point: the items', the bias walks')."""
+    A = res.A
+    k = np.broadcast_to(np.asarray(k, dtype=float), (res.m,))
+    kept = getattr(A, "_bvpnav_weighted", None)
+    if kept is not None and np.array_equal(kept[0], k):
+        return Affine(kept[1], res.c * k, res.labels)
+    out = res * k
+    if sp.issparse(A) and A.nnz <= WEIGHTED_KEPT:
+        A._bvpnav_weighted = (np.array(k), out.A)
+    return out
+
+
+#: Largest stored entries of a term's matrix whose weighted copy :func:`_weighted` keeps (a big
+#: problem's rows are not kept twice).
+WEIGHTED_KEPT = 1 << 17
+
+
 def least_squares_form(form: Formulation, lam: float, surrogate: bool = False) -> LeastSquaresForm | None:
     r"""The problem as equality-constrained least squares, or None if it is not one.
 
@@ -173,7 +193,7 @@ def least_squares_form(form: Formulation, lam: float, surrogate: bool = False) -
             blocks.append((term.label, slice(start, start + term.residual.m)))
             start += term.residual.m
         elif role == "D":
-            obj.append(term.residual * (np.sqrt(term.weight(lam)) / term.sigma))
+            obj.append(_weighted(term.residual, np.sqrt(term.weight(lam)) / term.sigma))
             scaled.append(np.full(term.residual.m, bool(term.scaled_by_lam)))
     # canonical once (sorted, no duplicates or explicit zeros): every factorization and every
     # lambda of a sweep then shares these arrays instead of cleaning a copy of its own. Each
@@ -427,27 +447,49 @@ def fem_rows_by_diagonals(form: Formulation, workspace: Workspace | None = None)
     if workspace is not None and workspace.fem_diagonals is not None and workspace.model is model:
         return workspace.fem_diagonals
     N, d = model.N, model.d
-    tri, dense, rows, cols, vals = [], [], [], [], []
+    every = [model.fem_blocks(a) for a in range(d)]
+    # the blocks that do not move with the linearization point (K, M, the end velocities' and
+    # element residuals' columns: one object each for the node-state loop's models) placed once
+    fixed = tuple(b[key] for b in every for key in ("r", "w", "vb", "u") if key in b)
+    kept = None if workspace is None else workspace.fem_fixed
+    if kept is not None and kept[1] == model.size and len(kept[0]) == len(fixed) and all(
+            x is y for x, y in zip(kept[0], fixed, strict=True)):
+        tri, rows, cols, vals = (list(v) for v in kept[2])
+        if not model.q and model.ns and kept[3] is not None:
+            # the other entries: the fixed ones' rows with the node states' columns after them
+            # (the same matrix as through coordinates, without their sort)
+            extra = rows_with_tail(kept[3], [model.ms_columns(a) for a in range(d)], int(model.s_index[0]))
+            out = DiagonalRows(N * d, list(tri), [], extra)
+            workspace.fem_diagonals, workspace.model = out, model
+            return out
+    else:
+        tri, rows, cols, vals = [], [], [], []
+        for a, blocks in enumerate(every):
+            for key, c0 in (("r", model.r_index(a)[0]), ("w", model.w_index(a)[0])):
+                A = blocks[key]   # K and M keep the diagonals they were made from (fem.tridiagonal)
+                lo, dg, up = (getattr(A, "_bvpnav_diagonals", None)
+                              or (A.diagonal(-1), A.diagonal(0), A.diagonal(1)))
+                tri.append((a * N, int(c0), lo, dg, up))
+            vb = blocks["vb"].tocoo()
+            rows.append(a * N + vb.row)
+            cols.append(np.asarray(model.v_end_index(a))[vb.col])
+            vals.append(vb.data)
+            if "u" in blocks:   # a coarse mesh's element residuals (bvpnav.mesh): two rows each
+                u = blocks["u"].tocoo()
+                rows.append(a * N + u.row)
+                cols.append(model.element_index(a)[u.col])
+                vals.append(u.data)
+        if workspace is not None:
+            head = (sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                                  shape=(N * d, model.size)) if model.ns else None)
+            placed = (tuple(tri), tuple(rows), tuple(cols), tuple(vals))
+            workspace.fem_fixed = (fixed, model.size, placed, head)
+    dense = []
     for a in range(d):
-        blocks = model.fem_blocks(a)
-        for key, c0 in (("r", model.r_index(a)[0]), ("w", model.w_index(a)[0])):
-            A = blocks[key]   # K and M keep the diagonals they were made from (fem.tridiagonal)
-            lo, dg, up = (getattr(A, "_bvpnav_diagonals", None)
-                          or (A.diagonal(-1), A.diagonal(0), A.diagonal(1)))
-            tri.append((a * N, int(c0), lo, dg, up))
-        vb = blocks["vb"].tocoo()
-        rows.append(a * N + vb.row)
-        cols.append(np.asarray(model.v_end_index(a))[vb.col])
-        vals.append(vb.data)
         if model.q:   # the columns copied: a view would keep all of the axis' M G alive
             mcols, mg = model.mg_columns(a)
             dense += [(a * N, int(model.l_index[k]), mg[:, i].copy()) for i, k in enumerate(mcols)
                       if mg[:, i].any()]
-        if "u" in blocks:   # a coarse mesh's element residuals (bvpnav.mesh): two rows each
-            u = blocks["u"].tocoo()
-            rows.append(a * N + u.row)
-            cols.append(model.element_index(a)[u.col])
-            vals.append(u.data)
         if model.ns:   # the node states' local columns M G_s
             ms = model.ms_columns(a).tocoo()
             rows.append(a * N + ms.row)

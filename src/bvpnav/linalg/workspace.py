@@ -33,6 +33,12 @@ class Workspace:
         The FEM rows by diagonals of :attr:`model` (:func:`bvpnav.linalg.lsq.fem_rows_by_diagonals`).
     model : NavModel or None
         The model :attr:`fem_diagonals` describe.
+    fem_fixed : tuple or None
+        The FEM rows' blocks that do not move with a Gauss-Newton point (the stiffness, the
+        mass, the end velocities' and element residuals' columns: objects the node-state loop's
+        models share), their placement by :func:`bvpnav.linalg.lsq.fem_rows_by_diagonals` and
+        (node states) the entries off the diagonals as CSR rows to which the states' columns are
+        appended, reused while the blocks are the same objects.
     band_plan : BandPlan or None
         The symbolic analysis of the banded factorization (:func:`bvpnav.linalg.lsq.banded_plan`),
         for the sparsity pattern :attr:`band_pattern`.
@@ -56,6 +62,7 @@ class Workspace:
 
     fem_diagonals: DiagonalRows | None = None
     model: NavModel | None = None
+    fem_fixed: tuple | None = None
     band_plan: BandPlan | None = None
     band_pattern: tuple[np.ndarray, ...] | None = None
     affine_band: AffineBand | None = None
