@@ -74,7 +74,10 @@ nb_merge_streams = True
 
 # What the executed tutorials see (the kernel inherits this process's environment).
 os.environ.setdefault("BVPNAV_SMALL", "1")
-os.environ["BVPNAV_FIGURES"] = tempfile.mkdtemp(prefix="bvpnav-docs-figures-")
+# The figure files the pages save go to a temporary folder, or to BVPNAV_DOCS_FIGURES when set
+# (the test suite checks the tutorials' files there); the pages show the figures inline either way.
+os.environ["BVPNAV_FIGURES"] = os.environ.get("BVPNAV_DOCS_FIGURES") or tempfile.mkdtemp(
+    prefix="bvpnav-docs-figures-")
 os.environ["MPLBACKEND"] = "module://matplotlib_inline.backend_inline"  # figures shown inline
 # tqdm.auto sees a Jupyter kernel and warns that ipywidgets is missing; the pages need no widget.
 os.environ["PYTHONWARNINGS"] = ",".join(

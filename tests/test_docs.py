@@ -1,10 +1,11 @@
 """The documentation site builds offline with warnings as errors and has its key pages.
 
-The build runs ``sphinx-build -W --keep-going -b html`` (as a reader would) on a copy of
-``docs/`` in a temporary folder, so the generated API stubs never land in the work tree;
-every proxy points at a closed loopback port, so any attempt to fetch something during the
-build (intersphinx inventories, remote images) fails it. The tutorial gallery is executed
-at small size (``BVPNAV_SMALL=1``).
+The build (conftest's session fixture ``docs_build``, shared with test_tutorial) runs
+``sphinx-build -W --keep-going -b html`` (as a reader would) on a copy of ``docs/`` in a
+temporary folder, so the generated API stubs never land in the work tree; every proxy points
+at a closed loopback port, so any attempt to fetch something during the build (intersphinx
+inventories, remote images) fails it. The tutorials, the gallery and the executed guides are
+executed at small size (``BVPNAV_SMALL=1``).
 """
 
 from __future__ import annotations
@@ -13,7 +14,6 @@ import json
 import os
 import pkgutil
 import re
-import shutil
 import subprocess
 import sys
 import zipfile
@@ -41,12 +41,6 @@ EXECUTED_GUIDES = ["getting_started", "guide/strapdown", "guide/readers"]
 GUIDES = ["items", "error_models", "solvers", "lambda", "uncertainty", "files_cli", "batch", "strapdown",
           "readers",
           "safety"]
-#: Where a fetch would go: the discard port on loopback, closed (connection refused).
-NO_NETWORK = "http://127.0.0.1:9"
-
-
-def _files(root: Path) -> set[Path]:
-    return {p for p in root.rglob("*") if p.is_file() and "__pycache__" not in p.parts}
 
 
 def _sources(*roots: Path) -> dict:
@@ -55,34 +49,10 @@ def _sources(*roots: Path) -> dict:
     return {p: v for p, v in snapshot(*roots).items() if "__pycache__" not in p.parts}
 
 
-@pytest.fixture(scope="module")
-def site(tmp_path_factory):
-    """Build the site once for this module; return the HTML folder."""
-    base = tmp_path_factory.mktemp("docs")
-    src = base / "source"
-    # Symbolic links (the tutorials) are copied as the files they point to.
-    shutil.copytree(DOCS, src, ignore=shutil.ignore_patterns(
-        "_build", "generated", "jupyter_execute", ".jupyter_cache"))
-    before = _sources(ROOT / "examples", DOCS)
-    files_before = _files(ROOT / "examples") | _files(DOCS)
-    env = dict(os.environ, BVPNAV_SMALL="1", MPLBACKEND="Agg")
-    env.pop("BVPNAV_DOCS_EXECUTE", None)
-    # Only what bvpnav[docs] installs is importable, in the build and in its kernels.
-    env.update(docs_only_environment(base / "docs-only"))
-    for var in ("http_proxy", "https_proxy", "HTTP_PROXY", "HTTPS_PROXY", "all_proxy", "ALL_PROXY"):
-        env[var] = NO_NETWORK
-    env.pop("no_proxy", None)
-    env.pop("NO_PROXY", None)
-    out = base / "html"
-    proc = subprocess.run(
-        [sys.executable, "-m", "sphinx", "-W", "--keep-going", "-j", "2", "-b", "html", str(src), str(out)],
-        cwd=base, env=env, capture_output=True, text=True, timeout=900, stdin=subprocess.DEVNULL,
-    )
-    assert proc.returncode == 0, f"sphinx-build failed:\n{proc.stderr[-6000:]}\n{proc.stdout[-2000:]}"
-    # The build read the examples and the docs and wrote nothing beside them.
-    assert_unchanged(before)
-    assert _files(ROOT / "examples") | _files(DOCS) == files_before
-    return out
+@pytest.fixture
+def site(docs_build):
+    """The HTML folder of the site, built once per session (conftest's ``docs_build``)."""
+    return docs_build.html
 
 
 def test_every_tutorial_script_is_linked_into_the_gallery():

@@ -26,6 +26,31 @@ def test_derivative_identity_rho_prime_equals_minus_lam_eta_prime():
     assert abs(d_rho + lam * b["deta2"]) < 1e-5 * abs(d_rho)
 
 
+@pytest.mark.parametrize("error_model", [None, "scale+bias"])
+def test_load_form_points_by_one_factor_and_an_update_equal_a_factor_per_lambda(error_model):
+    """The load form has no band: a sweep factors its sparse LU once (lambda = 1) and reaches
+    every lambda through a rank-20 update of the prior's rows (sweep._LamUpdate). Every
+    quantity of a point equals the one from a fresh LU at that lambda (the previous path),
+    across the range and beyond it, with the error model's dense columns too."""
+    from bvpnav.error_models import Bias, ScaleFactor
+    from bvpnav.lam.sweep import _LamUpdate
+
+    prob, _ = table1()
+    if error_model:
+        prob = bvpnav.NavigationProblem(prob.data, residual="load", error_model=ScaleFactor() + Bias(),
+                                        grade=None).add(*prob.items)
+    updated, fresh = _DirectSweep(prob.formulation), _DirectSweep(prob.formulation)
+    fresh._update = False   # a sparse LU at every lambda
+    assert updated._plan is None
+    assert isinstance(updated._factor(updated._ls.at_lam(3.0), 3.0), _LamUpdate)
+    assert len(prob.formulation.model.l_index) == (2 if error_model else 0)
+    for lam in (1e-6, 1e-2, 1.0, 37.0, 1e4, 1e6, 1e9):
+        a, b = fresh.point(lam), updated.point(lam)
+        np.testing.assert_allclose(b["x"], a["x"], rtol=0, atol=1e-10 * np.abs(a["x"]).max())
+        for key in ("rho2", "eta2", "deta2", "d2eta2", "quasi"):
+            assert b[key] == pytest.approx(a[key], rel=1e-9), (lam, key)
+
+
 def _with_bias():
     """Three axes with a bias per axis (the banded factor's border) and soft velocities."""
     from bvpnav.constraints import Velocity

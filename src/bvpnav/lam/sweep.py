@@ -36,7 +36,7 @@ import pandas as pd
 from ..cvx import compiled
 from ..errors import InputError
 from ..formulation import LAM_RANGE, Formulation
-from ..linalg.banded import AffineBand, BandedKKT, KeptFactors, NotBanded
+from ..linalg.banded import AffineBand, BandedKKT, Factorization, KeptFactors, NotBanded
 from ..linalg.condensed import CondensedBand, CondensedKKT
 from ..linalg.lsq import (
     banded_factor,
@@ -70,11 +70,70 @@ SLOPE_POINTS = 7
 #: Default coarse sweep of the cvxpy engine (spline through the samples).
 CVXPY_POINTS = 25
 
+#: Most lambda-weighted rows for which a sweep without a band factors its sparse LU once (at
+#: lambda = 1) and reaches every lambda by a low-rank update (:class:`_LamUpdate`) instead of
+#: factoring again at each lambda.
+UPDATE_ROWS = 64
+
 #: The imaginary step of a complex-step point, relative to lambda (no difference is
 #: taken, so it can be far below the square root of the machine epsilon).
 COMPLEX_STEP = 1e-20
 
 log = logging.getLogger(__name__)
+
+
+class _LamUpdate(Factorization):
+    r"""The augmented matrix :math:`S(\lambda)` of a sweep without a band, solved through one
+    factorization of :math:`S(1)` and a low-rank update.
+
+    Parameters
+    ----------
+    S : sparse matrix, shape (T, T)
+        The augmented matrix at ``lam`` (:meth:`bvpnav.linalg.lsq.LeastSquaresForm.augmented`):
+        what :meth:`refined` iterates against.
+    base : Factorization
+        The factorization of the augmented matrix at lambda = 1.
+    rows : ndarray of int, shape (k,)
+        The lambda-weighted rows (residual rows: the first block of ``S``).
+    cap : ndarray, shape (k, k)
+        :math:`G = P^T S(1)^{-1} P`, ``P`` the columns of the identity at ``rows``.
+    lam : float
+        Lambda (> 0).
+
+    Notes
+    -----
+    The rows of :math:`\lambda` are scaled by :math:`\sqrt\lambda`, so with :math:`T` the
+    identity but :math:`s = 1/\sqrt\lambda` at those rows, :math:`T S(\lambda) T = S(1) +
+    \delta P P^T` with :math:`\delta = 1 - s^2` (the ``-I`` block's entries there become
+    :math:`-s^2`). By the Woodbury identity
+
+    .. math:: S(\lambda)^{-1} b = T (y - \delta Z (I + \delta G)^{-1} P^T y), \qquad
+              y = S(1)^{-1} T b, \quad Z = S(1)^{-1} P.
+
+    :math:`G` is minus the complement of the hat matrix at those rows (eigenvalues in
+    :math:`[-1, 0]`), so :math:`I + \delta G` has eigenvalues of at least 1 for
+    :math:`\lambda \le 1` and at least :math:`1/\lambda` above; :meth:`refined` iterates
+    against :math:`S(\lambda)` itself.
+    """
+
+    def __init__(self, S, base: Factorization, rows: np.ndarray, cap: np.ndarray, lam: float):
+        self.S = S
+        self._base, self._rows = base, rows
+        self._s = 1.0 / math.sqrt(lam)
+        self._delta = 1.0 - self._s**2
+        self._cap = np.linalg.inv(np.eye(rows.size) + self._delta * cap)
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        """Solve ``S z = rhs`` for one (T,) or several (T, k) right-hand sides."""
+        rows, s = self._rows, self._s
+        c = np.array(rhs, dtype=float)
+        c[rows] *= s
+        y = self._base.solve(c)
+        w = np.zeros_like(y)
+        w[rows] = self._cap @ (self._delta * y[rows])
+        y -= self._base.solve(w)
+        y[rows] *= s
+        return y
 
 
 @dataclass(repr=False)
@@ -224,6 +283,7 @@ class DirectSweep:
         self._parts = None
         self._buffers: list = [None, None, None]
         self._kept: tuple | None = None   # (lambda, factor, buffer index) of the last real point
+        self._update = None   # (factor at lambda = 1, rows, G) of _LamUpdate, or False
         self._reads_eliminated = None
         #: How the last log-determinant derivative was taken ("complex step" or
         #: "central difference"), None before GCV's first trace by the log-determinant.
@@ -327,7 +387,27 @@ class DirectSweep:
                 if lam is not None:
                     self._kept = (float(lam), fac, 0 if parts is not None else None)
                 return fac
+        elif lam is not None and self._updatable():
+            base, rows, cap = self._update
+            return _LamUpdate(ls.augmented(), base, rows, cap, float(lam) / self._ls.lam)
         return factor_form(ls, self.form)
+
+    def _updatable(self) -> bool:
+        """Whether points reach their lambda by :class:`_LamUpdate` (at most :data:`UPDATE_ROWS`
+        lambda-weighted rows); its factor at lambda = 1 and :math:`G` are made at the first call."""
+        if self._update is None:
+            self._update = False
+            rows = np.flatnonzero(np.asarray(self._ls.lam_rows, dtype=bool))
+            if 0 < rows.size <= UPDATE_ROWS:
+                base = factor_form(self._ls, self.form)   # raises, as a point's own would
+                cap = np.empty((rows.size, rows.size))
+                e = np.zeros(base.S.shape[0])
+                for j, r in enumerate(rows):   # column by column: no (T, k) array
+                    e[r] = 1.0
+                    cap[:, j] = base.solve(e)[rows]
+                    e[r] = 0.0
+                self._update = (base, rows, cap)
+        return bool(self._update)
 
     def hand_off(self) -> None:
         """Hand the last real point's factor and the buffers no factor uses to the solve at
