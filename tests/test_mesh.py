@@ -528,3 +528,32 @@ def test_a_loop_with_linearized_items_on_a_mesh_takes_no_cheap_step():
     kinds = [it["solve"] for it in rep.iterations]
     assert "linearized once" in kinds and "cheap" not in kinds and rep.cheap_steps == 0
     assert rep.converged and kinds[-1] == "stage"
+
+
+def test_a_linearized_item_on_a_mesh_reads_the_trajectory_at_its_own_times():
+    """The sequential loop linearizes an item about the answer's trajectory, which on a mesh is
+    at every sample, not at the nodes: ``KnownDistance`` on a 1 s mesh (it failed with a
+    reshape error of 1203 values into 33 rows). Noise-free, sparse fixes, a hard known
+    distance between two instants inside elements: the estimate is the truth to rounding and
+    holds the distance, as the per-sample problem does."""
+    from bvpnav.constraints import KnownDistance, Position
+    from bvpnav.error_models import ErrorStates
+
+    d = _drive(T=20.0)
+    k = np.arange(0, d["t"].size, 20)
+    ia, ib = 30, 250
+    dist = float(np.linalg.norm(d["r"][ib] - d["r"][ia]))
+    out = {}
+    for segment in (None, 1.0):
+        prob = bvpnav.NavigationProblem(d["data"], error_model=ErrorStates(arw=1e-4, gyro_drift=1e-4,
+                                                                           acc_drift=1e-3),
+                                        sigma_a=2e-2, segment=segment)
+        prob.add(Position(t=d["t"][k], value=d["fix"][k], sigma=0.3),
+                 KnownDistance(t=(d["t"][ia], d["t"][ib]), distance=dist, mode="hard"))
+        sol = prob.solve(solver="direct", attitude={"progress": False})
+        pos = sol.position()
+        assert sol.stats["verified"]
+        assert abs(np.linalg.norm(pos[ib] - pos[ia]) - dist) < 1e-6 * dist
+        out[segment] = pos
+    assert np.max(np.abs(out[1.0] - d["r"])) < 1e-5
+    assert np.max(np.abs(out[None] - d["r"])) < 1e-5

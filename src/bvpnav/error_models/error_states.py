@@ -435,9 +435,9 @@ def states_at(data, totals: dict):
 
 @dataclass(eq=False)
 class _Cheap:
-    """A cheap step's point relative to ``ref``, the data of the last full pass (whose per-element
+    r"""A cheap step's point relative to ``ref``, the data of the last full pass (whose per-element
     sums it reads): per mesh node the rotation ``rot`` (n, 3, 3) that takes the reference's node
-    attitude to this point's, :math:`R_p = C_p \\bar C_p^T`, and the bias changes ``dbg``, ``dba``
+    attitude to this point's, :math:`R_p = C_p \bar C_p^T`, and the bias changes ``dbg``, ``dba``
     (n, 3; rad/s, m/s^2)."""
 
     ref: Any

@@ -224,14 +224,14 @@ def _iterate(loop: _Loop, inner: Stage, opts: SolveOptions, traj: pd.DataFrame,
     """Linearize and solve until the final phase converges or runs out of iterations
     (``capped``: an outer loop's intermediate step, which ends with the phase it is in: a
     continuation's soft phase is not cut short by the requested modes)."""
-    t = loop.form.model.grid.t
     axes = list(loop.form.model.axes)
     prev = traj[axes].to_numpy()
     n_phase = 0
     with progress(desc="sequential loop", unit="iter", enabled=loop.o["progress"]) as bar:
         before: dict | None = None
         while True:
-            sub = loop.linearized_form(t, traj, sol)
+            # the trajectory's own times: on a mesh the answer is at every sample, not at the nodes
+            sub = loop.linearized_form(traj.index.to_numpy(dtype=float), traj, sol)
             if before is not None and not loop.soft and _settled(before, loop.current, loop.o["tol"]):
                 # every item's linearization moved by less than tol: the last solve answers it
                 loop.phases.append({"mode": "final", "iterations": n_phase, "tol": loop.o["tol"],
