@@ -953,7 +953,13 @@ def _may_cheap(o: dict, k: int, iters: list, lam) -> bool:
     if not (_slow(iters) and _quick_next(o, k, iters, lam)):
         return False
     last = iters[-1]
-    return last["solve"] != "cheap" or _expected(iters) >= CHEAP_GAP * np.sqrt(2.0 * last["cheap_error"])
+    return last["solve"] != "cheap" or _expected(iters) >= _left_out(last)
+
+
+def _left_out(it: dict) -> float:
+    """The step (rad) a cheap step ``it`` is expected to leave to the next full pass:
+    :data:`CHEAP_GAP` times the gyro-bias rotation ``sqrt(2 cheap_error)``."""
+    return CHEAP_GAP * float(np.sqrt(2.0 * it["cheap_error"]))
 
 
 def _slow(iters: list) -> bool:
@@ -968,7 +974,7 @@ def _banded_next(o: dict, k: int, iters: list, lam) -> bool:
     first after cheap steps and its step (what they left out, :data:`CHEAP_GAP`) is expected at
     least ``tol``."""
     if (iters and iters[-1]["solve"] == "cheap" and k + 1 < int(o["max_iter"])
-            and CHEAP_GAP * np.sqrt(2.0 * iters[-1]["cheap_error"]) >= o["tol"]):
+            and _left_out(iters[-1]) >= o["tol"]):
         return True
     return _quick_next(o, k, iters, lam)
 
@@ -1162,6 +1168,8 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     def step_form(data) -> Formulation:
         return _step_form(form, data, checked, item_terms)
 
+    kw = {} if workspace is None else {"workspace": workspace}   # the stage's solves share it
+
     with progress(desc="state loop", unit="iter", enabled=o["progress"]) as bar:
         for k in range(int(o["max_iter"])):
             data, err, totals = _next_point(form, o, iters, ref, nodes, totals,
@@ -1181,7 +1189,6 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
                                        lambda at=nodes: step_form(states_at(raw, sm.expand(raw, at))))
             staged, once = x is None, False
             if staged:
-                kw = {} if workspace is None else {"workspace": workspace}
                 once = joint and _quick_next(o, k, iters, lam_now)
                 sol = inner(f, lam_now, opts, **kw, **({"steps": 1} if once else {}))
                 x = sol.x
@@ -1193,7 +1200,7 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
             if (once or (not staged and not cheap)) and step < o["tol"]:
                 # a quick step (or one linearization) that converged: the answer is this step's solve
                 # by the stage (the linearized items iterated to their tol)
-                sol = inner(f, lam_now, opts, **({} if workspace is None else {"workspace": workspace}))
+                sol = inner(f, lam_now, opts, **kw)
                 x, staged, once = sol.x, True, False
                 s = f.model.split(x)["s"]
                 step = float(np.max(np.linalg.norm(s[sm.state_index(raw, "attitude_error")], axis=1)))
