@@ -247,6 +247,30 @@ def test_reading_parquet_leaves_no_thread_that_aborts_the_process_at_exit(tmp_pa
     assert codes == [2] * 16, codes
 
 
+@pytest.mark.skipif(not os.path.isdir("/proc/self/task"), reason="counts threads in /proc (Linux)")
+def test_reading_parquet_starts_no_arrow_thread(tmp_path):
+    # The abort above is a thread of Arrow's pool alive at teardown; the probabilistic test can
+    # miss it on a quiet machine, this one cannot: pandas.read_parquet starts one such thread
+    # even with use_threads=False, parquet_frame must start none.
+    import subprocess
+    import sys
+
+    path = tmp_path / "rec.parquet"
+    index = pd.Index(np.arange(50) * 0.1, name="time")
+    pd.DataFrame({"acc_x": np.arange(50.0)}, index=index).to_parquet(path)
+    script = ("import os, sys, pandas, pyarrow.parquet; from bvpnav.io import parquet_frame\n"
+              "n = lambda: len(os.listdir('/proc/self/task'))\n"
+              "before = n(); a = parquet_frame(sys.argv[1])\n"
+              "b = parquet_frame(open(sys.argv[1], 'rb').read())\n"
+              "print(before, n(), a.index.name, float(a['acc_x'].sum()), b.equals(a))")
+    out = subprocess.run([sys.executable, "-c", script, str(path)], capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 0, out.stderr
+    before, after, name, total, same = out.stdout.split()
+    assert int(after) == int(before), f"{int(after) - int(before)} thread(s) started by reading Parquet"
+    assert (name, float(total), same) == ("time", 1225.0, "True")
+
+
 # ------------------------------------------------------------- a folder recording (issue 40, case 5)
 _FOLDER_SPEC = """\
 [problem]

@@ -282,17 +282,39 @@ def read_regular_file(path: str | os.PathLike, what: str = "recording", max_byte
 def parquet_frame(source: bytes | str | os.PathLike):
     """A Parquet file (its bytes or its path) as a DataFrame, read on the calling thread.
 
-    ``pandas.read_parquet`` on a Python file object lets pyarrow's thread pool outlive the
-    interpreter's teardown: about one process in three then aborts at exit ("terminate called
-    without an active exception", exit -6) after its work is done (apache/arrow#34314, #50482).
-    Reading from an Arrow buffer with ``use_threads=False`` measured 0 aborts in 150 runs
-    (48 in 150 before); a recording is small enough that one thread costs nothing.
+    ``pandas.read_parquet`` goes through Arrow's dataset scanner, which starts a thread of
+    Arrow's pool even with ``use_threads=False``; a pool thread still alive at interpreter
+    teardown can abort the process after its work is done ("terminate called without an
+    active exception", exit -6; apache/arrow#34314, #50482). This reads the file with
+    ``ParquetFile.read`` (no scanner, no pre-buffering) from an Arrow buffer and converts it
+    on the calling thread, so no Arrow thread is ever started; the index and dtypes come
+    back from the file's pandas metadata as ``pandas.read_parquet`` gives them.
+
+    Parameters
+    ----------
+    source : bytes or path-like
+        The file's bytes, or its path.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The table, with the index stored in the file.
+
+    Examples
+    --------
+    >>> import io, pandas as pd
+    >>> buf = io.BytesIO()
+    >>> pd.DataFrame({"acc_x": [0.0, 1.0]}, index=pd.Index([0.0, 0.1], name="time")).to_parquet(buf)
+    >>> parquet_frame(buf.getvalue()).index.name
+    'time'
     """
-    import pandas as pd
     import pyarrow as pa
+    import pyarrow.parquet as pq
 
     raw = source if isinstance(source, (bytes, bytearray, memoryview)) else Path(source).read_bytes()
-    return pd.read_parquet(pa.BufferReader(raw), use_threads=False)
+    with pq.ParquetFile(pa.BufferReader(raw), pre_buffer=False) as f:
+        table = f.read(use_threads=False)
+    return table.to_pandas(use_threads=False)
 
 
 def write_table(df, path: str | os.PathLike, option: str = "path") -> None:
