@@ -257,14 +257,58 @@ class _Elements:
     h: np.ndarray
 
     @functools.cached_property
-    def Jr(self) -> np.ndarray:
-        """:math:`J_r(a_j)` of every step, (N - 1, 3, 3)."""
-        return right_jacobian(self.a)
+    def Zc(self) -> np.ndarray:
+        """:math:`S_j J_r(a_j) h_j` of every step, component-major (9, N - 1) (s; row-major 3 x 3,
+        each entry contiguous over the steps): written out entry by entry on the steps' arrays
+        (:func:`_right_jacobian_components`), as the running sums and the process rows read it."""
+        J = _right_jacobian_components(self.a)
+        Sm = self.S.as_matrix()
+        m = Sm.shape[0]
+        S = np.ascontiguousarray(Sm.reshape(m, 9).T).reshape(3, 3, m)
+        out = np.empty((3, 3, m))
+        tmp = np.empty(m)
+        for k in range(3):
+            for c in range(3):
+                o = out[k, c]
+                np.multiply(S[k, 0], J[0, c], out=o)
+                np.multiply(S[k, 1], J[1, c], out=tmp)
+                o += tmp
+                np.multiply(S[k, 2], J[2, c], out=tmp)
+                o += tmp
+                o *= self.h
+        return out.reshape(9, m)
 
-    @functools.cached_property
+    @property
     def Z(self) -> np.ndarray:
-        """:math:`S_j J_r(a_j) h_j` of every step, (N - 1, 3, 3) (s): ``S`` as matrices."""
-        return self.S.as_matrix() @ self.Jr * self.h[:, None, None]
+        """:math:`S_j J_r(a_j) h_j` of every step, (N - 1, 3, 3) (s): :attr:`Zc` sample-major (a view)."""
+        return self.Zc.T.reshape(-1, 3, 3)
+
+
+def _right_jacobian_components(phi: np.ndarray) -> np.ndarray:
+    r""":func:`~bvpnav.error_models._attitude.right_jacobian` of the rotation vectors ``phi`` (M, 3),
+    component-major (3, 3, M): :math:`I - a\,[\phi\times] + b\,[\phi\times]^2` with the same
+    coefficients and series (below 1e-4 rad), each entry computed on contiguous arrays of the M
+    vectors (no per-vector 3 x 3 blocks)."""
+    p = np.ascontiguousarray(np.asarray(phi, dtype=float).T)
+    m = p.shape[1]
+    th2 = p[0] ** 2 + p[1] ** 2 + p[2] ** 2
+    th = np.sqrt(th2)
+    small = th < 1e-4
+    safe = np.where(small, 1.0, th)
+    a = np.where(small, 0.5 - th2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
+    b = np.where(small, 1.0 / 6.0 - th2 / 120.0, (safe - np.sin(safe)) / safe**3)
+    d = 1.0 - b * th2
+    out = np.empty((3, 3, m))
+    for k in range(3):
+        bk = b * p[k]
+        for c in range(3):
+            np.multiply(bk, p[c], out=out[k, c])
+        out[k, k] += d
+    # - a [phi x]: [phi x] = [[0, -z, y], [z, 0, -x], [-y, x, 0]]
+    for k, c, comp, sgn in ((0, 1, 2, 1.0), (0, 2, 1, -1.0), (1, 0, 2, -1.0), (1, 2, 0, 1.0),
+                            (2, 0, 1, 1.0), (2, 1, 0, -1.0)):
+        out[k, c] += sgn * (a * p[comp])
+    return out
 
 
 def _index_type(size: int, m: int, w: int) -> type:
@@ -328,11 +372,9 @@ def _gyro_sums(el: _Elements, mesh: np.ndarray) -> np.ndarray:
     if kept is not None:
         return kept
     n = el.left.size
-    Zt = np.ascontiguousarray(el.Z.reshape(n - 1, 9).T)
     Y2 = np.zeros((2, 9, n))
-    np.cumsum(Zt, axis=1, out=Y2[0, :, 1:])
-    Zt *= el.theta[:-1]
-    np.cumsum(Zt, axis=1, out=Y2[1, :, 1:])
+    np.cumsum(el.Zc, axis=1, out=Y2[0, :, 1:])
+    np.cumsum(el.Zc * el.theta[:-1], axis=1, out=Y2[1, :, 1:])
     counts = np.bincount(el.left, minlength=mesh.size)      # samples whose element starts at each node
     Y2 -= np.repeat(Y2[:, :, mesh], counts, axis=2)
     Y2[0] -= Y2[1]
@@ -587,8 +629,9 @@ def _mesh_process(data, mesh: np.ndarray, gyro: bool):
         return e0, Jli, Jri, None, None
     # D_i^T = dR^T (R_s ... R_i), dR the element's: dR^T out of the sums over its steps
     lead = Cq.as_matrix() @ np.swapaxes(dR.as_matrix(), 1, 2)
-    Vp = lead @ np.add.reduceat((1.0 - theta)[:, None, None] * el.Z, mesh[:-1], axis=0)
-    Vq = lead @ np.add.reduceat(theta[:, None, None] * el.Z, mesh[:-1], axis=0)
+    ne = mesh.size - 1
+    Vp = lead @ np.add.reduceat(el.Zc * (1.0 - theta), mesh[:-1], axis=1).T.reshape(ne, 3, 3)
+    Vq = lead @ np.add.reduceat(el.Zc * theta, mesh[:-1], axis=1).T.reshape(ne, 3, 3)
     data.__dict__["_cheap_process"] = (M.as_quat(), Vp, Vq)   # a cheap step's reference
     return e0, Jli, Jri, Jli @ Vp, Jli @ Vq
 
@@ -866,20 +909,30 @@ class ErrorStates(ErrorModel):
             Y[("acc_bias", 0)] = -(g["P1"] @ C9).reshape(-1, 3, 3)
             Y[("acc_bias", 1)] = -(g["P2"] @ C9).reshape(-1, 3, 3)
         if "gyro_bias" in kinds:
-            at = mesh[el.left]
-            Y2 = _gyro_sums(el, mesh)
-            Cp = C.reshape(n, 9).T[:, at].reshape(3, 3, n)
-            f0, f1, f2 = np.ascontiguousarray(fn.T)
-            T = (f1 * Cp[2] - f2 * Cp[1], f2 * Cp[0] - f0 * Cp[2], f0 * Cp[1] - f1 * Cp[0])
-            # [f_n x] C_p Y_i (row r: sum_j T[r, j] Y[j]), written sample-major for the sums
-            Y4 = Y2.reshape(2, 3, 3, n)
-            X = np.empty((n, 2, 3, 3))
-            for r in range(3):
-                Xr = T[r][0] * Y4[:, 0]
-                Xr += T[r][1] * Y4[:, 1]
-                Xr += T[r][2] * Y4[:, 2]
-                X[:, :, r, :] = Xr.transpose(2, 0, 1)
-            Yg = (P @ X.reshape(n, 18)).reshape(-1, 2, 3, 3)
+            # [f_n x] C_p Y_i = C_p [g_i x] Y_i with g_i = C_p^T f_n,i (C_p the sample's element's left
+            # node's, the same for every sample of a group): the sums of [g_i x] Y_i, then C_p
+            Y4 = _gyro_sums(el, mesh).reshape(2, 3, 3, n)
+            Cn = C.reshape(n, 9)[mesh]                                   # (n nodes, 9)
+            Cp = np.ascontiguousarray(Cn.T)[:, el.left]                  # (9, N): C_p[k, l] at 3 k + l
+            f = np.ascontiguousarray(fn.T)
+            gb = np.empty((3, n))
+            x, tmp = np.empty(n), np.empty(n)
+            for c in range(3):   # g_c = sum_k C_p[k, c] f_k
+                np.multiply(Cp[c], f[0], out=gb[c])
+                np.multiply(Cp[3 + c], f[1], out=tmp)
+                gb[c] += tmp
+                np.multiply(Cp[6 + c], f[2], out=tmp)
+                gb[c] += tmp
+            Sg = np.empty((P.shape[0], 2, 3, 3))
+            for w in range(2):
+                for r in range(3):
+                    a, b = (r + 1) % 3, (r + 2) % 3          # ([g x] Y)_r = g_a Y_b - g_b Y_a
+                    for c in range(3):
+                        np.multiply(gb[a], Y4[w, b, c], out=x)
+                        np.multiply(gb[b], Y4[w, a, c], out=tmp)
+                        x -= tmp
+                        Sg[:, w, r, c] = P @ x
+            Yg = np.einsum("gij,gwjc->gwic", Cn.reshape(-1, 3, 3)[g["left"]], Sg)
             Y[("gyro_bias", 0)], Y[("gyro_bias", 1)] = Yg[:, 0], Yg[:, 1]
         # the sums and their derivatives, for the cheap steps that follow (cheap_at)
         data.__dict__.setdefault("_cheap_sums", {})[id(W)] = (W, L, Y)
