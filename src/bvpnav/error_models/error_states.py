@@ -193,15 +193,21 @@ def _rotvec(q: np.ndarray) -> np.ndarray:
     :math:`\theta\,\hat v` with :math:`\theta = 2\,\mathrm{atan2}(|v|, w)` on the hemisphere
     :math:`w \ge 0` (scipy's ``Rotation.from_quat(q).as_rotvec()`` without the rotation object;
     the scale :math:`\theta / \sin(\theta/2)` by its series below 1e-3 rad)."""
-    q = q / np.linalg.norm(q, axis=1)[:, None]
-    q *= np.where(q[:, 3] < 0.0, -1.0, 1.0)[:, None]
-    v = q[:, :3]
-    angle = 2.0 * np.arctan2(np.linalg.norm(v, axis=1), q[:, 3])
+    return _rotvec_components(np.asarray(q, dtype=float).T)
+
+
+def _rotvec_components(q: np.ndarray) -> np.ndarray:
+    """:func:`_rotvec` of quaternions stored components first, (4, M) (x, y, z, w): the rotation
+    vectors (M, 3), rad, each component computed on contiguous arrays."""
+    q = q / np.sqrt(q[0] ** 2 + q[1] ** 2 + q[2] ** 2 + q[3] ** 2)
+    q *= np.where(q[3] < 0.0, -1.0, 1.0)
+    v = q[:3]
+    angle = 2.0 * np.arctan2(np.sqrt(v[0] ** 2 + v[1] ** 2 + v[2] ** 2), q[3])
     small = angle <= 1e-3
     a2 = angle**2
     scale = np.where(small, 2.0 + a2 / 12.0 + 7.0 * a2**2 / 2880.0,
                      angle / np.sin(0.5 * np.where(small, 1.0, angle)))
-    return scale[:, None] * v
+    return np.ascontiguousarray((scale * v).T)
 
 
 def _inverse_jacobian(phi: np.ndarray, sign: float) -> np.ndarray:
@@ -278,6 +284,26 @@ class _Elements:
                 o *= self.h
         return out.reshape(9, m)
 
+    @functools.cached_property
+    def weighted(self) -> tuple[np.ndarray, np.ndarray]:
+        r""":attr:`Zc` weighted for the element's left and right node, :math:`(1 - \theta_j) Z_j` and
+        :math:`\theta_j Z_j`, (9, N - 1) each (s); dropped by :func:`_gyro_sums`, which sums them
+        in place."""
+        th = self.theta[:-1]
+        return self.Zc * (1.0 - th), self.Zc * th
+
+    @functools.cached_property
+    def element_sums(self) -> tuple[np.ndarray, np.ndarray]:
+        r"""The sums of :attr:`weighted` over every element's steps, (9, n - 1) each (s): the process
+        rows' bias terms (:func:`_mesh_process`), and what restarts :func:`_gyro_sums` at the nodes."""
+        start = np.flatnonzero(np.r_[True, self.left[1:-1] != self.left[:-2]])
+        return tuple(np.add.reduceat(z, start, axis=1) for z in self.weighted)
+
+    @functools.cached_property
+    def Sc(self) -> np.ndarray:
+        """``S`` as quaternions stored components first, (4, N - 1) (x, y, z, w)."""
+        return np.ascontiguousarray(self.S.as_quat().T)
+
     @property
     def Z(self) -> np.ndarray:
         """:math:`S_j J_r(a_j) h_j` of every step, (N - 1, 3, 3) (s): :attr:`Zc` sample-major (a view)."""
@@ -347,19 +373,21 @@ def _make_elements(data, mesh: np.ndarray, bg: np.ndarray) -> _Elements:
     n = t.size
     kept = raw.__dict__.get("_mesh_left")          # of the mesh only: the same at every point
     if kept is not None and kept[0] is mesh:
-        left, theta = kept[1]
+        left, theta, h, start, layout = kept[1]
     else:
         left = np.minimum(np.searchsorted(mesh, np.arange(n), side="right") - 1, mesh.size - 1)
         theta = np.zeros(n)
         inner = left < mesh.size - 1
         theta[inner] = (t[inner] - t[mesh[left[inner]]]) / np.diff(t[mesh])[left[inner]]
-        raw.__dict__["_mesh_left"] = (mesh, (left, theta))
+        h, start = np.diff(t), mesh[left[:-1]]
+        layout = _scan_layout(start)
+        raw.__dict__["_mesh_left"] = (mesh, (left, theta, h, start, layout))
     phi = raw.__dict__.get("_step_rotations")      # of the measured rates: the same at every point
     if phi is None:
         phi = raw.__dict__["_step_rotations"] = step_rotation_vectors(t, np.asarray(raw.gyro, dtype=float))
-    a = phi - np.diff(t)[:, None] * bg[:-1]
-    S = _segment_products(Rotation.from_rotvec(a).as_quat(), mesh[left[:-1]])
-    return _Elements(left, theta, a, S, np.diff(t))
+    a = phi - h[:, None] * bg[:-1]
+    S = _segment_products(Rotation.from_rotvec(a).as_quat(), start, layout)
+    return _Elements(left, theta, a, S, h)
 
 
 def _gyro_sums(el: _Elements, mesh: np.ndarray) -> np.ndarray:
@@ -372,44 +400,65 @@ def _gyro_sums(el: _Elements, mesh: np.ndarray) -> np.ndarray:
     if kept is not None:
         return kept
     n = el.left.size
-    Y2 = np.zeros((2, 9, n))
-    np.cumsum(el.Zc, axis=1, out=Y2[0, :, 1:])
-    np.cumsum(el.Zc * el.theta[:-1], axis=1, out=Y2[1, :, 1:])
-    counts = np.bincount(el.left, minlength=mesh.size)      # samples whose element starts at each node
-    Y2 -= np.repeat(Y2[:, :, mesh], counts, axis=2)
-    Y2[0] -= Y2[1]
+    Y2 = np.empty((2, 9, n))
+    if mesh[0] != 0 or mesh[-1] != n - 1:   # pragma: no cover - mesh_nodes keeps both ends
+        raise ValueError("node states: a coarse mesh must have nodes at the first and the last sample")
+    sums = el.element_sums
+    for Y, z, total in zip(Y2, el.weighted, sums, strict=True):
+        z[:, mesh[1:] - 1] -= total        # each element's sum taken off at its last step: the
+        Y[:, 0] = 0.0                      # running sums restart at every node
+        np.cumsum(z, axis=1, out=Y[:, 1:])
+    Y2[:, :, mesh] = 0.0                   # exactly (not to rounding) at the nodes
+    del el.weighted                        # summed in place
     el.__dict__["_gyro_sums"] = Y2
     return Y2
 
 
-def _segment_products(steps: np.ndarray, start: np.ndarray) -> Rotation:
+def _scan_layout(start: np.ndarray) -> tuple | None:
+    """Where :func:`_segment_products`' padded scan puts every step (elements whose first steps are
+    ``start``, ascending): ``(ne, nb, B, flat)``, ``flat`` the step's place in a (B, ne, nb) array
+    (position in the block, element, block), or None when the elements' lengths differ too much
+    for the padding (the indexed scan then). Of the mesh alone: kept with it."""
+    m = start.shape[0]
+    if not m:
+        return None
+    first = np.flatnonzero(np.r_[True, start[1:] != start[:-1]])
+    lens = np.diff(np.r_[first, m])
+    if first.size * int(lens.max()) > 1.5 * m:
+        return None
+    ne, L = first.size, int(lens.max())
+    B = max(1, int(np.ceil(np.sqrt(L))))
+    nb = -(-L // B)
+    row, pos = np.repeat(np.arange(ne), lens), np.arange(m) - np.repeat(first, lens)
+    return ne, nb, B, ((pos % B) * ne + row) * nb + pos // B
+
+
+def _segment_products(steps: np.ndarray, start: np.ndarray, layout: tuple | None | bool = False) -> Rotation:
     """``R_s ... R_i`` for every step ``i`` (quaternions ``steps``, (M, 4)) from the first step
     ``start[i]`` of its element: a segmented parallel prefix scan (log2 of the longest element
     vectorised compositions). The steps of an element are contiguous (``start`` ascends): when
-    the elements are of similar lengths the products run on an (elements, blocks, block, 4)
-    array padded with identities (blocks of about the square root of the longest element):
-    running products within every block, then of the blocks' totals, then each block's
-    from the totals before it (about two compositions per step in all, in vectorised
-    slices; the same products grouped otherwise, equal to rounding)."""
-    m = steps.shape[0]
-    first = np.flatnonzero(np.r_[True, start[1:] != start[:-1]]) if m else np.zeros(0, np.int64)
-    lens = np.diff(np.r_[first, m])
-    if m and first.size * int(lens.max()) <= 1.5 * m:
-        ne, L = first.size, int(lens.max())
-        B = max(1, int(np.ceil(np.sqrt(L))))
-        nb = -(-L // B)
-        row, pos = np.repeat(np.arange(ne), lens), np.arange(m) - np.repeat(first, lens)
-        Q = np.zeros((4, ne, nb, B))               # components first
+    the elements are of similar lengths the products run on a (B, elements, blocks) array per
+    component padded with identities (blocks of B, about the square root of the longest element,
+    :func:`_scan_layout`; ``layout`` its answer when kept, else made here): running products
+    within every block, then of the blocks' totals, then each block's from the totals before it
+    (about two compositions per step in all, in vectorised slices; the same products grouped
+    otherwise, equal to rounding)."""
+    if layout is False:
+        layout = _scan_layout(start)
+    if layout is not None:
+        ne, nb, B, flat = layout
+        Q = np.zeros((4, B, ne, nb))               # components first; position in the block next
         Q[3] = 1.0
-        Q[:, row, pos // B, pos % B] = steps.T
+        Qf = Q.reshape(4, -1)
+        Qf[:, flat] = steps.T
         for j in range(1, B):                      # within the blocks
-            Q[..., j] = _quat_components_product(Q[..., j - 1], Q[..., j])
-        T = Q[..., B - 1].copy()                   # the blocks' totals, then their running products
+            Q[:, j] = _quat_components_product(Q[:, j - 1], Q[:, j])
+        T = Q[:, B - 1].copy()                     # the blocks' totals, then their running products
         for b in range(1, nb):
             T[:, :, b] = _quat_components_product(T[:, :, b - 1], T[:, :, b])
         if nb > 1:
-            Q[:, :, 1:] = _quat_components_product(T[:, :, :-1, None], Q[:, :, 1:])
-        return Rotation.from_quat(Q[:, row, pos // B, pos % B].T)
+            Q[:, :, :, 1:] = _quat_components_product(T[:, None, :, :-1], Q[:, :, :, 1:])
+        return Rotation.from_quat(Qf[:, flat].T)
     q = steps.copy()
     idx = np.arange(q.shape[0])
     off = 1
@@ -616,7 +665,7 @@ def _mesh_process(data, mesh: np.ndarray, gyro: bool):
     if cheap is not None:
         return _cheap_process(data, cheap, gyro)
     el = _elements(data, mesh, _totals(data, "gyro_bias"))
-    S, theta = el.S, el.theta[:-1]                                # per step, in its element
+    S = el.S                                                      # per step, in its element
     dR = S[mesh[1:] - 1]                                          # each element's product of steps
     C = data.attitude
     Cp, Cq = C[mesh[:-1]], C[mesh[1:]]
@@ -630,8 +679,7 @@ def _mesh_process(data, mesh: np.ndarray, gyro: bool):
     # D_i^T = dR^T (R_s ... R_i), dR the element's: dR^T out of the sums over its steps
     lead = Cq.as_matrix() @ np.swapaxes(dR.as_matrix(), 1, 2)
     ne = mesh.size - 1
-    Vp = lead @ np.add.reduceat(el.Zc * (1.0 - theta), mesh[:-1], axis=1).T.reshape(ne, 3, 3)
-    Vq = lead @ np.add.reduceat(el.Zc * theta, mesh[:-1], axis=1).T.reshape(ne, 3, 3)
+    Vp, Vq = (lead @ z.T.reshape(ne, 3, 3) for z in el.element_sums)
     data.__dict__["_cheap_process"] = (M.as_quat(), Vp, Vq)   # a cheap step's reference
     return e0, Jli, Jri, Jli @ Vp, Jli @ Vq
 
@@ -886,7 +934,9 @@ class ErrorStates(ErrorModel):
         (the attitude block :math:`-[\cdot\times]` of it), :math:`-\sum_i W_{ri} w_i C_i`
         (accelerometer bias, :math:`w = 1 - \theta, \theta`) and :math:`\sum_i W_{ri}
         [f_{n,i}\times] C_p Y_i` (gyro bias, module Notes); the weights :math:`W_{ri} w_i` are
-        the same at every point.
+        the same at every point. The gyro-bias sums are taken as :math:`C_p \sum_i W_{ri}
+        [g_i\times] Y_i` with :math:`g_i = C_p^T f_{n,i}` (:math:`[f\times] C = C [(C^T f)\times]`
+        for a rotation :math:`C`; :math:`C_p` is one per group).
         """
         mesh = _mesh(data)
         if mesh is None:
@@ -1197,19 +1247,20 @@ class ErrorStates(ErrorModel):
         raw = _raw(data)
         n = raw.n
         el = _elements(data, mesh, out.get("gyro_bias", np.zeros((n, 3))))
-        q = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))                  # P_i: identity at the nodes
         inside = raw.__dict__.get("_mesh_inside")
         if inside is None or inside[0] is not mesh:
             inside = raw.__dict__["_mesh_inside"] = (mesh, np.flatnonzero(~np.isin(np.arange(n), mesh)))
         inside = inside[1]
-        q[inside] = el.S.as_quat()[inside - 1]
         Chat = raw.attitude
         Cnode = _compose(Rotation.from_rotvec(nodes["attitude_error"]), Chat[mesh]).as_quat()   # C_p
-        C = _quat_product(Cnode[el.left], q)                        # C_i = C_p P_i
-        inv = raw.__dict__.get("_attitude_inverse")
+        # C_i = C_p P_i (components first), P_i the identity at the nodes
+        C = np.ascontiguousarray(Cnode.T)[:, el.left]
+        C[:, inside] = _quat_components_product(C[:, inside], el.Sc[:, inside - 1])
+        inv = raw.__dict__.get("_attitude_inverse_components")
         if inv is None:
-            inv = raw.__dict__["_attitude_inverse"] = Chat.inv().as_quat()
-        out["attitude_error"] = _rotvec(_quat_product(C, inv))
+            inv = raw.__dict__["_attitude_inverse_components"] = np.ascontiguousarray(Chat.inv().as_quat().T)
+        out["attitude_error"] = _rotvec_components(_quat_components_product(C, inv))
+        C = C.T
         raw.__dict__["_expanded_attitude"] = (out["attitude_error"], C)
         return out
 
