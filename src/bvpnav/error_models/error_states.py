@@ -950,10 +950,10 @@ class ErrorStates(ErrorModel):
         el = _elements(data, mesh, _totals(data, "gyro_bias"))
         g = self._groups(data, mesh, W, el.left)
         P = g["P"]
-        fn = data.attitude.apply(data.specific_force)
+        C = data.attitude.as_matrix()
+        fn = np.einsum("nij,nj->ni", C, data.specific_force)    # f_n = C f, from the matrices made here
         L = P @ fn
         Y = {("attitude_error", 0): -_skew(L)}
-        C = data.attitude.as_matrix()
         if "acc_bias" in kinds:
             C9 = C.reshape(n, 9)
             Y[("acc_bias", 0)] = -(g["P1"] @ C9).reshape(-1, 3, 3)
@@ -1052,8 +1052,15 @@ class ErrorStates(ErrorModel):
         vals, cols_w = np.asarray(Wc.data, dtype=float)[perm], Wc.col[perm]
         th = _elements(data, mesh, _totals(data, "gyro_bias")).theta
 
-        def summing(w):
-            return sp.csr_matrix((w, (group, cols_w)), shape=(starts.size, W.shape[1]))
+        if sp.issparse(W) and W.format == "csr" and W.has_canonical_format:
+            # W's entries grouped (stable sort: by column within a group): the groups' CSR arrays
+            ptr = np.r_[starts, key.size].astype(cols_w.dtype)
+
+            def summing(w):
+                return sp.csr_matrix((w, cols_w, ptr), shape=(starts.size, W.shape[1]))
+        else:
+            def summing(w):
+                return sp.csr_matrix((w, (group, cols_w)), shape=(starts.size, W.shape[1]))
 
         out = {"P": summing(vals), "P1": summing(vals * (1.0 - th[cols_w])), "P2": summing(vals * th[cols_w]),
                "row": R, "left": L, "order": order, "keep": keep, "slot": slot, "nnz": uniq.size,
