@@ -422,6 +422,38 @@ def test_a_cheap_point_has_the_full_pass_rows_in_the_node_attitudes_and_biases()
     assert np.all((3.5 < ratio) & (ratio < 4.5)), (errs, ratio)
 
 
+def test_condensed_state_columns_are_the_load_times_the_per_sample_columns():
+    """The node states' condensed columns (per-element sums: the gyro-bias block as
+    :math:`C_p \\sum_i W_{ri} [g_i\\times] Y_i` from running sums restarted at the nodes) are the
+    load times the columns made at every sample (``state_columns``: the blocks written per
+    sample), at a point with every state moved, to rounding; the same sparsity."""
+    from bvpnav.error_models import ErrorStates
+    from bvpnav.error_models.error_states import states_at
+
+    d = _drive(T=20.0, noise=True)
+    model = ErrorStates(arw=2e-3 / np.sqrt(20.0), gyro_drift=1e-4, acc_drift=1e-3)
+    k = np.arange(0, d["t"].size, 20)
+    prob = bvpnav.NavigationProblem(d["data"], error_model=model, sigma_a=2e-2, segment=1.0)
+    prob.add(Position(t=d["t"][k], value=d["fix"][k], sigma=0.3))
+    form = prob.formulation
+    raw, sm, n = form.data, form.model.state_model, form.model.N
+    rng = np.random.default_rng(5)
+    nodes = {kind: rng.normal(scale=s, size=(n, 3))
+             for kind, s in (("attitude_error", 0.05), ("gyro_bias", 2e-3), ("acc_bias", 0.05))}
+    data = states_at(raw, sm.expand(raw, nodes))
+    W = form.model.cond.load
+    got = sm.condensed_columns(data, W)
+    want = [(W @ g).tocsr() for g in sm.state_columns(data)]
+    gyro = sm.state_index(data, "gyro_bias").ravel()
+    for a, b in zip(got, want, strict=True):
+        assert a.shape == b.shape
+        scale = abs(b).max()
+        assert abs(a - b).max() <= 1e-12 * scale
+        assert abs(b[:, gyro]).max() > 1e-3 * scale   # the gyro-bias block is there to compare
+        b.eliminate_zeros()
+        assert a.nnz == b.nnz
+
+
 def test_cheap_steps_give_the_full_passes_answer():
     """With cheap intermediate steps (``attitude={"cheap": True}``, the default) the loop
     converges to the answer of full passes only: the last step is always a full pass (through

@@ -414,6 +414,19 @@ def test_segment_products_are_the_element_products(lengths):
         assert (got[i] * want.inv()).magnitude() < 1e-13
 
 
+def test_right_jacobian_components_are_the_right_jacobian():
+    """The steps' right Jacobians written entry by entry (components first) are
+    ``right_jacobian``'s (N, 3, 3) blocks, below and above its series' 1e-4 rad."""
+    from bvpnav.error_models._attitude import right_jacobian
+    from bvpnav.error_models.error_states import _right_jacobian_components
+
+    rng = np.random.default_rng(4)
+    phi = rng.standard_normal((40, 3)) * np.repeat([1e-6, 1e-4, 1e-2, 1.0], 10)[:, None]
+    got = _right_jacobian_components(phi)
+    assert got.shape == (3, 3, 40)
+    assert np.abs(np.moveaxis(got, -1, 0) - right_jacobian(phi)).max() < 1e-15
+
+
 def test_rotation_vectors_of_quaternions_are_scipys():
     """The re-integrated attitude's rotation vectors (no rotation objects): scipy's to rounding,
     on both hemispheres, below and above the series' 1e-3 rad, near pi and unnormalized."""
