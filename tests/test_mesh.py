@@ -423,8 +423,8 @@ def test_a_cheap_point_has_the_full_pass_rows_in_the_node_attitudes_and_biases()
 
 
 def test_condensed_state_columns_are_the_load_times_the_per_sample_columns():
-    """The node states' condensed columns (per-element sums: the gyro-bias block as
-    :math:`C_p \\sum_i W_{ri} [g_i\\times] Y_i` from running sums restarted at the nodes) are the
+    r"""The node states' condensed columns (per-element sums: the gyro-bias block as
+    :math:`C_p \sum_i W_{ri} [g_i\times] Y_i` from running sums restarted at the nodes) are the
     load times the columns made at every sample (``state_columns``: the blocks written per
     sample), at a point with every state moved, to rounding; the same sparsity."""
     from bvpnav.error_models import ErrorStates
