@@ -844,8 +844,11 @@ def _next_totals(sm, data, s: np.ndarray, iters: list, prev_att: np.ndarray | No
     ``turn``, the cosine between this attitude step and the last, and ``accelerated``, the
     mixing coefficients;
     ``history`` keeps ``(x, g)`` of the last steps below :data:`ANDERSON_START` (a step above
-    it, or one larger than the step before, clears it: a pair from the nonlinear regime or from
-    steps that grow, where Gauss-Newton overshoots, would mislead the secant).
+    it clears it: a pair from the nonlinear regime would mislead the secant). A step larger than
+    the one before drops the pairs before it (a secant across steps that grow, where Gauss-Newton
+    overshoots, misleads) and is not mixed, but its own pair starts the new history: the next
+    step, if it shrinks, is mixed with it (the first full pass after cheap steps, whose step is
+    what they left out, and the first cheap step after a full pass are such steps).
 
     On a coarse mesh (``sm.node_totals``) the unknowns are the nodes' totals: they are the
     ones mixed, and the samples' totals are made from the point taken when a full pass needs
@@ -861,15 +864,17 @@ def _next_totals(sm, data, s: np.ndarray, iters: list, prev_att: np.ndarray | No
 
     def nodes(tot):
         return tot if mesh is None else {k: v[mesh] for k, v in tot.items()}
-    grew = len(iters) > 1 and iters[-1]["step"] >= iters[-2]["step"]
-    if not o["loop"] or iters[-1]["step"] >= ANDERSON_START or grew:
-        history.clear()   # mixed only with steps of the linear regime, where they shrink
+    if not o["loop"] or iters[-1]["step"] >= ANDERSON_START:
+        history.clear()   # mixed only with steps of the linear regime
         return plain, att
+    grew = len(iters) > 1 and iters[-1]["step"] >= iters[-2]["step"]
+    if grew:
+        history.clear()   # mixed only with steps that shrink: this step's pair starts the history
     kinds = sm.state_kinds(data)
     before = _flat_totals(sm, data, nodes({k: _totals(data, k) for k in kinds}))
     history.append((before, _flat_totals(sm, data, plain)))
     del history[:-(ANDERSON_DEPTH + 1)]
-    if iters[-1]["step"] < o["tol"]:
+    if grew or iters[-1]["step"] < o["tol"]:
         return plain, att   # the answer's totals, as Gauss-Newton gives them
     m = before.size // (3 * len(kinds))   # samples, or nodes
     mixed = _anderson(history, m)
@@ -911,6 +916,16 @@ CHEAP_RATE = 0.02
 #: the first run of cheap steps, 0.003-0.15 after the second (steps below 1e-7 rad).
 CHEAP_GAP = 0.01
 
+#: A first step of at least this, rad, starts far from the answer: the second may be cheap before
+#: the rate of convergence is known (:func:`_slow` needs two steps), since several steps follow at
+#: any rate (from 0.1 rad quadratic convergence takes three more to 1e-7). Measured on the KITTI
+#: drive's development split (1 s mesh): first steps 0.18 / 0.46 / 0.33 rad at fixes every
+#: 10 / 30 / 60 s, the cheap error after them 8e-5 / 2e-5 / 7e-7 (so only at 60 s within
+#: :data:`CHEAP_ERROR`: there 11 -> 8 steps, full passes 4 -> 3); a noise-free simulated drive
+#: (quadratic convergence, tests/test_mesh.py) 9e-3 rad, where a cheap second step costs a full
+#: pass more.
+CHEAP_FIRST = 0.1
+
 #: Items whose rows read the nodal positions alone (no attitude, velocity or acceleration of the
 #: point): with only these (and :class:`~bvpnav.error_models.ErrorStates` as the whole error
 #: model) a coarse mesh's Gauss-Newton steps may be cheap (:func:`_cheap_eligible`).
@@ -946,14 +961,21 @@ def _quick_next(o: dict, k: int, iters: list, lam) -> bool:
 
 
 def _may_cheap(o: dict, k: int, iters: list, lam) -> bool:
-    """Whether step ``k`` may be cheap: Gauss-Newton converges linearly (:func:`_slow`), the
-    step is an intermediate one (:func:`_quick_next`), and a run of cheap steps has not yet
+    """Whether step ``k`` may be cheap: Gauss-Newton converges linearly (:func:`_slow`) or the
+    one step taken was large (:func:`_far`), the step is an intermediate one
+    (:func:`_quick_next`), and a run of cheap steps has not yet
     converged to within what it leaves out (its next step expected above :data:`CHEAP_GAP`
     times the gyro-bias rotation: a full pass is then due)."""
-    if not (_slow(iters) and _quick_next(o, k, iters, lam)):
+    if not ((_slow(iters) or _far(iters)) and _quick_next(o, k, iters, lam)):
         return False
     last = iters[-1]
     return last["solve"] != "cheap" or _expected(iters) >= _left_out(last)
+
+
+def _far(iters: list) -> bool:
+    """Whether the node-state loop has taken one step and it was at least :data:`CHEAP_FIRST`:
+    the next may be cheap before the rate of convergence is known."""
+    return len(iters) == 1 and iters[0]["step"] >= CHEAP_FIRST
 
 
 def _left_out(it: dict) -> float:
@@ -1112,7 +1134,8 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     step is still below ``tol``.
 
     On a coarse mesh (``segment=``, items of :data:`POINT_FREE_ITEMS`, :func:`_cheap_eligible`)
-    an intermediate step where Gauss-Newton converges linearly (:data:`CHEAP_RATE`) is *cheap*
+    an intermediate step where Gauss-Newton converges linearly (:data:`CHEAP_RATE`), or the second
+    after a first step of at least :data:`CHEAP_FIRST`, is *cheap*
     (``iterations[k]["solve"]``: ``"cheap"``) while what it
     leaves out is small (:data:`CHEAP_ERROR`,
     :func:`bvpnav.error_models.error_states.cheap_error`: the second-order term of the
