@@ -359,26 +359,6 @@ def test_anderson_mixing_finds_the_limit_of_a_linear_iteration_with_two_modes():
     assert _anderson(history[:1], n) is None
 
 
-def test_a_step_that_grew_starts_the_mixing_history():
-    """A step larger than the one before is not mixed with the steps before it (they are
-    dropped), but its own pair (totals before it, after it) starts the history, so the next
-    step, if it shrinks, is mixed with it; a step that grows again drops it."""
-    from bvpnav.solve.attitude import _next_totals, check_attitude
-
-    d = simulate(const(BG), const(BA), T=2.0)
-    form = problem(d, ErrorStates(arw=1e-5, gyro_drift=1e-4, acc_drift=1e-3)).formulation
-    sm, data, o = form.model.state_model, form.data, check_attitude(None)
-    ns = form.model.split(np.zeros(form.model.size))["s"].size
-    rng = np.random.default_rng(3)
-    history: list = []
-    iters: list = []
-    for k, step in enumerate([0.01, 0.02, 0.005, 0.006]):   # the second and the fourth grew
-        iters.append({"step": step})
-        _next_totals(sm, data, step * rng.standard_normal(ns), iters, None, o, history)
-        mixed = "accelerated" in iters[-1]
-        assert (len(history), mixed) == [(1, False), (1, False), (2, True), (1, False)][k], k
-
-
 def test_a_misfit_loop_is_accelerated_to_the_same_answer_in_fewer_steps(monkeypatch):
     # rates and forces 10 times noisier than sigma_a says (a misfit, as on the KITTI drive):
     # Gauss-Newton alternates along one line, shrinking by about 0.54 a step; Anderson mixing of
