@@ -19,7 +19,7 @@ from bvpnav.error_models import Bias, ScaleFactor
 from bvpnav.errors import InputError
 from bvpnav.grid import MeshGrid, TimeGrid, mesh_nodes
 from bvpnav.mesh import MeshModel
-from bvpnav.solve.attitude import CHEAP_GAP
+from bvpnav.solve.attitude import CHEAP_ERROR, CHEAP_FIRST, CHEAP_GAP
 
 #: The simulated items are few and the noise small: the misfit check speaks (the same words
 #: for both solves, asserted below); not the subject here.
@@ -480,6 +480,41 @@ def test_cheap_steps_give_the_full_passes_answer():
            and i + 2 < fast.max_iter]
     assert due and all(kinds[i] == "banded" for i in due), kinds
     # measured: positions 1.1e-12 relative apart, states 3e-10 (both stop at a step below 1e-7 rad)
+    a, b = sols[True], sols[False]
+    assert np.abs(a.position() - b.position()).max() <= 1e-9 * np.abs(b.position()).max()
+    assert np.abs(a.error_states.to_numpy() - b.error_states.to_numpy()).max() <= 1e-8
+    assert a.stats["verified"] and b.stats["verified"]
+
+
+def test_a_start_far_off_takes_a_cheap_second_step():
+    """From a start whose first step is at least CHEAP_FIRST (a heading 0.3 rad off, the heading
+    open) the second step is cheap when what it leaves out is within CHEAP_ERROR, before the
+    rate of convergence is known (it needs two steps); the answer is the cheap-off loop's, in
+    fewer full passes."""
+    from error_models.test_error_states import GRAV
+    from scipy.spatial.transform import Rotation
+
+    from bvpnav.error_models import ErrorStates
+
+    d = _drive(T=20.0, noise=True)
+    data = bvpnav.ImuData.from_gyro(d["t"], d["data"].specific_force, d["data"].gyro,
+                                    initial_attitude=Rotation.from_rotvec([0.0, 0.0, 0.3]) * d["C"][0],
+                                    gravity=GRAV)
+    model = ErrorStates(arw=2e-3 / np.sqrt(20.0), gyro_drift=1e-5, acc_drift=1e-3,
+                        attitude_sigma=[0.1, 0.1, np.inf], gyro_sigma=1e-3, acc_sigma=1e-3)
+    k = np.arange(0, d["t"].size, 20)
+    sols = {}
+    for cheap in (True, False):
+        prob = bvpnav.NavigationProblem(data, error_model=model, sigma_a=2e-2, segment=1.0)
+        prob.add(Position(t=d["t"][k], value=d["fix"][k], sigma=0.3))
+        sols[cheap] = prob.solve(solver="direct", attitude={"progress": False, "cheap": cheap})
+    fast, slow = sols[True].records.attitude, sols[False].records.attitude
+    first, second = fast.iterations[:2]
+    # measured: first step 0.39 rad, the second's cheap error 1.2e-6 rad
+    assert first["step"] >= CHEAP_FIRST and first["solve"] == "banded"
+    assert second["solve"] == "cheap" and second["cheap_error"] <= CHEAP_ERROR
+    assert fast.converged and slow.converged and fast.full_passes < slow.full_passes
+    # measured: positions 3e-13 relative apart
     a, b = sols[True], sols[False]
     assert np.abs(a.position() - b.position()).max() <= 1e-9 * np.abs(b.position()).max()
     assert np.abs(a.error_states.to_numpy() - b.error_states.to_numpy()).max() <= 1e-8

@@ -101,3 +101,29 @@ def test_course_start_refusals(drive):
         solve(problem(drive, model=Bias()), "course")
     with pytest.raises(InputError, match=r"start.*'data'.*'course'"):
         solve(problem(drive), "gyro")
+
+
+def test_a_course_start_is_no_reference_for_a_cheap_second_step():
+    """A first step of at least CHEAP_FIRST from the data as measured may be followed by a cheap
+    one, not from a course start: cheap steps rotate the reference pass's samples element by
+    element, and the course start sets every sample's attitude (not the gyro's between the
+    nodes), so cheap steps from it converge away from the full passes' point (measured on this
+    tactical drive, 1 s mesh: the next full pass 6.7e-3 rad, 8 steps against 5)."""
+    from bvpnav.solve.attitude import CHEAP_FIRST
+
+    drive = car_drive(120.0, 20.0, "tactical", seed=0)
+    fig = drive.params["sensor"]
+    data = ImuData.from_gyro(drive.t, drive.specific_force, drive.gyro,
+                             initial_attitude=drive.initial_attitude_guess, gravity=drive.gravity)
+    model = ErrorStates(arw=fig["gyro_noise"], gyro_drift=fig["gyro_bias_walk"],
+                        acc_drift=fig["acc_bias_walk"], attitude_sigma=[fig["tilt"], fig["tilt"], np.inf],
+                        gyro_sigma=fig["gyro_bias"], acc_sigma=fig["acc_bias"])
+    prob = NavigationProblem(data, error_model=model, sigma_a=fig["acc_noise"] * math.sqrt(20.0), segment=1.0)
+    kept = np.arange(0, drive.fix_t.size, 10)
+    prob.add(Position(t=drive.fix_t[kept], value=drive.fix_position[kept],
+                      sigma=np.tile(drive.fix_sigma, (kept.size, 1)), name="fixes"))
+    rec = solve(prob, "course").records.attitude
+    steps = [(it["solve"], it["step"]) for it in rec.iterations]
+    # measured: the first step 0.75 rad
+    assert rec.converged and steps[0][1] >= CHEAP_FIRST and steps[1][0] == "banded", steps
+    assert rec.cheap_steps >= 1 and rec.full_passes <= 4, steps   # measured: 4 full passes, 1 cheap step

@@ -845,7 +845,9 @@ def _next_totals(sm, data, s: np.ndarray, iters: list, prev_att: np.ndarray | No
     mixing coefficients;
     ``history`` keeps ``(x, g)`` of the last steps below :data:`ANDERSON_START` (a step above
     it, or one larger than the step before, clears it: a pair from the nonlinear regime or from
-    steps that grow, where Gauss-Newton overshoots, would mislead the secant).
+    steps that grow, where Gauss-Newton overshoots, would mislead the secant; so would the grown
+    step's own pair as the oldest of the next mixing: on the simulated consumer car, seed 1, 60 s
+    between fixes, course start, 1 s mesh, keeping it threw the attitude 0.44 rad, 13 -> 15 steps).
 
     On a coarse mesh (``sm.node_totals``) the unknowns are the nodes' totals: they are the
     ones mixed, and the samples' totals are made from the point taken when a full pass needs
@@ -911,6 +913,16 @@ CHEAP_RATE = 0.02
 #: the first run of cheap steps, 0.003-0.15 after the second (steps below 1e-7 rad).
 CHEAP_GAP = 0.01
 
+#: A first step of at least this, rad, starts far from the answer: the second may be cheap before
+#: the rate of convergence is known (:func:`_slow` needs two steps), since several steps follow at
+#: any rate (from 0.1 rad quadratic convergence takes three more to 1e-7). Measured on the KITTI
+#: drive's development split (1 s mesh): first steps 0.18 / 0.46 / 0.33 rad at fixes every
+#: 10 / 30 / 60 s, the cheap error after them 8e-5 / 2e-5 / 7e-7 (so only at 60 s within
+#: :data:`CHEAP_ERROR`: there full passes 4 -> 3, cheap steps 7 -> 8); a noise-free simulated drive
+#: (quadratic convergence, tests/test_mesh.py) 9e-3 rad, where a cheap second step costs a full
+#: pass more.
+CHEAP_FIRST = 0.1
+
 #: Items whose rows read the nodal positions alone (no attitude, velocity or acceleration of the
 #: point): with only these (and :class:`~bvpnav.error_models.ErrorStates` as the whole error
 #: model) a coarse mesh's Gauss-Newton steps may be cheap (:func:`_cheap_eligible`).
@@ -945,15 +957,27 @@ def _quick_next(o: dict, k: int, iters: list, lam) -> bool:
     return _expected(iters) >= o["tol"] if iters else not isinstance(lam, str)
 
 
-def _may_cheap(o: dict, k: int, iters: list, lam) -> bool:
-    """Whether step ``k`` may be cheap: Gauss-Newton converges linearly (:func:`_slow`), the
+def _may_cheap(o: dict, k: int, iters: list, lam, started: bool = False) -> bool:
+    """Whether step ``k`` may be cheap: Gauss-Newton converges linearly (:func:`_slow`) or the
+    one step taken was large (:func:`_far`; not when the loop ``started`` off the data), the
     step is an intermediate one (:func:`_quick_next`), and a run of cheap steps has not yet
     converged to within what it leaves out (its next step expected above :data:`CHEAP_GAP`
     times the gyro-bias rotation: a full pass is then due)."""
-    if not (_slow(iters) and _quick_next(o, k, iters, lam)):
+    if not ((_slow(iters) or (_far(iters) and not started)) and _quick_next(o, k, iters, lam)):
         return False
     last = iters[-1]
     return last["solve"] != "cheap" or _expected(iters) >= _left_out(last)
+
+
+def _far(iters: list) -> bool:
+    """Whether the node-state loop has taken one step and it was at least :data:`CHEAP_FIRST`:
+    the next may be cheap before the rate of convergence is known. Only from the data as
+    measured: a cheap step rotates its reference pass's samples element by element, which is a
+    full pass's point only when the samples' attitude between the nodes is the gyro's from the
+    left node (the data's, integrated from its rates; a start off the data, ``start="course"``,
+    sets every sample's attitude, and cheap steps from it converge away from the full passes'
+    point: measured on a simulated car, 1 s mesh, the next full pass 0.03-0.1 rad)."""
+    return len(iters) == 1 and iters[0]["step"] >= CHEAP_FIRST
 
 
 def _left_out(it: dict) -> float:
@@ -1112,7 +1136,8 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     step is still below ``tol``.
 
     On a coarse mesh (``segment=``, items of :data:`POINT_FREE_ITEMS`, :func:`_cheap_eligible`)
-    an intermediate step where Gauss-Newton converges linearly (:data:`CHEAP_RATE`) is *cheap*
+    an intermediate step where Gauss-Newton converges linearly (:data:`CHEAP_RATE`), or the second
+    after a first step of at least :data:`CHEAP_FIRST`, is *cheap*
     (``iterations[k]["solve"]``: ``"cheap"``) while what it
     leaves out is small (:data:`CHEAP_ERROR`,
     :func:`bvpnav.error_models.error_states.cheap_error`: the second-order term of the
@@ -1173,7 +1198,7 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     with progress(desc="state loop", unit="iter", enabled=o["progress"]) as bar:
         for k in range(int(o["max_iter"])):
             data, err, totals = _next_point(form, o, iters, ref, nodes, totals,
-                                            cheap_ok and _may_cheap(o, k, iters, lam_now), started)
+                                            cheap_ok and _may_cheap(o, k, iters, lam_now, started), started)
             cheap = err is not None
             if iters and any(getattr(it, "body_frame", False) for it in form.items):
                 # body-frame items: their attitude term about the last step's velocity
