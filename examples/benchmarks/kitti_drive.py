@@ -476,7 +476,11 @@ VEHICLE = {"bvpnav NHC soft": ("soft", False), "bvpnav NHC band": ("band", False
            "bvpnav states mesh NHC lever band": ("band", False),
            "bvpnav states mesh NHC mount": ("soft", False),
            "bvpnav states mesh NHC mount band": ("band", False),
-           "bvpnav states mesh NHC+FM mount band": ("band", True)}
+           "bvpnav states mesh NHC+FM mount band": ("band", True),
+           "bvpnav states mesh NHC slip": ("soft", False),
+           "bvpnav states mesh NHC slip known": ("soft", False),
+           "bvpnav states mesh NHC+FM slip": ("soft", True),
+           "bvpnav states mesh NHC slip sigma": ("soft", False)}
 #: The methods that estimate the IMU's mounting (yaw and pitch boresight) with the non-holonomic
 #: rows (``NonHolonomic(mounting="estimated")``), prior sigma :data:`MOUNT_SIGMA`.
 MOUNTED = ("bvpnav states NHC mount", "bvpnav NHC+FM mount", "bvpnav states mesh NHC mount",
@@ -496,6 +500,18 @@ LEVERED = ("bvpnav states NHC lever", "bvpnav states NHC lever band", "bvpnav NH
 #: this drive (a car's IMU is within about 2 m of its rear axle).
 LEVER_SIGMA = 2.0
 LEVER_NAMES = ("nhc_lever_x", "nhc_lever_y", "nhc_lever_z")
+#: The methods with the tyres' side slip in the lateral rows (issue 39, the 10 s gap: a car is not
+#: non-holonomic in a turn; :class:`~bvpnav.constraints.NonHolonomic`'s Notes): ``NonHolonomic(slip=
+#: "estimated")`` with ``SideSlip(sigma=SIDE_SLIP_SIGMA, prior=SIDE_SLIP_PRIOR)`` (4 +- 2 deg/g, from
+#: published cornering stiffnesses, not from this drive), or the prior's value as known (``slip=
+#: SIDE_SLIP_PRIOR``).
+SLIPPED = ("bvpnav states mesh NHC slip", "bvpnav states mesh NHC+FM slip")
+SLIP_KNOWN = ("bvpnav states mesh NHC slip known",)
+#: The noise-model form of the same physics (no unknown): the lateral rows' sigma grows with the slip
+#: the tyres make, ``sqrt(NHC_WIDTH^2 + (SIDE_SLIP_SIGMA f_y v_x)^2)`` per row, with :math:`f_y` the
+#: measured lateral specific force and :math:`v_x` the speed of the kept fixes interpolated linearly
+#: (the vertical rows keep NHC_WIDTH).
+SLIP_NOISE = ("bvpnav states mesh NHC slip sigma",)
 
 #: The methods that estimate one more error of the IMU itself beside the node states (issue 39, the 10 s
 #: gap): method -> (the method it extends, the error). ``"acc scale"``: the horizontal accelerometers'
@@ -763,7 +779,8 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float, *, fix_s
     fixes = start_prior == "fixes" and method.startswith("bvpnav states")
     from bvpnav import ImuData, NavigationProblem
     from bvpnav.constraints import Position
-    from bvpnav.error_models import AttitudeError, Bias, GyroBias, Mounting, NhcLever
+    from bvpnav.error_models import AttitudeError, Bias, GyroBias, Mounting, NhcLever, SideSlip
+    from bvpnav.error_models.side_slip import SIDE_SLIP_PRIOR, SIDE_SLIP_SIGMA
     from bvpnav.sensors import from_datasheet
 
     data = ImuData.from_gyro(d["t"], d["f"], d["w"], initial_attitude=c0,
@@ -778,6 +795,8 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float, *, fix_s
             model = model + Mounting(sigma=MOUNT_SIGMA)
         if method in LEVERED:
             model = model + NhcLever(sigma=LEVER_SIGMA)
+        if method in SLIPPED:
+            model = model + SideSlip(sigma=SIDE_SLIP_SIGMA, prior=SIDE_SLIP_PRIOR)
         prob = NavigationProblem(data, error_model=model, sigma_a=fig["acc_noise"] * math.sqrt(rate),
                                  segment=MESH_SEGMENT if method.startswith("bvpnav states mesh") else None)
     elif method == "bvpnav README" or method in VEHICLE:
@@ -804,11 +823,32 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float, *, fix_s
         mode, forward = VEHICLE[method]
         width = {"sigma": NHC_WIDTH} if mode == "soft" else {"tol": NHC_WIDTH}
         lever = "estimated" if method in LEVERED else (0.0, 0.0, 0.0)
-        prob.add(NonHolonomic(axes=("y", "z"), lever=lever, rate=NHC_RATE, mode=mode, **width,
+        slip = "estimated" if method in SLIPPED else SIDE_SLIP_PRIOR if method in SLIP_KNOWN else None
+        if method in SLIP_NOISE:
+            width = {"sigma": slip_sigma(d, kept, data)}
+        prob.add(NonHolonomic(axes=("y", "z"), lever=lever, rate=NHC_RATE, mode=mode, **width, slip=slip,
                               mounting="estimated" if method in MOUNTED else None, name="non-holonomic"))
         if forward:
             prob.add(ForwardMotion(min_speed=0.0, lever=lever, rate=NHC_RATE, name="forward"))
     return prob
+
+
+def slip_sigma(d: dict, kept, data) -> np.ndarray:
+    """The :data:`SLIP_NOISE` rows' sigmas, m/s, (instants, 2) for the axes ``("y", "z")`` at
+    :data:`NHC_RATE`: laterally ``hypot(NHC_WIDTH, SIDE_SLIP_SIGMA |f_y| v)`` with the measured lateral
+    specific force and the kept fixes' horizontal speed (linear between them), vertically NHC_WIDTH."""
+    from bvpnav.constraints import NonHolonomic
+    from bvpnav.error_models.side_slip import SIDE_SLIP_SIGMA
+    from bvpnav.model import NavModel
+
+    t = NonHolonomic(rate=NHC_RATE).instants(NavModel(data))
+    kt = np.asarray(sorted(int(k) for k in kept))
+    ft, fp = d["fix_t"][kt], d["fix_p"][kt, :2]
+    speed = np.linalg.norm(np.diff(fp, axis=0), axis=1) / np.diff(ft)
+    v = np.interp(t, 0.5 * (ft[1:] + ft[:-1]), speed)
+    fy = np.interp(t, d["t"], d["f"][:, 1])
+    lateral = np.hypot(NHC_WIDTH, SIDE_SLIP_SIGMA * np.abs(fy) * v)
+    return np.column_stack([lateral, np.full(t.size, NHC_WIDTH)])
 
 
 def _with_imu_error(d: dict, kept, method: str, fig: dict, c0, interval: float, **options):
@@ -930,6 +970,7 @@ def run_bvpnav(d: dict, kept, withheld, method: str, fig: dict, c0, interval: fl
             if "mounting_yaw" in sol.error_params else None,
             "nhc_lever": [float(sol.error_params[n]) for n in LEVER_NAMES]
             if "nhc_lever_x" in sol.error_params else None,
+            "side_slip": float(sol.error_params["side_slip"]) if "side_slip" in sol.error_params else None,
             "imu_error": _imu_estimates(sol, profile) if imu_error else None}
 
 
@@ -1043,6 +1084,9 @@ def main(argv: list[str] | None = None) -> list[dict]:
                 + (" mounting yaw {:.3f} pitch {:.3f} deg".format(*r["mounting_deg"]) if r.get("mounting_deg")
                    else "")
                 + (" lever ({:.3f}, {:.3f}, {:.3f}) m".format(*r["nhc_lever"]) if r.get("nhc_lever") else "")
+                + (" side slip {:.5f} s^2/m ({:.2f} deg/g)".format(
+                    r["side_slip"], math.degrees(r["side_slip"] * GRAVITY)) if r.get("side_slip") is not None
+                   else "")
                 + "".join(f" {k} {v[0]:.5g}" + (f" +- {v[1]:.2g}" if v[1] is not None else "")
                           for k, v in (r.get("imu_error") or {}).items() if isinstance(v, list | tuple))
                 + (" along {along:.3f} cross {cross:.3f} first {early:.3f} last 50 s {late:.3f} m".format(
