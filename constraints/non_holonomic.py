@@ -399,7 +399,11 @@ class NonHolonomic(Item):
         return r"e_j^T (C_k^T v_n(t_k) + \omega_k \times \ell) = 0"
 
     def math(self) -> str:
-        return f"e_j^T (C^T v_n(t_k) + omega x {lever_text(self.lever)}) = 0 for body axes {list(self.axes)}"
+        out = f"e_j^T (C^T v_n(t_k) + omega x {lever_text(self.lever)}) = 0 for body axes {list(self.axes)}"
+        if self.slip is None:
+            return out
+        k = "estimated (SideSlip)" if isinstance(self.slip, str) else f"= {self.slip:g} s^2/m"
+        return out + f", the lateral one plus K f_y v_x with K {k}"
 
 
 def vehicle_example_model():
