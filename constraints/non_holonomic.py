@@ -14,6 +14,12 @@ from ._common import finite, interval
 
 __all__ = ["NonHolonomic"]
 
+#: Largest known cornering compliance :math:`K` accepted by ``slip=K``, s^2/m (0.05: a side-slip
+#: angle of 28 degrees per g of lateral specific force, several times any road tyre's; see
+#: :class:`NonHolonomic`'s Notes for the physics and :class:`~bvpnav.error_models.SideSlip` for the
+#: published figures, 0.004-0.009 s^2/m).
+SLIP_MAX = 0.05
+
 #: Default half-width of the band, m/s: what a car's wheels allow sideways and vertically
 #: (tyre slip in ordinary driving, suspension travel, a residual mounting misalignment of a few
 #: tenths of a degree at 15 m/s) without being tuned to any recording.
@@ -64,6 +70,54 @@ def positive_rate(rate, label: str) -> float | None:
     if r.size != 1 or not float(r.ravel()[0]) > 0:
         raise InputError(f"{label}: rate={rate!r}; give the rows' rate in Hz (> 0), or None for every sample")
     return float(r.ravel()[0])
+
+
+def slip_value(slip, label: str) -> float | str | None:
+    """``None`` (no slip), ``"estimated"`` or a known cornering compliance :math:`K` in s^2/m,
+    validated (finite, ``0 <= K <= SLIP_MAX``)."""
+    if slip is None or (isinstance(slip, str) and slip == "estimated"):
+        return slip
+    fix = ("give the rear axle's cornering compliance K in s^2/m (the side-slip angle, rad, per m/s^2 of "
+           f"lateral specific force; 0 <= K <= {SLIP_MAX:g}, a car's 0.004-0.009), 'estimated' (the "
+           "error model's SideSlip), or None")
+    if isinstance(slip, str | bool):
+        raise InputError(f"{label}: slip={slip!r}; {fix}")
+    try:
+        k = float(slip)
+    except (TypeError, ValueError):
+        raise InputError(f"{label}: slip={slip!r}; {fix}") from None
+    if not (np.isfinite(k) and 0.0 <= k <= SLIP_MAX):
+        raise InputError(f"{label}: slip={slip!r} s^2/m is outside [0, {SLIP_MAX:g}] (negative: the rear "
+                         f"axle sliding into the turn, which a tyre's lateral force cannot do; above: a slip "
+                         f"angle of {np.degrees(SLIP_MAX * 9.80665):.0f} deg per g and more); {fix}")
+    return k
+
+
+def lateral_force(model, t: np.ndarray) -> np.ndarray:
+    """The measured body-frame lateral specific force :math:`f_y` at ``t`` (m/s^2; linear
+    between samples)."""
+    f = np.asarray(model.data.specific_force, dtype=float)[:, 1]
+    return model.sample_grid.interpolation_matrix(t, "lateral specific force") @ f
+
+
+def slip_rows(model, t, axes, lever, slip, who: str):
+    r"""The side-slip term of the lateral rows (zero on the other axes), to be added to
+    :func:`point_rows`: :math:`K f_y(t_k)\, v_x(t_k)` with a known ``slip`` :math:`K` (linear
+    in the point's forward velocity), or with ``slip="estimated"`` the rows of
+    :meth:`bvpnav.NavModel.side_slip_velocity` (the error model's
+    :class:`~bvpnav.error_models.SideSlip`)."""
+    import scipy.sparse as sp
+
+    from bvpnav.model import Affine
+
+    if isinstance(slip, str):
+        return model.side_slip_velocity(t, axes, what=who)
+    t = np.asarray(t, dtype=float)
+    nb, iy = len(axes), list(axes).index("y")
+    fwd = point_rows(model, t, ("x",), lever, who)                  # one row per instant
+    S = sp.csr_matrix((slip * lateral_force(model, t), (np.arange(t.size) * nb + iy, np.arange(t.size))),
+                      shape=(t.size * nb, t.size))
+    return Affine(S @ fwd.A, S @ fwd.c)
 
 
 def point_rows(model, t, axes, lever, who: str):
@@ -148,6 +202,13 @@ class NonHolonomic(Item):
         velocity across the *vehicle's* forward axis, whose yaw and pitch in the body frame are
         the parameters of :class:`~bvpnav.error_models.Mounting` (add it to the error model,
         with a prior). Default None: the body axes are the vehicle's.
+    slip : None, float or ``"estimated"``
+        The tyres' side slip in turns (see Notes): ``None`` (default) holds the lateral
+        velocity at zero; a cornering compliance :math:`K` in s^2/m (the rear axle's side-slip
+        angle, rad, per m/s^2 of lateral specific force, e.g. 0.007: about 3.9 degrees per g)
+        makes the lateral rows :math:`v_y + K f_y v_x`; ``"estimated"``: :math:`K` is the
+        parameter of :class:`~bvpnav.error_models.SideSlip` (add it to the error model, with
+        its prior). Needs ``"y"`` in ``axes``.
     rate : float or None
         Rate of the rows, Hz (default 10): the samples nearest at or after ``t0 + k / rate``
         per interval; ``None`` for every sample. The errors of this information (tyre slip,
@@ -180,6 +241,34 @@ class NonHolonomic(Item):
     :math:`\omega_k \times \ell = [\omega_k\times]\,\ell` is linear in it
     (:meth:`bvpnav.NavModel.vehicle_point_velocity`).
 
+    **Side slip** (``slip=``). A car is not non-holonomic in a turn: a tyre carries a lateral
+    force by rolling at a slip angle :math:`\alpha` to its heading, and in the linear range
+    (below about 0.4 g) the force is proportional to it, :math:`F_y = -C_\alpha \alpha`
+    with :math:`\alpha = \arctan(v_y / v_x) \approx v_y / v_x` of the wheel's velocity
+    and :math:`C_\alpha` the axle's cornering stiffness (N/rad): the force opposes the
+    sideways sliding. In a steady turn the rear axle carries the share of the lateral force
+    its load :math:`W_r` carries of the weight, :math:`F_{y,r} = W_r\, a_y / g` (moments
+    about the centre of gravity: the steady-state cornering of the bicycle model, Gillespie,
+    *Fundamentals of Vehicle Dynamics*, SAE 1992, ch. 6; Rajamani, *Vehicle Dynamics and
+    Control*, 2nd ed., Springer 2012, ch. 2-3).
+    The lateral force the tyres carry per unit mass is what the accelerometer measures, the
+    lateral specific force :math:`f_y` (gravity's component on a banked road included, so
+    no bank angle is needed). So the middle of the rear axle slides outwards at
+
+    .. math:: v_y = -\frac{W_r}{g\, C_{\alpha r}}\, f_y\, v_x = -K f_y v_x ,
+
+    :math:`K = D_r / g` with :math:`D_r = W_r / C_{\alpha r}` the rear axle's cornering
+    compliance (rad per g; Gillespie's understeer gradient is :math:`D_f - D_r`): the side-slip
+    angle :math:`\beta = v_y / v_x = -K f_y`, outwards (right, :math:`-y`) in a left turn
+    (:math:`f_y > 0`). The lateral row becomes :math:`\rho_{k,y} + K f_y(t_k)\,
+    \rho_{k,x}` with :math:`\rho_{k,x}` the point's forward velocity; with ``slip=
+    "estimated"`` :math:`K f_y v^0_x` with :math:`v^0_x` the loop's linearization point
+    (:meth:`bvpnav.NavModel.side_slip_velocity`; exact at the loop's answer). For a car
+    driving forward (:math:`v_x > 0`); the published figures for :math:`K` are under
+    :class:`~bvpnav.error_models.SideSlip`. The point should be the rear axle's middle
+    (``lever``): a point :math:`d` m ahead of it moves sideways at :math:`d` times the yaw
+    rate besides.
+
     Examples
     --------
     >>> from bvpnav.constraints import NonHolonomic
@@ -194,6 +283,7 @@ class NonHolonomic(Item):
     t: Any = None
     rate: Any = 10.0
     mounting: Any = None
+    slip: Any = None
     units = "m/s"
     #: The item's axes are body axes (the contract check compares one body axis's rows with
     #: the rows of all of them instead of looking for navigation axes).
@@ -226,6 +316,10 @@ class NonHolonomic(Item):
             raise InputError(f"{label}: mounting='estimated' with axes={list(axes)}; the mounting turns the "
                              "lateral and vertical rows: give axes among ('y', 'z')")
         object.__setattr__(self, "lever", lever_arm(self.lever, label))
+        object.__setattr__(self, "slip", slip_value(self.slip, label))
+        if self.slip is not None and "y" not in axes:
+            raise InputError(f"{label}: slip={self.slip!r} with axes={list(axes)}; the side slip acts on the "
+                             "lateral rows: give axes with 'y' (e.g. axes=('y', 'z')) or drop slip")
         object.__setattr__(self, "t", intervals(self.t, label))
         object.__setattr__(self, "rate", positive_rate(self.rate, label))
 
@@ -233,8 +327,9 @@ class NonHolonomic(Item):
     def reads_error_model(self) -> bool:
         """Whether the rows read a parameter of the error model (the :class:`~bvpnav.error_models.
         Mounting` with ``mounting="estimated"``, the :class:`~bvpnav.error_models.NhcLever` with
-        ``lever="estimated"``): the contract check then solves with it."""
-        return self.mounting is not None or isinstance(self.lever, str)
+        ``lever="estimated"``, the :class:`~bvpnav.error_models.SideSlip` with ``slip=
+        "estimated"``): the contract check then solves with it."""
+        return self.mounting is not None or isinstance(self.lever, str) or isinstance(self.slip, str)
 
     def row_layout(self, m: int) -> tuple[int, int]:
         """``(instants, body axes)``: sigma and tol may be given per axis."""
@@ -261,6 +356,8 @@ class NonHolonomic(Item):
         check_body_data(model, who)
         t = self.instants(model)
         rows = point_rows(model, t, self.axes, self.lever, who)
+        if self.slip is not None:
+            rows = rows + slip_rows(model, t, self.axes, self.lever, self.slip, who)
         if self.mounting is None:
             return rows
         return rows + model.mounting_velocity(t, self.axes, what=who)   # no constant: rows' labels and c
@@ -302,7 +399,11 @@ class NonHolonomic(Item):
         return r"e_j^T (C_k^T v_n(t_k) + \omega_k \times \ell) = 0"
 
     def math(self) -> str:
-        return f"e_j^T (C^T v_n(t_k) + omega x {lever_text(self.lever)}) = 0 for body axes {list(self.axes)}"
+        out = f"e_j^T (C^T v_n(t_k) + omega x {lever_text(self.lever)}) = 0 for body axes {list(self.axes)}"
+        if self.slip is None:
+            return out
+        k = "estimated (SideSlip)" if isinstance(self.slip, str) else f"= {self.slip:g} s^2/m"
+        return out + f", the lateral one plus K f_y v_x with K {k}"
 
 
 def vehicle_example_model():

@@ -1204,6 +1204,15 @@ class NavModel:
         naming ``what`` when the problem has none."""
         return self.params(self._provided("time_offset", what, "TimeOffset(sigma=...)"))
 
+    def _looped(self) -> bool:
+        """Whether an outer loop re-linearizes the body-frame rows (attitude error models, node
+        states with an attitude error, or the loop's data)."""
+        comps = [c for c in getattr(self.error_model, "components", (self.error_model,)) if c is not None]
+        return (any(hasattr(c, "rate_columns") or hasattr(c, "initial_columns") for c in comps)
+                or getattr(self.data, "attitude_point", None) is not None        # the loop's data
+                or getattr(self.data, "body_point", None) is not None
+                or (self.ns and "attitude_error" in self.state_model.state_kinds(self.data)))
+
     def mounting_velocity(self, t, axes, what: str = "mounting") -> Affine:
         r"""The change of the lateral and vertical body velocity rows of a vehicle item made by
         the IMU's mounting (:class:`~bvpnav.error_models.Mounting`), m/s; rows time-major, then
@@ -1237,12 +1246,7 @@ class NavModel:
                              "cosine only (4e-5 at 0.5 deg)")
         idx = self.l_index[[self.param_names.index(n) for n in self._provided("mounting", what,
                                                                                "Mounting(sigma=...)")]]
-        comps = [c for c in getattr(self.error_model, "components", (self.error_model,)) if c is not None]
-        looped = (any(hasattr(c, "rate_columns") or hasattr(c, "initial_columns") for c in comps)
-                  or getattr(self.data, "attitude_point", None) is not None        # the loop's data
-                  or getattr(self.data, "body_point", None) is not None
-                  or (self.ns and "attitude_error" in self.state_model.state_kinds(self.data)))
-        if not looped:
+        if not self._looped():
             raise InputError(f"{what}: mounting='estimated' is linearized about the velocity of the attitude "
                              "loop, and this problem has none (no attitude error model, no node states); add "
                              "one (e.g. AttitudeError(sigma=...) or GyroBias), or give the data in vehicle "
@@ -1260,6 +1264,42 @@ class NavModel:
         A = sp.csr_matrix(((vx[:, None] * sign[None, :]).ravel(), (np.arange(K * nb), np.tile(col, K))),
                           shape=(K * nb, self.size))
         return Affine(A, np.zeros(K * nb), TimeLabels("mount_", list(names), times))
+
+    def side_slip_velocity(self, t, axes, what: str = "side slip") -> Affine:
+        r"""The side slip :math:`K f_y(t)\, v^0_x(t)` of the lateral rows of a vehicle item, m/s,
+        with :math:`K` the parameter of the error model's :class:`~bvpnav.error_models.SideSlip`;
+        rows time-major, then axis (zero but on ``"y"``), to be added to :meth:`body_velocity`'s
+        rows of the same ``t`` and ``axes``.
+
+        Notes
+        -----
+        :math:`f_y` is the measured lateral specific force (linear between samples) and
+        :math:`v^0_x = e_x^T C^T v^0` the forward body velocity of the loop's linearization
+        point (``data.body_point``), as in :meth:`mounting_velocity`: without a point (a loop's
+        first solve) the rows are zero, so :math:`K` stays at its prior for that solve, and at
+        the loop's answer the rows are exact. Refused without an attitude loop (nothing would
+        iterate them).
+        """
+        names, jb = _body_axes(axes, what)
+        (col,) = self.l_index[[self.param_names.index(n) for n in self._provided("side_slip", what,
+                                                                                  "SideSlip(sigma=...)")]]
+        if not self._looped():
+            raise InputError(f"{what}: slip='estimated' is linearized about the velocity of the attitude "
+                             "loop, and this problem has none (no attitude error model, no node states); add "
+                             "one (e.g. AttitudeError(sigma=...) or GyroBias), or give the compliance as "
+                             "known (slip=K in s^2/m)")
+        times = as_times(t, what)
+        K, nb = times.size, len(jb)
+        point = getattr(self.data, "body_point", None)
+        labels = TimeLabels("slip_", list(names), times)
+        if point is None or 1 not in jb:
+            return Affine(sp.csr_matrix((K * nb, self.size)), np.zeros(K * nb), labels)
+        C = self._attitude_at(times, what)
+        vx = np.einsum("kn,kn->k", C[:, :, 0], self._point_velocity(times, point, what))
+        fy = self.sample_grid.interpolation_matrix(times, what) @ np.asarray(self.data.specific_force)[:, 1]
+        A = sp.csr_matrix((fy * vx, (np.arange(K) * nb + jb.index(1), np.full(K, col))),
+                          shape=(K * nb, self.size))
+        return Affine(A, np.zeros(K * nb), labels)
 
     def vehicle_point_velocity(self, t, axes, what: str = "vehicle point") -> Affine:
         r"""The velocity :math:`\omega \times \ell` of the vehicle's no-slip point relative to the

@@ -100,10 +100,12 @@ class NhcLever(_Installed):
         return prob, dict(zip(NAMES, lever.tolist(), strict=True)), {"solver": "direct"}
 
 
-def _car_drive(lever: np.ndarray, duration: float = 20.0, rate: float = 10.0):
+def _car_drive(lever: np.ndarray, duration: float = 20.0, rate: float = 10.0, slip=None):
     r"""A car on a winding, undulating road whose point ``lever`` (m, body axes from the IMU)
     moves along the body x axis, noise-free: the data, and the IMU's positions and velocities
-    at the samples.
+    at the samples. ``slip`` (per sample, dimensionless; default none): the point slides
+    sideways at ``-slip`` times its forward speed instead (``slip_drive`` of
+    :mod:`bvpnav.error_models.side_slip`).
 
     The yaw rate :math:`0.3 \sin(0.4 t)`, roll rate :math:`0.05 \cos(0.9 t)` and pitch rate
     :math:`0.04 \sin(0.7 t + 0.3)` rad/s are the gyro samples; the attitude is the one
@@ -127,7 +129,8 @@ def _car_drive(lever: np.ndarray, duration: float = 20.0, rate: float = 10.0):
     first = ImuData.from_gyro(t, np.tile(-g, (t.size, 1)), w, initial_attitude=att0, gravity=g, checks=False)
     C = first.attitude.as_matrix()
     s = 8.0 + 2.0 * np.sin(0.3 * t)
-    vb = np.column_stack([s, np.zeros(t.size), np.zeros(t.size)]) - np.cross(w, lever)
+    side = np.zeros(t.size) if slip is None else -np.asarray(slip, dtype=float) * s
+    vb = np.column_stack([s, side, np.zeros(t.size)]) - np.cross(w, lever)
     v = np.einsum("kij,kj->ki", C, vb)
     acc = np.empty_like(v)
     dv = np.gradient(v, t, axis=0, edge_order=2)

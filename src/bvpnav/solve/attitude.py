@@ -172,6 +172,12 @@ def objective_value(form: Formulation, x: np.ndarray, lam: float) -> float:
 
 
 # ------------------------------------------------------------- the loop
+def _bilinear(item) -> bool:
+    """Whether the item's rows are bilinear in a parameter and the velocity (an estimated
+    mounting or side slip of a vehicle item)."""
+    return bool(getattr(item, "mounting", None)) or getattr(item, "slip", None) == "estimated"
+
+
 def _turns_with_attitude(items) -> bool:
     """Whether some item's rows turn with the attitude and so take the loop's linearization
     point: body-frame items (``body_frame``) and fixes of an antenna off the IMU
@@ -283,8 +289,8 @@ class _Loop:
     @property
     def mounted(self) -> bool:
         """Whether an item's rows are bilinear in a parameter and the velocity
-        (``NonHolonomic(mounting="estimated")``)."""
-        return any(getattr(it, "mounting", None) for it in self.form.items)
+        (``NonHolonomic(mounting="estimated")``, ``NonHolonomic(slip="estimated")``)."""
+        return any(_bilinear(it) for it in self.form.items)
 
     def _unmounted(self, data) -> Solution:
         """The first velocity point of mounted items: the fixed-attitude solve with the vehicle
@@ -293,13 +299,14 @@ class _Loop:
         from dataclasses import replace
 
         rest = [c for c in getattr(self.rest_model, "components", (self.rest_model,))
-                if c is not None and getattr(type(c), "provides", None) != "mounting"]
+                if c is not None and getattr(type(c), "provides", None) not in ("mounting", "side_slip")]
         model = None if not rest else (rest[0] if len(rest) == 1 else sum(rest[1:], rest[0]))
         # soft (0.1 m/s where the item gives no sigma): hard rows about the body's axes could
         # conflict with the other hard information, which holds about the vehicle's
         items = [replace(it, mounting=None, mode="soft", tol=None, huber=None,
-                         sigma=0.1 if it.sigma is None else it.sigma)
-                 if getattr(it, "mounting", None) else it
+                         sigma=0.1 if it.sigma is None else it.sigma,
+                         **({"slip": None} if getattr(it, "slip", None) == "estimated" else {}))
+                 if _bilinear(it) else it
                  for it in self.form.items if not it.needs_error_model]
         form = self._form(data, model, items=items)
         sol = self.inner(form, self.lam if isinstance(self.lam, float) else 1.0, self.opts)

@@ -647,6 +647,16 @@ NHC_LEVER_LIMIT = 5.0
 #: set at a known angle on purpose), as :data:`LEVER_ARM_LIMIT`.
 MOUNTING_LIMIT = float(np.radians(10.0))
 
+#: Side-slip limits, s^2/m: the rear axle's cornering compliance
+#: (:class:`~bvpnav.error_models.SideSlip`) outside -0.002..0.02. A road tyre's cornering
+#: stiffness is at least about 10 % of its load per degree (Gillespie, *Fundamentals of Vehicle
+#: Dynamics*, ch. 10: 11-19 % for radial tyres), so a rear axle slips at most about 10 degrees
+#: per g, 0.018 s^2/m; a negative compliance is the rear axle sliding into the turn, which a
+#: tyre's lateral force cannot do (-0.002: 1.1 degrees per g, room for the estimate's noise).
+#: Beyond either the rows absorb something else (a heading or gyro error in the turns, the rows
+#: at a point that is not the rear axle). Counted from zero and from the stated prior.
+SIDE_SLIP_LIMITS = (-0.002, 0.02)
+
 #: An installation or timing estimate (time offset, lever arm, no-slip point, mounting) more
 #: than this many of its prior sigmas from its prior mean is warned (with ``sigma=`` given),
 #: whatever its size. With the truth drawn from the stated prior, the estimate's distance
@@ -657,7 +667,7 @@ MOUNTING_LIMIT = float(np.radians(10.0))
 INSTALLATION_PRIOR_SIGMAS = 3.0
 
 __all__ += ["ODOMETER_SCALE_LIMIT", "TIME_OFFSET_LATE_LIMIT", "TIME_OFFSET_EARLY_LIMIT", "LEVER_ARM_LIMIT",
-            "NHC_LEVER_LIMIT", "MOUNTING_LIMIT", "INSTALLATION_PRIOR_SIGMAS"]
+            "NHC_LEVER_LIMIT", "MOUNTING_LIMIT", "SIDE_SLIP_LIMITS", "INSTALLATION_PRIOR_SIGMAS"]
 
 _WHY_DELAY = ("a delay moves each fix along its track, so it absorbs any along-track error the rest of "
               "the model leaves (a speed or scale error, a heading error in the turns, few fixes across a "
@@ -678,6 +688,11 @@ _WHY_MOUNT = ("the boresight absorbs a lateral or vertical velocity the NonHolon
               "heading error), or the body axes are not the vehicle's (x forward, y left, z up); if the "
               "unit sits at a large angle on purpose, rotate the data into the vehicle's axes or give the "
               "known angles as Mounting's prior")
+_WHY_SLIP = ("the side slip absorbs a lateral velocity the tyres cannot make (a heading or gyro error "
+             "in the turns, a mounting yaw: Mounting, the rows at a point that is not the rear axle: "
+             "NhcLever or lever=), or the body axes are not the vehicle's (x forward, y left, z up); give "
+             "SideSlip the published prior (SideSlip(prior=SIDE_SLIP_PRIOR, sigma=SIDE_SLIP_SIGMA)) or drop "
+             "slip=")
 
 #: The installation and timing models, by the role the items look them up by (``provides``):
 #: (what, unit, the limit of a vector's length (None: each value has its own), the point the
@@ -687,7 +702,8 @@ _INSTALLED = {"time_offset": ("the fixes' delay", "s", None, "", _WHY_DELAY),
                             _WHY_LEVER),
               "nhc_lever": ("the no-slip point", "m", "NHC_LEVER_LIMIT", "the no-slip point; a car",
                             _WHY_NHC),
-              "mounting": ("the mounting", "rad", None, "", _WHY_MOUNT)}
+              "mounting": ("the mounting", "rad", None, "", _WHY_MOUNT),
+              "side_slip": ("the side slip", "s^2/m", None, "", _WHY_SLIP)}
 
 
 def _installed(sol: Solution, form: Formulation) -> list[tuple[str, Any, list[str], list[str]]]:
@@ -733,6 +749,8 @@ def _show(role: str, n: str, v: float) -> str:
         return f"{n} = {_fmt(v, 's')} ({1e3 * v:+.4g} ms)"
     if role == "mounting":
         return f"{n} = {_fmt(v, 'rad')} ({np.degrees(v):+.3g} deg)"
+    if role == "side_slip":
+        return f"{n} = {_fmt(v, 's^2/m')} ({np.degrees(v * 9.80665):+.3g} deg/g)"
     return f"{n} = {_fmt(v, 'm')}"
 
 
@@ -776,6 +794,15 @@ def _installation_checks(sol: Solution, form: Formulation) -> list[str]:
                 absurd = (f"{', '.join(_show(role, n, x) for n, x in bad)} is beyond the limit "
                           f"{MOUNTING_LIMIT:.3g} rad ({np.degrees(MOUNTING_LIMIT):.3g} deg) of an IMU "
                           "mounted by eye")
+        elif role == "side_slip":
+            lo, hi = SIDE_SLIP_LIMITS
+            bad = [(n, x) for n, x, q in zip(names, v, p, strict=True)
+                   if not (lo <= x <= hi or lo <= x - q <= hi)]
+            if bad:
+                deg = np.degrees(np.array([lo, hi]) * 9.80665)
+                absurd = (f"{', '.join(_show(role, n, x) for n, x in bad)} is beyond the limits "
+                          f"{lo:g}..{hi:g} s^2/m of a road tyre ({deg[0]:+.2g}..{deg[1]:+.3g} deg of side "
+                          "slip per g)")
         else:
             limit = float(globals()[vec_limit])
             length, off = float(np.linalg.norm(v)), float(np.linalg.norm(v - p))
