@@ -504,6 +504,10 @@ def test_a_patterns_stencil_writes_the_placed_band_bit_for_bit_at_other_values(s
         for new, old in ((ab, placed[0]), (h, placed[3]), (sU, placed[4])):
             assert new.shape == old.shape and np.array_equal(new, old)
         assert plan._stencil(D, E, diagonal) is stencil   # kept for the pattern
+        Ez = E[:, plan.elim_index]   # the eliminated columns by gathers: scipy's matrices exactly
+        for got, want in zip(stencil.eliminated(plan, E), (Ez, Ez.T.tocsr()), strict=True):
+            for a in ("data", "indices", "indptr"):
+                assert np.array_equal(getattr(got, a), getattr(want, a))
         fac = BandedKKT(D, E, plan=plan, diagonal=diagonal)
         assert fac.plan._stencil_kept is stencil
         aug = sp.bmat([[-sp.identity(D.shape[0]), D, None], [D.T, None, E.T], [None, E, None]]).toarray()

@@ -544,6 +544,7 @@ class _Stencil:
         self.pattern = tuple(np.array(a) for a in (D.indptr, D.indices, E.indptr, E.indices))
         self.by_diagonals = by_diagonals
         self.n, self.el, self.nb = n, el, nb
+        self._ez: list | None = None   # the eliminated columns' matrices (eliminated)
         size = nb * ldab
         eliminated = np.zeros(n, dtype=bool)
         eliminated[el] = True
@@ -624,6 +625,26 @@ class _Stencil:
         return by_diagonals == self.by_diagonals and all(
             a is b or (a.size == b.size and np.array_equal(a, b))
             for a, b in zip(self.pattern, (D.indptr, D.indices, E.indptr, E.indices), strict=True))
+
+    def matches_rows(self, E: sp.csr_matrix) -> bool:
+        """Whether ``E`` has this stencil's pattern."""
+        return all(a is b or (a.size == b.size and np.array_equal(a, b))
+                   for a, b in zip(self.pattern[2:], (E.indptr, E.indices), strict=True))
+
+    def eliminated(self, plan: BandPlan, E: sp.csr_matrix) -> tuple:
+        """:meth:`BandPlan._eliminated` of ``E`` (this stencil's pattern): the matrices scipy's
+        column indexing and transpose make, found once for the pattern (on the entries' numbers
+        as values), then ``E``'s values gathered into copies of them."""
+        if self._ez is None:
+            numbers = sp.csr_matrix((np.arange(1.0, E.nnz + 1.0), E.indices, E.indptr), shape=E.shape)
+            Ez = numbers[:, plan.elim_index]
+            self._ez = [(M, M.data.astype(np.int64) - 1) for M in (Ez, Ez.T.tocsr())]
+        out = []
+        for M, take in self._ez:
+            X = copy.copy(M)   # the pattern's index arrays, shared (never changed in place)
+            X.data = E.data[take]
+            out.append(X)
+        return tuple(out)
 
     def parts(self, D: sp.csr_matrix, E: sp.csr_matrix, ldab: int, out: np.ndarray | None = None) -> tuple:
         """``(ab, None, C, h, sU)`` as :meth:`BandPlan.assemble` (``ab`` scaled; ``out``: memory
@@ -1581,10 +1602,14 @@ class BandPlan:
         twice as fast as scipy's column-wise one for ``E_z^T mu``), cached together."""
         cached = getattr(self, "_Ez", None)
         if cached is None or cached[0] is not E.data:   # the same arrays under a new wrapper
-            # scipy's column indexing (a slice for one run of unknowns): faster than the
-            # product with a selection matrix
-            Ez = E[:, self.elim_index]
-            cached = (E.data, Ez, Ez.T.tocsr())
+            stencil = self.__dict__.get("_stencil_kept")
+            if stencil is not None and stencil.matches_rows(E):   # a pattern seen: gathers
+                cached = (E.data, *stencil.eliminated(self, E))
+            else:
+                # scipy's column indexing (a slice for one run of unknowns): faster than the
+                # product with a selection matrix
+                Ez = E[:, self.elim_index]
+                cached = (E.data, Ez, Ez.T.tocsr())
             self._Ez = cached
         return cached[1], cached[2]
 
