@@ -522,3 +522,26 @@ def test_a_patterns_stencil_writes_the_placed_band_bit_for_bit_at_other_values(s
     assert other is not stencil and other is not None
     placed = plan._scatter(plan._entries(D2, E, diagonal), scaled=True)
     assert np.array_equal(other.parts(D2, E, plan.ldab)[0], placed[0])
+
+
+def test_a_pattern_beyond_the_stencils_size_is_placed_as_before(monkeypatch):
+    # no stencil is kept for a pattern of more entries than STENCIL_ENTRIES (its index arrays
+    # would be as large as the band): the assembly places the blocks, with the same band
+    from bvpnav.linalg import banded
+    from bvpnav.linalg.lsq import banded_plan, fem_rows_by_diagonals, least_squares_form
+    from bvpnav.linalg.workspace import Workspace
+
+    d = simulate(const(BG), const(BA), T=2.0)
+    form = problem(d, ErrorStates(arw=1e-4, gyro_drift=1e-4, acc_drift=1e-3)).formulation
+    ls = least_squares_form(form, 1.0)
+    ws = Workspace()
+    plan = banded_plan(ls, form, ws)
+    diagonal = fem_rows_by_diagonals(form, ws)
+    D, E = ls.D.A, ls.E.A
+    monkeypatch.setattr(banded, "STENCIL_ENTRIES", D.nnz + E.nnz - 1)
+    assert plan._stencil(D, E, diagonal) is None
+    placed = plan.assemble(D.copy(), E.copy(), diagonal)   # not the plan's first arrays
+    monkeypatch.setattr(banded, "STENCIL_ENTRIES", D.nnz + E.nnz)
+    stencil = plan._stencil(D, E, diagonal)
+    assert stencil is not None
+    assert np.array_equal(stencil.parts(D, E, plan.ldab)[0], placed[0])

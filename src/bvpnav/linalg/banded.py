@@ -369,6 +369,11 @@ MIN_SORTED_CELLS = 1 << 16
 MEMO_ENTRIES = 1024
 MEMO_PER_KEY = 2
 
+#: Most stored entries of ``D`` and ``E`` together for which a plan keeps a :class:`_Stencil` (its
+#: index arrays hold a few integers per entry and per product pair, about the band's own memory);
+#: larger patterns are placed block by block at every assembly.
+STENCIL_ENTRIES = 1 << 20
+
 #: Shortest run of evenly spaced band positions placed as a :class:`_Stride` (shorter ones,
 #: where extra unknowns sit at a node, go entry by entry).
 MIN_STRIDE_RUN = 64
@@ -1578,8 +1583,9 @@ class BandPlan:
         """The :class:`_Stencil` of ``D`` and ``E``'s pattern, kept for the plan's last pattern
         (an assembly that is not the plan's first is a factorization of the pattern again: a
         Gauss-Newton step, a lambda or an interior-point iteration); None for a plan with a
-        border or several runs, or where it does not apply."""
-        if self.border_order.size or self.segments > 1:
+        border or several runs, a pattern of more than :data:`STENCIL_ENTRIES` entries, or
+        where it does not apply."""
+        if self.border_order.size or self.segments > 1 or D.nnz + E.nnz > STENCIL_ENTRIES:
             return None
         by_diagonals = self._pairs_by_diagonals(E, diagonal)
         kept = self.__dict__.get("_stencil_kept")
