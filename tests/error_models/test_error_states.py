@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 from scipy.spatial.transform import Rotation
 
 import bvpnav
@@ -473,3 +474,87 @@ def test_a_solve_without_a_mesh_leaves_the_users_data_as_it_was():
     assert sorted(data.__dict__) == sorted(before)
     assert all(data.__dict__[key] is v for key, v in before.items())
     assert len(pickle.dumps(data)) == size
+
+
+@pytest.mark.parametrize("segment", [None, 1.0], ids=["samples", "mesh"])
+def test_a_patterns_stencil_writes_the_placed_band_bit_for_bit_at_other_values(segment):
+    # a Gauss-Newton step's assembly of a pattern seen before goes through the plan's stencil
+    # (gathers and sums over the values): the band, h and the scales must be exactly those the
+    # blocks placed one by one give, at the first values and at other values of the same
+    # pattern (the next step's), and the factor must solve the system
+    from bvpnav.linalg.banded import BandedKKT, _Stencil
+    from bvpnav.linalg.lsq import banded_plan, fem_rows_by_diagonals, least_squares_form
+    from bvpnav.linalg.workspace import Workspace
+
+    d = simulate(const(BG), const(BA), T=4.0)
+    model = ErrorStates(arw=1e-4, gyro_drift=1e-4, acc_drift=1e-3, attitude_sigma=0.1)
+    k = np.arange(0, d["t"].size, 8)
+    prob = bvpnav.NavigationProblem(d["data"], error_model=model, sigma_a=1e-3, segment=segment)
+    prob.add(Position(t=d["t"][k], value=d["r"][k], sigma=1e-2))
+    form = prob.add(Position(t=d["t"][[3, 40]], value=d["r"][[3, 40]], mode="hard")).formulation
+    ls = least_squares_form(form, 1.0)
+    ws = Workspace()
+    plan = banded_plan(ls, form, ws)
+    diagonal = fem_rows_by_diagonals(form, ws)
+    D, E = ls.D.A, ls.E.A
+    assert plan.border == 0 and plan.segments == 1 and plan.elim.size and E.shape[0] > diagonal.rows
+    by_diagonals = plan._pairs_by_diagonals(E, diagonal)
+    assert by_diagonals == (segment is None)   # the mesh's element residuals: pairs by products
+    rng = np.random.default_rng(1)
+    for step in range(3):   # the plan's first values, then two other steps' of the same pattern
+        if step:
+            D = D.copy()
+            E = E.copy()
+            D.data *= rng.uniform(0.5, 2.0, D.nnz)
+            # the FEM rows are the model's (the diagonals describe them), the items' rows below
+            below = slice(E.indptr[diagonal.rows], E.nnz)
+            E.data[below] *= rng.uniform(0.5, 2.0, E.nnz - E.indptr[diagonal.rows])
+        stencil = plan._stencil(D, E, diagonal)
+        assert isinstance(stencil, _Stencil) and stencil.by_diagonals == by_diagonals
+        placed = plan._scatter(plan._entries(D, E, diagonal), scaled=True)
+        ab, B, C, h, sU = stencil.parts(D, E, plan.ldab)
+        assert B is None and placed[1] is None and C.shape == placed[2].shape == (0, 0)
+        for new, old in ((ab, placed[0]), (h, placed[3]), (sU, placed[4])):
+            assert new.shape == old.shape and np.array_equal(new, old)
+        assert plan._stencil(D, E, diagonal) is stencil   # kept for the pattern
+        Ez = E[:, plan.elim_index]   # the eliminated columns by gathers: scipy's matrices exactly
+        for got, want in zip(stencil.eliminated(plan, E), (Ez, Ez.T.tocsr()), strict=True):
+            for a in ("data", "indices", "indptr"):
+                assert np.array_equal(getattr(got, a), getattr(want, a))
+        fac = BandedKKT(D, E, plan=plan, diagonal=diagonal)
+        assert fac.plan._stencil_kept is stencil
+        aug = sp.bmat([[-sp.identity(D.shape[0]), D, None], [D.T, None, E.T], [None, E, None]]).toarray()
+        rhs = rng.standard_normal(aug.shape[0])
+        z = fac.refined(rhs, 3)[0]
+        assert np.abs(aug @ z - rhs).max() <= 1e-9 * np.abs(rhs).max()
+    # another pattern: a new stencil for it (a value made zero drops its entry)
+    D2 = D.copy()
+    D2.data[D2.indptr[np.flatnonzero(np.diff(D2.indptr) > 2)[0]]] = 0.0   # a process row's first entry
+    D2.eliminate_zeros()
+    other = plan._stencil(D2, E, diagonal)
+    assert other is not stencil and other is not None
+    placed = plan._scatter(plan._entries(D2, E, diagonal), scaled=True)
+    assert np.array_equal(other.parts(D2, E, plan.ldab)[0], placed[0])
+
+
+def test_a_pattern_beyond_the_stencils_size_is_placed_as_before(monkeypatch):
+    # no stencil is kept for a pattern of more entries than STENCIL_ENTRIES (its index arrays
+    # would be as large as the band): the assembly places the blocks, with the same band
+    from bvpnav.linalg import banded
+    from bvpnav.linalg.lsq import banded_plan, fem_rows_by_diagonals, least_squares_form
+    from bvpnav.linalg.workspace import Workspace
+
+    d = simulate(const(BG), const(BA), T=2.0)
+    form = problem(d, ErrorStates(arw=1e-4, gyro_drift=1e-4, acc_drift=1e-3)).formulation
+    ls = least_squares_form(form, 1.0)
+    ws = Workspace()
+    plan = banded_plan(ls, form, ws)
+    diagonal = fem_rows_by_diagonals(form, ws)
+    D, E = ls.D.A, ls.E.A
+    monkeypatch.setattr(banded, "STENCIL_ENTRIES", D.nnz + E.nnz - 1)
+    assert plan._stencil(D, E, diagonal) is None
+    placed = plan.assemble(D.copy(), E.copy(), diagonal)   # not the plan's first arrays
+    monkeypatch.setattr(banded, "STENCIL_ENTRIES", D.nnz + E.nnz)
+    stencil = plan._stencil(D, E, diagonal)
+    assert stencil is not None
+    assert np.array_equal(stencil.parts(D, E, plan.ldab)[0], placed[0])

@@ -369,6 +369,11 @@ MIN_SORTED_CELLS = 1 << 16
 MEMO_ENTRIES = 1024
 MEMO_PER_KEY = 2
 
+#: Most stored entries of ``D`` and ``E`` together for which a plan keeps a :class:`_Stencil` (its
+#: index arrays hold a few integers per entry and per product pair, about the band's own memory);
+#: larger patterns are placed block by block at every assembly.
+STENCIL_ENTRIES = 1 << 20
+
 #: Shortest run of evenly spaced band positions placed as a :class:`_Stride` (shorter ones,
 #: where extra unknowns sit at a node, go entry by entry).
 MIN_STRIDE_RUN = 64
@@ -477,6 +482,212 @@ def _row_groups(diagonal: DiagonalRows) -> list:
     for r0, c0, lo, dg, up in diagonal.tridiagonal:
         groups.setdefault(r0, []).append((c0, lo, dg, up))
     return list(groups.items())
+
+
+def _ranges(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """``concatenate([arange(s, s + c) for s, c in zip(starts, counts)])``, int64."""
+    counts = counts.astype(np.int64)
+    ends = np.cumsum(counts)
+    out = np.arange(int(ends[-1]) if ends.size else 0, dtype=np.int64)
+    out -= np.repeat(ends - counts - starts.astype(np.int64), counts)
+    return out
+
+
+def _pairs_in_columns(first: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For entries ``first`` (indices, in the order the pairs are wanted) of a matrix whose
+    entries have columns ``cols``: ``(a, b)``, every entry ``a`` of ``first`` with every
+    entry ``b`` of ``first`` in its column, ``b`` by increasing index."""
+    if not first.size:
+        return first, first
+    by_col = first[np.argsort(cols[first], kind="stable")]
+    ucols, start, count = np.unique(cols[by_col], return_index=True, return_counts=True)
+    k = np.searchsorted(ucols, cols[first])
+    reps = count[k]
+    return np.repeat(first, reps), by_col[_ranges(start[k], reps)]
+
+
+def _dense_ids(keys: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(unique, inverse)`` of integer ``keys`` in ``[0, size)`` (as :func:`numpy.unique`),
+    by marks in an array of ``size`` instead of a sort."""
+    mark = np.zeros(size, dtype=bool)
+    mark[keys] = True
+    uniq = np.flatnonzero(mark)
+    ids = np.empty(size, dtype=np.int32 if uniq.size < 2**31 else np.int64)
+    ids[uniq] = np.arange(uniq.size)
+    return uniq, ids[keys]
+
+
+class _Stencil:
+    r"""Where every value of ``D`` and ``E`` of one sparsity pattern goes in the scaled band of
+    :meth:`BandPlan.assemble`, found once: an assembly of that pattern (the node-state loop's
+    Gauss-Newton steps) is then a few gathers, products and ``bincount`` sums over the values,
+    no sparse matrix made and no block placed.
+
+    Only for plans without a border and with one run (:attr:`BandPlan.segments`): the
+    node-state loop's interleaved plans.
+
+    Notes
+    -----
+    The band cells are *slots*, each one value of the reduced matrix written once (or, for a
+    mirrored slot, at its transpose too): ``E``'s entries (a multiplier's row, an unknown's
+    column, mirrored); :math:`D_f^T D_f` at ``(i, j)``, the sum over the rows ``k`` (ascending)
+    of :math:`D_{ki} D_{kj}` (the same at ``(j, i)``: the products commute); :math:`-E_z h^{-1}
+    E_z^T` at ``(r_1, r_2)``, the sum over the eliminated columns ``c`` (ascending) of
+    :math:`(E_{r_1 c} / h_c) E_{r_2 c}`, or, where :meth:`BandPlan._entries` takes it by
+    diagonals, of :math:`(E_{r_1 c} E_{r_2 c}) / h_c` at ``r_1 <= r_2``, mirrored. Those are the
+    operations, in the order, of scipy's sparse products and of
+    :meth:`BandPlan._diagonal_pairs`, and the scaling is :func:`_scale_entries`'s (a slot's
+    value times the scale of its row, then of its column): the band is the one
+    :meth:`BandPlan._entries` and :meth:`BandPlan._scatter` write, bit for bit.
+    """
+
+    def __init__(self, plan: BandPlan, D: sp.csr_matrix, E: sp.csr_matrix, by_diagonals: bool):
+        n, m, p, kl, ldab = plan.n, plan.m, plan.p, plan.kl, plan.ldab
+        nb = plan.pos_order.size
+        pos = plan.pos.astype(np.int64)
+        el = plan.elim
+        self.pattern = tuple(np.array(a) for a in (D.indptr, D.indices, E.indptr, E.indices))
+        self.by_diagonals = by_diagonals
+        self.n, self.el, self.nb = n, el, nb
+        self._ez: list | None = None   # the eliminated columns' matrices (eliminated)
+        size = nb * ldab
+        eliminated = np.zeros(n, dtype=bool)
+        eliminated[el] = True
+        slot = np.full(n, -1, dtype=np.int64)
+        slot[el] = np.arange(el.size)
+        Dcount, Ecount = np.diff(D.indptr), np.diff(E.indptr)
+        Drow = np.repeat(np.arange(m, dtype=np.int64), Dcount)
+        Dcol = D.indices.astype(np.int64)
+        Erow = np.repeat(np.arange(p, dtype=np.int64), Ecount)
+        Ecol = E.indices.astype(np.int64)
+
+        def cell(i: np.ndarray, j: np.ndarray) -> np.ndarray:   # the flat band index of A[i, j]
+            return j * (ldab - 1) + i + 2 * kl
+
+        def banded(i: np.ndarray, j: np.ndarray) -> np.ndarray:
+            ok = (i >= 0) & (j >= 0)
+            if np.any(np.abs(i[ok] - j[ok]) > kl):
+                raise NotBanded("the sparsity pattern changed since the plan was made")
+            return ok
+
+        # E's entries: a multiplier's row and an unknown's column, mirrored
+        er, ec = pos[n + Erow], pos[Ecol]
+        self.e_take = np.flatnonzero(banded(er, ec))
+        parts = [(er[self.e_take], ec[self.e_take], np.ones(self.e_take.size, dtype=bool))]
+        # D_f^T D_f (every row folded: no border), without the rows that are a lone entry on an
+        # eliminated unknown: the pairs i <= j of scipy's product in its order (column i, row k
+        # ascending, column j), each sum placed at (i, j) and (j, i)
+        first = Dcol[np.minimum(D.indptr[:-1], max(D.nnz - 1, 0))]
+        kept = ~((Dcount == 1) & eliminated[first]) if el.size and D.nnz else np.ones(m, dtype=bool)
+        ent = np.flatnonzero(kept[Drow])
+        ent = ent[np.argsort(Dcol[ent], kind="stable")]
+        k = Drow[ent]
+        after = D.indptr[k + 1] - ent   # entries of row k from this one on (sorted columns)
+        a = np.repeat(ent, after)
+        b = _ranges(ent, after)
+        i, j = pos[Dcol[a]], pos[Dcol[b]]
+        ok = banded(i, j)
+        self.d_a, self.d_b = a[ok], b[ok]
+        key, self.d_inv = _dense_ids(cell(i[ok], j[ok]), size)
+        self.d_sums = key.size
+        dj = key // ldab
+        di = key % ldab + dj - 2 * kl
+        off = np.flatnonzero(di != dj)
+        self.d_map = np.concatenate([np.arange(key.size), off])
+        parts.append((np.concatenate([di, dj[off]]), np.concatenate([dj, di[off]]),
+                      np.zeros(self.d_map.size, dtype=bool)))
+        # -E_z h^-1 E_z^T: every pair of E's entries in an eliminated column, by the first
+        # one's row, then the column, then the second one's row
+        a, b = _pairs_in_columns(np.flatnonzero(eliminated[Ecol]), Ecol)
+        if by_diagonals:
+            ok = Erow[a] <= Erow[b]
+            a, b = a[ok], b[ok]
+        i, j = pos[n + Erow[a]], pos[n + Erow[b]]
+        ok = banded(i, j)
+        self.z_a, self.z_b, self.z_c = a[ok], b[ok], slot[Ecol[a[ok]]]
+        key, self.z_inv = _dense_ids(cell(i[ok], j[ok]), size)
+        zj = key // ldab
+        zi = key % ldab + zj - 2 * kl
+        parts.append((zi, zj, (zi != zj) if by_diagonals else np.zeros(key.size, dtype=bool)))
+        self.sizes = [x[0].size for x in parts]
+        self.pa = np.concatenate([x[0] for x in parts])   # the slot's row (scaled first) ...
+        self.pb = np.concatenate([x[1] for x in parts])   # ... and column
+        mirror = np.concatenate([x[2] for x in parts])
+        mslots = np.flatnonzero(mirror)
+        cells = np.concatenate([cell(self.pa, self.pb), cell(self.pb[mslots], self.pa[mslots])])
+        self.flat, where = _dense_ids(cells, size)   # the cells by band row (a column of A)
+        if self.flat.size != cells.size:
+            raise NotBanded("two values for one band cell")   # never for a plan's pattern
+        order = np.empty(cells.size, dtype=np.int64)
+        order[where] = np.arange(cells.size)
+        self.cell_slot = np.concatenate([np.arange(self.pa.size), mslots])[order]
+        cols = self.flat // ldab
+        self.col_start = np.flatnonzero(np.r_[True, cols[1:] != cols[:-1]]) if cols.size else cols
+        self.cols = cols[self.col_start]
+
+    def matches(self, D: sp.csr_matrix, E: sp.csr_matrix, by_diagonals: bool) -> bool:
+        """Whether ``D`` and ``E`` have this stencil's pattern (and pairs as it was made)."""
+        return by_diagonals == self.by_diagonals and all(
+            a is b or (a.size == b.size and np.array_equal(a, b))
+            for a, b in zip(self.pattern, (D.indptr, D.indices, E.indptr, E.indices), strict=True))
+
+    def matches_rows(self, E: sp.csr_matrix) -> bool:
+        """Whether ``E`` has this stencil's pattern."""
+        return all(a is b or (a.size == b.size and np.array_equal(a, b))
+                   for a, b in zip(self.pattern[2:], (E.indptr, E.indices), strict=True))
+
+    def eliminated(self, plan: BandPlan, E: sp.csr_matrix) -> tuple:
+        """:meth:`BandPlan._eliminated` of ``E`` (this stencil's pattern): the matrices scipy's
+        column indexing and transpose make, found once for the pattern (on the entries' numbers
+        as values), then ``E``'s values gathered into copies of them."""
+        if self._ez is None:
+            numbers = sp.csr_matrix((np.arange(1.0, E.nnz + 1.0), E.indices, E.indptr), shape=E.shape)
+            Ez = numbers[:, plan.elim_index]
+            self._ez = [(M, M.data.astype(np.int64) - 1) for M in (Ez, Ez.T.tocsr())]
+        out = []
+        for M, take in self._ez:
+            X = copy.copy(M)   # the pattern's index arrays, shared (never changed in place)
+            X.data = E.data[take]
+            out.append(X)
+        return tuple(out)
+
+    def parts(self, D: sp.csr_matrix, E: sp.csr_matrix, ldab: int, out: np.ndarray | None = None) -> tuple:
+        """``(ab, None, C, h, sU)`` as :meth:`BandPlan.assemble` (``ab`` scaled; ``out``: memory
+        for the band, :meth:`BandPlan._write_band`)."""
+        Dd, Ed = D.data, E.data
+        nE, nD, nZ = self.sizes
+        S = np.empty(nE + nD + nZ)
+        np.take(Ed, self.e_take, out=S[:nE])
+        w = Dd[self.d_a]
+        w *= Dd[self.d_b]
+        np.take(np.bincount(self.d_inv, w, minlength=self.d_sums), self.d_map, out=S[nE:nE + nD])
+        h = np.bincount(D.indices, weights=Dd ** 2, minlength=self.n)[self.el]   # column_squares
+        if nZ:
+            if self.by_diagonals:
+                w = Ed[self.z_a] * Ed[self.z_b]
+                w *= (1.0 / h)[self.z_c]
+            else:
+                w = Ed[self.z_a] / h[self.z_c]
+                w *= Ed[self.z_b]
+            np.negative(np.bincount(self.z_inv, w, minlength=nZ), out=S[nE + nD:])
+        cells = S[self.cell_slot]
+        colmax = np.zeros(self.nb)
+        if self.cols.size:
+            big = np.maximum.reduceat(cells, self.col_start)
+            np.maximum(big, -np.minimum.reduceat(cells, self.col_start), out=big)
+            colmax[self.cols] = big
+        sU = _scales(colmax, overwrite=True)
+        S *= sU[self.pa]
+        S *= sU[self.pb]
+        size = self.nb * ldab
+        if out is not None and out.dtype == np.float64 and out.flags.c_contiguous and out.size >= size:
+            ab = out.reshape(-1)[:size].reshape(self.nb, ldab)
+            ab.fill(0.0)
+        else:
+            ab = np.zeros((self.nb, ldab))
+        np.take(S, self.cell_slot, out=cells)
+        ab.reshape(-1)[self.flat] = cells
+        return ab, None, np.zeros((0, 0)), h, sU
 
 
 class _Run(NamedTuple):
@@ -1041,16 +1252,12 @@ class BandPlan:
             for b0, col, v in diagonal.dense:
                 self._place(r0 + b0 + np.arange(v.size), np.full(v.size, col), v, True, out)
             add_sparse(diagonal.extra, r0, 0, True)
-            rest = E[k:]
-            add_sparse(rest, r0 + k, 0, True)
-            if el.size:
-                dense = np.array([col for _, col, _ in diagonal.dense], dtype=np.int64)
-                if not (eliminated[rest.indices].any() or eliminated[diagonal.extra.indices].any()
-                        or eliminated[dense].any()):
-                    hinv = np.zeros(n)
-                    hinv[el] = 1.0 / h
-                    self._diagonal_pairs(diagonal, hinv, r0, out, runs)
-                    return (*out, h)
+            add_sparse(E[k:], r0 + k, 0, True)
+            if self._pairs_by_diagonals(E, diagonal):
+                hinv = np.zeros(n)
+                hinv[el] = 1.0 / h
+                self._diagonal_pairs(diagonal, hinv, r0, out, runs)
+                return (*out, h)
         else:
             add_sparse(E, r0, 0, True)
         if el.size:
@@ -1060,6 +1267,19 @@ class BandPlan:
             Zh = sp.csr_matrix((Ez.data / h[Ez.indices], Ez.indices, Ez.indptr), shape=Ez.shape)
             add_sparse(Zh @ EzT, n + nu, n + nu, False, -1.0)
         return (*out, h)
+
+    def _pairs_by_diagonals(self, E: sp.csr_matrix, diagonal: DiagonalRows | None) -> bool:
+        """Whether :meth:`_entries` places :math:`-E_z h^{-1} E_z^T` by diagonals
+        (:meth:`_diagonal_pairs`): ``diagonal`` matches ``E`` and no other row touches an
+        eliminated unknown."""
+        el = self.elim
+        if diagonal is None or not el.size or not diagonal.matches(E):
+            return False
+        eliminated = np.zeros(self.n, dtype=bool)
+        eliminated[el] = True
+        dense = np.array([col for _, col, _ in diagonal.dense], dtype=np.int64)
+        return not (eliminated[E.indices[E.indptr[diagonal.rows]:]].any()
+                    or eliminated[diagonal.extra.indices].any() or eliminated[dense].any())
 
     def _diagonal_pairs(self, diagonal: DiagonalRows, hinv: np.ndarray, r0: int, out: tuple,
                         runs: dict | None = None) -> None:
@@ -1354,7 +1574,29 @@ class BandPlan:
         first, self._first = getattr(self, "_first", None), None
         if first is not None and first[0] is D.data and first[1] is E.data:
             return first[2]
+        stencil = self._stencil(D, E, diagonal)
+        if stencil is not None:
+            return stencil.parts(D, E, self.ldab, out=out)
         return self._scatter(self._entries(D, E, diagonal), scaled=True, out=out)
+
+    def _stencil(self, D: sp.csr_matrix, E: sp.csr_matrix, diagonal: DiagonalRows | None) -> _Stencil | None:
+        """The :class:`_Stencil` of ``D`` and ``E``'s pattern, kept for the plan's last pattern
+        (an assembly that is not the plan's first is a factorization of the pattern again: a
+        Gauss-Newton step, a lambda or an interior-point iteration); None for a plan with a
+        border or several runs, a pattern of more than :data:`STENCIL_ENTRIES` entries, or
+        where it does not apply."""
+        if self.border_order.size or self.segments > 1 or D.nnz + E.nnz > STENCIL_ENTRIES:
+            return None
+        by_diagonals = self._pairs_by_diagonals(E, diagonal)
+        kept = self.__dict__.get("_stencil_kept")
+        if kept is not None and kept.matches(D, E, by_diagonals):
+            return kept
+        try:
+            self._stencil_kept = _Stencil(self, D, E, by_diagonals)
+        except NotBanded:   # placed as before, which says why
+            self._stencil_kept = None
+            return None
+        return self._stencil_kept
 
     def eliminated_columns(self, E: sp.csr_matrix) -> sp.csr_matrix:
         """``E`` restricted to the eliminated unknowns (kept for the last ``E`` seen: every
@@ -1366,10 +1608,14 @@ class BandPlan:
         twice as fast as scipy's column-wise one for ``E_z^T mu``), cached together."""
         cached = getattr(self, "_Ez", None)
         if cached is None or cached[0] is not E.data:   # the same arrays under a new wrapper
-            # scipy's column indexing (a slice for one run of unknowns): faster than the
-            # product with a selection matrix
-            Ez = E[:, self.elim_index]
-            cached = (E.data, Ez, Ez.T.tocsr())
+            stencil = self.__dict__.get("_stencil_kept")
+            if stencil is not None and stencil.matches_rows(E):   # a pattern seen: gathers
+                cached = (E.data, *stencil.eliminated(self, E))
+            else:
+                # scipy's column indexing (a slice for one run of unknowns): faster than the
+                # product with a selection matrix
+                Ez = E[:, self.elim_index]
+                cached = (E.data, Ez, Ez.T.tocsr())
             self._Ez = cached
         return cached[1], cached[2]
 
@@ -1416,7 +1662,7 @@ class BandPlan:
         out = copy.copy(self)
         out.nnz_D = D.nnz
         out._first = None
-        for memo in ("_place_memo", "_flat_memo", "_memo_owned"):   # the copy keeps its own
+        for memo in ("_place_memo", "_flat_memo", "_memo_owned", "_stencil_kept"):   # the copy keeps its own
             out.__dict__.pop(memo, None)
         return out
 

@@ -134,17 +134,40 @@ def non_least_squares_term(form: Formulation):
 
 
 def _weighted(res: Affine, k) -> Affine:
-    """``res * k``; the weighted matrix kept with ``res.A`` (up to :data:`WEIGHTED_KEPT`
-    entries) for the next call with the same ``k`` (the node-state loop's steps share the rows
-    that do not move with the point: the items', the bias walks')."""
+    """``res * k``, canonical (:func:`bvpnav.sparse.canonical`: a weighted value that is zero is
+    not stored, the matrix marked); the weighted matrix kept with ``res.A`` (up to
+    :data:`WEIGHTED_KEPT` entries) for the next call with the same ``k`` (the node-state loop's
+    steps share the rows that do not move with the point: the items', the bias walks')."""
     A = res.A
     k = np.broadcast_to(np.asarray(k, dtype=float), (res.m,))
     kept = getattr(A, "_bvpnav_weighted", None)
     if kept is not None and np.array_equal(kept[0], k):
         return Affine(kept[1], res.c * k, res.labels)
-    out = res * k
+    if sp.issparse(A) and A.format == "csr" and A.has_canonical_format and np.all(k):
+        out = Affine(_scaled_canonical(A, k), res.c * k, res.labels)
+    else:
+        out = res * k
     if sp.issparse(A) and A.nnz <= WEIGHTED_KEPT:
         A._bvpnav_weighted = (np.array(k), out.A)
+    return out
+
+
+def _scaled_canonical(A: sp.csr_matrix, k: np.ndarray) -> sp.csr_matrix:
+    """``diag(k) A`` for a canonical CSR ``A`` and ``k`` without zeros, its zero values dropped
+    as it is written (one matrix made: not a scaled copy, then a canonical copy of that), marked
+    canonical."""
+    m = A.shape[0]
+    rows = np.repeat(np.arange(m), np.diff(A.indptr))
+    v = A.data * k[rows]
+    if v.size and not np.all(v):
+        keep = v != 0
+        indptr = np.zeros(m + 1, dtype=A.indptr.dtype)
+        np.cumsum(np.bincount(rows[keep], minlength=m), out=indptr[1:])
+        out = sp.csr_matrix((v[keep], A.indices[keep], indptr), shape=A.shape)
+    else:
+        out = sp.csr_matrix((v, A.indices, A.indptr), shape=A.shape)
+    out.has_canonical_format = True
+    out._bvpnav_canonical = out.data
     return out
 
 
