@@ -59,7 +59,7 @@ class SideSlip(_Installed):
     cornering stiffness), so that the side-slip angle at the rear axle is
     :math:`\beta = v_y / v_x = -K f_y`. Published figures: a radial tyre's cornering
     stiffness is 11-19 % of its load per degree of slip (about 15 %; low-aspect tyres 25-30
-    %: Gillespie, *Fundamentals of Vehicle Dynamics*, SAE 1992, ch. 10, pp. 347-355), so
+    %: Gillespie, *Fundamentals of Vehicle Dynamics*, SAE 1992, ch. 10, the cornering coefficient), so
     :math:`D_r` = 3.3-9 deg/g; the passenger car of Rajamani's examples (*Vehicle Dynamics
     and Control*, 2nd ed., Springer 2012, ch. 2-3: 1573 kg, the centre of gravity 1.1 m
     behind the front axle and 1.58 m ahead of the rear, 80,000 N/rad per tyre) has a rear
