@@ -7,7 +7,8 @@ unit of work, sent whole to one worker: the fixture is made once, as in a serial
 the same ``xdist_group`` mark are one unit too, and so are the tests using one of the expensive
 session fixtures of :data:`SHARED_SESSION` (the documentation build). Every other test is its own
 unit, given to whichever worker is free. Units holding a test marked ``slow`` are handed out first,
-so that the longest work does not start last and finish on one worker while the other idles.
+the documentation build's unit (the longest) before them, so that the longest work does not start
+last and finish on one worker while the other idles.
 
 xdist's own ``loadgroup`` passes a test's group to the controller by appending it to the test's
 node id, which pytest 9.2's structured node ids ignore (pytest-dev/pytest-xdist#1386: the groups
@@ -126,8 +127,12 @@ def docs_build(tmp_path_factory) -> DocsBuild:
     env.pop("no_proxy", None)
     env.pop("NO_PROXY", None)
     out = base / "html"
+    # In a pytest-xdist worker the other workers keep the cores busy: Sphinx's parallel read
+    # (forked readers, pickled doctrees merged back) would only add CPU; run serially it reads
+    # and executes the pages one after another, with the same warnings-as-errors build.
+    jobs = "1" if os.environ.get("PYTEST_XDIST_WORKER") else "2"
     proc = subprocess.run(
-        [sys.executable, "-m", "sphinx", "-W", "--keep-going", "-j", "2", "-b", "html", str(src), str(out)],
+        [sys.executable, "-m", "sphinx", "-W", "--keep-going", "-j", jobs, "-b", "html", str(src), str(out)],
         cwd=base, env=env, capture_output=True, text=True, timeout=900, stdin=subprocess.DEVNULL,
     )
     assert proc.returncode == 0, f"sphinx-build failed:\n{proc.stderr[-6000:]}\n{proc.stdout[-2000:]}"
@@ -177,14 +182,18 @@ def _units(items: list[pytest.Item]) -> dict[str, str]:
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """In an xdist worker: units holding a slow test first (the order within kept), and the
-    units written for the controller's scheduler."""
+    """In an xdist worker: the :data:`SHARED_SESSION` unit, then units holding a slow test
+    first (the order within kept), and the units written for the controller's scheduler."""
     workerinput = getattr(config, "workerinput", None)
     if workerinput is None or UNITS_DIR not in workerinput:
         return
     units = _units(items)
     slow = {units[item.nodeid] for item in items if item.get_closest_marker("slow")}
-    items.sort(key=lambda item: units[item.nodeid] not in slow)  # stable; every worker sorts alike
+    # the unit of the shared session fixtures (the documentation build: the longest unit) first
+    longest = {units[item.nodeid] for item in items
+               if any(k.startswith("session::") for k in _shared(item))}
+    # stable; every worker sorts alike
+    items.sort(key=lambda item: (units[item.nodeid] not in longest, units[item.nodeid] not in slow))
     folder = Path(workerinput[UNITS_DIR])
     tmp = folder / f".{workerinput['workerid']}.tmp"
     tmp.write_text(json.dumps({item.nodeid: units[item.nodeid] for item in items}))

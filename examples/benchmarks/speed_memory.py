@@ -82,9 +82,9 @@ their code comments (each taken once, on one VM, in the session that made the ch
 - ``cvxpy.installed_solvers()`` (cached by the back-end table): about 3 ms per call.
 
 Flags: ``--quick`` (N = 2e3 and 1e4, seconds), ``--sizes`` (1-axis N, default 1e4,1e5,1e6),
-``--sizes3`` (3-axis N, default the same), ``--repeat`` (3), ``--skip`` (comma-separated
-variants to leave out, e.g. ``csne3@1e6,clarabel3@1e6``; ``name@N`` or ``name`` for all N;
-``name3`` for the 3-axis case), ``--lam-n`` (1e5), ``--lam-huge``, ``--no-lam``,
+``--sizes3`` (3-axis N, default the same), ``--repeat`` (3; the speed and lambda tables),
+``--skip`` (comma-separated variants to leave out, e.g. ``csne3@1e6,clarabel3@1e6``; ``name@N``
+or ``name`` for all N; ``name3`` for the 3-axis case), ``--lam-n`` (1e5), ``--lam-huge``, ``--no-lam``,
 ``--memory``, ``--memory-n``, ``--no-peers``, ``--huge``, ``--huge-cap``, ``--huge-n``, ``--osqp-max``,
 ``--profile N`` (only a cProfile of one ``direct`` solve at N; ``--profile-axes``)
 (1e4; 2e3 with ``--quick``).
@@ -780,9 +780,9 @@ SPEED_HEAD = (f"{'case':<11}{'N':>9}  {'variant':<18}{'time s':>9}{'x ref':>8}{'
 
 
 # ------------------------------------------------------------------ lambda rules
-def lambda_table(n: int) -> None:
+def lambda_table(n: int, repeat: int = 3) -> None:
     """The lambda rules as multiples of a single direct solve (1 axis), each rule's run
-    beside a single solve (the median of three per-run ratios, as in the speed table: the
+    beside a single solve (the median of ``repeat`` per-run ratios, as in the speed table: the
     VM's speed drifts over a run)."""
     spec = make_spec(n, 1)
     _quiet(lambda: make_problem(spec).solve(solver="direct"))   # warm-up (first-call imports)
@@ -797,7 +797,7 @@ def lambda_table(n: int) -> None:
     singles, rows = [], []
     for rule in ("lcurve", "gcv", "quasi"):
         ratios, times = [], []
-        for _ in range(3):   # (a rule's first run pays its own warm-up: the median drops it)
+        for _ in range(repeat):   # (a rule's first run pays its own warm-up: the median drops it)
             single = timed_solve()[0]
             dt, sol = timed_solve(rule)
             singles.append(single)
@@ -806,7 +806,7 @@ def lambda_table(n: int) -> None:
         rows.append((rule, sol, float(np.median(times)), float(np.median(ratios))))
     t_ref = min(_timed(lambda: reference_solve(spec)) for _ in range(2))
     print(f"\nlambda rules, N = {n}, 1 axis: single direct solve {float(np.median(singles)):.2f} s "
-          f"(the reference {t_ref:.3f} s; x single: the median of three ratios to a solve beside it)")
+          f"(the reference {t_ref:.3f} s; x single: the median of {repeat} ratios to a solve beside it)")
     print(f"{'rule':<8}{'lambda':>10}{'evaluations':>13}{'ms/eval':>9}{'total s':>9}{'x single':>10}"
           f"{'x ref':>8}  warnings")
     for rule, sol, dt, ratio in rows:
@@ -1059,9 +1059,9 @@ def main(argv: list[str] | None = None) -> None:
             for n in ns:
                 print_speed(speed_case(n, axes, args.repeat, skip))
         if not args.no_lam:
-            lambda_table(lam_n)
+            lambda_table(lam_n, args.repeat)
             if args.lam_huge:
-                lambda_table(1_000_000)
+                lambda_table(1_000_000, args.repeat)
         if not args.no_peers:
             peers_table([n for n in sizes if n <= 100_000])
     if args.memory:
