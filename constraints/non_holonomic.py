@@ -17,7 +17,10 @@ __all__ = ["NonHolonomic"]
 #: Largest known cornering compliance :math:`K` accepted by ``slip=K``, s^2/m (0.05: a side-slip
 #: angle of 28 degrees per g of lateral specific force, several times any road tyre's; see
 #: :class:`NonHolonomic`'s Notes for the physics and :class:`~bvpnav.error_models.SideSlip` for the
-#: published figures, 0.004-0.009 s^2/m).
+#: published figures, 0.004-0.009 s^2/m). Wider than the limits an *estimated* compliance is
+#: warned beyond (:data:`bvpnav.solve.plausibility.SIDE_SLIP_LIMITS`, road tyres on a paved
+#: road): a stated value is the user's knowledge of the vehicle (loose ground, worn tyres), an
+#: estimate outside a road tyre's range more likely absorbs another error.
 SLIP_MAX = 0.05
 
 #: Default half-width of the band, m/s: what a car's wheels allow sideways and vertically
@@ -111,7 +114,7 @@ def slip_rows(model, t, axes, lever, slip, who: str):
     from bvpnav.model import Affine
 
     if isinstance(slip, str):
-        return model.side_slip_velocity(t, axes, what=who)
+        return model.side_slip_velocity(t, axes, lever=None if isinstance(lever, str) else lever, what=who)
     t = np.asarray(t, dtype=float)
     nb, iy = len(axes), list(axes).index("y")
     fwd = point_rows(model, t, ("x",), lever, who)                  # one row per instant

@@ -1265,20 +1265,39 @@ class NavModel:
                           shape=(K * nb, self.size))
         return Affine(A, np.zeros(K * nb), TimeLabels("mount_", list(names), times))
 
-    def side_slip_velocity(self, t, axes, what: str = "side slip") -> Affine:
+    def side_slip_velocity(self, t, axes, lever=(0.0, 0.0, 0.0), what: str = "side slip") -> Affine:
         r"""The side slip :math:`K f_y(t)\, v^0_x(t)` of the lateral rows of a vehicle item, m/s,
         with :math:`K` the parameter of the error model's :class:`~bvpnav.error_models.SideSlip`;
         rows time-major, then axis (zero but on ``"y"``), to be added to :meth:`body_velocity`'s
         rows of the same ``t`` and ``axes``.
 
+        Parameters
+        ----------
+        t : array_like of float
+            Times, s, inside the window.
+        axes : str or sequence of str
+            Body axes among ``"x", "y", "z"``.
+        lever : array_like (3,) or None
+            The point where the rows hold, m, body axes from the IMU; ``None`` for a point the
+            error model estimates (:class:`~bvpnav.error_models.NhcLever`), whose forward speed
+            is then taken as the IMU's (see Notes).
+        what : str
+            What asks (for error messages).
+
         Notes
         -----
         :math:`f_y` is the measured lateral specific force (linear between samples) and
-        :math:`v^0_x = e_x^T C^T v^0` the forward body velocity of the loop's linearization
-        point (``data.body_point``), as in :meth:`mounting_velocity`: without a point (a loop's
-        first solve) the rows are zero, so :math:`K` stays at its prior for that solve, and at
-        the loop's answer the rows are exact. Refused without an attitude loop (nothing would
-        iterate them).
+        :math:`v^0_x = e_x^T (C^T v^0 + \omega \times \ell)` the forward body velocity of the
+        point :math:`\ell` at the loop's linearization point (``data.body_point``; the rates
+        :math:`\omega` as in :meth:`vehicle_point_velocity`), as in :meth:`mounting_velocity`:
+        without a point (a loop's first solve) the rows are zero, so :math:`K` stays at its
+        prior for that solve, and at the loop's answer the rows are exact. With the point
+        estimated, :math:`(\omega \times \ell)_x = \omega_y \ell_z - \omega_z \ell_y` is left
+        out: the rows are then exact only for a point on the body's x axis. The rows freeze
+        :math:`v^0_x` and leave out :math:`K_0 f_y\, \delta v_x`: with hard rows the fixed
+        point is exact; with soft rows it is the fixed point of the linearized rows, within
+        about :math:`K f_y` (a few per cent) of the lateral residual of the bilinear least
+        squares. Refused without an attitude loop (nothing would iterate them).
         """
         names, jb = _body_axes(axes, what)
         (col,) = self.l_index[[self.param_names.index(n) for n in self._provided("side_slip", what,
@@ -1296,10 +1315,31 @@ class NavModel:
             return Affine(sp.csr_matrix((K * nb, self.size)), np.zeros(K * nb), labels)
         C = self._attitude_at(times, what)
         vx = np.einsum("kn,kn->k", C[:, :, 0], self._point_velocity(times, point, what))
+        ell = np.zeros(3) if lever is None else np.asarray(lever, dtype=float).reshape(3)
+        if np.any(ell):     # the point's forward speed: (omega x l)_x = w_y l_z - w_z l_y
+            w = self.sample_grid.interpolation_matrix(times, what) @ self._point_rates(what)
+            vx = vx + w[:, 1] * ell[2] - w[:, 2] * ell[1]
         fy = self.sample_grid.interpolation_matrix(times, what) @ np.asarray(self.data.specific_force)[:, 1]
         A = sp.csr_matrix((fy * vx, (np.arange(K) * nb + jb.index(1), np.full(K, col))),
                           shape=(K * nb, self.size))
         return Affine(A, np.zeros(K * nb), labels)
+
+    def _point_rates(self, what: str) -> np.ndarray:
+        """The body rates at every sample (N, 3), rad/s, at the loop's current point: corrected by
+        the attitude loop's totals (``data.attitude_point``), less the node states' gyro-bias
+        totals (``data.state_point``), else the measured rates."""
+        point = getattr(self.data, "attitude_point", None)
+        rates = point.rates if point is not None else getattr(self.data, "gyro", None)
+        if rates is None:
+            raise InputError(f"{what}: lever='estimated' needs the gyro rates (the point's velocity is "
+                             "omega x lever); these data have an attitude but no rates: build them with "
+                             "bvpnav.ImuData.from_gyro (or give a gyro column to the reader), or give the "
+                             "lever as known")
+        rates = np.asarray(rates, dtype=float)
+        states = getattr(self.data, "state_point", None)
+        if states is not None and "gyro_bias" in states.totals:
+            rates = rates - states.totals["gyro_bias"]
+        return rates
 
     def vehicle_point_velocity(self, t, axes, what: str = "vehicle point") -> Affine:
         r"""The velocity :math:`\omega \times \ell` of the vehicle's no-slip point relative to the
@@ -1330,17 +1370,7 @@ class NavModel:
         names, jb = _body_axes(axes, what)
         idx = self.l_index[[self.param_names.index(n) for n in self._provided("nhc_lever", what,
                                                                                "NhcLever(sigma=...)")]]
-        point = getattr(self.data, "attitude_point", None)
-        rates = point.rates if point is not None else getattr(self.data, "gyro", None)
-        if rates is None:
-            raise InputError(f"{what}: lever='estimated' needs the gyro rates (the point's velocity is "
-                             "omega x lever); these data have an attitude but no rates: build them with "
-                             "bvpnav.ImuData.from_gyro (or give a gyro column to the reader), or give the "
-                             "lever as known")
-        rates = np.asarray(rates, dtype=float)
-        states = getattr(self.data, "state_point", None)
-        if states is not None and "gyro_bias" in states.totals:
-            rates = rates - states.totals["gyro_bias"]
+        rates = self._point_rates(what)
         times = as_times(t, what)
         K, nb = times.size, len(jb)
         w = self.sample_grid.interpolation_matrix(times, what) @ rates      # (K, 3)

@@ -96,8 +96,8 @@ def test_compliance_and_trajectory_recovered_exactly():
 
 def test_with_a_lever_and_node_states():
     """The rear axle 1.2 m behind the IMU (known lever) and node states (soft rows, the published
-    prior): K within 2e-4 relative (7.7e-5 measured) and the positions within 0.1 mm (0.02 mm): the
-    node-state loop is not exact on these drives (NhcLever's test: 0.06 mm)."""
+    prior): K within 2e-4 relative and the positions within 0.1 mm; the node-state loop is not
+    exact on these drives (as NhcLever's test)."""
     from bvpnav.error_models import ErrorStates
 
     lever = (-1.2, 0.0, 0.0)
@@ -113,6 +113,22 @@ def test_with_a_lever_and_node_states():
     assert sol.stats["verified"]
     assert abs(sol.error_params["side_slip"] / K - 1.0) < 2e-4
     np.testing.assert_allclose(sol.position(), pos, rtol=0, atol=1e-4)
+
+
+@pytest.mark.parametrize("lever", [(-1.2, 0.5, 0.5), (0.3, -0.4, 0.8)])
+def test_estimated_slip_at_a_point_off_the_x_axis(lever):
+    """The slip is K f_y times the forward speed of the rows' point, not the IMU's: they differ by
+    (omega x l)_x = w_y l_z - w_z l_y, zero only for a point on the body's x axis. Hard rows at
+    such a point: K to 1e-6 relative and the path to 1e-8 m."""
+    data, pos, _ = slip_drive(K, lever=lever)
+    k = np.arange(0, data.n, 20)
+    prob = NavigationProblem(data, error_model=AttitudeError(sigma=0.01) + SideSlip(), grade=None)
+    prob.add(Position(t=data.t[k], value=pos[k], name="fixes"),
+             NonHolonomic(mode="hard", lever=lever, slip="estimated", rate=2.0, name="nhc"))
+    sol = prob.solve(solver="direct", attitude={"tol": 1e-12})
+    assert sol.stats["verified"]
+    assert abs(sol.error_params["side_slip"] / K - 1.0) < 1e-6
+    np.testing.assert_allclose(sol.position(), pos, rtol=0, atol=1e-8)
 
 
 @pytest.mark.parametrize(("kw", "match"), [
@@ -154,6 +170,13 @@ def test_absurd_compliance_warned():
     assert msg.startswith("implausible estimate: side_slip = +0.03 s^2/m (+16.9 deg/g) is beyond the limits "
                           "-0.002..0.02 s^2/m of a road tyre")
     assert "Mounting" in msg and "NhcLever" in msg
+    # the published prior does not move the limits (a tyre's physics, counted from zero)
+    wide = AttitudeError(sigma=0.01) + SideSlip(sigma=1.0, prior=SIDE_SLIP_PRIOR)
+    lax = NavigationProblem(*slip_drive(0.025)[:1], grade=None, error_model=wide)
+    lax.add(_fixes(data, slip_drive(0.025)[1]),
+            NonHolonomic(mode="hard", slip="estimated", rate=2.0, name="nhc"))
+    with pytest.warns(BvpnavWarning, match="implausible estimate: side_slip = \\+0.025"):
+        lax.solve(solver="direct")
     ok = NavigationProblem(*slip_drive(K)[:1], error_model=AttitudeError(sigma=0.01) + SideSlip(), grade=None)
     ok.add(_fixes(data, slip_drive(K)[1]), NonHolonomic(mode="hard", slip="estimated", rate=2.0, name="nhc"))
     assert not [w for w in ok.solve(solver="direct").warnings if "side_slip" in w]

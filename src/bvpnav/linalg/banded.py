@@ -577,8 +577,11 @@ class _Stencil:
         # D_f^T D_f (every row folded: no border), without the rows that are a lone entry on an
         # eliminated unknown: the pairs i <= j of scipy's product in its order (column i, row k
         # ascending, column j), each sum placed at (i, j) and (j, i)
-        first = Dcol[np.minimum(D.indptr[:-1], max(D.nnz - 1, 0))]
-        kept = ~((Dcount == 1) & eliminated[first]) if el.size and D.nnz else np.ones(m, dtype=bool)
+        if el.size and D.nnz:
+            first = Dcol[np.minimum(D.indptr[:-1], D.nnz - 1)]
+            kept = ~((Dcount == 1) & eliminated[first])
+        else:
+            kept = np.ones(m, dtype=bool)
         ent = np.flatnonzero(kept[Drow])
         ent = ent[np.argsort(Dcol[ent], kind="stable")]
         k = Drow[ent]

@@ -853,8 +853,8 @@ def _next_totals(sm, data, s: np.ndarray, iters: list, prev_att: np.ndarray | No
     ``history`` keeps ``(x, g)`` of the last steps below :data:`ANDERSON_START` (a step above
     it, or one larger than the step before, clears it: a pair from the nonlinear regime or from
     steps that grow, where Gauss-Newton overshoots, would mislead the secant; so would the grown
-    step's own pair as the oldest of the next mixing: on the simulated consumer car, seed 1, 60 s
-    between fixes, course start, 1 s mesh, keeping it threw the attitude 0.44 rad, 13 -> 15 steps).
+    step's own pair as the oldest of the next mixing, which on a simulated consumer car with a
+    course start threw the attitude far off and cost steps).
 
     On a coarse mesh (``sm.node_totals``) the unknowns are the nodes' totals: they are the
     ones mixed, and the samples' totals are made from the point taken when a full pass needs
@@ -905,9 +905,9 @@ def _next_totals(sm, data, s: np.ndarray, iters: list, prev_att: np.ndarray | No
 CHEAP_ERROR = 1e-5
 
 #: Cheap steps are taken where Gauss-Newton converges linearly (:func:`_slow`): the last step at
-#: least this fraction of the one before. Measured: the KITTI drive's development split 0.05-0.8
-#: (its data misfit the sigmas 4x); a noise-free simulated drive 0.005 (quadratic: 4 full passes
-#: converge, tests/test_mesh.py).
+#: least this fraction of the one before: a real drive whose data misfit their sigmas converges
+#: linearly well above it, a noise-free simulated drive quadratically well below it (the rates
+#: are in the KITTI benchmark's docstring and the commit that set it).
 CHEAP_RATE = 0.02
 
 #: A low estimate of the step of the first full pass after cheap ones, relative to the gyro-bias
@@ -915,19 +915,15 @@ CHEAP_RATE = 0.02
 #: :func:`~bvpnav.error_models.error_states.cheap_error`): the cheap steps' fixed point is off by
 #: about this much or more (their columns' change with the gyro bias is left out). A run of cheap
 #: steps ends when its next step is expected below it (converging the cheap model further is
-#: wasted), and when it is below ``tol`` that full pass goes through the stage at once. Measured on
-#: the KITTI drive's development split (1 s mesh, 10 / 30 / 60 s fixes): 0.04 / 0.1 / 0.05 after
-#: the first run of cheap steps, 0.003-0.15 after the second (steps below 1e-7 rad).
+#: wasted), and when it is below ``tol`` that full pass goes through the stage at once. A low
+#: estimate: the measured ratios (in the commits that set it) are mostly above it.
 CHEAP_GAP = 0.01
 
 #: A first step of at least this, rad, starts far from the answer: the second may be cheap before
 #: the rate of convergence is known (:func:`_slow` needs two steps), since several steps follow at
-#: any rate (from 0.1 rad quadratic convergence takes three more to 1e-7). Measured on the KITTI
-#: drive's development split (1 s mesh): first steps 0.18 / 0.46 / 0.33 rad at fixes every
-#: 10 / 30 / 60 s, the cheap error after them 8e-5 / 2e-5 / 7e-7 (so only at 60 s within
-#: :data:`CHEAP_ERROR`: there full passes 4 -> 3, cheap steps 7 -> 8); a noise-free simulated drive
-#: (quadratic convergence, tests/test_mesh.py) 9e-3 rad, where a cheap second step costs a full
-#: pass more.
+#: any rate (from 0.1 rad quadratic convergence takes three more to 1e-7). The cheap step is
+#: still taken only when what it leaves out is within :data:`CHEAP_ERROR`; a start closer than
+#: this converges quadratically, where a cheap second step would cost a full pass more.
 CHEAP_FIRST = 0.1
 
 #: Items whose rows read the nodal positions alone (no attitude, velocity or acceleration of the
@@ -983,7 +979,7 @@ def _far(iters: list) -> bool:
     full pass's point only when the samples' attitude between the nodes is the gyro's from the
     left node (the data's, integrated from its rates; a start off the data, ``start="course"``,
     sets every sample's attitude, and cheap steps from it converge away from the full passes'
-    point: measured on a simulated car, 1 s mesh, the next full pass 0.03-0.1 rad)."""
+    point)."""
     return len(iters) == 1 and iters[0]["step"] >= CHEAP_FIRST
 
 

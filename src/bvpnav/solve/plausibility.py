@@ -654,7 +654,8 @@ MOUNTING_LIMIT = float(np.radians(10.0))
 #: per g, 0.018 s^2/m; a negative compliance is the rear axle sliding into the turn, which a
 #: tyre's lateral force cannot do (-0.002: 1.1 degrees per g, room for the estimate's noise).
 #: Beyond either the rows absorb something else (a heading or gyro error in the turns, the rows
-#: at a point that is not the rear axle). Counted from zero and from the stated prior.
+#: at a point that is not the rear axle). Counted from zero only: a stated prior cannot move
+#: a tyre's physics.
 SIDE_SLIP_LIMITS = (-0.002, 0.02)
 
 #: An installation or timing estimate (time offset, lever arm, no-slip point, mounting) more
@@ -796,8 +797,8 @@ def _installation_checks(sol: Solution, form: Formulation) -> list[str]:
                           "mounted by eye")
         elif role == "side_slip":
             lo, hi = SIDE_SLIP_LIMITS
-            bad = [(n, x) for n, x, q in zip(names, v, p, strict=True)
-                   if not (lo <= x <= hi or lo <= x - q <= hi)]
+            # an absolute property of the tyres: counted from zero only (a prior cannot move it)
+            bad = [(n, x) for n, x in zip(names, v, strict=True) if not lo <= x <= hi]
             if bad:
                 deg = np.degrees(np.array([lo, hi]) * 9.80665)
                 absurd = (f"{', '.join(_show(role, n, x) for n, x in bad)} is beyond the limits "
