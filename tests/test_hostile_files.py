@@ -480,11 +480,20 @@ def test_ctrl_c_swallowed_by_a_library_still_stops_a_serial_batch(work, monkeypa
     recs = many_recordings(work, 6)
     out = work / "out"
     calls = swallowing_task(monkeypatch, signal.SIGINT)  # Ctrl-C
+    # the caller here is a plain Python process: Python's own handler, SIGINT not blocked (an
+    # earlier test in the same test worker must not decide what this one sees)
+    found = signal.signal(signal.SIGINT, signal.default_int_handler)
+    mask = signal.pthread_sigmask(signal.SIG_UNBLOCK, [signal.SIGINT])
     before = signal.getsignal(signal.SIGINT)
-    with pytest.raises(KeyboardInterrupt):
-        batch.run_batch(recs, work / "spec.toml", out, scheduler="serial", progress=False)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            batch.run_batch(recs, work / "spec.toml", out, scheduler="serial", progress=False)
+        after = signal.getsignal(signal.SIGINT)
+    finally:
+        signal.signal(signal.SIGINT, found)
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
     assert len(calls) == 2                              # no recording after the interrupt
-    assert signal.getsignal(signal.SIGINT) is before    # the caller's handler is back
+    assert after is before                              # the caller's handler is back
     assert sorted(p.name for p in out.glob("*.json")) == ["run00.json"] and not (out / "summary.csv").exists()
 
 
