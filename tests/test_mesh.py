@@ -377,6 +377,19 @@ def _cheap_rows(form, nodes0, nodes1):
     return full, cheap, gyro
 
 
+
+def _noisy_states_form():
+    """A 20 s noisy drive's node states on a 1 s mesh with fixes every 20 samples: its formulation."""
+    from bvpnav.error_models import ErrorStates
+
+    d = _drive(T=20.0, noise=True)
+    model = ErrorStates(arw=2e-3 / np.sqrt(20.0), gyro_drift=1e-4, acc_drift=1e-3)
+    k = np.arange(0, d["t"].size, 20)
+    prob = bvpnav.NavigationProblem(d["data"], error_model=model, sigma_a=2e-2, segment=1.0)
+    prob.add(Position(t=d["t"][k], value=d["fix"][k], sigma=0.3))
+    return prob.formulation
+
+
 def test_a_cheap_point_has_the_full_pass_rows_in_the_node_attitudes_and_biases():
     """A cheap step's rows (made from a full pass's per-element sums, no pass over the samples)
     are the rows made from every sample when the nodes' attitudes and accelerometer biases
@@ -385,14 +398,7 @@ def test_a_cheap_point_has_the_full_pass_rows_in_the_node_attitudes_and_biases()
     taken to first order, so the rows' error is second order in it."""
     from scipy.spatial.transform import Rotation
 
-    from bvpnav.error_models import ErrorStates
-
-    d = _drive(T=20.0, noise=True)
-    model = ErrorStates(arw=2e-3 / np.sqrt(20.0), gyro_drift=1e-4, acc_drift=1e-3)
-    k = np.arange(0, d["t"].size, 20)
-    prob = bvpnav.NavigationProblem(d["data"], error_model=model, sigma_a=2e-2, segment=1.0)
-    prob.add(Position(t=d["t"][k], value=d["fix"][k], sigma=0.3))
-    form = prob.formulation
+    form = _noisy_states_form()
     n = form.model.N
     rng = np.random.default_rng(3)
     nodes0 = {kind: rng.normal(scale=s, size=(n, 3))
@@ -427,15 +433,9 @@ def test_condensed_state_columns_are_the_load_times_the_per_sample_columns():
     :math:`C_p \sum_i W_{ri} [g_i\times] Y_i` from running sums restarted at the nodes) are the
     load times the columns made at every sample (``state_columns``: the blocks written per
     sample), at a point with every state moved, to rounding; the same sparsity."""
-    from bvpnav.error_models import ErrorStates
     from bvpnav.error_models.error_states import states_at
 
-    d = _drive(T=20.0, noise=True)
-    model = ErrorStates(arw=2e-3 / np.sqrt(20.0), gyro_drift=1e-4, acc_drift=1e-3)
-    k = np.arange(0, d["t"].size, 20)
-    prob = bvpnav.NavigationProblem(d["data"], error_model=model, sigma_a=2e-2, segment=1.0)
-    prob.add(Position(t=d["t"][k], value=d["fix"][k], sigma=0.3))
-    form = prob.formulation
+    form = _noisy_states_form()
     raw, sm, n = form.data, form.model.state_model, form.model.N
     rng = np.random.default_rng(5)
     nodes = {kind: rng.normal(scale=s, size=(n, 3))

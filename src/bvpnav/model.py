@@ -1246,14 +1246,9 @@ class NavModel:
                              "cosine only (4e-5 at 0.5 deg)")
         idx = self.l_index[[self.param_names.index(n) for n in self._provided("mounting", what,
                                                                                "Mounting(sigma=...)")]]
-        if not self._looped():
-            raise InputError(f"{what}: mounting='estimated' is linearized about the velocity of the attitude "
-                             "loop, and this problem has none (no attitude error model, no node states); add "
-                             "one (e.g. AttitudeError(sigma=...) or GyroBias), or give the data in vehicle "
-                             "axes (rotate the IMU samples by the known mounting)")
-        times = as_times(t, what)
+        times, point = self._loop_point(t, what, "mounting", "give the data in vehicle axes (rotate the "
+                                                             "IMU samples by the known mounting)")
         K, nb = times.size, len(jb)
-        point = getattr(self.data, "body_point", None)
         if point is None:
             return Affine(sp.csr_matrix((K * nb, self.size)), np.zeros(K * nb),
                           TimeLabels("mount_", list(names), times))
@@ -1264,6 +1259,15 @@ class NavModel:
         A = sp.csr_matrix(((vx[:, None] * sign[None, :]).ravel(), (np.arange(K * nb), np.tile(col, K))),
                           shape=(K * nb, self.size))
         return Affine(A, np.zeros(K * nb), TimeLabels("mount_", list(names), times))
+
+    def _loop_point(self, t, what: str, option: str, fix: str):
+        """``(times, data.body_point)`` for rows linearized about the attitude loop's velocity
+        (``option="estimated"``); refused, with ``fix``, when the problem has no loop."""
+        if not self._looped():
+            raise InputError(f"{what}: {option}='estimated' is linearized about the velocity of the attitude "
+                             "loop, and this problem has none (no attitude error model, no node states); add "
+                             f"one (e.g. AttitudeError(sigma=...) or GyroBias), or {fix}")
+        return as_times(t, what), getattr(self.data, "body_point", None)
 
     def side_slip_velocity(self, t, axes, lever=(0.0, 0.0, 0.0), what: str = "side slip") -> Affine:
         r"""The side slip :math:`K f_y(t)\, v^0_x(t)` of the lateral rows of a vehicle item, m/s,
@@ -1302,14 +1306,8 @@ class NavModel:
         names, jb = _body_axes(axes, what)
         (col,) = self.l_index[[self.param_names.index(n) for n in self._provided("side_slip", what,
                                                                                   "SideSlip(sigma=...)")]]
-        if not self._looped():
-            raise InputError(f"{what}: slip='estimated' is linearized about the velocity of the attitude "
-                             "loop, and this problem has none (no attitude error model, no node states); add "
-                             "one (e.g. AttitudeError(sigma=...) or GyroBias), or give the compliance as "
-                             "known (slip=K in s^2/m)")
-        times = as_times(t, what)
+        times, point = self._loop_point(t, what, "slip", "give the compliance as known (slip=K in s^2/m)")
         K, nb = times.size, len(jb)
-        point = getattr(self.data, "body_point", None)
         labels = TimeLabels("slip_", list(names), times)
         if point is None or 1 not in jb:
             return Affine(sp.csr_matrix((K * nb, self.size)), np.zeros(K * nb), labels)
