@@ -1313,11 +1313,12 @@ class NavModel:
             return Affine(sp.csr_matrix((K * nb, self.size)), np.zeros(K * nb), labels)
         C = self._attitude_at(times, what)
         vx = np.einsum("kn,kn->k", C[:, :, 0], self._point_velocity(times, point, what))
+        P = self.sample_grid.interpolation_matrix(times, what)
         ell = np.zeros(3) if lever is None else np.asarray(lever, dtype=float).reshape(3)
         if np.any(ell):     # the point's forward speed: (omega x l)_x = w_y l_z - w_z l_y
-            w = self.sample_grid.interpolation_matrix(times, what) @ self._point_rates(what)
+            w = P @ self._point_rates(what)
             vx = vx + w[:, 1] * ell[2] - w[:, 2] * ell[1]
-        fy = self.sample_grid.interpolation_matrix(times, what) @ np.asarray(self.data.specific_force)[:, 1]
+        fy = P @ np.asarray(self.data.specific_force)[:, 1]
         A = sp.csr_matrix((fy * vx, (np.arange(K) * nb + jb.index(1), np.full(K, col))),
                           shape=(K * nb, self.size))
         return Affine(A, np.zeros(K * nb), labels)
