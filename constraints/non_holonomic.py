@@ -363,7 +363,9 @@ class NonHolonomic(Item):
             rows = rows + slip_rows(model, t, self.axes, self.lever, self.slip, who)
         if self.mounting is None:
             return rows
-        return rows + model.mounting_velocity(t, self.axes, what=who)   # no constant: rows' labels and c
+        lever = None if isinstance(self.lever, str) else self.lever
+        # no constant: the rows' labels and c
+        return rows + model.mounting_velocity(t, self.axes, lever=lever, what=who)
 
     def active(self, solution, rtol: float = 1e-3):
         """The rows at the band's edge in a solution: where the vehicle slid by at least ``tol``.

@@ -1213,7 +1213,7 @@ class NavModel:
                 or getattr(self.data, "body_point", None) is not None
                 or (self.ns and "attitude_error" in self.state_model.state_kinds(self.data)))
 
-    def mounting_velocity(self, t, axes, what: str = "mounting") -> Affine:
+    def mounting_velocity(self, t, axes, lever=(0.0, 0.0, 0.0), what: str = "mounting") -> Affine:
         r"""The change of the lateral and vertical body velocity rows of a vehicle item made by
         the IMU's mounting (:class:`~bvpnav.error_models.Mounting`), m/s; rows time-major, then
         axis, to be added to :meth:`body_velocity`'s rows of the same ``t`` and ``axes``.
@@ -1224,6 +1224,10 @@ class NavModel:
             Times, s, inside the window.
         axes : str or sequence of str
             Body axes among ``"y"`` and ``"z"`` (the forward axis carries no mounting term).
+        lever : array_like (3,) or None
+            The point where the rows hold, m, body axes from the IMU; ``None`` for a point the
+            error model estimates (:class:`~bvpnav.error_models.NhcLever`), whose forward speed
+            is then taken as the IMU's (see Notes).
         what : str
             What asks (for error messages).
 
@@ -1232,12 +1236,16 @@ class NavModel:
         With the slopes :math:`(s_y, s_z)` of the mounting the rows are
         :math:`-s_y\, v^0_x(t)` (axis y) and :math:`+s_z\, v^0_x(t)` (axis z), so that
         :math:`v_y - s_y v_x = 0` and :math:`v_z + s_z v_x = 0` say the point moves along the
-        vehicle's forward axis :math:`(1, s_y, -s_z)`. :math:`v^0_x = e_x^T C^T v^0` is the
-        forward body velocity of the loop's linearization point (``data.body_point``, set by
-        the attitude loop, as for :meth:`body_velocity`'s attitude terms), so the rows are exact
-        at the loop's answer. Without a point (a loop's first solve) the rows are zero and the
-        slopes stay at their prior for that solve; without an attitude loop at all (no
-        attitude error model, no node states) nothing would iterate them, and this refuses.
+        vehicle's forward axis :math:`(1, s_y, -s_z)`. :math:`v^0_x = e_x^T (C^T v^0 + \omega
+        \times \ell)` is the forward body velocity of the point :math:`\ell` at the loop's
+        linearization point (``data.body_point``, set by the attitude loop, as for
+        :meth:`body_velocity`'s attitude terms; the rates :math:`\omega` as in
+        :meth:`vehicle_point_velocity`), so the rows are exact at the loop's answer. With the
+        point estimated, :math:`(\omega \times \ell)_x = \omega_y \ell_z - \omega_z \ell_y` is
+        left out: the rows are then exact only for a point on the body's x axis. Without a
+        point (a loop's first solve) the rows are zero and the slopes stay at their prior for
+        that solve; without an attitude loop at all (no attitude error model, no node states)
+        nothing would iterate them, and this refuses.
         """
         names, jb = _body_axes(axes, what)
         if 0 in jb:
@@ -1252,8 +1260,7 @@ class NavModel:
         if point is None:
             return Affine(sp.csr_matrix((K * nb, self.size)), np.zeros(K * nb),
                           TimeLabels("mount_", list(names), times))
-        C = self._attitude_at(times, what)
-        vx = np.einsum("kn,kn->k", C[:, :, 0], self._point_velocity(times, point, what))
+        vx, _ = self._forward_speed(times, point, lever, what)
         sign = np.array([{1: -1.0, 2: 1.0}[j] for j in jb])
         col = np.array([idx[j - 1] for j in jb])
         A = sp.csr_matrix(((vx[:, None] * sign[None, :]).ravel(), (np.arange(K * nb), np.tile(col, K))),
@@ -1311,17 +1318,24 @@ class NavModel:
         labels = TimeLabels("slip_", list(names), times)
         if point is None or 1 not in jb:
             return Affine(sp.csr_matrix((K * nb, self.size)), np.zeros(K * nb), labels)
-        C = self._attitude_at(times, what)
-        vx = np.einsum("kn,kn->k", C[:, :, 0], self._point_velocity(times, point, what))
-        P = self.sample_grid.interpolation_matrix(times, what)
-        ell = np.zeros(3) if lever is None else np.asarray(lever, dtype=float).reshape(3)
-        if np.any(ell):     # the point's forward speed: (omega x l)_x = w_y l_z - w_z l_y
-            w = P @ self._point_rates(what)
-            vx = vx + w[:, 1] * ell[2] - w[:, 2] * ell[1]
+        vx, P = self._forward_speed(times, point, lever, what)
         fy = P @ np.asarray(self.data.specific_force)[:, 1]
         A = sp.csr_matrix((fy * vx, (np.arange(K) * nb + jb.index(1), np.full(K, col))),
                           shape=(K * nb, self.size))
         return Affine(A, np.zeros(K * nb), labels)
+
+    def _forward_speed(self, times: np.ndarray, point, lever, what: str):
+        r"""The forward body speed (m/s) of the point ``lever`` (m, body axes; ``None``: the
+        IMU's) at ``times`` about the loop's ``point``, :math:`e_x^T (C^T v^0 + \omega \times
+        \ell)`, and the samples' interpolation matrix at ``times``."""
+        C = self._attitude_at(times, what)
+        vx = np.einsum("kn,kn->k", C[:, :, 0], self._point_velocity(times, point, what))
+        P = self.sample_grid.interpolation_matrix(times, what)
+        ell = np.zeros(3) if lever is None else np.asarray(lever, dtype=float).reshape(3)
+        if np.any(ell):     # (omega x l)_x = w_y l_z - w_z l_y
+            w = P @ self._point_rates(what)
+            vx = vx + w[:, 1] * ell[2] - w[:, 2] * ell[1]
+        return vx, P
 
     def _point_rates(self, what: str) -> np.ndarray:
         """The body rates at every sample (N, 3), rad/s, at the loop's current point: corrected by

@@ -126,3 +126,23 @@ def test_with_node_states():
     assert sol.stats["verified"]
     assert abs(np.degrees(sol.error_params["mounting_yaw"] - YAW)) < 0.05
     assert abs(np.degrees(sol.error_params["mounting_pitch"] - PITCH)) < 0.005
+
+
+@pytest.mark.parametrize("lever", [(-1.2, 0.5, 0.5), (0.3, -0.4, 0.8)])
+def test_mounting_at_a_point_off_the_x_axis_on_a_winding_drive(lever):
+    """The mounting term is the slope times the forward speed of the rows' point, not the IMU's:
+    they differ by (omega x l)_x = w_y l_z - w_z l_y on a turning, pitching drive. Hard rows at
+    such a point: both angles to 1e-9 rad and the path to 1e-8 m."""
+    from bvpnav.error_models.nhc_lever import _car_drive
+
+    data, pos, _ = _car_drive(np.asarray(lever), slopes=mounting_slopes(YAW, PITCH))
+    k = np.arange(0, data.n, 20)
+    prob = NavigationProblem(data, error_model=AttitudeError(sigma=0.01) + Mounting(), grade=None)
+    prob.add(Position(t=data.t[k], value=pos[k], name="fixes"),
+             NonHolonomic(mode="hard", lever=lever, mounting="estimated", rate=2.0, name="nhc"))
+    sol = prob.solve(solver="direct", attitude={"tol": 1e-12})
+    assert sol.stats["verified"]
+    assert abs(sol.error_params["mounting_yaw"] - YAW) < 1e-9
+    assert abs(sol.error_params["mounting_pitch"] - PITCH) < 1e-9
+    np.testing.assert_allclose(sol.position(), pos, rtol=0, atol=1e-8)
+

@@ -100,12 +100,14 @@ class NhcLever(_Installed):
         return prob, dict(zip(NAMES, lever.tolist(), strict=True)), {"solver": "direct"}
 
 
-def _car_drive(lever: np.ndarray, duration: float = 20.0, rate: float = 10.0, slip=None):
+def _car_drive(lever: np.ndarray, duration: float = 20.0, rate: float = 10.0, slip=None, slopes=None):
     r"""A car on a winding, undulating road whose point ``lever`` (m, body axes from the IMU)
     moves along the body x axis, noise-free: the data, and the IMU's positions and velocities
     at the samples. ``slip`` (per sample, dimensionless; default none): the point slides
     sideways at ``-slip`` times its forward speed instead (``slip_drive`` of
-    :mod:`bvpnav.error_models.side_slip`).
+    :mod:`bvpnav.error_models.side_slip`). ``slopes`` (:math:`(s_y, s_z)`, default none): the
+    IMU is mounted with these slopes (:mod:`bvpnav.error_models.mounting`), so the point moves
+    along :math:`(1, s_y, -s_z)` in the IMU's axes, at the forward speed times that vector.
 
     The yaw rate :math:`0.3 \sin(0.4 t)`, roll rate :math:`0.05 \cos(0.9 t)` and pitch rate
     :math:`0.04 \sin(0.7 t + 0.3)` rad/s are the gyro samples; the attitude is the one
@@ -130,7 +132,8 @@ def _car_drive(lever: np.ndarray, duration: float = 20.0, rate: float = 10.0, sl
     C = first.attitude.as_matrix()
     s = 8.0 + 2.0 * np.sin(0.3 * t)
     side = np.zeros(t.size) if slip is None else -np.asarray(slip, dtype=float) * s
-    vb = np.column_stack([s, side, np.zeros(t.size)]) - np.cross(w, lever)
+    sy, sz = (0.0, 0.0) if slopes is None else (float(slopes[0]), float(slopes[1]))
+    vb = np.column_stack([s, side + sy * s, -sz * s]) - np.cross(w, lever)
     v = np.einsum("kij,kj->ki", C, vb)
     acc = np.empty_like(v)
     dv = np.gradient(v, t, axis=0, edge_order=2)
