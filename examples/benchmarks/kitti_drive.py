@@ -297,9 +297,13 @@ full, cheap x3, full, cheap x3, the stage's pass; steps 0.18, 0.027, 4.0e-3, 4.4
   samples' columns 8.2e-7. The gap is the gyro-bias columns' change with the bias, not the
   second-order term of the right-hand sides that ``cheap_error`` measures: the samples' gyro-bias
   columns in the FEM rows alone leave 8.3e-5, in the attitude process rows alone 3.6e-5, in both
-  5.7e-6. A cheap step that carried those columns to first order in the gyro-bias change would
-  shrink that full pass's step about 18x, still far above ``tol``. With ``CHEAP_ERROR`` 1e-4 (a
-  cheap second step) and today's columns the 10 s case took a full pass more (12 steps).
+  5.7e-6. The ceiling of a cheap step that carried those columns to first order in the gyro-bias
+  change, measured with the samples' own gyro-bias columns put into every cheap step (a harness,
+  not a method): the middle full pass's step 2.4e-5 / 1.7e-5 / 7.6e-5 rad at 10 / 30 / 60 s (with
+  today's cheap steps 8.9e-5 / 3.2e-4 / 1.5e-5), and the same full passes and cheap steps in the
+  same order at every gap; with ``CHEAP_ERROR`` 1e-4 as well, 11 steps at 10 s (2 full passes, 3
+  through the stage, 6 cheap). With ``CHEAP_ERROR`` 1e-4 and today's columns the 10 s case took
+  12 steps (a full pass more).
 
 After the harness fix (every method starts from the kept fixes only: GTSAM's example had
 started LM from every fix and both smoothers' heading came from the first fixes, withheld or
