@@ -23,8 +23,8 @@ convex problems, Levenberg-Marquardt style:
 
 Linear convergence. Gauss-Newton leaves out the curvature of the acceleration times the
 residual; where the residual is large (fast motion the linear-acceleration model does not
-follow, a foot's swing at 6 rad/s) the steps then shrink by a steady ratio ``r`` (0.78
-measured on a foot-mounted walk) instead of quadratically. When an accepted step is more
+follow, a foot's swing at 6 rad/s) the steps then shrink by a steady ratio ``r`` (the
+foot-walk benchmark's docstring gives it) instead of quadratically. When an accepted step is more
 than 0.3 of the previous one, the loop also evaluates the point ``1/(1 - r)`` steps along
 the same direction and keeps it if it lowers :math:`J` further.
 
@@ -37,10 +37,10 @@ loop converges; without such information the heading stays what the priors make 
 
 The candidates are scored without the items whose rows turn with the attitude (body-frame
 items such as :class:`~bvpnav.constraints.NonHolonomic`): with the attitude held fixed, such an
-item scores a heading 5 degrees off nearly as badly as one 120 degrees off (a simulated car
-drive's search picked 120 degrees with them and ended 129 m off; without them it starts within
-5 degrees and converges in 6 steps), while the position information it leaves alone is what
-tells the headings apart. The loop then starts from the best candidate with every item.
+item scores a heading a few degrees off nearly as badly as one far off (with them a search can
+pick a heading far off, from where the loop does not come back), while the position information
+it leaves alone is what tells the headings apart. The loop then starts from the best candidate
+with every item.
 
 An unobservable heading is detected, not rounded: when nothing constrains the horizontal
 direction (position fixes at one place only, or a walk with stances only) every candidate
@@ -99,8 +99,8 @@ MERIT_WEIGHT = 1e16
 
 #: Candidate headings whose objectives differ by at most this fraction of the largest
 #: (and of 1) cannot be told apart: the heading is unobservable. An unobservable heading
-#: leaves differences of rounding (2e-13 relative measured on a foot walk); a position fix
-#: 10 m from the start with 1 m noise changes the objective by tens at 30 degrees.
+#: leaves differences of rounding; position information that makes it observable changes the
+#: objective between headings by orders of magnitude more than this.
 HEADING_RTOL = 1e-8
 
 #: Equal objectives at this many distinct headings prove an equality-constrained
@@ -898,10 +898,8 @@ def _next_totals(sm, data, s: np.ndarray, iters: list, prev_att: np.ndarray | No
 #: (:func:`~bvpnav.error_models.error_states.cheap_error`, rad: the second-order term of the
 #: gyro-bias change since the last full pass) is at most this: the change turns no element by
 #: more than about 4.5e-3 rad (0.26 degrees). Cheap steps only move the linearization point (the
-#: answer is a full pass's), so this sets how far one full pass carries, not the accuracy. Measured
-#: on the KITTI drive's development split (1 s mesh, fixes every 10 / 30 / 60 s): full passes and
-#: cheap steps 4+8 / 4+8 / 3+8 against 5+7 / 6+4 / 5+6 with 1e-7 (the loop's tol), the answers
-#: equal to 5e-9 relative.
+#: answer is a full pass's), so this sets how far one full pass carries, not the accuracy (the
+#: KITTI benchmark's docstring has the counts it gave against the loop's ``tol`` as the limit).
 CHEAP_ERROR = 1e-5
 
 #: Cheap steps are taken where Gauss-Newton converges linearly (:func:`_slow`): the last step at
