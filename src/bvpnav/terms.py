@@ -183,7 +183,8 @@ class Term:
         if self.mode == "robust" and self.huber is not None:
             size = np.minimum(size, self.huber)
         w = size * (2.0 * self.weight(lam) / self.sigma**2)   # the weights on the rows
-        return abs_max(_column_sums(A.indices, absA * w[rows], A.shape[1])[1])
+        absA *= w[rows]   # |A| weighted by rows, in place (one array of the stored entries)
+        return abs_max(_column_sums(A.indices, absA, A.shape[1])[1])
 
 
 def transposed_product(A: sp.spmatrix, u: np.ndarray) -> tuple[np.ndarray | slice, np.ndarray]:
