@@ -34,7 +34,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .model import Affine
-from .sparse import abs_max
+from .sparse import abs_max, as_csr
 
 if TYPE_CHECKING:
     import cvxpy as cp
@@ -173,13 +173,18 @@ class Term:
         the terms that cancel in it (``|A| |x| + |c|``); 0 for constraints."""
         if not self.is_penalty or self.sigma is None:
             return 0.0
-        size = self.residual.row_scale(x)
+        # |A| |x| + |c| per row (Affine.row_scale) and |A|^T w on the stored entries of A, summed
+        # in their order as the CSR products do (no |A| matrix made)
+        A = as_csr(self.residual.A)
+        rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
+        absA = np.abs(A.data)
+        size = np.bincount(rows, weights=absA * np.abs(x[A.indices]), minlength=A.shape[0])
+        size += np.abs(self.residual.c)
         if self.mode == "robust" and self.huber is not None:
             size = np.minimum(size, self.huber)
         w = size * (2.0 * self.weight(lam) / self.sigma**2)   # the weights on the rows
-        A = self.residual.A
-        return abs_max(transposed_product(sp.csr_matrix((np.abs(A.data), A.indices, A.indptr),
-                                                        shape=A.shape), w)[1])
+        absA *= w[rows]   # |A| weighted by rows, in place (one array of the stored entries)
+        return abs_max(_column_sums(A.indices, absA, A.shape[1])[1])
 
 
 def transposed_product(A: sp.spmatrix, u: np.ndarray) -> tuple[np.ndarray | slice, np.ndarray]:
@@ -191,12 +196,18 @@ def transposed_product(A: sp.spmatrix, u: np.ndarray) -> tuple[np.ndarray | slic
     entries in more than an eighth of its columns gives ``(slice(None), A^T u)``.
     """
     A = A.tocsr() if A.format != "csr" else A
-    n = A.shape[1]
-    if A.nnz * 8 > n:
-        return slice(None), np.asarray(A.T @ u, dtype=float)
     rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
-    cols, at = np.unique(A.indices, return_inverse=True)
-    return cols, np.bincount(at.ravel(), weights=A.data * u[rows], minlength=cols.size)
+    return _column_sums(A.indices, A.data * u[rows], A.shape[1])
+
+
+def _column_sums(cols: np.ndarray, values: np.ndarray, n: int) -> tuple[np.ndarray | slice, np.ndarray]:
+    """The sums of ``values`` by column ``cols`` (a CSR matrix's stored entries, in their order: the
+    sums of its transposed product, in the order it adds them) as :func:`transposed_product`
+    returns them: on the columns that occur, or on all ``n`` when more than an eighth occur."""
+    if cols.size * 8 > n:
+        return slice(None), np.bincount(cols, weights=values, minlength=n).astype(float, copy=False)
+    touched, at = np.unique(cols, return_inverse=True)
+    return touched, np.bincount(at.ravel(), weights=values, minlength=touched.size)
 
 
 class TermKind:

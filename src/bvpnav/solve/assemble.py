@@ -19,9 +19,15 @@ from ..linalg.lsq import Factored
 from ..linalg.workspace import Workspace
 from ..model import RowLabels, TimeLabels
 from ..result import Attempt, ItemRows, Run, Solution, SolveRecords, Verification
+from ..sparse import as_csr
 from .verify import verify
 
 __all__ = ["finish", "make_solution"]
+
+# pandas makes string columns (the tables' column names, the items' names) with pyarrow when it is
+# installed, loading pyarrow's pandas layer on the first one: made as this module loads, with the
+# other modules a solve needs, rather than inside the first solve of a process
+pd.Index(["t"])
 
 
 def _dual_rms(duals: dict | None, label: str) -> float | None:
@@ -65,9 +71,18 @@ def _label_times(labels, m: int) -> np.ndarray | None:
     return out
 
 
-def _row_times(term, model, m: int) -> np.ndarray:
+def _column_times(model, n: int) -> np.ndarray:
+    """The time (s) of each of ``n`` columns that is a node's position, NaN for the others."""
+    tcol = np.full(n, np.nan)
+    for a in range(model.d):
+        tcol[model.r_index(a)] = model.grid.t
+    return tcol
+
+
+def _row_times(term, model, m: int, tcol: np.ndarray | None = None) -> np.ndarray:
     """Time of each shown row (s): from the labels, else the mean time of the nodes the row
-    touches weighted by its coefficients' sizes; NaN for rows on no node (priors, cones)."""
+    touches weighted by its coefficients' sizes; NaN for rows on no node (priors, cones).
+    ``tcol``: :func:`_column_times` of ``model`` when the caller has it."""
     res = term.residual
     got = _label_times(getattr(res, "labels", None), m)
     if got is not None:
@@ -75,13 +90,16 @@ def _row_times(term, model, m: int) -> np.ndarray:
     A = getattr(res, "A", None)
     if A is None or A.shape[0] != m:
         return np.full(m, np.nan)
-    tcol = np.full(A.shape[1], np.nan)
-    for a in range(model.d):
-        tcol[model.r_index(a)] = model.grid.t
-    on = np.isfinite(tcol)
-    absA = abs(A)
-    den = np.asarray(absA @ on.astype(float)).ravel()
-    num = np.asarray(absA @ np.where(on, tcol, 0.0)).ravel()
+    A = as_csr(A)
+    if tcol is None or tcol.size != A.shape[1]:
+        tcol = _column_times(model, A.shape[1])
+    # |A| (1 on a node's position) and |A| t, summed over each row's stored entries in their order
+    tj = tcol[A.indices]
+    on = np.isfinite(tj)
+    absA = np.abs(A.data)
+    rows = np.repeat(np.arange(m), np.diff(A.indptr))
+    den = np.bincount(rows, weights=absA * on, minlength=m)
+    num = np.bincount(rows, weights=absA * np.where(on, tj, 0.0), minlength=m)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(den > 0, num / np.where(den > 0, den, 1.0), np.nan)
 
@@ -90,20 +108,23 @@ def _per_row(v, m: int) -> np.ndarray | None:
     return None if v is None or np.size(v) != m else np.asarray(v, float).ravel()
 
 
-def _item_rows(term, model, m: int) -> ItemRows:
-    """The :class:`ItemRows` of a term's ``m`` shown rows."""
+def _item_rows(term, model, m: int, tcol: np.ndarray | None = None) -> ItemRows:
+    """The :class:`ItemRows` of a term's ``m`` shown rows (``tcol``: see :func:`_row_times`)."""
     labels = getattr(term.residual, "labels", None)
-    return ItemRows(t=_row_times(term, model, m), labels=labels if labels is not None and len(labels) == m
-                    else None, mode=term.mode, kind=term.kind, units=term.units,
+    return ItemRows(t=_row_times(term, model, m, tcol),
+                    labels=labels if labels is not None and len(labels) == m else None, mode=term.mode,
+                    kind=term.kind, units=term.units,
                     sigma=_per_row(term.sigma, m), huber=term.huber, tol=_per_row(term.tol, m))
 
 
 def _items_table(form: Formulation, xval: np.ndarray, duals: dict | None) -> tuple[pd.DataFrame, dict, dict]:
     rows, item_res, item_rows = [], {}, {}
+    model = form.model
+    tcol = _column_times(model, model.size)
     for term in form.terms():
         r, shown = term.shown(xval)
         item_res[term.label] = r
-        item_rows[term.label] = _item_rows(term, form.model, np.size(shown))
+        item_rows[term.label] = _item_rows(term, model, np.size(shown), tcol)
         rows.append({
             "item": term.label,
             "class": type(term.item).__name__ if term.item is not None else "prior",

@@ -205,7 +205,10 @@ def _variance_factor(sol: Solution, form: Formulation) -> tuple[float, int, dict
 def _misfit(sol: Solution, form: Formulation) -> tuple[dict[str, Any], list[str]]:
     axes = list(form.model.axes)
     sa = np.asarray(form.sigma_a_used, dtype=float)
-    w = sol.residuals[[f"w_{ax}" for ax in axes]].to_numpy(dtype=float)
+    names = [f"w_{ax}" for ax in axes]
+    res = sol.residuals
+    # the columns in their order (a solution's own table) without a selected copy of the table
+    w = (res if list(res.columns) == names else res[names]).to_numpy(dtype=float)
     per = np.sqrt(np.mean((w / sa) ** 2, axis=0))
     overall = float(np.sqrt(np.mean(per**2)))
     out: dict[str, Any] = {"residual_ratio": {ax: float(r) for ax, r in zip(axes, per, strict=True)},
