@@ -24,11 +24,6 @@ from .verify import verify
 
 __all__ = ["finish", "make_solution"]
 
-# pandas makes string columns (the tables' column names, the items' names) with pyarrow when it is
-# installed, loading pyarrow's pandas layer on the first one: made as this module loads, with the
-# other modules a solve needs, rather than inside the first solve of a process
-pd.Index(["t"])
-
 
 def _dual_rms(duals: dict | None, label: str) -> float | None:
     if duals is None or not duals.get(label):
