@@ -138,6 +138,22 @@ def _csr(data: np.ndarray, indices: np.ndarray, indptr: np.ndarray, shape: tuple
     return sp.csr_matrix((data, indices, indptr), shape=shape)
 
 
+def _pattern(indices: np.ndarray, indptr: np.ndarray, shape: tuple) -> sp.csr_matrix:
+    """A canonical CSR pattern (its values zeros) for :func:`_with_values`: kept, never handed out."""
+    out = _csr(np.zeros(indices.size), indices, indptr, shape)
+    out.has_canonical_format = True
+    return out
+
+
+def _with_values(pattern: sp.csr_matrix, data: np.ndarray) -> sp.csr_matrix:
+    """The matrix of ``pattern`` (:func:`_pattern`) with the values ``data``: a shallow copy
+    sharing its index arrays (scipy's checks of them, made once for the pattern, are not run
+    again at every Gauss-Newton step)."""
+    out = copy.copy(pattern)
+    out.data = data
+    return out
+
+
 def _raw(data):
     p = getattr(data, "state_point", None)
     return data if p is None else p.raw
@@ -1052,13 +1068,18 @@ class ErrorStates(ErrorModel):
         """The blocks ``Y`` (key -> (G, 3, 3), one per group of ``g``) as the canonical CSR
         matrices of :meth:`condensed_columns`, one per navigation axis."""
         vals = [Y[key][g["keep"][key]] for key in g["order"]]
+        kept = g.setdefault("patterns", {})   # per axis: the layout's entries not zero, and their pattern
         out = []
         for a in range(3):
-            v = np.concatenate([y[:, a, :].ravel() for y in vals])
-            A = sp.csr_matrix((np.bincount(g["slot"], v, minlength=g["nnz"]), g["indices"].copy(),
-                               g["indptr"].copy()), shape=g["shape"])   # the kept layout is not pruned
-            A.has_canonical_format = True
+            v = np.bincount(g["slot"], np.concatenate([y[:, a, :].ravel() for y in vals]), minlength=g["nnz"])
+            nz = v != 0
+            if a in kept and np.array_equal(kept[a][0], nz):   # zeros where the last point had them
+                out.append(_with_values(kept[a][1], v[nz]))
+                continue
+            A = sp.csr_matrix((v, g["indices"].copy(), g["indptr"].copy()), shape=g["shape"])
+            A.has_canonical_format = True   # the kept layout is not pruned
             A.eliminate_zeros()
+            kept[a] = (nz, _pattern(A.indices, A.indptr, A.shape))
             out.append(A)
         return out
 
@@ -1220,9 +1241,9 @@ class ErrorStates(ErrorModel):
             cols = np.empty((m, 3, w), dtype=np.int64)
             for b, (c, _) in enumerate(blocks):
                 cols[:, :, 3 * b:3 * b + 3] = s0 + c[:, None, :]
-            fixed["process"] = (cols.ravel().astype(itype), np.arange(0, 3 * m * w + 1, w, dtype=itype))
-        cols, ptr = fixed["process"]
-        A = _csr(vals.ravel(), cols, ptr, (3 * m, model.size))
+            fixed["process"] = _pattern(cols.ravel().astype(itype),
+                                        np.arange(0, 3 * m * w + 1, w, dtype=itype), (3 * m, model.size))
+        A = _with_values(fixed["process"], vals.ravel())
         res = Affine(A, e0.ravel(), RowLabels([("process_attitude", 3 * m)]))
         out.append(Term(label="process ErrorStates[attitude]", item=None, residual=res, mode="soft",
                         kind="equality", sigma=np.repeat(self.arw * np.sqrt(h), 3), scaled_by_lam=False,
@@ -1246,18 +1267,32 @@ class ErrorStates(ErrorModel):
             else:
                 out.append(Term(label=f"constant ErrorStates[{kind}]", item=None, residual=res, mode="hard",
                                 kind="equality", scaled_by_lam=False, units=KINDS[kind]))
-        # priors on the first node
+        return out + self._prior_terms(data, model, fixed)
+
+    def _prior_terms(self, data, model, fixed: dict) -> list:
+        """The priors on the first node's states (:meth:`terms`); their rows' patterns, and a bias
+        prior's rows whole (the identity's), kept in ``fixed`` with the process rows'."""
+        from ..model import Affine
+        from ..terms import Term
+
+        s0 = int(model.s_index[0])
+        kinds = self.state_kinds(data)
+        out = []
         for kind, sig in (("attitude_error", self.attitude_sigma), ("gyro_bias", self.gyro_sigma),
                           ("acc_bias", self.acc_sigma)):
             if sig is None or kind not in kinds:
                 continue
-            cols = self.state_index(data, kind)[0]
             tot = self.state_total(data, kind)[0]
-            J = _inverse_jacobian(tot, 1.0) if kind == "attitude_error" else np.eye(3)
             keep = np.flatnonzero(np.isfinite(sig))
             if keep.size:   # the kept rows of J on the first node's three states (increasing columns)
-                k = keep.size
-                A = _csr(J[keep].ravel(), np.tile(s0 + cols, k), np.arange(0, 3 * k + 1, 3), (k, model.size))
+                key = ("prior", kind, tuple(keep))
+                if key not in fixed:   # the pattern; a bias prior's rows (J = I) whole
+                    k, cols = keep.size, self.state_index(data, kind)[0]
+                    fixed[key] = _pattern(np.tile(s0 + cols, k), np.arange(0, 3 * k + 1, 3), (k, model.size))
+                    if kind != "attitude_error":
+                        fixed[key] = _with_values(fixed[key], np.eye(3)[keep].ravel())
+                A = (_with_values(fixed[key], _inverse_jacobian(tot, 1.0)[keep].ravel())
+                     if kind == "attitude_error" else fixed[key])
                 res = Affine(A, tot[keep], tuple(f"prior_{kind}[{i}]" for i in keep))
                 out.append(Term(label=f"prior ErrorStates[{kind}]", item=None, residual=res,
                                 mode="soft", kind="equality", sigma=np.asarray(sig, dtype=float)[keep],
