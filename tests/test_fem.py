@@ -361,3 +361,34 @@ def test_time_labels_are_made_on_demand_and_read_as_the_formatted_strings():
     one = m.position(times, axes=["x"])   # one axis: the rows as made, no reordering copy
     assert list(one.labels) == [f"x(t={tk:.6g})" for tk in times]
     np.testing.assert_array_equal(one.A.toarray(), P.A.toarray()[0::3])
+
+
+def test_rows_with_tail_reuses_its_pattern_only_for_the_same_index_arrays():
+    """``rows_with_tail`` keeps the result's pattern with the head for tails (and rows below) on
+    the very index arrays of the last call: another call on them takes the new values (the
+    result equals scipy's ``hstack``/``vstack`` of the blocks), and tails on other index arrays,
+    even equal ones, are placed again."""
+    import copy
+
+    from bvpnav.model import rows_with_tail
+
+    rng = np.random.default_rng(11)
+    left = sp.random(6, 4, density=0.5, format="csr", random_state=1)
+    head = sp.hstack([left, sp.csr_matrix((6, 3))], format="csr")   # the full width, its columns before 4
+    tail = [sp.random(6, 3, density=0.5, format="csr", random_state=2)]
+    below = sp.random(2, 7, density=0.5, format="csr", random_state=3)
+
+    def want(tl, bl):
+        return sp.vstack([sp.hstack([left, tl[0]]), bl], format="csr").toarray()
+
+    first = rows_with_tail(head, tail, 4, [below])
+    np.testing.assert_array_equal(first.toarray(), want(tail, below))
+    for _ in range(2):   # the same index arrays (shallow copies), new values: the kept pattern
+        t2, b2 = copy.copy(tail[0]), copy.copy(below)
+        t2.data, b2.data = rng.normal(size=t2.nnz), rng.normal(size=b2.nnz)
+        got = rows_with_tail(head, [t2], 4, [b2])
+        np.testing.assert_array_equal(got.toarray(), want([t2], b2))
+        assert got.indices is first.indices and not np.array_equal(got.data, first.data)
+    other = sp.random(6, 3, density=0.3, format="csr", random_state=4)   # another pattern
+    np.testing.assert_array_equal(rows_with_tail(head, [other], 4, [below]).toarray(), want([other], below))
+    np.testing.assert_array_equal(rows_with_tail(head, tail, 4, [below]).toarray(), want(tail, below))

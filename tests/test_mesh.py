@@ -454,6 +454,40 @@ def test_condensed_state_columns_are_the_load_times_the_per_sample_columns():
         assert a.nnz == b.nnz
 
 
+def test_a_full_pass_after_other_points_has_a_fresh_formulations_rows():
+    """A coarse mesh's elements hand their largest arrays to the next point's as memory (not
+    values): a full pass made after passes at two other points has, bit for bit, the rows of
+    the same point made first in a fresh formulation; and the rows move with the point (the
+    gyro bias, the attitude), nothing kept from the points before."""
+    from bvpnav.error_models.error_states import states_at
+    from bvpnav.formulation import Formulation
+    from bvpnav.linalg.lsq import least_squares_form
+
+    def rows(form, nodes):
+        raw, sm = form.data, form.model.state_model
+        f = Formulation(states_at(raw, sm.expand(raw, nodes)), form.residual, form.sigma_a, form.error_model,
+                        form.items, grade=None, segment=form.segment)
+        f._observable = True
+        return least_squares_form(f, 1.0)
+
+    form = _noisy_states_form()
+    n = form.model.N
+    rng = np.random.default_rng(7)
+    points = [{kind: rng.normal(scale=s, size=(n, 3))
+               for kind, s in (("attitude_error", 0.05), ("gyro_bias", 2e-3), ("acc_bias", 0.05))}
+              for _ in range(3)]
+    first = rows(_noisy_states_form(), points[2])
+    seen = [rows(form, p) for p in points]
+    for a, b in ((first.D, seen[2].D), (first.E, seen[2].E)):
+        assert np.array_equal(a.c, b.c)
+        assert np.array_equal(a.A.indptr, b.A.indptr) and np.array_equal(a.A.indices, b.A.indices)
+        assert np.array_equal(a.A.data, b.A.data)
+    for a, b in ((seen[0], seen[1]), (seen[1], seen[2])):   # each point's own rows
+        assert np.abs(a.E.c - b.E.c).max() > 1e-3 * np.abs(a.E.c).max()
+        assert abs(a.E.A - b.E.A).max() > 1e-3 * abs(a.E.A).max()
+        assert np.abs(a.D.c - b.D.c).max() > 1e-3 * np.abs(a.D.c).max()
+
+
 def test_cheap_steps_give_the_full_passes_answer():
     """With cheap intermediate steps (``attitude={"cheap": True}``, the default) the loop
     converges to the answer of full passes only: the last step is always a full pass (through

@@ -417,9 +417,19 @@ class MeshModel(NavModel):
                                "samples' accelerations are the last full pass's)")
 
     def _acc_load(self, axis: int) -> np.ndarray:
-        out = self.cond.load @ self.data.acc[:, axis]
+        out = self._acc_loads()[:, axis]
         change = self._load_change
         return out if change is None else out + change[:, axis]
+
+    def _acc_loads(self) -> np.ndarray:
+        """``cond.load @ data.acc`` (n, d), m/s^2 s: the samples' accelerations condensed, every axis
+        in one product, kept on the data with the load and the accelerations it was made of (a cheap
+        Gauss-Newton point, a copy of its full pass's data, reads that pass's)."""
+        W, acc = self.cond.load, self.data.acc
+        kept = self.data.__dict__.get("_mesh_acc_loads")
+        if kept is None or kept[0] is not W or kept[1] is not acc:
+            kept = self.data.__dict__["_mesh_acc_loads"] = (W, acc, np.asarray(W @ acc))
+        return kept[2]
 
     def residual_rows(self, axes=None) -> Affine:
         """The node residuals ``w`` (m/s^2) and the whitened element residuals ``u``, axis by

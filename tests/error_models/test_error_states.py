@@ -407,12 +407,27 @@ def test_segment_products_are_the_element_products(lengths):
     steps = Rotation.from_rotvec(0.3 * rng.standard_normal((m, 3)))
     first = np.cumsum([0] + lengths[:-1])
     start = np.repeat(first, lengths)
-    got = _segment_products(steps.as_quat(), start)
+    got = Rotation.from_quat(_segment_products(steps.as_quat(), start).T)
     for i in range(m):
         want = steps[start[i]]
         for j in range(start[i] + 1, i + 1):
             want = want * steps[j]
         assert (got[i] * want.inv()).magnitude() < 1e-13
+
+
+def test_quaternion_components_are_scipys_bit_for_bit():
+    """The unit quaternions and rotation matrices the coarse mesh's elements write out on
+    component arrays (no rotation objects) are scipy's ``Rotation.from_quat`` / ``as_matrix``,
+    bit for bit: near the identity, at any norm, and with a negative scalar part."""
+    from bvpnav.error_models.error_states import _matrix_components, _unit_components
+
+    rng = np.random.default_rng(5)
+    q = rng.standard_normal((500, 4)) * rng.uniform(0.5, 2.0, (500, 1))
+    q[:100] = [0.0, 0.0, 0.0, 1.0] + 1e-9 * rng.standard_normal((100, 4))
+    want = Rotation.from_quat(q)
+    unit = _unit_components(np.ascontiguousarray(q.T))
+    assert np.array_equal(unit, want.as_quat().T)
+    assert np.array_equal(_matrix_components(unit), want.as_matrix().transpose(1, 2, 0))
 
 
 def test_right_jacobian_components_are_the_right_jacobian():

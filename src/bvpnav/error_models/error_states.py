@@ -138,6 +138,22 @@ def _csr(data: np.ndarray, indices: np.ndarray, indptr: np.ndarray, shape: tuple
     return sp.csr_matrix((data, indices, indptr), shape=shape)
 
 
+def _pattern(indices: np.ndarray, indptr: np.ndarray, shape: tuple) -> sp.csr_matrix:
+    """A canonical CSR pattern (its values zeros) for :func:`_with_values`: kept, never handed out."""
+    out = _csr(np.zeros(indices.size), indices, indptr, shape)
+    out.has_canonical_format = True
+    return out
+
+
+def _with_values(pattern: sp.csr_matrix, data: np.ndarray) -> sp.csr_matrix:
+    """The matrix of ``pattern`` (:func:`_pattern`) with the values ``data``: a shallow copy
+    sharing its index arrays (scipy's checks of them, made once for the pattern, are not run
+    again at every Gauss-Newton step)."""
+    out = copy.copy(pattern)
+    out.data = data
+    return out
+
+
 def _raw(data):
     p = getattr(data, "state_point", None)
     return data if p is None else p.raw
@@ -252,15 +268,25 @@ def _hats(data) -> sp.csr_matrix:
 @dataclass(eq=False)
 class _Elements:
     """A coarse mesh's elements at a point: per sample its element's left node ``left`` and
-    ``theta`` (0 at nodes); per step ``a`` (the corrected step rotations, rad), ``S`` (the
-    product of the element's steps up to and including this one) and ``h`` (the step, s)."""
+    ``theta`` (0 at nodes); per step ``a`` (the corrected step rotations, rad), ``Sc`` (the
+    product of the element's steps up to and including this one, as unit quaternions stored
+    components first, (4, N - 1): x, y, z, w) and ``h`` (the step, s). ``spare``: the largest
+    arrays of the elements this one replaced (:func:`_elements`), memory for its own
+    (:attr:`Zc`, :attr:`weighted`): a Gauss-Newton pass then writes them into pages it already
+    has instead of fresh ones the process must fault in."""
 
     left: np.ndarray
     theta: np.ndarray
     a: np.ndarray
-    S: Rotation
+    Sc: np.ndarray
 
     h: np.ndarray
+    spare: dict = field(default_factory=dict)
+
+    def _memory(self, name: str, shape: tuple) -> np.ndarray:
+        """The spare array ``name`` when it has ``shape`` (taken: used once), else a new one."""
+        out = self.spare.pop(name, None)
+        return out if out is not None and out.shape == shape else np.empty(shape)
 
     @functools.cached_property
     def Zc(self) -> np.ndarray:
@@ -268,10 +294,9 @@ class _Elements:
         each entry contiguous over the steps): written out entry by entry on the steps' arrays
         (:func:`_right_jacobian_components`), as the running sums and the process rows read it."""
         J = _right_jacobian_components(self.a)
-        Sm = self.S.as_matrix()
-        m = Sm.shape[0]
-        S = np.ascontiguousarray(Sm.reshape(m, 9).T).reshape(3, 3, m)
-        out = np.empty((3, 3, m))
+        S = _matrix_components(self.Sc)
+        m = S.shape[2]
+        out = self._memory("Zc", (9, m)).reshape(3, 3, m)
         tmp = np.empty(m)
         for k in range(3):
             for c in range(3):
@@ -285,24 +310,25 @@ class _Elements:
         return out.reshape(9, m)
 
     @functools.cached_property
-    def weighted(self) -> tuple[np.ndarray, np.ndarray]:
+    def weighted(self) -> np.ndarray:
         r""":attr:`Zc` weighted for the element's left and right node, :math:`(1 - \theta_j) Z_j` and
-        :math:`\theta_j Z_j`, (9, N - 1) each (s); dropped by :func:`_gyro_sums`, which sums them
-        in place."""
+        :math:`\theta_j Z_j`, (2, 9, N) (s): step ``j`` in column ``j + 1``, column 0 zero (the
+        layout of :func:`_gyro_sums`' running sums, which are taken in this memory, in place, and
+        drop it)."""
         th = self.theta[:-1]
-        return self.Zc * (1.0 - th), self.Zc * th
+        m = self.Zc.shape[1]
+        out = self._memory("weighted", (2, 9, m + 1))
+        out[:, :, 0] = 0.0
+        np.multiply(self.Zc, 1.0 - th, out=out[0, :, 1:])
+        np.multiply(self.Zc, th, out=out[1, :, 1:])
+        return out
 
     @functools.cached_property
     def element_sums(self) -> tuple[np.ndarray, np.ndarray]:
         r"""The sums of :attr:`weighted` over every element's steps, (9, n - 1) each (s): the process
         rows' bias terms (:func:`_mesh_process`), and what restarts :func:`_gyro_sums` at the nodes."""
         start = np.flatnonzero(np.r_[True, self.left[1:-1] != self.left[:-2]])
-        return tuple(np.add.reduceat(z, start, axis=1) for z in self.weighted)
-
-    @functools.cached_property
-    def Sc(self) -> np.ndarray:
-        """``S`` as quaternions stored components first, (4, N - 1) (x, y, z, w)."""
-        return np.ascontiguousarray(self.S.as_quat().T)
+        return tuple(np.add.reduceat(z[:, 1:], start, axis=1) for z in self.weighted)
 
     @property
     def Z(self) -> np.ndarray:
@@ -337,6 +363,35 @@ def _right_jacobian_components(phi: np.ndarray) -> np.ndarray:
     return out
 
 
+def _unit_components(q: np.ndarray) -> np.ndarray:
+    """Quaternions stored components first, (4, M), divided by their norms in place: the
+    quaternions scipy's ``Rotation.from_quat`` keeps (its norm and division, so ``as_quat``
+    of that rotation is this, bit for bit), without the rotation object."""
+    q /= np.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    return q
+
+
+def _matrix_components(q: np.ndarray) -> np.ndarray:
+    r"""The rotation matrices of unit quaternions stored components first, ``q`` (4, M),
+    component-major (3, 3, M): scipy's ``Rotation.as_matrix`` written out entry by entry on
+    the components' arrays (its products and sums in its order: the same matrices, bit for
+    bit), with no (M, 3, 3) array to transpose."""
+    x, y, z, w = q
+    x2, y2, z2, w2 = x * x, y * y, z * z, w * w
+    xy, zw, xz, yw, yz, xw = x * y, z * w, x * z, y * w, y * z, x * w
+    out = np.empty((3, 3, q.shape[1]))
+    out[0, 0] = x2 - y2 - z2 + w2
+    out[1, 0] = 2 * (xy + zw)
+    out[2, 0] = 2 * (xz - yw)
+    out[0, 1] = 2 * (xy - zw)
+    out[1, 1] = - x2 + y2 - z2 + w2
+    out[2, 1] = 2 * (yz + xw)
+    out[0, 2] = 2 * (xz + yw)
+    out[1, 2] = 2 * (yz - xw)
+    out[2, 2] = - x2 - y2 + z2 + w2
+    return out
+
+
 def _index_type(size: int, m: int, w: int) -> type:
     """The integer type of the kept index arrays of :meth:`ErrorStates.terms`' process rows:
     int32 when every stored index fits (the columns, below ``size``; the attitude rows' pointers,
@@ -361,6 +416,11 @@ def _elements(data, mesh: np.ndarray, bg: np.ndarray) -> _Elements:
     if kept is not None and kept[0] is mesh and (kept[1] is bg or np.array_equal(kept[1], bg)):
         return kept[2]
     el = _make_elements(data, mesh, bg)
+    if kept is not None:   # the replaced elements' largest arrays (read only while it was kept): el's memory
+        old = kept[2].__dict__
+        for name, key in (("Zc", "Zc"), ("weighted", "_gyro_sums")):
+            if key in old:
+                el.spare[name] = old.pop(key)
     raw.__dict__["_mesh_elements"] = (mesh, np.array(bg), el)
     return el
 
@@ -386,8 +446,7 @@ def _make_elements(data, mesh: np.ndarray, bg: np.ndarray) -> _Elements:
     if phi is None:
         phi = raw.__dict__["_step_rotations"] = step_rotation_vectors(t, np.asarray(raw.gyro, dtype=float))
     a = phi - h[:, None] * bg[:-1]
-    S = _segment_products(Rotation.from_rotvec(a).as_quat(), start, layout)
-    return _Elements(left, theta, a, S, h)
+    return _Elements(left, theta, a, _segment_products(Rotation.from_rotvec(a).as_quat(), start, layout), h)
 
 
 def _gyro_sums(el: _Elements, mesh: np.ndarray) -> np.ndarray:
@@ -400,14 +459,13 @@ def _gyro_sums(el: _Elements, mesh: np.ndarray) -> np.ndarray:
     if kept is not None:
         return kept
     n = el.left.size
-    Y2 = np.empty((2, 9, n))
     if mesh[0] != 0 or mesh[-1] != n - 1:   # pragma: no cover - mesh_nodes keeps both ends
         raise ValueError("node states: a coarse mesh must have nodes at the first and the last sample")
     sums = el.element_sums
-    for Y, z, total in zip(Y2, el.weighted, sums, strict=True):
-        z[:, mesh[1:] - 1] -= total        # each element's sum taken off at its last step: the
-        Y[:, 0] = 0.0                      # running sums restart at every node
-        np.cumsum(z, axis=1, out=Y[:, 1:])
+    Y2 = el.weighted                       # step j in column j + 1, column 0 zero: summed in place
+    for Y, total in zip(Y2, sums, strict=True):
+        Y[:, mesh[1:]] -= total            # each element's sum taken off at its last step: the
+        np.cumsum(Y, axis=1, out=Y)        # running sums restart at every node
     Y2[:, :, mesh] = 0.0                   # exactly (not to rounding) at the nodes
     del el.weighted                        # summed in place
     el.__dict__["_gyro_sums"] = Y2
@@ -416,8 +474,9 @@ def _gyro_sums(el: _Elements, mesh: np.ndarray) -> np.ndarray:
 
 def _scan_layout(start: np.ndarray) -> tuple | None:
     """Where :func:`_segment_products`' padded scan puts every step (elements whose first steps are
-    ``start``, ascending): ``(ne, nb, B, flat)``, ``flat`` the step's place in a (B, ne, nb) array
-    (position in the block, element, block), or None when the elements' lengths differ too much
+    ``start``, ascending): ``(ne, nb, B, flat)``, ``flat`` the step's place in a (B, nb, ne) array
+    (position in the block, block, element: the elements vary fastest, so every composition of
+    the scan runs on contiguous runs of them), or None when the elements' lengths differ too much
     for the padding (the indexed scan then). Of the mesh alone: kept with it."""
     m = start.shape[0]
     if not m:
@@ -430,12 +489,14 @@ def _scan_layout(start: np.ndarray) -> tuple | None:
     B = max(1, int(np.ceil(np.sqrt(L))))
     nb = -(-L // B)
     row, pos = np.repeat(np.arange(ne), lens), np.arange(m) - np.repeat(first, lens)
-    return ne, nb, B, ((pos % B) * ne + row) * nb + pos // B
+    return ne, nb, B, ((pos % B) * nb + pos // B) * ne + row
 
 
-def _segment_products(steps: np.ndarray, start: np.ndarray, layout: tuple | None | bool = False) -> Rotation:
+def _segment_products(steps: np.ndarray, start: np.ndarray, layout: tuple | None | bool = False
+                      ) -> np.ndarray:
     """``R_s ... R_i`` for every step ``i`` (quaternions ``steps``, (M, 4)) from the first step
-    ``start[i]`` of its element: a segmented parallel prefix scan (log2 of the longest element
+    ``start[i]`` of its element, as unit quaternions stored components first, (4, M)
+    (:func:`_unit_components`): a segmented parallel prefix scan (log2 of the longest element
     vectorised compositions). The steps of an element are contiguous (``start`` ascends): when
     the elements are of similar lengths the products run on a (B, elements, blocks) array per
     component padded with identities (blocks of B, about the square root of the longest element,
@@ -447,7 +508,7 @@ def _segment_products(steps: np.ndarray, start: np.ndarray, layout: tuple | None
         layout = _scan_layout(start)
     if layout is not None:
         ne, nb, B, flat = layout
-        Q = np.zeros((4, B, ne, nb))               # components first; position in the block next
+        Q = np.zeros((4, B, nb, ne))               # components first; position in the block next
         Q[3] = 1.0
         Qf = Q.reshape(4, -1)
         Qf[:, flat] = steps.T
@@ -455,10 +516,10 @@ def _segment_products(steps: np.ndarray, start: np.ndarray, layout: tuple | None
             Q[:, j] = _quat_components_product(Q[:, j - 1], Q[:, j])
         T = Q[:, B - 1].copy()                     # the blocks' totals, then their running products
         for b in range(1, nb):
-            T[:, :, b] = _quat_components_product(T[:, :, b - 1], T[:, :, b])
+            T[:, b] = _quat_components_product(T[:, b - 1], T[:, b])
         if nb > 1:
-            Q[:, :, :, 1:] = _quat_components_product(T[:, None, :, :-1], Q[:, :, :, 1:])
-        return Rotation.from_quat(Qf[:, flat].T)
+            Q[:, :, 1:] = _quat_components_product(T[:, None, :-1], Q[:, :, 1:])
+        return _unit_components(Qf[:, flat])
     q = steps.copy()
     idx = np.arange(q.shape[0])
     off = 1
@@ -468,7 +529,7 @@ def _segment_products(steps: np.ndarray, start: np.ndarray, layout: tuple | None
             break
         q[take] = _quat_product(q[take - off], q[take])
         off *= 2
-    return Rotation.from_quat(q)
+    return _unit_components(np.ascontiguousarray(q.T))
 
 
 def _quat_components_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -665,8 +726,8 @@ def _mesh_process(data, mesh: np.ndarray, gyro: bool):
     if cheap is not None:
         return _cheap_process(data, cheap, gyro)
     el = _elements(data, mesh, _totals(data, "gyro_bias"))
-    S = el.S                                                      # per step, in its element
-    dR = S[mesh[1:] - 1]                                          # each element's product of steps
+    # each element's product of steps (the unit quaternions as they are: the rotation scipy keeps)
+    dR = Rotation(el.Sc[:, mesh[1:] - 1].T, normalize=False)
     C = data.attitude
     Cp, Cq = C[mesh[:-1]], C[mesh[1:]]
     M = _compose(_compose(Cq, dR.inv()), Cp.inv())
@@ -963,15 +1024,18 @@ class ErrorStates(ErrorModel):
             # node's, the same for every sample of a group): the sums of [g_i x] Y_i, then C_p
             Y4 = _gyro_sums(el, mesh).reshape(2, 3, 3, n)
             Cn = C.reshape(n, 9)[mesh]                                   # (n nodes, 9)
-            Cp = np.ascontiguousarray(Cn.T)[:, el.left]                  # (9, N): C_p[k, l] at 3 k + l
+            CnT = np.ascontiguousarray(Cn.T)                             # C_p[k, l] at 3 k + l
             f = np.ascontiguousarray(fn.T)
             gb = np.empty((3, n))
-            x, tmp = np.empty(n), np.empty(n)
-            for c in range(3):   # g_c = sum_k C_p[k, c] f_k
-                np.multiply(Cp[c], f[0], out=gb[c])
-                np.multiply(Cp[3 + c], f[1], out=tmp)
+            x, tmp, cp = np.empty(n), np.empty(n), np.empty(n)
+            for c in range(3):   # g_c = sum_k C_p[k, c] f_k, C_p[k, c] at every sample (its element's)
+                np.take(CnT[c], el.left, out=cp)
+                np.multiply(cp, f[0], out=gb[c])
+                np.take(CnT[3 + c], el.left, out=cp)
+                np.multiply(cp, f[1], out=tmp)
                 gb[c] += tmp
-                np.multiply(Cp[6 + c], f[2], out=tmp)
+                np.take(CnT[6 + c], el.left, out=cp)
+                np.multiply(cp, f[2], out=tmp)
                 gb[c] += tmp
             Sg = np.empty((P.shape[0], 2, 3, 3))
             for w in range(2):
@@ -1004,13 +1068,18 @@ class ErrorStates(ErrorModel):
         """The blocks ``Y`` (key -> (G, 3, 3), one per group of ``g``) as the canonical CSR
         matrices of :meth:`condensed_columns`, one per navigation axis."""
         vals = [Y[key][g["keep"][key]] for key in g["order"]]
+        kept = g.setdefault("patterns", {})   # per axis: the layout's entries not zero, and their pattern
         out = []
         for a in range(3):
-            v = np.concatenate([y[:, a, :].ravel() for y in vals])
-            A = sp.csr_matrix((np.bincount(g["slot"], v, minlength=g["nnz"]), g["indices"].copy(),
-                               g["indptr"].copy()), shape=g["shape"])   # the kept layout is not pruned
-            A.has_canonical_format = True
+            v = np.bincount(g["slot"], np.concatenate([y[:, a, :].ravel() for y in vals]), minlength=g["nnz"])
+            nz = v != 0
+            if a in kept and np.array_equal(kept[a][0], nz):   # zeros where the last point had them
+                out.append(_with_values(kept[a][1], v[nz]))
+                continue
+            A = sp.csr_matrix((v, g["indices"].copy(), g["indptr"].copy()), shape=g["shape"])
+            A.has_canonical_format = True   # the kept layout is not pruned
             A.eliminate_zeros()
+            kept[a] = (nz, _pattern(A.indices, A.indptr, A.shape))
             out.append(A)
         return out
 
@@ -1172,9 +1241,9 @@ class ErrorStates(ErrorModel):
             cols = np.empty((m, 3, w), dtype=np.int64)
             for b, (c, _) in enumerate(blocks):
                 cols[:, :, 3 * b:3 * b + 3] = s0 + c[:, None, :]
-            fixed["process"] = (cols.ravel().astype(itype), np.arange(0, 3 * m * w + 1, w, dtype=itype))
-        cols, ptr = fixed["process"]
-        A = _csr(vals.ravel(), cols, ptr, (3 * m, model.size))
+            fixed["process"] = _pattern(cols.ravel().astype(itype),
+                                        np.arange(0, 3 * m * w + 1, w, dtype=itype), (3 * m, model.size))
+        A = _with_values(fixed["process"], vals.ravel())
         res = Affine(A, e0.ravel(), RowLabels([("process_attitude", 3 * m)]))
         out.append(Term(label="process ErrorStates[attitude]", item=None, residual=res, mode="soft",
                         kind="equality", sigma=np.repeat(self.arw * np.sqrt(h), 3), scaled_by_lam=False,
@@ -1198,18 +1267,32 @@ class ErrorStates(ErrorModel):
             else:
                 out.append(Term(label=f"constant ErrorStates[{kind}]", item=None, residual=res, mode="hard",
                                 kind="equality", scaled_by_lam=False, units=KINDS[kind]))
-        # priors on the first node
+        return out + self._prior_terms(data, model, fixed)
+
+    def _prior_terms(self, data, model, fixed: dict) -> list:
+        """The priors on the first node's states (:meth:`terms`); their rows' patterns, and a bias
+        prior's rows whole (the identity's), kept in ``fixed`` with the process rows'."""
+        from ..model import Affine
+        from ..terms import Term
+
+        s0 = int(model.s_index[0])
+        kinds = self.state_kinds(data)
+        out = []
         for kind, sig in (("attitude_error", self.attitude_sigma), ("gyro_bias", self.gyro_sigma),
                           ("acc_bias", self.acc_sigma)):
             if sig is None or kind not in kinds:
                 continue
-            cols = self.state_index(data, kind)[0]
             tot = self.state_total(data, kind)[0]
-            J = _inverse_jacobian(tot, 1.0) if kind == "attitude_error" else np.eye(3)
             keep = np.flatnonzero(np.isfinite(sig))
             if keep.size:   # the kept rows of J on the first node's three states (increasing columns)
-                k = keep.size
-                A = _csr(J[keep].ravel(), np.tile(s0 + cols, k), np.arange(0, 3 * k + 1, 3), (k, model.size))
+                key = ("prior", kind, tuple(keep))
+                if key not in fixed:   # the pattern; a bias prior's rows (J = I) whole
+                    k, cols = keep.size, self.state_index(data, kind)[0]
+                    fixed[key] = _pattern(np.tile(s0 + cols, k), np.arange(0, 3 * k + 1, 3), (k, model.size))
+                    if kind != "attitude_error":
+                        fixed[key] = _with_values(fixed[key], np.eye(3)[keep].ravel())
+                A = (_with_values(fixed[key], _inverse_jacobian(tot, 1.0)[keep].ravel())
+                     if kind == "attitude_error" else fixed[key])
                 res = Affine(A, tot[keep], tuple(f"prior_{kind}[{i}]" for i in keep))
                 out.append(Term(label=f"prior ErrorStates[{kind}]", item=None, residual=res,
                                 mode="soft", kind="equality", sigma=np.asarray(sig, dtype=float)[keep],
@@ -1254,15 +1337,14 @@ class ErrorStates(ErrorModel):
         raw = _raw(data)
         n = raw.n
         el = _elements(data, mesh, out.get("gyro_bias", np.zeros((n, 3))))
-        inside = raw.__dict__.get("_mesh_inside")
-        if inside is None or inside[0] is not mesh:
-            inside = raw.__dict__["_mesh_inside"] = (mesh, np.flatnonzero(~np.isin(np.arange(n), mesh)))
-        inside = inside[1]
         Chat = raw.attitude
         Cnode = _compose(Rotation.from_rotvec(nodes["attitude_error"]), Chat[mesh]).as_quat()   # C_p
-        # C_i = C_p P_i (components first), P_i the identity at the nodes
-        C = np.ascontiguousarray(Cnode.T)[:, el.left]
-        C[:, inside] = _quat_components_product(C[:, inside], el.Sc[:, inside - 1])
+        # C_i = C_p P_i (components first): P_i the product of the element's steps before sample i,
+        # the identity at the nodes (a product with it gives C_p's components exactly)
+        P = np.empty((4, n))
+        P[:, 1:] = el.Sc
+        P[:, mesh] = ((0.0,), (0.0,), (0.0,), (1.0,))
+        C = _quat_components_product(np.ascontiguousarray(Cnode.T)[:, el.left], P)
         inv = raw.__dict__.get("_attitude_inverse_components")
         if inv is None:
             inv = raw.__dict__["_attitude_inverse_components"] = np.ascontiguousarray(Chat.inv().as_quat().T)
