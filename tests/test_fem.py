@@ -392,3 +392,45 @@ def test_rows_with_tail_reuses_its_pattern_only_for_the_same_index_arrays():
     other = sp.random(6, 3, density=0.3, format="csr", random_state=4)   # another pattern
     np.testing.assert_array_equal(rows_with_tail(head, [other], 4, [below]).toarray(), want([other], below))
     np.testing.assert_array_equal(rows_with_tail(head, tail, 4, [below]).toarray(), want(tail, below))
+
+
+def test_row_scaling_kept_only_for_the_same_values():
+    """``Affine * k`` keeps the row-scaled matrix with ``A`` for the next product by the same
+    ``k``; a shallow copy of ``A`` with new values (the loop's kept patterns) is another matrix:
+    its product is ``diag(k) A`` of its own values, not the kept one."""
+    import copy
+
+    from bvpnav.model import Affine
+
+    A = sp.csr_matrix(np.array([[1.0, 2.0], [0.0, 3.0]]))
+    k = np.array([2.0, 5.0])
+    first = (Affine(A, np.zeros(2)) * k).A
+    np.testing.assert_array_equal(first.toarray(), [[2.0, 4.0], [0.0, 15.0]])
+    assert (Affine(A, np.zeros(2)) * k).A is first   # kept: the same k on the same values
+    B = copy.copy(A)
+    B.data = np.array([7.0, 8.0, 9.0])
+    np.testing.assert_array_equal((Affine(B, np.zeros(2)) * k).A.toarray(), [[14.0, 16.0], [0.0, 45.0]])
+    np.testing.assert_array_equal((Affine(A, np.zeros(2)) * (2 * k)).A.toarray(), [[4.0, 8.0], [0.0, 30.0]])
+
+
+def test_plain_mesh_solve_never_writes_to_the_users_data():
+    """A coarse mesh without node states keeps what it condenses on its own model, not on the
+    user's :class:`bvpnav.ImuData` (nothing added to it, nothing changed), and a second solve of
+    the same data gives the first's answer."""
+    rng = np.random.default_rng(0)
+    t = np.linspace(0.0, 15.0, 1500)
+    acc = np.column_stack([np.sin(t), np.cos(0.5 * t)]) + 0.02 * rng.standard_normal((t.size, 2))
+    data = bvpnav.ImuData(t=t, acc=acc, axes=("x", "y"))
+    before = dict(data.__dict__)
+    acc0 = data.acc.copy()
+
+    def solve():
+        p = bvpnav.NavigationProblem(data, sigma_a=0.03, segment=1.0)
+        k = np.arange(0, t.size, 100)
+        p.add(Position(t=t[k], value=np.zeros((k.size, 2)), sigma=0.5))
+        return p.solve(solver="direct")
+
+    first = solve()
+    assert set(data.__dict__) == set(before)
+    np.testing.assert_array_equal(data.acc, acc0)
+    np.testing.assert_array_equal(solve().position(), first.position())

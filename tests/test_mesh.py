@@ -658,3 +658,19 @@ def test_a_linearized_item_on_a_mesh_reads_the_trajectory_at_its_own_times():
         out[segment] = pos
     assert np.max(np.abs(out[1.0] - d["r"])) < 1e-5
     assert np.max(np.abs(out[None] - d["r"])) < 1e-5
+
+
+def test_mesh_states_solution_keeps_no_spare_memory():
+    """The full passes hand each other their largest arrays as memory (the kept elements'
+    ``spare``); when the loop ends they are dropped, so a solution keeps none alive."""
+    import gc
+
+    from bvpnav.error_models import ErrorStates
+    from bvpnav.error_models.error_states import _Elements
+
+    d = _drive(noise=True)
+    model = ErrorStates(arw=1e-3, gyro_drift=1e-4, acc_drift=1e-3)
+    _, sol = _states_solve(d, model, 1.0, every=20, sigma=0.3, sigma_a=2e-2)
+    assert sol.stats["sequential"]["full_passes"] >= 2   # at least one hand-over took place
+    alive = [o for o in gc.get_objects() if isinstance(o, _Elements)]
+    assert alive and not any(o.spare for o in alive)

@@ -419,16 +419,20 @@ class MeshModel(NavModel):
     def _acc_load(self, axis: int) -> np.ndarray:
         out = self._acc_loads()[:, axis]
         change = self._load_change
-        return out if change is None else out + change[:, axis]
+        return out.copy() if change is None else out + change[:, axis]
 
     def _acc_loads(self) -> np.ndarray:
         """``cond.load @ data.acc`` (n, d), m/s^2 s: the samples' accelerations condensed, every axis
-        in one product, kept on the data with the load and the accelerations it was made of (a cheap
-        Gauss-Newton point, a copy of its full pass's data, reads that pass's)."""
+        in one product, kept with the load and the accelerations it was made of: on the data when
+        bvpnav made it (node states: a cheap Gauss-Newton point, a copy of its full pass's data,
+        reads that pass's), else on this model (the user's own data is never written to). Read
+        only: the kept array is returned."""
         W, acc = self.cond.load, self.data.acc
-        kept = self.data.__dict__.get("_mesh_acc_loads")
+        ours = getattr(self.data, "state_mesh", None) is not None
+        store = self.data.__dict__ if ours else self.__dict__
+        kept = store.get("_mesh_acc_loads")
         if kept is None or kept[0] is not W or kept[1] is not acc:
-            kept = self.data.__dict__["_mesh_acc_loads"] = (W, acc, np.asarray(W @ acc))
+            kept = store["_mesh_acc_loads"] = (W, acc, np.asarray(W @ acc))
         return kept[2]
 
     def residual_rows(self, axes=None) -> Affine:

@@ -170,13 +170,14 @@ def rows_with_tail(head: sp.csr_matrix, tail: list, col: int, below: Sequence = 
     ``col`` on after each row's entries, then the rows of the ``below`` matrices: the result of
     :func:`rows_side_by_side` for these blocks, written by index arithmetic on whole arrays (a
     ``head`` made once serves every Gauss-Newton step of the node-state loop). Canonical when
-    the blocks are."""
+    the blocks are. The result's pattern is kept on ``head`` (up to :data:`TAIL_PLAN_KEPT`
+    entries): a next call with blocks on the very same index arrays writes the values only."""
     R, ncols = head.shape
     tail = [as_csr(t) for t in tail]
     below = [as_csr(b) for b in below]
     # the blocks' index arrays: the same objects as the last call's with this head (the loop's steps'
     # node-state columns on a kept pattern) give the same result's pattern, which only takes the values
-    arrays = [a for t in (*tail, *below) for a in (t.indptr, t.indices)]
+    arrays = [head.indptr, head.indices] + [a for t in (*tail, *below) for a in (t.indptr, t.indices)]
     plan = getattr(head, "_bvpnav_tail_plan", None)
     if (plan is not None and plan[0] == col and len(plan[1]) == len(arrays)
             and all(a is b for a, b in zip(plan[1], arrays, strict=True))):
@@ -218,9 +219,10 @@ def rows_with_tail(head: sp.csr_matrix, tail: list, col: int, below: Sequence = 
         at += b.nnz
     out = sp.csr_matrix((data, indices, indptr.astype(itype, copy=False)),
                         shape=(R + sum(c.size for c in bc), ncols))
-    pattern = copy.copy(out)
-    pattern.data = np.zeros(0)   # the pattern keeps no values (its nnz is the index arrays')
-    head._bvpnav_tail_plan = (col, arrays, pattern, dest, tdest, starts)
+    if nnz <= TAIL_PLAN_KEPT:   # a bounded plan on the head, which lives as long as its model
+        pattern = copy.copy(out)
+        pattern.data = np.zeros(0)   # the pattern keeps no values (its nnz is the index arrays')
+        head._bvpnav_tail_plan = (col, arrays, pattern, dest, tdest, starts)
     return out
 
 
@@ -327,6 +329,10 @@ def _is_indexed(q) -> bool:
 #: problem's rows are not kept twice).
 ROW_SCALED_KEPT = 1 << 17
 
+#: The most entries of a :func:`rows_with_tail` result whose plan (pattern and destinations,
+#: about 20 bytes an entry) is kept on its head for the next call.
+TAIL_PLAN_KEPT = 1 << 18
+
 
 @dataclass(frozen=True, eq=False)
 class Affine:
@@ -391,17 +397,18 @@ class Affine:
         k = np.broadcast_to(k, (self.m,))
         A = self.A
         if sp.issparse(A) and A.format == "csr" and A.has_canonical_format and np.all(k):
-            # row scaling on the stored values (no sparse product: 3e6 rows took 0.13 s by
-            # diags(k) @ A); the index arrays are shared, which is safe for a canonical
-            # matrix (nothing sorts or merges them again) and keeps the result canonical.
-            # The scaled matrix is kept with A for the next product by the same k (maps are
-            # never changed in place: the node-state loop's steps scale the same data rows)
+            # row scaling on the stored values (no sparse product by diags(k)); the index
+            # arrays are shared, which is safe for a canonical matrix (nothing sorts or merges
+            # them again) and keeps the result canonical. The scaled matrix is kept with A for
+            # the next product by the same k on the same values' array (a shallow copy of A
+            # with new values is another matrix; values are never changed in place: the
+            # node-state loop's steps scale the same data rows)
             kept = getattr(A, "_bvpnav_row_scaled", None)
-            if kept is not None and np.array_equal(kept[0], k):
-                return Affine(kept[1], self.c * k, self.labels)
+            if kept is not None and kept[1] is A.data and np.array_equal(kept[0], k):
+                return Affine(kept[2], self.c * k, self.labels)
             out = row_scaled(A, k)
             if A.nnz <= ROW_SCALED_KEPT:
-                A._bvpnav_row_scaled = (np.array(k), out)
+                A._bvpnav_row_scaled = (np.array(k), A.data, out)
             return Affine(out, self.c * k, self.labels)
         return Affine(sp.diags(k) @ A, self.c * k, self.labels)
 

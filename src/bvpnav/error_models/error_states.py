@@ -1353,6 +1353,14 @@ class ErrorStates(ErrorModel):
         raw.__dict__["_expanded_attitude"] = (out["attitude_error"], C)
         return out
 
+    def release(self, data) -> None:
+        """Drop the memory the loop's full passes hand each other (the kept elements' spare
+        arrays, :func:`_elements`): called when the node-state loop ends, so that a solution
+        does not keep arrays no pass will write again."""
+        kept = _raw(data).__dict__.get("_mesh_elements")
+        if kept is not None:
+            kept[2].spare.clear()
+
     def frame(self, data, totals: dict) -> pd.DataFrame:
         """The states per sample as a DataFrame (index ``t (s)``; columns ``<kind>_<axis> (<unit>)``)."""
         cols = {}

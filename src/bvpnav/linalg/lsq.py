@@ -141,14 +141,14 @@ def _weighted(res: Affine, k) -> Affine:
     A = res.A
     k = np.broadcast_to(np.asarray(k, dtype=float), (res.m,))
     kept = getattr(A, "_bvpnav_weighted", None)
-    if kept is not None and np.array_equal(kept[0], k):
-        return Affine(kept[1], res.c * k, res.labels)
+    if kept is not None and kept[1] is getattr(A, "data", None) and np.array_equal(kept[0], k):
+        return Affine(kept[2], res.c * k, res.labels)
     if sp.issparse(A) and A.format == "csr" and A.has_canonical_format and np.all(k):
         out = Affine(_scaled_canonical(A, k), res.c * k, res.labels)
     else:
         out = res * k
     if sp.issparse(A) and A.nnz <= WEIGHTED_KEPT:
-        A._bvpnav_weighted = (np.array(k), out.A)
+        A._bvpnav_weighted = (np.array(k), A.data, out.A)   # a shallow copy with new values misses
     return out
 
 

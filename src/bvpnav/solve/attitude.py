@@ -1252,6 +1252,7 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
                 iters[-1]["converged"] = True
                 break
     totals = sm.expand(raw, nodes)
+    sm.release(raw)
     if reason is None:
         _warn(sol, f"node-state loop did not converge in {o['max_iter']} iterations: the last step changed "
                    f"the attitude by {iters[-1]['step']:.3g} rad > tol={o['tol']:g} rad. Raise max_iter "
