@@ -1362,6 +1362,8 @@ class NavModel:
         if point is None or 1 not in jb:
             return Affine(sp.csr_matrix((K * nb, self.size)), np.zeros(K * nb), labels)
         vx, P = self._forward_speed(times, point, lever, what)
+        if P is None:
+            P = self.sample_grid.interpolation_matrix(times, what)
         fy = P @ np.asarray(self.data.specific_force)[:, 1]
         A = sp.csr_matrix((fy * vx, (np.arange(K) * nb + jb.index(1), np.full(K, col))),
                           shape=(K * nb, self.size))
@@ -1370,12 +1372,14 @@ class NavModel:
     def _forward_speed(self, times: np.ndarray, point, lever, what: str):
         r"""The forward body speed (m/s) of the point ``lever`` (m, body axes; ``None``: the
         IMU's) at ``times`` about the loop's ``point``, :math:`e_x^T (C^T v^0 + \omega \times
-        \ell)`, and the samples' interpolation matrix at ``times``."""
+        \ell)`, and the samples' interpolation matrix at ``times`` when it was needed (a point
+        off the IMU), else None."""
         C = self._attitude_at(times, what)
         vx = np.einsum("kn,kn->k", C[:, :, 0], self._point_velocity(times, point, what))
-        P = self.sample_grid.interpolation_matrix(times, what)
         ell = np.zeros(3) if lever is None else np.asarray(lever, dtype=float).reshape(3)
+        P = None
         if np.any(ell):     # (omega x l)_x = w_y l_z - w_z l_y
+            P = self.sample_grid.interpolation_matrix(times, what)
             w = P @ self._point_rates(what)
             vx = vx + w[:, 1] * ell[2] - w[:, 2] * ell[1]
         return vx, P
