@@ -31,13 +31,23 @@ import subprocess
 import sys
 from pathlib import Path
 
-#: What the server imports once for all the kernels (the pages' own imports and the kernel's).
-#: Not the inline backend: it hooks into the running IPython when it is imported.
+#: What the server imports once for all the kernels: what every kernel imports as it starts
+#: and what most pages import. Not the inline backend: it hooks into the running IPython when
+#: it is imported.
 PRELOAD = (
-    "ipykernel.kernelapp", "ipykernel.ipkernel", "ipykernel.zmqshell", "numpy", "scipy.linalg",
-    "scipy.sparse", "scipy.sparse.linalg", "scipy.interpolate", "scipy.spatial.transform", "pandas",
-    "cvxpy", "matplotlib", "matplotlib.pyplot", "bvpnav", "bvpnav.problem", "bvpnav.constraints",
-    "bvpnav.error_models", "bvpnav.scenarios", "bvpnav.plot",
+    # the kernel's own
+    "ipykernel.kernelapp", "ipykernel.ipkernel", "ipykernel.zmqshell", "ipykernel.debugger",
+    "IPython.core.completerlib", "IPython.core.debugger", "IPython.core.oinspect", "IPython.core.pylabtools",
+    "IPython.extensions.storemagic", "psutil", "sqlite3", "tornado.platform.asyncio",
+    # the pages'
+    "numpy", "scipy.linalg", "scipy.sparse", "scipy.sparse.linalg", "scipy.interpolate",
+    "scipy.spatial.transform", "pandas", "cvxpy", "matplotlib", "matplotlib.pyplot",
+    "matplotlib.backends.backend_agg", "bvpnav", "bvpnav.problem", "bvpnav.constraints",
+    "bvpnav.error_models", "bvpnav.scenarios", "bvpnav.plot", "bvpnav.log", "bvpnav.solve.pipeline",
+    "bvpnav.solve.uncertainty", "bvpnav.lam.lcurve", "bvpnav.lam.gcv", "bvpnav.lam.quasi",
+    "bvpnav.lam.discrepancy", "bvpnav.lam.sweep", "bvpnav.linalg.banded", "bvpnav.linalg.lsq",
+    "bvpnav.linalg.covariance", "bvpnav.linalg.selinv", "bvpnav.linalg.ipm", "bvpnav.linalg.active_set",
+    "bvpnav.linalg.condensed", "bvpnav.backends.direct", "bvpnav.backends.cvxpy_solvers",
 )
 #: Variables set per kernel, which no import reads; every other variable must equal the server's.
 PER_KERNEL = ("JPY_PARENT_PID", "JPY_SESSION_NAME", "PWD", "OLDPWD")
@@ -173,12 +183,12 @@ def serve(listener_fd: int) -> None:
 class _Server:
     """The warm server's state: its listening socket, the running kernels, the forks made."""
 
-    def __init__(self, listener: socket.socket):
+    def __init__(self, listener: socket.socket, env0: dict[str, str]):
         import selectors
 
         self.listener = listener
         self.folder = Path(listener.getsockname()).parent
-        self.env0 = {k: v for k, v in os.environ.items() if k not in PER_KERNEL}
+        self.env0 = env0
         self.sel = selectors.DefaultSelector()
         self.sel.register(listener, selectors.EVENT_READ, None)
         self.running: dict[int, tuple[int, socket.socket]] = {}  # pidfd -> (pid, launcher connection)
@@ -232,7 +242,9 @@ class _Server:
         self.sel.unregister(pidfd)
         os.close(pidfd)
         self.running.pop(pidfd, None)
-        _, status = os.waitpid(pid, 0)
+        _, status, usage = os.wait4(pid, 0)
+        print(f"kernel {pid}: status {status}, CPU user {usage.ru_utime:.2f} s sys {usage.ru_stime:.2f} s",
+              file=sys.stderr, flush=True)
         try:
             conn.sendall(struct.pack("!i", _exit_status(status)))
         except OSError:
@@ -254,12 +266,18 @@ class _Server:
 def warm(listener_fd: int, conn_fd: int, fds: list[int], first: Path) -> None:
     """Import :data:`PRELOAD`, then fork one kernel per launcher that connects (the first
     one already connected: ``conn_fd`` with its streams ``fds`` and its request in ``first``)."""
+    import gc
     import importlib
 
     signal.signal(signal.SIGTERM, lambda *a: sys.exit(0))
+    env0 = {k: v for k, v in os.environ.items() if k not in PER_KERNEL}  # before the imports change it
     for name in PRELOAD:
-        importlib.import_module(name)
-    server = _Server(socket.socket(fileno=listener_fd))
+        try:
+            importlib.import_module(name)
+        except ImportError as exc:  # a module renamed: the kernels import it themselves
+            print(f"preload: {name}: {exc}", file=sys.stderr, flush=True)
+    gc.freeze()  # what the imports made stays out of the kernels' collections (they keep it all)
+    server = _Server(socket.socket(fileno=listener_fd), env0)
     server.pending.append((socket.socket(fileno=conn_fd), json.loads(first.read_text()), fds))
     server.run()
 
@@ -274,8 +292,12 @@ def _kernel(child: _Child) -> None:
         signal.signal(sig, signal.SIG_DFL)
     signal.signal(signal.SIGINT, signal.default_int_handler)
     os.chdir(request["cwd"])
-    os.environ.clear()
-    os.environ.update(request["env"])
+    # the launcher's environment: the server's (what the imports set included) but the per-kernel ones
+    for name in PER_KERNEL:
+        if name in request["env"]:
+            os.environ[name] = request["env"][name]
+        else:
+            os.environ.pop(name, None)
     sys.argv = [str(Path(__import__("ipykernel_launcher").__file__)), *request["args"]]
     if "numpy.random" in sys.modules:
         sys.modules["numpy.random"].seed()  # the global generator from fresh entropy, as at start
