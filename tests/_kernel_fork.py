@@ -52,6 +52,8 @@ PRELOAD = (
 #: Variables set per kernel, which no import reads; every other variable must equal the server's.
 PER_KERNEL = ("JPY_PARENT_PID", "JPY_SESSION_NAME", "PWD", "OLDPWD")
 SOCKET_VAR = "BVPNAV_KERNEL_FORK_SOCKET"
+#: Seconds between the server's checks that the process that started it is still there.
+ORPHAN_CHECK = 5.0
 FORWARDED = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT, signal.SIGUSR1, signal.SIGUSR2)
 _LEN = struct.Struct("!I")
 
@@ -71,9 +73,11 @@ def start_server(folder: Path) -> tuple[subprocess.Popen, dict[str, str]]:
     listener = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     listener.bind(str(path))
     listener.listen(16)
-    proc = subprocess.Popen([sys.executable, str(Path(__file__).resolve()), "serve", str(listener.fileno())],
-                            pass_fds=[listener.fileno()], stdin=subprocess.DEVNULL,
-                            stdout=subprocess.DEVNULL, stderr=open(folder / "server.log", "w"))
+    with open(folder / "server.log", "w") as log:
+        command = [sys.executable, str(Path(__file__).resolve()), "serve", str(listener.fileno()),
+                   str(os.getpid())]
+        proc = subprocess.Popen(command, pass_fds=[listener.fileno()], stdin=subprocess.DEVNULL,
+                                stdout=subprocess.DEVNULL, stderr=log)
     listener.close()
     return proc, {"JUPYTER_PATH": str(folder), SOCKET_VAR: str(path)}
 
@@ -118,8 +122,11 @@ def launch(args: list[str]) -> None:
     if conn is None:
         _fresh_kernel(args)
     msg = json.dumps({"args": args, "cwd": os.getcwd(), "env": dict(os.environ)}).encode()
-    socket.send_fds(conn, [_LEN.pack(len(msg)) + msg], [0, 1, 2])
-    pid = struct.unpack("!i", _recv_exact(conn, 4))[0]
+    try:
+        socket.send_fds(conn, [_LEN.pack(len(msg)) + msg], [0, 1, 2])
+        pid = struct.unpack("!i", _recv_exact(conn, 4))[0]
+    except OSError:  # the server stopped meanwhile (ConnectionError is one)
+        pid = 0
     if pid <= 0:
         conn.close()
         _fresh_kernel(args)
@@ -165,19 +172,25 @@ def _request(conn: socket.socket) -> tuple[dict, list[int]]:
     return json.loads(data), fds
 
 
-def serve(listener_fd: int) -> None:
+def serve(listener_fd: int, parent: int) -> None:
     """The server as started: wait for the first kernel, then become the warm server in its
     environment (the interpreter's start and the imports read the variables the kernels get)."""
+    import select
+
     listener = socket.socket(fileno=listener_fd)
     signal.signal(signal.SIGTERM, lambda *a: sys.exit(0))
+    while not select.select([listener], [], [], ORPHAN_CHECK)[0]:
+        if os.getppid() != parent:
+            return  # the build's process is gone
     conn, _ = listener.accept()
     request, fds = _request(conn)
     first = Path(listener.getsockname()).parent / "first.json"
     first.write_text(json.dumps(request))
     for fd in (listener.fileno(), conn.fileno(), *fds):
         os.set_inheritable(fd, True)
-    os.execve(sys.executable, [sys.executable, str(Path(__file__).resolve()), "warm", str(listener.fileno()),
-                               str(conn.fileno()), *map(str, fds), str(first)], request["env"])
+    os.execve(sys.executable, [sys.executable, str(Path(__file__).resolve()), "warm", str(parent),
+                               str(listener.fileno()), str(conn.fileno()), *map(str, fds), str(first)],
+              request["env"])
 
 
 class _Server:
@@ -251,11 +264,14 @@ class _Server:
             pass
         conn.close()
 
-    def run(self) -> None:
+    def run(self, parent: int) -> None:
         while True:
             while self.pending:
                 self.start(*self.pending.pop(0))
-            for key, _ in self.sel.select():
+            events = self.sel.select(timeout=ORPHAN_CHECK)
+            if not events and os.getppid() != parent:
+                return
+            for key, _ in events:
                 if key.data is None:  # a launcher
                     conn, _ = self.listener.accept()
                     self.pending.append((conn, *_request(conn)))
@@ -263,7 +279,7 @@ class _Server:
                     self.ended(key.fd, *key.data)
 
 
-def warm(listener_fd: int, conn_fd: int, fds: list[int], first: Path) -> None:
+def warm(parent: int, listener_fd: int, conn_fd: int, fds: list[int], first: Path) -> None:
     """Import :data:`PRELOAD`, then fork one kernel per launcher that connects (the first
     one already connected: ``conn_fd`` with its streams ``fds`` and its request in ``first``)."""
     import gc
@@ -279,7 +295,7 @@ def warm(listener_fd: int, conn_fd: int, fds: list[int], first: Path) -> None:
     gc.freeze()  # what the imports made stays out of the kernels' collections (they keep it all)
     server = _Server(socket.socket(fileno=listener_fd), env0)
     server.pending.append((socket.socket(fileno=conn_fd), json.loads(first.read_text()), fds))
-    server.run()
+    server.run(parent)
 
 
 def _kernel(child: _Child) -> None:
@@ -328,10 +344,10 @@ def main() -> None:
     if command == "launch":
         launch(args)
     elif command == "serve":
-        serve(int(args[0]))
+        serve(int(args[0]), int(args[1]))
     elif command == "warm":
         try:
-            warm(int(args[0]), int(args[1]), [int(a) for a in args[2:-1]], Path(args[-1]))
+            warm(int(args[0]), int(args[1]), int(args[2]), [int(a) for a in args[3:-1]], Path(args[-1]))
         except _Child as child:
             _kernel(child)
 
