@@ -31,6 +31,7 @@ import pytest
 from _docs_only import environment as docs_only_environment
 from _helpers import quintic
 from _hostile import assert_unchanged, snapshot
+from _kernel_fork import start_server, stop_server
 
 #: Fixture scopes made once per module (or class) of a worker; "session" fixtures are made once
 #: per worker whatever the grouping, so grouping by them would only cost parallelism.
@@ -108,7 +109,9 @@ def docs_build(tmp_path_factory) -> DocsBuild:
     the generated API stubs never land in the work tree; every proxy points at a closed loopback
     port, so any attempt to fetch something during the build (intersphinx inventories, remote
     images) fails it; only what ``bvpnav[docs]`` installs is importable, in the build and in its
-    kernels. The pages are executed at small size (``BVPNAV_SMALL=1``)."""
+    kernels. The pages are executed at small size (``BVPNAV_SMALL=1``). Each page's kernel is a
+    process of its own, forked from one that has made the kernel's and the pages' imports
+    (``_kernel_fork.py``): the imports are paid once, not once per page."""
     base = tmp_path_factory.mktemp("docs")
     src = base / "source"
     docs, examples = ROOT / "docs", ROOT / "examples"
@@ -131,10 +134,17 @@ def docs_build(tmp_path_factory) -> DocsBuild:
     # (forked readers, pickled doctrees merged back) would only add CPU; run serially it reads
     # and executes the pages one after another, with the same warnings-as-errors build.
     jobs = "1" if os.environ.get("PYTEST_XDIST_WORKER") else "2"
-    proc = subprocess.run(
-        [sys.executable, "-m", "sphinx", "-W", "--keep-going", "-j", jobs, "-b", "html", str(src), str(out)],
-        cwd=base, env=env, capture_output=True, text=True, timeout=900, stdin=subprocess.DEVNULL,
-    )
+    # The pages' kernels are forks of one process that has made their imports (_kernel_fork.py).
+    kernels, kernel_env = start_server(base / "kernels")
+    env.update(kernel_env)
+    try:
+        proc = subprocess.run(
+            [sys.executable, "-m", "sphinx", "-W", "--keep-going", "-j", jobs, "-b", "html", str(src),
+             str(out)],
+            cwd=base, env=env, capture_output=True, text=True, timeout=900, stdin=subprocess.DEVNULL,
+        )
+    finally:
+        stop_server(kernels, base / "kernels")
     assert proc.returncode == 0, f"sphinx-build failed:\n{proc.stderr[-6000:]}\n{proc.stdout[-2000:]}"
     # The build read the examples and the docs and wrote nothing beside them.
     assert_unchanged(before)

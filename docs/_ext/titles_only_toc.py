@@ -9,13 +9,21 @@ HTML writing phase. Here a listed page's entry, as that copy-then-delete leaves 
 made once per (page, title, depth limit, whether the page is an ancestor of the one being
 written, ...) and each page gets a deep copy of it: the HTML is the same byte for byte,
 only the work is not repeated. Calls without ``titles_only`` are Sphinx's own.
+
+A page that no toctree lists (the highlighted sources, the general index, the search page)
+gets the same sidebar as every other such page in its folder: Sphinx's tree depends on the
+page only through its ancestors in the toctrees (none), the entries that point at it (none)
+and the links relative to its folder. Such a page's tree is made once per folder (and
+arguments); the listed pages' are made for each page, as Sphinx does.
 """
 
 from __future__ import annotations
 
 import contextvars
+import posixpath
 
 from sphinx import addnodes
+from sphinx.builders.html import StandaloneHTMLBuilder
 from sphinx.environment.adapters import toctree as _toctree
 
 #: True while Sphinx resolves a toctree with ``titles_only`` (set by :func:`_entries`).
@@ -61,9 +69,39 @@ def _standard_entry(title, ref, maxdepth, toc, toctree_ancestors, prune, collaps
 
 _standard_entry.cache = {}
 
+_sphinx_local_toctree = StandaloneHTMLBuilder._get_local_toctree
+
+
+def _listed(env) -> set[str]:
+    """The pages a toctree lists, those holding a toctree and the root page."""
+    listed = {env.config.root_doc, *env.toctree_includes}
+    for children in env.toctree_includes.values():
+        listed.update(children)
+    return listed
+
+
+def _local_toctree(self, docname, collapse=True, **kwargs):
+    # links relative to the folder: the html builder's "page.html" targets (not dirhtml's)
+    if docname in _listed(self.env) or type(self).get_target_uri is not StandaloneHTMLBuilder.get_target_uri:
+        return _sphinx_local_toctree(self, docname, collapse, **kwargs)
+    key = (id(self), posixpath.dirname(docname), collapse, tuple(sorted(kwargs.items())))
+    cache = _local_toctree.cache
+    if key not in cache:
+        cache[key] = _sphinx_local_toctree(self, docname, collapse, **kwargs)
+    return cache[key]
+
+
+_local_toctree.cache = {}
+
+
+def _clear(*_):
+    _standard_entry.cache.clear()
+    _local_toctree.cache.clear()
+
 
 def setup(app):
     _toctree._entries_from_toctree = _entries
     _toctree._toctree_standard_entry = _standard_entry
-    app.connect("env-before-read-docs", lambda *_: _standard_entry.cache.clear())
+    StandaloneHTMLBuilder._get_local_toctree = _local_toctree
+    app.connect("env-before-read-docs", _clear)
     return {"parallel_read_safe": True, "parallel_write_safe": True}
