@@ -155,3 +155,18 @@ def conflict_problem(*extra):
     prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=t, acc=np.zeros_like(t)))
     return prob.add(Position(t=[0.0, 10.0], value=[0.0, 0.0], name="ends"),
                     Velocity(t=2.0, value=0.0, name="v at 2 s"), *extra)
+
+
+def hard_vehicle_rows_solve(data, pos, error_model, **nhc):
+    """A noise-free drive's solve with hard ``NonHolonomic`` rows (at 2 Hz, options ``nhc``: the
+    point's ``lever``, ``mounting=``/``slip="estimated"``) and fixes every 20th sample, the
+    attitude loop to 1e-12 rad: the vehicle tests' exactness check at a point off the IMU."""
+    from bvpnav.constraints import NonHolonomic
+
+    k = np.arange(0, data.n, 20)
+    prob = bvpnav.NavigationProblem(data, error_model=error_model, grade=None)
+    prob.add(Position(t=data.t[k], value=pos[k], name="fixes"),
+             NonHolonomic(mode="hard", rate=2.0, name="nhc", **nhc))
+    sol = prob.solve(solver="direct", attitude={"tol": 1e-12})
+    assert sol.stats["verified"]
+    return sol

@@ -7,6 +7,7 @@ import copy
 
 import numpy as np
 import pytest
+from _helpers import hard_vehicle_rows_solve
 from scipy.spatial.transform import Rotation
 
 from bvpnav import InputError, NavigationProblem, NavModel
@@ -136,13 +137,8 @@ def test_mounting_at_a_point_off_the_x_axis_on_a_winding_drive(lever):
     from bvpnav.error_models.nhc_lever import _car_drive
 
     data, pos, _ = _car_drive(np.asarray(lever), slopes=mounting_slopes(YAW, PITCH))
-    k = np.arange(0, data.n, 20)
-    prob = NavigationProblem(data, error_model=AttitudeError(sigma=0.01) + Mounting(), grade=None)
-    prob.add(Position(t=data.t[k], value=pos[k], name="fixes"),
-             NonHolonomic(mode="hard", lever=lever, mounting="estimated", rate=2.0, name="nhc"))
-    sol = prob.solve(solver="direct", attitude={"tol": 1e-12})
-    assert sol.stats["verified"]
+    sol = hard_vehicle_rows_solve(data, pos, AttitudeError(sigma=0.01) + Mounting(), lever=lever,
+                                  mounting="estimated")
     assert abs(sol.error_params["mounting_yaw"] - YAW) < 1e-9
     assert abs(sol.error_params["mounting_pitch"] - PITCH) < 1e-9
     np.testing.assert_allclose(sol.position(), pos, rtol=0, atol=1e-8)
-

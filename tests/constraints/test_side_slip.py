@@ -7,6 +7,7 @@ import copy
 
 import numpy as np
 import pytest
+from _helpers import hard_vehicle_rows_solve
 
 from bvpnav import InputError, NavigationProblem, NavModel
 from bvpnav.constraints import NonHolonomic, Position
@@ -121,12 +122,8 @@ def test_estimated_slip_at_a_point_off_the_x_axis(lever):
     (omega x l)_x = w_y l_z - w_z l_y, zero only for a point on the body's x axis. Hard rows at
     such a point: K to 1e-6 relative and the path to 1e-8 m."""
     data, pos, _ = slip_drive(K, lever=lever)
-    k = np.arange(0, data.n, 20)
-    prob = NavigationProblem(data, error_model=AttitudeError(sigma=0.01) + SideSlip(), grade=None)
-    prob.add(Position(t=data.t[k], value=pos[k], name="fixes"),
-             NonHolonomic(mode="hard", lever=lever, slip="estimated", rate=2.0, name="nhc"))
-    sol = prob.solve(solver="direct", attitude={"tol": 1e-12})
-    assert sol.stats["verified"]
+    sol = hard_vehicle_rows_solve(data, pos, AttitudeError(sigma=0.01) + SideSlip(), lever=lever,
+                                  slip="estimated")
     assert abs(sol.error_params["side_slip"] / K - 1.0) < 1e-6
     np.testing.assert_allclose(sol.position(), pos, rtol=0, atol=1e-8)
 
