@@ -1303,7 +1303,7 @@ class NavModel:
         if point is None:
             return Affine(sp.csr_matrix((K * nb, self.size)), np.zeros(K * nb),
                           TimeLabels("mount_", list(names), times))
-        vx, _ = self._forward_speed(times, point, lever, what)
+        vx = self._forward_speed(times, point, lever, what)
         sign = np.array([{1: -1.0, 2: 1.0}[j] for j in jb])
         col = np.array([idx[j - 1] for j in jb])
         A = sp.csr_matrix(((vx[:, None] * sign[None, :]).ravel(), (np.arange(K * nb), np.tile(col, K))),
@@ -1361,28 +1361,26 @@ class NavModel:
         labels = TimeLabels("slip_", list(names), times)
         if point is None or 1 not in jb:
             return Affine(sp.csr_matrix((K * nb, self.size)), np.zeros(K * nb), labels)
-        vx, P = self._forward_speed(times, point, lever, what)
-        if P is None:
-            P = self.sample_grid.interpolation_matrix(times, what)
+        P = self.sample_grid.interpolation_matrix(times, what)
+        vx = self._forward_speed(times, point, lever, what, P)
         fy = P @ np.asarray(self.data.specific_force)[:, 1]
         A = sp.csr_matrix((fy * vx, (np.arange(K) * nb + jb.index(1), np.full(K, col))),
                           shape=(K * nb, self.size))
         return Affine(A, np.zeros(K * nb), labels)
 
-    def _forward_speed(self, times: np.ndarray, point, lever, what: str):
+    def _forward_speed(self, times: np.ndarray, point, lever, what: str, P=None) -> np.ndarray:
         r"""The forward body speed (m/s) of the point ``lever`` (m, body axes; ``None``: the
         IMU's) at ``times`` about the loop's ``point``, :math:`e_x^T (C^T v^0 + \omega \times
-        \ell)`, and the samples' interpolation matrix at ``times`` when it was needed (a point
-        off the IMU), else None."""
+        \ell)`. ``P``: the samples' interpolation matrix at ``times`` when the caller has it
+        (made here for a point off the IMU otherwise)."""
         C = self._attitude_at(times, what)
         vx = np.einsum("kn,kn->k", C[:, :, 0], self._point_velocity(times, point, what))
         ell = np.zeros(3) if lever is None else np.asarray(lever, dtype=float).reshape(3)
-        P = None
         if np.any(ell):     # (omega x l)_x = w_y l_z - w_z l_y
-            P = self.sample_grid.interpolation_matrix(times, what)
+            P = self.sample_grid.interpolation_matrix(times, what) if P is None else P
             w = P @ self._point_rates(what)
             vx = vx + w[:, 1] * ell[2] - w[:, 2] * ell[1]
-        return vx, P
+        return vx
 
     def _point_rates(self, what: str) -> np.ndarray:
         """The body rates at every sample (N, 3), rad/s, at the loop's current point: corrected by
