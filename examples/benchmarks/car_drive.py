@@ -190,6 +190,42 @@ loop diverges on seed 1 (steps of 3-40 rad, warned). With the mixing of growing 
 start at 60 s on seed 1 had stopped at its 30 steps (5.536 m, warned); now 13 steps, 5.2129 m, the
 per-sample answer (5.20 m).
 
+The same drives at e4f779c (2026-12-05, after the per-step and final-stage work of issue 42;
+``--grade tactical --seeds 0 1 2 3 4 --methods GTSAM "bvpnav states mesh"``, then ``--grade consumer
+--seeds 0 1 --methods GTSAM "bvpnav states mesh" "bvpnav states mesh course start"``, load average 1-4;
+3-D RMS m, CPU s of the solve, LM iterations or Gauss-Newton steps, ratios to GTSAM's RMS and CPU)::
+
+    gap   seed  GTSAM                     states mesh              RMS x  CPU x
+    10 s  0     0.8144  CPU 0.25   4 it   0.8165  CPU 0.43 5 it    1.003   1.70
+    10 s  1     0.6982  CPU 0.25   4 it   0.6981  CPU 0.40 4 it    1.000   1.62
+    10 s  2     0.8136  CPU 0.26   4 it   0.8117  CPU 0.43 5 it    0.998   1.63
+    10 s  3     0.8503  CPU 0.26   4 it   0.8473  CPU 0.40 4 it    0.996   1.51
+    10 s  4     0.7515  CPU 0.25   4 it   0.7555  CPU 0.40 4 it    1.005   1.60
+    30 s  0     1.1919  CPU 1.65  65 it   1.2006  CPU 0.41 5 it    1.007   0.25
+    30 s  1     1.0938  CPU 1.71  64 it   1.0838  CPU 0.42 5 it    0.991   0.24
+    30 s  2     1.3485  CPU 1.67  64 it   1.3428  CPU 0.41 5 it    0.996   0.24
+    30 s  3     1.3294  CPU 1.92  64 it   1.3214  CPU 0.39 5 it    0.994   0.20
+    30 s  4     1.3746  CPU 1.92  64 it   1.3771  CPU 0.44 5 it    1.002   0.23
+    60 s  0     1.4506  CPU 3.95 159 it   1.4580  CPU 0.41 5 it    1.005   0.10
+    60 s  1     1.3030  CPU 3.81 156 it   1.2802  CPU 0.42 5 it    0.982   0.11
+    60 s  2     1.5513  CPU 4.27 157 it   1.5526  CPU 0.39 5 it    1.001   0.09
+    60 s  3     1.6349  CPU 4.20 155 it   1.6264  CPU 0.39 5 it    0.995   0.09
+    60 s  4     2.1540  CPU 4.35 152 it   2.1648  CPU 0.44 4 it    1.005   0.10
+
+    consumer  seed  GTSAM                      states mesh (data start)   states mesh course start   CPU x
+    10 s      0     19.188  CPU 1.92  55 it     19.188   29 steps         0.9914  CPU 0.63  6 steps  0.33
+    10 s      1     18.094  CPU 2.09  72 it   3188.6     30 steps (*)     1.0364  CPU 0.59  5 steps  0.28
+    30 s      0      1.982  CPU 5.62 185 it      1.966   13 steps         1.9656  CPU 0.79  9 steps  0.14
+    30 s      1     33.623  CPU 8.97 300 it   8096.5     30 steps (*)     2.0717  CPU 0.87  9 steps  0.10
+    60 s      0    106.39   CPU 8.39 300 it    151.31    30 steps (*)     7.7333  CPU 1.01 13 steps  0.12
+    60 s      1    103.73   CPU 9.80 300 it  63754      30 steps (*)     5.2129  CPU 0.89 13 steps  0.09
+
+(*) not converged, warned. The RMS are the earlier table's to the digits shown; the CPU ratios are
+the ones to read (wall times on the same run: the mesh 1.5x GTSAM's at 10 s on seed 0 at load below
+1). Peak memory per IMU sample: GTSAM 3.7 kB, the mesh 5.4-5.8 kB. With the course start on the
+tactical drives (``"bvpnav states mesh course start"``, same day) the RMS are the same to 4 digits in
+5-8 steps instead of 4-5 (CPU 0.6-0.7 s, 2.0-2.4x GTSAM's at 10 s under load 3-4).
+
 Measured before node states (2026-12-03, the previous version of this script, ``--seeds 0 1 2 3
 4``, tactical; withheld-fix 3-D RMS averaged over the five drives, m; ``+GyroBias+AttitudeError+
 Walk`` = ``grade.error_model(30, walk=True)`` with ``grade.sigma_a(100, 30)``, 3-5 minutes per
