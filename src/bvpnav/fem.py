@@ -53,11 +53,17 @@ def stiffness(grid: TimeGrid) -> sp.csr_matrix:
     scipy.sparse.csr_matrix, shape (N, N)
         Symmetric, tridiagonal, singular (constants are in its null space).
     """
+    return tridiagonal(*stiffness_diagonals(grid))
+
+
+def stiffness_diagonals(grid: TimeGrid) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The diagonals ``(lower, diag, upper)`` (N - 1, N, N - 1) of :func:`stiffness`, 1/s,
+    without the matrix."""
     inv = 1.0 / grid.h
     diag = np.zeros(grid.n)
     diag[:-1] += inv
     diag[1:] += inv
-    return tridiagonal(-inv, diag, -inv)
+    return -inv, diag, -inv
 
 
 def mass(grid: TimeGrid) -> sp.csr_matrix:
@@ -68,11 +74,17 @@ def mass(grid: TimeGrid) -> sp.csr_matrix:
     scipy.sparse.csr_matrix, shape (N, N)
         Symmetric positive definite, tridiagonal.
     """
+    return tridiagonal(*mass_diagonals(grid))
+
+
+def mass_diagonals(grid: TimeGrid) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The diagonals ``(lower, diag, upper)`` (N - 1, N, N - 1) of :func:`mass`, s, without the
+    matrix."""
     h = grid.h
     diag = np.zeros(grid.n)
     diag[:-1] += h / 3.0
     diag[1:] += h / 3.0
-    return tridiagonal(h / 6.0, diag, h / 6.0)
+    return h / 6.0, diag, h / 6.0
 
 
 def tridiagonal(lower: np.ndarray, diag: np.ndarray, upper: np.ndarray) -> sp.csr_matrix:
