@@ -1157,16 +1157,17 @@ class ErrorStates(ErrorModel):
         el = _elements(data, mesh, _totals(data, "gyro_bias"))
         tmp = np.empty(n)
 
-        def rotated(M: np.ndarray, v: np.ndarray, order: tuple = (0, 2, 1)) -> np.ndarray:
-            """``M v`` per sample: ``M`` (9, N) row-major 3 x 3 entries, ``v`` (3, N), the products
-            summed in ``order`` (``Rotation.apply``'s: ``(m0 v0 + m2 v2) + m1 v1``)."""
+        def rotated(M, v: np.ndarray, order: tuple = (0, 2, 1)) -> np.ndarray:
+            """``M v`` per sample: ``M(k)`` the row-major 3 x 3 entry ``k`` at every sample (N,),
+            ``v`` (3, N), the products summed in ``order`` (``Rotation.apply``'s:
+            ``(m0 v0 + m2 v2) + m1 v1``)."""
             out = np.empty((3, n))
             a, b, c = order
             for i in range(3):
-                np.multiply(M[3 * i + a], v[a], out=out[i])
-                np.multiply(M[3 * i + b], v[b], out=tmp)
+                np.multiply(M(3 * i + a), v[a], out=out[i])
+                np.multiply(M(3 * i + b), v[b], out=tmp)
                 out[i] += tmp
-                np.multiply(M[3 * i + c], v[c], out=tmp)
+                np.multiply(M(3 * i + c), v[c], out=tmp)
                 out[i] += tmp
             return out
 
@@ -1198,24 +1199,25 @@ class ErrorStates(ErrorModel):
         nxt = np.minimum(np.arange(1, nn + 1), nn - 1)   # the right node (the last node's weight is 0)
 
         def spread(V: np.ndarray) -> np.ndarray:
-            """Node values ``V`` (k, n nodes) at every sample of their element, (k, N)."""
-            return np.repeat(V, runs, axis=1)
+            """Node values ``V`` (..., n nodes) at every sample of their element, (..., N)."""
+            return np.repeat(V, runs, axis=-1)
 
         C = np.ascontiguousarray(data.attitude.as_matrix().reshape(n, 9).T)   # C_i, (9, N)
-        fn = rotated(C, np.ascontiguousarray(np.asarray(data.specific_force, dtype=float).T))
+        fn = rotated(C.__getitem__, np.ascontiguousarray(np.asarray(data.specific_force, dtype=float).T))
         out = crossed(spread(s[self.state_index(data, "attitude_error")].T), fn)
         if "acc_bias" in kinds:
             B = np.ascontiguousarray(s[self.state_index(data, "acc_bias")].T)
             th = el.theta
-            out -= rotated(C, (1.0 - th) * spread(B) + th * spread(B[:, nxt]))
+            out -= rotated(C.__getitem__, (1.0 - th) * spread(B) + th * spread(B[:, nxt]))
         if "gyro_bias" in kinds:
             B = np.ascontiguousarray(s[self.state_index(data, "gyro_bias")].T)
             Y2 = _gyro_sums(el, mesh).reshape(2, 3, 3, n)
             u = carried(Y2[0], spread(B))
             u += carried(Y2[1], spread(B[:, nxt]))
-            # C_p (the element's left node's) u, summed in the order of the products' columns
-            Cp = spread(np.ascontiguousarray(data.attitude[mesh].as_matrix().reshape(nn, 9).T))
-            crossed(fn, rotated(Cp, u, (0, 1, 2)), out)
+            # C_p (the element's left node's, an entry at a time) u, summed in the order of the
+            # products' columns
+            Cn = np.ascontiguousarray(data.attitude[mesh].as_matrix().reshape(nn, 9).T)
+            crossed(fn, rotated(lambda k: spread(Cn[k]), u, (0, 1, 2)), out)
         return out.T
 
     def _mesh_layout(self, data, mesh: np.ndarray, kinds: list, k: np.ndarray) -> tuple:
