@@ -11,6 +11,7 @@ import warnings
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 
 import bvpnav
 from bvpnav import fem
@@ -103,6 +104,19 @@ def test_condensation_is_phi_transpose_of_the_fine_matrices(kind):
     h = t[201] - t[200]
     np.testing.assert_allclose(c.Cq[e].toarray().ravel()[[200, 201]], [h / 6, h / 3], rtol=1e-13)
     assert c.Cq[e].nnz == 2
+    # written as canonical CSR: an element's row holds exactly its samples, a node's load row the
+    # samples of its two elements, each once and in order (what a sum of duplicates would give)
+    k = np.arange(nodes.size)
+    elements = (nodes[:-1], nodes[1:])
+    for A, (first, last) in ((c.Cp, elements), (c.Cq, elements),
+                             (c.load, (nodes[np.maximum(k - 1, 0)], nodes[np.minimum(k + 1, k[-1])]))):
+        assert A.shape[0] == first.size
+        for r, (p, q) in enumerate(zip(first, last, strict=True)):
+            np.testing.assert_array_equal(A.indices[A.indptr[r]:A.indptr[r + 1]], np.arange(p, q + 1))
+        B = sp.csr_matrix((A.data.copy(), A.indices.copy(), A.indptr.copy()), shape=A.shape)
+        B.has_canonical_format = False
+        B.sum_duplicates()
+        assert B.nnz == A.nnz and np.array_equal(B.data, A.data)
 
 
 def test_mesh_nodes_rules():
