@@ -11,6 +11,7 @@ import warnings
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 
 import bvpnav
 from bvpnav import fem
@@ -103,6 +104,19 @@ def test_condensation_is_phi_transpose_of_the_fine_matrices(kind):
     h = t[201] - t[200]
     np.testing.assert_allclose(c.Cq[e].toarray().ravel()[[200, 201]], [h / 6, h / 3], rtol=1e-13)
     assert c.Cq[e].nnz == 2
+    # written as canonical CSR: an element's row holds exactly its samples, a node's load row the
+    # samples of its two elements, each once and in order (what a sum of duplicates would give)
+    k = np.arange(nodes.size)
+    elements = (nodes[:-1], nodes[1:])
+    for A, (first, last) in ((c.Cp, elements), (c.Cq, elements),
+                             (c.load, (nodes[np.maximum(k - 1, 0)], nodes[np.minimum(k + 1, k[-1])]))):
+        assert A.shape[0] == first.size
+        for r, (p, q) in enumerate(zip(first, last, strict=True)):
+            np.testing.assert_array_equal(A.indices[A.indptr[r]:A.indptr[r + 1]], np.arange(p, q + 1))
+        B = sp.csr_matrix((A.data.copy(), A.indices.copy(), A.indptr.copy()), shape=A.shape)
+        B.has_canonical_format = False
+        B.sum_duplicates()
+        assert B.nnz == A.nnz and np.array_equal(B.data, A.data)
 
 
 def test_mesh_nodes_rules():
@@ -452,6 +466,36 @@ def test_condensed_state_columns_are_the_load_times_the_per_sample_columns():
         assert abs(b[:, gyro]).max() > 1e-3 * scale   # the gyro-bias block is there to compare
         b.eliminate_zeros()
         assert a.nnz == b.nnz
+
+
+def test_state_acceleration_is_the_per_sample_columns_times_the_states():
+    """The acceleration the node states' increments make at every sample (the trajectory's
+    recovery inside elements reads it), taken without the columns, is the columns made at
+    every sample (``state_columns``) times the increments, at a point with every state moved,
+    for every kind of state; and a change of the increments or of the point changes it."""
+    from bvpnav.error_models.error_states import states_at
+
+    form = _noisy_states_form()
+    raw, sm, n = form.data, form.model.state_model, form.model.N
+    rng = np.random.default_rng(7)
+    nodes = {kind: rng.normal(scale=s, size=(n, 3))
+             for kind, s in (("attitude_error", 0.05), ("gyro_bias", 2e-3), ("acc_bias", 0.05))}
+    data = states_at(raw, sm.expand(raw, nodes))
+    cols = sm.state_columns(data)
+    s = rng.normal(size=cols[0].shape[1])
+    got = sm.state_acceleration(data, s)
+    want = np.column_stack([g @ s for g in cols])
+    assert got.shape == (raw.n, 3)
+    assert np.abs(got - want).max() <= 1e-12 * np.abs(want).max()
+    for kind in ("attitude_error", "gyro_bias", "acc_bias"):   # each kind on its own
+        only = np.zeros_like(s)
+        idx = sm.state_index(data, kind).ravel()
+        only[idx] = s[idx]
+        part = np.column_stack([g @ only for g in cols])
+        assert np.abs(part).max() > 1e-3 * np.abs(want).max()
+        assert np.abs(sm.state_acceleration(data, only) - part).max() <= 1e-12 * np.abs(part).max()
+    other = states_at(raw, sm.expand(raw, {**nodes, "gyro_bias": 2.0 * nodes["gyro_bias"]}))
+    assert np.abs(sm.state_acceleration(other, s) - got).max() > 1e-6 * np.abs(got).max()
 
 
 def test_a_full_pass_after_other_points_has_a_fresh_formulations_rows():

@@ -53,11 +53,17 @@ def stiffness(grid: TimeGrid) -> sp.csr_matrix:
     scipy.sparse.csr_matrix, shape (N, N)
         Symmetric, tridiagonal, singular (constants are in its null space).
     """
+    return tridiagonal(*stiffness_diagonals(grid))
+
+
+def stiffness_diagonals(grid: TimeGrid) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The diagonals ``(lower, diag, upper)`` (N - 1, N, N - 1) of :func:`stiffness`, 1/s,
+    without the matrix."""
     inv = 1.0 / grid.h
     diag = np.zeros(grid.n)
     diag[:-1] += inv
     diag[1:] += inv
-    return tridiagonal(-inv, diag, -inv)
+    return -inv, diag, -inv
 
 
 def mass(grid: TimeGrid) -> sp.csr_matrix:
@@ -68,11 +74,17 @@ def mass(grid: TimeGrid) -> sp.csr_matrix:
     scipy.sparse.csr_matrix, shape (N, N)
         Symmetric positive definite, tridiagonal.
     """
+    return tridiagonal(*mass_diagonals(grid))
+
+
+def mass_diagonals(grid: TimeGrid) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The diagonals ``(lower, diag, upper)`` (N - 1, N, N - 1) of :func:`mass`, s, without the
+    matrix."""
     h = grid.h
     diag = np.zeros(grid.n)
     diag[:-1] += h / 3.0
     diag[1:] += h / 3.0
-    return tridiagonal(h / 6.0, diag, h / 6.0)
+    return h / 6.0, diag, h / 6.0
 
 
 def tridiagonal(lower: np.ndarray, diag: np.ndarray, upper: np.ndarray) -> sp.csr_matrix:
@@ -305,19 +317,43 @@ def condensation(grid: TimeGrid, nodes: np.ndarray) -> Condensation:
     th1[nodes[1:] - 1] = 1.0            # the last step of an element ends on its right node
     th0[nodes[:-1]] = 0.0
     k6 = h / 6.0
-    rows = np.concatenate([step_elem, step_elem])
-    cols = np.concatenate([np.arange(N - 1), np.arange(1, N)])
-    q_vals = np.concatenate([k6 * (2.0 * th0 + th1), k6 * (th0 + 2.0 * th1)])
-    p_vals = np.concatenate([k6 * (2.0 * (1.0 - th0) + (1.0 - th1)), k6 * ((1.0 - th0) + 2.0 * (1.0 - th1))])
-    Cq = sp.csr_matrix((q_vals, (rows, cols)), shape=(n - 1, N))
-    Cp = sp.csr_matrix((p_vals, (rows, cols)), shape=(n - 1, N))
-    Cq.sum_duplicates()
-    Cp.sum_duplicates()
-    e = np.arange(n - 1)
-    Sp = sp.csr_matrix((np.ones(n - 1), (e, e)), shape=(n, n - 1))       # element e -> its left node
-    Sq = sp.csr_matrix((np.ones(n - 1), (e + 1, e)), shape=(n, n - 1))   # element e -> its right node
-    load = sp.csr_matrix(Sp @ Cp + Sq @ Cq)
-    load.sum_duplicates()
+    # written straight into canonical CSR arrays (no duplicates summed, no indices sorted): element
+    # e's row holds its samples nodes[e] .. nodes[e + 1], sample j at entry j + e, so step i's two
+    # samples at i + e and i + 1 + e, a sample inside the element getting its two steps' sum
+    size = N + n - 2
+    itype = np.int32 if size < 2**31 else np.int64
+    elem = np.repeat(np.arange(n - 1), np.diff(nodes) + 1)      # the element (row) of every entry
+    indices = (np.arange(size) - elem).astype(itype)
+    indptr = (nodes + np.arange(n)).astype(itype)
+    indptr[0] = 0
+    at = np.arange(N - 1) + step_elem
+
+    def element_rows(first: np.ndarray, second: np.ndarray) -> sp.csr_matrix:
+        """The (n - 1, N) rows with step i's entries ``first[i]`` (at its first sample) and
+        ``second[i]`` (at its second)."""
+        vals = np.zeros(size)
+        vals[at] = first
+        vals[at + 1] += second
+        out = sp.csr_matrix((vals, indices.copy(), indptr.copy()), shape=(n - 1, N))
+        out.has_canonical_format = True
+        return out
+
+    Cq = element_rows(k6 * (2.0 * th0 + th1), k6 * (th0 + 2.0 * th1))
+    Cp = element_rows(k6 * (2.0 * (1.0 - th0) + (1.0 - th1)), k6 * ((1.0 - th0) + 2.0 * (1.0 - th1)))
+    # node k's row: the samples nodes[k - 1] .. nodes[k + 1], Cq of the element on its left and
+    # Cp of the one on its right, node k's own sample the sum of the two
+    lo = nodes[np.maximum(np.arange(n) - 1, 0)]
+    width = nodes[np.minimum(np.arange(n) + 1, n - 1)] - lo + 1
+    lptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(width, out=lptr[1:])
+    m = int(lptr[-1])
+    vals = np.zeros(m)
+    vals[lptr[elem] + indices - lo[elem]] = Cp.data             # element e -> its left node e
+    vals[lptr[elem + 1] + indices - nodes[elem]] += Cq.data     # element e -> its right node e + 1
+    ltype = np.int32 if max(m, N) < 2**31 else np.int64
+    lcols = (np.arange(m) + np.repeat(lo - lptr[:-1], width)).astype(ltype)
+    load = sp.csr_matrix((vals, lcols, lptr.astype(ltype)), shape=(n, N))
+    load.has_canonical_format = True
     element = np.full(N, -1, dtype=np.int64)
     is_node = np.zeros(N, dtype=bool)
     is_node[nodes] = True

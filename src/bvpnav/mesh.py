@@ -579,22 +579,41 @@ class MeshModel(NavModel):
                 acc[a] += self.G[:, a, :] @ lval
         if self.ns:
             acc += self._state_acceleration(xval[self.s_index]).T
+        tmp = np.empty((d, Nf - 2))   # the products of the rows below, one at a time
         if idx.size:
             # K_f r + M_f a = 0 at the samples inside elements, the nodal positions given (the
-            # products' inner rows term by term, in the order a CSR product sums them)
-            lo_k, dg_k, up_k = fem.stiffness(fine)._bvpnav_diagonals
-            lo_m, dg_m, up_m = fem.mass(fine)._bvpnav_diagonals
-            rhs = np.zeros((d, Nf))
-            rhs[:, 1:-1] = -(lo_m[:-1] * acc[:, :-2] + dg_m[1:-1] * acc[:, 1:-1] + up_m[1:] * acc[:, 2:])
-            rhs[:, 1:-1] -= lo_k[:-1] * R[:, :-2] + dg_k[1:-1] * R[:, 1:-1] + up_k[1:] * R[:, 2:]
-            R[:, idx] = sla.solve_banded((1, 1), self._interior_band((lo_k, dg_k, up_k)), rhs[:, idx].T,
-                                         check_finite=False).T
+            # products' inner rows term by term, in the order a CSR product sums them), rows 1 .. Nf - 2
+            lo_k, dg_k, up_k = fem.stiffness_diagonals(fine)
+            lo_m, dg_m, up_m = fem.mass_diagonals(fine)
+            rhs = np.multiply(lo_m[:-1], acc[:, :-2])
+            rhs += np.multiply(dg_m[1:-1], acc[:, 1:-1], out=tmp)
+            rhs += np.multiply(up_m[1:], acc[:, 2:], out=tmp)
+            np.negative(rhs, out=rhs)
+            kr = np.multiply(lo_k[:-1], R[:, :-2])
+            kr += np.multiply(dg_k[1:-1], R[:, 1:-1], out=tmp)
+            kr += np.multiply(up_k[1:], R[:, 2:], out=tmp)
+            rhs -= kr
+            del kr
+            # one solve for every axis: the (M, d) right-hand sides in Fortran order (no copy), the
+            # band and the right-hand sides made here (overwritten)
+            R[:, idx] = sla.solve_banded((1, 1), self._interior_band((lo_k, dg_k, up_k)),
+                                         rhs.take(idx - 1, axis=1).T, overwrite_ab=True,
+                                         overwrite_b=True, check_finite=False).T
+            del rhs
         V = np.empty((d, Nf))
         for a in range(d):
             v0, v1 = self.v_end_index(a)
             V[a, 0], V[a, -1] = xval[v0], xval[v1]
         hl = fine.h[:-1]
-        V[:, 1:-1] = (R[:, 1:-1] - R[:, :-2]) / hl + hl * (acc[:, :-2] + 2.0 * acc[:, 1:-1]) / 6.0
+        # (R_i - R_{i-1}) / h + h (a_{i-1} + 2 a_i) / 6 at the samples inside
+        inner = V[:, 1:-1]
+        np.subtract(R[:, 1:-1], R[:, :-2], out=inner)
+        inner /= hl
+        np.multiply(acc[:, 1:-1], 2.0, out=tmp)
+        tmp += acc[:, :-2]
+        tmp *= hl
+        tmp /= 6.0
+        inner += tmp
         R, V, W = (np.ascontiguousarray(z.T) for z in (R, V, W))   # (Nf, d), as callers index them
         return {"t": fine.t, "r": R, "v": V, "w": W}
 

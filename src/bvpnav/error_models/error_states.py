@@ -1144,7 +1144,10 @@ class ErrorStates(ErrorModel):
         r"""``state_columns(data)[a] @ s`` for every axis, (N, 3), m/s^2: the acceleration the
         state increments ``s`` make at every sample (on a coarse mesh without the columns:
         :math:`\varepsilon_p \times f_{n,i} - C_i \delta b_{a,i} + f_{n,i} \times C_p (Y_{p,i}
-        \delta b_{g,p} + Y_{q,i} \delta b_{g,q})`, module Notes)."""
+        \delta b_{g,p} + Y_{q,i} \delta b_{g,q})`, module Notes). On a mesh the products are
+        taken on component arrays, each contiguous over the samples (the rotations' matrices
+        component-major), the products summed in the order ``Rotation.apply`` and ``numpy.einsum``
+        summed them (the same numbers, bit for bit); the answer is a (N, 3) view of a (3, N) array."""
         mesh = _mesh(data)
         s = np.asarray(s, dtype=float)
         if mesh is None:
@@ -1152,20 +1155,70 @@ class ErrorStates(ErrorModel):
         kinds = self.state_kinds(data)
         n, nn = data.n, mesh.size
         el = _elements(data, mesh, _totals(data, "gyro_bias"))
-        left, right = el.left, np.minimum(el.left + 1, nn - 1)   # the last node's right weight is 0
-        fn = data.attitude.apply(data.specific_force)
-        out = np.cross(s[self.state_index(data, "attitude_error")][left], fn)
+        tmp = np.empty(n)
+
+        def rotated(M, v: np.ndarray, order: tuple = (0, 2, 1)) -> np.ndarray:
+            """``M v`` per sample: ``M(k)`` the row-major 3 x 3 entry ``k`` at every sample (N,),
+            ``v`` (3, N), the products summed in ``order`` (``Rotation.apply``'s:
+            ``(m0 v0 + m2 v2) + m1 v1``)."""
+            out = np.empty((3, n))
+            a, b, c = order
+            for i in range(3):
+                np.multiply(M(3 * i + a), v[a], out=out[i])
+                np.multiply(M(3 * i + b), v[b], out=tmp)
+                out[i] += tmp
+                np.multiply(M(3 * i + c), v[c], out=tmp)
+                out[i] += tmp
+            return out
+
+        def crossed(a: np.ndarray, b: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+            """``a x b`` per sample, ``a``, ``b`` (3, N) (``numpy.cross``'s products), or ``out``
+            plus it."""
+            c = np.empty((3, n))
+            for i in range(3):
+                j, k = (i + 1) % 3, (i + 2) % 3
+                np.multiply(a[j], b[k], out=c[i])
+                np.multiply(a[k], b[j], out=tmp)
+                c[i] -= tmp
+            if out is not None:
+                out += c
+            return c if out is None else out
+
+        def carried(Y: np.ndarray, b: np.ndarray) -> np.ndarray:
+            """``Y b`` per sample, ``Y`` (3, 3, N), ``b`` (3, N): einsum ``"jcn,nc->nj"``'s sums."""
+            part = np.empty((3, n))
+            for j in range(3):
+                np.multiply(Y[j, 0], b[0], out=part[j])
+                for c in (1, 2):
+                    np.multiply(Y[j, c], b[c], out=tmp)
+                    part[j] += tmp
+            return part
+
+        # the samples of node p's element are mesh[p] .. mesh[p + 1] - 1 (the last node: itself)
+        runs = np.diff(np.append(mesh, n))
+        nxt = np.minimum(np.arange(1, nn + 1), nn - 1)   # the right node (the last node's weight is 0)
+
+        def spread(V: np.ndarray) -> np.ndarray:
+            """Node values ``V`` (..., n nodes) at every sample of their element, (..., N)."""
+            return np.repeat(V, runs, axis=-1)
+
+        C = np.ascontiguousarray(data.attitude.as_matrix().reshape(n, 9).T)   # C_i, (9, N)
+        fn = rotated(C.__getitem__, np.ascontiguousarray(np.asarray(data.specific_force, dtype=float).T))
+        out = crossed(spread(s[self.state_index(data, "attitude_error")].T), fn)
         if "acc_bias" in kinds:
-            B = s[self.state_index(data, "acc_bias")]
-            th = el.theta[:, None]
-            out -= data.attitude.apply((1.0 - th) * B[left] + th * B[right])
+            B = np.ascontiguousarray(s[self.state_index(data, "acc_bias")].T)
+            th = el.theta
+            out -= rotated(C.__getitem__, (1.0 - th) * spread(B) + th * spread(B[:, nxt]))
         if "gyro_bias" in kinds:
-            B = s[self.state_index(data, "gyro_bias")]
+            B = np.ascontiguousarray(s[self.state_index(data, "gyro_bias")].T)
             Y2 = _gyro_sums(el, mesh).reshape(2, 3, 3, n)
-            u = (np.einsum("jcn,nc->nj", Y2[0], B[left]) + np.einsum("jcn,nc->nj", Y2[1], B[right]))
-            Cp = data.attitude.as_matrix()[mesh[left]]
-            out += np.cross(fn, np.einsum("nij,nj->ni", Cp, u))
-        return out
+            u = carried(Y2[0], spread(B))
+            u += carried(Y2[1], spread(B[:, nxt]))
+            # C_p (the element's left node's, an entry at a time) u, summed in the order of the
+            # products' columns
+            Cn = np.ascontiguousarray(data.attitude[mesh].as_matrix().reshape(nn, 9).T)
+            crossed(fn, rotated(lambda k: spread(Cn[k]), u, (0, 1, 2)), out)
+        return out.T
 
     def _mesh_layout(self, data, mesh: np.ndarray, kinds: list, k: np.ndarray) -> tuple:
         """The column indices and row pointers of :meth:`_mesh_columns` (the same at every point:
