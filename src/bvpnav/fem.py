@@ -53,10 +53,10 @@ def stiffness(grid: TimeGrid) -> sp.csr_matrix:
     scipy.sparse.csr_matrix, shape (N, N)
         Symmetric, tridiagonal, singular (constants are in its null space).
     """
-    return tridiagonal(*stiffness_diagonals(grid))
+    return tridiagonal(*_stiffness_diagonals(grid))
 
 
-def stiffness_diagonals(grid: TimeGrid) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _stiffness_diagonals(grid: TimeGrid) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The diagonals ``(lower, diag, upper)`` (N - 1, N, N - 1) of :func:`stiffness`, 1/s,
     without the matrix."""
     inv = 1.0 / grid.h
@@ -74,10 +74,10 @@ def mass(grid: TimeGrid) -> sp.csr_matrix:
     scipy.sparse.csr_matrix, shape (N, N)
         Symmetric positive definite, tridiagonal.
     """
-    return tridiagonal(*mass_diagonals(grid))
+    return tridiagonal(*_mass_diagonals(grid))
 
 
-def mass_diagonals(grid: TimeGrid) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _mass_diagonals(grid: TimeGrid) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The diagonals ``(lower, diag, upper)`` (N - 1, N, N - 1) of :func:`mass`, s, without the
     matrix."""
     h = grid.h

@@ -583,8 +583,8 @@ class MeshModel(NavModel):
         if idx.size:
             # K_f r + M_f a = 0 at the samples inside elements, the nodal positions given (the
             # products' inner rows term by term, in the order a CSR product sums them), rows 1 .. Nf - 2
-            lo_k, dg_k, up_k = fem.stiffness_diagonals(fine)
-            lo_m, dg_m, up_m = fem.mass_diagonals(fine)
+            lo_k, dg_k, up_k = fem._stiffness_diagonals(fine)
+            lo_m, dg_m, up_m = fem._mass_diagonals(fine)
             rhs = np.multiply(lo_m[:-1], acc[:, :-2])
             rhs += np.multiply(dg_m[1:-1], acc[:, 1:-1], out=tmp)
             rhs += np.multiply(up_m[1:], acc[:, 2:], out=tmp)

@@ -1147,7 +1147,8 @@ class ErrorStates(ErrorModel):
         \delta b_{g,p} + Y_{q,i} \delta b_{g,q})`, module Notes). On a mesh the products are
         taken on component arrays, each contiguous over the samples (the rotations' matrices
         component-major), the products summed in the order ``Rotation.apply`` and ``numpy.einsum``
-        summed them (the same numbers, bit for bit); the answer is a (N, 3) view of a (3, N) array."""
+        summed them (the same numbers to rounding; bit for bit with the numpy and scipy this was
+        written against); the answer is a (N, 3) view of a (3, N) array."""
         mesh = _mesh(data)
         s = np.asarray(s, dtype=float)
         if mesh is None:
