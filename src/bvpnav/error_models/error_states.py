@@ -839,6 +839,17 @@ def _mesh_process(data, mesh: np.ndarray, gyro: bool):
     return e0, Jli, Jri, Jli @ Vp, Jli @ Vq
 
 
+def _from_rotation_matrices(m: np.ndarray) -> Rotation:
+    """``Rotation.from_matrix(m)`` of matrices that ``Rotation.as_matrix`` made (orthogonal with a
+    positive determinant to rounding): the same rotations, without scipy's checks of the
+    determinant and the Gram matrices where scipy can skip them (``assume_valid``, recent scipy):
+    such matrices pass them, and the conversion after them is the same."""
+    try:
+        return Rotation.from_matrix(m, assume_valid=True)
+    except TypeError:   # an older scipy: no assume_valid
+        return Rotation.from_matrix(m)
+
+
 def _cheap_process(data, cheap: _Cheap, gyro: bool):
     r""":func:`_mesh_process` at a cheap point (:func:`cheap_at`): with the reference's
     :math:`\bar M = \bar C_q \Delta R^T \bar C_p^T` and bias sums :math:`V_{p|q}` (the bias
@@ -854,7 +865,7 @@ def _cheap_process(data, cheap: _Cheap, gyro: bool):
     if gyro:
         v = np.einsum("eij,ej->ei", Vp, cheap.dbg[:-1]) + np.einsum("eij,ej->ei", Vq, cheap.dbg[1:])
         M = _unit_components(_quat_components_product(Rotation.from_rotvec(v).as_quat().T, M))
-    R = np.ascontiguousarray(Rotation.from_matrix(cheap.rot).as_quat().T)
+    R = np.ascontiguousarray(_from_rotation_matrices(cheap.rot).as_quat().T)
     Rp_inv = R[:, :-1].copy()
     Rp_inv[:3] *= -1.0                    # the inverse: the vector part negated (Rotation.inv's)
     RqM = _unit_components(_quat_components_product(R[:, 1:], M))
