@@ -656,7 +656,9 @@ def states_at(data, totals: dict):
     att = raw.attitude
     if made is not None and totals is made[0]:   # (N, 3) arrays, the attitude error made on first read
         tot = totals
-        att = Rotation.from_quat(made[1])     # C_i as expand re-integrated it (to rounding the same)
+        # C_i as expand re-integrated it (to rounding the same), normalized as Rotation.from_quat
+        # normalizes (_unit_components: the same quaternions) on the components' contiguous arrays
+        att = Rotation(np.ascontiguousarray(_unit_components(np.array(made[1].T)).T), normalize=False)
     else:
         tot = {k: np.asarray(v, dtype=float).reshape(n, 3) for k, v in totals.items()}
         if "attitude_error" in tot:
