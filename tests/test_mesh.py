@@ -438,7 +438,7 @@ def test_a_points_totals_at_the_nodes_are_its_samples_there_made_without_them():
 
     from scipy.spatial.transform import Rotation
 
-    from bvpnav.error_models.error_states import _hats, _node_totals, cheap_at, states_at
+    from bvpnav.error_models.error_states import _hats, _node_totals, attitude_at, cheap_at, states_at
 
     form = _noisy_states_form()
     raw, sm, n = form.data, form.model.state_model, form.model.N
@@ -472,6 +472,10 @@ def test_a_points_totals_at_the_nodes_are_its_samples_there_made_without_them():
     np.testing.assert_array_equal(ct["attitude_error"][inside], tot["attitude_error"][inside])
     for k in ("gyro_bias", "acc_bias"):
         np.testing.assert_array_equal(ct[k], _hats(raw) @ moved[k])
+    # the attitude alone (the loop's answer) is states_at's
+    for given in (tot, {k: np.array(v) for k, v in tot.items()}):
+        want = states_at(raw, given).attitude.as_quat()
+        np.testing.assert_array_equal(attitude_at(raw, given).as_quat(), want)
     # copies (and a pickle) read the samples
     again = sm.expand(raw, nodes)
     for copied in (dict(again), {**sm.expand(raw, nodes)}, pickle.loads(pickle.dumps(sm.expand(raw, nodes)))):

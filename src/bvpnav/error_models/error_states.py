@@ -645,24 +645,36 @@ def _quat_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return _quat_components_product(a.T, b.T).T
 
 
+def _point_attitude(raw, totals: dict) -> tuple:
+    """``(totals, attitude)`` of :func:`states_at`: the totals as (N, 3) arrays (``totals`` itself
+    when the last :meth:`ErrorStates.expand` made it) and the attitude at them (that expand's, or
+    the data's composed with the attitude error)."""
+    made = raw.__dict__.get("_expanded_attitude")   # (totals, their attitude) of the last expand
+    if made is not None and totals is made[0]:   # (N, 3) arrays, the attitude error made on first read
+        # C_i as expand re-integrated it (to rounding the same), normalized as Rotation.from_quat
+        # normalizes (_unit_components: the same quaternions) on the components' contiguous arrays
+        q = np.ascontiguousarray(_unit_components(np.array(made[1].T)).T)
+        return totals, Rotation(q, normalize=False)
+    n = raw.n
+    tot = {k: np.asarray(v, dtype=float).reshape(n, 3) for k, v in totals.items()}
+    att = raw.attitude
+    if "attitude_error" in tot:
+        att = _compose(Rotation.from_rotvec(tot["attitude_error"]), att)
+    return tot, att
+
+
+def attitude_at(data, totals: dict) -> Rotation:
+    """The attitude of :func:`states_at` ``(data, totals).attitude``, without the data made at it."""
+    return _point_attitude(_raw(data), totals)[1]
+
+
 def states_at(data, totals: dict):
     r"""The measured data re-linearized at the node-state ``totals`` (kind -> (N, 3)): attitude
     :math:`\exp([\psi\times])\hat C`, specific force :math:`\hat f - b_a`, ``state_point`` set."""
     from ..imu import ImuData
 
     raw = _raw(data)
-    n = raw.n
-    made = raw.__dict__.get("_expanded_attitude")   # (totals, their attitude) of the last expand
-    att = raw.attitude
-    if made is not None and totals is made[0]:   # (N, 3) arrays, the attitude error made on first read
-        tot = totals
-        # C_i as expand re-integrated it (to rounding the same), normalized as Rotation.from_quat
-        # normalizes (_unit_components: the same quaternions) on the components' contiguous arrays
-        att = Rotation(np.ascontiguousarray(_unit_components(np.array(made[1].T)).T), normalize=False)
-    else:
-        tot = {k: np.asarray(v, dtype=float).reshape(n, 3) for k, v in totals.items()}
-        if "attitude_error" in tot:
-            att = _compose(Rotation.from_rotvec(tot["attitude_error"]), att)
+    tot, att = _point_attitude(raw, totals)
     f = raw.specific_force - tot["acc_bias"] if "acc_bias" in tot else raw.specific_force
     out = ImuData(raw.t, specific_force=f, attitude=att, gravity=raw.gravity, axes=raw.axes,
                   time_origin=raw.time_origin, checks=False)

@@ -1144,7 +1144,7 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     is the answer's, so the answer is the exact fixed point. ``stats["sequential"]`` counts
     ``full_passes`` and ``cheap_steps``.
     """
-    from ..error_models.error_states import states_at
+    from ..error_models.error_states import attitude_at, states_at
 
     if comps:
         names = ", ".join(type(c).__name__ for c in comps)
@@ -1253,7 +1253,7 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
                    f"(solve(..., attitude={{'max_iter': {2 * int(o['max_iter'])}}})) or give priors on the "
                    "first node (ErrorStates(attitude_sigma=..., gyro_sigma=..., acc_sigma=...))")
     sol.error_states = sm.frame(raw, totals)
-    sol.attitude = states_at(raw, totals).attitude
+    sol.attitude = attitude_at(raw, totals)
     sol.attitude_data = raw.attitude
     sol.records.attitude = AttitudeLoopReport(
         kind="states", iterations=iters, converged=reason is not None, reason=reason or "max_iter",
