@@ -442,6 +442,62 @@ def test_a_cheap_point_has_the_full_pass_rows_in_the_node_attitudes_and_biases()
     assert np.all((3.5 < ratio) & (ratio < 4.5)), (errs, ratio)
 
 
+def test_a_points_totals_at_the_nodes_are_its_samples_there_made_without_them():
+    """The node-state loop reads a point's totals at the mesh's nodes: a full pass's (``expand``)
+    and a cheap point's (``cheap_at``) are there before their samples are made (on first read),
+    and equal the samples' at the nodes bit for bit; at every sample they are the attitude of
+    ``states_at`` (to rounding), the biases linear between the nodes, and a cheap point's
+    attitude error the reference's but at the nodes; a copy holds every kind's samples."""
+    import pickle
+
+    from scipy.spatial.transform import Rotation
+
+    from bvpnav.error_models.error_states import _hats, _node_totals, attitude_at, cheap_at, states_at
+
+    form = _noisy_states_form()
+    raw, sm, n = form.data, form.model.state_model, form.model.N
+    mesh = form.model.grid.nodes
+    rng = np.random.default_rng(11)
+    nodes = {kind: rng.normal(scale=s, size=(n, 3))
+             for kind, s in (("attitude_error", 0.05), ("gyro_bias", 2e-3), ("acc_bias", 0.05))}
+    tot = sm.expand(raw, nodes)
+    data = states_at(raw, tot)
+    at = {k: _node_totals(data, k) for k in nodes}
+    assert dict.__getitem__(tot, "attitude_error") is None   # not made by the reads at the nodes
+    np.testing.assert_array_equal(sm.state_total(data, "attitude_error"), at["attitude_error"])
+    for k in nodes:
+        np.testing.assert_array_equal(tot[k][mesh], at[k])
+    psi = (data.attitude * raw.attitude.inv()).as_rotvec()
+    assert np.abs(tot["attitude_error"] - psi).max() <= 1e-12
+    for k in ("gyro_bias", "acc_bias"):
+        np.testing.assert_array_equal(tot[k], _hats(raw) @ nodes[k])
+    # a cheap point from that pass: its nodes as given, the reference's attitude between them
+    moved = {k: v + rng.normal(scale=1e-3, size=(n, 3)) for k, v in nodes.items()}
+    moved["attitude_error"] = (Rotation.from_rotvec(rng.normal(scale=0.01, size=(n, 3)))
+                               * Rotation.from_rotvec(nodes["attitude_error"])).as_rotvec()
+    cheap = cheap_at(data, moved)
+    ct = cheap.state_point.totals
+    at = {k: _node_totals(cheap, k) for k in moved}
+    assert all(dict.__getitem__(ct, k) is None for k in moved)
+    np.testing.assert_array_equal(at["attitude_error"], moved["attitude_error"])
+    for k in moved:
+        np.testing.assert_array_equal(ct[k][mesh], at[k])
+    inside = np.setdiff1d(np.arange(raw.n), mesh)
+    np.testing.assert_array_equal(ct["attitude_error"][inside], tot["attitude_error"][inside])
+    for k in ("gyro_bias", "acc_bias"):
+        np.testing.assert_array_equal(ct[k], _hats(raw) @ moved[k])
+    # the attitude alone (the loop's answer) is states_at's
+    for given in (tot, {k: np.array(v) for k, v in tot.items()}):
+        want = states_at(raw, given).attitude.as_quat()
+        np.testing.assert_array_equal(attitude_at(raw, given).as_quat(), want)
+    # copies (and a pickle) read the samples
+    again = sm.expand(raw, nodes)
+    for copied in (dict(again), {**sm.expand(raw, nodes)}, pickle.loads(pickle.dumps(sm.expand(raw, nodes)))):
+        assert type(copied) is dict and set(copied) == set(nodes)
+        for k in nodes:
+            np.testing.assert_array_equal(copied[k], tot[k])
+
+
 def test_condensed_state_columns_are_the_load_times_the_per_sample_columns():
     r"""The node states' condensed columns (per-element sums: the gyro-bias block as
     :math:`C_p \sum_i W_{ri} [g_i\times] Y_i` from running sums restarted at the nodes) are the

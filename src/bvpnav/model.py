@@ -365,7 +365,9 @@ class Affine:
 
     def __post_init__(self):
         A = as_csr(self.A)
-        c = np.broadcast_to(np.asarray(self.c, dtype=float), (A.shape[0],)).copy()
+        c = np.asarray(self.c, dtype=float)
+        # a copy (the caller's array is not kept), broadcast when not already one value a row
+        c = c.copy() if c.shape == (A.shape[0],) else np.broadcast_to(c, (A.shape[0],)).copy()
         object.__setattr__(self, "A", A)
         object.__setattr__(self, "c", c)
 

@@ -132,6 +132,73 @@ class StatePoint:
     cheap: Any = None
 
 
+class _Totals(dict):
+    """Totals kind -> (N, 3) at every sample, some made on first read: a Gauss-Newton point of the
+    node-state loop is read at the mesh's nodes only (:func:`_node_totals`) unless something asks
+    for its samples (the last point's frame, a row that reads the attitude between nodes), so
+    the pass over the samples that makes them is made only then.
+
+    Parameters
+    ----------
+    values : dict
+        The totals already made, kind -> (N, 3).
+    lazy : dict
+        kind -> a function of no arguments that makes that kind's (N, 3) totals (called once).
+    nodes : dict
+        kind -> (n, 3): the lazy kinds' totals at the mesh's node samples (equal to the samples'
+        there, bit for bit).
+    """
+
+    def __init__(self, values: dict, lazy: dict, nodes: dict):
+        super().__init__(values)
+        for kind in lazy:
+            dict.__setitem__(self, kind, None)
+        self._lazy = dict(lazy)
+        self._nodes = dict(nodes)
+
+    def __getitem__(self, kind):
+        make = self._lazy.pop(kind, None)
+        if make is not None:
+            dict.__setitem__(self, kind, make())
+        return dict.__getitem__(self, kind)
+
+    def __iter__(self):   # not dict's own: a copy (dict(t), {**t}) then reads every value through []
+        return iter(list(dict.keys(self)))
+
+    def get(self, kind, default=None):
+        return self[kind] if kind in self else default
+
+    def items(self) -> list:
+        return [(kind, self[kind]) for kind in self]
+
+    def values(self) -> list:
+        return [self[kind] for kind in self]
+
+    def copy(self) -> dict:
+        return {kind: self[kind] for kind in self}
+
+    def __reduce__(self):
+        return dict, (self.copy(),)
+
+    def at_nodes(self, kind: str, mesh: np.ndarray) -> np.ndarray:
+        """``self[kind][mesh]``, without making the samples of a lazy kind."""
+        if kind in self._lazy:
+            return self._nodes[kind]
+        return self[kind][mesh]
+
+
+def _node_totals(data, kind: str) -> np.ndarray:
+    """``_totals(data, kind)`` at the coarse mesh's node samples (n, 3), without the samples of a
+    point whose totals are made on first read (:class:`_Totals`)."""
+    mesh = _mesh(data)
+    p = getattr(data, "state_point", None)
+    if p is None or kind not in p.totals:
+        return np.zeros((mesh.size, 3))
+    if isinstance(p.totals, _Totals):
+        return p.totals.at_nodes(kind, mesh)
+    return p.totals[kind][mesh]
+
+
 def _csr(data: np.ndarray, indices: np.ndarray, indptr: np.ndarray, shape: tuple) -> sp.csr_matrix:
     """A CSR matrix on its arrays (canonical ones: sorted, no duplicates; the loop's steps may
     share the index arrays, which no reader changes in place)."""
@@ -232,6 +299,12 @@ def _inverse_jacobian(phi: np.ndarray, sign: float) -> np.ndarray:
     :math:`c = 1/\theta^2 - (1 + \cos\theta)/(2\theta\sin\theta)` (its series
     :math:`1/12 + \theta^2/720 + \theta^4/30240` below 1e-2 rad, where the difference loses
     digits); singular at :math:`\theta = \pi`, as the Jacobian."""
+    S, Q = _inverse_jacobian_parts(phi)
+    return np.eye(3) - 0.5 * sign * S + Q
+
+
+def _inverse_jacobian_parts(phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    r"""``([phi x], c [phi x]^2)`` of :func:`_inverse_jacobian`."""
     phi = np.asarray(phi, dtype=float)
     th2 = np.sum(phi**2, axis=-1)
     th = np.sqrt(th2)
@@ -240,7 +313,16 @@ def _inverse_jacobian(phi: np.ndarray, sign: float) -> np.ndarray:
     c = np.where(small, 1.0 / 12.0 + th2 / 720.0 + th2**2 / 30240.0,
                  1.0 / safe**2 - (1.0 + np.cos(safe)) / (2.0 * safe * np.sin(safe)))
     S = _skew(phi)
-    return np.eye(3) - 0.5 * sign * S + c[..., None, None] * (S @ S)
+    return S, c[..., None, None] * (S @ S)
+
+
+def _inverse_jacobians(phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    r""":math:`(J_l^{-1}, J_r^{-1})` of :func:`_inverse_jacobian` (the same values) from one
+    :math:`[\phi\times]` and its square."""
+    S, Q = _inverse_jacobian_parts(phi)
+    A = 0.5 * S
+    eye = np.eye(3)
+    return eye - A + Q, eye + A + Q
 
 
 def _mesh(data) -> np.ndarray | None:
@@ -250,19 +332,20 @@ def _mesh(data) -> np.ndarray | None:
     return getattr(_raw(data), "state_mesh", None)
 
 
-def _hats(data) -> sp.csr_matrix:
-    """The mesh's hat functions at the samples, (N, n): biases linear between nodes."""
+def _hats(data, nodes_only: bool = False) -> sp.csr_matrix:
+    """The mesh's hat functions at the samples, (N, n): biases linear between nodes; with
+    ``nodes_only`` their rows at the node samples (n, n: a product with them gives the samples'
+    values there, bit for bit)."""
     from ..grid import TimeGrid
 
     raw = _raw(data)
     mesh = _mesh(data)
     kept = raw.__dict__.get("_mesh_hats")
-    if kept is not None and kept[0] is mesh:
-        return kept[1]
-    t = np.asarray(data.t, dtype=float)
-    out = TimeGrid(t[mesh]).interpolation_matrix(t)
-    raw.__dict__["_mesh_hats"] = (mesh, out)
-    return out
+    if kept is None or kept[0] is not mesh:
+        t = np.asarray(data.t, dtype=float)
+        out = TimeGrid(t[mesh]).interpolation_matrix(t)
+        kept = raw.__dict__["_mesh_hats"] = (mesh, out, out[mesh])
+    return kept[2] if nodes_only else kept[1]
 
 
 @dataclass(eq=False)
@@ -519,7 +602,7 @@ def _segment_products(steps: np.ndarray, start: np.ndarray, layout: tuple | None
             T[:, b] = _quat_components_product(T[:, b - 1], T[:, b])
         if nb > 1:
             Q[:, :, 1:] = _quat_components_product(T[:, None, :-1], Q[:, :, 1:])
-        return _unit_components(Qf[:, flat])
+        return _unit_components(np.take(Qf, flat, axis=1))   # C order (an index on axis 1 is not)
     q = steps.copy()
     idx = np.arange(q.shape[0])
     off = 1
@@ -562,20 +645,36 @@ def _quat_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return _quat_components_product(a.T, b.T).T
 
 
+def _point_attitude(raw, totals: dict) -> tuple:
+    """``(totals, attitude)`` of :func:`states_at`: the totals as (N, 3) arrays (``totals`` itself
+    when the last :meth:`ErrorStates.expand` made it) and the attitude at them (that expand's, or
+    the data's composed with the attitude error)."""
+    made = raw.__dict__.get("_expanded_attitude")   # (totals, their attitude) of the last expand
+    if made is not None and totals is made[0]:   # (N, 3) arrays, the attitude error made on first read
+        # C_i as expand re-integrated it (to rounding the same), normalized as Rotation.from_quat
+        # normalizes (_unit_components: the same quaternions) on the components' contiguous arrays
+        q = np.ascontiguousarray(_unit_components(np.array(made[1].T)).T)
+        return totals, Rotation(q, normalize=False)
+    n = raw.n
+    tot = {k: np.asarray(v, dtype=float).reshape(n, 3) for k, v in totals.items()}
+    att = raw.attitude
+    if "attitude_error" in tot:
+        att = _compose(Rotation.from_rotvec(tot["attitude_error"]), att)
+    return tot, att
+
+
+def attitude_at(data, totals: dict) -> Rotation:
+    """The attitude of :func:`states_at` ``(data, totals).attitude``, without the data made at it."""
+    return _point_attitude(_raw(data), totals)[1]
+
+
 def states_at(data, totals: dict):
     r"""The measured data re-linearized at the node-state ``totals`` (kind -> (N, 3)): attitude
     :math:`\exp([\psi\times])\hat C`, specific force :math:`\hat f - b_a`, ``state_point`` set."""
     from ..imu import ImuData
 
     raw = _raw(data)
-    n = raw.n
-    made = raw.__dict__.get("_expanded_attitude")   # (totals' array, its attitude) of the last expand
-    tot = {k: np.asarray(v, dtype=float).reshape(n, 3) for k, v in totals.items()}
-    att = raw.attitude
-    if made is not None and totals.get("attitude_error") is made[0]:
-        att = Rotation.from_quat(made[1])     # C_i as expand re-integrated it (to rounding the same)
-    elif "attitude_error" in tot:
-        att = _compose(Rotation.from_rotvec(tot["attitude_error"]), att)
+    tot, att = _point_attitude(raw, totals)
     f = raw.specific_force - tot["acc_bias"] if "acc_bias" in tot else raw.specific_force
     out = ImuData(raw.t, specific_force=f, attitude=att, gravity=raw.gravity, axes=raw.axes,
                   time_origin=raw.time_origin, checks=False)
@@ -617,13 +716,13 @@ def cheap_error(data, nodes: dict) -> float:
     if "gyro_bias" not in nodes:
         return 0.0
     raw = _raw(data)
-    db = np.linalg.norm(np.asarray(nodes["gyro_bias"]) - _totals(data, "gyro_bias")[mesh], axis=1)
+    db = np.linalg.norm(np.asarray(nodes["gyro_bias"]) - _node_totals(data, "gyro_bias"), axis=1)
     H = np.diff(np.asarray(raw.t, dtype=float)[mesh])
     rho_g = float(np.max(H * np.maximum(db[:-1], db[1:]))) if H.size else 0.0
     rho_a = 0.0
     if "acc_bias" in nodes:
         g = float(np.linalg.norm(raw.gravity)) if getattr(raw, "gravity", None) is not None else 0.0
-        da = float(np.max(np.linalg.norm(np.asarray(nodes["acc_bias"]) - _totals(data, "acc_bias")[mesh],
+        da = float(np.max(np.linalg.norm(np.asarray(nodes["acc_bias"]) - _node_totals(data, "acc_bias"),
                                          axis=1)))
         rho_a = da / g if g > 0 else float("inf")
     return rho_g * (0.5 * rho_g + rho_a)
@@ -655,17 +754,27 @@ def cheap_at(ref, nodes: dict):
     if mesh is None or _cheap(ref) is not None:
         raise ValueError("cheap_at: the reference must be a full pass on a coarse mesh")
     nn = mesh.size
-    was = {k: _totals(ref, k)[mesh] for k in nodes}
+    was = {k: _node_totals(ref, k) for k in nodes}
     rot = _compose(Rotation.from_rotvec(nodes["attitude_error"]),
                    Rotation.from_rotvec(was["attitude_error"]).inv()).as_matrix()
     zero = np.zeros((nn, 3))
     dbg = nodes["gyro_bias"] - was["gyro_bias"] if "gyro_bias" in nodes else zero
     dba = nodes["acc_bias"] - was["acc_bias"] if "acc_bias" in nodes else zero
-    hats = _hats(ref)
-    tot = {k: hats @ np.asarray(v, dtype=float) for k, v in nodes.items() if k != "attitude_error"}
-    att = np.array(_totals(ref, "attitude_error"))
-    att[mesh] = nodes["attitude_error"]
-    tot["attitude_error"] = att
+    # the totals at every sample (the biases linear between the nodes, the attitude error the
+    # reference's but at the nodes) when read; at the nodes now
+    hats, at_nodes = _hats(ref), _hats(ref, nodes_only=True)
+    lazy, known = {}, {}
+    for k, v in nodes.items():
+        v = np.array(v, dtype=float)
+        if k == "attitude_error":
+            def make(v=v):
+                att = np.array(_totals(ref, "attitude_error"))
+                att[mesh] = v
+                return att
+            lazy[k], known[k] = make, v
+        else:
+            lazy[k], known[k] = (lambda v=v: hats @ v), at_nodes @ v
+    tot = _Totals({}, lazy, known)
     out = copy.copy(ref)
     for key in ("_cheap_sums", "_cheap_process"):   # the reference's, read through cheap.ref
         out.__dict__.pop(key, None)
@@ -732,8 +841,7 @@ def _mesh_process(data, mesh: np.ndarray, gyro: bool):
     Cp, Cq = C[mesh[:-1]], C[mesh[1:]]
     M = _compose(_compose(Cq, dR.inv()), Cp.inv())
     e0 = M.as_rotvec()
-    Jli = _inverse_jacobian(e0, 1.0)
-    Jri = _inverse_jacobian(e0, -1.0)
+    Jli, Jri = _inverse_jacobians(e0)
     if not gyro:
         data.__dict__["_cheap_process"] = (M.as_quat(), None, None)
         return e0, Jli, Jri, None, None
@@ -745,6 +853,17 @@ def _mesh_process(data, mesh: np.ndarray, gyro: bool):
     return e0, Jli, Jri, Jli @ Vp, Jli @ Vq
 
 
+def _from_rotation_matrices(m: np.ndarray) -> Rotation:
+    """``Rotation.from_matrix(m)`` of matrices that ``Rotation.as_matrix`` made (orthogonal with a
+    positive determinant to rounding): the same rotations, without scipy's checks of the
+    determinant and the Gram matrices where scipy can skip them (``assume_valid``, recent scipy):
+    such matrices pass them, and the conversion after them is the same."""
+    try:
+        return Rotation.from_matrix(m, assume_valid=True)
+    except TypeError:   # an older scipy: no assume_valid
+        return Rotation.from_matrix(m)
+
+
 def _cheap_process(data, cheap: _Cheap, gyro: bool):
     r""":func:`_mesh_process` at a cheap point (:func:`cheap_at`): with the reference's
     :math:`\bar M = \bar C_q \Delta R^T \bar C_p^T` and bias sums :math:`V_{p|q}` (the bias
@@ -754,14 +873,18 @@ def _cheap_process(data, cheap: _Cheap, gyro: bool):
     if kept is None or (gyro and kept[1] is None):
         raise RuntimeError("cheap step: the reference pass kept no process rows")
     Mq, Vp, Vq = kept
-    M = Rotation.from_quat(Mq)
+    # the compositions of _compose on the quaternions' components (each product normalized as
+    # Rotation.from_quat normalizes it): the same rotations, without a rotation object each
+    M = _unit_components(np.array(Mq.T))
     if gyro:
         v = np.einsum("eij,ej->ei", Vp, cheap.dbg[:-1]) + np.einsum("eij,ej->ei", Vq, cheap.dbg[1:])
-        M = _compose(Rotation.from_rotvec(v), M)
-    R = Rotation.from_matrix(cheap.rot)
-    e0 = _compose(_compose(R[1:], M), R[:-1].inv()).as_rotvec()
-    Jli = _inverse_jacobian(e0, 1.0)
-    Jri = _inverse_jacobian(e0, -1.0)
+        M = _unit_components(_quat_components_product(Rotation.from_rotvec(v).as_quat().T, M))
+    R = np.ascontiguousarray(_from_rotation_matrices(cheap.rot).as_quat().T)
+    Rp_inv = R[:, :-1].copy()
+    Rp_inv[:3] *= -1.0                    # the inverse: the vector part negated (Rotation.inv's)
+    RqM = _unit_components(_quat_components_product(R[:, 1:], M))
+    e0 = Rotation.from_quat(_quat_components_product(RqM, Rp_inv).T).as_rotvec()
+    Jli, Jri = _inverse_jacobians(e0)
     if not gyro:
         return e0, Jli, Jri, None, None
     lead = Jli @ cheap.rot[1:]
@@ -900,8 +1023,7 @@ class ErrorStates(ErrorModel):
     def state_total(self, data, kind: str) -> np.ndarray:
         """The current total of ``kind`` at every node, (N, 3) (zero at the data as measured;
         at the node samples on a coarse mesh)."""
-        mesh = _mesh(data)
-        return _totals(data, kind) if mesh is None else _totals(data, kind)[mesh]
+        return _totals(data, kind) if _mesh(data) is None else _node_totals(data, kind)
 
     def state_columns(self, data) -> list:
         r"""Acceleration change per unit state, one sparse (N, ns) matrix per navigation
@@ -1270,8 +1392,7 @@ class ErrorStates(ErrorModel):
         P = self.state_index(data, "attitude_error")
         if mesh is None:
             e0, a = process_residuals(data)
-            Jli = _inverse_jacobian(e0, 1.0)
-            Jri = _inverse_jacobian(e0, -1.0)
+            Jli, Jri = _inverse_jacobians(e0)
             blocks = [(P[:-1], -Jri), (P[1:], Jli)]
             if "gyro_bias" in kinds:
                 C1 = data.attitude.as_matrix()[1:]
@@ -1369,7 +1490,7 @@ class ErrorStates(ErrorModel):
         out = {}
         for kind in self.state_kinds(data):
             d = np.asarray(s, dtype=float)[self.state_index(data, kind)]
-            tot = _totals(data, kind)[at]
+            tot = _totals(data, kind)[at] if mesh is None else _node_totals(data, kind)
             if kind == "attitude_error":
                 out[kind] = _compose(Rotation.from_rotvec(d), Rotation.from_rotvec(tot)).as_rotvec()
             else:
@@ -1398,13 +1519,19 @@ class ErrorStates(ErrorModel):
         P = np.empty((4, n))
         P[:, 1:] = el.Sc
         P[:, mesh] = ((0.0,), (0.0,), (0.0,), (1.0,))
-        C = _quat_components_product(np.ascontiguousarray(Cnode.T)[:, el.left], P)
+        C = _quat_components_product(np.take(np.ascontiguousarray(Cnode.T), el.left, axis=1), P)
         inv = raw.__dict__.get("_attitude_inverse_components")
         if inv is None:
             inv = raw.__dict__["_attitude_inverse_components"] = np.ascontiguousarray(Chat.inv().as_quat().T)
-        out["attitude_error"] = _rotvec_components(_quat_components_product(C, inv))
-        C = C.T
-        raw.__dict__["_expanded_attitude"] = (out["attitude_error"], C)
+
+        def attitude_error(C=C, inv=inv):   # Log(C_i hat C_i^T) of every sample, when read
+            return _rotvec_components(_quat_components_product(C, inv))
+
+        # at the nodes now (the loop's next step reads them): the same products there
+        at_nodes = _rotvec_components(_quat_components_product(np.ascontiguousarray(C[:, mesh]),
+                                                               np.ascontiguousarray(inv[:, mesh])))
+        out = _Totals(out, {"attitude_error": attitude_error}, {"attitude_error": at_nodes})
+        raw.__dict__["_expanded_attitude"] = (out, C.T)
         return out
 
     def release(self, data) -> None:

@@ -675,10 +675,8 @@ class _Stencil:
             np.negative(np.bincount(self.z_inv, w, minlength=nZ), out=S[nE + nD:])
         cells = S[self.cell_slot]
         colmax = np.zeros(self.nb)
-        if self.cols.size:
-            big = np.maximum.reduceat(cells, self.col_start)
-            np.maximum(big, -np.minimum.reduceat(cells, self.col_start), out=big)
-            colmax[self.cols] = big
+        if self.cols.size:   # the largest magnitude in every band row (a column of A)
+            colmax[self.cols] = np.maximum.reduceat(np.abs(cells), self.col_start)
         sU = _scales(colmax, overwrite=True)
         S *= sU[self.pa]
         S *= sU[self.pb]

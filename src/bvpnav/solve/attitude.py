@@ -859,23 +859,17 @@ def _next_totals(sm, data, s: np.ndarray, iters: list, prev_att: np.ndarray | No
     On a coarse mesh (``sm.node_totals``) the unknowns are the nodes' totals: they are the
     ones mixed, and the samples' totals are made from the point taken when a full pass needs
     them (``sm.expand``, the attitude re-integrated)."""
-    from ..error_models.error_states import _mesh, _totals
-
     att = s[sm.state_index(data, "attitude_error")].ravel()
     if prev_att is not None:
         den = max(float(np.linalg.norm(att) * np.linalg.norm(prev_att)), 1e-300)
         iters[-1]["turn"] = float(att @ prev_att) / den
-    mesh = _mesh(data)
     plain = sm.node_totals(data, s)     # at the nodes: a coarse mesh's, else every sample
-
-    def nodes(tot):
-        return tot if mesh is None else {k: v[mesh] for k, v in tot.items()}
     grew = len(iters) > 1 and iters[-1]["step"] >= iters[-2]["step"]
     if not o["loop"] or iters[-1]["step"] >= ANDERSON_START or grew:
         history.clear()   # mixed only with steps of the linear regime, where they shrink
         return plain, att
     kinds = sm.state_kinds(data)
-    before = _flat_totals(sm, data, nodes({k: _totals(data, k) for k in kinds}))
+    before = _flat_totals(sm, data, {k: sm.state_total(data, k) for k in kinds})   # at the nodes
     history.append((before, _flat_totals(sm, data, plain)))
     del history[:-(ANDERSON_DEPTH + 1)]
     if iters[-1]["step"] < o["tol"]:
@@ -1150,7 +1144,7 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
     is the answer's, so the answer is the exact fixed point. ``stats["sequential"]`` counts
     ``full_passes`` and ``cheap_steps``.
     """
-    from ..error_models.error_states import states_at
+    from ..error_models.error_states import attitude_at, states_at
 
     if comps:
         names = ", ".join(type(c).__name__ for c in comps)
@@ -1259,7 +1253,7 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
                    f"(solve(..., attitude={{'max_iter': {2 * int(o['max_iter'])}}})) or give priors on the "
                    "first node (ErrorStates(attitude_sigma=..., gyro_sigma=..., acc_sigma=...))")
     sol.error_states = sm.frame(raw, totals)
-    sol.attitude = states_at(raw, totals).attitude
+    sol.attitude = attitude_at(raw, totals)
     sol.attitude_data = raw.attitude
     sol.records.attitude = AttitudeLoopReport(
         kind="states", iterations=iters, converged=reason is not None, reason=reason or "max_iter",
