@@ -631,8 +631,114 @@ DELAY_SIGMA = 0.1
 #: The profile's first half-width (dimensionless): the objective at the estimate and this far either side.
 GYRO_SCALE_STEP = 0.005
 
+#: Variance component estimation (issue 39, the 10 s gap: are the stated sigmas the data's?): method ->
+#: the method whose noise it estimates from its own residuals (:func:`variance_components`).
+VCE = {"bvpnav states mesh vce": "bvpnav states mesh",
+       "bvpnav states mesh NHC soft vce": "bvpnav states mesh NHC soft"}
+#: GTSAM with the noise ``"bvpnav states mesh NHC soft vce"`` estimated in the same run: the fixes' sigma
+#: only (``"GTSAM vce sigma"``), or it and the IMU's four figures (``"GTSAM vce all"``: the same noise
+#: model as the rows' answer, the rows left out).
+GTSAM_VCE = {"GTSAM vce sigma": ("fix",),
+             "GTSAM vce all": ("fix", "acc_noise", "gyro_noise", "gyro_bias_walk", "acc_bias_walk")}
+#: The groups of objective rows whose variances :func:`variance_components` estimates: row label (of
+#: :func:`bvpnav.linalg.covariance.redundancy`) -> what it scales: the accelerometer noise (``sigma_a``,
+#: GTSAM's accelerometer covariance), the fixes' sigma, the non-holonomic rows' sigma, the gyro noise (the
+#: attitude's process noise), the two bias walks. The priors at the start (2-3 rows each) are held.
+VCE_GROUPS = {"acceleration residual": "acc_noise", "fixes": "fix", "non-holonomic": "nhc",
+              "process ErrorStates[attitude]": "gyro_noise",
+              "process ErrorStates[gyro_bias]": "gyro_bias_walk",
+              "process ErrorStates[acc_bias]": "acc_bias_walk"}
+#: Foerstner's iteration stops when every estimated group's ratio square sum / redundancy is within this of
+#: 1, or after :data:`VCE_ITERATIONS` solves.
+VCE_TOL = 0.01
+VCE_ITERATIONS = 30
+#: A group whose redundancy falls below this is held at its last sigma: its residuals carry less than one
+#: degree of freedom, so they cannot estimate its variance (the iteration heads for a zero variance).
+VCE_MIN_REDUNDANCY = 1.0
+
 METHODS = ("GTSAM", "GTSAM peer", "bvpnav README", "bvpnav defaults", "bvpnav states", "bvpnav states mesh",
-           *VEHICLE, *IMU_ERRORS)
+           *VEHICLE, *IMU_ERRORS, *VCE, *GTSAM_VCE)
+
+
+def scaled_noise(fig: dict, scale: dict) -> tuple[dict, dict]:
+    """The figures and the problem's sigmas with :func:`variance_components`' factors ``scale`` (group
+    name of :data:`VCE_GROUPS` -> factor on its sigma; missing: 1): ``(fig, {"fix_sigma", "nhc_sigma"})``."""
+    f2 = {k: v * scale.get(k, 1.0) for k, v in fig.items()}
+    return f2, {"fix_sigma": FIX_SIGMA * scale.get("fix", 1.0),
+                "nhc_sigma": NHC_WIDTH * scale.get("nhc", 1.0)}
+
+
+def variance_components(d: dict, kept, method: str, fig: dict, c0, interval: float, *,
+                        iterations: int = VCE_ITERATIONS, tol: float = VCE_TOL) -> dict:
+    r"""Each row group's noise estimated from its own residuals (Foerstner's iteration of Helmert's
+    variance component estimation) for the problem of ``method``, from the kept fixes only.
+
+    Returns ``scale`` (group -> factor on the stated sigma), ``sigma`` (group -> the estimated sigma:
+    the fixes' m, the rows' m/s, the IMU's figures in their units), ``redundancy`` and ``ratio`` (group
+    -> :math:`r_g` and :math:`\Omega_g / r_g` at the last solve), ``held`` (the groups held by
+    :data:`VCE_MIN_REDUNDANCY`), ``iterations``, ``converged`` and ``history`` (per solve, group ->
+    (factor, ratio, redundancy)).
+
+    Notes
+    -----
+    A group's variance is right when its weighted residual square sum :math:`\Omega_g` equals its
+    redundancy :math:`r_g = m_g - \operatorname{tr}(H_g)` (its share of the degrees of freedom;
+    :func:`bvpnav.linalg.covariance.redundancy`). The iteration multiplies every group's variance by
+    :math:`\Omega_g / r_g` and solves again. The groups are those of :data:`VCE_GROUPS` that the problem
+    has; the priors at the start keep their stated sigmas.
+    """
+    from bvpnav.linalg.covariance import redundancy
+
+    scale: dict[str, float] = {}
+    held: list[str] = []
+    history = []
+    converged = False
+    for it in range(iterations):
+        f2, sig = scaled_noise(fig, scale)
+        sol = problem(d, kept, method, f2, c0, interval, **sig).solve(solver="direct",
+                                                                      attitude={"progress": False})
+        agg: dict[str, list[float]] = {}
+        for label, (_, r, omega) in redundancy(sol.formulation, sol.x, sol.lam).items():
+            if label in VCE_GROUPS:
+                a = agg.setdefault(VCE_GROUPS[label], [0.0, 0.0])
+                a[0] += omega
+                a[1] += r
+        ratio = {g: o / r for g, (o, r) in agg.items()}
+        red = {g: r for g, (_, r) in agg.items()}
+        history.append({g: (scale.get(g, 1.0), ratio[g], red[g]) for g in agg})
+        held += [g for g in agg if red[g] < VCE_MIN_REDUNDANCY and g not in held]
+        free = [g for g in agg if g not in held]
+        if all(abs(ratio[g] - 1.0) <= tol for g in free):
+            converged = True
+            break
+        if it + 1 < iterations:
+            for g in free:
+                scale[g] = scale.get(g, 1.0) * math.sqrt(ratio[g])
+    f2, sig = scaled_noise(fig, scale)
+    sigma = {g: sig["fix_sigma"] if g == "fix" else sig["nhc_sigma"] if g == "nhc" else f2[g] for g in agg}
+    return {"scale": {g: scale.get(g, 1.0) for g in agg}, "sigma": sigma, "redundancy": red, "ratio": ratio,
+            "held": held, "iterations": len(history), "converged": converged, "history": history,
+            "solution": sol}
+
+
+def run_vce(d: dict, kept, withheld, method: str, fig: dict, c0, interval: float) -> dict:
+    """A :data:`VCE` method (the noise estimated, then the method solved and scored with it) or a
+    :data:`GTSAM_VCE` one (GTSAM with the noise the rows' method estimated)."""
+    cpu = time.process_time()
+    base = VCE.get(method, "bvpnav states mesh NHC soft")
+    v = variance_components(d, kept, base, fig, c0, interval)
+    vce = {"vce_" + k: v[k]
+           for k in ("scale", "sigma", "redundancy", "ratio", "held", "iterations", "converged")}
+    vce["vce_cpu_seconds"] = time.process_time() - cpu
+    if method in GTSAM_VCE:
+        scale = {g: v["scale"][g] for g in GTSAM_VCE[method] if g in v["scale"]}
+        f2, sig = scaled_noise(fig, scale)
+        g = gtsam_example_smoother(d, kept, f2, c0, fix_sigma=sig["fix_sigma"])
+        return {"rms": hrms(g["position"][withheld], d["fix_p"][withheld]), "seconds": g["seconds"],
+                "track": track_rms(g["position"][withheld], d, withheld), "cpu_seconds": g["cpu_seconds"],
+                "verified": None, "iterations": g["iterations"], "graph_error": g["graph_error"], **vce}
+    f2, sig = scaled_noise(fig, v["scale"])
+    return {**run_bvpnav(d, kept, withheld, base, f2, c0, interval, **sig), **vce}
 
 
 def data_dir() -> Path:
@@ -857,12 +963,14 @@ def run_gtsam(d: dict, kept, withheld, fig: dict, c0) -> dict:
 
 
 def problem(d: dict, kept, method: str, fig: dict, c0, interval: float, *, fix_sigma=None,
-            tilt: float | None = None, start_prior: str | None = None, fix_delay=None):
+            tilt: float | None = None, start_prior: str | None = None, fix_delay=None,
+            nhc_sigma: float | None = None):
     """The bvpnav problem of ``method`` (the data, the error model, the kept fixes); ``fix_sigma`` (m,
     one or per navigation axis), ``tilt`` (rad) and ``start_prior`` default to this drive's
     (:data:`FIX_SIGMA`, :data:`TILT`, :data:`START_PRIOR`; with ``"fixes"`` the node-state methods get
     GTSAM's heading and velocity priors, :func:`_start_factors`); ``fix_delay`` is the fixes'
-    ``Position(delay=)`` (s, or ``"estimated"``; default none)."""
+    ``Position(delay=)`` (s, or ``"estimated"``; default none); ``nhc_sigma`` the soft non-holonomic
+    rows' sigma, m/s (default :data:`NHC_WIDTH`)."""
     if method in IMU_ERRORS:
         return _with_imu_error(d, kept, method, fig, c0, interval, fix_sigma=fix_sigma, tilt=tilt,
                                start_prior=start_prior)
@@ -914,7 +1022,8 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float, *, fix_s
         from bvpnav.constraints import ForwardMotion, NonHolonomic
 
         mode, forward = VEHICLE[method]
-        width = {"sigma": NHC_WIDTH} if mode == "soft" else {"tol": NHC_WIDTH}
+        nhc = NHC_WIDTH if nhc_sigma is None else nhc_sigma
+        width = {"sigma": nhc} if mode == "soft" else {"tol": nhc}
         lever = "estimated" if method in LEVERED else (0.0, 0.0, 0.0)
         slip = "estimated" if method in SLIPPED else SIDE_SLIP_PRIOR if method in SLIP_KNOWN else None
         if method in SLIP_NOISE:
@@ -1123,6 +1232,8 @@ def case(method: str, gap: float, interval: float, fix_sigma: float = FIX_SIGMA,
         out = run_gtsam_example(d, kept, withheld, fig, c0)
     elif method == "GTSAM peer":
         out = run_gtsam(d, kept, withheld, fig, c0)
+    elif method in VCE or method in GTSAM_VCE:
+        out = run_vce(d, kept, withheld, method, fig, c0, interval)
     else:
         out = run_bvpnav(d, kept, withheld, method, fig, c0, interval)
     out.update(method=method, gap=gap, kept=int(kept.size), withheld=int(withheld.size),
@@ -1188,11 +1299,22 @@ def main(argv: list[str] | None = None) -> list[dict]:
                    if r.get("side_slip_std") is not None else "")
                 + "".join(f" {k} {v[0]:.5g}" + (f" +- {v[1]:.2g}" if v[1] is not None else "")
                           for k, v in (r.get("imu_error") or {}).items() if isinstance(v, list | tuple))
+                + _vce_note(r)
                 + (" along {along:.3f} cross {cross:.3f} first {early:.3f} last 50 s {late:.3f} m".format(
                     **r["track"]) if r.get("track") else ""))
             print(f"{gap:6g} {r['method']:>16} {r.get('rms', float('nan')):9.3f} "
                   f"{r.get('seconds', float('nan')):8.1f} {ratio:8.1f} {bps:9.0f}  {note}")
     return rows
+
+
+def _vce_note(r: dict) -> str:
+    """A :data:`VCE` or :data:`GTSAM_VCE` row's estimated sigmas, factors and redundancies."""
+    if not r.get("vce_sigma"):
+        return ""
+    each = "".join(f" {g} {r['vce_sigma'][g]:.4g} (x{r['vce_scale'][g]:.3g}, r {r['vce_redundancy'][g]:.1f})"
+                   for g in r["vce_sigma"])
+    held = f" held {','.join(r['vce_held'])}" if r["vce_held"] else ""
+    return f"{each} vce it={r['vce_iterations']} converged={r['vce_converged']}{held}"
 
 
 if __name__ == "__main__":
