@@ -581,22 +581,22 @@ and the group's redundancy at the last solve::
 all 241 fixes kept and nothing withheld, not a score.) What they mean:
 
 - **With the rows inside the estimate the loss stays, and the estimate is not physical.** Given each
-  smoother the noise the data estimate with the rows in the estimate (``NHC soft vce``, and GTSAM the
-  same figures: ``GTSAM vce all``), the rows lose by more than with the stated sigmas (0.973 against
-  0.828 m, 1.18x; stated 1.04x); with only the fixes' sigma exchanged GTSAM is far worse (3.161 m: the fixes' sigma alone is not what
-  the data say is wrong). With the rows in the estimate the iteration pins the rows' disagreement with
-  the kept fixes on the fixes: their sigma comes out at 0.75 / 5.0 / 7.1 m at 10 / 30 / 60 s (30 and 60
-  s not converged in 30 solves), and the error at 30 / 60 s doubles (5.738 / 7.982 m against the stated
-  rows' 2.696 / 3.893); the rows' own sigma comes out at 0.038 m/s at every spacing, tighter than
-  stated. Holding the rows at their stated 0.1 m/s and estimating the sensors with them present (``NHC
-  vce sensors``) does not converge either (the accelerometer bias walk climbs to x14-15) and gives the
-  fixes 0.67 / 3.6 m. With every fix kept (the diagnostic row) the fixes come out at 0.057 m even with
-  the rows, and the misfit goes to the gyro bias walk instead (x80): the rows' misfit lands on whichever
-  group the kept fixes determine least. A fix sigma of 0.7-7 m is not an RT3003's (RTK / differential:
-  cm to dm), and a noise that grows with the fix spacing is not a noise: the vehicle rows are a model,
-  their misfit is concentrated in the turns (lateral residuals 0.054 m/s RMS over the first 190 s, 0.094
-  over the last 50 s), and one variance per group cannot describe that. So the rows are left out of the
-  estimation by that physical check, not by the scores.
+  smoother the noise the data estimate with the rows in the estimate (``NHC soft vce``, and GTSAM the same
+  figures: ``GTSAM vce all``), the rows lose by more than with the stated sigmas (0.973 against 0.828 m,
+  1.18x; stated 1.04x); with only the fixes' sigma exchanged GTSAM is far worse (3.161 m: the fixes' sigma
+  alone is not what the data say is wrong). With the rows in the estimate the iteration pins the rows'
+  disagreement with the kept fixes on the fixes: their sigma comes out at 0.75 / 5.0 / 7.1 m at 10 / 30 /
+  60 s (30 and 60 s not converged in 30 solves), and the error at 30 / 60 s doubles (5.738 / 7.982 m
+  against the stated rows' 2.696 / 3.893); the rows' own sigma comes out at 0.038 m/s at every spacing,
+  tighter than stated. Holding the rows at their stated 0.1 m/s and estimating the sensors with them
+  present (``NHC vce sensors``) does not converge either (the accelerometer bias walk climbs to x14-15)
+  and gives the fixes 0.67 / 3.6 m. With every fix kept (the diagnostic row) the fixes come out at 0.057 m
+  even with the rows, and the misfit goes to the gyro bias walk instead (x80): the rows' misfit lands on
+  whichever group the kept fixes determine least. A fix sigma of 0.7-7 m is not an RT3003's (RTK /
+  differential: cm to dm), and a noise that grows with the fix spacing is not a noise: the vehicle rows
+  are a model, their misfit is concentrated in the turns (lateral residuals 0.054 m/s RMS over the first
+  190 s, 0.094 over the last 50 s), and one variance per group cannot describe that. So the rows are left
+  out of the estimation by that physical check, not by the scores.
 - **The sensors' noise, estimated without the rows (GTSAM's own graph, ``mesh vce``), is far from the
   metadata's.** At 10 s the accelerometer noise comes out 8.9x and the gyro noise 26x the metadata's
   (0.089 m/s^2/sqrt(Hz), 0.0045 rad/s/sqrt(Hz)), and the fixes' sigma heads for zero (held at 0.13 m,
@@ -617,10 +617,10 @@ all 241 fixes kept and nothing withheld, not a score.) What they mean:
   of GTSAM's 15.589 / 55.053 with the same noise), against 2.696 / 3.893 with the stated noise: better at
   30 s, worse at 60 s (where only the bias walks moved: the gyro's x0.36 on one solve before its r fell
   below 1). The last 50 s (the turns) at 10 s: 0.569 m against 1.513 for GTSAM with the same noise
-  (stated: 3.049 against 2.770). Where the fix-weight account above found the node states with the rows behind GTSAM
-  only at the example's sigma, with the noise the data give the rows are ahead by 2x. The held rule does
-  not decide it: with the fixes' sigma carried on to 0.048 m (the 20th solve, without the rule) the same
-  methods give 0.730 (mesh), 0.731 (GTSAM), 0.365 m (rows).
+  (stated: 3.049 against 2.770). Where the fix-weight account above found the node states with the rows
+  behind GTSAM only at the example's sigma, with the noise the data give the rows are ahead by 2x. The
+  held rule does not decide it: with the fixes' sigma carried on to 0.048 m (the 20th solve, without the
+  rule) the same methods give 0.730 (mesh), 0.731 (GTSAM), 0.365 m (rows).
 - Nothing was tuned on the scores (the stated sigmas, the stop and hold rules were set before any
   score); the trials in their order, all at 10 s first: the fixes' sigma alone (the IMU held at the
   metadata's: 13.0 m without the rows, 4.8 m with them, RMS 17.1 / 5.70 m: the IMU's misfit dumped on the
