@@ -50,7 +50,7 @@ from .banded import row_span
 from .lsq import LeastSquaresForm, least_squares_form
 from .selinv import CyclicReduction, equilibrated_inverse, symmetric_scale
 
-__all__ = ["Covariance", "posterior", "quadratic_model", "MAX_BORDER_ROWS", "BORDER_COND_WARN"]
+__all__ = ["Covariance", "posterior", "quadratic_model", "redundancy", "MAX_BORDER_ROWS", "BORDER_COND_WARN"]
 
 #: Most hard-item rows the fallback layout takes into the border (each one costs a
 #: right-hand side of N blocks); beyond it such problems are refused with the fix.
@@ -483,3 +483,79 @@ def posterior(form: Formulation, x: np.ndarray, lam: float) -> Covariance:
                       border=int(post.layout.border.size), block=int(post.layout.b),
                       hard_rows_in_border=moved, border_condition=post.border_cond,
                       pivot_condition=post.cr.pivot_condition, states=states)
+
+
+#: The group of the data rows (the acceleration residuals over ``sigma_a``) in :func:`redundancy`.
+DATA_GROUP = "acceleration residual"
+
+
+def redundancy(form: Formulation, x: np.ndarray, lam: float) -> dict[str, tuple[int, float, float]]:
+    r"""Each group of objective rows' redundancy and weighted square sum at the estimate ``x``.
+
+    Parameters
+    ----------
+    form : Formulation
+        An equality-constrained least-squares problem (no band, inequality or robust item).
+    x : ndarray
+        The solution (stacked unknowns).
+    lam : float
+        The weight the soft items had.
+
+    Returns
+    -------
+    dict of str to (int, float, float)
+        Per group, the rows :math:`m_g`, the redundancy :math:`r_g` (dimensionless) and the
+        weighted residual square sum :math:`\Omega_g = \|D_g \hat x + c_g\|^2`; the groups are
+        :data:`DATA_GROUP` (the acceleration residuals) and each soft item's and prior's label
+        (items of one label summed). The redundancies add up to the degrees of freedom.
+
+    Raises
+    ------
+    InputError
+        When the problem is not least squares.
+
+    Notes
+    -----
+    With the whitened rows :math:`D` and the covariance :math:`C = (K^{-1})_{xx}` of the module
+    Notes, the hat matrix of the rows is :math:`H = D C D^T` and a group's redundancy is
+
+    .. math:: r_g = m_g - \operatorname{tr}(D_g C D_g^T),
+
+    the diagonal of :math:`D_g C D_g^T` from the selected inverse in O(N). Variance component
+    estimation (Helmert; Foerstner's iteration) rescales each group's variances by
+    :math:`\Omega_g / r_g` and solves again until every ratio is 1: the noise of each group
+    estimated from its own residuals. For linearized items it is the last linearization's.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from bvpnav import ImuData, NavigationProblem
+    >>> from bvpnav.constraints import Position
+    >>> t = np.linspace(0.0, 10.0, 101)
+    >>> rng = np.random.default_rng(0)
+    >>> prob = NavigationProblem(ImuData(t, rng.normal(0.0, 0.01, (101, 1)), axes=("x",)), sigma_a=0.01)
+    >>> p = [[0.0], [0.1], [0.0], [-0.1], [0.0]]
+    >>> fixes = Position(t=[0.0, 2.5, 5.0, 7.5, 10.0], value=p, sigma=0.1, name="fixes")
+    >>> _ = prob.add(fixes)
+    >>> sol = prob.solve(solver="direct")
+    >>> red = redundancy(sol.formulation, sol.x, sol.lam)
+    >>> {k: round(r, 2) for k, (m, r, _) in red.items()}
+    {'acceleration residual': 0.02, 'fixes': 2.98}
+    """
+    ls = least_squares_form(form, lam)
+    if ls is None:
+        raise InputError("redundancy: the problem is not least squares (a band, inequality or robust item); "
+                         "the redundancies exist for soft and hard equality items only")
+    groups = [(DATA_GROUP, form.data_rows().m)]
+    groups += [(t.label, t.residual.m) for t in form.terms() if t.least_squares_role() == "D"]
+    post = _Posterior(ls, form.model)
+    res = ls.D.value(np.asarray(x, dtype=float))
+    out: dict[str, tuple[int, float, float]] = {}
+    start = 0
+    for label, m in groups:
+        h = post.cross(*[post.query(ls.D.A[start:start + m])] * 2) if m else np.zeros(0)
+        r = res[start:start + m]
+        m0, r0, o0 = out.get(label, (0, 0.0, 0.0))
+        out[label] = (m0 + m, r0 + m - float(h.sum()), o0 + float(r @ r))
+        start += m
+    return out
