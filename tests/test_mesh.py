@@ -498,19 +498,26 @@ def test_a_points_totals_at_the_nodes_are_its_samples_there_made_without_them():
             np.testing.assert_array_equal(copied[k], tot[k])
 
 
+def _moved_point(seed: int):
+    """``_noisy_states_form()``'s formulation with its data at a point where every node state is
+    moved (attitude errors 0.05 rad, gyro biases 2e-3 rad/s, accelerometer biases 0.05 m/s^2,
+    drawn with ``seed``): ``(form, raw, state model, node totals, data there, rng)``."""
+    from bvpnav.error_models.error_states import states_at
+
+    form = _noisy_states_form()
+    raw, sm, n = form.data, form.model.state_model, form.model.N
+    rng = np.random.default_rng(seed)
+    nodes = {kind: rng.normal(scale=s, size=(n, 3))
+             for kind, s in (("attitude_error", 0.05), ("gyro_bias", 2e-3), ("acc_bias", 0.05))}
+    return form, raw, sm, nodes, states_at(raw, sm.expand(raw, nodes)), rng
+
+
 def test_condensed_state_columns_are_the_load_times_the_per_sample_columns():
     r"""The node states' condensed columns (per-element sums: the gyro-bias block as
     :math:`C_p \sum_i W_{ri} [g_i\times] Y_i` from running sums restarted at the nodes) are the
     load times the columns made at every sample (``state_columns``: the blocks written per
     sample), at a point with every state moved, to rounding; the same sparsity."""
-    from bvpnav.error_models.error_states import states_at
-
-    form = _noisy_states_form()
-    raw, sm, n = form.data, form.model.state_model, form.model.N
-    rng = np.random.default_rng(5)
-    nodes = {kind: rng.normal(scale=s, size=(n, 3))
-             for kind, s in (("attitude_error", 0.05), ("gyro_bias", 2e-3), ("acc_bias", 0.05))}
-    data = states_at(raw, sm.expand(raw, nodes))
+    form, raw, sm, _, data, rng = _moved_point(5)
     W = form.model.cond.load
     got = sm.condensed_columns(data, W)
     want = [(W @ g).tocsr() for g in sm.state_columns(data)]
@@ -531,12 +538,7 @@ def test_state_acceleration_is_the_per_sample_columns_times_the_states():
     for every kind of state; and a change of the increments or of the point changes it."""
     from bvpnav.error_models.error_states import states_at
 
-    form = _noisy_states_form()
-    raw, sm, n = form.data, form.model.state_model, form.model.N
-    rng = np.random.default_rng(7)
-    nodes = {kind: rng.normal(scale=s, size=(n, 3))
-             for kind, s in (("attitude_error", 0.05), ("gyro_bias", 2e-3), ("acc_bias", 0.05))}
-    data = states_at(raw, sm.expand(raw, nodes))
+    form, raw, sm, nodes, data, rng = _moved_point(7)
     cols = sm.state_columns(data)
     s = rng.normal(size=cols[0].shape[1])
     got = sm.state_acceleration(data, s)
