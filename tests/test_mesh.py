@@ -498,6 +498,58 @@ def test_a_points_totals_at_the_nodes_are_its_samples_there_made_without_them():
             np.testing.assert_array_equal(copied[k], tot[k])
 
 
+def test_totals_made_on_first_read_behave_as_a_dict_of_their_values():
+    """The totals whose samples are made on first read (``_Totals``) are a dict of their values
+    whatever is done to them: an assigned kind keeps its value (its maker and node values
+    dropped), pop / setdefault / popitem / update give and take the made arrays, a maker that
+    fails leaves the kind to be made on the next read (not a placeholder), and the node values
+    handed out are copies."""
+    from bvpnav.error_models.error_states import _Totals
+
+    calls = []
+
+    def make():
+        calls.append(1)
+        if len(calls) == 1:
+            raise MemoryError("first make fails")
+        return np.full((4, 3), 2.0)
+
+    def fresh():
+        return _Totals({"acc_bias": np.zeros((4, 3))}, {"attitude_error": lambda: np.ones((4, 3))},
+                       {"attitude_error": np.ones((2, 3))})
+
+    t = _Totals({}, {"attitude_error": make}, {"attitude_error": np.full((2, 3), 2.0)})
+    with pytest.raises(MemoryError):
+        t["attitude_error"]
+    np.testing.assert_array_equal(t["attitude_error"], 2.0)   # made on the next read
+    t = fresh()
+    t["attitude_error"] = np.full((4, 3), 5.0)
+    np.testing.assert_array_equal(t["attitude_error"], 5.0)
+    np.testing.assert_array_equal(t.at_nodes("attitude_error", np.array([0, 3])), 5.0)
+    t = fresh()
+    np.testing.assert_array_equal(t.pop("attitude_error"), 1.0)
+    assert "attitude_error" not in t and t.pop("attitude_error", None) is None
+    t = fresh()
+    np.testing.assert_array_equal(t.setdefault("attitude_error", None), 1.0)
+    t = fresh()
+    kind, value = t.popitem()
+    assert kind == "attitude_error"
+    np.testing.assert_array_equal(value, 1.0)
+    t = fresh()
+    t.update(attitude_error=np.zeros((4, 3)))
+    t |= {"acc_bias": np.ones((4, 3))}
+    np.testing.assert_array_equal(t["attitude_error"], 0.0)
+    np.testing.assert_array_equal(t["acc_bias"], 1.0)
+    t = fresh()
+    handed = t.at_nodes("attitude_error", np.array([0, 3]))
+    handed += 1.0
+    np.testing.assert_array_equal(t.at_nodes("attitude_error", np.array([0, 3])), 1.0)
+    del t["attitude_error"]
+    assert set(t) == {"acc_bias"}
+    t.clear()
+    assert len(t) == 0 and dict(t) == {}
+
+
 def _moved_point(seed: int):
     """``_noisy_states_form()``'s formulation with its data at a point where every node state is
     moved (attitude errors 0.05 rad, gyro biases 2e-3 rad/s, accelerometer biases 0.05 m/s^2,
@@ -764,7 +816,8 @@ def test_a_linearized_item_on_a_mesh_reads_the_trajectory_at_its_own_times():
 
 def test_mesh_states_solution_keeps_no_spare_memory():
     """The full passes hand each other their largest arrays as memory (the kept elements'
-    ``spare``); when the loop ends they are dropped, so a solution keeps none alive."""
+    ``spare``); when the loop ends they are dropped, so a solution keeps none alive, nor the
+    last expand's totals and attitude (read once, for the answer's attitude)."""
     import gc
 
     from bvpnav.error_models import ErrorStates
@@ -776,3 +829,4 @@ def test_mesh_states_solution_keeps_no_spare_memory():
     assert sol.stats["sequential"]["full_passes"] >= 2   # at least one hand-over took place
     alive = [o for o in gc.get_objects() if isinstance(o, _Elements)]
     assert alive and not any(o.spare for o in alive)
+    assert "_expanded_attitude" not in sol.formulation.data.state_point.raw.__dict__

@@ -124,7 +124,7 @@ class StatePoint:
     cheap : _Cheap or None
         A cheap Gauss-Newton step's point (:func:`cheap_at`): the rows are made from the sums
         of the last full pass, not from the samples; ``totals`` then hold the biases at every
-        sample but the attitude error at the nodes only.
+        sample and the attitude error made from the nodes on first read (:class:`_Totals`).
     """
 
     raw: Any
@@ -136,7 +136,9 @@ class _Totals(dict):
     """Totals kind -> (N, 3) at every sample, some made on first read: a Gauss-Newton point of the
     node-state loop is read at the mesh's nodes only (:func:`_node_totals`) unless something asks
     for its samples (the last point's frame, a row that reads the attitude between nodes), so
-    the pass over the samples that makes them is made only then.
+    the pass over the samples that makes them is made only then. Every way of reading it (``[]``,
+    ``get``, ``items``, ``values``, a copy, ``dict(t)``, ``{**t}``, pickling) gives the made
+    arrays; a kind assigned, removed or popped drops its maker (it is a dict of its values).
 
     Parameters
     ----------
@@ -157,10 +159,57 @@ class _Totals(dict):
         self._nodes = dict(nodes)
 
     def __getitem__(self, kind):
-        make = self._lazy.pop(kind, None)
-        if make is not None:
+        make = self._lazy.get(kind)
+        if make is not None:   # made, stored, and only then no longer lazy (a failed make stays lazy)
             dict.__setitem__(self, kind, make())
+            del self._lazy[kind]
+            self._nodes.pop(kind, None)
         return dict.__getitem__(self, kind)
+
+    def _forget(self, kind) -> None:
+        """A kind given a new value or removed: its lazy maker and node values no longer hold."""
+        self._lazy.pop(kind, None)
+        self._nodes.pop(kind, None)
+
+    def __setitem__(self, kind, value) -> None:
+        self._forget(kind)
+        dict.__setitem__(self, kind, value)
+
+    def __delitem__(self, kind) -> None:
+        self._forget(kind)
+        dict.__delitem__(self, kind)
+
+    def pop(self, kind, *default):
+        if kind not in self:
+            return dict.pop(self, kind, *default)
+        value = self[kind]
+        del self[kind]
+        return value
+
+    def popitem(self) -> tuple:
+        if not len(self):
+            raise KeyError("popitem(): totals are empty")
+        kind = list(dict.keys(self))[-1]
+        return kind, self.pop(kind)
+
+    def setdefault(self, kind, default=None):
+        if kind in self:
+            return self[kind]
+        self[kind] = default
+        return default
+
+    def update(self, *args, **kwargs) -> None:
+        for kind, value in dict(*args, **kwargs).items():
+            self[kind] = value
+
+    def __ior__(self, other):
+        self.update(other)
+        return self
+
+    def clear(self) -> None:
+        self._lazy.clear()
+        self._nodes.clear()
+        dict.clear(self)
 
     def __iter__(self):   # not dict's own: a copy (dict(t), {**t}) then reads every value through []
         return iter(list(dict.keys(self)))
@@ -181,9 +230,9 @@ class _Totals(dict):
         return dict, (self.copy(),)
 
     def at_nodes(self, kind: str, mesh: np.ndarray) -> np.ndarray:
-        """``self[kind][mesh]``, without making the samples of a lazy kind."""
+        """``self[kind][mesh]`` (a new array), without making the samples of a lazy kind."""
         if kind in self._lazy:
-            return self._nodes[kind]
+            return self._nodes[kind].copy()
         return self[kind][mesh]
 
 
@@ -1502,7 +1551,9 @@ class ErrorStates(ErrorModel):
         (``nodes``, kind -> (n, 3)): the biases linear between nodes, the attitude
         re-integrated from its element's left node with the corrected rates, :math:`C_i = C_p
         P_i` (module Notes), as the attitude error :math:`\mathrm{Log}(C_i \hat C_i^T)` of every
-        sample. Without a mesh the nodes are the samples: ``nodes`` itself."""
+        sample. Without a mesh the nodes are the samples: ``nodes`` itself. On a mesh the
+        attitude error's samples are made on first read (a dict whose every read gives the made
+        arrays, :class:`_Totals`)."""
         mesh = _mesh(data)
         if mesh is None:
             return dict(nodes)
@@ -1537,10 +1588,13 @@ class ErrorStates(ErrorModel):
     def release(self, data) -> None:
         """Drop the memory the loop's full passes hand each other (the kept elements' spare
         arrays, :func:`_elements`): called when the node-state loop ends, so that a solution
-        does not keep arrays no pass will write again."""
-        kept = _raw(data).__dict__.get("_mesh_elements")
+        does not keep arrays no pass will write again, nor the last expand's totals and attitude
+        (:func:`_point_attitude` reads them; call this after the answer's attitude is made)."""
+        raw = _raw(data)
+        kept = raw.__dict__.get("_mesh_elements")
         if kept is not None:
             kept[2].spare.clear()
+        raw.__dict__.pop("_expanded_attitude", None)
 
     def frame(self, data, totals: dict) -> pd.DataFrame:
         """The states per sample as a DataFrame (index ``t (s)``; columns ``<kind>_<axis> (<unit>)``)."""

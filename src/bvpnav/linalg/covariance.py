@@ -412,6 +412,37 @@ class _Posterior:
         return s[:, None] * self.Sinv[np.ix_(pos, pos)] * s[None, :]
 
 
+def _factored(ls: LeastSquaresForm, model, what: str) -> tuple[_Posterior, int]:
+    """The :class:`_Posterior` of ``ls`` and the hard-item rows it moved into the border (0, or
+    all of them when a run of nodes is singular without them); ``what`` names the caller in the
+    errors.
+
+    Raises
+    ------
+    InputError
+        When the hard rows are too many for the border, or the KKT matrix is singular."""
+    hard_rows = int(ls.E.m - ls.eq_blocks[0][1].stop)
+    try:
+        try:
+            return _Posterior(ls, model), 0
+        except np.linalg.LinAlgError:
+            # hard items that fix a stretch of the trajectory on their own (a hard
+            # zero-velocity interval) can make a run of nodes singular by itself: their rows
+            # then go through the border's Schur complement, which stays exact
+            if hard_rows > MAX_BORDER_ROWS:
+                raise InputError(
+                    f"{what}: {hard_rows} hard-item rows fix stretches of the trajectory on "
+                    f"their own, more than the {MAX_BORDER_ROWS} the O(N) covariance can take "
+                    "through its border: give the long hard items (zero-velocity intervals) "
+                    "mode='soft' with a small sigma (e.g. sigma=1e-3 m/s), or solve without "
+                    f"{what}") from None
+            return _Posterior(ls, model, hard_to_border=True), hard_rows
+    except np.linalg.LinAlgError as exc:
+        raise InputError(f"{what}: the covariance does not exist ({exc}): the information "
+                         "does not determine every unknown. Add position or velocity "
+                         f"information, or solve without {what}") from exc
+
+
 def posterior(form: Formulation, x: np.ndarray, lam: float) -> Covariance:
     """The covariance of the estimate ``x`` of ``form`` at ``lam`` (see the module Notes).
 
@@ -435,28 +466,7 @@ def posterior(form: Formulation, x: np.ndarray, lam: float) -> Covariance:
     """
     model = form.model
     ls, exact = quadratic_model(form, x, lam)
-    hard_rows = int(ls.E.m - ls.eq_blocks[0][1].stop)
-    moved = 0
-    try:
-        try:
-            post = _Posterior(ls, model)
-        except np.linalg.LinAlgError:
-            # hard items that fix a stretch of the trajectory on their own (a hard
-            # zero-velocity interval) can make a run of nodes singular by itself: their rows
-            # then go through the border's Schur complement, which stays exact
-            if hard_rows > MAX_BORDER_ROWS:
-                raise InputError(
-                    f"uncertainty: {hard_rows} hard-item rows fix stretches of the trajectory on "
-                    f"their own, more than the {MAX_BORDER_ROWS} the O(N) covariance can take "
-                    "through its border: give the long hard items (zero-velocity intervals) "
-                    "mode='soft' with a small sigma (e.g. sigma=1e-3 m/s), or solve without "
-                    "uncertainty") from None
-            moved = hard_rows
-            post = _Posterior(ls, model, hard_to_border=True)
-    except np.linalg.LinAlgError as exc:
-        raise InputError(f"uncertainty: the covariance does not exist ({exc}): the information "
-                         "does not determine every unknown. Add position or velocity "
-                         "information, or solve without uncertainty") from exc
+    post, moved = _factored(ls, model, "uncertainty")
     d = model.d
     queries = [post.query(model.node_position(a).A) for a in range(d)]
     queries += [post.query(model.node_velocity(a).A) for a in range(d)]
@@ -525,6 +535,11 @@ def redundancy(form: Formulation, x: np.ndarray, lam: float) -> dict[str, tuple[
     estimation (Helmert; Foerstner's iteration) rescales each group's variances by
     :math:`\Omega_g / r_g` and solves again until every ratio is 1: the noise of each group
     estimated from its own residuals. For linearized items it is the last linearization's.
+    :math:`\Omega_g` is dimensionless (whitened rows); a soft item's rows carry the weight
+    ``lam``, so the iteration on them estimates :math:`\sigma^2/\lambda`: hold ``lam`` fixed (a
+    number, not a rule) or rescale by it. Rows that reach more than two neighbouring nodes (an
+    average over an interval, a velocity between samples) are refused; like :func:`posterior`,
+    a run of nodes fixed by hard items alone goes through the border.
 
     Examples
     --------
@@ -548,12 +563,18 @@ def redundancy(form: Formulation, x: np.ndarray, lam: float) -> dict[str, tuple[
                          "the redundancies exist for soft and hard equality items only")
     groups = [(DATA_GROUP, form.data_rows().m)]
     groups += [(t.label, t.residual.m) for t in form.terms() if t.least_squares_role() == "D"]
-    post = _Posterior(ls, form.model)
+    post, _ = _factored(ls, form.model, "redundancy")
     res = ls.D.value(np.asarray(x, dtype=float))
     out: dict[str, tuple[int, float, float]] = {}
     start = 0
     for label, m in groups:
-        h = post.cross(*[post.query(ls.D.A[start:start + m])] * 2) if m else np.zeros(0)
+        try:
+            h = post.cross(*[post.query(ls.D.A[start:start + m])] * 2) if m else np.zeros(0)
+        except SolveError as exc:   # a row over more than two neighbouring nodes
+            raise InputError(f"redundancy: the rows of {label!r} reach more than two neighbouring "
+                             "nodes (an average or a velocity between samples over a longer "
+                             "span), whose redundancy the O(N) selected inverse does not give; "
+                             "place them at samples, make them hard, or leave the item out") from exc
         r = res[start:start + m]
         m0, r0, o0 = out.get(label, (0, 0.0, 0.0))
         out[label] = (m0 + m, r0 + m - float(h.sum()), o0 + float(r @ r))

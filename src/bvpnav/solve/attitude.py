@@ -1246,7 +1246,6 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
                 iters[-1]["converged"] = True
                 break
     totals = sm.expand(raw, nodes)
-    sm.release(raw)
     if reason is None:
         _warn(sol, f"node-state loop did not converge in {o['max_iter']} iterations: the last step changed "
                    f"the attitude by {iters[-1]['step']:.3g} rad > tol={o['tol']:g} rad. Raise max_iter "
@@ -1254,6 +1253,7 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
                    "first node (ErrorStates(attitude_sigma=..., gyro_sigma=..., acc_sigma=...))")
     sol.error_states = sm.frame(raw, totals)
     sol.attitude = attitude_at(raw, totals)
+    sm.release(raw)
     sol.attitude_data = raw.attitude
     sol.records.attitude = AttitudeLoopReport(
         kind="states", iterations=iters, converged=reason is not None, reason=reason or "max_iter",
