@@ -858,8 +858,7 @@ def variance_components(d: dict, kept, method: str, fig: dict, c0, interval: flo
     f2, sig = scaled_noise(fig, scale)
     sigma = {g: sig["fix_sigma"] if g == "fix" else sig["nhc_sigma"] if g == "nhc" else f2[g] for g in agg}
     return {"scale": {g: scale.get(g, 1.0) for g in agg}, "sigma": sigma, "redundancy": red, "ratio": ratio,
-            "held": held, "iterations": len(history), "converged": converged, "history": history,
-            "solution": sol}
+            "held": held, "iterations": len(history), "converged": converged, "history": history}
 
 
 def run_vce(d: dict, kept, withheld, method: str, fig: dict, c0, interval: float) -> dict:

@@ -1534,12 +1534,10 @@ class ErrorStates(ErrorModel):
     def node_totals(self, data, s: np.ndarray) -> dict:
         r"""The totals at the nodes after the increments ``s``, kind -> (n, 3) (attitude by
         composition, biases by addition; the nodes of a coarse mesh, else every sample)."""
-        mesh = _mesh(data)
-        at = slice(None) if mesh is None else mesh
         out = {}
         for kind in self.state_kinds(data):
             d = np.asarray(s, dtype=float)[self.state_index(data, kind)]
-            tot = _totals(data, kind)[at] if mesh is None else _node_totals(data, kind)
+            tot = self.state_total(data, kind)
             if kind == "attitude_error":
                 out[kind] = _compose(Rotation.from_rotvec(d), Rotation.from_rotvec(tot)).as_rotvec()
             else:
