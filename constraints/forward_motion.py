@@ -13,6 +13,7 @@ from bvpnav.model import Affine
 
 from ._common import finite
 from .non_holonomic import (
+    NODES,
     body_instants,
     check_body_data,
     intervals,
@@ -51,8 +52,9 @@ class ForwardMotion(Item):
         :class:`~bvpnav.constraints.NonHolonomic`).
     t : (float, float) or list of them, optional
         Interval(s) in s where it holds; default the whole recording.
-    rate : float or None
-        Rate of the rows, Hz (default 10; ``None`` for every sample).
+    rate : float, ``"nodes"`` or None
+        Rate of the rows, Hz (default 10; ``None`` for every sample; ``"nodes"``: at the coarse
+        mesh's nodes, refused without one, as :class:`~bvpnav.constraints.NonHolonomic`'s).
     sigma, mode, huber, tol, name
         See :class:`bvpnav.items.Item`; in m/s. The default is hard (the bound holds); with
         ``sigma`` a violation is penalized (``lam sum (pos(g)/sigma)^2``); ``tol`` loosens the
@@ -117,8 +119,15 @@ class ForwardMotion(Item):
         the contract check then solves with it."""
         return isinstance(self.lever, str)
 
+    @property
+    def rows_at_nodes(self) -> bool:
+        """``rate="nodes"``: the rows sit at the coarse mesh's nodes and ask it for none
+        (:func:`bvpnav.mesh.item_times`)."""
+        return self.rate == NODES
+
     def instants(self, model) -> np.ndarray:
-        """The rows' times (s): the samples in the intervals at :attr:`rate`."""
+        """The rows' times (s): the samples in the intervals at :attr:`rate` (with ``"nodes"``
+        the mesh's nodes in them)."""
         return body_instants(model, self.t, self.rate, self.identify())
 
     def row_layout(self, m: int) -> tuple[int, int]:

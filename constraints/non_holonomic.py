@@ -65,13 +65,23 @@ def lever_arm(lever, label: str) -> tuple[float, float, float] | str:
     return tuple(float(a) for a in v)
 
 
-def positive_rate(rate, label: str) -> float | None:
-    """``None`` (every sample) or a rate in Hz > 0."""
+#: ``rate=NODES``: the rows at the coarse mesh's nodes (:func:`body_instants`).
+NODES = "nodes"
+
+
+def positive_rate(rate, label: str) -> float | str | None:
+    """``None`` (every sample), ``"nodes"`` (the coarse mesh's nodes) or a rate in Hz > 0."""
     if rate is None:
         return None
+    if isinstance(rate, str):
+        if rate.strip().lower() != NODES:
+            raise InputError(f"{label}: rate={rate!r}; give the rows' rate in Hz (> 0), 'nodes' (at the "
+                             "coarse mesh's nodes, segment=), or None for every sample")
+        return NODES
     r = finite(rate, label, "rate")
     if r.size != 1 or not float(r.ravel()[0]) > 0:
-        raise InputError(f"{label}: rate={rate!r}; give the rows' rate in Hz (> 0), or None for every sample")
+        raise InputError(f"{label}: rate={rate!r}; give the rows' rate in Hz (> 0), 'nodes' (at the coarse "
+                         "mesh's nodes, segment=), or None for every sample")
     return float(r.ravel()[0])
 
 
@@ -151,9 +161,13 @@ def check_body_data(model, who: str) -> None:
                          "gyro rates)")
 
 
-def body_instants(model, spans, rate: float | None, who: str) -> np.ndarray:
+def body_instants(model, spans, rate: float | str | None, who: str) -> np.ndarray:
     """The samples inside ``spans`` (the whole window when None), thinned to at most ``rate`` Hz:
-    per interval, the first sample at or after each of ``t0, t0 + 1/rate, ...`` (s)."""
+    per interval, the first sample at or after each of ``t0, t0 + 1/rate, ...`` (s); with
+    ``rate="nodes"`` the coarse mesh's nodes inside ``spans`` (a model without a mesh is refused:
+    its nodes are every sample)."""
+    if isinstance(rate, str):
+        return _node_instants(model, spans, who)
     t = getattr(model, "sample_grid", model).t   # every sample (a coarse mesh's nodes are some of them)
     eps = 1e-9 * max(1.0, abs(float(t[0])), abs(float(t[-1])))
     spans = ((float(t[0]), float(t[-1])),) if spans is None else spans
@@ -172,6 +186,30 @@ def body_instants(model, spans, rate: float | None, who: str) -> np.ndarray:
             inside = inside[pick]
         out.append(inside)
     return t[np.unique(np.concatenate(out))]
+
+
+def _node_instants(model, spans, who: str) -> np.ndarray:
+    """``rate="nodes"``: the nodes of the model's coarse mesh inside ``spans`` (s)."""
+    sample_grid = getattr(model, "sample_grid", None)
+    grid = getattr(model, "grid", None)
+    if sample_grid is None or grid is None or grid is sample_grid:
+        raise InputError(f"{who}: rate='nodes' puts the rows at a coarse mesh's nodes, but this problem has "
+                         "no mesh (every sample is a node: the rows would be as dense as the samples); give "
+                         "NavigationProblem(..., segment=1.0) or the rows' rate in Hz, e.g. rate=1.0")
+    t = np.asarray(grid.t, dtype=float)
+    eps = 1e-9 * max(1.0, abs(float(t[0])), abs(float(t[-1])))
+    if spans is None:
+        return t.copy()
+    keep = np.zeros(t.size, dtype=bool)
+    for a, b in spans:
+        if a < t[0] - eps or b > t[-1] + eps:
+            raise InputError(f"{who}: interval ({a:g}, {b:g}) s reaches outside the recording window "
+                             f"[{t[0]:g}, {t[-1]:g}] s; give intervals inside it (or omit t for all of it)")
+        inside = (t >= a - eps) & (t <= b + eps)
+        if not inside.any():
+            raise InputError(f"{who}: no mesh node lies in ({a:g}, {b:g}) s; widen the interval or drop it")
+        keep |= inside
+    return t[keep]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -212,11 +250,14 @@ class NonHolonomic(Item):
         makes the lateral rows :math:`v_y + K f_y v_x`; ``"estimated"``: :math:`K` is the
         parameter of :class:`~bvpnav.error_models.SideSlip` (add it to the error model, with
         its prior). Needs ``"y"`` in ``axes``.
-    rate : float or None
+    rate : float, ``"nodes"`` or None
         Rate of the rows, Hz (default 10): the samples nearest at or after ``t0 + k / rate``
         per interval; ``None`` for every sample. The errors of this information (tyre slip,
         misalignment) are correlated over many samples, so rows much denser than they
-        decorrelate add weight, not information.
+        decorrelate add weight, not information. ``"nodes"``: the rows at the nodes of the
+        coarse mesh (``NavigationProblem(..., segment=)``) inside the intervals, and nowhere
+        else (see Notes); refused without a mesh (there every sample is a node: rows as dense
+        as the samples, the overcount above at its worst).
     tol : float or array_like, optional
         Half-width of the band, m/s (per axis allowed). Default :data:`DEFAULT_TOL` = 0.1
         m/s in ``mode="band"`` (the default mode): the velocity may be anywhere within
@@ -243,6 +284,18 @@ class NonHolonomic(Item):
     :math:`\ell` is the unknown of :class:`~bvpnav.error_models.NhcLever` and
     :math:`\omega_k \times \ell = [\omega_k\times]\,\ell` is linear in it
     (:meth:`bvpnav.NavModel.vehicle_point_velocity`).
+
+    **Rows at the mesh's nodes** (``rate="nodes"``). On a coarse mesh the unknowns are the
+    nodes' positions, velocities and states; between nodes the velocity is not an unknown but
+    the conditional mean of the samples' residuals given the element's loads
+    (:func:`bvpnav.mesh.rows_inside_elements`, :meth:`bvpnav.mesh.MeshModel.sample_velocity`),
+    which a row profile inside an element can only pull through those two loads per axis.
+    At the nodes the rows read the model's velocity and attitude error where it has them,
+    and need no nodes of their own (the mesh is built first, from the other items and
+    ``segment``; the rows follow it). It is also the honest weight: what this information
+    gets wrong (tyre slip, a mounting misalignment, suspension travel) is correlated over
+    about a second, so rows at 10 Hz with independent sigmas count each error about ten
+    times; one row per node of a 1 s mesh counts it about once.
 
     **Side slip** (``slip=``). A car is not non-holonomic in a turn: a tyre carries a lateral
     force by rolling at a slip angle :math:`\alpha` to its heading, and in the linear range
@@ -334,13 +387,20 @@ class NonHolonomic(Item):
         "estimated"``): the contract check then solves with it."""
         return self.mounting is not None or isinstance(self.lever, str) or isinstance(self.slip, str)
 
+    @property
+    def rows_at_nodes(self) -> bool:
+        """``rate="nodes"``: the rows sit at the coarse mesh's nodes and ask it for none
+        (:func:`bvpnav.mesh.item_times`)."""
+        return self.rate == NODES
+
     def row_layout(self, m: int) -> tuple[int, int]:
         """``(instants, body axes)``: sigma and tol may be given per axis."""
         a = len(self.axes)
         return (m // a, a) if m % a == 0 else (m, 1)
 
     def instants(self, model) -> np.ndarray:
-        """The rows' times (s): the samples in the intervals at :attr:`rate`."""
+        """The rows' times (s): the samples in the intervals at :attr:`rate` (with ``"nodes"``
+        the mesh's nodes in them)."""
         return body_instants(model, self.t, self.rate, self.identify())
 
     @classmethod

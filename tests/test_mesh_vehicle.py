@@ -205,6 +205,9 @@ def test_contract_on_a_mesh_model():
     check_item(NonHolonomic, model)
     check_item(ForwardMotion, model)
     check_item(NonHolonomic(sigma=0.05, axes=("x", "y", "z"), rate=None, lever=(0.4, -0.2, 0.1)), model)
+    check_item(NonHolonomic(rate="nodes", lever=(-0.5, 0.0, -0.3), t=[(0.0, 4.0), (6.0, 10.0)]), model)
+    check_item(NonHolonomic(rate="nodes", sigma=0.05, lever=(0.4, -0.2, 0.1)), model)
+    check_item(ForwardMotion(rate="nodes", min_speed=0.5, max_speed=30.0, lever=(-0.5, 0.0, 0.0)), model)
 
 
 def test_what_the_mesh_still_refuses():
@@ -219,3 +222,31 @@ def test_what_the_mesh_still_refuses():
 
     with pytest.raises(InputError, match="GyroBias.*not carried.*segment=None"):
         _ = _mesh_problem(data, GyroBias(interval=20.0)).formulation.model
+
+
+def test_rows_at_the_nodes_follow_the_mesh_and_ask_it_for_none():
+    """``rate="nodes"``: one row per node (inside the intervals) of the mesh the other items and
+    ``segment`` make, held or soft; the mesh is the one without the rows, and a problem without a
+    mesh refuses it, naming the fix."""
+    drive = car_drive(duration=60.0, rate=20.0, grade="tactical", seed=1)
+    data = drive.data()
+    plain = _mesh_problem(data).formulation.model
+    for item in (NonHolonomic(rate="nodes"), NonHolonomic(rate="Nodes", sigma=0.1),
+                 ForwardMotion(rate="nodes"), NonHolonomic(rate="nodes", mode="hard")):
+        assert item.rate == "nodes" and item.rows_at_nodes
+        model = _mesh_problem(data).add(item).formulation.model
+        np.testing.assert_array_equal(model.grid.t, plain.grid.t)
+        np.testing.assert_array_equal(item.instants(model), plain.grid.t)
+    spans = NonHolonomic(rate="nodes", t=[(5.0, 20.0), (30.0, 41.3)])
+    model = _mesh_problem(data).add(spans).formulation.model
+    t = model.grid.t
+    expect = t[((t >= 5.0) & (t <= 20.0)) | ((t >= 30.0) & (t <= 41.3))]
+    np.testing.assert_array_equal(spans.instants(model), expect)
+    assert expect.size == 16 + 12 + 1 and 41.3 in expect     # the interval ends are nodes (its t)
+    assert not NonHolonomic(rate=1.0).rows_at_nodes and not ForwardMotion(rate=None).rows_at_nodes
+    with pytest.raises(InputError, match=r"NonHolonomic.*rate='nodes'.*no mesh.*segment=1.0.*rate=1.0"):
+        _mesh_problem(data, segment=None).add(NonHolonomic(rate="nodes")).formulation.terms()
+    with pytest.raises(InputError, match=r"rate='node'.*'nodes'"):
+        NonHolonomic(rate="node")
+    with pytest.raises(InputError, match=r"ForwardMotion.*rate=-1.*'nodes'"):
+        ForwardMotion(rate=-1)

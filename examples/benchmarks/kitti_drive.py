@@ -697,7 +697,15 @@ VEHICLE = {"bvpnav NHC soft": ("soft", False), "bvpnav NHC band": ("band", False
            "bvpnav states mesh NHC slip known": ("soft", False),
            "bvpnav states mesh NHC+FM slip": ("soft", True),
            "bvpnav states mesh NHC slip sigma": ("soft", False),
-           "bvpnav states mesh NHC lever slip": ("soft", False)}
+           "bvpnav states mesh NHC lever slip": ("soft", False),
+           "bvpnav states mesh NHC soft nodes": ("soft", False),
+           "bvpnav states mesh NHC band nodes": ("band", False),
+           "bvpnav states mesh NHC+FM band nodes": ("band", True),
+           "bvpnav states mesh NHC soft+FM nodes": ("soft", True)}
+#: The methods whose vehicle rows sit at the 1 s mesh's nodes (``rate="nodes"``, issue 39), instead of
+#: :data:`NHC_RATE`: one row per node and axis, no node of their own.
+AT_NODES = ("bvpnav states mesh NHC soft nodes", "bvpnav states mesh NHC band nodes",
+            "bvpnav states mesh NHC+FM band nodes", "bvpnav states mesh NHC soft+FM nodes")
 #: The methods that estimate the IMU's mounting (yaw and pitch boresight) with the non-holonomic
 #: rows (``NonHolonomic(mounting="estimated")``), prior sigma :data:`MOUNT_SIGMA`.
 MOUNTED = ("bvpnav states NHC mount", "bvpnav NHC+FM mount", "bvpnav states mesh NHC mount",
@@ -1168,10 +1176,11 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float, *, fix_s
         slip = "estimated" if method in SLIPPED else SIDE_SLIP_PRIOR if method in SLIP_KNOWN else None
         if method in SLIP_NOISE:
             width = {"sigma": slip_sigma(d, kept, data)}
-        prob.add(NonHolonomic(axes=("y", "z"), lever=lever, rate=NHC_RATE, mode=mode, **width, slip=slip,
+        rate = "nodes" if method in AT_NODES else NHC_RATE
+        prob.add(NonHolonomic(axes=("y", "z"), lever=lever, rate=rate, mode=mode, **width, slip=slip,
                               mounting="estimated" if method in MOUNTED else None, name="non-holonomic"))
         if forward:
-            prob.add(ForwardMotion(min_speed=0.0, lever=lever, rate=NHC_RATE, name="forward"))
+            prob.add(ForwardMotion(min_speed=0.0, lever=lever, rate=rate, name="forward"))
     return prob
 
 

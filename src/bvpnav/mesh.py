@@ -108,7 +108,9 @@ def item_times(items, grid=None) -> np.ndarray:
     """Every instant (s) the items name in their time fields (:data:`TIME_FIELDS`) and, with
     the samples' ``grid``, the instants of items that list them (``instants(grid)``, e.g.
     :class:`~bvpnav.constraints.ZeroVelocity`: every sample of its interval), except the rows
-    that stay inside elements (:func:`rows_inside_elements`).
+    that stay inside elements (:func:`rows_inside_elements`) and the rows that sit at the mesh's
+    own nodes (an item whose ``rows_at_nodes`` is true, e.g. ``NonHolonomic(rate="nodes")``:
+    they follow the mesh, so they ask it for no node).
 
     Raises
     ------
@@ -122,7 +124,8 @@ def item_times(items, grid=None) -> np.ndarray:
                              "coarse "
                              "mesh (segment=) cannot give them nodes; solve on every sample (segment=None)")
         inst = getattr(it, "instants", None)
-        if grid is not None and callable(inst) and not rows_inside_elements(it):
+        if (grid is not None and callable(inst) and not rows_inside_elements(it)
+                and getattr(it, "rows_at_nodes", False) is not True):
             try:
                 out.append(np.asarray(inst(grid), dtype=float).ravel())
             except (TypeError, AttributeError, ValueError):   # instants of a model, not of a grid

@@ -161,6 +161,16 @@ def _allowed_columns(model: NavModel, axes: tuple[str, ...]) -> set[int]:
     return cols | set(model.l_index.tolist())
 
 
+def _segment(model: NavModel) -> float | None:
+    """The coarse mesh's ``segment`` (s) of a :class:`bvpnav.mesh.MeshModel` without node states
+    (the checks solve on it too), else None."""
+    from .mesh import MeshModel
+
+    if isinstance(model, MeshModel) and model.state_model is None:
+        return model.segment
+    return None
+
+
 def _other_model(model: NavModel) -> NavModel:
     """The same axes and window on a coarser grid (navigation-frame accelerations; strapdown
     data with gyro rates stay strapdown, with the same error model)."""
@@ -173,6 +183,11 @@ def _other_model(model: NavModel) -> NavModel:
 
         coarse = ImuData.from_gyro(t2, on(data.specific_force), on(data.gyro),
                                    initial_attitude=data.attitude[0], gravity=data.gravity)
+        segment = _segment(model)
+        if segment is not None:   # a coarse mesh stays a mesh (items may read its nodes)
+            from .mesh import MeshModel
+
+            return MeshModel(coarse, model.error_model, segment=segment, times=[t2[0], t2[-1]])
         return NavModel(coarse, model.error_model)
     acc = np.column_stack([np.interp(t2, t, data.acc[:, a]) for a in range(model.d)])
     return NavModel(ImuData(t2, acc, axes=model.axes))
@@ -261,7 +276,7 @@ def _solve_with(item: Item, model: NavModel, mode: str, who: str) -> None:
         # or reads a parameter of it (``reads_error_model``: NonHolonomic(mounting="estimated"))
         reads = item.needs_error_model or getattr(item, "reads_error_model", False)
         em = model.error_model if reads else None
-        prob = NavigationProblem(model.data, error_model=em)
+        prob = NavigationProblem(model.data, error_model=em, segment=_segment(model))
         prob.add(base, checked)
         sol = prob.solve(lam=1.0)
     _require(sol.stats.get("verified"), who, rule, f"the solve was not verified ({sol.stats.get('status')})")
@@ -343,7 +358,9 @@ def check_item(item_or_class: Item | type[Item], model: NavModel | None = None) 
       with ``tol=0.1``; 'solves when soft' and 'solves when robust': the same with
       ``sigma=1`` (robust: ``huber=1``) beside hard end positions (all on
       ``model.data`` without the error model, whose parameters these items alone need
-      not determine);
+      not determine). On a coarse mesh's model (:class:`bvpnav.mesh.MeshModel` without
+      node states) the coarser model is a mesh of the same ``segment`` and the solves are
+      on the mesh (an item may read its nodes: ``NonHolonomic(rate="nodes")``);
     - 'linearized': an item with ``needs_linearization`` True is not compiled or solved
       itself; its ``linearized(t, trajectory)`` about the solution with positions 0 at
       both ends must no longer need linearization and is put through every rule above.
