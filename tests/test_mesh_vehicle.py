@@ -15,6 +15,7 @@ from bvpnav.constraints import ForwardMotion, NonHolonomic, Position
 from bvpnav.error_models import Bias, ErrorStates, Mounting
 from bvpnav.errors import InputError
 from bvpnav.mesh import MeshModel
+from bvpnav.model import Affine
 from bvpnav.scenarios import car_drive
 from bvpnav.sensors import grade
 from bvpnav.testing import check_item
@@ -250,3 +251,63 @@ def test_rows_at_the_nodes_follow_the_mesh_and_ask_it_for_none():
         NonHolonomic(rate="node")
     with pytest.raises(InputError, match=r"ForwardMotion.*rate=-1.*'nodes'"):
         ForwardMotion(rate=-1)
+
+
+def test_node_time_fast_paths_are_the_general_rows(monkeypatch):
+    """At node times the velocity rows are the model's node rows (made once) and the attitude error
+    is the node states' own columns and totals (no columns of every sample): the same A and c as
+    the general paths (the attitude error read with a time inside an element among them, the
+    velocity at each time alone), at a node-state loop's point with nonzero totals."""
+    drive = car_drive(duration=60.0, rate=20.0, grade="tactical", seed=1)
+    g = grade("tactical")
+    em = ErrorStates(arw=g.gyro_noise, gyro_drift=g.gyro_bias_walk, acc_drift=g.acc_bias_walk,
+                     attitude_sigma=[0.02, 0.02, 0.2], gyro_sigma=g.gyro_bias, acc_sigma=g.acc_bias)
+    keep = np.arange(0, drive.fix_t.size, 20)
+    prob = bvpnav.NavigationProblem(drive.data(), error_model=em, sigma_a=g.acc_noise * np.sqrt(20.0),
+                                    segment=1.0)
+    prob.add(Position(t=drive.fix_t[keep], value=drive.fix_position[keep],
+                      sigma=np.tile(drive.fix_sigma, (keep.size, 1))), NonHolonomic(sigma=0.1, rate="nodes"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sol = prob.solve(solver="direct", attitude={"progress": False})
+    model = sol.formulation.model
+    assert isinstance(model, MeshModel) and model.ns and sol.stats["verified"]
+    tot = model.state_model.state_total(model.data, "attitude_error")
+    assert np.abs(tot).max() > 1e-3               # a point away from the data as measured
+    nodes = model.grid.t[3:-2:2]
+    inside = model.fine.t[np.flatnonzero(model.cond.element >= 0)[::37]]
+    mixed = np.sort(np.r_[nodes, inside])
+    at = np.searchsorted(mixed, nodes)
+
+    def same(fast, general):
+        assert fast.A.shape == general.A.shape and fast.A.shape[0] > 0
+        assert abs(fast.A - general.A).max() <= 1e-12 * max(abs(general.A).max(), 1.0)
+        assert np.abs(fast.c - general.c).max() <= 1e-12 * max(np.abs(general.c).max(), 1.0)
+
+    for axes in (None, ("y", "z"), "x"):
+        na = 3 if axes is None else len(axes)
+        rows = (at[:, None] * na + np.arange(na)).ravel()
+        fast = model.states("attitude_error", nodes, axes)
+        assert list(fast.labels) == list(model.states("attitude_error", mixed, axes).rows(rows).labels)
+        same(fast, model.states("attitude_error", mixed, axes).rows(rows))
+        names = None if axes is None else list(np.atleast_1d(axes))
+        one = Affine.vstack([model.velocity([t], names) for t in nodes])   # each time alone
+        same(model.sample_velocity(nodes, names), one)
+        same(model.sample_velocity(mixed, names).rows(rows), one)
+    # the node rows of the attitude error: the node's own state, its total the node's
+    k = np.searchsorted(model.grid.t, nodes)
+    idx = model.state_model.state_index(model.data, "attitude_error")[k] + model.s_index[0]
+    fast = model.states("attitude_error", nodes)
+    np.testing.assert_array_equal(fast.A.indices, idx.ravel())
+    np.testing.assert_array_equal(fast.A.data, 1.0)
+    np.testing.assert_array_equal(fast.c, tot[k].ravel())
+    # made without the columns of every sample
+    model.__dict__.pop("_att_cols", None)
+
+    def every_sample(*args):
+        raise AssertionError("the attitude columns of every sample were made")
+
+    monkeypatch.setattr(type(model.state_model), "attitude_columns", every_sample)
+    same(model.states("attitude_error", nodes), fast)
+    with pytest.raises(AssertionError, match="every sample were made"):
+        model.states("attitude_error", mixed)

@@ -77,7 +77,7 @@ import scipy.sparse as sp
 
 from . import fem
 from .errors import InputError
-from .grid import MeshGrid, TimeGrid, as_times, mesh_nodes
+from .grid import EDGE_SLACK, MeshGrid, TimeGrid, as_times, mesh_nodes
 from .imu import ImuData
 from .model import Affine, NavModel, TimeLabels, _body_axes, canonical_csr, columns_csr, state_component
 from .sparse import as_csr
@@ -366,25 +366,11 @@ class MeshModel(NavModel):
         return by_sums(self.data, W)
 
     @functools.cached_property
-    def _element_state_columns(self) -> tuple[list, list]:
-        r"""``Cp @ Gs[a]`` and ``Cq @ Gs[a]`` of every axis ((n - 1, ns) each, s): the node states'
-        loads of every element on its two nodes, made once per model (one pass over the
-        samples); the condensed rows and the velocities at nodes are made of them."""
-        both = self._state_times(self._element_loads())
-        m = self.N - 1
-        return [b[:m] for b in both], [b[m:] for b in both]
-
-    def _element_loads(self) -> sp.csr_matrix:
-        """``Cp`` stacked on ``Cq`` ((2 (n - 1), N): every element's loads on its two nodes),
-        kept on the formulation's copy of the measured data (the loop's steps share it)."""
-        c = self.cond
-        raw = getattr(getattr(self.data, "state_point", None), "raw", self.data)
-        W = raw.__dict__.get("_mesh_element_loads") if getattr(raw, "state_mesh", None) is not None else None
-        if W is None or W[0] is not c:
-            W = (c, sp.vstack([c.Cp, c.Cq]).tocsr())
-            if getattr(raw, "state_mesh", None) is not None:
-                raw.__dict__["_mesh_element_loads"] = W
-        return W[1]
+    def _left_element_state_columns(self) -> list:
+        r"""``Cq @ Gs[a]`` of every axis ((n - 1, ns), s): the node states' loads of every element
+        on its right node, made once per model (one pass over the samples); the velocities at
+        the nodes (from the element on their left) are made of them."""
+        return self._state_times(self.cond.Cq)
 
     @functools.cached_property
     def _load_change(self) -> np.ndarray | None:
@@ -508,7 +494,7 @@ class MeshModel(NavModel):
         if self.ns:   # the left element's loads (Cq G_s), and the samples' columns inside one-step elements
             Fm = F - place @ self.cond.Cq[ji - 1]
             Fm.eliminate_zeros()
-            FGs = [place @ CqG[ji - 1] for CqG in self._element_state_columns[1]]
+            FGs = [place @ CqG[ji - 1] for CqG in self._left_element_state_columns]
             if Fm.nnz:
                 FGs = [canonical_csr(a + b) for a, b in zip(FGs, self._state_times(Fm), strict=True)]
             else:
@@ -687,7 +673,12 @@ class MeshModel(NavModel):
         ins = np.flatnonzero(inner)
         parts = []
         if rest.size:
-            parts.append(self.velocity(times[rest], [self.axes[a] for a in ax], what))
+            node = self._node_of(times[rest])
+            if np.all(node >= 0):   # the nodes' own rows, made once per model (:meth:`velocity`'s)
+                rows = node[:, None] * self.d + np.asarray(ax)[None, :]
+                parts.append(self._node_velocities.rows(rows.ravel()))
+            else:
+                parts.append(self.velocity(times[rest], [self.axes[a] for a in ax], what))
         if ins.size:
             parts.append(self._inner_velocity(near[ins], ax))
         out = Affine.vstack(parts)
@@ -750,7 +741,9 @@ class MeshModel(NavModel):
         r"""As :meth:`bvpnav.NavModel.states`, at any time: the biases linear between the nodes;
         the attitude error at a sample inside an element the left node's carried by the corrected
         rates (:meth:`bvpnav.error_models.ErrorStates.attitude_columns`: its total at the sample
-        plus the exact first-order change), linear between samples."""
+        plus the exact first-order change), linear between samples. When every time is a node, the
+        attitude error is the node states' own (their columns and totals, as the biases'): the
+        same rows without the columns of every sample."""
         if t is None or kind not in getattr(self.state_model, "state_kinds", lambda d: [])(self.data):
             return super().states(kind, t, axes, what)
         what = what or kind.replace("_", " ")
@@ -760,14 +753,20 @@ class MeshModel(NavModel):
         point = getattr(self.data, "state_point", None)
         totals = None if point is None else point.totals.get(kind)
         parts = []
-        if kind == "attitude_error":
+        node = self._node_of(times)
+        if kind == "attitude_error" and np.any(node < 0):
             P = self.fine.interpolation_matrix(times, what)
             cols = self._attitude_state_columns()
             total = np.zeros((self.fine.n, 3)) if totals is None else np.asarray(totals, dtype=float)
             for a in ax:
                 parts.append(Affine(self._place({"s": canonical_csr(P @ cols[a])}, 0), P @ total[:, a]))
         else:
-            P = TimeGrid(self.grid.t).interpolation_matrix(times, what)
+            # a bias linear between the nodes; the attitude error at the nodes only: the node state
+            # itself (no columns of every sample), its total the node's
+            if kind == "attitude_error":
+                P = sp.csr_matrix((np.ones(times.size), (np.arange(times.size), node)), shape=(times.size, n))
+            else:
+                P = TimeGrid(self.grid.t).interpolation_matrix(times, what)
             idx = np.asarray(sm.state_index(self.data, kind), dtype=np.int64)
             total = np.asarray(sm.state_total(self.data, kind), dtype=float)
             for a in ax:
@@ -775,6 +774,15 @@ class MeshModel(NavModel):
                 parts.append(Affine(self._place({"s": canonical_csr(P @ S)}, 0), P @ total[:, a]))
         out = self._interleave(parts, times.size)
         return Affine(out.A, out.c, TimeLabels(f"{kind}_", list(names), times))
+
+    def _node_of(self, times: np.ndarray) -> np.ndarray:
+        """The node of each of ``times`` (s) within rounding of one (as :meth:`MeshGrid.snapped`),
+        -1 for the others."""
+        g = self.grid
+        tol = EDGE_SLACK * max(g.duration, 1.0)
+        k = np.clip(np.searchsorted(g.t, times), 0, g.n - 1)
+        near = np.where((k > 0) & (np.abs(g.t[k - 1] - times) < np.abs(g.t[k] - times)), k - 1, k)
+        return np.where(np.abs(g.t[near] - times) <= tol, near, -1)
 
     def _attitude_state_columns(self) -> list:
         """:meth:`bvpnav.error_models.ErrorStates.attitude_columns` of this model's data, made once."""
