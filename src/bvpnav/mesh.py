@@ -675,8 +675,9 @@ class MeshModel(NavModel):
         if rest.size:
             node = self._node_of(times[rest])
             if np.all(node >= 0):   # the nodes' own rows, made once per model (:meth:`velocity`'s)
-                rows = node[:, None] * self.d + np.asarray(ax)[None, :]
-                parts.append(self._node_velocities.rows(rows.ravel()))
+                rows = (node[:, None] * self.d + np.asarray(ax)[None, :]).ravel()
+                V = self._node_velocities
+                parts.append(Affine(V.A[rows], V.c[rows]))   # labelled below
             else:
                 parts.append(self.velocity(times[rest], [self.axes[a] for a in ax], what))
         if ins.size:
@@ -750,11 +751,11 @@ class MeshModel(NavModel):
         names, ax = _body_axes(axes, what, "axes")
         times = self.fine.check_inside(as_times(t, what), what)
         sm, n = self.state_model, self.N
-        point = getattr(self.data, "state_point", None)
-        totals = None if point is None else point.totals.get(kind)
         parts = []
         node = self._node_of(times)
         if kind == "attitude_error" and np.any(node < 0):
+            point = getattr(self.data, "state_point", None)
+            totals = None if point is None else point.totals.get(kind)
             P = self.fine.interpolation_matrix(times, what)
             cols = self._attitude_state_columns()
             total = np.zeros((self.fine.n, 3)) if totals is None else np.asarray(totals, dtype=float)
