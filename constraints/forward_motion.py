@@ -21,6 +21,7 @@ from .non_holonomic import (
     point_rows,
     positive_rate,
     vehicle_example_model,
+    without_rounding_noise,
 )
 
 __all__ = ["ForwardMotion"]
@@ -148,6 +149,8 @@ class ForwardMotion(Item):
         who = self.identify()
         check_body_data(model, who)
         s = point_rows(model, self.instants(model), self.axis, self.lever, who)
+        if self.rows_at_nodes:
+            s = without_rounding_noise(s)
         low = Affine(-s.A, self.min_speed - s.c, tuple(f"{lab} >= {self.min_speed:g}" for lab in s.labels))
         if self.max_speed is None:
             return low

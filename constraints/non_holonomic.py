@@ -144,6 +144,41 @@ def point_rows(model, t, axes, lever, who: str):
     return model.body_velocity(t, axes, lever, what=who)
 
 
+#: Entries of a row smaller than this times the row's largest are rounding noise of exact zeros
+#: (:func:`without_rounding_noise`).
+ROUNDING_NOISE = 1e-14
+
+
+def without_rounding_noise(rows):
+    r"""``rows`` without the entries below :data:`ROUNDING_NOISE` times their row's largest.
+
+    A body-frame row at a sample :math:`q` holds :math:`C_q^T` times the velocity's columns; where
+    those hold :math:`C_q` itself (the accelerometer bias's columns of the sample's own state, in
+    an element of one sample step) the product is :math:`C_q^T C_q = I`, whose off-diagonal
+    entries come out of the sums as rounding noise (about 1e-20) or as exact zeros, differently
+    from one linearization point to the next. Sparse rows drop exact zeros, so the rows' pattern
+    would change between Gauss-Newton steps, and with it the banded plan's analysis
+    (:class:`bvpnav.linalg.banded.BandPlan`), made again every step. Dropped, the pattern is
+    the structure's; the values change by less than the rounding of the row's own sums.
+    """
+    import scipy.sparse as sp
+
+    from bvpnav.model import Affine
+
+    A = sp.csr_matrix(rows.A, copy=True)
+    if A.nnz == 0:
+        return rows
+    big = np.maximum.reduceat(np.abs(A.data), A.indptr[:-1][np.diff(A.indptr) > 0])
+    scale = np.zeros(A.shape[0])
+    scale[np.diff(A.indptr) > 0] = big
+    small = np.abs(A.data) < ROUNDING_NOISE * np.repeat(scale, np.diff(A.indptr))
+    if not small.any():
+        return rows
+    A.data[small] = 0.0
+    A.eliminate_zeros()
+    return Affine(A, rows.c, rows.labels)
+
+
 def lever_text(lever) -> str:
     """The lever for ``math()``: its coordinates, or the estimated point."""
     if isinstance(lever, str):
@@ -421,11 +456,11 @@ class NonHolonomic(Item):
         rows = point_rows(model, t, self.axes, self.lever, who)
         if self.slip is not None:
             rows = rows + slip_rows(model, t, self.axes, self.lever, self.slip, who)
-        if self.mounting is None:
-            return rows
-        lever = None if isinstance(self.lever, str) else self.lever
-        # no constant: the rows' labels and c
-        return rows + model.mounting_velocity(t, self.axes, lever=lever, what=who)
+        if self.mounting is not None:
+            lever = None if isinstance(self.lever, str) else self.lever
+            # no constant: the rows' labels and c
+            rows = rows + model.mounting_velocity(t, self.axes, lever=lever, what=who)
+        return without_rounding_noise(rows) if self.rows_at_nodes else rows
 
     def active(self, solution, rtol: float = 1e-3):
         """The rows at the band's edge in a solution: where the vehicle slid by at least ``tol``.

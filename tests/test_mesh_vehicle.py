@@ -301,6 +301,14 @@ def test_node_time_fast_paths_are_the_general_rows(monkeypatch):
     np.testing.assert_array_equal(fast.A.indices, idx.ravel())
     np.testing.assert_array_equal(fast.A.data, 1.0)
     np.testing.assert_array_equal(fast.c, tot[k].ravel())
+    # the body rows at the nodes: every axis made once per model, the axes asked for taken from them
+    for axes, lever in ((("y", "z"), (0.0, 0.0, 0.0)), ("x", (0.0, 0.0, 0.0)), (None, (-1.2, 0.3, -0.4))):
+        got = model.body_velocity(nodes, axes, lever)
+        assert np.array_equal(got.c, bvpnav.NavModel.body_velocity(model, nodes, axes, lever).c)
+        same(got, bvpnav.NavModel.body_velocity(model, nodes, axes, lever))
+        assert list(got.labels) == list(bvpnav.NavModel.body_velocity(model, nodes, axes, lever).labels)
+        on = np.flatnonzero(np.repeat(np.isin(mixed, nodes), got.m // nodes.size))
+        same(model.body_velocity(mixed, axes, lever).rows(on), got)
     # made without the columns of every sample
     model.__dict__.pop("_att_cols", None)
 
@@ -311,3 +319,26 @@ def test_node_time_fast_paths_are_the_general_rows(monkeypatch):
     same(model.states("attitude_error", nodes), fast)
     with pytest.raises(AssertionError, match="every sample were made"):
         model.states("attitude_error", mixed)
+
+
+def test_rounding_noise_of_exact_zeros_is_dropped_from_rows_at_the_nodes():
+    """Entries below 1e-14 of their row's largest (the off-diagonal rounding of C^T C = I) are
+    dropped, so the rows' pattern does not move between linearization points; the others and the
+    constants stay as they are."""
+    import scipy.sparse as sp
+
+    from bvpnav.constraints.non_holonomic import without_rounding_noise
+
+    A = sp.csr_matrix(np.array([[1.0, 3e-21, -2e-8, 0.0], [0.0, 5e-3, -4e-17, 1e-16], [0.0, 0.0, 0.0, 0.0]]))
+    rows = without_rounding_noise(Affine(A, np.array([1.0, 2.0, 3.0]), ("a", "b", "c")))
+    np.testing.assert_array_equal(rows.A.toarray(), [[1.0, 0.0, -2e-8, 0.0], [0.0, 5e-3, 0.0, 1e-16],
+                                                     [0.0, 0.0, 0.0, 0.0]])
+    assert rows.A.nnz == 4 and list(rows.c) == [1.0, 2.0, 3.0] and tuple(rows.labels) == ("a", "b", "c")
+    assert np.array_equal(A.toarray()[0], [1.0, 3e-21, -2e-8, 0.0])      # the input is not changed
+    drive = car_drive(duration=60.0, rate=20.0, grade="tactical", seed=1)
+    model = _mesh_problem(drive.data()).formulation.model
+    for item in (NonHolonomic(rate="nodes"), ForwardMotion(rate="nodes")):
+        got = item.compile(model).A
+        full = (bvpnav.NavModel.body_velocity(model, model.grid.t, item.axes or "x")).A
+        big = np.repeat(abs(full).max(axis=1).toarray().ravel(), np.diff(got.indptr))
+        assert np.all(np.abs(got.data) >= 1e-14 * big) and got.nnz <= full.nnz

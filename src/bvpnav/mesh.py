@@ -689,6 +689,25 @@ class MeshModel(NavModel):
         order = (pos[:, None] * nax + np.arange(nax)[None, :]).ravel()
         return Affine(out.A[order], out.c[order], self._labels("v", times, ax))
 
+    def body_velocity(self, t, axes=None, lever=(0.0, 0.0, 0.0), what: str = "body velocity") -> Affine:
+        """As :meth:`bvpnav.NavModel.body_velocity`; at node times the rows of every body axis are
+        made once per model and the axes asked for taken from them (the non-holonomic rows and
+        forward motion at the nodes, ``rate="nodes"``, read the same rows)."""
+        try:
+            times = as_times(t, what)
+            key = (times.tobytes(), np.asarray(lever, dtype=float).reshape(3).tobytes())
+        except (InputError, TypeError, ValueError):
+            return super().body_velocity(t, axes, lever, what)   # which says what is wrong
+        if times.size == 0 or np.any(self._node_of(times) < 0):
+            return super().body_velocity(t, axes, lever, what)
+        kept = self.__dict__.get("_node_body_rows")
+        if kept is None or kept[0] != key:
+            kept = self.__dict__["_node_body_rows"] = (key, super().body_velocity(times, None, lever, what))
+        names, jb = _body_axes(axes, what)
+        rows = (np.arange(times.size)[:, None] * 3 + np.asarray(jb)[None, :]).ravel()
+        every = kept[1]
+        return Affine(every.A[rows], every.c[rows], TimeLabels("vb_", list(names), times))
+
     def _inner_velocity(self, i: np.ndarray, ax) -> Affine:
         """:meth:`sample_velocity` at samples ``i`` strictly inside elements (see its Notes)."""
         self._check_full_point("velocities")
