@@ -231,7 +231,7 @@ velocity of every sample for them (``MeshModel.point_velocities``, the trajector
 sample in the attitude loop) 0.09-0.11 s, of which rows at the nodes read only the nodes (a scratch
 patch, not kept, that made it at the nodes only, linear in between: the same RMS to the last digit and
 0.47 / 0.59 / 0.50 s against 0.61 / 0.67 / 0.63 s for the band, 0.51 / 0.54 / 0.49 s against 0.63 / 0.64 /
-0.57 s with ``ForwardMotion``, best of three in one process, about 2.3-2.8x the plain mesh's 0.19-0.21 s
+0.57 s with ``ForwardMotion``, best of three in one process, about 2.2-2.8x the plain mesh's 0.19-0.21 s
 there: the loop would ask for it when every body-frame item has its rows at the nodes); the interior
 point's set-up per step (its least-squares form, the multiplier band) 0.18 s of 1.39 s under cProfile.
 Before the rows dropped their rounding noise of exact zeros (``without_rounding_noise``) the banded
