@@ -321,6 +321,50 @@ def test_node_time_fast_paths_are_the_general_rows(monkeypatch):
         model.states("attitude_error", mixed)
 
 
+def test_rows_at_the_nodes_linearize_about_the_node_velocities(monkeypatch):
+    """With every body-frame row at the nodes the node-state loop's velocity point is the node
+    velocities (linear between them, which no row reads): at the nodes the recovered trajectory's
+    own to rounding, and the answer the one linearized about every sample's velocity (the same
+    steps, positions to 1e-9 m)."""
+    import bvpnav.solve.attitude as attitude
+
+    drive = car_drive(duration=60.0, rate=20.0, grade="tactical", seed=1)
+    g = grade("tactical")
+    keep = np.arange(0, drive.fix_t.size, 20)
+
+    def solve():
+        em = ErrorStates(arw=g.gyro_noise, gyro_drift=g.gyro_bias_walk, acc_drift=g.acc_bias_walk,
+                         attitude_sigma=[0.02, 0.02, 0.2], gyro_sigma=g.gyro_bias, acc_sigma=g.acc_bias)
+        prob = bvpnav.NavigationProblem(drive.data(), error_model=em, sigma_a=g.acc_noise * np.sqrt(20.0),
+                                        segment=1.0)
+        prob.add(Position(t=drive.fix_t[keep], value=drive.fix_position[keep],
+                          sigma=np.tile(drive.fix_sigma, (keep.size, 1))),
+                 NonHolonomic(rate="nodes"), ForwardMotion(rate="nodes"))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return prob.solve(solver="direct", attitude={"progress": False})
+
+    calls = []
+    node_point = MeshModel.node_point_velocities
+    monkeypatch.setattr(MeshModel, "node_point_velocities",
+                        lambda self, x: calls.append(1) or node_point(self, x))
+    fast = solve()
+    model = fast.formulation.model
+    assert calls and fast.stats["verified"] and fast.records.attitude.converged
+    v_nodes = model.node_point_velocities(fast.x)
+    v_all = model.point_velocities(fast.x)
+    nodes = model.grid.nodes
+    np.testing.assert_allclose(v_nodes[nodes], v_all[nodes], rtol=0, atol=1e-9 * np.abs(v_all).max())
+    inside = np.flatnonzero(model.cond.element >= 0)
+    assert np.abs(v_nodes[inside] - v_all[inside]).max() > 1e-4     # between the nodes they differ
+    made = len(calls)
+    monkeypatch.setattr(attitude, "_rows_at_nodes", lambda items, m: False)
+    general = solve()
+    assert general.stats["verified"] and len(calls) == made
+    assert fast.stats["sequential"]["solves"] == general.stats["sequential"]["solves"]
+    np.testing.assert_allclose(fast.position(), general.position(), rtol=0, atol=1e-9)
+
+
 def test_rounding_noise_of_exact_zeros_is_dropped_from_rows_at_the_nodes():
     """Entries below 1e-14 of their row's largest (the off-diagonal rounding of C^T C = I) are
     dropped, so the rows' pattern does not move between linearization points; the others and the

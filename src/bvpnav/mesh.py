@@ -531,6 +531,23 @@ class MeshModel(NavModel):
         V = self._node_velocities
         return (V.A @ xval + V.c)[axis::self.d]
 
+    def node_point_velocities(self, xval: np.ndarray) -> np.ndarray:
+        r"""The velocity of the nodal solution ``xval`` at the nodes, linear between them, at every
+        sample (n, d), m/s: the linearization point of body-frame rows that are read at the nodes
+        only (``rate="nodes"``), without recovering the samples inside the elements.
+
+        Notes
+        -----
+        At a node :math:`v_j` is :meth:`node_velocity` (the left element's,
+        :math:`(r_j - r_{j-1})/H + (C_q a)_e`), which the recovered trajectory
+        (:meth:`point_velocities`) equals there up to rounding: the fine velocity is continuous
+        at the samples. Between the nodes the values are the linear interpolant, which no row at
+        the nodes reads.
+        """
+        V = self._node_velocities
+        vn = (V.A @ xval + V.c).reshape(self.N, self.d)
+        return np.column_stack([np.interp(self.fine.t, self.grid.t, vn[:, a]) for a in range(self.d)])
+
     # ------------------------------------------------------- recovery
     def trajectory(self, xval: np.ndarray) -> dict[str, np.ndarray]:
         r"""The answer at every sample: ``t`` (N,), ``r``, ``v``, ``w`` (N, d) from the nodal

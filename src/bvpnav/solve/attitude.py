@@ -942,6 +942,15 @@ def _cheap_eligible(form: Formulation) -> bool:
     return all(t.least_squares_role() is not None for t in form.terms() if t.item is not None)
 
 
+def _rows_at_nodes(items, model) -> bool:
+    """Whether every body-frame item reads the loop's linearization velocity at a coarse mesh's
+    nodes only (``rows_at_nodes``, e.g. ``NonHolonomic(rate="nodes")``): the point is then
+    :meth:`~bvpnav.mesh.MeshModel.node_point_velocities`, not the samples' recovered velocity."""
+    body = [it for it in items if getattr(it, "body_frame", False)]
+    return (bool(body) and hasattr(model, "node_point_velocities")
+            and all(getattr(it, "rows_at_nodes", False) is True for it in body))
+
+
 def _quick_next(o: dict, k: int, iters: list, lam) -> bool:
     """Whether step ``k`` of the node-state loop (options ``o``) may be one banded solve: the
     loop goes on, it is not the last allowed step, and either it is the first at a fixed
@@ -1198,7 +1207,8 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
             if iters and any(getattr(it, "body_frame", False) for it in form.items):
                 # body-frame items: their attitude term about the last step's velocity
                 m = f.model
-                vel = m.point_velocities(x)
+                vel = (m.node_point_velocities(x) if _rows_at_nodes(form.items, m)
+                       else m.point_velocities(x))
                 data.body_point = LinearizationPoint(velocity=vel, names=(), psi=np.zeros((raw.n, 3, 0)))
             f = step_form(data) if iters or started else form
             # an intermediate step only moves the linearization point: one banded solve, no
