@@ -159,7 +159,8 @@ def without_rounding_noise(rows):
     from one linearization point to the next. Sparse rows drop exact zeros, so the rows' pattern
     would change between Gauss-Newton steps, and with it the banded plan's analysis
     (:class:`bvpnav.linalg.banded.BandPlan`), made again every step. Dropped, the pattern is
-    the structure's; the values change by less than the rounding of the row's own sums.
+    the structure's; the values change by about the rounding of the row's own sums (1e-14 of
+    the row's largest entry is some fifty machine epsilons).
     """
     import scipy.sparse as sp
 
@@ -330,7 +331,9 @@ class NonHolonomic(Item):
     ``segment``; the rows follow it). It is also the honest weight: what this information
     gets wrong (tyre slip, a mounting misalignment, suspension travel) is correlated over
     about a second, so rows at 10 Hz with independent sigmas count each error about ten
-    times; one row per node of a 1 s mesh counts it about once.
+    times; one row per node of a 1 s mesh counts it about once. Where other items give the
+    mesh denser nodes (fixes at 10 Hz, a zero-velocity interval's samples) the rows follow
+    them and are as dense there.
 
     **Side slip** (``slip=``). A car is not non-holonomic in a turn: a tyre carries a lateral
     force by rolling at a slip angle :math:`\alpha` to its heading, and in the linear range

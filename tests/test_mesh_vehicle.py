@@ -211,6 +211,25 @@ def test_contract_on_a_mesh_model():
     check_item(ForwardMotion(rate="nodes", min_speed=0.5, max_speed=30.0, lever=(-0.5, 0.0, 0.0)), model)
 
 
+def test_contract_on_a_node_state_mesh():
+    """The rows at the nodes on the documented path's model (node states on a 1 s mesh, which a
+    problem makes): the coarser model of the checks is a problem's mesh too, with nodes at the
+    item's interval ends, so an interval between two fixes' nodes has its node rows there."""
+    drive = car_drive(duration=60.0, rate=20.0, grade="tactical", seed=1)
+    data = drive.data()
+    k = np.arange(0, data.t.size, 20)
+    em = ErrorStates(arw=1e-3, gyro_drift=1e-4, acc_drift=1e-3)
+    item = NonHolonomic(rate="nodes", t=[(2.3, 2.6), (10.0, 30.0)])
+    prob = bvpnav.NavigationProblem(data, error_model=em, sigma_a=0.05, segment=1.0)
+    prob.add(Position(t=data.t[k], value=drive.position[k], sigma=1.0), item)
+    model = prob.formulation.model
+    assert isinstance(model, MeshModel) and model.ns and {2.3, 2.6} <= set(np.round(model.grid.t, 9))
+    check_item(item, model)
+    check_item(NonHolonomic(rate="nodes", sigma=0.1, lever=(-1.0, 0.0, -0.3)), model)
+    check_item(ForwardMotion(rate="nodes"), model)
+    check_item(NonHolonomic(), model)
+
+
 def test_what_the_mesh_still_refuses():
     """Rows between two samples inside an element, and the attitude loop's parameter models."""
     drive = car_drive(duration=60.0, rate=20.0, grade="tactical", seed=1)
@@ -363,6 +382,38 @@ def test_rows_at_the_nodes_linearize_about_the_node_velocities(monkeypatch):
     assert general.stats["verified"] and len(calls) == made
     assert fast.stats["sequential"]["solves"] == general.stats["sequential"]["solves"]
     np.testing.assert_allclose(fast.position(), general.position(), rtol=0, atol=1e-9)
+
+
+def test_rows_at_the_nodes_alone_take_the_node_point():
+    """The node velocities are the loop's point only when every body-frame item has its rows at
+    the nodes: with soft rows inside the elements beside them (10 Hz), or none, the samples'."""
+    from bvpnav.solve.attitude import _rows_at_nodes
+
+    drive = car_drive(duration=60.0, rate=20.0, grade="tactical", seed=1)
+    model = _mesh_problem(drive.data()).formulation.model
+    fixes = Position(t=[0.0], value=np.zeros((1, 3)), sigma=1.0)
+    assert _rows_at_nodes([fixes, NonHolonomic(rate="nodes"), ForwardMotion(rate="nodes")], model)
+    assert not _rows_at_nodes([fixes, NonHolonomic(rate="nodes"), NonHolonomic(sigma=0.1, name="b")], model)
+    assert not _rows_at_nodes([fixes, ForwardMotion(rate="nodes"), NonHolonomic()], model)
+    assert not _rows_at_nodes([fixes], model)
+    assert not _rows_at_nodes([NonHolonomic(rate=1.0)], model)
+
+
+def test_with_acc_drops_the_rows_that_hold_the_accelerations():
+    """A mesh model for other accelerations does not keep the node velocities or the body rows at
+    the nodes made with the first ones: its rows are a fresh model's."""
+    drive = car_drive(duration=60.0, rate=20.0, grade="tactical", seed=1)
+    model = _mesh_problem(drive.data()).formulation.model
+    item = NonHolonomic(rate="nodes", lever=(-1.0, 0.2, -0.3))
+    first = item.compile(model)
+    assert "_node_velocities" in model.__dict__ and "_node_body_rows" in model.__dict__
+    acc = np.zeros_like(model.data.acc)
+    other = model.with_acc(acc)
+    fresh = MeshModel(other.data, None, segment=model.segment, nodes=model.grid.nodes)
+    np.testing.assert_allclose(item.compile(other).c, item.compile(fresh).c, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(other.sample_velocity(model.grid.t).c, fresh.sample_velocity(model.grid.t).c,
+                               rtol=0, atol=1e-12)
+    assert np.abs(first.c - item.compile(other).c).max() > 0.1
 
 
 def test_rounding_noise_of_exact_zeros_is_dropped_from_rows_at_the_nodes():

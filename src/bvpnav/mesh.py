@@ -531,15 +531,23 @@ class MeshModel(NavModel):
         V = self._node_velocities
         return (V.A @ xval + V.c)[axis::self.d]
 
+    def with_acc(self, acc: np.ndarray) -> MeshModel:
+        """As :meth:`bvpnav.NavModel.with_acc`, without the rows this model keeps that hold its
+        accelerations (the node velocities and the body rows at the nodes)."""
+        other = super().with_acc(acc)
+        for key in ("_node_velocities", "_node_body_rows"):
+            other.__dict__.pop(key, None)
+        return other
+
     def node_point_velocities(self, xval: np.ndarray) -> np.ndarray:
         r"""The velocity of the nodal solution ``xval`` at the nodes, linear between them, at every
-        sample (n, d), m/s: the linearization point of body-frame rows that are read at the nodes
+        sample (``fine.n``, d), m/s: the linearization point of body-frame rows that are read at the nodes
         only (``rate="nodes"``), without recovering the samples inside the elements.
 
         Notes
         -----
-        At a node :math:`v_j` is :meth:`node_velocity` (the left element's,
-        :math:`(r_j - r_{j-1})/H + (C_q a)_e`), which the recovered trajectory
+        At a node :math:`v_j` is :meth:`node_velocity` (inside the window the left element's,
+        :math:`(r_j - r_{j-1})/H + (C_q a)_e`; at the ends the end velocities), which the recovered trajectory
         (:meth:`point_velocities`) equals there up to rounding: the fine velocity is continuous
         at the samples. Between the nodes the values are the linear interpolant, which no row at
         the nodes reads.
@@ -708,8 +716,9 @@ class MeshModel(NavModel):
 
     def body_velocity(self, t, axes=None, lever=(0.0, 0.0, 0.0), what: str = "body velocity") -> Affine:
         """As :meth:`bvpnav.NavModel.body_velocity`; at node times the rows of every body axis are
-        made once per model and the axes asked for taken from them (the non-holonomic rows and
-        forward motion at the nodes, ``rate="nodes"``, read the same rows)."""
+        kept on the model for the last times and lever asked and the axes asked for taken from
+        them (the non-holonomic rows and forward motion at the nodes, ``rate="nodes"``, with
+        one lever read the same rows)."""
         try:
             times = as_times(t, what)
             key = (times.tobytes(), np.asarray(lever, dtype=float).reshape(3).tobytes())

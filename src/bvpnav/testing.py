@@ -38,6 +38,7 @@ from .error_models import CompositeErrorModel, ErrorModel
 from .error_models._base import as_error_model
 from .errors import InputError
 from .formulation import Formulation
+from .grid import TimeGrid
 from .imu import ImuData
 from .items import MODES, Item, item_class
 from .lam import NEEDS
@@ -161,17 +162,38 @@ def _allowed_columns(model: NavModel, axes: tuple[str, ...]) -> set[int]:
     return cols | set(model.l_index.tolist())
 
 
-def _segment(model: NavModel) -> float | None:
-    """The coarse mesh's ``segment`` (s) of a :class:`bvpnav.mesh.MeshModel` without node states
-    (the checks solve on it too), else None."""
+def _segment(model: NavModel, item: Item | None = None) -> float | None:
+    """The coarse mesh's ``segment`` (s) of a :class:`bvpnav.mesh.MeshModel` the checks solve on:
+    a mesh without node states, or any mesh for an item whose rows are at its nodes
+    (``rows_at_nodes``, which only a mesh has); else None (the solves, without the error model,
+    are on every sample)."""
     from .mesh import MeshModel
 
-    if isinstance(model, MeshModel) and model.state_model is None:
+    if not isinstance(model, MeshModel):
+        return None
+    if model.state_model is None or getattr(item, "rows_at_nodes", False) is True:
         return model.segment
     return None
 
 
-def _other_model(model: NavModel) -> NavModel:
+def _other_mesh(item: Item, coarse: ImuData, model: NavModel, segment: float) -> NavModel:
+    """The coarser data's mesh of the same ``segment``, with nodes at the item's own instants
+    (as a problem gives them, :func:`bvpnav.mesh.item_times`) and, with node states, made by a
+    problem (which gives the states their mesh)."""
+    from .mesh import MeshModel, item_times
+    from .problem import NavigationProblem
+
+    t2 = coarse.t
+    times = item_times([item], TimeGrid(t2))
+    times = np.r_[t2[0], t2[-1], times[(times >= t2[0]) & (times <= t2[-1])]]
+    if getattr(model, "state_model", None) is None:
+        return MeshModel(coarse, model.error_model, segment=segment, times=times)
+    prob = NavigationProblem(coarse, error_model=model.error_model, segment=segment)
+    prob.add(Position(t=times, value=np.zeros((times.size, 3)), sigma=1.0, name="nodes"))
+    return prob.formulation.model
+
+
+def _other_model(model: NavModel, item: Item | None = None) -> NavModel:
     """The same axes and window on a coarser grid (navigation-frame accelerations; strapdown
     data with gyro rates stay strapdown, with the same error model)."""
     t = np.asarray(model.data.t, dtype=float)     # every sample (a coarse mesh's grid is its nodes)
@@ -183,11 +205,10 @@ def _other_model(model: NavModel) -> NavModel:
 
         coarse = ImuData.from_gyro(t2, on(data.specific_force), on(data.gyro),
                                    initial_attitude=data.attitude[0], gravity=data.gravity)
-        segment = _segment(model)
-        if segment is not None:   # a coarse mesh stays a mesh (items may read its nodes)
-            from .mesh import MeshModel
+        from .mesh import MeshModel
 
-            return MeshModel(coarse, model.error_model, segment=segment, times=[t2[0], t2[-1]])
+        if isinstance(model, MeshModel):   # a coarse mesh stays a mesh (items may read its nodes)
+            return _other_mesh(item, coarse, model, model.segment)
         return NavModel(coarse, model.error_model)
     acc = np.column_stack([np.interp(t2, t, data.acc[:, a]) for a in range(model.d)])
     return NavModel(ImuData(t2, acc, axes=model.axes))
@@ -197,7 +218,7 @@ def _check_other_model(item: Item, model: NavModel, res: Affine, who: str) -> No
     """Rows follow the model they are compiled for: the item keeps nothing from one compile."""
     rule = "no state across models"
     with _rule(who, rule):
-        other = _other_model(model)
+        other = _other_model(model, item)
         rows = item.compile(other)
         back = item.compile(model)
     _require(isinstance(rows, Affine) and rows.A.shape[1] == other.size, who, rule,
@@ -276,7 +297,7 @@ def _solve_with(item: Item, model: NavModel, mode: str, who: str) -> None:
         # or reads a parameter of it (``reads_error_model``: NonHolonomic(mounting="estimated"))
         reads = item.needs_error_model or getattr(item, "reads_error_model", False)
         em = model.error_model if reads else None
-        prob = NavigationProblem(model.data, error_model=em, segment=_segment(model))
+        prob = NavigationProblem(model.data, error_model=em, segment=_segment(model, item))
         prob.add(base, checked)
         sol = prob.solve(lam=1.0)
     _require(sol.stats.get("verified"), who, rule, f"the solve was not verified ({sol.stats.get('status')})")
@@ -358,9 +379,11 @@ def check_item(item_or_class: Item | type[Item], model: NavModel | None = None) 
       with ``tol=0.1``; 'solves when soft' and 'solves when robust': the same with
       ``sigma=1`` (robust: ``huber=1``) beside hard end positions (all on
       ``model.data`` without the error model, whose parameters these items alone need
-      not determine). On a coarse mesh's model (:class:`bvpnav.mesh.MeshModel` without
-      node states) the coarser model is a mesh of the same ``segment`` and the solves are
-      on the mesh (an item may read its nodes: ``NonHolonomic(rate="nodes")``);
+      not determine). On a coarse mesh's model (:class:`bvpnav.mesh.MeshModel`) the
+      coarser model is a mesh of the same ``segment`` with nodes at the item's instants
+      (made by a problem when the model has node states), and the solves are on a mesh
+      when the model has no node states or the item's rows are at its nodes
+      (``NonHolonomic(rate="nodes")``);
     - 'linearized': an item with ``needs_linearization`` True is not compiled or solved
       itself; its ``linearized(t, trajectory)`` about the solution with positions 0 at
       both ends must no longer need linearization and is put through every rule above.
