@@ -183,6 +183,20 @@ def _keep_constants(data: ImuData, cond: fem.Condensation, sigma: np.ndarray, va
         raw.__dict__["_mesh_constants"] = (cond, sigma, values)
 
 
+def _element_entries(C: sp.csr_matrix, e: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """``C[e, idx]`` (one value per sample ``idx`` of element ``e``) of a condensation's ``Cp`` or
+    ``Cq``: read from their layout (:func:`bvpnav.fem.condensation`: element ``e``'s row holds
+    its samples in order, sample ``j`` at entry ``j + e``) when it holds, else by scipy's
+    indexing."""
+    if not idx.size:
+        return np.zeros(0)
+    at = idx + e
+    if at[-1] < C.indices.size and np.array_equal(C.indices[at], idx) and np.all(
+            (C.indptr[e] <= at) & (at < C.indptr[e + 1])):
+        return C.data[at]
+    return np.asarray(C[e, idx]).ravel()
+
+
 class MeshModel(NavModel):
     r"""The unknowns of a problem on a coarse mesh of its samples (see the module Notes).
 
@@ -277,8 +291,7 @@ class MeshModel(NavModel):
         c = self.cond
         idx = c.interior
         e = c.element[idx]
-        self._cp = np.asarray(c.Cp[e, idx]).ravel() if idx.size else np.zeros(0)
-        self._cq = np.asarray(c.Cq[e, idx]).ravel() if idx.size else np.zeros(0)
+        self._cp, self._cq = _element_entries(c.Cp, e, idx), _element_entries(c.Cq, e, idx)
         self._slot = np.full(self.N - 1, -1, dtype=np.int64)
         self._slot[self.elements] = np.arange(self.me)
         nE = self.N - 1

@@ -102,6 +102,7 @@ import scipy.sparse as sp
 from scipy.spatial.transform import Rotation
 
 from ..errors import InputError
+from ..imu import ImuData
 from ._attitude import _check_strapdown_gyro, _skew, right_jacobian
 from ._base import ErrorModel
 
@@ -717,16 +718,38 @@ def attitude_at(data, totals: dict) -> Rotation:
     return _point_attitude(_raw(data), totals)[1]
 
 
+class _PointData(ImuData):
+    """The data of a node-state linearization point (:func:`states_at`): its strapdown keeps the
+    attitude's matrices and the specific force in the navigation frame it made the accelerations
+    of, for :meth:`ErrorStates.condensed_columns` (:func:`_rotated_force`) to read instead of
+    making them again."""
+
+    def _navigation_force(self, rot: Rotation, f: np.ndarray) -> np.ndarray:
+        C = rot.as_matrix()
+        fn = np.einsum("nij,nj->ni", C, f)   # Rotation.apply's product, its sums in the same order
+        self.__dict__["_navigation_force"] = (rot, f, C, fn)
+        return fn
+
+
+def _rotated_force(data) -> tuple[np.ndarray, np.ndarray]:
+    """``(C, C f)`` at the data's point: the attitude's matrices (N, 3, 3) and the specific force
+    in the navigation frame (N, 3), m/s^2; those the strapdown of a :class:`_PointData` kept
+    when they are of its attitude and specific force (taken: read once), else made here."""
+    kept = data.__dict__.pop("_navigation_force", None)
+    if kept is not None and kept[0] is data.attitude and kept[1] is data.specific_force:
+        return kept[2], kept[3]
+    C = data.attitude.as_matrix()
+    return C, np.einsum("nij,nj->ni", C, data.specific_force)
+
+
 def states_at(data, totals: dict):
     r"""The measured data re-linearized at the node-state ``totals`` (kind -> (N, 3)): attitude
     :math:`\exp([\psi\times])\hat C`, specific force :math:`\hat f - b_a`, ``state_point`` set."""
-    from ..imu import ImuData
-
     raw = _raw(data)
     tot, att = _point_attitude(raw, totals)
     f = raw.specific_force - tot["acc_bias"] if "acc_bias" in tot else raw.specific_force
-    out = ImuData(raw.t, specific_force=f, attitude=att, gravity=raw.gravity, axes=raw.axes,
-                  time_origin=raw.time_origin, checks=False)
+    out = _PointData(raw.t, specific_force=f, attitude=att, gravity=raw.gravity, axes=raw.axes,
+                     time_origin=raw.time_origin, checks=False)
     out.checks = dict(raw.checks)
     out.gyro = raw.gyro
     out.state_point = StatePoint(raw=raw, totals=tot)
@@ -1182,8 +1205,7 @@ class ErrorStates(ErrorModel):
         el = _elements(data, mesh, _totals(data, "gyro_bias"))
         g = self._groups(data, mesh, W, el.left)
         P = g["P"]
-        C = data.attitude.as_matrix()
-        fn = np.einsum("nij,nj->ni", C, data.specific_force)    # f_n = C f, from the matrices made here
+        C, fn = _rotated_force(data)                             # f_n = C f
         L = P @ fn
         Y = {("attitude_error", 0): -_skew(L)}
         if "acc_bias" in kinds:
