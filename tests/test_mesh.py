@@ -607,7 +607,8 @@ def test_condensed_columns_read_a_points_strapdown_only_at_its_own_attitude():
     for a, b in zip(got, want, strict=True):
         assert a.shape == b.shape and (a != b).nnz == 0
     # a point whose attitude is then replaced by another point's: that attitude's columns
-    other = dict(nodes, attitude_error=nodes["attitude_error"] + rng.normal(scale=0.05, size=(form.model.N, 3)))
+    turned = nodes["attitude_error"] + rng.normal(scale=0.05, size=(form.model.N, 3))
+    other = dict(nodes, attitude_error=turned)
     moved = states_at(raw, sm.expand(raw, nodes))
     moved.attitude = states_at(raw, sm.expand(raw, other)).attitude
     want = sm.condensed_columns(made_here(moved), W)

@@ -720,25 +720,29 @@ def attitude_at(data, totals: dict) -> Rotation:
 
 class _PointData(ImuData):
     """The data of a node-state linearization point (:func:`states_at`): its strapdown keeps the
-    attitude's matrices and the specific force in the navigation frame it made the accelerations
-    of, for :meth:`ErrorStates.condensed_columns` (:func:`_rotated_force`) to read instead of
-    making them again."""
+    specific force in the navigation frame it made the accelerations of, for
+    :meth:`ErrorStates.condensed_columns` (:func:`_rotated_force`) to read instead of making it
+    again (until then only: it is read once)."""
 
     def _navigation_force(self, rot: Rotation, f: np.ndarray) -> np.ndarray:
-        C = rot.as_matrix()
-        fn = np.einsum("nij,nj->ni", C, f)   # Rotation.apply's product, its sums in the same order
-        self.__dict__["_navigation_force"] = (rot, f, C, fn)
+        fn = rot.apply(f)
+        # one list for this data and its shallow copies (a formulation's): emptied when read
+        self.__dict__["_navigation_force"] = [rot, f, fn]
         return fn
 
 
 def _rotated_force(data) -> tuple[np.ndarray, np.ndarray]:
     """``(C, C f)`` at the data's point: the attitude's matrices (N, 3, 3) and the specific force
-    in the navigation frame (N, 3), m/s^2; those the strapdown of a :class:`_PointData` kept
-    when they are of its attitude and specific force (taken: read once), else made here."""
+    in the navigation frame (N, 3), m/s^2, the latter the one the strapdown of a
+    :class:`_PointData` kept when it is of its attitude and specific force (taken: read once;
+    ``Rotation.apply`` is the product of these matrices, the same sums), else made here."""
     kept = data.__dict__.pop("_navigation_force", None)
-    if kept is not None and kept[0] is data.attitude and kept[1] is data.specific_force:
-        return kept[2], kept[3]
     C = data.attitude.as_matrix()
+    if kept:
+        rot, f, fn = kept
+        kept.clear()
+        if rot is data.attitude and f is data.specific_force:
+            return C, fn
     return C, np.einsum("nij,nj->ni", C, data.specific_force)
 
 
@@ -1260,16 +1264,28 @@ class ErrorStates(ErrorModel):
     def _placed(self, g: dict, Y: dict) -> list:
         """The blocks ``Y`` (key -> (G, 3, 3), one per group of ``g``) as the canonical CSR
         matrices of :meth:`condensed_columns`, one per navigation axis."""
-        vals = [Y[key][g["keep"][key]] for key in g["order"]]
+        order, nnz = g["order"], g["nnz"]
+        blocks = np.stack([Y[key] for key in order])   # (kinds, G, 3, 3)
+        G = blocks.shape[1]
+        gather = g.get("gather")
+        if gather is None or gather[0] != G:
+            # every axis' entries of the kept groups' blocks, in the slots' order (block by block,
+            # group, column), the axes one after the other: one gather and one sum for all
+            idx = [np.concatenate([(((k * G + g["keep"][key]) * 3 + a) * 3)[:, None] + np.arange(3)
+                                   for k, key in enumerate(order)]).ravel() for a in range(3)]
+            slots = np.concatenate([g["slot"] + a * nnz for a in range(3)])
+            gather = g["gather"] = (G, np.concatenate(idx), slots)
+        # per slot the same sums in the same order as one axis at a time
+        every = np.bincount(gather[2], blocks.reshape(-1)[gather[1]], minlength=3 * nnz)
         kept = g.setdefault("patterns", {})   # per axis: the layout's entries not zero, and their pattern
         out = []
         for a in range(3):
-            v = np.bincount(g["slot"], np.concatenate([y[:, a, :].ravel() for y in vals]), minlength=g["nnz"])
+            v = every[a * nnz:(a + 1) * nnz]
             nz = v != 0
             if a in kept and np.array_equal(kept[a][0], nz):   # zeros where the last point had them
                 out.append(_with_values(kept[a][1], v[nz]))
                 continue
-            A = sp.csr_matrix((v, g["indices"].copy(), g["indptr"].copy()), shape=g["shape"])
+            A = sp.csr_matrix((v.copy(), g["indices"].copy(), g["indptr"].copy()), shape=g["shape"])
             A.has_canonical_format = True   # the kept layout is not pruned
             A.eliminate_zeros()
             kept[a] = (nz, _pattern(A.indices, A.indptr, A.shape))
