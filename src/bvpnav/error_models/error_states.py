@@ -878,9 +878,12 @@ def _cheap_sums(data, W, groups: dict) -> tuple:
         if kind == "attitude_error":
             continue
         node = left + right
+        change = cheap.dba if kind == "acc_bias" else cheap.dbg
         ok = node < nn
-        db = (cheap.dba if kind == "acc_bias" else cheap.dbg)[node[ok]]
-        d[ok] += np.einsum("gij,gj->gi", blk[ok], db)
+        if ok.all():   # every group's node (the left ones): no copies of the blocks
+            d += np.einsum("gij,gj->gi", blk, change[node])
+        else:
+            d[ok] += np.einsum("gij,gj->gi", blk[ok], change[node[ok]])
     R = cheap.rot[left]
     L = np.einsum("gij,gj->gi", R, d)
     Y = {key: (-_skew(L) if key[0] == "attitude_error" else R @ blk) for key, blk in Y0.items()}
