@@ -597,13 +597,13 @@ def test_condensed_columns_read_a_points_strapdown_only_at_its_own_attitude():
 
     def made_here(d):   # the same data without what its strapdown kept
         out = copy.copy(d)
-        out.__dict__ = {k: v for k, v in d.__dict__.items() if k != "_navigation_force"}
+        out.__dict__ = {k: v for k, v in d.__dict__.items() if k != "_kept_navigation_force"}
         return out
 
     want = sm.condensed_columns(made_here(data), W)
-    assert "_navigation_force" in data.__dict__
+    assert "_kept_navigation_force" in data.__dict__
     got = sm.condensed_columns(data, W)
-    assert "_navigation_force" not in data.__dict__   # read once
+    assert "_kept_navigation_force" not in data.__dict__   # read once
     for a, b in zip(got, want, strict=True):
         assert a.shape == b.shape and (a != b).nnz == 0
     # a point whose attitude is then replaced by another point's: that attitude's columns

@@ -727,7 +727,7 @@ class _PointData(ImuData):
     def _navigation_force(self, rot: Rotation, f: np.ndarray) -> np.ndarray:
         fn = rot.apply(f)
         # one list for this data and its shallow copies (a formulation's): emptied when read
-        self.__dict__["_navigation_force"] = [rot, f, fn]
+        self.__dict__["_kept_navigation_force"] = [rot, f, fn]
         return fn
 
 
@@ -736,7 +736,7 @@ def _rotated_force(data) -> tuple[np.ndarray, np.ndarray]:
     in the navigation frame (N, 3), m/s^2, the latter the one the strapdown of a
     :class:`_PointData` kept when it is of its attitude and specific force (taken: read once;
     ``Rotation.apply`` is the product of these matrices, the same sums), else made here."""
-    kept = data.__dict__.pop("_navigation_force", None)
+    kept = data.__dict__.pop("_kept_navigation_force", None)
     C = data.attitude.as_matrix()
     if kept:
         rot, f, fn = kept
