@@ -167,13 +167,13 @@ def _condensation(data: ImuData, fine, nodes: np.ndarray) -> fem.Condensation:
 
 
 def _kept_constants(data: ImuData, cond: fem.Condensation, sigma: np.ndarray) -> tuple | None:
-    """The mesh's matrices and element weights a step before made with this condensation and
-    these ``sigma`` (kept on the formulation's copy of the measured data, as
-    :func:`_condensation`), or None."""
+    """``(sigma, values)``: the mesh's matrices and element weights a step before made with this
+    condensation and these ``sigma`` (kept on the formulation's copy of the measured data, as
+    :func:`_condensation`, with the ``sigma`` array they were made with), or None."""
     raw = getattr(getattr(data, "state_point", None), "raw", data)
     kept = raw.__dict__.get("_mesh_constants")
     if kept is not None and kept[0] is cond and np.array_equal(kept[1], sigma):
-        return kept[2]
+        return kept[1], kept[2]
     return None
 
 
@@ -265,16 +265,18 @@ class MeshModel(NavModel):
                                  "the problem with NavigationProblem(..., segment=...), which sets it")
             self.ns = int(self.state_model.state_size(data))
         sa = np.ones(d) if sigma_a is None else np.asarray(sigma_a, dtype=float)
-        self.sigma_fine = np.array(np.broadcast_to(sa if sa.ndim == 2 else sa[None, :], (Nf, d)))
+        sigma_fine = np.broadcast_to(sa if sa.ndim == 2 else sa[None, :], (Nf, d))
         inside = np.diff(nodes) - 1
         self.elements = np.flatnonzero(inside >= 2)        # elements with residuals to condense
         self.me = self.elements.size
         self.block = 2 * n + 2 + 2 * self.me
         self.size = d * self.block + self.q + self.ns
-        kept = _kept_constants(data, self.cond, self.sigma_fine)
-        if kept is not None:   # the loop's steps share the mesh and sigma_a
-            self.K, self.M, self._cp, self._cq, self._slot, self.chol, self._constant = kept
+        kept = _kept_constants(data, self.cond, sigma_fine)
+        if kept is not None:   # the loop's steps share the mesh and sigma_a (and its (N, d) array)
+            self.sigma_fine, values = kept
+            self.K, self.M, self._cp, self._cq, self._slot, self.chol, self._constant = values
             return
+        self.sigma_fine = np.array(sigma_fine)
         self.K = fem.stiffness(self.grid)
         W = self.cond.load[:, nodes].tocsr()
         self.M = fem.tridiagonal(W.diagonal(-1), W.diagonal(0), W.diagonal(1))   # the node residuals
