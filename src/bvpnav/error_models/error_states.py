@@ -752,8 +752,11 @@ def states_at(data, totals: dict):
     raw = _raw(data)
     tot, att = _point_attitude(raw, totals)
     f = raw.specific_force - tot["acc_bias"] if "acc_bias" in tot else raw.specific_force
-    out = _PointData(raw.t, specific_force=f, attitude=att, gravity=raw.gravity, axes=raw.axes,
-                     time_origin=raw.time_origin, checks=False)
+    # on a coarse mesh the condensed columns read the strapdown's C f (_PointData); without one
+    # nothing would, and the data would carry it for its lifetime
+    kind = ImuData if _mesh(raw) is None else _PointData
+    out = kind(raw.t, specific_force=f, attitude=att, gravity=raw.gravity, axes=raw.axes,
+               time_origin=raw.time_origin, checks=False)
     out.checks = dict(raw.checks)
     out.gyro = raw.gyro
     out.state_point = StatePoint(raw=raw, totals=tot)
