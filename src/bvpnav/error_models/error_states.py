@@ -973,6 +973,28 @@ def _cheap_process(data, cheap: _Cheap, gyro: bool):
     return e0, Jli, Jri, lead @ Vp, lead @ Vq
 
 
+#: Most nodes whose :meth:`ErrorStates.state_index` arrays are kept (a coarse mesh's: the loop
+#: reads them many times per step); more are made at every call.
+STATE_INDEX_KEPT = 1 << 16
+
+
+def _state_index(n: int, per_node: int, k: int) -> np.ndarray:
+    """:meth:`ErrorStates.state_index` of kind number ``k`` on ``n`` nodes of ``per_node`` states
+    (read only), kept for the last few layouts of at most :data:`STATE_INDEX_KEPT` nodes."""
+    if n > STATE_INDEX_KEPT:
+        out = np.arange(n)[:, None] * per_node + 3 * k + np.arange(3)[None, :]
+        out.setflags(write=False)
+        return out
+    return _kept_state_index(n, per_node, k)
+
+
+@functools.lru_cache(maxsize=16)
+def _kept_state_index(n: int, per_node: int, k: int) -> np.ndarray:
+    out = np.arange(n)[:, None] * per_node + 3 * k + np.arange(3)[None, :]
+    out.setflags(write=False)
+    return out
+
+
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
 class ErrorStates(ErrorModel):
     r"""Attitude error and random-walk biases as states at every node (in the band).
@@ -1098,9 +1120,9 @@ class ErrorStates(ErrorModel):
 
     def state_index(self, data, kind: str) -> np.ndarray:
         """Position in the state block of ``kind`` at every node and axis, (N, 3) int (the
-        samples, or the nodes of a coarse mesh)."""
-        k = self.state_kinds(data).index(kind)
-        return np.arange(self._nodes(data))[:, None] * self._per_node(data) + 3 * k + np.arange(3)[None, :]
+        samples, or the nodes of a coarse mesh; read only)."""
+        kinds = self.state_kinds(data)
+        return _state_index(self._nodes(data), 3 * len(kinds), kinds.index(kind))
 
     def state_total(self, data, kind: str) -> np.ndarray:
         """The current total of ``kind`` at every node, (N, 3) (zero at the data as measured;
