@@ -583,6 +583,88 @@ def test_condensed_state_columns_are_the_load_times_the_per_sample_columns():
         assert a.nnz == b.nnz
 
 
+def test_condensed_columns_read_a_points_strapdown_only_at_its_own_attitude():
+    """A point's data (``states_at``) keeps the attitude's matrices and the navigation-frame
+    specific force its strapdown made: the condensed columns read them (the columns made from
+    the attitude, bit for bit), once; given another attitude, the data's columns are that
+    attitude's, not the kept ones."""
+    import copy
+
+    from bvpnav.error_models.error_states import states_at
+
+    form, raw, sm, nodes, data, rng = _moved_point(7)
+    W = form.model.cond.load
+
+    def made_here(d):   # the same data without what its strapdown kept
+        out = copy.copy(d)
+        out.__dict__ = {k: v for k, v in d.__dict__.items() if k != "_kept_navigation_force"}
+        return out
+
+    want = sm.condensed_columns(made_here(data), W)
+    assert "_kept_navigation_force" in data.__dict__
+    got = sm.condensed_columns(data, W)
+    assert "_kept_navigation_force" not in data.__dict__   # read once
+    for a, b in zip(got, want, strict=True):
+        assert a.shape == b.shape and (a != b).nnz == 0
+    # a point whose attitude is then replaced by another point's: that attitude's columns
+    turned = nodes["attitude_error"] + rng.normal(scale=0.05, size=(form.model.N, 3))
+    other = dict(nodes, attitude_error=turned)
+    moved = states_at(raw, sm.expand(raw, nodes))
+    moved.attitude = states_at(raw, sm.expand(raw, other)).attitude
+    want = sm.condensed_columns(made_here(moved), W)
+    got = sm.condensed_columns(moved, W)
+    for a, b, c in zip(got, want, sm.condensed_columns(made_here(data), W), strict=True):
+        assert (a != b).nnz == 0
+        assert abs(a - c).max() > 1e-3 * abs(c).max()   # another attitude: other columns
+
+
+def test_mesh_nodes_walk_is_the_searchsorted_walk():
+    """The mesh's greedy walk between the nodes the items need (on the times as Python floats)
+    gives the nodes of the walk by ``searchsorted`` on the array, on uneven steps, at segments
+    a whole number of steps long (ties with the reach) and not."""
+    from bvpnav.grid import EDGE_SLACK, TimeGrid, mesh_nodes
+
+    def walked(grid, segment, times):   # the walk on the array's scalars
+        t, N = grid.t, grid.n
+        keep = np.zeros(N, dtype=bool)
+        keep[[0, N - 1]] = True
+        tt = np.asarray(times, dtype=float).ravel()
+        tol = EDGE_SLACK * max(grid.duration, 1.0)
+        tt = np.clip(tt[(tt >= grid.t0 - tol) & (tt <= grid.t1 + tol)], grid.t0, grid.t1)
+        if tt.size:
+            k = np.clip(np.searchsorted(t, tt), 0, N - 1)
+            near = np.where((k > 0) & (np.abs(t[k - 1] - tt) < np.abs(t[k] - tt)), k - 1, k)
+            on = np.abs(t[near] - tt) <= tol
+            keep[near[on]] = True
+            j = np.clip(np.searchsorted(t, tt[~on], side="right") - 1, 0, N - 2)
+            keep[j] = True
+            keep[j + 1] = True
+        fixed = np.flatnonzero(keep)
+        out = [fixed[:1]]
+        for p, q in zip(fixed[:-1], fixed[1:], strict=True):
+            cur, add = int(p), []
+            reach = segment * (1.0 + 1e-9)
+            while t[q] - t[cur] > reach:
+                nxt = max(int(np.searchsorted(t, t[cur] + reach, side="right")) - 1, cur + 1)
+                if nxt >= q:
+                    break
+                add.append(nxt)
+                cur = nxt
+            out.append(np.array(add + [int(q)], dtype=np.int64))
+        nodes = np.concatenate(out)
+        return np.union1d(nodes, nodes[:-1][np.diff(nodes) == 2] + 1)
+
+    rng = np.random.default_rng(3)
+    for t in (np.arange(2001) * 0.01, np.cumsum(rng.uniform(0.005, 0.02, 3000))):
+        grid = TimeGrid(t)
+        times = rng.uniform(t[0] - 1.0, t[-1] + 1.0, 17)
+        for segment in (0.05, 0.1, 0.37, 1.0, 3.0):
+            got = mesh_nodes(grid, segment, times)
+            assert got.dtype == np.int64
+            assert np.array_equal(got, walked(grid, segment, times))
+            assert got.size > 2
+
+
 def test_state_acceleration_is_the_per_sample_columns_times_the_states():
     """The acceleration the node states' increments make at every sample (the trajectory's
     recovery inside elements reads it), taken without the columns, is the columns made at

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import bisect
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -217,16 +218,20 @@ def mesh_nodes(grid: TimeGrid, segment: float, times=()) -> np.ndarray:
         keep[j + 1] = True
     fixed = np.flatnonzero(keep)
     out = [fixed[:1]]
-    for p, q in zip(fixed[:-1], fixed[1:], strict=True):
-        cur, add = int(p), []
-        reach = segment * (1.0 + 1e-9)   # a sample at the segment's end up to rounding is within it
-        while t[q] - t[cur] > reach:
-            nxt = max(int(np.searchsorted(t, t[cur] + reach, side="right")) - 1, cur + 1)
+    # the greedy walk on the times as Python floats (the same doubles: the same sums and
+    # comparisons as on the array's scalars, and bisect_right is searchsorted's side="right"),
+    # without a numpy call per node
+    tl = np.asarray(t, dtype=float).tolist()
+    reach = segment * (1.0 + 1e-9)   # a sample at the segment's end up to rounding is within it
+    for p, q in zip(fixed[:-1].tolist(), fixed[1:].tolist(), strict=True):
+        cur, add = p, []
+        while tl[q] - tl[cur] > reach:
+            nxt = max(bisect.bisect_right(tl, tl[cur] + reach) - 1, cur + 1)
             if nxt >= q:
                 break
             add.append(nxt)
             cur = nxt
-        out.append(np.array(add + [int(q)], dtype=np.int64))
+        out.append(np.array(add + [q], dtype=np.int64))
     nodes = np.concatenate(out).astype(np.int64)
     lone = nodes[:-1][np.diff(nodes) == 2] + 1          # one sample inside: make it a node
     return np.union1d(nodes, lone).astype(np.int64)

@@ -407,7 +407,12 @@ class ImuData:
                 "one specific-force row per time"
             )
         self.specific_force, self.attitude, self.gravity = f, rot, g
-        return rot.apply(f) + g
+        return self._navigation_force(rot, f) + g
+
+    def _navigation_force(self, rot: Rotation, f: np.ndarray) -> np.ndarray:
+        """The specific force in the navigation frame, ``rot.apply(f)`` (N, 3), m/s^2, of which
+        :meth:`_strapdown` makes the acceleration (a subclass may keep it)."""
+        return rot.apply(f)
 
     @classmethod
     def from_gyro(

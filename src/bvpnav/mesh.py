@@ -170,13 +170,13 @@ def _condensation(data: ImuData, fine, nodes: np.ndarray) -> fem.Condensation:
 
 
 def _kept_constants(data: ImuData, cond: fem.Condensation, sigma: np.ndarray) -> tuple | None:
-    """The mesh's matrices and element weights a step before made with this condensation and
-    these ``sigma`` (kept on the formulation's copy of the measured data, as
-    :func:`_condensation`), or None."""
+    """``(sigma, values)``: the mesh's matrices and element weights a step before made with this
+    condensation and these ``sigma`` (kept on the formulation's copy of the measured data, as
+    :func:`_condensation`, with the ``sigma`` array they were made with), or None."""
     raw = getattr(getattr(data, "state_point", None), "raw", data)
     kept = raw.__dict__.get("_mesh_constants")
     if kept is not None and kept[0] is cond and np.array_equal(kept[1], sigma):
-        return kept[2]
+        return kept[1], kept[2]
     return None
 
 
@@ -184,6 +184,20 @@ def _keep_constants(data: ImuData, cond: fem.Condensation, sigma: np.ndarray, va
     raw = getattr(getattr(data, "state_point", None), "raw", data)
     if getattr(raw, "state_mesh", None) is not None:   # the user's own data: never written to
         raw.__dict__["_mesh_constants"] = (cond, sigma, values)
+
+
+def _element_entries(C: sp.csr_matrix, e: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """``C[e, idx]`` (one value per sample ``idx`` of element ``e``) of a condensation's ``Cp`` or
+    ``Cq``: read from their layout (:func:`bvpnav.fem.condensation`: element ``e``'s row holds
+    its samples in order, sample ``j`` at entry ``j + e``) when it holds, else by scipy's
+    indexing."""
+    if not idx.size:
+        return np.zeros(0)
+    at = idx + e
+    if at[-1] < C.indices.size and np.array_equal(C.indices[at], idx) and np.all(
+            (C.indptr[e] <= at) & (at < C.indptr[e + 1])):
+        return C.data[at]
+    return np.asarray(C[e, idx]).ravel()
 
 
 class MeshModel(NavModel):
@@ -254,16 +268,18 @@ class MeshModel(NavModel):
                                  "the problem with NavigationProblem(..., segment=...), which sets it")
             self.ns = int(self.state_model.state_size(data))
         sa = np.ones(d) if sigma_a is None else np.asarray(sigma_a, dtype=float)
-        self.sigma_fine = np.array(np.broadcast_to(sa if sa.ndim == 2 else sa[None, :], (Nf, d)))
+        sigma_fine = np.broadcast_to(sa if sa.ndim == 2 else sa[None, :], (Nf, d))
         inside = np.diff(nodes) - 1
         self.elements = np.flatnonzero(inside >= 2)        # elements with residuals to condense
         self.me = self.elements.size
         self.block = 2 * n + 2 + 2 * self.me
         self.size = d * self.block + self.q + self.ns
-        kept = _kept_constants(data, self.cond, self.sigma_fine)
-        if kept is not None:   # the loop's steps share the mesh and sigma_a
-            self.K, self.M, self._cp, self._cq, self._slot, self.chol, self._constant = kept
+        kept = _kept_constants(data, self.cond, sigma_fine)
+        if kept is not None:   # the loop's steps share the mesh and sigma_a (and its (N, d) array)
+            self.sigma_fine, values = kept
+            self.K, self.M, self._cp, self._cq, self._slot, self.chol, self._constant = values
             return
+        self.sigma_fine = np.array(sigma_fine)
         self.K = fem.stiffness(self.grid)
         W = self.cond.load[:, nodes].tocsr()
         self.M = fem.tridiagonal(W.diagonal(-1), W.diagonal(0), W.diagonal(1))   # the node residuals
@@ -280,8 +296,7 @@ class MeshModel(NavModel):
         c = self.cond
         idx = c.interior
         e = c.element[idx]
-        self._cp = np.asarray(c.Cp[e, idx]).ravel() if idx.size else np.zeros(0)
-        self._cq = np.asarray(c.Cq[e, idx]).ravel() if idx.size else np.zeros(0)
+        self._cp, self._cq = _element_entries(c.Cp, e, idx), _element_entries(c.Cq, e, idx)
         self._slot = np.full(self.N - 1, -1, dtype=np.int64)
         self._slot[self.elements] = np.arange(self.me)
         nE = self.N - 1

@@ -573,3 +573,19 @@ def test_a_pattern_beyond_the_stencils_size_is_placed_as_before(monkeypatch):
     stencil = plan._stencil(D, E, diagonal)
     assert stencil is not None
     assert np.array_equal(stencil.parts(D, E, plan.ldab)[0], placed[0])
+
+
+def test_state_index_is_the_node_major_layout_and_read_only():
+    """``state_index``: kind ``k`` of node ``j`` at ``3 kinds j + 3 k + axis``, for each set of
+    kinds and number of nodes (a kept array serves only its own layout), and read only (a kept
+    array is shared by every caller)."""
+    from bvpnav.error_models.error_states import STATE_INDEX_KEPT, _state_index
+
+    for n in (5, 7, STATE_INDEX_KEPT + 1):
+        for kinds in (1, 2, 3):
+            for k in range(kinds):
+                idx = _state_index(n, 3 * kinds, k)
+                want = 3 * kinds * np.arange(n)[:, None] + 3 * k + np.arange(3)
+                assert idx.shape == (n, 3) and np.array_equal(idx, want)
+                with pytest.raises(ValueError):
+                    idx[0, 0] = -1

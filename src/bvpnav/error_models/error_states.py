@@ -102,6 +102,7 @@ import scipy.sparse as sp
 from scipy.spatial.transform import Rotation
 
 from ..errors import InputError
+from ..imu import ImuData
 from ._attitude import _check_strapdown_gyro, _skew, right_jacobian
 from ._base import ErrorModel
 
@@ -717,16 +718,45 @@ def attitude_at(data, totals: dict) -> Rotation:
     return _point_attitude(_raw(data), totals)[1]
 
 
+class _PointData(ImuData):
+    """The data of a node-state linearization point (:func:`states_at`): its strapdown keeps the
+    specific force in the navigation frame it made the accelerations of, for
+    :meth:`ErrorStates.condensed_columns` (:func:`_rotated_force`) to read instead of making it
+    again (until then only: it is read once)."""
+
+    def _navigation_force(self, rot: Rotation, f: np.ndarray) -> np.ndarray:
+        fn = rot.apply(f)
+        # one list for this data and its shallow copies (a formulation's): emptied when read
+        self.__dict__["_kept_navigation_force"] = [rot, f, fn]
+        return fn
+
+
+def _rotated_force(data) -> tuple[np.ndarray, np.ndarray]:
+    """``(C, C f)`` at the data's point: the attitude's matrices (N, 3, 3) and the specific force
+    in the navigation frame (N, 3), m/s^2, the latter the one the strapdown of a
+    :class:`_PointData` kept when it is of its attitude and specific force (taken: read once;
+    ``Rotation.apply`` is the product of these matrices, the same sums), else made here."""
+    kept = data.__dict__.pop("_kept_navigation_force", None)
+    C = data.attitude.as_matrix()
+    if kept:
+        rot, f, fn = kept
+        kept.clear()
+        if rot is data.attitude and f is data.specific_force:
+            return C, fn
+    return C, np.einsum("nij,nj->ni", C, data.specific_force)
+
+
 def states_at(data, totals: dict):
     r"""The measured data re-linearized at the node-state ``totals`` (kind -> (N, 3)): attitude
     :math:`\exp([\psi\times])\hat C`, specific force :math:`\hat f - b_a`, ``state_point`` set."""
-    from ..imu import ImuData
-
     raw = _raw(data)
     tot, att = _point_attitude(raw, totals)
     f = raw.specific_force - tot["acc_bias"] if "acc_bias" in tot else raw.specific_force
-    out = ImuData(raw.t, specific_force=f, attitude=att, gravity=raw.gravity, axes=raw.axes,
-                  time_origin=raw.time_origin, checks=False)
+    # on a coarse mesh the condensed columns read the strapdown's C f (_PointData); without one
+    # nothing would, and the data would carry it for its lifetime
+    kind = ImuData if _mesh(raw) is None else _PointData
+    out = kind(raw.t, specific_force=f, attitude=att, gravity=raw.gravity, axes=raw.axes,
+               time_origin=raw.time_origin, checks=False)
     out.checks = dict(raw.checks)
     out.gyro = raw.gyro
     out.state_point = StatePoint(raw=raw, totals=tot)
@@ -851,9 +881,12 @@ def _cheap_sums(data, W, groups: dict) -> tuple:
         if kind == "attitude_error":
             continue
         node = left + right
+        change = cheap.dba if kind == "acc_bias" else cheap.dbg
         ok = node < nn
-        db = (cheap.dba if kind == "acc_bias" else cheap.dbg)[node[ok]]
-        d[ok] += np.einsum("gij,gj->gi", blk[ok], db)
+        if ok.all():   # every group's node (the left ones): no copies of the blocks
+            d += np.einsum("gij,gj->gi", blk, change[node])
+        else:
+            d[ok] += np.einsum("gij,gj->gi", blk[ok], change[node[ok]])
     R = cheap.rot[left]
     L = np.einsum("gij,gj->gi", R, d)
     Y = {key: (-_skew(L) if key[0] == "attitude_error" else R @ blk) for key, blk in Y0.items()}
@@ -938,6 +971,28 @@ def _cheap_process(data, cheap: _Cheap, gyro: bool):
         return e0, Jli, Jri, None, None
     lead = Jli @ cheap.rot[1:]
     return e0, Jli, Jri, lead @ Vp, lead @ Vq
+
+
+#: Most nodes whose :meth:`ErrorStates.state_index` arrays are kept (a coarse mesh's: the loop
+#: reads them many times per step); more are made at every call.
+STATE_INDEX_KEPT = 1 << 16
+
+
+def _state_index(n: int, per_node: int, k: int) -> np.ndarray:
+    """:meth:`ErrorStates.state_index` of kind number ``k`` on ``n`` nodes of ``per_node`` states
+    (read only), kept for the last few layouts of at most :data:`STATE_INDEX_KEPT` nodes."""
+    if n > STATE_INDEX_KEPT:
+        out = np.arange(n)[:, None] * per_node + 3 * k + np.arange(3)[None, :]
+        out.setflags(write=False)
+        return out
+    return _kept_state_index(n, per_node, k)
+
+
+@functools.lru_cache(maxsize=16)
+def _kept_state_index(n: int, per_node: int, k: int) -> np.ndarray:
+    out = np.arange(n)[:, None] * per_node + 3 * k + np.arange(3)[None, :]
+    out.setflags(write=False)
+    return out
 
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
@@ -1065,9 +1120,9 @@ class ErrorStates(ErrorModel):
 
     def state_index(self, data, kind: str) -> np.ndarray:
         """Position in the state block of ``kind`` at every node and axis, (N, 3) int (the
-        samples, or the nodes of a coarse mesh)."""
-        k = self.state_kinds(data).index(kind)
-        return np.arange(self._nodes(data))[:, None] * self._per_node(data) + 3 * k + np.arange(3)[None, :]
+        samples, or the nodes of a coarse mesh; read only)."""
+        kinds = self.state_kinds(data)
+        return _state_index(self._nodes(data), 3 * len(kinds), kinds.index(kind))
 
     def state_total(self, data, kind: str) -> np.ndarray:
         """The current total of ``kind`` at every node, (N, 3) (zero at the data as measured;
@@ -1182,8 +1237,7 @@ class ErrorStates(ErrorModel):
         el = _elements(data, mesh, _totals(data, "gyro_bias"))
         g = self._groups(data, mesh, W, el.left)
         P = g["P"]
-        C = data.attitude.as_matrix()
-        fn = np.einsum("nij,nj->ni", C, data.specific_force)    # f_n = C f, from the matrices made here
+        C, fn = _rotated_force(data)                             # f_n = C f
         L = P @ fn
         Y = {("attitude_error", 0): -_skew(L)}
         if "acc_bias" in kinds:
@@ -1238,16 +1292,28 @@ class ErrorStates(ErrorModel):
     def _placed(self, g: dict, Y: dict) -> list:
         """The blocks ``Y`` (key -> (G, 3, 3), one per group of ``g``) as the canonical CSR
         matrices of :meth:`condensed_columns`, one per navigation axis."""
-        vals = [Y[key][g["keep"][key]] for key in g["order"]]
+        order, nnz = g["order"], g["nnz"]
+        blocks = np.stack([Y[key] for key in order])   # (kinds, G, 3, 3)
+        G = blocks.shape[1]
+        gather = g.get("gather")
+        if gather is None or gather[0] != G:
+            # every axis' entries of the kept groups' blocks, in the slots' order (block by block,
+            # group, column), the axes one after the other: one gather and one sum for all
+            idx = [np.concatenate([(((k * G + g["keep"][key]) * 3 + a) * 3)[:, None] + np.arange(3)
+                                   for k, key in enumerate(order)]).ravel() for a in range(3)]
+            slots = np.concatenate([g["slot"] + a * nnz for a in range(3)])
+            gather = g["gather"] = (G, np.concatenate(idx), slots)
+        # per slot the same sums in the same order as one axis at a time
+        every = np.bincount(gather[2], blocks.reshape(-1)[gather[1]], minlength=3 * nnz)
         kept = g.setdefault("patterns", {})   # per axis: the layout's entries not zero, and their pattern
         out = []
         for a in range(3):
-            v = np.bincount(g["slot"], np.concatenate([y[:, a, :].ravel() for y in vals]), minlength=g["nnz"])
+            v = every[a * nnz:(a + 1) * nnz]
             nz = v != 0
             if a in kept and np.array_equal(kept[a][0], nz):   # zeros where the last point had them
                 out.append(_with_values(kept[a][1], v[nz]))
                 continue
-            A = sp.csr_matrix((v, g["indices"].copy(), g["indptr"].copy()), shape=g["shape"])
+            A = sp.csr_matrix((v.copy(), g["indices"].copy(), g["indptr"].copy()), shape=g["shape"])
             A.has_canonical_format = True   # the kept layout is not pruned
             A.eliminate_zeros()
             kept[a] = (nz, _pattern(A.indices, A.indptr, A.shape))

@@ -548,7 +548,7 @@ class _Stencil:
         el = plan.elim
         self.pattern = tuple(np.array(a) for a in (D.indptr, D.indices, E.indptr, E.indices))
         self.by_diagonals = by_diagonals
-        self.n, self.el, self.nb = n, el, nb
+        self.n, self.el, self.nb, self.kl = n, el, nb, kl
         self._ez: list | None = None   # the eliminated columns' matrices (eliminated)
         size = nb * ldab
         eliminated = np.zeros(n, dtype=bool)
@@ -683,7 +683,10 @@ class _Stencil:
         size = self.nb * ldab
         if out is not None and out.dtype == np.float64 and out.flags.c_contiguous and out.size >= size:
             ab = out.reshape(-1)[:size].reshape(self.nb, ldab)
-            ab.fill(0.0)
+            # the band's cells only: the first kl of every band row are the factor's fill-in rows,
+            # which dgbtrf zeroes itself before it writes them (the last factor's values stay
+            # there unread)
+            ab[:, self.kl:].fill(0.0)
         else:
             ab = np.zeros((self.nb, ldab))
         np.take(S, self.cell_slot, out=cells)
