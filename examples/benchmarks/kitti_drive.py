@@ -238,6 +238,22 @@ Before the rows dropped their rounding noise of exact zeros (``without_rounding_
 plan's stencil was analysed again at every step (0.11-0.16 s soft) and the interior point's plan
 refitted (0.04 s band).
 
+After the loop took that point (``MeshModel.node_point_velocities`` when every body-frame item has its
+rows at the nodes; 9b488dc) and fast42g's per-step work was merged (e0735ab), the same command, three
+runs on a quiet machine (load 0.8-1.2; the RMS the same floats as above in every run, every answer
+verified). Wall s (= CPU here), best of three, and the ratio of the best to the plain mesh's best::
+
+    gap s  GTSAM  mesh    soft nodes     band nodes     NHC+FM band    soft+FM
+    10     0.121  0.222   0.452 (2.04x)  0.513 (2.31x)  0.535 (2.41x)  0.557 (2.51x)
+    30     0.148  0.255   0.547 (2.15x)  0.575 (2.25x)  0.561 (2.20x)  0.651 (2.55x)
+    60     0.136  0.212   0.461 (2.17x)  0.524 (2.47x)  0.521 (2.46x)  0.584 (2.75x)
+    peak   7.9k   11.7k   13.2k          12.6-12.7k     12.8-12.9k     14.3k
+
+Now every variant at the nodes solves in at most 2.8x the plain mesh (the bands 2.2-2.5x), so (b)
+holds; (a) is unchanged: the soft rows with ``ForwardMotion``'s inequality (``soft+FM``) meet both
+criteria at every gap (0.94 / 0.23 / 0.096 of GTSAM's RMS in 2.5 / 2.6 / 2.8x the plain mesh), the
+bands at the nodes still lose at 10 s by 9 %.
+
 ``bvpnav states`` (2026-12-04, ``--methods GTSAM "bvpnav states"``, load average 13-14; CPU
 seconds are the process's, the solve's modules imported before the clock as gtsam is)::
 
