@@ -622,24 +622,11 @@ def test_mesh_nodes_walk_is_the_searchsorted_walk():
     """The mesh's greedy walk between the nodes the items need (on the times as Python floats)
     gives the nodes of the walk by ``searchsorted`` on the array, on uneven steps, at segments
     a whole number of steps long (ties with the reach) and not."""
-    from bvpnav.grid import EDGE_SLACK, TimeGrid, mesh_nodes
+    from bvpnav.grid import TimeGrid, _needed_nodes, mesh_nodes
 
     def walked(grid, segment, times):   # the walk on the array's scalars
-        t, N = grid.t, grid.n
-        keep = np.zeros(N, dtype=bool)
-        keep[[0, N - 1]] = True
-        tt = np.asarray(times, dtype=float).ravel()
-        tol = EDGE_SLACK * max(grid.duration, 1.0)
-        tt = np.clip(tt[(tt >= grid.t0 - tol) & (tt <= grid.t1 + tol)], grid.t0, grid.t1)
-        if tt.size:
-            k = np.clip(np.searchsorted(t, tt), 0, N - 1)
-            near = np.where((k > 0) & (np.abs(t[k - 1] - tt) < np.abs(t[k] - tt)), k - 1, k)
-            on = np.abs(t[near] - tt) <= tol
-            keep[near[on]] = True
-            j = np.clip(np.searchsorted(t, tt[~on], side="right") - 1, 0, N - 2)
-            keep[j] = True
-            keep[j + 1] = True
-        fixed = np.flatnonzero(keep)
+        t = grid.t
+        fixed = _needed_nodes(grid, times)
         out = [fixed[:1]]
         for p, q in zip(fixed[:-1], fixed[1:], strict=True):
             cur, add = int(p), []

@@ -201,6 +201,30 @@ def mesh_nodes(grid: TimeGrid, segment: float, times=()) -> np.ndarray:
     >>> mesh_nodes(grid, 2.0, times=[3.05]).tolist()
     [0, 20, 30, 31, 51, 71, 91, 100]
     """
+    fixed = _needed_nodes(grid, times)
+    out = [fixed[:1]]
+    # the greedy walk on the times as Python floats (the same doubles: the same sums and
+    # comparisons as on the array's scalars, and bisect_right is searchsorted's side="right"),
+    # without a numpy call per node
+    tl = np.asarray(grid.t, dtype=float).tolist()
+    reach = segment * (1.0 + 1e-9)   # a sample at the segment's end up to rounding is within it
+    for p, q in zip(fixed[:-1].tolist(), fixed[1:].tolist(), strict=True):
+        cur, add = p, []
+        while tl[q] - tl[cur] > reach:
+            nxt = max(bisect.bisect_right(tl, tl[cur] + reach) - 1, cur + 1)
+            if nxt >= q:
+                break
+            add.append(nxt)
+            cur = nxt
+        out.append(np.array(add + [q], dtype=np.int64))
+    nodes = np.concatenate(out).astype(np.int64)
+    lone = nodes[:-1][np.diff(nodes) == 2] + 1          # one sample inside: make it a node
+    return np.union1d(nodes, lone).astype(np.int64)
+
+
+def _needed_nodes(grid: TimeGrid, times=()) -> np.ndarray:
+    """The samples :func:`mesh_nodes` keeps before its walk (increasing indices into ``grid``):
+    the ends, a time's sample, both samples around a time between two."""
     t, N = grid.t, grid.n
     keep = np.zeros(N, dtype=bool)
     keep[[0, N - 1]] = True
@@ -216,25 +240,7 @@ def mesh_nodes(grid: TimeGrid, segment: float, times=()) -> np.ndarray:
         j = np.clip(np.searchsorted(t, tt[~on], side="right") - 1, 0, N - 2)
         keep[j] = True
         keep[j + 1] = True
-    fixed = np.flatnonzero(keep)
-    out = [fixed[:1]]
-    # the greedy walk on the times as Python floats (the same doubles: the same sums and
-    # comparisons as on the array's scalars, and bisect_right is searchsorted's side="right"),
-    # without a numpy call per node
-    tl = np.asarray(t, dtype=float).tolist()
-    reach = segment * (1.0 + 1e-9)   # a sample at the segment's end up to rounding is within it
-    for p, q in zip(fixed[:-1].tolist(), fixed[1:].tolist(), strict=True):
-        cur, add = p, []
-        while tl[q] - tl[cur] > reach:
-            nxt = max(bisect.bisect_right(tl, tl[cur] + reach) - 1, cur + 1)
-            if nxt >= q:
-                break
-            add.append(nxt)
-            cur = nxt
-        out.append(np.array(add + [q], dtype=np.int64))
-    nodes = np.concatenate(out).astype(np.int64)
-    lone = nodes[:-1][np.diff(nodes) == 2] + 1          # one sample inside: make it a node
-    return np.union1d(nodes, lone).astype(np.int64)
+    return np.flatnonzero(keep)
 
 
 @dataclass(frozen=True, eq=False)
