@@ -252,7 +252,10 @@ verified). Wall s (= CPU here), best of three, and the ratio of the best to the 
 Now every variant at the nodes solves in at most 2.8x the plain mesh (the bands 2.2-2.5x), so (b)
 holds; (a) is unchanged: the soft rows with ``ForwardMotion``'s inequality (``soft+FM``) meet both
 criteria at every gap (0.94 / 0.23 / 0.096 of GTSAM's RMS in 2.5 / 2.6 / 2.8x the plain mesh), the
-bands at the nodes still lose at 10 s by 9 %.
+bands at the nodes still lose at 10 s by 9 %. With the side slip estimated as well
+(``slip="estimated"`` and ``SideSlip``, a scratch run at e240af5, one run) the band at the nodes is
+1.610 / 2.890 / 5.199 m and the soft rows 1.390 / 3.606 / 5.368 m: the slip does not explain the
+band's 10 s loss.
 
 ``bvpnav states`` (2026-12-04, ``--methods GTSAM "bvpnav states"``, load average 13-14; CPU
 seconds are the process's, the solve's modules imported before the clock as gtsam is)::
