@@ -203,8 +203,9 @@ def body_instants(model, spans, rate: float | str | None, who: str) -> np.ndarra
     ``rate="nodes"`` the coarse mesh's nodes inside ``spans`` (a model without a mesh is refused:
     its nodes are every sample)."""
     if isinstance(rate, str):
-        return _node_instants(model, spans, who)
-    t = getattr(model, "sample_grid", model).t   # every sample (a coarse mesh's nodes are some of them)
+        t, word = _mesh_node_times(model, who), "mesh node"
+    else:
+        t, word = getattr(model, "sample_grid", model).t, "sample"   # a coarse mesh's nodes are some samples
     eps = 1e-9 * max(1.0, abs(float(t[0])), abs(float(t[-1])))
     spans = ((float(t[0]), float(t[-1])),) if spans is None else spans
     out = []
@@ -214,8 +215,8 @@ def body_instants(model, spans, rate: float | str | None, who: str) -> np.ndarra
                              f"[{t[0]:g}, {t[-1]:g}] s; give intervals inside it (or omit t for all of it)")
         inside = np.flatnonzero((t >= a - eps) & (t <= b + eps))
         if inside.size == 0:
-            raise InputError(f"{who}: no sample lies in ({a:g}, {b:g}) s; widen the interval or drop it")
-        if rate is not None:
+            raise InputError(f"{who}: no {word} lies in ({a:g}, {b:g}) s; widen the interval or drop it")
+        if rate is not None and not isinstance(rate, str):
             ts = t[inside]
             marks = ts[0] + np.arange(int(np.floor((ts[-1] - ts[0]) * rate + 1e-9)) + 1) / rate
             pick = np.unique(np.clip(np.searchsorted(ts, marks - eps), 0, ts.size - 1))
@@ -224,28 +225,16 @@ def body_instants(model, spans, rate: float | str | None, who: str) -> np.ndarra
     return t[np.unique(np.concatenate(out))]
 
 
-def _node_instants(model, spans, who: str) -> np.ndarray:
-    """``rate="nodes"``: the nodes of the model's coarse mesh inside ``spans`` (s)."""
+def _mesh_node_times(model, who: str) -> np.ndarray:
+    """``rate="nodes"``: the times of the model's coarse mesh nodes (s), or :class:`InputError`
+    for a model without a mesh."""
     sample_grid = getattr(model, "sample_grid", None)
     grid = getattr(model, "grid", None)
     if sample_grid is None or grid is None or grid is sample_grid:
         raise InputError(f"{who}: rate='nodes' puts the rows at a coarse mesh's nodes, but this problem has "
                          "no mesh (every sample is a node: the rows would be as dense as the samples); give "
                          "NavigationProblem(..., segment=1.0) or the rows' rate in Hz, e.g. rate=1.0")
-    t = np.asarray(grid.t, dtype=float)
-    eps = 1e-9 * max(1.0, abs(float(t[0])), abs(float(t[-1])))
-    if spans is None:
-        return t.copy()
-    keep = np.zeros(t.size, dtype=bool)
-    for a, b in spans:
-        if a < t[0] - eps or b > t[-1] + eps:
-            raise InputError(f"{who}: interval ({a:g}, {b:g}) s reaches outside the recording window "
-                             f"[{t[0]:g}, {t[-1]:g}] s; give intervals inside it (or omit t for all of it)")
-        inside = (t >= a - eps) & (t <= b + eps)
-        if not inside.any():
-            raise InputError(f"{who}: no mesh node lies in ({a:g}, {b:g}) s; widen the interval or drop it")
-        keep |= inside
-    return t[keep]
+    return np.asarray(grid.t, dtype=float)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

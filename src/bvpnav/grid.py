@@ -130,6 +130,16 @@ class TimeGrid:
             )
         return np.clip(times, lo, hi)
 
+    def nearest(self, times: np.ndarray, tol: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """The index of the time nearest each of ``times`` (s; the earlier of two equally near)
+        and whether it lies within ``tol`` s of it (default: rounding of the window,
+        ``EDGE_SLACK * max(duration, 1)``)."""
+        tol = EDGE_SLACK * max(self.duration, 1.0) if tol is None else tol
+        t = self.t
+        k = np.clip(np.searchsorted(t, times), 0, self.n - 1)
+        near = np.where((k > 0) & (np.abs(t[k - 1] - times) < np.abs(t[k] - times)), k - 1, k)
+        return near, np.abs(t[near] - times) <= tol
+
     def locate(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Element index ``j`` and local coordinate ``s = t - t_j`` for each time.
 
@@ -233,9 +243,7 @@ def _needed_nodes(grid: TimeGrid, times=()) -> np.ndarray:
     # a time outside the window is left to the item that names it (its rows refuse it by name)
     tt = np.clip(tt[(tt >= grid.t0 - tol) & (tt <= grid.t1 + tol)], grid.t0, grid.t1)
     if tt.size:
-        k = np.clip(np.searchsorted(t, tt), 0, N - 1)
-        near = np.where((k > 0) & (np.abs(t[k - 1] - tt) < np.abs(t[k] - tt)), k - 1, k)
-        on = np.abs(t[near] - tt) <= tol
+        near, on = grid.nearest(tt, tol)
         keep[near[on]] = True
         j = np.clip(np.searchsorted(t, tt[~on], side="right") - 1, 0, N - 2)
         keep[j] = True
@@ -287,10 +295,8 @@ class MeshGrid(TimeGrid):
 
     def snapped(self, times: np.ndarray) -> np.ndarray:
         """``times`` with those within rounding of a node moved onto it."""
-        tol = EDGE_SLACK * max(self.duration, 1.0)
-        k = np.clip(np.searchsorted(self.t, times), 0, self.n - 1)
-        near = np.where((k > 0) & (np.abs(self.t[k - 1] - times) < np.abs(self.t[k] - times)), k - 1, k)
-        return np.where(np.abs(self.t[near] - times) <= tol, self.t[near], times)
+        near, on = self.nearest(times)
+        return np.where(on, self.t[near], times)
 
     def check_on_mesh(self, times: np.ndarray, what: str) -> None:
         """:class:`InputError` naming ``what`` for a time inside an element of several samples."""

@@ -77,7 +77,7 @@ import scipy.sparse as sp
 
 from . import fem
 from .errors import InputError
-from .grid import EDGE_SLACK, MeshGrid, TimeGrid, as_times, mesh_nodes
+from .grid import MeshGrid, TimeGrid, as_times, mesh_nodes
 from .imu import ImuData
 from .model import Affine, NavModel, TimeLabels, _body_axes, canonical_csr, columns_csr, state_component
 from .sparse import as_csr
@@ -705,9 +705,7 @@ class MeshModel(NavModel):
         f = self.fine
         times = f.check_inside(as_times(t, what), what)
         ax = self.axes_of(axes, what)
-        k = np.clip(np.searchsorted(f.t, times), 0, f.n - 1)
-        near = np.where((k > 0) & (np.abs(f.t[k - 1] - times) < np.abs(f.t[k] - times)), k - 1, k)
-        on = np.abs(f.t[near] - times) <= 1e-9 * max(f.duration, 1.0)
+        near, on = f.nearest(times, 1e-9 * max(f.duration, 1.0))
         inner = on & (self.cond.element[near] >= 0)
         rest = np.flatnonzero(~inner)
         ins = np.flatnonzero(inner)
@@ -839,11 +837,8 @@ class MeshModel(NavModel):
     def _node_of(self, times: np.ndarray) -> np.ndarray:
         """The node of each of ``times`` (s) within rounding of one (as :meth:`MeshGrid.snapped`),
         -1 for the others."""
-        g = self.grid
-        tol = EDGE_SLACK * max(g.duration, 1.0)
-        k = np.clip(np.searchsorted(g.t, times), 0, g.n - 1)
-        near = np.where((k > 0) & (np.abs(g.t[k - 1] - times) < np.abs(g.t[k] - times)), k - 1, k)
-        return np.where(np.abs(g.t[near] - times) <= tol, near, -1)
+        near, on = self.grid.nearest(times)
+        return np.where(on, near, -1)
 
     def _attitude_state_columns(self) -> list:
         """:meth:`bvpnav.error_models.ErrorStates.attitude_columns` of this model's data, made once."""

@@ -162,7 +162,7 @@ def _allowed_columns(model: NavModel, axes: tuple[str, ...]) -> set[int]:
     return cols | set(model.l_index.tolist())
 
 
-def _segment(model: NavModel, item: Item | None = None) -> float | None:
+def _segment(model: NavModel, item: Item) -> float | None:
     """The coarse mesh's ``segment`` (s) of a :class:`bvpnav.mesh.MeshModel` the checks solve on:
     a mesh without node states, or any mesh for an item whose rows are at its nodes
     (``rows_at_nodes``, which only a mesh has); else None (the solves, without the error model,
@@ -193,7 +193,7 @@ def _other_mesh(item: Item, coarse: ImuData, model: NavModel, segment: float) ->
     return prob.formulation.model
 
 
-def _other_model(model: NavModel, item: Item | None = None) -> NavModel:
+def _other_model(model: NavModel, item: Item) -> NavModel:
     """The same axes and window on a coarser grid (navigation-frame accelerations; strapdown
     data with gyro rates stay strapdown, with the same error model)."""
     t = np.asarray(model.data.t, dtype=float)     # every sample (a coarse mesh's grid is its nodes)

@@ -978,21 +978,21 @@ def _cheap_process(data, cheap: _Cheap, gyro: bool):
 STATE_INDEX_KEPT = 1 << 16
 
 
-def _state_index(n: int, per_node: int, k: int) -> np.ndarray:
+def _made_state_index(n: int, per_node: int, k: int) -> np.ndarray:
     """:meth:`ErrorStates.state_index` of kind number ``k`` on ``n`` nodes of ``per_node`` states
-    (read only), kept for the last few layouts of at most :data:`STATE_INDEX_KEPT` nodes."""
-    if n > STATE_INDEX_KEPT:
-        out = np.arange(n)[:, None] * per_node + 3 * k + np.arange(3)[None, :]
-        out.setflags(write=False)
-        return out
-    return _kept_state_index(n, per_node, k)
-
-
-@functools.lru_cache(maxsize=16)
-def _kept_state_index(n: int, per_node: int, k: int) -> np.ndarray:
+    (read only)."""
     out = np.arange(n)[:, None] * per_node + 3 * k + np.arange(3)[None, :]
     out.setflags(write=False)
     return out
+
+
+_kept_state_index = functools.lru_cache(maxsize=16)(_made_state_index)
+
+
+def _state_index(n: int, per_node: int, k: int) -> np.ndarray:
+    """:func:`_made_state_index`, kept for the last few layouts of at most
+    :data:`STATE_INDEX_KEPT` nodes."""
+    return (_kept_state_index if n <= STATE_INDEX_KEPT else _made_state_index)(n, per_node, k)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False, repr=False)
