@@ -28,6 +28,11 @@ SLIP_MAX = 0.05
 #: tenths of a degree at 15 m/s) without being tuned to any recording.
 DEFAULT_TOL = 0.1
 
+#: Default sigma of the band's soft edges, m/s: beyond the band the excess is a soft penalty of
+#: this sigma (a skid of another 0.1 m/s costs what one standard deviation does), the same scale
+#: as the band itself, so the default states one figure of the vehicle's sideways freedom.
+DEFAULT_EDGE_SIGMA = 0.1
+
 _BODY = ("x", "y", "z")
 
 
@@ -286,11 +291,13 @@ class NonHolonomic(Item):
     tol : float or array_like, optional
         Half-width of the band, m/s (per axis allowed). Default :data:`DEFAULT_TOL` = 0.1
         m/s in ``mode="band"`` (the default mode): the velocity may be anywhere within
-        ``tol``, so a car that skids a little does not drag the solution, and where it
-        skids more the band's edge is reached and reported (:meth:`active`).
+        ``tol``, so a car that skids a little does not drag the solution.
     sigma, mode, huber, name
-        See :class:`bvpnav.items.Item`. ``sigma`` alone (m/s) makes the rows soft; ``mode=
-        "hard"`` makes them exact.
+        See :class:`bvpnav.items.Item`. With nothing given the band has soft edges of sigma
+        :data:`DEFAULT_EDGE_SIGMA` = 0.1 m/s (see Notes): where the car skids more than
+        ``tol`` the excess is a soft penalty, reported by :meth:`active`. ``tol`` alone (or
+        ``mode="band"`` without ``sigma``) makes the band's edges hard; ``sigma`` alone
+        (m/s) makes the rows soft; ``mode="hard"`` makes them exact.
 
     Notes
     -----
@@ -309,6 +316,14 @@ class NonHolonomic(Item):
     :math:`\ell` is the unknown of :class:`~bvpnav.error_models.NhcLever` and
     :math:`\omega_k \times \ell = [\omega_k\times]\,\ell` is linear in it
     (:meth:`bvpnav.NavModel.vehicle_point_velocity`).
+
+    **The band's edges.** A hard band says the point never moves sideways faster than
+    ``tol``. A car does, in a sharp turn or on a loose surface, and where the fixes are dense
+    enough to show it a hard edge pulls the path against them. The default band's edges are
+    soft: the penalty :math:`\lambda \sum (\max(|\rho| - tol, 0)/\sigma)^2` is zero
+    within the band and grows beyond it as a soft row of sigma :math:`\sigma` would from the
+    edge (:class:`bvpnav.items.Item`, "band with sigma"), so the band costs nothing where the
+    car rolls and still holds a drifting solution where nothing else does.
 
     **Rows at the mesh's nodes** (``rate="nodes"``). On a coarse mesh the unknowns are the
     nodes' positions, velocities and states; between nodes the velocity is not an unknown but
@@ -356,8 +371,10 @@ class NonHolonomic(Item):
     --------
     >>> from bvpnav.constraints import NonHolonomic
     >>> item = NonHolonomic()
-    >>> item.mode, item.axes, float(item.tol), item.units
-    ('band', ('y', 'z'), 0.1, 'm/s')
+    >>> item.mode, item.axes, float(item.tol), float(item.sigma), item.units
+    ('band', ('y', 'z'), 0.1, 0.1, 'm/s')
+    >>> NonHolonomic(tol=0.1).sigma is None          # a band with hard edges
+    True
     >>> NonHolonomic(sigma=0.05, rate=2.0, t=[(0.0, 50.0), (70.0, 120.0)]).mode
     'soft'
     """
@@ -376,6 +393,7 @@ class NonHolonomic(Item):
         if self.mode is None and self.sigma is None and self.tol is None:
             object.__setattr__(self, "mode", "band")
             object.__setattr__(self, "tol", DEFAULT_TOL)
+            object.__setattr__(self, "sigma", DEFAULT_EDGE_SIGMA)
         elif self.mode is None and self.tol is not None and self.sigma is None:
             object.__setattr__(self, "mode", "band")
         elif str(self.mode).lower() == "band" and self.tol is None:
@@ -455,7 +473,8 @@ class NonHolonomic(Item):
         return without_rounding_noise(rows) if self.rows_at_nodes else rows
 
     def active(self, solution, rtol: float = 1e-3):
-        """The rows at the band's edge in a solution: where the vehicle slid by at least ``tol``.
+        """The rows at or beyond the band's edge in a solution: where the vehicle slid by at
+        least ``tol`` (beyond it only with the default soft edges).
 
         Parameters
         ----------

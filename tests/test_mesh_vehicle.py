@@ -185,11 +185,13 @@ def test_noisy_drive_on_the_mesh_matches_the_per_sample_rows():
 
 
 def test_held_rows_get_nodes_and_penalty_rows_stay_inside():
-    """Rows held as constraints (the default band, hard, forward motion's inequality) get mesh
-    nodes at their instants; soft rows stay at their samples inside the elements."""
+    """Rows held as constraints (a hard-edged band, hard, forward motion's inequality) get mesh
+    nodes at their instants; penalty rows (soft, robust, the default band's soft edges) stay at
+    their samples inside the elements."""
     drive = car_drive(duration=60.0, rate=20.0, grade="tactical", seed=1)
     data = drive.data()
-    for item, nodes in ((NonHolonomic(), True), (NonHolonomic(mode="hard"), True), (ForwardMotion(), True),
+    for item, nodes in ((NonHolonomic(tol=0.1), True), (NonHolonomic(mode="hard"), True), (ForwardMotion(), True),
+                        (NonHolonomic(), False),
                         (NonHolonomic(sigma=0.1), False), (ForwardMotion(sigma=0.1, mode="soft"), False),
                         (NonHolonomic(mode="robust", sigma=0.1, huber=1.0), False)):
         model = _mesh_problem(data).add(item).formulation.model

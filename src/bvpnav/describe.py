@@ -254,9 +254,9 @@ def describe(problem, format: str = "text", lam: float | None = None,
     math(f"  lam = {lam:.6g}", rf"\lambda = {lam:.6g}")
     A_eq = Affine.vstack([model.fem_rows()] + [t.residual for t in terms
                                                 if t.mode == "hard" and t.kind == "equality"]).A
-    n_ineq = sum(t.residual.m for t in terms if t.kind == "inequality" and t.mode in ("hard", "band"))
-    n_cone = sum(t.residual.groups for t in terms if t.kind == "cone" and t.mode in ("hard", "band"))
-    n_obj = form.data_rows().m + sum(t.residual.m for t in terms if t.mode in ("soft", "robust"))
+    n_ineq = sum(t.residual.m for t in terms if t.kind == "inequality" and t.is_constraint)
+    n_cone = sum(t.residual.groups for t in terms if t.kind == "cone" and t.is_constraint)
+    n_obj = form.data_rows().m + sum(t.residual.m for t in terms if t.is_penalty)
     nnz = A_eq.nnz + form.data_rows().A.nnz + sum(
         t.residual.A.nnz for t in terms if not (t.mode == "hard" and t.kind == "equality"))
     extra = (f"{n_ineq} inequality rows, " if n_ineq else "") + (f"{n_cone} cones, " if n_cone else "")

@@ -94,7 +94,8 @@ class Item:
         Huber threshold in the item's units for ``mode="robust"``; ``None`` means the
         L1 penalty.
     tol : float or array_like, optional
-        Half-width of the band in the item's units for ``mode="band"``.
+        Half-width of the band in the item's units for ``mode="band"``. With ``sigma`` as
+        well the band has soft edges (see Notes).
     name : str, optional
         Label used in reports and error messages; default ``Class#k``.
 
@@ -106,7 +107,12 @@ class Item:
     - soft: :math:`\lambda \sum_i (\rho_i/\sigma_i)^2` added to the objective;
     - robust: :math:`\lambda \sum_i \mathrm{huber}(\rho_i/\sigma_i, M/\sigma_i)`, or
       :math:`\lambda \sum_i |\rho_i|/\sigma_i` without a threshold;
-    - band: :math:`|\rho_i| \le \mathrm{tol}_i`.
+    - band: :math:`|\rho_i| \le \mathrm{tol}_i`;
+    - band with ``sigma`` (soft edges): :math:`\lambda \sum_i (\max(|\rho_i| - \mathrm{tol}_i,
+      0)/\sigma_i)^2`, nothing within the band and the excess beyond it a soft penalty (an
+      inequality :math:`g \le 0`: :math:`\max(g_i - \mathrm{tol}_i, 0)`). The information
+      "within tol, and rarely beyond by more than sigma": convex, once differentiable, and
+      solved by ``direct`` as well as by the conic solvers. Not for cone items.
 
     **Broadcasting rule** (one function, :func:`broadcast_rows`, for ``value``, ``sigma``
     and ``tol`` of every item). An item with K instants on A axes has K * A residual rows,
@@ -198,6 +204,9 @@ class Item:
         if huber is not None and mode != "robust":
             raise InputError(f"{label}: huber= goes with mode='robust'")
         object.__setattr__(self, "huber", None if huber is None else float(huber))
+        if mode == "band" and sigma is not None and self.kind == "cone":
+            raise InputError(f"{label}: sigma={self.sigma!r} with mode='band' (a band with soft edges) is not "
+                             "available for a cone item; drop sigma (a hard band) or use mode='soft'")
         tol = positive_array(self.tol, f"{label}: tol")
         if mode == "band" and tol is None:
             raise InputError(f"{label}: mode='band' needs tol (half-width in {self.units})")

@@ -145,13 +145,15 @@ def item_times(items, grid=None) -> np.ndarray:
 def rows_inside_elements(item) -> bool:
     """Whether ``item``'s rows stay at their samples inside the mesh's elements instead of
     getting nodes: the penalty rows (soft, robust) of a body-frame item
-    (:meth:`MeshModel.sample_velocity`). Its rows held as constraints (hard, band, inequality)
+    (:meth:`MeshModel.sample_velocity`; a band with soft edges is a penalty too). Its rows held
+    as constraints (hard, band, inequality)
     get nodes: inside an element the residuals are their conditional mean given the element's
     loads (two per axis), which cannot follow a row profile the data contradict at a cost the
     samples' problem would pay (``examples/benchmarks/kitti_drive.py``: a band inside 1 s
     elements made the node-state loop diverge; with nodes at its rows it gives the samples'
     answer)."""
-    return bool(getattr(item, "body_frame", False)) and item.mode in ("soft", "robust")
+    penalty = item.mode in ("soft", "robust") or (item.mode == "band" and item.sigma is not None)
+    return bool(getattr(item, "body_frame", False)) and penalty
 
 
 def _condensation(data: ImuData, fine, nodes: np.ndarray) -> fem.Condensation:

@@ -12,11 +12,15 @@ mode               equality ``r``          inequality ``g``            cone exce
 =================  ======================  ==========================  ==========================
 hard               ``r = 0``               ``g <= 0``                  ``||u_k|| <= s_k``
 band               ``|r| <= tol``          ``g <= tol``                ``||u_k|| <= s_k + tol_k``
+band with sigma    ``lam sum (pos(|r| -    ``lam sum (pos(g - tol)     (refused)
+                   tol)/s)^2``             /s)^2``
 soft               ``lam sum (r/s)^2``     ``lam sum (pos(g)/s)^2``    ``lam sum (pos(e)/s)^2``
 robust             ``lam sum huber/|.|``   ``lam sum pos(g)/s``        ``lam sum pos(e)/s``
 =================  ======================  ==========================  ==========================
 
-(``lam`` multiplies items; error-model priors and bounds are not scaled by it.) Each kind
+(``lam`` multiplies items; error-model priors and bounds are not scaled by it.) A band with a
+``sigma`` has soft edges: nothing inside it, the excess beyond it squared (:attr:`Term.soft_edges`),
+so it is a penalty, not a constraint. Each kind
 answers: its cvxpy constraints and penalty (:meth:`TermKind.constraints`,
 :meth:`TermKind.penalty`), the violation that verification measures, the gradient of its
 part of the Lagrangian (stationarity), the rows it shows in a solution, its role in the
@@ -91,14 +95,28 @@ class Term:
         return KINDS[self.kind]
 
     @property
+    def soft_edges(self) -> bool:
+        """A band with a ``sigma``: free within ``tol``, the excess beyond it a soft penalty."""
+        return self.mode == "band" and self.sigma is not None
+
+    @property
     def is_constraint(self) -> bool:
-        """Hard or band: compiled to constraints (verified as violations)."""
-        return self.mode in CONSTRAINT_MODES
+        """Hard or band (without soft edges): compiled to constraints (verified as violations)."""
+        return self.mode in CONSTRAINT_MODES and not self.soft_edges
 
     @property
     def is_penalty(self) -> bool:
-        """Soft or robust: a penalty in the objective."""
-        return self.mode in PENALTY_MODES
+        """Soft, robust or a band with soft edges: a penalty in the objective."""
+        return self.mode in PENALTY_MODES or self.soft_edges
+
+    def excess(self, x: np.ndarray) -> np.ndarray:
+        r"""A band with soft edges: how far each row lies beyond the band at ``x``, signed
+        (:math:`\operatorname{sign}(r) \max(|r| - tol, 0)` for an equality, :math:`\max(g - tol,
+        0)` for an inequality), item units."""
+        r = self.residual.value(x)
+        if self.kind == "inequality":
+            return np.maximum(r - self.tol, 0.0)
+        return np.sign(r) * np.maximum(np.abs(r) - self.tol, 0.0)
 
     def weight(self, lam: float) -> float:
         """The factor of this term's penalty: ``lam`` for items, 1 for priors."""
@@ -247,6 +265,8 @@ class TermKind:
 
     def penalty_symbol(self, term: Term) -> str:
         """The penalty's symbol in :func:`bvpnav.describe.describe`."""
+        if term.soft_edges:
+            return "pos(. - tol)^2"
         return "pos(.)" if term.mode == "robust" else "pos(.)^2"
 
 
@@ -276,6 +296,8 @@ class Equality(TermKind):
     def penalty(self, term, r):
         import cvxpy as cp
 
+        if term.soft_edges:
+            return cp.sum_squares(cp.multiply(1.0 / term.sigma, cp.pos(cp.abs(r) - term.tol)))
         if term.mode == "soft":
             return cp.sum_squares(cp.multiply(1.0 / term.sigma, r))
         if term.huber is None:
@@ -288,6 +310,8 @@ class Equality(TermKind):
 
     def gradient_rows(self, term, x, lam, duals):
         k = term.weight(lam)
+        if term.soft_edges:
+            return term.excess(x) * (2.0 * k / term.sigma**2)
         if term.mode == "soft":
             return term.residual.value(x) * (2.0 * k / term.sigma**2)
         if term.mode == "robust":
@@ -312,6 +336,8 @@ class Equality(TermKind):
             return every, every[:0]
         if term.mode == "soft":
             return every[:0], every
+        if term.soft_edges:
+            return every[:0], np.flatnonzero(np.abs(r) > term.tol + atol)
         if term.mode == "band":
             return np.flatnonzero(np.abs(r) >= term.tol - atol), every[:0]
         if term.huber is None:  # L1: only its kink holds a row
@@ -321,6 +347,8 @@ class Equality(TermKind):
     def penalty_symbol(self, term):
         if term.mode == "robust":
             return "huber" if term.huber else "|.|"
+        if term.soft_edges:
+            return "pos(|.| - tol)^2"
         return "(.)^2"
 
 
@@ -335,6 +363,8 @@ class Inequality(TermKind):
     def penalty(self, term, r):
         import cvxpy as cp
 
+        if term.soft_edges:
+            return cp.sum_squares(cp.multiply(1.0 / term.sigma, cp.pos(r - term.tol)))
         if term.mode == "soft":
             return cp.sum_squares(cp.multiply(1.0 / term.sigma, cp.pos(r)))
         return cp.sum(cp.multiply(1.0 / term.sigma, cp.pos(r)))
@@ -344,6 +374,8 @@ class Inequality(TermKind):
         return np.maximum(r - (term.tol if term.mode == "band" else 0.0), 0)
 
     def gradient_rows(self, term, x, lam, duals):
+        if term.soft_edges:
+            return term.excess(x) * (2.0 * term.weight(lam) / term.sigma**2)
         if term.mode == "soft":
             return np.maximum(term.residual.value(x), 0) * (2.0 * term.weight(lam) / term.sigma**2)
         if term.mode == "robust":
@@ -358,6 +390,8 @@ class Inequality(TermKind):
         none = np.zeros(0, dtype=int)
         if term.mode == "soft":
             return none, np.flatnonzero(g > atol)
+        if term.soft_edges:
+            return none, np.flatnonzero(g > term.tol + atol)
         bound = term.tol if term.mode == "band" else 0.0
         if term.mode == "robust":  # pos(g): its kink at g = 0
             return np.flatnonzero(np.abs(g) <= atol), none

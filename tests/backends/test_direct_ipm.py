@@ -155,8 +155,10 @@ def test_infeasible_rows_take_the_certified_path():
     assert exc.value.attempts[0]["solver"] == "direct" and exc.value.attempts[0]["status"] == "not converged"
 
 
-@pytest.mark.parametrize("kw,mode", [({"sigma": 0.1}, "soft"), ({"mode": "robust", "sigma": 0.1}, "robust")])
+@pytest.mark.parametrize("kw,mode", [({"mode": "robust", "sigma": 0.1}, "robust")])
 def test_penalised_inequalities_are_refused_by_name(kw, mode):
+    """Robust inequalities (an L1 penalty) are refused; soft ones are solved
+    (tests/backends/test_direct_soft_edges.py)."""
     prob = line_problem(PositionBound(upper=8.0, t0=9.0, t1=10.0, name="cap", **kw))
     with pytest.raises(bvpnav.InputError, match=rf"'direct' cannot take item 'cap' \(kind 'inequality', "
                                                 rf"mode '{mode}'\).*clarabel"):

@@ -216,7 +216,7 @@ class _Held:
         self.ia = np.flatnonzero(act)
         self.kb = qp.base_of[self.ia]
         self.delta = np.full(nb, _DECOUPLED)
-        self.delta[self.kb] = 0.0
+        self.delta[self.kb] = qp.soft[self.kb]   # 0: held hard; a penalty row's 1 / p
         rk = np.zeros(nb)
         rk[self.kb] = -qp.sign[self.ia] * G.c[self.ia]
         self.fac = newton.steps.factor(self.delta)
@@ -245,7 +245,7 @@ def _next_guess(qp: QuadraticForm, act: np.ndarray, r: np.ndarray, violated: np.
                 wrong: np.ndarray) -> np.ndarray:
     """The next guess: the rows whose multiplier pulls dropped, the violated rows that peak
     (:func:`_peaks`) added."""
-    return (act & ~wrong) | (violated & _peaks(qp, r))
+    return (act & ~wrong) | (violated & ((qp.soft_rows > 0) | _peaks(qp, r)))
 
 
 def _peaks(qp: QuadraticForm, r: np.ndarray) -> np.ndarray:

@@ -73,8 +73,8 @@ def unsupported_term(form: Formulation):
     for term in form.terms():
         if term.least_squares_role() is not None:
             continue
-        if term.kind == "inequality" and term.mode in ("hard", "band"):
-            continue
+        if term.kind == "inequality" and term.mode in ("hard", "band", "soft"):
+            continue   # soft: a row whose slack carries the penalty (QuadraticForm.soft)
         if term.kind == "equality" and term.mode == "band":
             continue
         return term
@@ -106,6 +106,10 @@ class QuadraticForm:
         Per row of ``G``, the row of the same term, side and axis at the item's previous
         and next instant (:meth:`bvpnav.items.Item.row_layout`: rows time-major), -1 at
         the ends; every row its own instant when the term has no item.
+    soft : ndarray
+        Per row of :attr:`base`, :math:`1/p_k` for the rows of a soft inequality or a band
+        with soft edges (penalty :math:`p_k \max(G_k x + g_k, 0)^2` in the scaled row's
+        units), 0 for the rows that hold hard (see the module Notes).
     """
 
     ls: LeastSquaresForm
@@ -117,6 +121,12 @@ class QuadraticForm:
     ineq_blocks: list
     before: np.ndarray
     after: np.ndarray
+    soft: np.ndarray
+
+    @property
+    def soft_rows(self) -> np.ndarray:
+        """:attr:`soft` per row of :attr:`G`."""
+        return self.soft[self.base_of]
 
     def base_weights(self, w: np.ndarray) -> np.ndarray:
         r"""``w`` (one value per row of ``G``) summed onto :attr:`base`'s rows
@@ -138,7 +148,7 @@ def quadratic_form(form: Formulation, lam: float) -> QuadraticForm:
         raise ValueError(f"item {bad.label!r} (kind {bad.kind!r}, mode {bad.mode!r}) is not a "
                          "quadratic-program row")
     ls = least_squares_form(form, lam, surrogate=True)
-    bases, consts, signs, of, blocks, strides = [], [], [], [], [], []
+    bases, consts, signs, of, blocks, strides, softs = [], [], [], [], [], [], []
     start = nbase = 0
     for term in form.terms():
         if term.least_squares_role() is not None:
@@ -148,7 +158,10 @@ def quadratic_form(form: Formulation, lam: float) -> QuadraticForm:
         axes = item.row_layout(res.m)[1] if item is not None else 1
         A = canonical(res.A)
         bases.append(A)
-        tol = np.zeros(res.m) if term.mode == "hard" else np.broadcast_to(term.tol, (res.m,))
+        tol = np.zeros(res.m) if term.tol is None else np.broadcast_to(term.tol, (res.m,))
+        # a penalty row's 1 / p_i, p_i its weight lam / sigma_i^2 (scaled below with its row)
+        softs.append(np.broadcast_to(term.sigma, (res.m,)) ** 2 / term.weight(lam) if term.is_penalty
+                     else np.zeros(res.m))
         pieces = []
         for sign in ([1.0] if term.kind == "inequality" else [1.0, -1.0]):
             consts.append(sign * res.c - tol)
@@ -174,7 +187,8 @@ def quadratic_form(form: Formulation, lam: float) -> QuadraticForm:
     for first, m, axes in strides:
         i = np.arange(first, first + m)
         before[i[axes:]], after[i[:-axes]] = i[:-axes], i[axes:]
-    return QuadraticForm(ls, Affine(G, c), scale, B, base_of, sign, blocks, before, after)
+    soft = np.concatenate(softs) / big**2 if softs else np.zeros(0)
+    return QuadraticForm(ls, Affine(G, c), scale, B, base_of, sign, blocks, before, after, soft)
 
 
 class MultiplierBand:
@@ -451,11 +465,12 @@ class _Newton:
         self.other = partner[self.two]
         self.two_sign = qp.sign[self.two]
         self.two_base = qp.base_of[self.two]
+        self.soft = qp.soft_rows
         self.fac = None
 
     def factor(self, s: np.ndarray, z: np.ndarray) -> None:
         self.s, self.z = s, z
-        self.delta = 2.0 * s / z
+        self.delta = 2.0 * s / z + self.soft
         self.fac = self.steps.factor(self._base_delta(self.delta))
 
     def _base_delta(self, delta: np.ndarray) -> np.ndarray:
@@ -490,7 +505,7 @@ class _Newton:
             R1 = b1 - g1 - e1 - f1
             R2 = b2 - self.E @ dx
             Gdx = self.G @ dx
-            R3 = b3 - Gdx - ds
+            R3 = b3 - Gdx - ds + 0.5 * self.soft * dz
             R4 = b4 - self.z * ds - self.s * dz
             big = max(abs_max(R1) / max(abs_max(b1), abs_max(g1), abs_max(e1), abs_max(f1), 1e-300),
                       abs_max(R3) / max(abs_max(b3), abs_max(Gdx), abs_max(ds), 1e-300))
@@ -547,7 +562,7 @@ def _measures(qp: QuadraticForm, pt: _Point, newton: _Newton, fscale: float):
     Ey, Gz = newton.Et @ pt.y, newton.Gt @ pt.z
     rd = grad + Ey + Gz
     re = E.value(pt.x)
-    gx = G.value(pt.x)
+    gx = G.value(pt.x) - 0.5 * newton.soft * pt.z    # a soft row's excess t = z / (2 p) moves its bound
     rg = gx + pt.s
     f = _dot(res, res)
     dscale = max(abs_max(grad), abs_max(Ey), abs_max(Gz), 1e-300)

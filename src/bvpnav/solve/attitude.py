@@ -142,6 +142,8 @@ def _penalty(term, x: np.ndarray) -> float:
         k = term.residual.size
         e = np.maximum(term.residual.excess(x), 0.0) / sig[::k]
         return float(np.sum(e**2) if term.mode == "soft" else np.sum(e))
+    if term.soft_edges:
+        return float(np.sum((term.excess(x) / sig) ** 2))
     r = term.residual.value(x)
     if term.kind == "inequality":
         g = np.maximum(r, 0.0) / sig
