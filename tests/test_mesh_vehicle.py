@@ -190,8 +190,8 @@ def test_held_rows_get_nodes_and_penalty_rows_stay_inside():
     their samples inside the elements."""
     drive = car_drive(duration=60.0, rate=20.0, grade="tactical", seed=1)
     data = drive.data()
-    for item, nodes in ((NonHolonomic(tol=0.1), True), (NonHolonomic(mode="hard"), True), (ForwardMotion(), True),
-                        (NonHolonomic(), False),
+    for item, nodes in ((NonHolonomic(tol=0.1), True), (NonHolonomic(mode="hard"), True),
+                        (ForwardMotion(), True), (NonHolonomic(), False),
                         (NonHolonomic(sigma=0.1), False), (ForwardMotion(sigma=0.1, mode="soft"), False),
                         (NonHolonomic(mode="robust", sigma=0.1, huber=1.0), False)):
         model = _mesh_problem(data).add(item).formulation.model

@@ -781,11 +781,15 @@ VEHICLE = {"bvpnav NHC soft": ("soft", False), "bvpnav NHC band": ("band", False
            "bvpnav states mesh NHC soft nodes": ("soft", False),
            "bvpnav states mesh NHC band nodes": ("band", False),
            "bvpnav states mesh NHC+FM band nodes": ("band", True),
-           "bvpnav states mesh NHC soft+FM nodes": ("soft", True)}
+           "bvpnav states mesh NHC soft+FM nodes": ("soft", True),
+           "bvpnav states mesh NHC edges": ("edges", False),
+           "bvpnav states mesh NHC edges nodes": ("edges", False),
+           "bvpnav states mesh NHC+FM edges nodes": ("edges", True)}
 #: The methods whose vehicle rows sit at the 1 s mesh's nodes (``rate="nodes"``, issue 39), instead of
 #: :data:`NHC_RATE`: one row per node and axis, no node of their own.
 AT_NODES = ("bvpnav states mesh NHC soft nodes", "bvpnav states mesh NHC band nodes",
-            "bvpnav states mesh NHC+FM band nodes", "bvpnav states mesh NHC soft+FM nodes")
+            "bvpnav states mesh NHC+FM band nodes", "bvpnav states mesh NHC soft+FM nodes",
+            "bvpnav states mesh NHC edges nodes", "bvpnav states mesh NHC+FM edges nodes")
 #: The methods that estimate the IMU's mounting (yaw and pitch boresight) with the non-holonomic
 #: rows (``NonHolonomic(mounting="estimated")``), prior sigma :data:`MOUNT_SIGMA`.
 MOUNTED = ("bvpnav states NHC mount", "bvpnav NHC+FM mount", "bvpnav states mesh NHC mount",
@@ -1251,7 +1255,10 @@ def problem(d: dict, kept, method: str, fig: dict, c0, interval: float, *, fix_s
 
         mode, forward = VEHICLE[method]
         nhc = NHC_WIDTH if nhc_sigma is None else nhc_sigma
-        width = {"sigma": nhc} if mode == "soft" else {"tol": nhc}
+        # "edges": NonHolonomic's default, a band of NHC_WIDTH with soft edges of the same sigma
+        width = ({"sigma": nhc} if mode == "soft" else {"tol": nhc, "sigma": nhc} if mode == "edges"
+                 else {"tol": nhc})
+        mode = "band" if mode == "edges" else mode
         lever = "estimated" if method in LEVERED else (0.0, 0.0, 0.0)
         slip = "estimated" if method in SLIPPED else SIDE_SLIP_PRIOR if method in SLIP_KNOWN else None
         if method in SLIP_NOISE:

@@ -205,8 +205,8 @@ class Item:
             raise InputError(f"{label}: huber= goes with mode='robust'")
         object.__setattr__(self, "huber", None if huber is None else float(huber))
         if mode == "band" and sigma is not None and self.kind == "cone":
-            raise InputError(f"{label}: sigma={self.sigma!r} with mode='band' (a band with soft edges) is not "
-                             "available for a cone item; drop sigma (a hard band) or use mode='soft'")
+            raise InputError(f"{label}: sigma={self.sigma!r} with mode='band' (a band with soft edges) is "
+                             "not available for a cone item; drop sigma (a hard band) or use mode='soft'")
         tol = positive_array(self.tol, f"{label}: tol")
         if mode == "band" and tol is None:
             raise InputError(f"{label}: mode='band' needs tol (half-width in {self.units})")

@@ -28,9 +28,15 @@ next guess adds the violated rows and drops the rows whose multiplier has the wr
     W^+ = \{i \notin W : G_i x + g_i > \epsilon_g\} \cup \{i \in W : z_i \ge -\epsilon_z\},
 
 the primal-dual active-set step of Hintermüller, Ito and Kunisch (2002), a semismooth
-Newton step on :math:`\min(z, -(G x + g)) = 0`. With few rows at their bounds it ends in a
-few factorizations; it can cycle on problems that are not of its kind, so a repeated
-guess, a singular KKT matrix (rows at their bounds that determine no unknown alone) or
+Newton step on :math:`\min(z, -(G x + g)) = 0`. A penalty row (a soft inequality, a band's
+soft edge: :mod:`bvpnav.linalg.ipm`'s "Penalty rows") in :math:`W` is held with its diagonal
+:math:`1/p_i` instead of 0, i.e. as a soft row pulling :math:`G_i x + g_i` to 0, and its
+multiplier :math:`z_i = 2 p_i (G_i x + g_i)` has the wrong sign exactly where the row is
+satisfied; every violated penalty row enters :math:`W` at once (the semismooth Newton step of
+the piecewise quadratic penalty), the peak rule below being for the hard rows.
+
+With few rows at their bounds it ends in a few factorizations; it can cycle on problems that
+are not of its kind, so a repeated guess, a singular KKT matrix (rows at their bounds that determine no unknown alone) or
 ``max_iter`` updates hand the problem to the interior-point method. A band's two sides
 share one row of the system; at most one of them is in :math:`W`.
 

@@ -29,6 +29,15 @@ bandwidth, border) is made once; each step changes only that diagonal and the sc
 those rows (:class:`MultiplierBand`), then ``dgbtrf`` factors the band. Steps are refined
 against the full linearized system.
 
+**Penalty rows.** A soft inequality (:math:`\lambda \max(g_i, 0)^2/\sigma_i^2`) and a band with
+soft edges (its two sides, :math:`\pm r - tol`) are rows of the same system: with
+:math:`\max(g, 0)^2 = \min_{t \ge g} t^2` the row becomes :math:`G_i x + g_i - t_i \le 0` with
+:math:`p_i t_i^2` in the objective (:math:`p_i = \lambda/\sigma_i^2` in the scaled row's units),
+and the slack's stationarity gives :math:`t_i = z_i/(2 p_i)`. Eliminated, :math:`t_i` adds the
+constant :math:`1/p_i` (:attr:`QuadraticForm.soft`) to the multiplier's diagonal,
+:math:`\Delta_i = 2 s_i/z_i + 1/p_i`, and :math:`-z_i/(2 p_i)` to the row's residual; a hard
+row has 0. The answer is the penalty's optimum, with :math:`z_i = 2 p_i \max(g_i, 0)`.
+
 The direct back end tries :mod:`bvpnav.linalg.active_set` first (the same factorizations
 with the diagonal 0 or huge) and comes here where it gives way (:func:`interior_point`
 then reuses its plan). The first factorization leaves the inequality rows out (their
@@ -436,7 +445,8 @@ class _Newton:
         G\, dx + ds = b_3, \quad z \circ ds + s \circ dz = b_4.
 
     Eliminating :math:`ds = (b_4 - s\, dz)/z` leaves :math:`G_i dx - \Delta_i \nu_i = b_{3i}
-    - b_{4i}/z_i` with :math:`\nu = dz/2`, :math:`\Delta_i = 2 s_i / z_i`. A band's two sides
+    - b_{4i}/z_i` with :math:`\nu = dz/2`, :math:`\Delta_i = 2 s_i / z_i` (plus a penalty row's
+    :math:`1/p_i`, whose third equation is :math:`G_i dx + ds_i - dz_i/(2 p_i) = b_{3i}`). A band's two sides
     ``+B_k`` and ``-B_k`` share one multiplier :math:`\nu_k = \nu_+ - \nu_-` with
     :math:`\Delta_k = (1/\Delta_+ + 1/\Delta_-)^{-1}`; each side's multiplier follows from
     :math:`\nu_k` and the two rows' sum, in which :math:`dx` cancels (no product of a
