@@ -36,8 +36,9 @@ satisfied; every violated penalty row enters :math:`W` at once (the semismooth N
 the piecewise quadratic penalty), the peak rule below being for the hard rows.
 
 With few rows at their bounds it ends in a few factorizations; it can cycle on problems that
-are not of its kind, so a repeated guess, a singular KKT matrix (rows at their bounds that determine no unknown alone) or
-``max_iter`` updates hand the problem to the interior-point method. A band's two sides
+are not of its kind, so a repeated guess, a singular KKT matrix (rows at their bounds that
+determine no unknown alone) or ``max_iter`` updates hand the problem to the interior-point
+method. A band's two sides
 share one row of the system; at most one of them is in :math:`W`.
 
 The tolerances are the interior-point method's measures (:data:`bvpnav.linalg.ipm.IPM_TOL`):
