@@ -245,10 +245,15 @@ def describe(problem, format: str = "text", lam: float | None = None,
             pen = t.table.penalty_symbol(t)  # inequalities and cones: only the violation
             body = (t.item.math() if t.item is not None else t.label).replace(" = 0", "")
             body = body.replace(" <= 0", "")
+            edge = f", tol = {_fmt(t.tol)} {t.units}" if t.soft_edges else ""
+            lhs = _item_latex(t, lhs=True)
+            if t.soft_edges:   # the excess beyond the band
+                lhs = (r"\max(|" + lhs + r"| - \mathrm{tol}_k, 0)" if t.kind == "equality"
+                       else r"\max(" + lhs + r" - \mathrm{tol}_k, 0)")
             math(f"  + {k}sum {pen} of ({body}) / sigma   [{t.label}, {t.mode}, sigma = "
-                 f"{_fmt(t.sigma)} {t.units}, {t.residual.m} rows]",
+                 f"{_fmt(t.sigma)} {t.units}{edge}, {t.residual.m} rows]",
                  (r"+\ \lambda " if t.scaled_by_lam else "+ ") + r"\sum_k \left(\frac{"
-                 + _item_latex(t, lhs=True) + r"}{\sigma_k}\right)^2"
+                 + lhs + r"}{\sigma_k}\right)^2"
                  + rf"\quad \mathrm{{[{_tex_text(t.label)},\ {t.mode},\ \sigma = {_fmt(t.sigma)}\ "
                  rf"{_tex_text(t.units)}]}}")
     math(f"  lam = {lam:.6g}", rf"\lambda = {lam:.6g}")

@@ -110,7 +110,8 @@ def test_the_soft_edges_curvature_is_a_soft_rows_in_the_uncertainty():
 def test_describe_writes_the_soft_edges():
     prob = line(Position(t=10.0, value=8.0, mode="band", tol=0.5, sigma=1.0, name="edge"))
     text = prob.describe()
-    assert "pos(|.| - tol)^2" in text and "edge" in text
+    assert "pos(|.| - tol)^2" in text and "[edge, band, sigma = 1 m, tol = 0.5 m, 1 rows]" in text
+    assert r"\max(|" in prob.describe(format="latex")
 
 
 def test_a_cone_item_refuses_soft_edges_by_name():
