@@ -161,6 +161,17 @@ def _fmt(v) -> str:
     return f"{v.min():.4g}..{v.max():.4g}"
 
 
+def _penalty_latex(t) -> str:
+    """The numerator of a penalty term's LaTeX: its residual, or for a band with soft edges
+    the excess beyond the band."""
+    lhs = _item_latex(t, lhs=True)
+    if not t.soft_edges:
+        return lhs
+    if t.kind == "equality":
+        return r"\max(|" + lhs + r"| - \mathrm{tol}_k, 0)"
+    return r"\max(" + lhs + r" - \mathrm{tol}_k, 0)"
+
+
 def describe(problem, format: str = "text", lam: float | None = None,
              conditioning: bool = True) -> str:
     """The assembled problem in readable mathematics.
@@ -246,10 +257,7 @@ def describe(problem, format: str = "text", lam: float | None = None,
             body = (t.item.math() if t.item is not None else t.label).replace(" = 0", "")
             body = body.replace(" <= 0", "")
             edge = f", tol = {_fmt(t.tol)} {t.units}" if t.soft_edges else ""
-            lhs = _item_latex(t, lhs=True)
-            if t.soft_edges:   # the excess beyond the band
-                lhs = (r"\max(|" + lhs + r"| - \mathrm{tol}_k, 0)" if t.kind == "equality"
-                       else r"\max(" + lhs + r" - \mathrm{tol}_k, 0)")
+            lhs = _penalty_latex(t)
             math(f"  + {k}sum {pen} of ({body}) / sigma   [{t.label}, {t.mode}, sigma = "
                  f"{_fmt(t.sigma)} {t.units}{edge}, {t.residual.m} rows]",
                  (r"+\ \lambda " if t.scaled_by_lam else "+ ") + r"\sum_k \left(\frac{"
