@@ -169,6 +169,8 @@ def _penalty_latex(t) -> str:
         return lhs
     if t.kind == "equality":
         return r"\max(|" + lhs + r"| - \mathrm{tol}_k, 0)"
+    if "," in lhs:   # a two-sided bound's rows, "l - r, r - u": the larger of them
+        lhs = r"\max(" + lhs + ")"
     return r"\max(" + lhs + r" - \mathrm{tol}_k, 0)"
 
 
@@ -263,7 +265,8 @@ def describe(problem, format: str = "text", lam: float | None = None,
                  (r"+\ \lambda " if t.scaled_by_lam else "+ ") + r"\sum_k \left(\frac{"
                  + lhs + r"}{\sigma_k}\right)^2"
                  + rf"\quad \mathrm{{[{_tex_text(t.label)},\ {t.mode},\ \sigma = {_fmt(t.sigma)}\ "
-                 rf"{_tex_text(t.units)}]}}")
+                 rf"{_tex_text(t.units)}" + (rf",\ tol = {_fmt(t.tol)}\ {_tex_text(t.units)}" if t.soft_edges
+                                              else "") + "]}")
     math(f"  lam = {lam:.6g}", rf"\lambda = {lam:.6g}")
     A_eq = Affine.vstack([model.fem_rows()] + [t.residual for t in terms
                                                 if t.mode == "hard" and t.kind == "equality"]).A

@@ -88,9 +88,10 @@ def normalized_residuals(sol, acceleration: bool = True) -> pd.DataFrame:
     pandas.DataFrame
         Columns ``t`` (s; NaN for rows without a time, e.g. priors), ``item``, ``row``
         (the row's label), ``mode``, ``residual`` (item units), ``units``, ``sigma``
-        (item units), ``normalized`` (residual / sigma, 1) and ``down_weighted``
-        (bool), sorted by ``|normalized|``, largest first. Hard and band rows have no
-        sigma and are not listed.
+        (item units), ``normalized`` (residual / sigma, 1; for a band with soft edges the
+        excess beyond the band over sigma, 0 inside it) and ``down_weighted`` (bool), sorted
+        by ``|normalized|``, largest first. Hard rows and bands with hard edges have no sigma
+        and are not listed.
 
     Examples
     --------
@@ -117,7 +118,7 @@ def normalized_residuals(sol, acceleration: bool = True) -> pd.DataFrame:
         idx = np.arange(r.size)
         parts.append(pd.DataFrame({
             "t": rows.t, "item": label, "row": [rows.label(i) for i in idx], "mode": rows.mode,
-            "residual": r, "units": rows.units, "sigma": rows.sigma, "normalized": r / rows.sigma,
+            "residual": r, "units": rows.units, "sigma": rows.sigma, "normalized": _normalized(rows, r),
             "down_weighted": _down_weighted(rows, r)}))
     if acceleration and sol.sigma_a is not None and len(sol.residuals):
         t = sol.residuals.index.to_numpy(float)
@@ -138,6 +139,17 @@ def normalized_residuals(sol, acceleration: bool = True) -> pd.DataFrame:
     return out.iloc[order].reset_index(drop=True)
 
 
+def _normalized(rows, r: np.ndarray) -> np.ndarray:
+    """Rows' residuals ``r`` over their sigma; a band with soft edges: the excess beyond the
+    band over sigma (:meth:`bvpnav.terms.Term.excess`), 0 inside it."""
+    if rows.mode == "band" and rows.tol is not None:
+        if rows.kind == "inequality":
+            r = np.maximum(r - rows.tol, 0.0)
+        else:
+            r = np.sign(r) * np.maximum(np.abs(r) - rows.tol, 0.0)
+    return r / rows.sigma
+
+
 # --------------------------------------------------------------------------- figures
 def _fixes(sol, axes: list) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
     """Position fixes on the two map axes, recovered from the items' residuals
@@ -156,7 +168,7 @@ def _fixes(sol, axes: list) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndar
         r = np.asarray(sol.item_residuals[label], float).reshape(labs.times.size, len(labs.axes))
         down = _down_weighted(rows, r.ravel()).reshape(r.shape).any(axis=1)
         if rows.sigma is not None:
-            far = (np.abs(r) / rows.sigma.reshape(r.shape) > OUTLIER).any(axis=1)
+            far = (np.abs(_normalized(rows, r.ravel())).reshape(r.shape) > OUTLIER).any(axis=1)
         else:
             far = np.zeros(len(r), bool)
         pts = []

@@ -110,8 +110,15 @@ def _same_rows(a: Affine, b: Affine) -> bool:
 
 
 # ---------------------------------------------------------------------- items
+#: The end-to-end solve of a band with soft edges (``mode="band"`` with a ``sigma``), beside
+#: :data:`bvpnav.items.MODES`'.
+SOFT_EDGES = "band with soft edges"
+
+
 def _switch(item: Item, mode: str, sigma: float = 0.5) -> Item:
     """``item`` in another mode, with the weights that mode needs (and no others)."""
+    if mode == SOFT_EDGES:   # a band with soft edges: the band's tol and a sigma
+        return dataclasses.replace(item, mode="band", sigma=sigma, tol=0.1, huber=None)
     kw: dict[str, Any] = {"mode": mode, "sigma": None, "tol": None, "huber": None}
     if mode in ("soft", "robust"):
         kw["sigma"] = sigma
@@ -377,7 +384,8 @@ def check_item(item_or_class: Item | type[Item], model: NavModel | None = None) 
     - 'solves when hard': hard, beside soft positions 0 at both ends, the item gives a
       verified finite solution in which it is reported; 'solves when band': the same
       with ``tol=0.1``; 'solves when soft' and 'solves when robust': the same with
-      ``sigma=1`` (robust: ``huber=1``) beside hard end positions (all on
+      ``sigma=1`` (robust: ``huber=1``) beside hard end positions, and 'solves when band
+      with soft edges' (not for cones) with ``tol=0.1, sigma=1`` beside them (all on
       ``model.data`` without the error model, whose parameters these items alone need
       not determine). On a coarse mesh's model (:class:`bvpnav.mesh.MeshModel`) the
       coarser model is a mesh of the same ``segment`` with nodes at the item's instants
@@ -518,6 +526,8 @@ def _check_item(item: Item, model: NavModel, who: str) -> None:
     # ----------------------------------------------------------- end to end
     for mode in MODES:
         _solve_with(item, model, mode, who)
+    if item.kind != "cone":   # cones refuse soft edges
+        _solve_with(item, model, SOFT_EDGES, who)
 
 
 # --------------------------------------------------------------- error models

@@ -7,6 +7,8 @@ uncertainty, validation)."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 from _helpers import quintic, table1_problem
@@ -117,3 +119,43 @@ def test_describe_writes_the_soft_edges():
 def test_a_cone_item_refuses_soft_edges_by_name():
     with pytest.raises(bvpnav.InputError, match=r"SpeedLimit.*soft edges.*cone"):
         SpeedLimit(v_max=20.0, t0=1.0, t1=9.0, mode="band", tol=0.1, sigma=0.1)
+
+
+def test_the_variance_factor_reads_the_excess_beyond_the_band():
+    """r(10) = 9.25 m: the fix's residual -0.75 m and the band's excess 0.75 m (not the raw
+    1.25 m), each over sigma 1 m: 2 x 0.5625 on one degree of freedom (two rows, one unknown
+    slope) = 1.125."""
+    prob = line(Position(t=10.0, value=8.0, mode="band", tol=0.5, sigma=1.0, name="edge"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")   # one degree of freedom: the factor is judged, and may warn
+        sol = prob.solve(solver="direct", uncertainty=True)
+    assert sol.stats["uncertainty"]["variance_factor"] == pytest.approx(1.125, rel=1e-6)
+
+
+def test_at_lam_zero_the_penalty_rows_are_not_in_the_problem():
+    """lam = 0 weighs the items' penalties by 0: direct solves without them (their 1 / p would
+    be infinite), as without the items."""
+    def ends(*extra):   # the hard ends 0 and 10 m (lam weighs no hard row)
+        prob = bvpnav.NavigationProblem(bvpnav.ImuData(t=T, acc=np.zeros_like(T)))
+        return prob.add(Position(t=[0.0, 10.0], value=[0.0, 10.0], name="ends"), *extra)
+
+    cap = PositionBound(upper=8.0, t0=9.0, t1=10.0, mode="band", tol=0.2, sigma=0.5, name="cap")
+    with_cap = ends(cap).solve(solver="direct", lam=0.0, fallback=None)
+    without = ends().solve(solver="direct", lam=0.0, fallback=None)
+    assert with_cap.stats["verified"]
+    np.testing.assert_allclose(with_cap.position(), without.position(), atol=1e-9)
+
+
+def test_normalized_residuals_of_soft_edges_are_the_excess_over_sigma():
+    """A row inside its band has no penalty and is reported at 0, not at r / sigma; one beyond
+    it at its excess over sigma."""
+    from bvpnav.report import normalized_residuals
+
+    prob = line(Position(t=10.0, value=8.0, mode="band", tol=0.5, sigma=1.0, name="edge"),
+                Position(t=10.0, value=9.1, mode="band", tol=0.5, sigma=0.1, name="inside"))
+    tab = normalized_residuals(prob.solve(solver="direct"))
+    edge = tab[tab["item"] == "edge"].iloc[0]
+    inside = tab[tab["item"] == "inside"].iloc[0]
+    assert abs(edge["residual"]) > 0.5 and abs(inside["residual"]) < 0.5
+    assert edge["normalized"] == pytest.approx(np.sign(edge["residual"]) * (abs(edge["residual"]) - 0.5))
+    assert inside["normalized"] == 0.0

@@ -32,8 +32,9 @@ answered, ``stats["active_rows"]`` how many rows are at their bounds and
 ``stats["active_set"]`` the active set's updates or why it gave way (options ``ipm_tol``: the
 relative tolerance of both methods' residuals and gap, 1e-7, 1e-9, 1e-10 for the presets;
 ``ipm_max_iter``; ``method="lu"`` or ``"ldl"``: a pivoted sparse LU at every step instead of
-the banded factorization). Robust penalties,
-cones and soft inequalities are refused, naming the item; ``csne`` refuses every item that
+the banded factorization). Soft inequalities and bands with soft edges are rows of the same
+systems with a constant diagonal (:mod:`bvpnav.linalg.ipm`, "Penalty rows"). Robust penalties
+and cones are refused, naming the item; ``csne`` refuses every item that
 is not a hard or soft equality.
 """
 
@@ -133,8 +134,8 @@ class DirectBackend(_LeastSquaresBackend):
         if term is None:
             return None
         return (f"solver {self.name!r} cannot take item {term.label!r} (kind {term.kind!r}, mode "
-                f"{term.mode!r}): it solves least squares with hard and band equalities and hard and "
-                f"band inequalities (no robust penalties, cones or soft inequalities). {use_conic()}"
+                f"{term.mode!r}): it solves least squares with hard and band equalities and hard, band "
+                f"and soft inequalities (no robust penalties or cones). {use_conic()}"
                 + (", or give the item mode='soft' or mode='band'." if term.kind == "equality" else "."))
 
     def run(self, form: Formulation, lam: float, options: dict, verbose: bool = False,

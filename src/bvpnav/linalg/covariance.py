@@ -87,7 +87,12 @@ def quadratic_model(form: Formulation, x: np.ndarray, lam: float) -> tuple[Least
             start += held.size
         if squared.size:
             sig = np.broadcast_to(np.asarray(term.sigma, dtype=float), (term.residual.m,))[squared]
-            obj.append(term.residual.rows(squared) * (np.sqrt(term.weight(lam)) / sig))
+            rows = term.residual.rows(squared)
+            if term.soft_edges:   # the excess beyond the band: its row shifted by the band's edge
+                tol = np.broadcast_to(np.asarray(term.tol, dtype=float), (term.residual.m,))[squared]
+                side = 1.0 if term.kind == "inequality" else np.sign(rows.value(x))
+                rows = Affine(rows.A, rows.c - side * tol, rows.labels)
+            obj.append(rows * (np.sqrt(term.weight(lam)) / sig))
     return LeastSquaresForm(Affine.vstack(obj), Affine.vstack(eq), blocks), False
 
 

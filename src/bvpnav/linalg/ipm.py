@@ -2,7 +2,8 @@ r"""Bands and inequalities for the direct back end: a primal-dual interior-point
 every Newton step is one banded factorization.
 
 A problem whose items are hard or soft equalities, bands (``|r| <= tol``) and hard or
-band inequalities (``g <= 0``, ``g <= tol``) is the convex quadratic program
+band inequalities (``g <= 0``, ``g <= tol``) is the convex quadratic program (soft
+inequalities and bands with soft edges: "Penalty rows" below)
 
 .. math::
 
@@ -77,8 +78,7 @@ MU0 = 1e6
 
 
 def unsupported_term(form: Formulation):
-    """The first term the interior-point path cannot take (robust penalties, cones, soft
-    inequalities), or None."""
+    """The first term the interior-point path cannot take (robust penalties, cones), or None."""
     for term in form.terms():
         if term.least_squares_role() is not None:
             continue
@@ -149,8 +149,7 @@ def quadratic_form(form: Formulation, lam: float) -> QuadraticForm:
     Raises
     ------
     ValueError
-        When a term is a robust penalty, a cone or a soft inequality
-        (:func:`unsupported_term`).
+        When a term is a robust penalty or a cone (:func:`unsupported_term`).
     """
     bad = unsupported_term(form)
     if bad is not None:
@@ -162,6 +161,8 @@ def quadratic_form(form: Formulation, lam: float) -> QuadraticForm:
     for term in form.terms():
         if term.least_squares_role() is not None:
             continue
+        if term.is_penalty and term.weight(lam) == 0:
+            continue   # a penalty at lam = 0 is not in the problem (its 1 / p would be infinite)
         res = term.residual
         item = getattr(term, "item", None)
         axes = item.row_layout(res.m)[1] if item is not None else 1
