@@ -192,6 +192,10 @@ WALK = False
 #: figures, the attitude error and both bias random walks as states at every sample, the model the
 #: simulation draws from) instead of the grade's knot model (``grade.error_model(INTERVAL)``).
 STATES = True
+#: Whether every run's attitude loop starts from the course (``--course``: ``solve(attitude={"start":
+#: "course"})``, the heading the fixes imply, the gated fixes' outliers screened out of it: the start
+#: README recommends for a gyro that drifts by more than a few degrees over the drive).
+COURSE = False
 #: The solves: (a), (b), (c) and the two of ``--explain``.
 RUNS = ("clean", "faults", "reference", "known", "calibration")
 
@@ -278,7 +282,8 @@ def solve(d: Drive, which: str = "faults", uncertainty: bool = False):
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")   # the gating warning is read from the solution below
-        sol = prob.solve(solver="direct", attitude={"progress": False, "heading": "given"},
+        start = {"start": "course"} if COURSE else {}
+        sol = prob.solve(solver="direct", attitude={"progress": False, "heading": "given", **start},
                          uncertainty=uncertainty)
     return sol, time.perf_counter() - t0
 
@@ -465,6 +470,8 @@ def main(argv=None) -> list[dict]:
     ap.add_argument("--knots", action="store_true",
                     help="the grade's knot model (biases at knots INTERVAL s apart) instead of the node "
                          "states (ErrorStates from the grade's figures, the default)")
+    ap.add_argument("--course", action="store_true",
+                    help="start every run's attitude loop from the course the fixes imply (node states)")
     ap.add_argument("--json", help="also write each drive's measures to this file (JSON lines, appended)")
     ap.add_argument("--table", nargs="+", metavar="JSON",
                     help="print the tables of drives measured earlier (--json files) and solve nothing")
@@ -473,10 +480,11 @@ def main(argv=None) -> list[dict]:
         results = [json.loads(line) for f in a.table for line in open(f) if line.strip()]
         print_table(results)
         return results
-    global ODOMETER, WALK, STATES
+    global ODOMETER, WALK, STATES, COURSE
     ODOMETER = not a.no_odometer
     WALK = a.walk
     STATES = not a.knots
+    COURSE = a.course
     if a.quick:
         a.duration, a.rate, a.seeds = 120.0, 10.0, [0]
     print(f"car drive {a.duration:g} s at {a.rate:g} Hz, seeds {a.seeds}; lever {LEVER} m (vertical from "

@@ -127,3 +127,52 @@ def test_a_course_start_is_no_reference_for_a_cheap_second_step():
     # measured: the first step 0.75 rad
     assert rec.converged and steps[0][1] >= CHEAP_FIRST and steps[1][0] == "banded", steps
     assert rec.cheap_steps >= 1 and rec.full_passes <= 4, steps   # measured: 4 full passes, 1 cheap step
+
+
+def _outlying(seed: int = 0):
+    """300 fixes 1 s apart along a gently weaving road (10 m/s, 5 cm noise), 15 of them 20-50 m
+    off in random directions."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(300.0)
+    xy = np.column_stack([10.0 * t, 3.0 * np.sin(t / 10.0)]) + rng.normal(0.0, 0.05, (300, 2))
+    bad = np.sort(rng.choice(300, 15, replace=False))
+    ang = rng.uniform(0.0, 2.0 * np.pi, 15)
+    xy[bad] += rng.uniform(20.0, 50.0, (15, 1)) * np.column_stack([np.cos(ang), np.sin(ang)])
+    return t, xy, bad
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_screening_leaves_out_the_outlying_fixes_and_only_them(seed):
+    t, xy, bad = _outlying(seed)
+    keep = course.screened(t, xy, np.full(t.size, 0.05), np.full(t.size, 5.0))
+    inner = bad[(bad > 0) & (bad < t.size - 1)]     # at an end an outlier and its neighbour can trade
+    assert set(inner) <= set(np.flatnonzero(~keep)) <= set(bad) | {1, t.size - 2}
+    # no gate, no screening
+    assert course.screened(t, xy, np.full(t.size, 0.05), np.full(t.size, np.inf)).all()
+
+
+def test_screening_lets_a_hard_turn_through():
+    """A 0.5 g turn (radius 20 m at 10 m/s), fixes 1 s apart: within a car's curving, kept."""
+    t = np.arange(20.0)
+    xy = 20.0 * np.column_stack([np.cos(0.5 * t), np.sin(0.5 * t)])
+    assert course.screened(t, xy, np.full(t.size, 0.05), np.full(t.size, 5.0)).all()
+
+
+def test_gated_fixes_give_the_course_of_the_fixes_without_their_outliers(drive):
+    """The course start of gated fixes with 20-50 m outliers is that of the fixes without them."""
+    rng = np.random.default_rng(4)
+    fix_t, clean = drive.fix_t, drive.fix_position
+    bad = np.sort(rng.choice(np.arange(1, fix_t.size - 1), 6, replace=False))
+    faulty = clean.copy()
+    faulty[bad, :2] += rng.choice([-1.0, 1.0], (6, 2)) * rng.uniform(20.0, 50.0, (6, 2))
+    sig = np.tile(drive.fix_sigma, (fix_t.size, 1))
+    ok = np.setdiff1d(np.arange(fix_t.size), bad)
+    gated = problem(drive, fixes=np.array([], dtype=int)).add(
+        Position(t=fix_t, value=faulty, sigma=sig, gate=5.0, name="gnss"))
+    clean_only = problem(drive, fixes=np.array([], dtype=int)).add(
+        Position(t=fix_t[ok], value=clean[ok], sigma=sig[ok], name="gnss"))
+    ungated = problem(drive, fixes=np.array([], dtype=int)).add(
+        Position(t=fix_t, value=faulty, sigma=sig, name="gnss"))
+    a, b, c = (course.course_totals(p.formulation) for p in (gated, clean_only, ungated))
+    np.testing.assert_allclose(a, b, atol=1e-12)
+    assert np.max(np.abs(c - b)) > 0.3     # the outliers turn the ungated course by radians
