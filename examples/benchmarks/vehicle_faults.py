@@ -178,8 +178,8 @@ consumer). At 300 s the course start gives the default start's answers (consumer
 every printed digit).
 
 Run: ``python examples/benchmarks/vehicle_faults.py [--grade tactical consumer] [--quality ...]
-[--duration 300] [--rate 10] [--seeds 0 1 2 3 4] [--explain] [--no-odometer] [--walk] [--knots] [--course] [--quick]
-[--json FILE]``; each drive in its own process with ``--json`` and then ``--table FILE ...``
+[--duration 300] [--rate 10] [--seeds 0 1 2 3 4] [--explain] [--no-odometer] [--walk] [--knots] [--course]
+[--quick] [--json FILE]``; each drive in its own process with ``--json`` and then ``--table FILE ...``
 for the tables of them all.
 """
 
