@@ -398,6 +398,11 @@ def _hats(data, nodes_only: bool = False) -> sp.csr_matrix:
     return kept[2] if nodes_only else kept[1]
 
 
+#: Steps per block of :meth:`_Elements._write_steps`: its per-step arrays (the rotation matrices,
+#: the right Jacobians and their intermediates) are made for this many steps at a time.
+STEP_BLOCK = 8192
+
+
 @dataclass(eq=False)
 class _Elements:
     """A coarse mesh's elements at a point: per sample its element's left node ``left`` and
@@ -405,7 +410,7 @@ class _Elements:
     product of the element's steps up to and including this one, as unit quaternions stored
     components first, (4, N - 1): x, y, z, w) and ``h`` (the step, s). ``spare``: the largest
     arrays of the elements this one replaced (:func:`_elements`), memory for its own
-    (:attr:`Zc`, :attr:`weighted`): a Gauss-Newton pass then writes them into pages it already
+    (:attr:`weighted`, :attr:`Zc`): a Gauss-Newton pass then writes them into pages it already
     has instead of fresh ones the process must fault in."""
 
     left: np.ndarray
@@ -424,36 +429,56 @@ class _Elements:
     @functools.cached_property
     def Zc(self) -> np.ndarray:
         """:math:`S_j J_r(a_j) h_j` of every step, component-major (9, N - 1) (s; row-major 3 x 3,
-        each entry contiguous over the steps): written out entry by entry on the steps' arrays
-        (:func:`_right_jacobian_components`), as the running sums and the process rows read it."""
-        J = _right_jacobian_components(self.a)
-        S = _matrix_components(self.Sc)
-        m = S.shape[2]
-        out = self._memory("Zc", (9, m)).reshape(3, 3, m)
-        tmp = np.empty(m)
-        for k in range(3):
-            for c in range(3):
-                o = out[k, c]
-                np.multiply(S[k, 0], J[0, c], out=o)
-                np.multiply(S[k, 1], J[1, c], out=tmp)
-                o += tmp
-                np.multiply(S[k, 2], J[2, c], out=tmp)
-                o += tmp
-                o *= self.h
-        return out.reshape(9, m)
+        each entry contiguous over the steps): :meth:`_write_steps` (:attr:`weighted` writes it
+        into its own memory instead; this is for :attr:`Z`)."""
+        m = self.a.shape[0]
+        out = self._memory("Zc", (9, m))
+        self._write_steps(out.reshape(3, 3, m))
+        return out
+
+    def _write_steps(self, out: np.ndarray) -> None:
+        """:attr:`Zc` written into ``out`` (3, 3, N - 1), a view allowed: entry by entry on the
+        steps' arrays (:func:`_right_jacobian_components`, :func:`_matrix_components`), block by
+        block of :data:`STEP_BLOCK` steps (every operation is per step: the same numbers as on all
+        steps at once, with the blocks' arrays in place of the whole pass's), as the running sums
+        and the process rows read it."""
+        m = out.shape[2]
+        tmp = np.empty(min(m, STEP_BLOCK))
+        for lo in range(0, m, STEP_BLOCK):
+            hi = min(lo + STEP_BLOCK, m)
+            J = _right_jacobian_components(self.a[lo:hi])
+            S = _matrix_components(self.Sc[:, lo:hi])
+            h, t = self.h[lo:hi], tmp[:hi - lo]
+            for k in range(3):
+                for c in range(3):
+                    o = out[k, c, lo:hi]
+                    np.multiply(S[k, 0], J[0, c], out=o)
+                    np.multiply(S[k, 1], J[1, c], out=t)
+                    o += t
+                    np.multiply(S[k, 2], J[2, c], out=t)
+                    o += t
+                    o *= h
 
     @functools.cached_property
     def weighted(self) -> np.ndarray:
         r""":attr:`Zc` weighted for the element's left and right node, :math:`(1 - \theta_j) Z_j` and
         :math:`\theta_j Z_j`, (2, 9, N) (s): step ``j`` in column ``j + 1``, column 0 zero (the
         layout of :func:`_gyro_sums`' running sums, which are taken in this memory, in place, and
-        drop it)."""
+        drop it). :attr:`Zc` is written into the left node's half and weighted there in place
+        (the same products) unless it was made already."""
         th = self.theta[:-1]
-        m = self.Zc.shape[1]
+        m = self.a.shape[0]
         out = self._memory("weighted", (2, 9, m + 1))
         out[:, :, 0] = 0.0
-        np.multiply(self.Zc, 1.0 - th, out=out[0, :, 1:])
-        np.multiply(self.Zc, th, out=out[1, :, 1:])
+        Z = self.__dict__.get("Zc")
+        if Z is None:
+            Z = out[0, :, 1:]
+            self._write_steps(out.reshape(2, 3, 3, m + 1)[0, :, :, 1:])
+            np.multiply(Z, th, out=out[1, :, 1:])
+            Z *= 1.0 - th
+        else:
+            np.multiply(Z, 1.0 - th, out=out[0, :, 1:])
+            np.multiply(Z, th, out=out[1, :, 1:])
         return out
 
     @functools.cached_property
