@@ -494,6 +494,19 @@ class _Elements:
         return self.Zc.T.reshape(-1, 3, 3)
 
 
+def _matrix_rows(rot: Rotation) -> np.ndarray:
+    """The rotation matrices of ``rot`` (N rotations) component-major, (9, N) (row-major 3 x 3,
+    each entry contiguous over the rotations): scipy's ``as_matrix`` of blocks of
+    :data:`STEP_BLOCK` rotations (per rotation the same numbers), written into the result, with
+    no (N, 3, 3) array besides it."""
+    n = len(rot)
+    out = np.empty((9, n))
+    for lo in range(0, n, STEP_BLOCK):
+        hi = min(lo + STEP_BLOCK, n)
+        out[:, lo:hi] = rot[lo:hi].as_matrix().reshape(hi - lo, 9).T
+    return out
+
+
 def _right_jacobian_components(phi: np.ndarray) -> np.ndarray:
     r""":func:`~bvpnav.error_models._attitude.right_jacobian` of the rotation vectors ``phi`` (M, 3),
     component-major (3, 3, M): :math:`I - a\,[\phi\times] + b\,[\phi\times]^2` with the same
@@ -1465,13 +1478,26 @@ class ErrorStates(ErrorModel):
             """Node values ``V`` (..., n nodes) at every sample of their element, (..., N)."""
             return np.repeat(V, runs, axis=-1)
 
-        C = np.ascontiguousarray(data.attitude.as_matrix().reshape(n, 9).T)   # C_i, (9, N)
-        fn = rotated(C.__getitem__, np.ascontiguousarray(np.asarray(data.specific_force, dtype=float).T))
-        out = crossed(spread(s[self.state_index(data, "attitude_error")].T), fn)
-        if "acc_bias" in kinds:
+        # (made in the order that holds the fewest (3, N) arrays at once: the same operations)
+        C = _matrix_rows(data.attitude)   # C_i, (9, N)
+        r = None
+        if "acc_bias" in kinds:   # C_i ((1 - theta) B_p + theta B_q), subtracted below
             B = np.ascontiguousarray(s[self.state_index(data, "acc_bias")].T)
-            th = el.theta
-            out -= rotated(C.__getitem__, (1.0 - th) * spread(B) + th * spread(B[:, nxt]))
+            th, w = el.theta, np.empty(n)
+            v = np.empty((3, n))
+            for i in range(3):   # the products and the sum in place, a row at a time
+                v[i] = spread(B[i])
+                v[i] *= 1.0 - th
+                np.multiply(spread(B[i, nxt]), th, out=w)
+                v[i] += w
+            r = rotated(C.__getitem__, v)
+            del v, w
+        fn = rotated(C.__getitem__, np.asarray(data.specific_force, dtype=float).T)   # C_i f_i
+        del C   # the samples' matrices are read no more
+        out = crossed(spread(s[self.state_index(data, "attitude_error")].T), fn)
+        if r is not None:
+            out -= r
+            del r
         if "gyro_bias" in kinds:
             B = np.ascontiguousarray(s[self.state_index(data, "gyro_bias")].T)
             Y2 = _gyro_sums(el, mesh).reshape(2, 3, 3, n)
