@@ -494,6 +494,77 @@ class _Elements:
         return self.Zc.T.reshape(-1, 3, 3)
 
 
+def _block_acceleration(out: np.ndarray, tmp: np.ndarray, left: np.ndarray, th: np.ndarray, rot: Rotation,
+                        f: np.ndarray, att: np.ndarray, node: dict, Y2: np.ndarray | None,
+                        Cn: np.ndarray | None) -> None:
+    r""":meth:`ErrorStates.state_acceleration` on a coarse mesh at a block of ``b`` samples, written
+    into ``out`` (3, b): the samples' element's left nodes ``left`` and ``theta``, their attitude
+    ``rot`` and specific force ``f`` (3, b); the node values ``att`` (the attitude increments, 3 x
+    n) and ``node`` (kind and (kind, 1): a bias's increments at the left and the right node, 3 x
+    n), the running sums ``Y2`` (2, 3, 3, b) and the nodes' matrices ``Cn`` (9, n) with gyro-bias
+    states. ``tmp``: scratch of b. The products on component arrays, summed in the order
+    ``Rotation.apply`` and ``numpy.einsum`` sum them."""
+    b = out.shape[1]
+
+    def rotated(M, v: np.ndarray, order: tuple = (0, 2, 1)) -> np.ndarray:
+        """``M v`` per sample: ``M(k)`` the row-major 3 x 3 entry ``k`` at every sample (b,),
+        ``v`` (3, b), the products summed in ``order`` (``Rotation.apply``'s:
+        ``(m0 v0 + m2 v2) + m1 v1``)."""
+        r = np.empty((3, b))
+        p, q, w = order
+        for i in range(3):
+            np.multiply(M(3 * i + p), v[p], out=r[i])
+            np.multiply(M(3 * i + q), v[q], out=tmp)
+            r[i] += tmp
+            np.multiply(M(3 * i + w), v[w], out=tmp)
+            r[i] += tmp
+        return r
+
+    def crossed(a: np.ndarray, c: np.ndarray, into: np.ndarray | None = None) -> np.ndarray:
+        """``a x c`` per sample, ``a``, ``c`` (3, b) (``numpy.cross``'s products), or ``into``
+        plus it."""
+        x = np.empty((3, b))
+        for i in range(3):
+            j, k = (i + 1) % 3, (i + 2) % 3
+            np.multiply(a[j], c[k], out=x[i])
+            np.multiply(a[k], c[j], out=tmp)
+            x[i] -= tmp
+        if into is not None:
+            into += x
+        return x if into is None else into
+
+    def carried(Y: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """``Y v`` per sample, ``Y`` (3, 3, b), ``v`` (3, b): einsum ``"jcn,nc->nj"``'s sums."""
+        part = np.empty((3, b))
+        for j in range(3):
+            np.multiply(Y[j, 0], v[0], out=part[j])
+            for c in (1, 2):
+                np.multiply(Y[j, c], v[c], out=tmp)
+                part[j] += tmp
+        return part
+
+    def spread(V: np.ndarray) -> np.ndarray:
+        """Node values ``V`` (..., n nodes) at the block's samples (their element's), (..., b)."""
+        return np.take(V, left, axis=-1)
+
+    C = rot.as_matrix().reshape(b, 9).T   # C_i, (9, b)
+    fn = rotated(C.__getitem__, f)        # C_i f_i
+    out[...] = crossed(spread(att), fn)
+    if "acc_bias" in node:   # C_i ((1 - theta) B_p + theta B_q)
+        v = spread(node["acc_bias"])
+        v *= 1.0 - th
+        w = spread(node[("acc_bias", 1)])
+        w *= th
+        v += w
+        out -= rotated(C.__getitem__, v)
+    if Y2 is not None:
+        u = carried(Y2[0], spread(node["gyro_bias"]))
+        u += carried(Y2[1], spread(node[("gyro_bias", 1)]))
+        # C_p (the element's left node's, an entry at a time) u, summed in the order of the
+        # products' columns
+        crossed(fn, rotated(lambda k: spread(Cn[k]), u, (0, 1, 2)), out)
+
+
 def _matrix_rows(rot: Rotation) -> np.ndarray:
     """The rotation matrices of ``rot`` (N rotations) component-major, (9, N) (row-major 3 x 3,
     each entry contiguous over the rotations): scipy's ``as_matrix`` of blocks of
@@ -1431,82 +1502,24 @@ class ErrorStates(ErrorModel):
         kinds = self.state_kinds(data)
         n, nn = data.n, mesh.size
         el = _elements(data, mesh, _totals(data, "gyro_bias"))
-        tmp = np.empty(n)
-
-        def rotated(M, v: np.ndarray, order: tuple = (0, 2, 1)) -> np.ndarray:
-            """``M v`` per sample: ``M(k)`` the row-major 3 x 3 entry ``k`` at every sample (N,),
-            ``v`` (3, N), the products summed in ``order`` (``Rotation.apply``'s:
-            ``(m0 v0 + m2 v2) + m1 v1``)."""
-            out = np.empty((3, n))
-            a, b, c = order
-            for i in range(3):
-                np.multiply(M(3 * i + a), v[a], out=out[i])
-                np.multiply(M(3 * i + b), v[b], out=tmp)
-                out[i] += tmp
-                np.multiply(M(3 * i + c), v[c], out=tmp)
-                out[i] += tmp
-            return out
-
-        def crossed(a: np.ndarray, b: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-            """``a x b`` per sample, ``a``, ``b`` (3, N) (``numpy.cross``'s products), or ``out``
-            plus it."""
-            c = np.empty((3, n))
-            for i in range(3):
-                j, k = (i + 1) % 3, (i + 2) % 3
-                np.multiply(a[j], b[k], out=c[i])
-                np.multiply(a[k], b[j], out=tmp)
-                c[i] -= tmp
-            if out is not None:
-                out += c
-            return c if out is None else out
-
-        def carried(Y: np.ndarray, b: np.ndarray) -> np.ndarray:
-            """``Y b`` per sample, ``Y`` (3, 3, N), ``b`` (3, N): einsum ``"jcn,nc->nj"``'s sums."""
-            part = np.empty((3, n))
-            for j in range(3):
-                np.multiply(Y[j, 0], b[0], out=part[j])
-                for c in (1, 2):
-                    np.multiply(Y[j, c], b[c], out=tmp)
-                    part[j] += tmp
-            return part
-
-        # the samples of node p's element are mesh[p] .. mesh[p + 1] - 1 (the last node: itself)
-        runs = np.diff(np.append(mesh, n))
         nxt = np.minimum(np.arange(1, nn + 1), nn - 1)   # the right node (the last node's weight is 0)
-
-        def spread(V: np.ndarray) -> np.ndarray:
-            """Node values ``V`` (..., n nodes) at every sample of their element, (..., N)."""
-            return np.repeat(V, runs, axis=-1)
-
-        # (made in the order that holds the fewest (3, N) arrays at once: the same operations)
-        C = _matrix_rows(data.attitude)   # C_i, (9, N)
-        r = None
-        if "acc_bias" in kinds:   # C_i ((1 - theta) B_p + theta B_q), subtracted below
-            B = np.ascontiguousarray(s[self.state_index(data, "acc_bias")].T)
-            th, w = el.theta, np.empty(n)
-            v = np.empty((3, n))
-            for i in range(3):   # the products and the sum in place, a row at a time
-                v[i] = spread(B[i])
-                v[i] *= 1.0 - th
-                np.multiply(spread(B[i, nxt]), th, out=w)
-                v[i] += w
-            r = rotated(C.__getitem__, v)
-            del v, w
-        fn = rotated(C.__getitem__, np.asarray(data.specific_force, dtype=float).T)   # C_i f_i
-        del C   # the samples' matrices are read no more
-        out = crossed(spread(s[self.state_index(data, "attitude_error")].T), fn)
-        if r is not None:
-            out -= r
-            del r
-        if "gyro_bias" in kinds:
-            B = np.ascontiguousarray(s[self.state_index(data, "gyro_bias")].T)
-            Y2 = _gyro_sums(el, mesh).reshape(2, 3, 3, n)
-            u = carried(Y2[0], spread(B))
-            u += carried(Y2[1], spread(B[:, nxt]))
-            # C_p (the element's left node's, an entry at a time) u, summed in the order of the
-            # products' columns
-            Cn = np.ascontiguousarray(data.attitude[mesh].as_matrix().reshape(nn, 9).T)
-            crossed(fn, rotated(lambda k: spread(Cn[k]), u, (0, 1, 2)), out)
+        # the node values: attitude increments, the biases' at the left and the right node
+        att = np.ascontiguousarray(s[self.state_index(data, "attitude_error")].T)
+        node = {kind: np.ascontiguousarray(s[self.state_index(data, kind)].T) for kind in kinds[1:]}
+        node.update({(kind, 1): np.ascontiguousarray(v[:, nxt]) for kind, v in list(node.items())})
+        Y2 = _gyro_sums(el, mesh).reshape(2, 3, 3, n) if "gyro_bias" in kinds else None
+        Cn = (np.ascontiguousarray(data.attitude[mesh].as_matrix().reshape(nn, 9).T)
+              if "gyro_bias" in kinds else None)
+        f = np.asarray(data.specific_force, dtype=float)
+        out = np.empty((3, n))
+        tmp = np.empty(min(n, STEP_BLOCK))
+        # every term is per sample: made block by block of STEP_BLOCK samples (the same numbers as
+        # on every sample at once, each block's arrays in place of the whole pass's)
+        for lo in range(0, n, STEP_BLOCK):
+            hi = min(lo + STEP_BLOCK, n)
+            _block_acceleration(out[:, lo:hi], tmp[:hi - lo], el.left[lo:hi], el.theta[lo:hi],
+                                data.attitude[lo:hi], f[lo:hi].T, att, node,
+                                None if Y2 is None else Y2[..., lo:hi], Cn)
         return out.T
 
     def _mesh_layout(self, data, mesh: np.ndarray, kinds: list, k: np.ndarray) -> tuple:
