@@ -430,17 +430,6 @@ def test_quaternion_components_are_scipys_bit_for_bit():
     assert np.array_equal(_matrix_components(unit), want.as_matrix().transpose(1, 2, 0))
 
 
-@pytest.mark.parametrize("block", [1, 7, 100, 10**6])
-def test_matrix_rows_are_scipys_matrices_block_by_block(monkeypatch, block):
-    """The samples' rotation matrices written component-major block by block are scipy's
-    ``as_matrix`` of all the rotations at once, bit for bit, whether the blocks divide them or not."""
-    from bvpnav.error_models import error_states as es
-
-    monkeypatch.setattr(es, "STEP_BLOCK", block)
-    rot = Rotation.from_rotvec(np.random.default_rng(7).standard_normal((100, 3)))
-    assert np.array_equal(es._matrix_rows(rot), rot.as_matrix().reshape(100, 9).T)
-
-
 def test_right_jacobian_components_are_the_right_jacobian():
     """The steps' right Jacobians written entry by entry (components first) are
     ``right_jacobian``'s (N, 3, 3) blocks, below and above its series' 1e-4 rad."""

@@ -565,19 +565,6 @@ def _block_acceleration(out: np.ndarray, tmp: np.ndarray, left: np.ndarray, th: 
         crossed(fn, rotated(lambda k: spread(Cn[k]), u, (0, 1, 2)), out)
 
 
-def _matrix_rows(rot: Rotation) -> np.ndarray:
-    """The rotation matrices of ``rot`` (N rotations) component-major, (9, N) (row-major 3 x 3,
-    each entry contiguous over the rotations): scipy's ``as_matrix`` of blocks of
-    :data:`STEP_BLOCK` rotations (per rotation the same numbers), written into the result, with
-    no (N, 3, 3) array besides it."""
-    n = len(rot)
-    out = np.empty((9, n))
-    for lo in range(0, n, STEP_BLOCK):
-        hi = min(lo + STEP_BLOCK, n)
-        out[:, lo:hi] = rot[lo:hi].as_matrix().reshape(hi - lo, 9).T
-    return out
-
-
 def _right_jacobian_components(phi: np.ndarray) -> np.ndarray:
     r""":func:`~bvpnav.error_models._attitude.right_jacobian` of the rotation vectors ``phi`` (M, 3),
     component-major (3, 3, M): :math:`I - a\,[\phi\times] + b\,[\phi\times]^2` with the same
@@ -1491,10 +1478,11 @@ class ErrorStates(ErrorModel):
         state increments ``s`` make at every sample (on a coarse mesh without the columns:
         :math:`\varepsilon_p \times f_{n,i} - C_i \delta b_{a,i} + f_{n,i} \times C_p (Y_{p,i}
         \delta b_{g,p} + Y_{q,i} \delta b_{g,q})`, module Notes). On a mesh the products are
-        taken on component arrays, each contiguous over the samples (the rotations' matrices
-        component-major), the products summed in the order ``Rotation.apply`` and ``numpy.einsum``
-        summed them (the same numbers to rounding; bit for bit with the numpy and scipy this was
-        written against); the answer is a (N, 3) view of a (3, N) array."""
+        taken on component arrays over blocks of :data:`STEP_BLOCK` samples
+        (:func:`_block_acceleration`; the rotations' matrices component-major), the products
+        summed in the order ``Rotation.apply`` and ``numpy.einsum`` summed them (the same numbers
+        to rounding; bit for bit with the numpy and scipy this was written against); the answer
+        is a (N, 3) view of a (3, N) array."""
         mesh = _mesh(data)
         s = np.asarray(s, dtype=float)
         if mesh is None:
