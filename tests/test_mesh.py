@@ -677,6 +677,21 @@ def test_state_acceleration_is_the_per_sample_columns_times_the_states():
     assert np.abs(sm.state_acceleration(other, s) - got).max() > 1e-6 * np.abs(got).max()
 
 
+@pytest.mark.parametrize("block", [1, 13, 500])
+def test_state_acceleration_block_by_block_is_the_whole_pass_bit_for_bit(monkeypatch, block):
+    """The states' acceleration made block by block of samples (every term is per sample) is the
+    same numbers, bit for bit, as made on every sample at once, at blocks that divide the samples
+    or leave a remainder, and at blocks that split elements."""
+    from bvpnav.error_models import error_states as es
+
+    form, raw, sm, nodes, data, rng = _moved_point(7)
+    s = rng.normal(size=sm.state_size(data))
+    monkeypatch.setattr(es, "STEP_BLOCK", 10 * raw.n)
+    whole = sm.state_acceleration(data, s).copy()
+    monkeypatch.setattr(es, "STEP_BLOCK", block)
+    assert np.array_equal(sm.state_acceleration(data, s), whole)
+
+
 def test_a_full_pass_after_other_points_has_a_fresh_formulations_rows():
     """A coarse mesh's elements hand their largest arrays to the next point's as memory (not
     values): a full pass made after passes at two other points has, bit for bit, the rows of

@@ -614,23 +614,28 @@ class MeshModel(NavModel):
         if idx.size:
             # K_f r + M_f a = 0 at the samples inside elements, the nodal positions given (the
             # products' inner rows term by term, in the order a CSR product sums them), rows 1 .. Nf - 2
-            lo_k, dg_k, up_k = fem._stiffness_diagonals(fine)
+            # (each array freed once read: the recovery's memory is the answer's and a few rows)
             lo_m, dg_m, up_m = fem._mass_diagonals(fine)
             rhs = np.multiply(lo_m[:-1], acc[:, :-2])
             rhs += np.multiply(dg_m[1:-1], acc[:, 1:-1], out=tmp)
             rhs += np.multiply(up_m[1:], acc[:, 2:], out=tmp)
+            del lo_m, dg_m, up_m
             np.negative(rhs, out=rhs)
+            lo_k, dg_k, up_k = fem._stiffness_diagonals(fine)
             kr = np.multiply(lo_k[:-1], R[:, :-2])
             kr += np.multiply(dg_k[1:-1], R[:, 1:-1], out=tmp)
             kr += np.multiply(up_k[1:], R[:, 2:], out=tmp)
             rhs -= kr
             del kr
+            band = self._interior_band((lo_k, dg_k, up_k))
+            del lo_k, dg_k, up_k
+            b = rhs.take(idx - 1, axis=1)
+            del rhs
             # one solve for every axis: the (M, d) right-hand sides in Fortran order (no copy), the
             # band and the right-hand sides made here (overwritten)
-            R[:, idx] = sla.solve_banded((1, 1), self._interior_band((lo_k, dg_k, up_k)),
-                                         rhs.take(idx - 1, axis=1).T, overwrite_ab=True,
-                                         overwrite_b=True, check_finite=False).T
-            del rhs
+            R[:, idx] = sla.solve_banded((1, 1), band, b.T, overwrite_ab=True, overwrite_b=True,
+                                         check_finite=False).T
+            del band, b
         V = np.empty((d, Nf))
         for a in range(d):
             v0, v1 = self.v_end_index(a)
@@ -645,6 +650,7 @@ class MeshModel(NavModel):
         tmp *= hl
         tmp /= 6.0
         inner += tmp
+        del acc, tmp, inner
         R, V, W = (np.ascontiguousarray(z.T) for z in (R, V, W))   # (Nf, d), as callers index them
         return {"t": fine.t, "r": R, "v": V, "w": W}
 

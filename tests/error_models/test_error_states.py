@@ -443,6 +443,41 @@ def test_right_jacobian_components_are_the_right_jacobian():
     assert np.abs(np.moveaxis(got, -1, 0) - right_jacobian(phi)).max() < 1e-15
 
 
+@pytest.mark.parametrize("m", [5, 17, 40])
+def test_the_steps_columns_are_the_same_numbers_block_by_block(monkeypatch, m):
+    r"""The mesh's per-step columns :math:`S_j J_r(a_j) h_j`, made block by block of steps, are the
+    products of the whole pass's rotation matrices and right Jacobians, bit for bit, at block
+    sizes that divide the steps or leave a remainder; the weighted halves the running sums start
+    from are :math:`(1 - \theta) Z` and :math:`\theta Z` of those numbers, whether written in
+    their own memory or from the columns already made."""
+    from bvpnav.error_models import error_states as es
+
+    rng = np.random.default_rng(6)
+    a = rng.standard_normal((m, 3)) * 10.0 ** rng.uniform(-7, -1, (m, 1))
+    Sc = np.ascontiguousarray(Rotation.from_rotvec(rng.standard_normal((m, 3))).as_quat().T)
+    h = rng.uniform(0.005, 0.02, m)
+    theta = rng.uniform(0.0, 1.0, m + 1)
+    J, S = es._right_jacobian_components(a), es._matrix_components(Sc)
+    want = np.empty((3, 3, m))
+    for k in range(3):
+        for c in range(3):
+            want[k, c] = S[k, 0] * J[0, c]
+            want[k, c] += S[k, 1] * J[1, c]
+            want[k, c] += S[k, 2] * J[2, c]
+            want[k, c] *= h
+    want = want.reshape(9, m)
+    for block in (1, 4, m, 10 * m):
+        monkeypatch.setattr(es, "STEP_BLOCK", block)
+        el = es._Elements(np.zeros(m + 1, dtype=int), theta, a, Sc, h)
+        w = el.weighted   # the columns written in its own memory
+        assert np.array_equal(w[0, :, 1:], want * (1.0 - theta[:-1])) and not w[:, :, 0].any()
+        assert np.array_equal(w[1, :, 1:], want * theta[:-1])
+        assert "Zc" not in el.__dict__
+        el = es._Elements(np.zeros(m + 1, dtype=int), theta, a, Sc, h)
+        assert np.array_equal(el.Zc, want)
+        assert np.array_equal(el.weighted[0, :, 1:], want * (1.0 - theta[:-1]))   # from Zc
+
+
 def test_rotation_vectors_of_quaternions_are_scipys():
     """The re-integrated attitude's rotation vectors (no rotation objects): scipy's to rounding,
     on both hemispheres, below and above the series' 1e-3 rad, near pi and unnormalized."""

@@ -398,6 +398,11 @@ def _hats(data, nodes_only: bool = False) -> sp.csr_matrix:
     return kept[2] if nodes_only else kept[1]
 
 
+#: Steps per block of :meth:`_Elements._write_steps`: its per-step arrays (the rotation matrices,
+#: the right Jacobians and their intermediates) are made for this many steps at a time.
+STEP_BLOCK = 8192
+
+
 @dataclass(eq=False)
 class _Elements:
     """A coarse mesh's elements at a point: per sample its element's left node ``left`` and
@@ -405,7 +410,7 @@ class _Elements:
     product of the element's steps up to and including this one, as unit quaternions stored
     components first, (4, N - 1): x, y, z, w) and ``h`` (the step, s). ``spare``: the largest
     arrays of the elements this one replaced (:func:`_elements`), memory for its own
-    (:attr:`Zc`, :attr:`weighted`): a Gauss-Newton pass then writes them into pages it already
+    (:attr:`weighted`, :attr:`Zc`): a Gauss-Newton pass then writes them into pages it already
     has instead of fresh ones the process must fault in."""
 
     left: np.ndarray
@@ -424,36 +429,56 @@ class _Elements:
     @functools.cached_property
     def Zc(self) -> np.ndarray:
         """:math:`S_j J_r(a_j) h_j` of every step, component-major (9, N - 1) (s; row-major 3 x 3,
-        each entry contiguous over the steps): written out entry by entry on the steps' arrays
-        (:func:`_right_jacobian_components`), as the running sums and the process rows read it."""
-        J = _right_jacobian_components(self.a)
-        S = _matrix_components(self.Sc)
-        m = S.shape[2]
-        out = self._memory("Zc", (9, m)).reshape(3, 3, m)
-        tmp = np.empty(m)
-        for k in range(3):
-            for c in range(3):
-                o = out[k, c]
-                np.multiply(S[k, 0], J[0, c], out=o)
-                np.multiply(S[k, 1], J[1, c], out=tmp)
-                o += tmp
-                np.multiply(S[k, 2], J[2, c], out=tmp)
-                o += tmp
-                o *= self.h
-        return out.reshape(9, m)
+        each entry contiguous over the steps): :meth:`_write_steps` (:attr:`weighted` writes it
+        into its own memory instead; this is for :attr:`Z`)."""
+        m = self.a.shape[0]
+        out = self._memory("Zc", (9, m))
+        self._write_steps(out.reshape(3, 3, m))
+        return out
+
+    def _write_steps(self, out: np.ndarray) -> None:
+        """:attr:`Zc` written into ``out`` (3, 3, N - 1), a view allowed: entry by entry on the
+        steps' arrays (:func:`_right_jacobian_components`, :func:`_matrix_components`), block by
+        block of :data:`STEP_BLOCK` steps (every operation is per step: the same numbers as on all
+        steps at once, with the blocks' arrays in place of the whole pass's), as the running sums
+        and the process rows read it."""
+        m = out.shape[2]
+        tmp = np.empty(min(m, STEP_BLOCK))
+        for lo in range(0, m, STEP_BLOCK):
+            hi = min(lo + STEP_BLOCK, m)
+            J = _right_jacobian_components(self.a[lo:hi])
+            S = _matrix_components(self.Sc[:, lo:hi])
+            h, t = self.h[lo:hi], tmp[:hi - lo]
+            for k in range(3):
+                for c in range(3):
+                    o = out[k, c, lo:hi]
+                    np.multiply(S[k, 0], J[0, c], out=o)
+                    np.multiply(S[k, 1], J[1, c], out=t)
+                    o += t
+                    np.multiply(S[k, 2], J[2, c], out=t)
+                    o += t
+                    o *= h
 
     @functools.cached_property
     def weighted(self) -> np.ndarray:
         r""":attr:`Zc` weighted for the element's left and right node, :math:`(1 - \theta_j) Z_j` and
         :math:`\theta_j Z_j`, (2, 9, N) (s): step ``j`` in column ``j + 1``, column 0 zero (the
         layout of :func:`_gyro_sums`' running sums, which are taken in this memory, in place, and
-        drop it)."""
+        drop it). :attr:`Zc` is written into the left node's half and weighted there in place
+        (the same products) unless it was made already."""
         th = self.theta[:-1]
-        m = self.Zc.shape[1]
+        m = self.a.shape[0]
         out = self._memory("weighted", (2, 9, m + 1))
         out[:, :, 0] = 0.0
-        np.multiply(self.Zc, 1.0 - th, out=out[0, :, 1:])
-        np.multiply(self.Zc, th, out=out[1, :, 1:])
+        Z = self.__dict__.get("Zc")
+        if Z is None:
+            Z = out[0, :, 1:]
+            self._write_steps(out.reshape(2, 3, 3, m + 1)[0, :, :, 1:])
+            np.multiply(Z, th, out=out[1, :, 1:])
+            Z *= 1.0 - th
+        else:
+            np.multiply(Z, 1.0 - th, out=out[0, :, 1:])
+            np.multiply(Z, th, out=out[1, :, 1:])
         return out
 
     @functools.cached_property
@@ -467,6 +492,77 @@ class _Elements:
     def Z(self) -> np.ndarray:
         """:math:`S_j J_r(a_j) h_j` of every step, (N - 1, 3, 3) (s): :attr:`Zc` sample-major (a view)."""
         return self.Zc.T.reshape(-1, 3, 3)
+
+
+def _block_acceleration(out: np.ndarray, tmp: np.ndarray, left: np.ndarray, th: np.ndarray, rot: Rotation,
+                        f: np.ndarray, att: np.ndarray, node: dict, Y2: np.ndarray | None,
+                        Cn: np.ndarray | None) -> None:
+    r""":meth:`ErrorStates.state_acceleration` on a coarse mesh at a block of ``b`` samples, written
+    into ``out`` (3, b): the samples' element's left nodes ``left`` and ``theta``, their attitude
+    ``rot`` and specific force ``f`` (3, b); the node values ``att`` (the attitude increments, 3 x
+    n) and ``node`` (kind and (kind, 1): a bias's increments at the left and the right node, 3 x
+    n), the running sums ``Y2`` (2, 3, 3, b) and the nodes' matrices ``Cn`` (9, n) with gyro-bias
+    states. ``tmp``: scratch of b. The products on component arrays, summed in the order
+    ``Rotation.apply`` and ``numpy.einsum`` sum them."""
+    b = out.shape[1]
+
+    def rotated(M, v: np.ndarray, order: tuple = (0, 2, 1)) -> np.ndarray:
+        """``M v`` per sample: ``M(k)`` the row-major 3 x 3 entry ``k`` at every sample (b,),
+        ``v`` (3, b), the products summed in ``order`` (``Rotation.apply``'s:
+        ``(m0 v0 + m2 v2) + m1 v1``)."""
+        r = np.empty((3, b))
+        p, q, w = order
+        for i in range(3):
+            np.multiply(M(3 * i + p), v[p], out=r[i])
+            np.multiply(M(3 * i + q), v[q], out=tmp)
+            r[i] += tmp
+            np.multiply(M(3 * i + w), v[w], out=tmp)
+            r[i] += tmp
+        return r
+
+    def crossed(a: np.ndarray, c: np.ndarray, into: np.ndarray | None = None) -> np.ndarray:
+        """``a x c`` per sample, ``a``, ``c`` (3, b) (``numpy.cross``'s products), or ``into``
+        plus it."""
+        x = np.empty((3, b))
+        for i in range(3):
+            j, k = (i + 1) % 3, (i + 2) % 3
+            np.multiply(a[j], c[k], out=x[i])
+            np.multiply(a[k], c[j], out=tmp)
+            x[i] -= tmp
+        if into is not None:
+            into += x
+        return x if into is None else into
+
+    def carried(Y: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """``Y v`` per sample, ``Y`` (3, 3, b), ``v`` (3, b): einsum ``"jcn,nc->nj"``'s sums."""
+        part = np.empty((3, b))
+        for j in range(3):
+            np.multiply(Y[j, 0], v[0], out=part[j])
+            for c in (1, 2):
+                np.multiply(Y[j, c], v[c], out=tmp)
+                part[j] += tmp
+        return part
+
+    def spread(V: np.ndarray) -> np.ndarray:
+        """Node values ``V`` (..., n nodes) at the block's samples (their element's), (..., b)."""
+        return np.take(V, left, axis=-1)
+
+    C = rot.as_matrix().reshape(b, 9).T   # C_i, (9, b)
+    fn = rotated(C.__getitem__, f)        # C_i f_i
+    out[...] = crossed(spread(att), fn)
+    if "acc_bias" in node:   # C_i ((1 - theta) B_p + theta B_q)
+        v = spread(node["acc_bias"])
+        v *= 1.0 - th
+        w = spread(node[("acc_bias", 1)])
+        w *= th
+        v += w
+        out -= rotated(C.__getitem__, v)
+    if Y2 is not None:
+        u = carried(Y2[0], spread(node["gyro_bias"]))
+        u += carried(Y2[1], spread(node[("gyro_bias", 1)]))
+        # C_p (the element's left node's, an entry at a time) u, summed in the order of the
+        # products' columns
+        crossed(fn, rotated(lambda k: spread(Cn[k]), u, (0, 1, 2)), out)
 
 
 def _right_jacobian_components(phi: np.ndarray) -> np.ndarray:
@@ -1382,10 +1478,11 @@ class ErrorStates(ErrorModel):
         state increments ``s`` make at every sample (on a coarse mesh without the columns:
         :math:`\varepsilon_p \times f_{n,i} - C_i \delta b_{a,i} + f_{n,i} \times C_p (Y_{p,i}
         \delta b_{g,p} + Y_{q,i} \delta b_{g,q})`, module Notes). On a mesh the products are
-        taken on component arrays, each contiguous over the samples (the rotations' matrices
-        component-major), the products summed in the order ``Rotation.apply`` and ``numpy.einsum``
-        summed them (the same numbers to rounding; bit for bit with the numpy and scipy this was
-        written against); the answer is a (N, 3) view of a (3, N) array."""
+        taken on component arrays over blocks of :data:`STEP_BLOCK` samples
+        (:func:`_block_acceleration`; the rotations' matrices component-major), the products
+        summed in the order ``Rotation.apply`` and ``numpy.einsum`` summed them (the same numbers
+        to rounding; bit for bit with the numpy and scipy this was written against); the answer
+        is a (N, 3) view of a (3, N) array."""
         mesh = _mesh(data)
         s = np.asarray(s, dtype=float)
         if mesh is None:
@@ -1393,69 +1490,24 @@ class ErrorStates(ErrorModel):
         kinds = self.state_kinds(data)
         n, nn = data.n, mesh.size
         el = _elements(data, mesh, _totals(data, "gyro_bias"))
-        tmp = np.empty(n)
-
-        def rotated(M, v: np.ndarray, order: tuple = (0, 2, 1)) -> np.ndarray:
-            """``M v`` per sample: ``M(k)`` the row-major 3 x 3 entry ``k`` at every sample (N,),
-            ``v`` (3, N), the products summed in ``order`` (``Rotation.apply``'s:
-            ``(m0 v0 + m2 v2) + m1 v1``)."""
-            out = np.empty((3, n))
-            a, b, c = order
-            for i in range(3):
-                np.multiply(M(3 * i + a), v[a], out=out[i])
-                np.multiply(M(3 * i + b), v[b], out=tmp)
-                out[i] += tmp
-                np.multiply(M(3 * i + c), v[c], out=tmp)
-                out[i] += tmp
-            return out
-
-        def crossed(a: np.ndarray, b: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-            """``a x b`` per sample, ``a``, ``b`` (3, N) (``numpy.cross``'s products), or ``out``
-            plus it."""
-            c = np.empty((3, n))
-            for i in range(3):
-                j, k = (i + 1) % 3, (i + 2) % 3
-                np.multiply(a[j], b[k], out=c[i])
-                np.multiply(a[k], b[j], out=tmp)
-                c[i] -= tmp
-            if out is not None:
-                out += c
-            return c if out is None else out
-
-        def carried(Y: np.ndarray, b: np.ndarray) -> np.ndarray:
-            """``Y b`` per sample, ``Y`` (3, 3, N), ``b`` (3, N): einsum ``"jcn,nc->nj"``'s sums."""
-            part = np.empty((3, n))
-            for j in range(3):
-                np.multiply(Y[j, 0], b[0], out=part[j])
-                for c in (1, 2):
-                    np.multiply(Y[j, c], b[c], out=tmp)
-                    part[j] += tmp
-            return part
-
-        # the samples of node p's element are mesh[p] .. mesh[p + 1] - 1 (the last node: itself)
-        runs = np.diff(np.append(mesh, n))
         nxt = np.minimum(np.arange(1, nn + 1), nn - 1)   # the right node (the last node's weight is 0)
-
-        def spread(V: np.ndarray) -> np.ndarray:
-            """Node values ``V`` (..., n nodes) at every sample of their element, (..., N)."""
-            return np.repeat(V, runs, axis=-1)
-
-        C = np.ascontiguousarray(data.attitude.as_matrix().reshape(n, 9).T)   # C_i, (9, N)
-        fn = rotated(C.__getitem__, np.ascontiguousarray(np.asarray(data.specific_force, dtype=float).T))
-        out = crossed(spread(s[self.state_index(data, "attitude_error")].T), fn)
-        if "acc_bias" in kinds:
-            B = np.ascontiguousarray(s[self.state_index(data, "acc_bias")].T)
-            th = el.theta
-            out -= rotated(C.__getitem__, (1.0 - th) * spread(B) + th * spread(B[:, nxt]))
-        if "gyro_bias" in kinds:
-            B = np.ascontiguousarray(s[self.state_index(data, "gyro_bias")].T)
-            Y2 = _gyro_sums(el, mesh).reshape(2, 3, 3, n)
-            u = carried(Y2[0], spread(B))
-            u += carried(Y2[1], spread(B[:, nxt]))
-            # C_p (the element's left node's, an entry at a time) u, summed in the order of the
-            # products' columns
-            Cn = np.ascontiguousarray(data.attitude[mesh].as_matrix().reshape(nn, 9).T)
-            crossed(fn, rotated(lambda k: spread(Cn[k]), u, (0, 1, 2)), out)
+        # the node values: attitude increments, the biases' at the left and the right node
+        att = np.ascontiguousarray(s[self.state_index(data, "attitude_error")].T)
+        node = {kind: np.ascontiguousarray(s[self.state_index(data, kind)].T) for kind in kinds[1:]}
+        node.update({(kind, 1): np.ascontiguousarray(v[:, nxt]) for kind, v in list(node.items())})
+        Y2 = _gyro_sums(el, mesh).reshape(2, 3, 3, n) if "gyro_bias" in kinds else None
+        Cn = (np.ascontiguousarray(data.attitude[mesh].as_matrix().reshape(nn, 9).T)
+              if "gyro_bias" in kinds else None)
+        f = np.asarray(data.specific_force, dtype=float)
+        out = np.empty((3, n))
+        tmp = np.empty(min(n, STEP_BLOCK))
+        # every term is per sample: made block by block of STEP_BLOCK samples (the same numbers as
+        # on every sample at once, each block's arrays in place of the whole pass's)
+        for lo in range(0, n, STEP_BLOCK):
+            hi = min(lo + STEP_BLOCK, n)
+            _block_acceleration(out[:, lo:hi], tmp[:hi - lo], el.left[lo:hi], el.theta[lo:hi],
+                                data.attitude[lo:hi], f[lo:hi].T, att, node,
+                                None if Y2 is None else Y2[..., lo:hi], Cn)
         return out.T
 
     def _mesh_layout(self, data, mesh: np.ndarray, kinds: list, k: np.ndarray) -> tuple:

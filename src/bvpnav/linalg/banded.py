@@ -591,7 +591,9 @@ class _Stencil:
         i, j = pos[Dcol[a]], pos[Dcol[b]]
         ok = banded(i, j)
         self.d_a, self.d_b = a[ok], b[ok]
+        del a, b   # (the pairs' arrays freed once read: the largest this analysis makes)
         key, self.d_inv = _dense_ids(cell(i[ok], j[ok]), size)
+        del i, j, ok
         self.d_sums = key.size
         dj = key // ldab
         di = key % ldab + dj - 2 * kl
@@ -599,6 +601,7 @@ class _Stencil:
         self.d_map = np.concatenate([np.arange(key.size), off])
         parts.append((np.concatenate([di, dj[off]]), np.concatenate([dj, di[off]]),
                       np.zeros(self.d_map.size, dtype=bool)))
+        del di, dj, off
         # -E_z h^-1 E_z^T: every pair of E's entries in an eliminated column, by the first
         # one's row, then the column, then the second one's row
         a, b = _pairs_in_columns(np.flatnonzero(eliminated[Ecol]), Ecol)
@@ -616,14 +619,19 @@ class _Stencil:
         self.pa = np.concatenate([x[0] for x in parts])   # the slot's row (scaled first) ...
         self.pb = np.concatenate([x[1] for x in parts])   # ... and column
         mirror = np.concatenate([x[2] for x in parts])
+        del parts
         mslots = np.flatnonzero(mirror)
+        del mirror
         cells = np.concatenate([cell(self.pa, self.pb), cell(self.pb[mslots], self.pa[mslots])])
         self.flat, where = _dense_ids(cells, size)   # the cells by band row (a column of A)
         if self.flat.size != cells.size:
             raise NotBanded("two values for one band cell")   # never for a plan's pattern
         order = np.empty(cells.size, dtype=np.int64)
-        order[where] = np.arange(cells.size)
+        del cells
+        order[where] = np.arange(order.size)
+        del where
         self.cell_slot = np.concatenate([np.arange(self.pa.size), mslots])[order]
+        del order
         cols = self.flat // ldab
         self.col_start = np.flatnonzero(np.r_[True, cols[1:] != cols[:-1]]) if cols.size else cols
         self.cols = cols[self.col_start]

@@ -70,6 +70,13 @@ class Workspace:
     band_buffer: np.ndarray | None = None
     active_hint: object | None = None
 
+    def drop_model(self) -> None:
+        """Forget :attr:`fem_diagonals` and the model they describe (which holds its data): a
+        loop whose next step is a new model (the node-state loop's full passes) calls this so
+        that the last step's model and data are freed before the next step's are made."""
+        self.fem_diagonals = None
+        self.model = None
+
     def drop_sweep_bands(self) -> None:
         """Forget a sweep's bands (the band along lambda and the kept factors) once the
         chosen lambda is solved: bands of the whole problem are not kept alive longer."""

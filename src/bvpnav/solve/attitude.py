@@ -1071,24 +1071,52 @@ def _banded_step(f: Formulation, cheap: bool, banded: bool, lam, workspace, full
     return f, x, cheap
 
 
-def _next_point(form: Formulation, o: dict, iters: list, ref, nodes: dict | None, totals: dict,
-                may_cheap: bool, started: bool) -> tuple:
-    """The data of the node-state loop's next point, the size of what it leaves out when it is
-    cheap (None: a full pass), and the totals at every sample (``totals``, made from ``nodes``
-    for a full pass). A cheap point
-    (:func:`~bvpnav.error_models.error_states.cheap_at`, no pass over the samples) when
-    ``may_cheap`` and what it leaves out is at most :data:`CHEAP_ERROR`; else a full
-    pass, the data as measured at an unmoved start."""
-    from ..error_models.error_states import cheap_at, cheap_error, states_at
+def _cheap_point(ref, nodes: dict | None, may_cheap: bool) -> tuple | None:
+    """``(data, err)`` of the node-state loop's next point when it is cheap
+    (:func:`~bvpnav.error_models.error_states.cheap_at` from the last full pass's data ``ref``,
+    no pass over the samples; ``err`` the size of what it leaves out): when ``may_cheap`` and
+    that is at most :data:`CHEAP_ERROR`; else None (the next point is a full pass,
+    :func:`_full_point`)."""
+    from ..error_models.error_states import cheap_at, cheap_error
 
-    raw = form.data
     if may_cheap and ref is not None and nodes is not None:
         err = cheap_error(ref, nodes)
         if err <= CHEAP_ERROR:
-            return cheap_at(ref, nodes), err, totals
+            return cheap_at(ref, nodes), err
+    return None
+
+
+def _full_point(form: Formulation, iters: list, nodes: dict | None, totals: dict | None,
+                started: bool, workspace) -> tuple:
+    """The data of a full pass of the node-state loop and the totals at every sample (made
+    from ``nodes``, the node totals, when given; else ``totals``): the data as measured at an
+    unmoved start. The loop's ``workspace`` (when it has one) first forgets the last step's
+    model (:meth:`~bvpnav.linalg.workspace.Workspace.drop_model`: it holds that step's data)."""
+    from ..error_models.error_states import states_at
+
+    if workspace is not None:
+        workspace.drop_model()
+    raw = form.data
     if nodes is not None:
         totals = form.model.state_model.expand(raw, nodes)
-    return (raw if not (iters or started) else states_at(raw, totals)), None, totals
+    return (raw if not (iters or started) else states_at(raw, totals)), totals
+
+
+def _body_velocity(form: Formulation, iters: list, f: Formulation | None, x) -> np.ndarray | None:
+    """With body-frame items, after a first step: the velocity (N, 3), m/s, of the last step's
+    answer ``x`` of ``f`` at every sample (at the nodes, linear between them, when the items'
+    rows are at the nodes), their attitude term's linearization point; else None."""
+    if not (iters and any(getattr(it, "body_frame", False) for it in form.items)):
+        return None
+    m = f.model
+    return m.node_point_velocities(x) if _rows_at_nodes(form.items, m) else m.point_velocities(x)
+
+
+def _set_body_point(data, vel: np.ndarray | None) -> None:
+    """The body-frame items' linearization point ``vel`` (:func:`_body_velocity`) on the
+    next point's ``data``, when there is one."""
+    if vel is not None:
+        data.body_point = LinearizationPoint(velocity=vel, names=(), psi=np.zeros((data.n, 3, 0)))
 
 
 def _step_form(form: Formulation, data, checked: bool, item_terms: list | None) -> Formulation:
@@ -1203,15 +1231,19 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
 
     with progress(desc="state loop", unit="iter", enabled=o["progress"]) as bar:
         for k in range(int(o["max_iter"])):
-            data, err, totals = _next_point(form, o, iters, ref, nodes, totals,
-                                            cheap_ok and _may_cheap(o, k, iters, lam_now, started), started)
-            cheap = err is not None
-            if iters and any(getattr(it, "body_frame", False) for it in form.items):
-                # body-frame items: their attitude term about the last step's velocity
-                m = f.model
-                vel = (m.node_point_velocities(x) if _rows_at_nodes(form.items, m)
-                       else m.point_velocities(x))
-                data.body_point = LinearizationPoint(velocity=vel, names=(), psi=np.zeros((raw.n, 3, 0)))
+            vel = _body_velocity(form, iters, f, x)
+            point = _cheap_point(ref, nodes, cheap_ok and _may_cheap(o, k, iters, lam_now, started))
+            cheap = point is not None
+            if cheap:
+                data, err = point
+            else:
+                # a full pass: the last point (its data, formulation and answer, the cheap steps'
+                # reference, the samples' totals a new one replaces) is read no more, and its
+                # memory is free before the new point's is taken
+                point = ref = data = f = x = err = used = s = None
+                totals = totals if nodes is None else None
+                data, totals = _full_point(form, iters, nodes, totals, started, workspace)
+            _set_body_point(data, vel)
             f = step_form(data) if iters or started else form
             # an intermediate step only moves the linearization point: one banded solve, no
             # refinement or verification; the step expected to be the last (and the first
@@ -1257,6 +1289,9 @@ def _state_loop(form: Formulation, inner: Stage, lam, opts, comps: list) -> Solu
                 reason = "step"
                 iters[-1]["converged"] = True
                 break
+    # the loop's band memory and plan, the last point's data and formulation (the answer keeps
+    # its own), are not read again: freed before the samples' totals and attitude are made
+    workspace = kw = ref = data = f = x = used = s = None
     totals = sm.expand(raw, nodes)
     if reason is None:
         _warn(sol, f"node-state loop did not converge in {o['max_iter']} iterations: the last step changed "
