@@ -81,9 +81,9 @@ def screened(fix_t: np.ndarray, fix_xy: np.ndarray, sigma: np.ndarray, gate: np.
     kept fixes on one side), the line through them predicts :math:`\hat p_i = w_j p_j + w_k
     p_k` with the Lagrange weights :math:`w_j = (t_i - t_k)/(t_j - t_k)`, :math:`w_k = 1 -
     w_j`. A path of acceleration at most :math:`a` departs from that line by at most
-    :math:`	frac{a}{2} |(t_i - t_j)(t_i - t_k)|`, and the fixes' noise by a standard
+    :math:`\tfrac{a}{2} |(t_i - t_j)(t_i - t_k)|`, and the fixes' noise by a standard
     deviation :math:`s_i = \sqrt{\sigma_i^2 + w_j^2 \sigma_j^2 + w_k^2 \sigma_k^2}`. The fix
-    whose miss :math:`\|p_i - \hat p_i\|` exceeds :math:`	frac{a}{2}|(t_i - t_j)(t_i -
+    whose miss :math:`\|p_i - \hat p_i\|` exceeds :math:`\tfrac{a}{2}|(t_i - t_j)(t_i -
     t_k)| + g_i s_i` by the largest ratio is left out, and the test is repeated until every
     kept fix passes (:data:`CAR_ACCELERATION` for :math:`a`); a fix left out that then passes
     against its kept neighbours is let back (an outlier next to it had made it miss). At
