@@ -286,6 +286,12 @@ class Item:
         """Number of instants (or intervals) the item constrains, if known before compiling."""
         return None
 
+    @property
+    def is_constraint(self) -> bool:
+        """Whether the rows are held as constraints (hard, or a band without ``sigma``: hard
+        edges) rather than penalized (soft, robust, a band with soft edges)."""
+        return self.mode == "hard" or (self.mode == "band" and self.sigma is None)
+
     def weight_rows(self, m: int) -> np.ndarray | None:
         """``sigma`` per residual row (None for hard/band), by :func:`broadcast_rows`."""
         if self.sigma is None:

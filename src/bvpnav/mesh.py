@@ -152,8 +152,7 @@ def rows_inside_elements(item) -> bool:
     samples' problem would pay (``examples/benchmarks/kitti_drive.py``: a band inside 1 s
     elements made the node-state loop diverge; with nodes at its rows it gives the samples'
     answer)."""
-    penalty = item.mode in ("soft", "robust") or (item.mode == "band" and item.sigma is not None)
-    return bool(getattr(item, "body_frame", False)) and penalty
+    return bool(getattr(item, "body_frame", False)) and not item.is_constraint
 
 
 def _condensation(data: ImuData, fine, nodes: np.ndarray) -> fem.Condensation:

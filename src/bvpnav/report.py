@@ -142,11 +142,10 @@ def normalized_residuals(sol, acceleration: bool = True) -> pd.DataFrame:
 def _normalized(rows, r: np.ndarray) -> np.ndarray:
     """Rows' residuals ``r`` over their sigma; a band with soft edges: the excess beyond the
     band over sigma (:meth:`bvpnav.terms.Term.excess`), 0 inside it."""
+    from .terms import band_excess
+
     if rows.mode == "band" and rows.tol is not None:
-        if rows.kind == "inequality":
-            r = np.maximum(r - rows.tol, 0.0)
-        else:
-            r = np.sign(r) * np.maximum(np.abs(r) - rows.tol, 0.0)
+        r = band_excess(r, rows.tol, rows.kind)
     return r / rows.sigma
 
 

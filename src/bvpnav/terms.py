@@ -43,7 +43,7 @@ from .sparse import abs_max, as_csr
 if TYPE_CHECKING:
     import cvxpy as cp
 
-__all__ = ["Term", "TermKind", "KINDS", "MODES", "CONSTRAINT_MODES", "PENALTY_MODES"]
+__all__ = ["Term", "TermKind", "KINDS", "MODES", "CONSTRAINT_MODES", "PENALTY_MODES", "band_excess"]
 
 MODES = ("hard", "soft", "robust", "band")
 #: Modes that compile to constraints, and modes that compile to lambda-weighted penalties.
@@ -113,10 +113,7 @@ class Term:
         r"""A band with soft edges: how far each row lies beyond the band at ``x``, signed
         (:math:`\operatorname{sign}(r) \max(|r| - tol, 0)` for an equality, :math:`\max(g - tol,
         0)` for an inequality), item units."""
-        r = self.residual.value(x)
-        if self.kind == "inequality":
-            return np.maximum(r - self.tol, 0.0)
-        return np.sign(r) * np.maximum(np.abs(r) - self.tol, 0.0)
+        return band_excess(self.residual.value(x), self.tol, self.kind)
 
     def weight(self, lam: float) -> float:
         """The factor of this term's penalty: ``lam`` for items, 1 for priors."""
@@ -203,6 +200,23 @@ class Term:
         w = size * (2.0 * self.weight(lam) / self.sigma**2)   # the weights on the rows
         absA *= w[rows]   # |A| weighted by rows, in place (one array of the stored entries)
         return abs_max(_column_sums(A.indices, absA, A.shape[1])[1])
+
+
+def band_excess(r: np.ndarray, tol, kind: str) -> np.ndarray:
+    r"""How far rows ``r`` lie beyond a band of half-width ``tol`` (item units): signed,
+    :math:`\operatorname{sign}(r) \max(|r| - tol, 0)`, for an equality; :math:`\max(r - tol, 0)`
+    for an inequality (``kind``); 0 inside the band.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from bvpnav.terms import band_excess
+    >>> band_excess(np.array([-0.3, 0.05, 0.25]), 0.1, "equality").round(2).tolist()
+    [-0.2, 0.0, 0.15]
+    """
+    if kind == "inequality":
+        return np.maximum(r - tol, 0.0)
+    return np.sign(r) * np.maximum(np.abs(r) - tol, 0.0)
 
 
 def transposed_product(A: sp.spmatrix, u: np.ndarray) -> tuple[np.ndarray | slice, np.ndarray]:

@@ -54,8 +54,7 @@ def check_demotion(form, priority, demote_sigma) -> tuple[dict, dict, float]:
 def _victim(exc: Infeasible, current, demoted, priority, order) -> tuple[str, list]:
     conflict = next((a["conflicts"] for a in reversed(exc.attempts or []) if a.get("conflicts")), [])
     # from the items, not terms(): an item awaiting linearization (TrackLine) cannot compile
-    hard_items = {it.label for it in current.items
-                  if it.mode == "hard" or (it.mode == "band" and it.sigma is None)}   # no soft edges
+    hard_items = {it.label for it in current.items if it.is_constraint}
     candidates = [c for c in conflict if c in hard_items]
     if not candidates:
         done = f"; already demoted {[d.item for d in demoted]}" if demoted else ""

@@ -127,8 +127,7 @@ class _Loop:
         self.lam_now = lam
         self.lam_soft = float(lam) if self.rule is None and float(lam) > 0 else 1.0
         # a hard or band item that takes a continuation starts soft
-        self.cont = {it.label for it in nonlin if o["continuation"]
-                     and (it.mode == "hard" or (it.mode == "band" and it.sigma is None))
+        self.cont = {it.label for it in nonlin if o["continuation"] and it.is_constraint
                      and type(it).continuation_sigma is not Linearizable.continuation_sigma}
         self.max_change, self.rms_change, self.lams, self.modes, self.sigmas = [], [], [], [], []
         self.phases, self.counts, self.curve = [], {}, None
